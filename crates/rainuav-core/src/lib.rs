@@ -1,0 +1,34 @@
+//! # rainuav-core
+//!
+//! The pure-Rust physics of rainuav: water permittivity, drop-size distributions, drop
+//! shapes, Mie scattering, Gauss-Legendre quadrature, the effective medium of rain and
+//! ITU-R P.838-3. Conventions follow `shared/PHYSICS.md`: time dependence `exp(+j w t)`,
+//! lossy media have `Im eps <= 0`, drop diameters in mm.
+//!
+//! ```
+//! use rainuav_core::medium::{MediumOptions, RainKernel};
+//! // Specific attenuation of 25 mm/h Marshall-Palmer rain at 28 GHz, horizontal polarisation.
+//! let kernel = RainKernel::new(28e9, &MediumOptions::default()).unwrap();
+//! let gamma = kernel.evaluate(25.0).unwrap().gamma_db_per_km;
+//! let itu = rainuav_core::p838::specific_attenuation(28e9, 25.0, 0.0, 0.0);
+//! assert!(gamma / itu > 0.6 && gamma / itu < 1.6);
+//! ```
+
+pub mod drops;
+pub mod dsd;
+pub mod error;
+pub mod medium;
+pub mod mie;
+pub mod p838;
+pub mod quadrature;
+pub mod water;
+
+pub use error::{CoreError, Result};
+
+/// Speed of light in vacuum, m/s.
+pub const SPEED_OF_LIGHT_M_S: f64 = 299_792_458.0;
+
+/// Free-space wavenumber `k0 = 2 pi f / c`, rad/m.
+pub fn wavenumber(freq_hz: f64) -> f64 {
+    2.0 * std::f64::consts::PI * freq_hz / SPEED_OF_LIGHT_M_S
+}

@@ -1,0 +1,51 @@
+"""Argument checking and broadcasting shared by the public modules."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from rainuav.errors import InvalidInputError
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def as_real_array(name: str, value: Any) -> FloatArray:
+    """``value`` as a float64 array, or an error naming ``name``."""
+    if isinstance(value, (str, bytes)) or np.iscomplexobj(value):
+        raise InvalidInputError(f"{name} must be real numbers (got {value!r})")
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise InvalidInputError(f"{name} must be real numbers (got {value!r})") from err
+
+
+def as_real_scalar(name: str, value: Any) -> float:
+    """``value`` as a Python float, or an error naming ``name``."""
+    arr = as_real_array(name, value)
+    if arr.ndim != 0:
+        raise InvalidInputError(f"{name} must be a scalar (got shape {arr.shape})")
+    return float(arr)
+
+
+def broadcast_flat(**named: Any) -> tuple[tuple[int, ...], list[FloatArray]]:
+    """Broadcasts the named arguments together and returns the common shape and each
+    argument as a flat C-contiguous float64 array (no copy when already so)."""
+    arrays = {k: as_real_array(k, v) for k, v in named.items()}
+    try:
+        parts = np.broadcast_arrays(*arrays.values())
+    except ValueError as err:
+        shapes = ", ".join(f"{k} {a.shape}" for k, a in arrays.items())
+        raise InvalidInputError(f"shapes do not broadcast: {shapes}") from err
+    shape = parts[0].shape
+    return shape, [np.ascontiguousarray(p).reshape(-1) for p in parts]
+
+
+def check_choice(name: str, value: Any, allowed: tuple[str, ...]) -> str:
+    """``value`` if it is one of ``allowed``, else an error listing them."""
+    if not isinstance(value, str) or value not in allowed:
+        choices = ", ".join(repr(a) for a in allowed)
+        raise InvalidInputError(f"{name} must be one of {choices} (got {value!r})")
+    return value

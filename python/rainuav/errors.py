@@ -1,0 +1,14 @@
+"""The exceptions rainuav raises. Everything derives from :class:`RainuavError`;
+bad input also derives from :class:`ValueError`, so ``except ValueError`` keeps working."""
+
+from __future__ import annotations
+
+
+class RainuavError(Exception):
+    """Base class of every error rainuav raises on purpose."""
+
+
+class InvalidInputError(RainuavError, ValueError):
+    """An argument is out of range, of the wrong shape or not a known name.
+
+    The message names the argument and the allowed range."""
