@@ -229,16 +229,23 @@ fn max_panel_width_mm(freq_hz: f64) -> f64 {
 /// returns `(beta_p' / beta_sphere, extra)` with `extra` the paper's wind factor (1 when off).
 fn drop_factor(eps_w: Complex64, d_mm: f64, opts: &MediumOptions) -> (Complex64, f64) {
     let r = opts.shape.axial_ratio(d_mm);
+    let extra = match opts.wind_model {
+        WindModel::Canting => 1.0,
+        WindModel::Paper => {
+            let vt = terminal_velocity_m_s(d_mm).max(0.1);
+            1.0 / (opts.wind_speed_m_s / vt).atan().cos()
+        }
+    };
+    if r >= 1.0 {
+        // A sphere looks the same from every side: exactly the sphere amplitude.
+        return (Complex64::new(1.0, 0.0), extra);
+    }
     let beta_sphere = polarisability(eps_w, 1.0 / 3.0);
     let (lx, lz) = depolarisation_factors(r);
     let (bx, bz) = (polarisability(eps_w, lx), polarisability(eps_w, lz));
-    let vh = opts.wind_speed_m_s;
-    let (cant, extra) = match opts.wind_model {
-        WindModel::Canting => (vh.atan2(terminal_velocity_m_s(d_mm)), 1.0),
-        WindModel::Paper => {
-            let vt = terminal_velocity_m_s(d_mm).max(0.1);
-            (0.0, 1.0 / (vh / vt).atan().cos())
-        }
+    let cant = match opts.wind_model {
+        WindModel::Canting => opts.wind_speed_m_s.atan2(terminal_velocity_m_s(d_mm)),
+        WindModel::Paper => 0.0,
     };
     let (s2, c2) = (cant.sin().powi(2), cant.cos().powi(2));
     let beta_p = match opts.polarization {
