@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
-
 from rainuav import medium as m
 
 freqs = st.floats(1e9, 1e12)
@@ -20,16 +19,25 @@ winds = st.floats(0.0, 60.0)
 @given(freqs, rates, rates, models, pols, shapes, temps)
 def test_attenuation_rises_with_rain_rate(f, r1, r2, model, pol, shape, t) -> None:
     lo, hi = sorted((r1, r2))
-    g = m.specific_attenuation(f, [lo, hi], model=model, polarization=pol, shape=shape,
-                               temperature_c=t)
+    g = m.specific_attenuation(
+        f, [lo, hi], model=model, polarization=pol, shape=shape, temperature_c=t
+    )
     assert g[0] <= g[1]
     assert g[0] > 0.0
 
 
 @given(freqs, rates, models, pols, shapes, temps, winds, st.sampled_from(m.WIND_MODELS))
 def test_permittivity_is_lossy(f, r, model, pol, shape, t, w, wind_model) -> None:
-    eps = m.effective_permittivity(f, r, model=model, polarization=pol, shape=shape,
-                                   temperature_c=t, wind_speed_m_s=w, wind_model=wind_model)
+    eps = m.effective_permittivity(
+        f,
+        r,
+        model=model,
+        polarization=pol,
+        shape=shape,
+        temperature_c=t,
+        wind_speed_m_s=w,
+        wind_model=wind_model,
+    )
     assert eps.imag <= 0.0
     assert np.isfinite(eps)
 
@@ -77,8 +85,10 @@ def test_wind_cants_drops_towards_the_other_polarisation() -> None:
 
 def test_paper_wind_factor_only_adds() -> None:
     # The paper's 1/F factor is >= 1 on every drop and grows with wind.
-    g = [m.specific_attenuation(10e9, 25.0, wind_model="paper", wind_speed_m_s=w)
-         for w in (0.0, 2.0, 5.0)]
+    g = [
+        m.specific_attenuation(10e9, 25.0, wind_model="paper", wind_speed_m_s=w)
+        for w in (0.0, 2.0, 5.0)
+    ]
     assert g[0] < g[1] < g[2]
 
 
@@ -95,8 +105,9 @@ def test_broadcasting_and_scalars() -> None:
     assert isinstance(m.effective_permittivity(5e9, 10.0), complex)
     # A non-contiguous view is accepted.
     fv = np.linspace(5e9, 50e9, 20)[::2]
-    np.testing.assert_array_equal(m.specific_attenuation(fv, 10.0),
-                                  m.specific_attenuation(fv.copy(), 10.0))
+    np.testing.assert_array_equal(
+        m.specific_attenuation(fv, 10.0), m.specific_attenuation(fv.copy(), 10.0)
+    )
 
 
 def test_other_distributions() -> None:

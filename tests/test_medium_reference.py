@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from rainuav import _core
 from rainuav import medium as m
 
@@ -172,4 +171,6 @@ def test_rain_medium_matches_functions() -> None:
         m.specific_attenuation(28e9, rates, polarization="v"),
     )
     assert med.permittivity(0.0) == 1.0
-    np.testing.assert_allclose(med.refractive_index(rates) ** 2, med.permittivity(rates), rtol=1e-12)
+    np.testing.assert_allclose(
+        med.refractive_index(rates) ** 2, med.permittivity(rates), rtol=1e-12
+    )

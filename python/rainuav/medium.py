@@ -34,7 +34,6 @@ from rainuav._validation import (
     broadcast_flat,
     check_choice,
 )
-from rainuav.errors import InvalidInputError
 
 __all__ = [
     "DropSizeDistribution",
@@ -292,5 +291,3 @@ class RainMedium:
     def specific_attenuation(self, rain_rate_mm_h: ArrayLike) -> Any:
         """Specific attenuation in dB/km at each rain rate."""
         return self._eval(rain_rate_mm_h)[2]
-
-

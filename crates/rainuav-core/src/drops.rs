@@ -97,7 +97,10 @@ mod tests {
             (0.5, 0.23640, 0.52720),
         ] {
             let (x, z) = depolarisation_factors(r);
-            assert!((x - lx).abs() < 1e-5 && (z - lz).abs() < 1e-5, "{r}: {x} {z}");
+            assert!(
+                (x - lx).abs() < 1e-5 && (z - lz).abs() < 1e-5,
+                "{r}: {x} {z}"
+            );
         }
     }
 

@@ -61,11 +61,35 @@ impl Dsd {
         let finite = |name: &'static str, v: f64, lo: f64, hi: f64, allowed: &str| {
             crate::error::check_range(name, v, lo, hi, allowed)
         };
-        finite("n0", n0_coeff, 0.0, 1e12, "must be finite and within 0..1e12")?;
-        finite("n0_exp", n0_exp, -5.0, 5.0, "must be finite and within -5..5")?;
+        finite(
+            "n0",
+            n0_coeff,
+            0.0,
+            1e12,
+            "must be finite and within 0..1e12",
+        )?;
+        finite(
+            "n0_exp",
+            n0_exp,
+            -5.0,
+            5.0,
+            "must be finite and within -5..5",
+        )?;
         finite("mu", mu, -2.0, 20.0, "must be finite and within -2..20")?;
-        finite("lambda_coeff", lambda_coeff, 1e-3, 1e3, "must be finite and within 1e-3..1e3 per mm")?;
-        finite("lambda_exp", lambda_exp, -5.0, 5.0, "must be finite and within -5..5")?;
+        finite(
+            "lambda_coeff",
+            lambda_coeff,
+            1e-3,
+            1e3,
+            "must be finite and within 1e-3..1e3 per mm",
+        )?;
+        finite(
+            "lambda_exp",
+            lambda_exp,
+            -5.0,
+            5.0,
+            "must be finite and within -5..5",
+        )?;
         Ok(Dsd::Gamma {
             n0_coeff,
             n0_exp,
@@ -81,7 +105,11 @@ impl Dsd {
             return Err(CoreError::invalid(
                 "dsd table",
                 "must have as many densities as diameters",
-                format!("{} diameters, {} densities", diameter_mm.len(), density.len()),
+                format!(
+                    "{} diameters, {} densities",
+                    diameter_mm.len(),
+                    density.len()
+                ),
             ));
         }
         if diameter_mm.len() < 2 {
@@ -135,7 +163,7 @@ impl Dsd {
             acc += w * d.powi(3) * terminal_velocity_m_s(d) * raw.density(d, 1.0);
         }
         let rate = 6.0 * std::f64::consts::PI * 1e-4 * acc * h;
-        if !(rate > 0.0) {
+        if rate.is_nan() || rate <= 0.0 {
             return Err(CoreError::invalid(
                 "dsd table",
                 "must hold some drops between 0.1 and 8 mm (its rain rate is zero)",

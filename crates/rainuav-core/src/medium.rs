@@ -214,7 +214,9 @@ pub struct RainKernel {
     model: Model,
     dsd: Dsd,
     nodes_mm: Vec<f64>,
-    /// `w_i K(D_i)`: `eps - 1` (quasi-static) or `n - 1` (forward) per unit N(D_i), m^3 mm.
+    /// `w_i K(D_i)`: `eps - 1` (quasi-static) or `n - 1` (forward) per unit N(D_i), m^3 mm;
+    /// for a gamma distribution the rate-independent `D_i^mu` is folded in too, so a rain
+    /// rate costs one `exp` per node.
     weighted: Vec<Complex64>,
 }
 
@@ -287,7 +289,11 @@ impl RainKernel {
                         Complex64::new(0.0, -2.0 * PI / k0.powi(3)) * s0.conj()
                     }
                 };
-                w * extra * ratio * base
+                let shape_of_n = match &opts.dsd {
+                    Dsd::Gamma { mu, .. } => d_mm.powf(*mu),
+                    Dsd::Table { .. } => 1.0,
+                };
+                w * extra * ratio * base * shape_of_n
             })
             .collect();
         Ok(RainKernel {
@@ -324,12 +330,25 @@ impl RainKernel {
                 gamma_db_per_km: 0.0,
             };
         }
-        let s: Complex64 = self
-            .nodes_mm
-            .iter()
-            .zip(&self.weighted)
-            .map(|(&d, &k)| k * self.dsd.density(d, rain_rate_mm_h))
-            .sum();
+        let nodes = self.nodes_mm.iter().zip(&self.weighted);
+        let s: Complex64 = match &self.dsd {
+            Dsd::Gamma {
+                n0_coeff,
+                n0_exp,
+                lambda_coeff,
+                lambda_exp,
+                ..
+            } => {
+                let lambda = lambda_coeff * rain_rate_mm_h.powf(*lambda_exp);
+                let n0 = n0_coeff * rain_rate_mm_h.powf(*n0_exp);
+                n0 * nodes
+                    .map(|(&d, &k)| k * (-lambda * d).exp())
+                    .sum::<Complex64>()
+            }
+            Dsd::Table { .. } => nodes
+                .map(|(&d, &k)| k * self.dsd.density(d, rain_rate_mm_h))
+                .sum(),
+        };
         let (n, eps) = match self.model {
             Model::QuasiStatic => ((one + s).sqrt(), one + s),
             Model::ForwardScattering => (one + s, (one + s) * (one + s)),
@@ -352,11 +371,22 @@ fn kernel_cache() -> &'static KernelCache {
 
 const KERNEL_CACHE_CAPACITY: usize = 1024;
 
+/// Empties the kernel cache (benchmarks use it to time cold starts).
+pub fn clear_kernel_cache() {
+    if let Ok(mut cache) = kernel_cache().lock() {
+        cache.clear();
+    }
+}
+
 /// The kernel for `(freq_hz, opts)`, from the cache or built and cached.
 pub fn cached_kernel(freq_hz: f64, opts: &MediumOptions) -> Result<Arc<RainKernel>> {
     // Debug formatting of f64 round-trips exactly, so equal keys mean equal inputs.
     let key = format!("{:?}|{:?}", freq_hz.to_bits(), opts);
-    if let Some(k) = kernel_cache().lock().ok().and_then(|c| c.get(&key).cloned()) {
+    if let Some(k) = kernel_cache()
+        .lock()
+        .ok()
+        .and_then(|c| c.get(&key).cloned())
+    {
         return Ok(k);
     }
     let kernel = Arc::new(RainKernel::new(freq_hz, opts)?);
@@ -385,7 +415,9 @@ pub fn effective_many(
     }
     opts.validate()?;
     freq_hz.iter().try_for_each(|&f| check_freq(f))?;
-    rain_rate_mm_h.iter().try_for_each(|&r| check_rain_rate(r))?;
+    rain_rate_mm_h
+        .iter()
+        .try_for_each(|&r| check_rain_rate(r))?;
 
     let mut distinct: Vec<u64> = freq_hz.iter().map(|f| f.to_bits()).collect();
     distinct.sort_unstable();
@@ -439,7 +471,11 @@ mod tests {
     }
 
     fn gamma(f: f64, r: f64, o: &MediumOptions) -> f64 {
-        RainKernel::new(f, o).unwrap().evaluate(r).unwrap().gamma_db_per_km
+        RainKernel::new(f, o)
+            .unwrap()
+            .evaluate(r)
+            .unwrap()
+            .gamma_db_per_km
     }
 
     /// PHYSICS.md's measured values for Marshall-Palmer, 20 C, spheres (2 significant
@@ -489,11 +525,21 @@ mod tests {
         let o = MediumOptions::default();
         let e = RainKernel::new(5e9, &o).unwrap().evaluate(0.0).unwrap();
         assert_eq!(e.eps, Complex64::new(1.0, 0.0));
-        let g = specific_attenuation_many(array![5e9, 5e9, 6e9].view(), array![0.0, 10.0, 10.0].view(), &o)
-            .unwrap();
+        let g = specific_attenuation_many(
+            array![5e9, 5e9, 6e9].view(),
+            array![0.0, 10.0, 10.0].view(),
+            &o,
+        )
+        .unwrap();
         assert_eq!(g[0], 0.0);
         assert!(g[2] > g[1] && g[1] > 0.0);
         let bad = specific_attenuation_many(array![5e9].view(), array![-1.0].view(), &o);
-        assert!(matches!(bad, Err(CoreError::InvalidArgument { name: "rain_rate_mm_h", .. })));
+        assert!(matches!(
+            bad,
+            Err(CoreError::InvalidArgument {
+                name: "rain_rate_mm_h",
+                ..
+            })
+        ));
     }
 }

@@ -95,7 +95,12 @@ mod tests {
         let m2 = m * m;
         let alpha = (m2 - 1.0) / (m2 + 2.0);
         let expect = Complex64::new(0.0, -1.0) * x.powi(3) * alpha;
-        assert!(((r.s0 - expect).norm() / expect.norm()) < 1e-5, "{} {}", r.s0, expect);
+        assert!(
+            ((r.s0 - expect).norm() / expect.norm()) < 1e-5,
+            "{} {}",
+            r.s0,
+            expect
+        );
     }
 
     /// A non-absorbing sphere: extinction equals scattering (optical theorem), to rounding.

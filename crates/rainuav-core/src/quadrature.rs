@@ -66,8 +66,10 @@ impl CompositeRule {
         let mut weights = Vec::with_capacity(nodes.capacity());
         for p in edges.windows(2) {
             let (a, b) = (p[0], p[1]);
-            if !(b > a) {
-                return Err(CoreError::Internal(format!("panel edges {a} {b} not increasing")));
+            if b.is_nan() || a.is_nan() || b <= a {
+                return Err(CoreError::Internal(format!(
+                    "panel edges {a} {b} not increasing"
+                )));
             }
             let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
             for k in 0..n {
@@ -80,7 +82,11 @@ impl CompositeRule {
 
     /// `sum w_k f(x_k)`.
     pub fn integrate(&self, f: impl Fn(f64) -> f64) -> f64 {
-        self.nodes.iter().zip(&self.weights).map(|(&x, &w)| w * f(x)).sum()
+        self.nodes
+            .iter()
+            .zip(&self.weights)
+            .map(|(&x, &w)| w * f(x))
+            .sum()
     }
 }
 
@@ -101,7 +107,11 @@ pub fn panel_edges(lo: f64, hi: f64, breakpoints: &[f64], max_width: f64) -> Vec
         let (a, b) = (piece[0], piece[1]);
         let k = ((b - a) / max_width).ceil().max(1.0) as usize;
         for i in 1..=k {
-            edges.push(if i == k { b } else { a + (b - a) * i as f64 / k as f64 });
+            edges.push(if i == k {
+                b
+            } else {
+                a + (b - a) * i as f64 / k as f64
+            });
         }
     }
     edges
@@ -118,9 +128,20 @@ mod tests {
         for n in [1, 2, 5, 16, 40] {
             let (x, w) = gauss_legendre(n).unwrap();
             for deg in 0..(2 * n) {
-                let got: f64 = x.iter().zip(&w).map(|(&x, &w)| w * x.powi(deg as i32)).sum();
-                let exact = if deg % 2 == 1 { 0.0 } else { 2.0 / (deg as f64 + 1.0) };
-                assert!((got - exact).abs() < 1e-13, "n={n} deg={deg}: {got} vs {exact}");
+                let got: f64 = x
+                    .iter()
+                    .zip(&w)
+                    .map(|(&x, &w)| w * x.powi(deg as i32))
+                    .sum();
+                let exact = if deg % 2 == 1 {
+                    0.0
+                } else {
+                    2.0 / (deg as f64 + 1.0)
+                };
+                assert!(
+                    (got - exact).abs() < 1e-13,
+                    "n={n} deg={deg}: {got} vs {exact}"
+                );
             }
         }
     }

@@ -67,7 +67,8 @@ fn water_permittivity<'py>(
     same_len("temperature_c", &f, &t)?;
     let out = detached(py, || {
         f.iter().try_for_each(|&v| medium::check_freq(v))?;
-        t.iter().try_for_each(|&v| rainuav_core::water::check_temperature(v))?;
+        t.iter()
+            .try_for_each(|&v| rainuav_core::water::check_temperature(v))?;
         Ok(f.iter()
             .zip(t.iter())
             .map(|(&f, &t)| rainuav_core::water::water_permittivity(f, t))
@@ -103,7 +104,10 @@ impl DropSizeDistribution {
 
     /// A tabulated N(D), linearly interpolated; scales with rain rate / table_rain_rate_mm_h.
     #[staticmethod]
-    fn table(diameter_mm: PyReadonlyArray1<'_, f64>, density: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+    fn table(
+        diameter_mm: PyReadonlyArray1<'_, f64>,
+        density: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Self> {
         Ok(DropSizeDistribution {
             inner: Dsd::table(diameter_mm.as_array().to_vec(), density.as_array().to_vec())
                 .map_err(to_py)?,
@@ -144,7 +148,13 @@ impl DropSizeDistribution {
             r.iter().try_for_each(|&v| medium::check_rain_rate(v))?;
             Ok(d.iter()
                 .zip(r.iter())
-                .map(|(&d, &r)| if r == 0.0 { 0.0 } else { self.inner.density(d, r) })
+                .map(|(&d, &r)| {
+                    if r == 0.0 {
+                        0.0
+                    } else {
+                        self.inner.density(d, r)
+                    }
+                })
                 .collect::<Array1<f64>>())
         })?;
         Ok(out.into_pyarray(py))
@@ -208,6 +218,9 @@ impl MediumConfig {
         format!("MediumConfig({:?})", self.inner)
     }
 }
+
+/// Two real arrays handed to Python.
+type RealPair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 
 type MediumArrays<'py> = (
     Bound<'py, PyArray1<Complex64>>,
@@ -325,10 +338,7 @@ fn mie_forward(m: Complex64, x: f64) -> PyResult<(Complex64, f64, f64)> {
 
 /// Gauss-Legendre nodes and weights on [-1, 1] (Golub-Welsch).
 #[pyfunction]
-fn gauss_legendre<'py>(
-    py: Python<'py>,
-    n: usize,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+fn gauss_legendre<'py>(py: Python<'py>, n: usize) -> PyResult<RealPair<'py>> {
     let (x, w) = rainuav_core::quadrature::gauss_legendre(n).map_err(to_py)?;
     Ok((x.into_pyarray(py), w.into_pyarray(py)))
 }

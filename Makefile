@@ -1,0 +1,39 @@
+# One entry point for everything a developer (and CI) runs.
+#   make test   build the extension, lint everything, run the Rust and Python tests
+#   make bench  criterion benches (cargo bench) and pytest-benchmark comparisons
+#   make fmt    format Rust and Python in place
+PYTHON ?= python
+PYTEST_ARGS ?=
+
+.PHONY: test build lint test-rust test-python bench fmt validate
+
+test: build lint test-rust test-python
+
+# Editable install of the extension into the current Python (release build via maturin).
+build:
+	$(PYTHON) -m pip install --no-build-isolation --no-deps -e . -q
+
+lint:
+	cargo fmt --all -- --check
+	cargo clippy --workspace --all-targets -- -D warnings
+	ruff check .
+	ruff format --check .
+	$(PYTHON) -m mypy.stubtest rainuav._core
+
+test-rust:
+	cargo test --workspace
+
+test-python: build
+	$(PYTHON) -m pytest $(PYTEST_ARGS)
+
+bench: build
+	cargo bench -p rainuav-core
+	$(PYTHON) -m pytest benches --benchmark-enable --benchmark-only --benchmark-columns=min,median,mean,stddev,rounds
+
+fmt:
+	cargo fmt --all
+	ruff check --fix .
+	ruff format .
+
+validate: build
+	$(PYTHON) -m rainuav.validate rain --out validation

@@ -1,0 +1,103 @@
+"""Type stubs for the Rust extension ``rainuav._core`` (crates/rainuav-py).
+
+Array arguments are 1-D float64 C-contiguous arrays (read as zero-copy views); results are
+fresh arrays handed over without copying. ``rainuav.medium`` wraps these with broadcasting.
+"""
+
+from typing import final
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = [
+    "DropSizeDistribution",
+    "MediumConfig",
+    "RainMediumKernel",
+    "__version__",
+    "axial_ratio",
+    "depolarisation_factors",
+    "effective_medium",
+    "gauss_legendre",
+    "itu_p838",
+    "mie_forward",
+    "terminal_velocity_m_s",
+    "water_permittivity",
+]
+
+__version__: str
+
+_F = npt.NDArray[np.float64]
+_C = npt.NDArray[np.complex128]
+
+@final
+class DropSizeDistribution:
+    """A drop-size distribution N(D) in m^-3 mm^-1."""
+
+    @staticmethod
+    def marshall_palmer() -> DropSizeDistribution:
+        """Marshall-Palmer: N = 8000 exp(-4.1 R^-0.21 D) m^-3 mm^-1."""
+    @staticmethod
+    def gamma(
+        n0: float, mu: float, lambda_coeff: float, lambda_exp: float, n0_exp: float = 0.0
+    ) -> DropSizeDistribution:
+        """Gamma: N = n0 R^n0_exp D^mu exp(-lambda_coeff R^lambda_exp D)."""
+    @staticmethod
+    def table(diameter_mm: _F, density: _F) -> DropSizeDistribution:
+        """A tabulated N(D), linearly interpolated; scales with R / table_rain_rate_mm_h."""
+    @property
+    def table_rain_rate_mm_h(self) -> float | None:
+        """The rain rate the table carries (Atlas fall speeds); None for parametric forms."""
+    def density(self, diameter_mm: _F, rain_rate_mm_h: _F) -> _F:
+        """N(D) for pairs (diameter_mm[i], rain_rate_mm_h[i]); zero rate gives zero."""
+
+@final
+class MediumConfig:
+    """Options of the rain medium (validated on construction)."""
+
+    def __new__(
+        cls,
+        *,
+        model: str,
+        polarization: str,
+        shape: str,
+        temperature_c: float,
+        wind_speed_m_s: float,
+        wind_model: str,
+        dsd: DropSizeDistribution,
+        nodes_per_panel: int = 16,
+    ) -> MediumConfig: ...
+
+@final
+class RainMediumKernel:
+    """The rain medium at one frequency, precomputed on the quadrature nodes."""
+
+    def __new__(cls, freq_hz: float, config: MediumConfig) -> RainMediumKernel: ...
+    @property
+    def nodes(self) -> int:
+        """Number of quadrature nodes."""
+    def evaluate(self, rain_rate_mm_h: _F) -> tuple[_C, _C, _F]:
+        """(eps, n, gamma_db_per_km) for each rain rate."""
+
+def water_permittivity(freq_hz: _F, temperature_c: _F) -> _C:
+    """Water permittivity (double Debye, Im <= 0) for pairs of frequency and temperature."""
+
+def effective_medium(freq_hz: _F, rain_rate_mm_h: _F, config: MediumConfig) -> tuple[_C, _C, _F]:
+    """(eps, n, gamma_db_per_km) for pairs (freq_hz[i], rain_rate_mm_h[i])."""
+
+def itu_p838(freq_hz: _F, rain_rate_mm_h: _F, tilt_deg: float, elevation_deg: float) -> _F:
+    """ITU-R P.838-3 specific attenuation in dB/km for pairs."""
+
+def mie_forward(m: complex, x: float) -> tuple[complex, float, float]:
+    """Bohren-Huffman Mie (S(0), Q_ext, Q_sca) for m (Im m >= 0) and size parameter x."""
+
+def gauss_legendre(n: int) -> tuple[_F, _F]:
+    """Gauss-Legendre nodes and weights on [-1, 1] (Golub-Welsch)."""
+
+def depolarisation_factors(axial_ratio: float) -> tuple[float, float]:
+    """Depolarisation factors (Lx, Lz) of an oblate spheroid, axial ratio in (0, 1]."""
+
+def axial_ratio(shape: str, diameter_mm: float) -> float:
+    """Axial ratio (minor/major) of a drop under a shape rule."""
+
+def terminal_velocity_m_s(diameter_mm: float) -> float:
+    """Atlas et al. (1973) terminal fall speed, m/s."""
