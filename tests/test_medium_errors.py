@@ -7,6 +7,8 @@ import re
 import numpy as np
 import pytest
 import rainuav
+from hypothesis import given
+from hypothesis import strategies as st
 from rainuav import medium as m
 
 
@@ -75,3 +77,57 @@ def test_bad_input_elsewhere() -> None:
         m.RainMedium(10e9).specific_attenuation([1.0, -1.0])
     with pytest.raises(rainuav.InvalidInputError, match="temperature_c"):
         m.effective_permittivity(10e9, 1.0, temperature_c=[10.0, 20.0])  # type: ignore[arg-type]
+
+
+@given(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.floats(allow_nan=True, allow_infinity=True),
+)
+def test_any_number_gives_a_finite_answer_or_a_clear_error(f, r, t, w) -> None:
+    # Never a panic, a hang or a silent NaN: either a finite, lossy result or ValueError.
+    try:
+        eps = m.effective_permittivity(f, r, temperature_c=t, wind_speed_m_s=w)
+    except rainuav.InvalidInputError as err:
+        assert any(k in str(err) for k in ("freq_hz", "rain_rate_mm_h", "temperature_c", "wind"))
+    else:
+        assert np.isfinite(eps) and eps.imag <= 0.0
+
+
+def test_core_rejects_bad_arguments_without_panicking() -> None:
+    from rainuav import _core
+
+    with pytest.raises(rainuav.InvalidInputError, match="nodes"):
+        _core.gauss_legendre(0)
+    with pytest.raises(rainuav.InvalidInputError, match="x"):
+        _core.mie_forward(1.5 + 0j, float("nan"))
+    with pytest.raises(rainuav.InvalidInputError, match="m must be finite"):
+        _core.mie_forward(1.5 - 1j, 1.0)
+    with pytest.raises(rainuav.InvalidInputError, match="axial_ratio"):
+        _core.depolarisation_factors(1.5)
+    with pytest.raises(rainuav.InvalidInputError, match="nodes_per_panel"):
+        _core.MediumConfig(
+            model="quasi-static",
+            polarization="h",
+            shape="sphere",
+            temperature_c=20.0,
+            wind_speed_m_s=0.0,
+            wind_model="canting",
+            dsd=m.NAMED_DSDS["marshall-palmer"],
+            nodes_per_panel=1,
+        )
+    with pytest.raises(rainuav.InvalidInputError, match="rain_rate_mm_h"):
+        _core.effective_medium(
+            np.ones(2) * 1e10,
+            np.ones(3),
+            _core.MediumConfig(
+                model="quasi-static",
+                polarization="h",
+                shape="sphere",
+                temperature_c=20.0,
+                wind_speed_m_s=0.0,
+                wind_model="canting",
+                dsd=m.NAMED_DSDS["marshall-palmer"],
+            ),
+        )

@@ -68,7 +68,7 @@ def run_rain(out_dir: Path) -> dict[str, Path]:
             w = csv.writer(fh)
             w.writerow(["freq_ghz", *[f"{k} [dB/km]" for k in curves]])
             for i, f in enumerate(freq_hz):
-                w.writerow([f"{f / 1e9:.6g}", *[f"{v[i]:.6e}" for v in curves.values()]])
+                w.writerow([f"{f / 1e9:.12g}", *[f"{v[i]:.6e}" for v in curves.values()]])
 
     csv_path = write_atomic(out_dir / "rain_attenuation.csv", write_csv)
 
