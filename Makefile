@@ -28,7 +28,7 @@ test-python: build
 
 bench: build
 	cargo bench -p rainuav-core
-	$(PYTHON) -m pytest benches --benchmark-enable --benchmark-only --benchmark-columns=min,median,mean,stddev,rounds
+	MIEPYTHON_USE_JIT=1 $(PYTHON) -m pytest benches --benchmark-enable --benchmark-only --benchmark-columns=min,median,mean,stddev,rounds
 
 fmt:
 	cargo fmt --all

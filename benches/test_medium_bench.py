@@ -2,7 +2,8 @@
 implementation of the same work (miepython Mie efficiencies on the same Gauss-Legendre
 nodes, integrated with numpy), in the same run.
 
-Run: ``make bench`` or ``pytest benches --benchmark-only``. Results go to BENCHMARKS.md.
+Run: ``make bench`` (sets ``MIEPYTHON_USE_JIT=1`` so the reference runs numba-compiled).
+Results go to BENCHMARKS.md.
 """
 
 from __future__ import annotations

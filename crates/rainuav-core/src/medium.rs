@@ -321,6 +321,19 @@ impl RainKernel {
         Ok(self.evaluate_unchecked(rain_rate_mm_h))
     }
 
+    /// The medium at each rain rate (all checked first), in parallel.
+    pub fn evaluate_many(&self, rain_rate_mm_h: ArrayView1<'_, f64>) -> Result<Vec<Effective>> {
+        rain_rate_mm_h
+            .iter()
+            .try_for_each(|&r| check_rain_rate(r))?;
+        let rates: Vec<f64> = rain_rate_mm_h.iter().copied().collect();
+        Ok(rates
+            .par_iter()
+            .with_min_len(256)
+            .map(|&r| self.evaluate_unchecked(r))
+            .collect())
+    }
+
     fn evaluate_unchecked(&self, rain_rate_mm_h: f64) -> Effective {
         let one = Complex64::new(1.0, 0.0);
         if rain_rate_mm_h == 0.0 {

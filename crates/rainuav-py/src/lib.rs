@@ -279,7 +279,7 @@ impl RainMediumKernel {
     ) -> PyResult<MediumArrays<'py>> {
         let r = rain_rate_mm_h.as_array();
         let kernel = &self.inner;
-        let all = detached(py, || r.iter().map(|&v| kernel.evaluate(v)).collect())?;
+        let all = detached(py, || kernel.evaluate_many(r))?;
         Ok(split(py, all))
     }
 }
