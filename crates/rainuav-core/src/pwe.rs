@@ -130,12 +130,24 @@ impl MarchSpec {
     /// Checks the spec.
     pub fn validate(&self) -> Result<()> {
         if self.nx < 4 || self.nx > 1 << 20 {
-            return Err(CoreError::invalid("nx", "must be within 4..1048576", self.nx));
+            return Err(CoreError::invalid(
+                "nx",
+                "must be within 4..1048576",
+                self.nx,
+            ));
         }
         if self.ny < 4 || self.ny > 1 << 20 {
-            return Err(CoreError::invalid("ny", "must be within 4..1048576", self.ny));
+            return Err(CoreError::invalid(
+                "ny",
+                "must be within 4..1048576",
+                self.ny,
+            ));
         }
-        for (name, v) in [("dx_m", self.dx_m), ("dy_m", self.dy_m), ("dz_m", self.dz_m)] {
+        for (name, v) in [
+            ("dx_m", self.dx_m),
+            ("dy_m", self.dy_m),
+            ("dz_m", self.dz_m),
+        ] {
             check_range(name, v, f64::MIN_POSITIVE, 1e6, "must be finite and > 0 m")?;
         }
         check_range(
@@ -302,10 +314,14 @@ fn taper(n: usize, frac: f64, lo: bool, hi: bool) -> Vec<f32> {
             let from_lo = i as f64;
             let from_hi = (n - 1 - i) as f64;
             if lo && from_lo < width {
-                w *= (std::f64::consts::FRAC_PI_2 * (1.0 - from_lo / width)).cos().powi(2);
+                w *= (std::f64::consts::FRAC_PI_2 * (1.0 - from_lo / width))
+                    .cos()
+                    .powi(2);
             }
             if hi && from_hi < width {
-                w *= (std::f64::consts::FRAC_PI_2 * (1.0 - from_hi / width)).cos().powi(2);
+                w *= (std::f64::consts::FRAC_PI_2 * (1.0 - from_hi / width))
+                    .cos()
+                    .powi(2);
             }
             w as f32
         })
@@ -324,7 +340,11 @@ impl Marcher {
             ));
         }
         if u0.iter().any(|z| !(z.re.is_finite() && z.im.is_finite())) {
-            return Err(CoreError::invalid("u0", "must be finite everywhere", "NaN or inf"));
+            return Err(CoreError::invalid(
+                "u0",
+                "must be finite everywhere",
+                "NaN or inf",
+            ));
         }
         let (nx, ny) = (spec.nx, spec.ny);
         let mut planner = FftPlanner::<f32>::new();
@@ -526,7 +546,12 @@ impl Marcher {
             .par_chunks_mut(ny)
             .zip(self.nyquist.par_iter_mut())
             .for_each_init(
-                || (vec![C32::default(); ylen], vec![C32::default(); scratch_len]),
+                || {
+                    (
+                        vec![C32::default(); ylen],
+                        vec![C32::default(); scratch_len],
+                    )
+                },
                 |(ext, scratch), (row, nq)| forward_row(ground, &*fft, row, nq, ext, scratch),
             );
         self.spectral = true;
@@ -629,7 +654,12 @@ impl Marcher {
             .zip(rec.par_chunks_mut(rec_rows.len().max(1)))
             .enumerate()
             .for_each_init(
-                || (vec![C32::default(); ylen], vec![C32::default(); scratch_len]),
+                || {
+                    (
+                        vec![C32::default(); ylen],
+                        vec![C32::default(); scratch_len],
+                    )
+                },
                 |(ext, scratch), (ix, ((row, nq), rec_row))| {
                     if ground == Ground::None {
                         inv.process_with_scratch(row, scratch);
@@ -639,10 +669,8 @@ impl Marcher {
                         row.copy_from_slice(&ext[..ny]);
                     }
                     match (uniform, medium) {
-                        (Some(s), _) => {
-                            if s != C32::new(1.0, 0.0) {
-                                row.iter_mut().for_each(|z| *z *= s);
-                            }
+                        (Some(s), _) if s != C32::new(1.0, 0.0) => {
+                            row.iter_mut().for_each(|z| *z *= s);
                         }
                         (None, StepMedium::Fixed) => {
                             let scr = &fixed.expect("checked in advance")[ix * ny..(ix + 1) * ny];
@@ -749,7 +777,11 @@ fn check_index(n: ArrayView2<'_, Complex64>, nx: usize, ny: usize) -> Result<()>
         ));
     }
     if n.iter().any(|z| !(z.re.is_finite() && z.im.is_finite())) {
-        return Err(CoreError::invalid("n", "must be finite everywhere", "NaN or inf"));
+        return Err(CoreError::invalid(
+            "n",
+            "must be finite everywhere",
+            "NaN or inf",
+        ));
     }
     Ok(())
 }
@@ -767,9 +799,11 @@ fn check_obstacle(obs: &StepObstacle<'_>, nx: usize, ny: usize) -> Result<()> {
             format!("heights must have {nx} values per step"),
             h.len(),
         )),
-        StepObstacle::Heights(h) if h.iter().any(|v| v.is_nan()) => {
-            Err(CoreError::invalid("obstacles", "heights must not be NaN", "NaN"))
-        }
+        StepObstacle::Heights(h) if h.iter().any(|v| v.is_nan()) => Err(CoreError::invalid(
+            "obstacles",
+            "heights must not be NaN",
+            "NaN",
+        )),
         _ => Ok(()),
     }
 }
@@ -777,6 +811,8 @@ fn check_obstacle(obs: &StepObstacle<'_>, nx: usize, ny: usize) -> Result<()> {
 /// Gaussian-beam aperture (PHYSICS.md section 4): height `height_m`, elevation tilt
 /// `elevation_deg`, half-power beamwidth `beamwidth_deg`, on the grid `x = (ix - nx/2) dx`,
 /// `y = iy dy`. Computed in f64, stored as complex64.
+// Mirrors `rainuav.pwe.gaussian_beam`'s signature one to one.
+#[allow(clippy::too_many_arguments)]
 pub fn gaussian_beam(
     nx: usize,
     ny: usize,
