@@ -12,12 +12,15 @@ import numpy.typing as npt
 __all__ = [
     "DropSizeDistribution",
     "MediumConfig",
+    "PeMarcher",
     "RainMediumKernel",
     "__version__",
     "axial_ratio",
+    "check_memory",
     "depolarisation_factors",
     "effective_medium",
     "gauss_legendre",
+    "gaussian_beam",
     "itu_p838",
     "mie_forward",
     "terminal_velocity_m_s",
@@ -28,6 +31,8 @@ __version__: str
 
 _F = npt.NDArray[np.float64]
 _C = npt.NDArray[np.complex128]
+_C64 = npt.NDArray[np.complex64]
+_B = npt.NDArray[np.bool_]
 
 @final
 class DropSizeDistribution:
@@ -101,3 +106,59 @@ def axial_ratio(shape: str, diameter_mm: float) -> float:
 
 def terminal_velocity_m_s(diameter_mm: float) -> float:
     """Atlas et al. (1973) terminal fall speed, m/s."""
+
+@final
+class PeMarcher:
+    """A split-step PE march in progress; ``rainuav.pwe.march`` drives it in chunks."""
+
+    def __new__(
+        cls,
+        u0: _C64,
+        *,
+        dx_m: float,
+        dy_m: float,
+        dz_m: float,
+        freq_hz: float,
+        propagator: str,
+        ground: str,
+        absorber: float,
+        n_fixed: _C | None = None,
+    ) -> PeMarcher: ...
+    @property
+    def steps_done(self) -> int:
+        """Steps done so far."""
+    def advance(
+        self,
+        steps: int,
+        *,
+        n_uniform: complex | None = None,
+        n_fixed: bool = False,
+        n_steps: _C | None = None,
+        mask_fixed: _B | None = None,
+        mask_steps: _B | None = None,
+        heights_fixed: _F | None = None,
+        heights_steps: _F | None = None,
+        record_rows: npt.NDArray[np.uint64],
+        rows_out: _C64 | None = None,
+        record_column: int | None = None,
+        column_out: _C64 | None = None,
+    ) -> None:
+        """Advances ``steps`` steps without the GIL; per-step inputs cover these steps."""
+    def finish(self) -> _C64:
+        """Hands the final (nx, ny) field over without copying; the marcher is spent."""
+
+def gaussian_beam(
+    nx: int,
+    ny: int,
+    dx_m: float,
+    dy_m: float,
+    *,
+    freq_hz: float,
+    height_m: float,
+    elevation_deg: float,
+    beamwidth_deg: float,
+) -> _C64:
+    """Gaussian-beam aperture (nx, ny) complex64."""
+
+def check_memory(bytes: int) -> None:
+    """Refuses a job needing ``bytes`` if it exceeds 80% of the available memory."""

@@ -464,6 +464,7 @@ impl Marcher {
         obstacle: &dyn Fn(usize) -> StepObstacle<'m>,
         recording: &mut Recording<'_>,
     ) -> Result<()> {
+        self.check_recording(steps, recording)?;
         for k in 0..steps {
             let global = self.steps_done;
             let med = medium(global);
@@ -518,6 +519,49 @@ impl Marcher {
                     .for_each(|(d, v)| *d = v);
             }
             self.steps_done += 1;
+        }
+        Ok(())
+    }
+
+    fn check_recording(&self, steps: usize, rec: &Recording<'_>) -> Result<()> {
+        let (nx, ny) = (self.spec.nx, self.spec.ny);
+        let end = self.steps_done + steps;
+        if let Some(&bad) = rec.record_rows.iter().find(|&&r| r >= ny) {
+            return Err(CoreError::invalid(
+                "record_rows",
+                format!("must be within 0..{ny}"),
+                bad,
+            ));
+        }
+        if let Some(rows) = &rec.rows {
+            let (r, s, x) = rows.dim();
+            if r != rec.record_rows.len() || s < end || x != nx {
+                return Err(CoreError::invalid(
+                    "rows",
+                    format!(
+                        "output must have shape ({}, >= {end}, {nx})",
+                        rec.record_rows.len()
+                    ),
+                    format!("{:?}", rows.dim()),
+                ));
+            }
+        }
+        if let Some((col, out)) = &rec.column {
+            if *col >= nx {
+                return Err(CoreError::invalid(
+                    "record_column",
+                    format!("must be within 0..{nx}"),
+                    col,
+                ));
+            }
+            let (s, y) = out.dim();
+            if s < end || y != ny {
+                return Err(CoreError::invalid(
+                    "column",
+                    format!("output must have shape (>= {end}, {ny})"),
+                    format!("{:?}", out.dim()),
+                ));
+            }
         }
         Ok(())
     }

@@ -1,0 +1,376 @@
+"""3-D split-step parabolic-equation propagation (``shared/PHYSICS.md`` section 4).
+
+Frame of one transmitter: z = range (the march axis), x = cross-range, y = height. Fields are
+``u[ix, iy]`` (complex64) on ``x = (ix - nx//2) dx_m``, ``y = iy dy_m``; with a ground, row
+``iy = 0`` is the ground. The full field is ``E = u exp(-j k0 z)``.
+
+The march runs in Rust (rustfft, rayon) without the GIL, in chunks of about a quarter of a
+second, so Ctrl-C stops it within a second and a progress bar or callback can follow it.
+
+Memory: the field, a propagator table (a quarter of a field, half with a ground) and, only
+for an (nx, ny) refractive index constant along range, its phase screen: at most 2.5 copies of
+the field, plus the recorded rows ``(len(record_rows), steps, nx)`` and column
+``(steps, ny)``. The job's bytes are estimated before anything is allocated and a job that
+would not fit in 80% of the available memory is refused with the number.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from rainuav import _core
+from rainuav._validation import as_real_scalar, check_choice
+from rainuav.errors import InvalidInputError
+
+__all__ = ["Marched", "gaussian_beam", "march", "pattern_source"]
+
+C0_M_S = 299_792_458.0
+PROPAGATORS = ("wide", "narrow")
+GROUNDS = ("pec-h", "pec-v")
+
+Complex64Array = npt.NDArray[np.complex64]
+
+
+@dataclass(frozen=True)
+class Marched:
+    """Result of :func:`march`."""
+
+    field: Complex64Array
+    """(nx, ny) complex64: the field after the last step."""
+    rows: Complex64Array
+    """(len(record_rows), steps, nx) complex64: the recorded rows after each step."""
+    column: Complex64Array | None = None
+    """(steps, ny) complex64: the vertical plane at ``record_column`` after each step."""
+
+
+def _field(name: str, value: Any) -> Complex64Array:
+    arr = np.asarray(value)
+    if arr.ndim != 2:
+        raise InvalidInputError(f"{name} must be a 2-D (nx, ny) array (got shape {arr.shape})")
+    if not (np.issubdtype(arr.dtype, np.number) or arr.dtype == np.bool_):
+        raise InvalidInputError(f"{name} must be numeric (got dtype {arr.dtype})")
+    out = np.ascontiguousarray(arr, dtype=np.complex64)
+    if not np.all(np.isfinite(out)):
+        raise InvalidInputError(f"{name} must be finite everywhere")
+    return out
+
+
+def _positive(name: str, value: Any) -> float:
+    v = as_real_scalar(name, value)
+    if not (np.isfinite(v) and v > 0):
+        raise InvalidInputError(f"{name} must be finite and > 0 (got {value!r})")
+    return v
+
+
+def _index(n: Any) -> np.ndarray | complex:
+    if np.isscalar(n) or (isinstance(n, np.ndarray) and n.ndim == 0):
+        z = complex(n)  # type: ignore[arg-type]
+        if not np.isfinite(z):
+            raise InvalidInputError(f"n must be finite (got {n!r})")
+        return z
+    arr = np.asarray(n)
+    if not np.issubdtype(arr.dtype, np.number):
+        raise InvalidInputError(f"n must be numbers (got dtype {arr.dtype})")
+    arr = np.ascontiguousarray(arr, dtype=np.complex128)
+    if not np.all(np.isfinite(arr)):
+        raise InvalidInputError("n must be finite everywhere")
+    return arr
+
+
+def _obstacle(obs: Any, nx: int, ny: int, steps: int | None) -> dict[str, np.ndarray]:
+    """Sorts an obstacle description into the core's keyword arguments."""
+    if obs is None:
+        return {}
+    arr = np.asarray(obs)
+    if arr.dtype == np.bool_:
+        if arr.shape == (nx, ny):
+            return {"mask_fixed": np.ascontiguousarray(arr)}
+        if arr.ndim == 3 and arr.shape[1:] == (nx, ny) and (steps is None or len(arr) == steps):
+            return {"mask_steps": np.ascontiguousarray(arr)}
+    elif np.issubdtype(arr.dtype, np.number):
+        h = np.ascontiguousarray(arr, dtype=np.float64)
+        if np.isnan(h).any():
+            raise InvalidInputError("obstacles heights must not be NaN")
+        if h.shape == (nx,):
+            return {"heights_fixed": h}
+        if h.ndim == 2 and h.shape[1] == nx and (steps is None or len(h) == steps):
+            return {"heights_steps": h}
+    raise InvalidInputError(
+        "obstacles must be a bool mask (nx, ny) or (steps, nx, ny), heights in metres (nx,) "
+        f"or (steps, nx), or a callable of the step (got shape {arr.shape}, dtype {arr.dtype}; "
+        f"nx={nx}, ny={ny}, steps={steps})"
+    )
+
+
+def march(
+    u0: npt.ArrayLike,
+    *,
+    dx_m: float,
+    dy_m: float,
+    dz_m: float,
+    steps: int,
+    freq_hz: float,
+    n: Any = 1.0,
+    propagator: str = "wide",
+    ground: str | None = None,
+    absorber: float = 0.0,
+    record_rows: Sequence[int] = (),
+    obstacles: Any = None,
+    record_column: int | None = None,
+    progress: bool | Callable[[int, int], None] = False,
+) -> Marched:
+    """Marches the aperture field ``u0`` (nx, ny) over ``steps`` range steps of ``dz_m``.
+
+    Args:
+        u0: (nx, ny) aperture at z = 0 (converted to complex64). ``u0[ix, iy]``.
+        dx_m, dy_m: cross-range and height spacings; ``dz_m``: range step (all > 0).
+        steps: number of range steps (>= 1).
+        freq_hz: frequency (1e6-1e12 Hz).
+        n: refractive index: a complex scalar (homogeneous, e.g. rain from
+            :func:`rainuav.medium.effective_index`), an (nx, ny) array constant along range,
+            a (steps, nx, ny) array, or a callable ``n(step) -> scalar | (nx, ny)``.
+        propagator: ``"wide"`` (exact spectral; evanescent waves decay) or ``"narrow"``
+            (paraxial, the paper's).
+        ground: ``None`` (periodic in y), ``"pec-h"`` or ``"pec-v"`` (flat PEC at ``iy = 0``
+            for horizontal / vertical polarisation, by images).
+        absorber: fraction (0-0.45) of the lateral edges and the top (and bottom without a
+            ground) over which a cos^2 window tapers the field to zero every step.
+        record_rows: rows ``iy`` (flight altitudes) recorded after every step.
+        obstacles: ``None``; a bool mask (nx, ny) used every step or (steps, nx, ny); heights
+            in metres (nx,) every step or (steps, nx), zeroing ``y <= height``; or a callable
+            ``obstacles(step)`` returning any of these per step.
+        record_column: optionally a column ``ix`` whose vertical plane is recorded.
+        progress: ``True`` for a progress bar, or a callable ``(done, total)``.
+
+    Returns:
+        :class:`Marched` with ``field`` (nx, ny), ``rows`` (len(record_rows), steps, nx) and
+        ``column`` (steps, ny) or None, all complex64.
+    """
+    u = _field("u0", u0)
+    nx, ny = u.shape
+    dx, dy, dz = (_positive(k, v) for k, v in (("dx_m", dx_m), ("dy_m", dy_m), ("dz_m", dz_m)))
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
+        raise InvalidInputError(f"steps must be an integer >= 1 (got {steps!r})")
+    steps = int(steps)
+    freq = as_real_scalar("freq_hz", freq_hz)
+    prop = check_choice("propagator", propagator, PROPAGATORS)
+    gnd = "none" if ground is None else check_choice("ground", ground, GROUNDS)
+    absorb = as_real_scalar("absorber", absorber)
+    rows_idx = np.asarray(record_rows, dtype=np.int64).reshape(-1)
+    if rows_idx.size and (rows_idx.min() < 0 or rows_idx.max() >= ny):
+        raise InvalidInputError(f"record_rows must be within 0..{ny - 1} (got {record_rows!r})")
+    if record_column is not None and not (0 <= int(record_column) < nx):
+        raise InvalidInputError(f"record_column must be within 0..{nx - 1} (got {record_column})")
+
+    n_callable = callable(n)
+    n_val = None if n_callable else _index(n)
+    n_fixed = None
+    if isinstance(n_val, np.ndarray):
+        if n_val.shape == (nx, ny):
+            n_fixed = n_val
+        elif n_val.shape != (steps, nx, ny):
+            raise InvalidInputError(
+                f"n must be a scalar, ({nx}, {ny}), ({steps}, {nx}, {ny}) or a callable "
+                f"(got shape {n_val.shape})"
+            )
+    obs_callable = callable(obstacles)
+    obs_kw = {} if obs_callable else _obstacle(obstacles, nx, ny, steps)
+
+    # Estimate every byte before allocating anything big.
+    c64 = 8
+    table = (ny // 2 + 1 if gnd == "none" else ny + 1) * (nx // 2 + 1) * c64
+    bytes_needed = (
+        2 * nx * ny * c64  # field + the handed-over copy of u0
+        + table
+        + (nx * ny * c64 if n_fixed is not None else 0)
+        + rows_idx.size * steps * nx * c64
+        + (steps * ny * c64 if record_column is not None else 0)
+    )
+    _core.check_memory(int(bytes_needed))
+
+    marcher = _core.PeMarcher(
+        u,
+        dx_m=dx,
+        dy_m=dy,
+        dz_m=dz,
+        freq_hz=freq,
+        propagator=prop,
+        ground=gnd,
+        absorber=absorb,
+        n_fixed=n_fixed,
+    )
+    rows_out = np.zeros((rows_idx.size, steps, nx), dtype=np.complex64)
+    column_out = None if record_column is None else np.zeros((steps, ny), dtype=np.complex64)
+    rows_u64 = rows_idx.astype(np.uint64)
+
+    bar = None
+    report: Callable[[int, int], None] | None = None
+    if progress is True:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=steps, desc="PE march", unit="step")
+    elif callable(progress):
+        report = progress
+
+    per_step = bool(n_callable or obs_callable)
+    done, chunk = 0, 1
+    try:
+        while done < steps:
+            k = 1 if per_step else min(chunk, steps - done)
+            kw: dict[str, Any] = {}
+            if n_callable:
+                nv = _index(n(done))
+                if isinstance(nv, np.ndarray):
+                    if nv.shape != (nx, ny):
+                        raise InvalidInputError(
+                            f"n({done}) must be a scalar or ({nx}, {ny}) (got {nv.shape})"
+                        )
+                    kw["n_steps"] = nv[None]
+                else:
+                    kw["n_uniform"] = nv
+            elif isinstance(n_val, complex):
+                kw["n_uniform"] = n_val
+            elif n_fixed is not None:
+                kw["n_fixed"] = True
+            else:
+                kw["n_steps"] = n_val[done : done + k]  # type: ignore[index]
+            if obs_callable:
+                o = _obstacle(obstacles(done), nx, ny, None)
+                kw.update({(key.replace("_fixed", "_steps")): v[None] for key, v in o.items()})
+            else:
+                for key, v in obs_kw.items():
+                    kw[key] = v[done : done + k] if key.endswith("_steps") else v
+            t0 = time.perf_counter()
+            marcher.advance(
+                k,
+                record_rows=rows_u64,
+                rows_out=rows_out,
+                record_column=record_column,
+                column_out=column_out,
+                **kw,
+            )
+            dt = time.perf_counter() - t0
+            done += k
+            # Aim for ~0.25 s per chunk: Ctrl-C and progress respond between chunks.
+            chunk = max(1, min(4 * chunk, int(0.25 * k / max(dt, 1e-6))))
+            if bar is not None:
+                bar.update(k)
+            if report is not None:
+                report(done, steps)
+    finally:
+        if bar is not None:
+            bar.close()
+    return Marched(field=marcher.finish(), rows=rows_out, column=column_out)
+
+
+def gaussian_beam(
+    nx: int,
+    ny: int,
+    dx_m: float,
+    dy_m: float,
+    *,
+    freq_hz: float,
+    height_m: float,
+    elevation_deg: float,
+    beamwidth_deg: float,
+) -> Complex64Array:
+    """Gaussian-beam aperture (PHYSICS.md section 4): centred at ``x = 0`` (column nx//2) and
+    ``y = height_m``, tilted up by ``elevation_deg``, with far-field half-power full width
+    ``beamwidth_deg``: ``exp(-j k0 sin(el) (y - h)) exp(-a^2 (x^2 + (y - h)^2) / (2 ln 2))``,
+    ``a = k0 sin(beamwidth / 2)``. Returns (nx, ny) complex64."""
+    return _core.gaussian_beam(
+        int(nx),
+        int(ny),
+        _positive("dx_m", dx_m),
+        _positive("dy_m", dy_m),
+        freq_hz=as_real_scalar("freq_hz", freq_hz),
+        height_m=as_real_scalar("height_m", height_m),
+        elevation_deg=as_real_scalar("elevation_deg", elevation_deg),
+        beamwidth_deg=as_real_scalar("beamwidth_deg", beamwidth_deg),
+    )
+
+
+def pattern_source(
+    nx: int,
+    ny: int,
+    dx_m: float,
+    dy_m: float,
+    *,
+    freq_hz: float,
+    height_m: float,
+    azimuth_deg: npt.ArrayLike,
+    elevation_deg: npt.ArrayLike,
+    gain_db: npt.ArrayLike,
+    tilt_deg: float = 0.0,
+) -> Complex64Array:
+    """Aperture synthesised from a tabulated antenna power pattern.
+
+    ``gain_db[i, j]`` is the gain at ``azimuth_deg[i]`` (cross-range angle, increasing) and
+    ``elevation_deg[j]`` (increasing), relative to boresight; ``tilt_deg`` tilts boresight up.
+    The aperture's angular spectrum is the amplitude pattern ``10^(gain_db / 20)`` sampled at
+    ``sin(angle) = k / k0`` (bilinear, zero outside the table and for evanescent waves),
+    shifted to ``height_m`` and brought to the aperture plane by an inverse FFT. Returns
+    (nx, ny) complex64 with ``x = (ix - nx//2) dx``, ``y = iy dy``, like :func:`gaussian_beam`.
+    """
+    az = np.asarray(azimuth_deg, dtype=np.float64)
+    el = np.asarray(elevation_deg, dtype=np.float64)
+    g = np.asarray(gain_db, dtype=np.float64)
+    if az.ndim != 1 or el.ndim != 1 or g.shape != (az.size, el.size):
+        raise InvalidInputError(
+            "gain_db must have shape (len(azimuth_deg), len(elevation_deg)) "
+            f"(got {g.shape} for {az.shape}, {el.shape})"
+        )
+    if az.size < 2 or el.size < 2 or np.any(np.diff(az) <= 0) or np.any(np.diff(el) <= 0):
+        raise InvalidInputError("azimuth_deg and elevation_deg must increase, >= 2 values each")
+    if not (np.all(np.isfinite(g)) and np.all(np.isfinite(az)) and np.all(np.isfinite(el))):
+        raise InvalidInputError("the pattern table must be finite")
+    dx, dy = _positive("dx_m", dx_m), _positive("dy_m", dy_m)
+    freq = _positive("freq_hz", freq_hz)
+    h = as_real_scalar("height_m", height_m)
+    tilt = as_real_scalar("tilt_deg", tilt_deg)
+    _core.check_memory(int(6 * nx * ny * 16))
+    k0 = 2 * np.pi * freq / C0_M_S
+    kx = 2 * np.pi * np.fft.fftfreq(nx, dx)
+    ky = 2 * np.pi * np.fft.fftfreq(ny, dy)
+    sx = np.clip(kx / k0, -1.0, 1.0)
+    sy = np.clip(ky / k0, -1.0, 1.0)
+    ang_x = np.degrees(np.arcsin(sx))
+    ang_y = np.degrees(np.arcsin(sy)) - tilt
+    amp = 10.0 ** (g / 20.0)
+    # Bilinear interpolation of the amplitude pattern, zero outside the table.
+    ix = np.interp(ang_x, az, np.arange(az.size), left=-1, right=-1)
+    iy = np.interp(ang_y, el, np.arange(el.size), left=-1, right=-1)
+    spec = np.zeros((nx, ny))
+    okx, oky = ix >= 0, iy >= 0
+    x0 = np.clip(np.floor(ix).astype(int), 0, az.size - 2)
+    y0 = np.clip(np.floor(iy).astype(int), 0, el.size - 2)
+    tx, ty = ix - x0, iy - y0
+    a = amp[x0][:, y0]
+    b = amp[x0 + 1][:, y0]
+    c = amp[x0][:, y0 + 1]
+    d = amp[x0 + 1][:, y0 + 1]
+    interp = (
+        a * np.outer(1 - tx, 1 - ty)
+        + b * np.outer(tx, 1 - ty)
+        + c * np.outer(1 - tx, ty)
+        + d * np.outer(tx, ty)
+    )
+    spec[np.ix_(okx, oky)] = interp[np.ix_(okx, oky)]
+    propagating = (kx[:, None] ** 2 + ky[None, :] ** 2) < k0**2
+    spec = spec * propagating
+    # A wave leaving at positive angles is exp(-j k0 sin(angle) y) (PHYSICS.md convention),
+    # which numpy's inverse FFT holds at negative wavenumbers: mirror the sampled pattern.
+    spec = spec[(-np.arange(nx)) % nx][:, (-np.arange(ny)) % ny]
+    # Centre the aperture at x = 0 (column nx//2) and y = h: f(r - r0) <-> F(k) exp(-j k r0).
+    shift = np.exp(-1j * kx[:, None] * (nx // 2) * dx) * np.exp(-1j * ky[None, :] * h)
+    u = np.fft.ifft2(spec * shift)
+    peak = np.abs(u).max()
+    if peak == 0:
+        raise InvalidInputError("the pattern has no energy inside the propagating spectrum")
+    return np.ascontiguousarray((u / peak).astype(np.complex64))
