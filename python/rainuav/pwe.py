@@ -55,10 +55,8 @@ def _field(name: str, value: Any) -> Complex64Array:
         raise InvalidInputError(f"{name} must be a 2-D (nx, ny) array (got shape {arr.shape})")
     if not (np.issubdtype(arr.dtype, np.number) or arr.dtype == np.bool_):
         raise InvalidInputError(f"{name} must be numeric (got dtype {arr.dtype})")
-    out = np.ascontiguousarray(arr, dtype=np.complex64)
-    if not np.all(np.isfinite(out)):
-        raise InvalidInputError(f"{name} must be finite everywhere")
-    return out
+    # Finiteness is checked in Rust, in the same pass that copies the field in.
+    return np.ascontiguousarray(arr, dtype=np.complex64)
 
 
 def _positive(name: str, value: Any) -> float:
