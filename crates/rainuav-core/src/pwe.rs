@@ -307,6 +307,8 @@ pub struct Marcher {
     steps_done: usize,
     /// Recorded rows of the current step, `rec_buf[ix * n_rows + r]` (reused across steps).
     rec_buf: Vec<C32>,
+    /// One image-extended column for recording the vertical plane (reused across steps).
+    col_buf: Vec<C32>,
 }
 
 /// cos^2 taper: 1 inside, to 0 at the edges over `frac * n` samples; `lo`/`hi` select edges.
@@ -424,6 +426,7 @@ impl Marcher {
             spectral: false,
             steps_done: 0,
             rec_buf: Vec::new(),
+            col_buf: Vec::new(),
             spec,
         };
         m.spectral = false;
@@ -521,16 +524,16 @@ impl Marcher {
             if let Some((col, out)) = recording.column.as_mut() {
                 // Between steps the rows hold y-spectra; one inverse FFT recovers this row.
                 let ny = self.spec.ny;
-                let row = if self.spectral {
+                let row: &[C32] = if self.spectral {
                     // Recover the real-space row: cheap (one row).
                     self.real_row(*col)
                 } else {
-                    self.field[*col * ny..(*col + 1) * ny].to_vec()
+                    &self.field[*col * ny..(*col + 1) * ny]
                 };
                 out.slice_mut(ndarray::s![global, ..])
                     .iter_mut()
                     .zip(row)
-                    .for_each(|(d, v)| *d = v);
+                    .for_each(|(d, v)| *d = *v);
             }
             self.steps_done += 1;
         }
@@ -580,17 +583,18 @@ impl Marcher {
         Ok(())
     }
 
-    /// The real-space values of row `ix` while the field is held as y-spectra.
-    fn real_row(&self, ix: usize) -> Vec<C32> {
+    /// The real-space values of row `ix` while the field is held as y-spectra, in
+    /// `self.col_buf[..ny]` (reused across steps).
+    fn real_row(&mut self, ix: usize) -> &[C32] {
         let ny = self.spec.ny;
         let ylen = self.spec.y_len();
-        let mut w = vec![C32::new(0.0, 0.0); ylen];
+        self.col_buf.resize(ylen, C32::default());
         let row = &self.field[ix * ny..(ix + 1) * ny];
-        let nyq = self.nyquist[ix];
-        spectrum_to_ext(self.spec.ground, row, nyq, &mut w);
-        self.row_inv.process(&mut w);
+        spectrum_to_ext(self.spec.ground, row, self.nyquist[ix], &mut self.col_buf);
+        self.row_inv.process(&mut self.col_buf);
         let s = 1.0 / ylen as f32;
-        w[..ny].iter().map(|z| z * s).collect()
+        self.col_buf[..ny].iter_mut().for_each(|z| *z *= s);
+        &self.col_buf[..ny]
     }
 
     /// Forward y transform of every row (real space -> y-spectra).
