@@ -16,7 +16,7 @@
 //! back; and a *row pass* that inverse-FFTs each row along y, applies the phase screen, the
 //! absorbing window and the obstacles, records the requested rows, and FFTs the row again
 //! for the next step. rustfft plans are made once; the hot loop allocates nothing
-//! (per-thread scratch is made once per pass by rayon's `for_each_init`).
+//! (each rayon thread has scratch buffers in the marcher's pool, sized once).
 //!
 //! **Ground.** A flat PEC ground is the image method: the column `u(x, y >= 0)` is extended
 //! to `2 ny` samples, odd (`"pec-h"`, `u(-y) = -u(y)`, a sine transform) or even (`"pec-v"`,
@@ -40,7 +40,7 @@ use num_complex::{Complex32, Complex64};
 use rayon::prelude::*;
 use rustfft::{Fft, FftPlanner};
 use std::str::FromStr;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard};
 
 /// Single-precision complex sample of the field.
 pub type C32 = Complex32;
@@ -284,6 +284,59 @@ impl FieldPtr {
     }
 }
 
+/// Scratch buffers of one thread: `a` holds an extended row or a block of columns, `b` is
+/// rustfft's scratch.
+#[derive(Default)]
+struct Scratch {
+    a: Vec<C32>,
+    b: Vec<C32>,
+}
+
+/// One [`Scratch`] per rayon thread, kept by the marcher so that steps allocate nothing.
+struct ScratchPool(Vec<Mutex<Scratch>>);
+
+/// A thread's pooled scratch, or a fresh one if its slot is busy (never in practice).
+enum ScratchGuard<'a> {
+    Pooled(MutexGuard<'a, Scratch>),
+    Fresh(Scratch),
+}
+
+impl ScratchPool {
+    fn new() -> Self {
+        ScratchPool(
+            (0..rayon::current_num_threads().max(1))
+                .map(|_| Mutex::new(Scratch::default()))
+                .collect(),
+        )
+    }
+
+    /// Scratch with `a.len() >= a_len` and `b.len() >= b_len` for the calling thread.
+    fn get(&self, a_len: usize, b_len: usize) -> ScratchGuard<'_> {
+        let slot = rayon::current_thread_index().and_then(|i| self.0.get(i));
+        let mut g = match slot.map(Mutex::try_lock) {
+            Some(Ok(guard)) => ScratchGuard::Pooled(guard),
+            _ => ScratchGuard::Fresh(Scratch::default()),
+        };
+        let s = g.scratch();
+        if s.a.len() < a_len {
+            s.a.resize(a_len, C32::default());
+        }
+        if s.b.len() < b_len {
+            s.b.resize(b_len, C32::default());
+        }
+        g
+    }
+}
+
+impl ScratchGuard<'_> {
+    fn scratch(&mut self) -> &mut Scratch {
+        match self {
+            ScratchGuard::Pooled(g) => g,
+            ScratchGuard::Fresh(s) => s,
+        }
+    }
+}
+
 /// A field being marched. Build with [`Marcher::new`], advance with [`Marcher::advance`].
 pub struct Marcher {
     spec: MarchSpec,
@@ -309,6 +362,8 @@ pub struct Marcher {
     rec_buf: Vec<C32>,
     /// One image-extended column for recording the vertical plane (reused across steps).
     col_buf: Vec<C32>,
+    /// Per-thread scratch of the passes.
+    pool: ScratchPool,
 }
 
 /// cos^2 taper: 1 inside, to 0 at the edges over `frac * n` samples; `lo`/`hi` select edges.
@@ -427,6 +482,7 @@ impl Marcher {
             steps_done: 0,
             rec_buf: Vec::new(),
             col_buf: Vec::new(),
+            pool: ScratchPool::new(),
             spec,
         };
         m.spectral = false;
@@ -608,13 +664,11 @@ impl Marcher {
             .par_chunks_mut(ny)
             .zip(self.nyquist.par_iter_mut())
             .for_each_init(
-                || {
-                    (
-                        vec![C32::default(); ylen],
-                        vec![C32::default(); scratch_len],
-                    )
+                || self.pool.get(ylen, scratch_len),
+                |g, (row, nq)| {
+                    let s = g.scratch();
+                    forward_row(ground, &*fft, row, nq, &mut s.a[..ylen], &mut s.b)
                 },
-                |(ext, scratch), (row, nq)| forward_row(ground, &*fft, row, nq, ext, scratch),
             );
         self.spectral = true;
     }
@@ -668,15 +722,13 @@ impl Marcher {
         };
         let ptr = FieldPtr(self.field.as_mut_ptr());
         let blocks = ny.div_ceil(COLUMN_BLOCK);
+        let pool = &self.pool;
         (0..blocks).into_par_iter().for_each_init(
-            || {
-                (
-                    vec![C32::default(); COLUMN_BLOCK * nx],
-                    vec![C32::default(); scratch_len],
-                )
-            },
-            |(buf, scratch), b| {
-                let m0 = b * COLUMN_BLOCK;
+            || pool.get(COLUMN_BLOCK * nx, scratch_len),
+            |g, block| {
+                let Scratch { a: buf, b } = g.scratch();
+                let scratch = b.as_mut_slice();
+                let m0 = block * COLUMN_BLOCK;
                 let w = COLUMN_BLOCK.min(ny - m0);
                 let base = ptr.get();
                 // SAFETY (both loops): this task alone touches columns m0..m0+w of the
@@ -754,19 +806,17 @@ impl Marcher {
             .max(fwd.get_inplace_scratch_len());
         let (rec_rows, rec) = record;
         debug_assert_eq!(rec.len(), nx * rec_rows.len().max(1));
+        let pool = &self.pool;
         self.field
             .par_chunks_mut(ny)
             .zip(self.nyquist.par_iter_mut())
             .zip(rec.par_chunks_mut(rec_rows.len().max(1)))
             .enumerate()
             .for_each_init(
-                || {
-                    (
-                        vec![C32::default(); ylen],
-                        vec![C32::default(); scratch_len],
-                    )
-                },
-                |(ext, scratch), (ix, ((row, nq), rec_row))| {
+                || pool.get(ylen, scratch_len),
+                |g, (ix, ((row, nq), rec_row))| {
+                    let Scratch { a, b } = g.scratch();
+                    let (ext, scratch) = (&mut a[..ylen], b.as_mut_slice());
                     if ground == Ground::None {
                         inv.process_with_scratch(row, scratch);
                     } else {
