@@ -464,7 +464,8 @@ impl Marcher {
         };
 
         let mut m = Marcher {
-            field: huge_page_buffer(u0),
+            // `iter()` walks in logical (ix, iy) order whatever u0's memory layout.
+            field: u0.iter().copied().collect(),
             // Used by "pec-v" only; zeros (and untouched by the column pass) otherwise, so the
             // row passes can zip over it unconditionally.
             nyquist: vec![C32::default(); nx],
@@ -870,40 +871,6 @@ impl Marcher {
             );
         self.spectral = forward_again;
     }
-}
-
-/// The field buffer, filled from `u0` in row-major order. On Linux the allocation is
-/// advised to use transparent huge pages before it is first touched: the column pass reads
-/// every row of the field at a stride of `8 ny` bytes, and with 4 KiB pages each of those
-/// reads would miss the TLB (measured: the 4096 x 1024 step drops from ~26 ms to ~X ms).
-fn huge_page_buffer(u0: ArrayView2<'_, C32>) -> Vec<C32> {
-    let len = u0.len();
-    let mut v: Vec<C32> = Vec::with_capacity(len);
-    #[cfg(target_os = "linux")]
-    {
-        let bytes = len * size_of::<C32>();
-        if bytes >= 4 << 20 {
-            let page = 2usize << 20;
-            let start = v.as_mut_ptr() as usize;
-            let aligned = start.div_ceil(page) * page;
-            let end = (start + bytes) / page * page;
-            if end > aligned {
-                // SAFETY: advisory only; the range lies inside this Vec's allocation and the
-                // call neither reads nor writes memory. A failure just leaves 4 KiB pages.
-                #[allow(unsafe_code)]
-                unsafe {
-                    libc::madvise(
-                        aligned as *mut libc::c_void,
-                        end - aligned,
-                        libc::MADV_HUGEPAGE,
-                    );
-                }
-            }
-        }
-    }
-    // `iter()` walks in logical (ix, iy) order whatever u0's memory layout.
-    v.extend(u0.iter().copied());
-    v
 }
 
 /// Forward y transform of one row: plain FFT, or image extension then FFT with a ground.
