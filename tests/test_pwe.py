@@ -253,3 +253,17 @@ def test_recording_and_obstacle_forms() -> None:
     seen = []
     pwe.march(u0, progress=lambda done, total: seen.append((done, total)), **kw)
     assert seen[-1] == (6, 6)
+
+
+def test_cross_range_index_matches_full_array() -> None:
+    # n varying with cross-range only: the (steps, nx) form equals the (steps, nx, ny) form.
+    d, n = 0.1, 64
+    u0 = tilted_beam(n, n, d, 0.0, 3.2, 0.8, tx_deg=5.0)
+    kw = {"dx_m": d, "dy_m": d, "dz_m": 2.0, "steps": 5, "freq_hz": 28e9}
+    rates = np.linspace(0.0, 100.0, n)
+    prof = np.tile(medium.effective_index(28e9, rates), (5, 1))
+    a = pwe.march(u0, n_cross_range=prof, **kw).field
+    b = pwe.march(u0, n=np.repeat(prof[:, :, None], n, axis=2), **kw).field
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-6)
+    with pytest.raises(ValueError, match="n_cross_range"):
+        pwe.march(u0, n_cross_range=prof[:, :3], **kw)

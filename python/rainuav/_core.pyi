@@ -134,6 +134,7 @@ class PeMarcher:
         n_uniform: complex | None = None,
         n_fixed: bool = False,
         n_steps: _C | None = None,
+        n_cross_range: _C | None = None,
         mask_fixed: _B | None = None,
         mask_steps: _B | None = None,
         heights_fixed: _F | None = None,

@@ -122,6 +122,7 @@ def march(
     obstacles: Any = None,
     record_column: int | None = None,
     progress: bool | Callable[[int, int], None] = False,
+    n_cross_range: npt.ArrayLike | None = None,
 ) -> Marched:
     """Marches the aperture field ``u0`` (nx, ny) over ``steps`` range steps of ``dz_m``.
 
@@ -145,6 +146,8 @@ def march(
             ``obstacles(step)`` returning any of these per step.
         record_column: optionally a column ``ix`` whose vertical plane is recorded.
         progress: ``True`` for a progress bar, or a callable ``(done, total)``.
+        n_cross_range: instead of ``n``, a (steps, nx) index varying with cross-range only
+            (rain cells: rate varies horizontally, not with height); one factor per row.
 
     Returns:
         :class:`Marched` with ``field`` (nx, ny), ``rows`` (len(record_rows), steps, nx) and
@@ -176,6 +179,16 @@ def march(
             raise InvalidInputError(
                 f"n must be a scalar, ({nx}, {ny}), ({steps}, {nx}, {ny}) or a callable "
                 f"(got shape {n_val.shape})"
+            )
+    n_cross = None
+    if n_cross_range is not None:
+        if n_callable or not (isinstance(n_val, complex) and n_val == 1):
+            raise InvalidInputError("give either n or n_cross_range, not both")
+        n_cross = _index(n_cross_range)
+        if not isinstance(n_cross, np.ndarray) or n_cross.shape != (steps, nx):
+            raise InvalidInputError(
+                f"n_cross_range must have shape ({steps}, {nx}) "
+                f"(got {np.shape(n_cross_range)})"
             )
     obs_callable = callable(obstacles)
     obs_kw = {} if obs_callable else _obstacle(obstacles, nx, ny, steps)
@@ -232,6 +245,8 @@ def march(
                     kw["n_steps"] = nv[None]
                 else:
                     kw["n_uniform"] = nv
+            elif n_cross is not None:
+                kw["n_cross_range"] = n_cross[done : done + k]
             elif isinstance(n_val, complex):
                 kw["n_uniform"] = n_val
             elif n_fixed is not None:

@@ -230,8 +230,11 @@ pub enum StepMedium<'a> {
     Uniform(Complex64),
     /// The (nx, ny) index given to [`Marcher::set_fixed_index`], constant along range.
     Fixed,
-    /// An (nx, ny) index for this step only (rain cells); its screen is computed on the fly.
+    /// An (nx, ny) index for this step only; its screen is computed on the fly.
     Index(ArrayView2<'a, Complex64>),
+    /// An index varying with cross-range only, (nx,), for this step (rain cells whose rate
+    /// varies horizontally but not with height): one screen factor per row.
+    CrossRange(ArrayView1<'a, Complex64>),
 }
 
 /// What blocks the field at one step.
@@ -539,6 +542,22 @@ impl Marcher {
             let med = medium(global);
             match med {
                 StepMedium::Index(n) => check_index(n, self.spec.nx, self.spec.ny)?,
+                StepMedium::CrossRange(n) => {
+                    if n.len() != self.spec.nx {
+                        return Err(CoreError::invalid(
+                            "n_cross_range",
+                            format!("must have {} values per step", self.spec.nx),
+                            n.len(),
+                        ));
+                    }
+                    if n.iter().any(|z| !(z.re.is_finite() && z.im.is_finite())) {
+                        return Err(CoreError::invalid(
+                            "n_cross_range",
+                            "must be finite",
+                            "NaN or inf",
+                        ));
+                    }
+                }
                 StepMedium::Fixed if self.fixed_screen.is_none() => {
                     return Err(CoreError::invalid(
                         "n",
@@ -832,6 +851,10 @@ impl Marcher {
                         (None, StepMedium::Fixed) => {
                             let scr = &fixed.expect("checked in advance")[ix * ny..(ix + 1) * ny];
                             row.iter_mut().zip(scr).for_each(|(z, s)| *z *= s);
+                        }
+                        (None, StepMedium::CrossRange(n)) => {
+                            let f = to_c32(screen_factor(n[ix], half_k0_dz));
+                            row.iter_mut().for_each(|z| *z *= f);
                         }
                         (None, StepMedium::Index(n)) => {
                             row.iter_mut().zip(n.row(ix)).for_each(|(z, &nn)| {

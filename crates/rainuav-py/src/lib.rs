@@ -458,7 +458,7 @@ impl PeMarcher {
     }
 
     /// Advances `steps` steps without the GIL. Per-step inputs cover exactly these steps.
-    #[pyo3(signature = (steps, *, n_uniform=None, n_fixed=false, n_steps=None, mask_fixed=None,
+    #[pyo3(signature = (steps, *, n_uniform=None, n_fixed=false, n_steps=None, n_cross_range=None, mask_fixed=None,
         mask_steps=None, heights_fixed=None, heights_steps=None, record_rows, rows_out=None,
         record_column=None, column_out=None))]
     #[allow(clippy::too_many_arguments)]
@@ -469,6 +469,7 @@ impl PeMarcher {
         n_uniform: Option<Complex64>,
         n_fixed: bool,
         n_steps: Option<PyReadonlyArray3<'_, Complex64>>,
+        n_cross_range: Option<PyReadonlyArray2<'_, Complex64>>,
         mask_fixed: Option<PyReadonlyArray2<'_, bool>>,
         mask_steps: Option<PyReadonlyArray3<'_, bool>>,
         heights_fixed: Option<PyReadonlyArray1<'_, f64>>,
@@ -481,12 +482,14 @@ impl PeMarcher {
         let m = self.marcher()?;
         let start = m.steps_done();
         let n_steps = n_steps.as_ref().map(|a| a.as_array());
+        let n_cross = n_cross_range.as_ref().map(|a| a.as_array());
         let mask_fixed = mask_fixed.as_ref().map(|a| a.as_array());
         let mask_steps = mask_steps.as_ref().map(|a| a.as_array());
         let heights_fixed = heights_fixed.as_ref().map(|a| a.as_array());
         let heights_steps = heights_steps.as_ref().map(|a| a.as_array());
         for (name, len) in [
             ("n", n_steps.map(|a| a.dim().0)),
+            ("n_cross_range", n_cross.map(|a| a.dim().0)),
             ("obstacles", mask_steps.map(|a| a.dim().0)),
             ("obstacles", heights_steps.map(|a| a.dim().0)),
         ] {
@@ -511,11 +514,18 @@ impl PeMarcher {
                 _ => None,
             },
         };
-        let medium = move |g: usize| match (n_steps, n_uniform) {
-            (Some(a), _) => StepMedium::Index(a.index_axis_move(ndarray::Axis(0), g - start)),
-            (None, Some(n)) => StepMedium::Uniform(n),
-            (None, None) if n_fixed => StepMedium::Fixed,
-            (None, None) => StepMedium::Uniform(Complex64::new(1.0, 0.0)),
+        let medium = move |g: usize| {
+            if let Some(a) = n_steps {
+                StepMedium::Index(a.index_axis_move(ndarray::Axis(0), g - start))
+            } else if let Some(a) = n_cross {
+                StepMedium::CrossRange(a.index_axis_move(ndarray::Axis(0), g - start))
+            } else if let Some(n) = n_uniform {
+                StepMedium::Uniform(n)
+            } else if n_fixed {
+                StepMedium::Fixed
+            } else {
+                StepMedium::Uniform(Complex64::new(1.0, 0.0))
+            }
         };
         let obstacle = move |g: usize| {
             if let Some(a) = mask_steps {
