@@ -187,8 +187,7 @@ def march(
         n_cross = _index(n_cross_range)
         if not isinstance(n_cross, np.ndarray) or n_cross.shape != (steps, nx):
             raise InvalidInputError(
-                f"n_cross_range must have shape ({steps}, {nx}) "
-                f"(got {np.shape(n_cross_range)})"
+                f"n_cross_range must have shape ({steps}, {nx}) (got {np.shape(n_cross_range)})"
             )
     obs_callable = callable(obstacles)
     obs_kw = {} if obs_callable else _obstacle(obstacles, nx, ny, steps)
