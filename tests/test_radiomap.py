@@ -1,0 +1,269 @@
+"""Radio maps against Friis, the specific attenuation, rain-cell path integrals, building
+shadows and hand-computed SIR; scenario files, the cache and bad scenarios."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import rainuav
+from rainuav import medium, radiomap, scenarios
+from rainuav.scenario import Area, Building, Cell, Medium, PESettings, RainCell, Scenario, Site
+
+C0 = 299_792_458.0
+
+
+@pytest.fixture(autouse=True)
+def _private_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("RAINUAV_CACHE_DIR", str(tmp_path / "cache"))
+
+
+def beam_line(freq_hz=4.9e9, bw=4.333, length=600.0, med=None, buildings=(), res=5.0):
+    """One horizontal beam from (0, 500) at 100 m along +x, free space, flying at 100 m."""
+    area = Area(
+        x_min_m=0.0,
+        x_max_m=length,
+        y_min_m=500 - 10 * res - res / 2,
+        y_max_m=500 + 10 * res + res / 2,
+        altitude_m=100.0,
+        resolution_m=res,
+    )
+    return Scenario(
+        name="line",
+        freq_hz=freq_hz,
+        area=area,
+        ground="none",
+        sites=[
+            Site(
+                x_m=0.0,
+                y_m=500.0,
+                height_m=100.0,
+                cells=[Cell(azimuth_deg=0.0, tilt_deg=0.0, beamwidth_deg=bw)],
+            )
+        ],
+        medium=med or Medium(kind="clear"),
+        buildings=list(buildings),
+        pe=PESettings(top_margin_m=30.0),
+    )
+
+
+def boresight(rm):
+    i = int(np.argmin(np.abs(rm.y_m - 500.0)))
+    assert abs(rm.y_m[i] - 500.0) < 1e-9
+    return rm.x_m, rm.rss_dbm[0, i]
+
+
+def test_friis_on_boresight() -> None:
+    # Far-field boresight power of a Gaussian beam: Pt + D + 20 log10(lambda / (4 pi r)) with
+    # D = 4 ln2 / (sin(bh/2) sin(bv/2)) (PHYSICS.md beam). zR = 4.7 m here, so beyond 100 m
+    # the near-field correction is < 0.01 dB; 0.5 dB is the issue's bar on the calibration.
+    scn = beam_line()
+    rm = scn.radio_map(cache=False)
+    x, rss = boresight(rm)
+    lam = C0 / scn.freq_hz
+    s = math.sin(math.radians(4.333 / 2))
+    d_dbi = 10 * math.log10(4 * math.log(2) / s**2)
+    sel = x > 100
+    friis = 46.0 + d_dbi + 20 * np.log10(lam / (4 * np.pi * x[sel]))
+    err = np.abs(rss[sel] - friis)
+    assert err.max() < 0.5, err.max()
+
+
+def test_homogeneous_rain_on_boresight() -> None:
+    # Rain minus clear along boresight equals -gamma * r within 0.1 dB (28 GHz, 25 mm/h:
+    # 4.8 dB/km, so up to 2.4 dB at 500 m); and rain never adds power anywhere (one beam:
+    # no interference).
+    kw = {"freq_hz": 28e9, "bw": 2.0, "length": 500.0}
+    clear = beam_line(**kw).radio_map(cache=False)
+    rain = beam_line(**kw, med=Medium(kind="homogeneous", rain_rate_mm_h=25.0)).radio_map(
+        cache=False
+    )
+    x, rc = boresight(clear)
+    _, rr = boresight(rain)
+    gamma = medium.specific_attenuation(28e9, 25.0)
+    sel = x > 50
+    assert np.abs((rr - rc)[sel] + gamma * x[sel] / 1000).max() < 0.1
+    strong = clear.rss_dbm > clear.rss_dbm.max() - 60
+    assert np.all(rain.rss_dbm[strong] <= clear.rss_dbm[strong] + 1e-6)
+
+
+def test_rain_cell_loss_is_the_path_integral() -> None:
+    # A gaussian rain cell straddling the beam at 250 m: the loss at 500 m equals the
+    # integral of the specific attenuation of the local rate along the path within 5%.
+    cell = RainCell(x_m=250.0, y_m=500.0, radius_m=60.0, peak_rate_mm_h=80.0)
+    kw = {"freq_hz": 28e9, "bw": 2.0, "length": 500.0}
+    clear = beam_line(**kw).radio_map(cache=False)
+    rain = beam_line(**kw, med=Medium(kind="cells", rain_rate_mm_h=0.0, cells=[cell])).radio_map(
+        cache=False
+    )
+    x, rc = boresight(clear)
+    _, rr = boresight(rain)
+    z = np.linspace(0, x[-1], 4001)
+    gamma = medium.specific_attenuation(28e9, cell.rate(z, 500.0))
+    want = np.trapezoid(gamma, z) / 1000
+    got = rc[-1] - rr[-1]
+    assert want > 1.0
+    assert got == pytest.approx(want, rel=0.05)
+
+
+def test_building_casts_a_shadow() -> None:
+    # A 150 m tall slab across the beam at 200-220 m: behind it the power is at least 10 dB
+    # below the same map without it.
+    slab = Building(x0_m=200.0, x1_m=220.0, y0_m=300.0, y1_m=700.0, height_m=150.0)
+    free = beam_line().radio_map(cache=False)
+    shadow = beam_line(buildings=[slab]).radio_map(cache=False)
+    x, rf = boresight(free)
+    _, rs = boresight(shadow)
+    behind = x > 300
+    assert np.all(rs[behind] <= rf[behind] - 10)
+    np.testing.assert_allclose(rs[x < 190], rf[x < 190], atol=1e-6)
+
+
+def test_sir_by_hand() -> None:
+    # Three cells, three pixels: hand-computed serving cell, SIR and SINR (PHYSICS.md 5).
+    p = np.array([[[1.0, 1e-3, 0.0]], [[0.5, 2e-3, 0.0]], [[0.25, 0.0, 0.0]]])
+    serving, sir, sinr = radiomap.sir_from_power(p, noise_dbm=10 * np.log10(0.25))
+    assert serving.tolist() == [[0, 1, -1]]
+    assert sir[0, 0] == pytest.approx(10 * np.log10(1.0 / 0.75))
+    assert sir[0, 1] == pytest.approx(10 * np.log10(2e-3 / 1e-3))
+    assert sir[0, 2] == radiomap.SIR_FLOOR_DB
+    assert sinr[0, 0] == pytest.approx(10 * np.log10(1.0 / 1.0))
+    assert np.isfinite(sir).all() and np.isfinite(sinr).all()
+
+
+def test_mirror_symmetric_scenario_gives_mirror_symmetric_map() -> None:
+    area = Area(x_min_m=0, x_max_m=2000, y_min_m=0, y_max_m=1000, altitude_m=100, resolution_m=20)
+    sites = [
+        Site(x_m=700.0, y_m=200.0, cells=[Cell(azimuth_deg=60.0, beamwidth_deg=8.0)]),
+        Site(x_m=1300.0, y_m=200.0, cells=[Cell(azimuth_deg=120.0, beamwidth_deg=8.0)]),
+    ]
+    rm = Scenario(name="mirror", area=area, sites=sites).radio_map(cache=False)
+    a, b = rm.rss_dbm[0], rm.rss_dbm[1][:, ::-1]
+    strong = (a > a.max() - 50) | (b > b.max() - 50)
+    # The march grids are symmetric up to their one extra sample at -nx/2 (in the absorber):
+    # 0.05 dB.
+    assert np.abs(a - b)[strong].max() < 0.05
+    sir = rm.sir_db
+    both = strong & strong[:, ::-1]
+    assert np.abs(sir - sir[:, ::-1])[both].max() < 0.1
+
+
+def test_paper_preset_has_good_and_weak_regions() -> None:
+    rm = scenarios.paper(rain_rate_mm_h=25.0).radio_map(cache=True)
+    cov = rm.coverage(10.0)
+    assert 0.10 <= cov <= 0.95, cov
+    assert rm.rss_dbm.shape == (7, 200, 200)
+    assert np.isfinite(rm.sir_db).all() and np.isfinite(rm.sinr_db).all()
+    # The cache returns the same map, bit for bit.
+    again = scenarios.paper(rain_rate_mm_h=25.0).radio_map(cache=True)
+    np.testing.assert_array_equal(again.rss_dbm, rm.rss_dbm)
+    assert again.build_seconds == 0.0
+
+
+def test_save_load_round_trip_and_corrupt_cache(tmp_path: Path) -> None:
+    scn = beam_line(length=200.0, res=10.0)
+    rm = scn.radio_map(cache=True)
+    path = rm.save(tmp_path / "m.npz")
+    back = radiomap.RadioMap.load(path)
+    for k in radiomap.RadioMap._ARRAYS:
+        np.testing.assert_array_equal(getattr(back, k), getattr(rm, k))
+        assert getattr(back, k).dtype == getattr(rm, k).dtype
+    assert back.scenario == scn and back.extent_m == rm.extent_m
+    # A corrupt cache entry is rebuilt, not trusted.
+    entry = radiomap.cache_dir() / "radiomaps" / f"{scn.digest()}.npz"
+    entry.write_bytes(b"not a zip")
+    rebuilt = scn.radio_map(cache=True)
+    np.testing.assert_array_equal(rebuilt.rss_dbm, rm.rss_dbm)
+    assert radiomap.RadioMap.load(entry).scenario == scn
+    with pytest.raises(rainuav.InvalidInputError, match="radio map"):
+        radiomap.RadioMap.load(tmp_path / "missing.npz")
+
+
+def test_toml_round_trip(tmp_path: Path) -> None:
+    for scn in (
+        scenarios.paper(),
+        scenarios.urban(rain_rate_mm_h=0.0),
+        beam_line(med=Medium(kind="cells", cells=[RainCell(1, 2, 3, 4)])),
+    ):
+        path = scn.to_toml(tmp_path / f"{scn.name}.toml")
+        back = Scenario.from_toml(path)
+        assert back == scn
+        assert back.digest() == scn.digest()
+
+
+@pytest.mark.parametrize(
+    ("change", "needle"),
+    [
+        (lambda s: s.sites.append(Site(x_m=5000.0, y_m=10.0)), "sites[7].x_m"),
+        (lambda s: setattr(s.area, "altitude_m", -5.0), "area.altitude_m"),
+        (lambda s: setattr(s.area, "altitude_m", 0.0), "area.altitude_m"),
+        (lambda s: s.sites[0].cells.append(Cell(azimuth_deg=0.0)), "overlaps another cell"),
+        (lambda s: setattr(s.sites[1], "cells", []), "sites[1].cells"),
+        (lambda s: s.sites.append(Site(x_m=1000.0, y_m=1000.0)), "overlaps another site"),
+        (lambda s: setattr(s.medium, "rain_rate_mm_h", -1.0), "medium.rain_rate_mm_h"),
+        (lambda s: setattr(s, "freq_hz", 1e6), "freq_hz"),
+        (lambda s: setattr(s.area, "x_max_m", -1.0), "area.x_max_m"),
+        (lambda s: setattr(s.sites[0].cells[0], "beamwidth_deg", 0.0), "beamwidth_deg"),
+        (lambda s: setattr(s.medium, "kind", "fog"), "medium.kind"),
+        (lambda s: s.buildings.append(Building(990, 1010, 990, 1010, 30.0)), "inside"),
+    ],
+)
+def test_invalid_scenarios(change, needle) -> None:
+    scn = scenarios.paper()
+    change(scn)
+    with pytest.raises(ValueError, match=re_escape(needle)) as info:
+        scn.validate()
+    assert isinstance(info.value, rainuav.InvalidInputError)
+
+
+def re_escape(s: str) -> str:
+    import re
+
+    return re.escape(s)
+
+
+def test_unknown_toml_field_and_grid_beyond_memory(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "x"\nfrequency = 5e9\n')
+    with pytest.raises(rainuav.InvalidInputError, match="unknown field"):
+        Scenario.from_toml(bad)
+    # 100 GHz, wide beams, 20 km: each march would need far more than this machine has.
+    huge = scenarios.paper(
+        freq_hz=1e11,
+        area=Area(x_min_m=0, x_max_m=20000, y_min_m=0, y_max_m=20000, resolution_m=50),
+        sites=[Site(x_m=100.0, y_m=100.0, cells=[Cell(azimuth_deg=45.0, beamwidth_deg=30.0)])],
+    )
+    with pytest.raises(rainuav.InvalidInputError, match="GB"):
+        huge.radio_map(cache=False)
+
+
+def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
+    cfg = beam_line(length=200.0, res=10.0).to_toml(tmp_path / "tiny.toml")
+    out = tmp_path / "maps"
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "rainuav.radiomap",
+            "--config",
+            str(cfg),
+            "--rain-rate",
+            "10",
+            "--out",
+            str(out),
+            "--no-cache",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={"MPLBACKEND": "Agg", "PATH": "", "RAINUAV_CACHE_DIR": str(tmp_path / "c")},
+    )
+    assert "SIR >= 10 dB" in proc.stdout
+    rm = radiomap.RadioMap.load(out / "radiomap.npz")
+    assert rm.scenario.medium.rain_rate_mm_h == 10.0
+    for png in ("rss.png", "sir.png"):
+        assert (out / png).read_bytes()[:4] == b"\x89PNG"
