@@ -206,8 +206,15 @@ def _aperture(scn: Scenario, site: Site, cell: Cell, plan: CellPlan) -> np.ndarr
     if cell.pattern is not None:
         p = cell.pattern
         return pwe.pattern_source(
-            plan.nx, plan.ny, plan.dx_m, plan.dy_m, freq_hz=scn.freq_hz, height_m=h,
-            azimuth_deg=p.azimuth_deg, elevation_deg=p.elevation_deg, gain_db=p.gain_db,
+            plan.nx,
+            plan.ny,
+            plan.dx_m,
+            plan.dy_m,
+            freq_hz=scn.freq_hz,
+            height_m=h,
+            azimuth_deg=p.azimuth_deg,
+            elevation_deg=p.elevation_deg,
+            gain_db=p.gain_db,
             tilt_deg=cell.tilt_deg,
         )
     # Gaussian beam with separate horizontal and vertical beamwidths (PHYSICS.md section 4).
@@ -335,7 +342,11 @@ def march_cell(scn: Scenario, site: Site, cell: Cell, plan: CellPlan) -> np.ndar
 
 
 def resample(
-    scn: Scenario, site: Site, plan: CellPlan, power: np.ndarray, x_m: np.ndarray,
+    scn: Scenario,
+    site: Site,
+    plan: CellPlan,
+    power: np.ndarray,
+    x_m: np.ndarray,
     y_m: np.ndarray,
 ) -> np.ndarray:
     """Bilinear resampling of a cell's (steps, nx) power onto the map grid (H, W); zero where
@@ -425,10 +436,16 @@ class RadioMap:
         scn = Scenario.from_toml_string(str(data["scenario_toml"]))
         ext = tuple(float(v) for v in data["extent_m"])
         out = cls(
-            x_m=data["x_m"], y_m=data["y_m"], extent_m=ext,  # type: ignore[arg-type]
-            altitude_m=float(data["altitude_m"]), rss_dbm=data["rss_dbm"],
-            serving_cell=data["serving_cell"], sir_db=data["sir_db"], sinr_db=data["sinr_db"],
-            scenario=scn, cell_site=data["cell_site"],
+            x_m=data["x_m"],
+            y_m=data["y_m"],
+            extent_m=ext,  # type: ignore[arg-type]
+            altitude_m=float(data["altitude_m"]),
+            rss_dbm=data["rss_dbm"],
+            serving_cell=data["serving_cell"],
+            sir_db=data["sir_db"],
+            sinr_db=data["sinr_db"],
+            scenario=scn,
+            cell_site=data["cell_site"],
         )
         h, w = scn.area.shape
         if out.rss_dbm.shape[1:] != (h, w) or out.sir_db.shape != (h, w):
@@ -457,8 +474,9 @@ class RadioMap:
         else:
             data = self.sir_db if kind == "sir" else self.sinr_db
             label = f"{kind.upper()} [dB]"
-            im = ax.imshow(data, origin="lower", extent=self.extent_m, cmap="RdYlGn",
-                           vmin=-10, vmax=30)
+            im = ax.imshow(
+                data, origin="lower", extent=self.extent_m, cmap="RdYlGn", vmin=-10, vmax=30
+            )
         plt.colorbar(im, ax=ax, label=label)
         xs = [s.x_m for s in self.scenario.sites]
         ys = [s.y_m for s in self.scenario.sites]
@@ -466,8 +484,12 @@ class RadioMap:
         for s in self.scenario.sites:
             for c in s.cells:
                 phi = math.radians(c.azimuth_deg)
-                ax.annotate("", xy=(s.x_m + 120 * math.cos(phi), s.y_m + 120 * math.sin(phi)),
-                            xytext=(s.x_m, s.y_m), arrowprops={"arrowstyle": "->", "lw": 1})
+                ax.annotate(
+                    "",
+                    xy=(s.x_m + 120 * math.cos(phi), s.y_m + 120 * math.sin(phi)),
+                    xytext=(s.x_m, s.y_m),
+                    arrowprops={"arrowstyle": "->", "lw": 1},
+                )
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
         ax.set_title(f"{self.scenario.name}: {label}, {self.altitude_m:g} m")
@@ -535,9 +557,15 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
     with np.errstate(divide="ignore"):
         rss = np.where(power > 0, 10 * np.log10(power), RSS_FLOOR_DBM)
     rm = RadioMap(
-        x_m=x_m, y_m=y_m, extent_m=(a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m),
-        altitude_m=a.altitude_m, rss_dbm=np.maximum(rss, RSS_FLOOR_DBM), serving_cell=serving,
-        sir_db=sir, sinr_db=sinr, scenario=scn,
+        x_m=x_m,
+        y_m=y_m,
+        extent_m=(a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m),
+        altitude_m=a.altitude_m,
+        rss_dbm=np.maximum(rss, RSS_FLOOR_DBM),
+        serving_cell=serving,
+        sir_db=sir,
+        sinr_db=sinr,
+        scenario=scn,
         cell_site=np.array([i for i, _, _ in jobs], dtype=np.int64),
         build_seconds=time.perf_counter() - t0,
     )
@@ -553,8 +581,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``python -m rainuav.radiomap --scenario paper --rain-rate 25 --out maps/``."""
     from rainuav import scenarios
 
-    ap = argparse.ArgumentParser(prog="python -m rainuav.radiomap",
-                                 description="Build a radio map and write npz + PNGs.")
+    ap = argparse.ArgumentParser(
+        prog="python -m rainuav.radiomap", description="Build a radio map and write npz + PNGs."
+    )
     ap.add_argument("--scenario", choices=sorted(scenarios.PRESETS), default="paper")
     ap.add_argument("--config", type=Path, help="a scenario TOML file (overrides --scenario)")
     ap.add_argument("--rain-rate", type=float, default=None, help="homogeneous rain, mm/h")
@@ -587,10 +616,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         buf = io.BytesIO()
         fig.savefig(buf, dpi=110, format="png")
         plt.close(fig)
-        pngs.append(write_atomic(args.out / f"{kind}.png", lambda t, b=buf: t.write_bytes(
-            b.getvalue())))
-    print(f"{scn.name}: {len(rm.rss_dbm)} cells, SIR >= 10 dB on {100 * rm.coverage():.1f}% "
-          f"of the area; built in {rm.build_seconds:.1f} s")
+        pngs.append(
+            write_atomic(args.out / f"{kind}.png", lambda t, b=buf: t.write_bytes(b.getvalue()))
+        )
+    print(
+        f"{scn.name}: {len(rm.rss_dbm)} cells, SIR >= 10 dB on {100 * rm.coverage():.1f}% "
+        f"of the area; built in {rm.build_seconds:.1f} s"
+    )
     print(f"wrote {npz}, {pngs[0]}, {pngs[1]}")
     return 0
 

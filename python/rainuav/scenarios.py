@@ -67,8 +67,12 @@ def paper(rain_rate_mm_h: float = 25.0, **overrides: Any) -> Scenario:
 def urban(rain_rate_mm_h: float = 25.0, **overrides: Any) -> Scenario:
     """Three-cell sites and a block of buildings (shadows at the flight altitude)."""
     sites = [
-        Site(x_m=1000 * x, y_m=1000 * y, height_m=25.0,
-             cells=[Cell(azimuth_deg=a) for a in (30.0, 150.0, 270.0)])
+        Site(
+            x_m=1000 * x,
+            y_m=1000 * y,
+            height_m=25.0,
+            cells=[Cell(azimuth_deg=a) for a in (30.0, 150.0, 270.0)],
+        )
         for x, y in PAPER_SITES_KM
     ]
     buildings = [
