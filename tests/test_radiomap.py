@@ -267,3 +267,21 @@ def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
     assert rm.scenario.medium.rain_rate_mm_h == 10.0
     for png in ("rss.png", "sir.png"):
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
+
+
+def test_height_map_equals_box_building() -> None:
+    # The same slab as a height map (5 m pixels over the 600 m x 105 m area) and as a box.
+    slab = Building(x0_m=200.0, x1_m=220.0, y0_m=447.5, y1_m=552.5, height_m=150.0)
+    box = beam_line(buildings=[slab]).radio_map(cache=False)
+    scn = beam_line()
+    h, w = scn.area.shape
+    hm = np.zeros((h, w))
+    hm[:, 40:44] = 150.0  # x in [200, 220)
+    scn.height_map_m = hm.tolist()
+    scn.validate()
+    mapped = scn.radio_map(cache=False)
+    x, rb = boresight(box)
+    _, rh = boresight(mapped)
+    behind = x > 300
+    assert np.all(rh[behind] <= boresight(beam_line().radio_map(cache=False))[1][behind] - 10)
+    np.testing.assert_allclose(rh[x < 190], rb[x < 190], atol=1e-6)

@@ -29,6 +29,7 @@ reach. Cells are computed one after another, each march using every core.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import io
 import math
 import os
@@ -183,7 +184,7 @@ def plan_cell(scn: Scenario, site: Site, cell: Cell) -> CellPlan | None:
         8 * nx * ny * 3  # field, propagator table (<= 1/2), handed-over aperture
         + 2 * steps * nx * 8  # the two recorded rows
         + (steps * nx * 16 if scn.medium.kind in ("cells", "map") else 0)
-        + (steps * nx * 8 if scn.buildings else 0)
+        + (steps * nx * 8 if scn.buildings or scn.height_map_m is not None else 0)
     )
     return CellPlan(
         nx=nx,
@@ -303,22 +304,40 @@ def _medium_kwargs(scn: Scenario, site: Site, plan: CellPlan) -> dict[str, Any]:
 
 
 def _obstacles(scn: Scenario, site: Site, plan: CellPlan) -> np.ndarray | None:
-    if not scn.buildings:
+    if not scn.buildings and scn.height_map_m is None:
         return None
     gx, gy = _step_points(site, plan)
     h = np.full(gx.shape, -1.0)
+    if scn.height_map_m is not None:
+        a = scn.area
+        hm = np.asarray(scn.height_map_m, dtype=float)
+        rows, cols = hm.shape
+        j = np.floor((gx - a.x_min_m) / (a.x_max_m - a.x_min_m) * cols).astype(int)
+        i = np.floor((gy - a.y_min_m) / (a.y_max_m - a.y_min_m) * rows).astype(int)
+        inside = (i >= 0) & (i < rows) & (j >= 0) & (j < cols)
+        val = hm[np.clip(i, 0, rows - 1), np.clip(j, 0, cols - 1)]
+        h = np.where(inside & (val > 0), val - plan.y0_m, h)
     for b in scn.buildings:
         inside = (gx >= b.x0_m) & (gx <= b.x1_m) & (gy >= b.y0_m) & (gy <= b.y1_m)
         h = np.where(inside, np.maximum(h, b.height_m - plan.y0_m), h)
     return h
 
 
-def march_cell(scn: Scenario, site: Site, cell: Cell, plan: CellPlan) -> np.ndarray:
-    """Received power (mW, isotropic receiver) at the flight altitude, (steps, nx)."""
+def march_cell(
+    scn: Scenario, site: Site, cell: Cell, plan: CellPlan, timings: dict[str, float] | None = None
+) -> np.ndarray:
+    """Received power (mW, isotropic receiver) at the flight altitude, (steps, nx). Adds the
+    seconds spent on the source, the medium and obstacle screens, and the march to
+    ``timings``."""
+    t = {} if timings is None else timings
     _core.check_memory(plan.bytes)
+    t0 = time.perf_counter()
     u0 = _aperture(scn, site, cell, plan)
     p0 = float(np.sum(np.abs(u0.astype(np.complex128)) ** 2)) * plan.dx_m * plan.dy_m
     ground = None if scn.ground == "none" else f"pec-{scn.polarization}"
+    t1 = time.perf_counter()
+    screens = {**_medium_kwargs(scn, site, plan), "obstacles": _obstacles(scn, site, plan)}
+    t2 = time.perf_counter()
     out = pwe.march(
         u0,
         dx_m=plan.dx_m,
@@ -330,12 +349,14 @@ def march_cell(scn: Scenario, site: Site, cell: Cell, plan: CellPlan) -> np.ndar
         ground=ground,
         absorber=scn.pe.absorber,
         record_rows=[plan.alt_row, plan.alt_row + 1],
-        obstacles=_obstacles(scn, site, plan),
-        **_medium_kwargs(scn, site, plan),
+        **screens,
     )
+    t3 = time.perf_counter()
+    for k, v in (("source", t1 - t0), ("screens", t2 - t1), ("march", t3 - t2)):
+        t[k] = t.get(k, 0.0) + v
     del u0
-    t = plan.alt_frac
-    u = (1 - t) * out.rows[0].astype(np.complex128) + t * out.rows[1]
+    frac = plan.alt_frac
+    u = (1 - frac) * out.rows[0].astype(np.complex128) + frac * out.rows[1]
     lam = C0_M_S / scn.freq_hz
     pt_mw = 10 ** (cell.tx_power_dbm / 10)
     return pt_mw * np.abs(u) ** 2 / p0 * lam**2 / (4 * math.pi)
@@ -402,6 +423,8 @@ class RadioMap:
     """(M,) the site index of each cell."""
     build_seconds: float = 0.0
     """Wall time of the build (0 when loaded from the cache)."""
+    timings: dict[str, float] = dataclasses.field(default_factory=dict)
+    """Seconds per phase of the build: source, screens, march, resample (empty if cached)."""
 
     _ARRAYS = ("x_m", "y_m", "rss_dbm", "serving_cell", "sir_db", "sinr_db", "cell_site")
 
@@ -538,6 +561,7 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
         if plan is not None:
             _core.check_memory(plan.bytes)
     power = np.zeros((len(jobs), h, w))
+    timings: dict[str, float] = {}
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -546,8 +570,10 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
     try:
         for m, ((_, site, cell), plan) in enumerate(zip(jobs, plans, strict=True)):
             if plan is not None:
-                p = march_cell(scn, site, cell, plan)
+                p = march_cell(scn, site, cell, plan, timings)
+                t_r = time.perf_counter()
                 power[m] = resample(scn, site, plan, p, x_m, y_m)
+                timings["resample"] = timings.get("resample", 0.0) + time.perf_counter() - t_r
             if bar is not None:
                 bar.update(1)
     finally:
@@ -568,6 +594,7 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
         scenario=scn,
         cell_site=np.array([i for i, _, _ in jobs], dtype=np.int64),
         build_seconds=time.perf_counter() - t0,
+        timings=timings,
     )
     if cache:
         rm.save(cache_dir() / "radiomaps" / f"{scn.digest()}.npz")
@@ -619,9 +646,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         pngs.append(
             write_atomic(args.out / f"{kind}.png", lambda t, b=buf: t.write_bytes(b.getvalue()))
         )
+    split = ", ".join(f"{k} {v:.1f} s" for k, v in rm.timings.items()) or "from the cache"
     print(
         f"{scn.name}: {len(rm.rss_dbm)} cells, SIR >= 10 dB on {100 * rm.coverage():.1f}% "
-        f"of the area; built in {rm.build_seconds:.1f} s"
+        f"of the area; built in {rm.build_seconds:.1f} s ({split})"
     )
     print(f"wrote {npz}, {pngs[0]}, {pngs[1]}")
     return 0

@@ -324,6 +324,9 @@ class Scenario:
     """'pec' (flat perfectly conducting ground) or 'none' (free space)."""
     buildings: list[Building] = field(default_factory=list)
     """Buildings (boxes)."""
+    height_map_m: list[list[float]] | None = None
+    """Optional obstacle heights (m) over the area, rows south to north, columns west to east;
+    each value covers its pixel of the area (nearest sample). Combined with ``buildings``."""
     pe: PESettings = field(default_factory=PESettings)
     """Gridding of the PE marches."""
 
@@ -363,6 +366,14 @@ class Scenario:
                         f"{w}.cells[{j}] overlaps another cell of the site (same azimuth and tilt)"
                     )
                 beams.add(key)
+        if self.height_map_m is not None:
+            import numpy as np
+
+            hm = np.asarray(self.height_map_m, dtype=float)
+            if hm.ndim != 2 or min(hm.shape) < 1:
+                raise InvalidInputError(f"height_map_m must be a 2-D table (got shape {hm.shape})")
+            if not (np.all(np.isfinite(hm)) and hm.min() >= 0 and hm.max() <= 1000):
+                raise InvalidInputError("height_map_m must be within 0..1000 m")
         for i, b in enumerate(self.buildings):
             w = f"buildings[{i}]"
             for k in ("x0_m", "x1_m", "y0_m", "y1_m"):
