@@ -23,6 +23,7 @@ __all__ = [
     "gaussian_beam",
     "itu_p838",
     "mie_forward",
+    "plan_optimal",
     "terminal_velocity_m_s",
     "water_permittivity",
 ]
@@ -163,3 +164,20 @@ def gaussian_beam(
 
 def check_memory(bytes: int) -> None:
     """Refuses a job needing ``bytes`` if it exceeds 80% of the available memory."""
+
+def plan_optimal(
+    sir_db: _F,
+    extent_m: tuple[float, float, float, float],
+    goal_m: tuple[float, float],
+    starts_m: _F,
+    *,
+    step_m: float,
+    tol_m: float,
+    max_steps: int,
+    mu: float,
+    reward: str,
+    sir_min_db: float,
+    goal_reward: float,
+    out_of_bounds_penalty: float,
+) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
+    """Exact optimal plans from many starts: (return, actions, path) each."""

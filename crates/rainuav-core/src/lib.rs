@@ -20,6 +20,7 @@ pub mod error;
 pub mod medium;
 pub mod mie;
 pub mod p838;
+pub mod plan;
 pub mod pwe;
 pub mod quadrature;
 pub mod water;

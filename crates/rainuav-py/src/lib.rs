@@ -588,6 +588,72 @@ fn check_memory(bytes: usize) -> PyResult<()> {
     pwe::check_memory(bytes).map_err(to_py)
 }
 
+/// One plan handed to Python: (return, actions, path).
+type PlanOut<'py> = (f64, Bound<'py, PyArray1<u8>>, Bound<'py, PyArray2<f64>>);
+
+/// Exact optimal plans from many starts: a list of (return, actions (T,) u8, path (T+1, 2)).
+#[pyfunction]
+#[pyo3(signature = (sir_db, extent_m, goal_m, starts_m, *, step_m, tol_m, max_steps, mu, reward,
+    sir_min_db, goal_reward, out_of_bounds_penalty))]
+#[allow(clippy::too_many_arguments)]
+fn plan_optimal<'py>(
+    py: Python<'py>,
+    sir_db: PyReadonlyArray2<'py, f64>,
+    extent_m: [f64; 4],
+    goal_m: [f64; 2],
+    starts_m: PyReadonlyArray2<'py, f64>,
+    step_m: f64,
+    tol_m: f64,
+    max_steps: usize,
+    mu: f64,
+    reward: &str,
+    sir_min_db: f64,
+    goal_reward: f64,
+    out_of_bounds_penalty: f64,
+) -> PyResult<Vec<PlanOut<'py>>> {
+    use rayon::prelude::*;
+    let task = rainuav_core::plan::NavTask {
+        sir_db: sir_db.as_array(),
+        extent: extent_m,
+        goal: goal_m,
+        step_m,
+        tol_m,
+        max_steps,
+        mu,
+        reward: reward.parse().map_err(to_py)?,
+        sir_min_db,
+        goal_reward,
+        out_of_bounds_penalty,
+    };
+    let starts = starts_m.as_array();
+    if starts.ncols() != 2 {
+        return Err(to_py(CoreError::invalid(
+            "starts_m",
+            "must have shape (N, 2)",
+            format!("{:?}", starts.dim()),
+        )));
+    }
+    let pts: Vec<[f64; 2]> = starts.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+    let plans = detached(py, || {
+        task.validate()?;
+        pts.par_iter()
+            .map(|&p| task.optimal(p))
+            .collect::<Result<Vec<_>, _>>()
+    })?;
+    Ok(plans
+        .into_iter()
+        .map(|p| {
+            let n = p.path.len();
+            let path = ndarray::Array2::from_shape_fn((n, 2), |(i, k)| p.path[i][k]);
+            (
+                p.return_,
+                Array1::from(p.actions).into_pyarray(py),
+                path.into_pyarray(py),
+            )
+        })
+        .collect())
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -605,5 +671,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PeMarcher>()?;
     m.add_function(wrap_pyfunction!(gaussian_beam, m)?)?;
     m.add_function(wrap_pyfunction!(check_memory, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_optimal, m)?)?;
     Ok(())
 }

@@ -1,0 +1,341 @@
+//! Exact planner for the UAV navigation MDP (PHYSICS.md section 6, `rainuav.env`).
+//!
+//! Moves are deterministic on the lattice `start + step (i, j)`, so the finite-horizon
+//! optimum is a backward dynamic programme over (steps left, lattice point): `V_T = 0`,
+//! `V_t(s) = max_a [r(s, a) + (terminal ? 0 : V_{t+1}(s'))]`. Rewards, the SIR interpolation,
+//! leaving the area and arriving follow `rainuav.env` operation for operation, so a plan
+//! replayed in the environment earns the same return.
+
+use crate::error::{CoreError, Result, check_range};
+use ndarray::ArrayView2;
+use std::str::FromStr;
+
+/// Base reward kinds (see `rainuav.env`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RewardKind {
+    /// `-1 - mu max(0, sir_min - SIR)`.
+    Shortfall,
+    /// `-1 - mu [SIR < sir_min]`.
+    Outage,
+    /// `-1 + mu 10^(SIR/10)`.
+    Linear,
+}
+
+impl FromStr for RewardKind {
+    type Err = CoreError;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "shortfall" => Ok(RewardKind::Shortfall),
+            "outage" => Ok(RewardKind::Outage),
+            "linear" => Ok(RewardKind::Linear),
+            _ => Err(CoreError::invalid(
+                "reward",
+                "must be 'shortfall', 'outage' or 'linear'",
+                format!("{s:?}"),
+            )),
+        }
+    }
+}
+
+/// The task: map, geometry and rewards.
+#[derive(Debug, Clone)]
+pub struct NavTask<'a> {
+    /// SIR map (H, W), dB.
+    pub sir_db: ArrayView2<'a, f64>,
+    /// (x_min, x_max, y_min, y_max).
+    pub extent: [f64; 4],
+    /// Destination.
+    pub goal: [f64; 2],
+    /// Move length.
+    pub step_m: f64,
+    /// Arrival tolerance.
+    pub tol_m: f64,
+    /// Horizon.
+    pub max_steps: usize,
+    /// SIR weight.
+    pub mu: f64,
+    /// Reward kind.
+    pub reward: RewardKind,
+    /// Minimum SIR.
+    pub sir_min_db: f64,
+    /// Paid on arrival.
+    pub goal_reward: f64,
+    /// Charged on leaving.
+    pub out_of_bounds_penalty: f64,
+}
+
+/// An optimal plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// Optimal undiscounted return.
+    pub return_: f64,
+    /// Actions (0 = +x, 1 = +y, 2 = -x, 3 = -y).
+    pub actions: Vec<u8>,
+    /// Positions visited, starting at the start (the last one clamped if the plan leaves).
+    pub path: Vec<[f64; 2]>,
+}
+
+const MOVES: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
+
+impl NavTask<'_> {
+    /// Checks the task.
+    pub fn validate(&self) -> Result<()> {
+        let (h, w) = self.sir_db.dim();
+        if h == 0 || w == 0 {
+            return Err(CoreError::invalid(
+                "sir_db",
+                "must not be empty",
+                format!("{h}x{w}"),
+            ));
+        }
+        if self.sir_db.iter().any(|v| !v.is_finite()) {
+            return Err(CoreError::invalid(
+                "sir_db",
+                "must be finite everywhere",
+                "NaN or inf",
+            ));
+        }
+        let [x0, x1, y0, y1] = self.extent;
+        if !(x1 > x0 && y1 > y0) || self.extent.iter().any(|v| !v.is_finite()) {
+            return Err(CoreError::invalid(
+                "extent_m",
+                "must be finite with x_max > x_min and y_max > y_min",
+                format!("{:?}", self.extent),
+            ));
+        }
+        if !(self.goal[0] >= x0 && self.goal[0] <= x1 && self.goal[1] >= y0 && self.goal[1] <= y1) {
+            return Err(CoreError::invalid(
+                "goal_m",
+                "must lie inside the area",
+                format!("{:?}", self.goal),
+            ));
+        }
+        check_range(
+            "step_m",
+            self.step_m,
+            f64::MIN_POSITIVE,
+            1e9,
+            "must be finite and > 0",
+        )?;
+        check_range(
+            "tol_m",
+            self.tol_m,
+            f64::MIN_POSITIVE,
+            1e9,
+            "must be finite and > 0",
+        )?;
+        if self.max_steps == 0 || self.max_steps > 100_000 {
+            return Err(CoreError::invalid(
+                "max_steps",
+                "must be within 1..100000",
+                self.max_steps,
+            ));
+        }
+        Ok(())
+    }
+
+    /// SIR at (x, y): bilinear, edge-clamped, exactly as `rainuav.env.SirField`.
+    pub fn sir_at(&self, x: f64, y: f64) -> f64 {
+        let [x0, x1, y0, y1] = self.extent;
+        let (h, w) = self.sir_db.dim();
+        let fx = ((x - x0) / (x1 - x0) * w as f64 - 0.5).clamp(0.0, w as f64 - 1.0);
+        let fy = ((y - y0) / (y1 - y0) * h as f64 - 0.5).clamp(0.0, h as f64 - 1.0);
+        let j0 = fx.floor().min(w.saturating_sub(2) as f64) as usize;
+        let i0 = fy.floor().min(h.saturating_sub(2) as f64) as usize;
+        let tx = fx - j0 as f64;
+        let ty = fy - i0 as f64;
+        let j1 = (j0 + 1).min(w - 1);
+        let i1 = (i0 + 1).min(h - 1);
+        let s = &self.sir_db;
+        s[(i0, j0)] * (1.0 - tx) * (1.0 - ty)
+            + s[(i0, j1)] * tx * (1.0 - ty)
+            + s[(i1, j0)] * (1.0 - tx) * ty
+            + s[(i1, j1)] * tx * ty
+    }
+
+    /// b(q') from the SIR there.
+    pub fn base_reward(&self, sir: f64) -> f64 {
+        match self.reward {
+            RewardKind::Shortfall => -1.0 - self.mu * (self.sir_min_db - sir).max(0.0),
+            RewardKind::Outage => -1.0 - self.mu * if sir < self.sir_min_db { 1.0 } else { 0.0 },
+            RewardKind::Linear => -1.0 + self.mu * 10f64.powf(sir / 10.0),
+        }
+    }
+
+    /// The transition from lattice offset `(i, j)` of `start` by action `a`:
+    /// `(reward, terminal, new offset, position after the move (clamped if it left))`.
+    pub fn transition(
+        &self,
+        start: [f64; 2],
+        i: i64,
+        j: i64,
+        a: usize,
+    ) -> (f64, bool, (i64, i64), [f64; 2]) {
+        let [x0, x1, y0, y1] = self.extent;
+        let (ni, nj) = (i + MOVES[a].0, j + MOVES[a].1);
+        let qx = start[0] + self.step_m * ni as f64;
+        let qy = start[1] + self.step_m * nj as f64;
+        let out = qx < x0 || qx > x1 || qy < y0 || qy > y1;
+        let (cx, cy) = (qx.clamp(x0, x1), qy.clamp(y0, y1));
+        let b = self.base_reward(self.sir_at(cx, cy));
+        if out {
+            return (b - self.out_of_bounds_penalty, true, (ni, nj), [cx, cy]);
+        }
+        if (qx - self.goal[0]).hypot(qy - self.goal[1]) <= self.tol_m {
+            return (b + self.goal_reward, true, (ni, nj), [qx, qy]);
+        }
+        (b, false, (ni, nj), [qx, qy])
+    }
+
+    /// The exact optimum from `start` (inside the area).
+    pub fn optimal(&self, start: [f64; 2]) -> Result<Plan> {
+        self.validate()?;
+        let [x0, x1, y0, y1] = self.extent;
+        if !(start[0] >= x0 && start[0] <= x1 && start[1] >= y0 && start[1] <= y1) {
+            return Err(CoreError::invalid(
+                "start_m",
+                "must lie inside the area",
+                format!("{start:?}"),
+            ));
+        }
+        // Lattice offsets inside the area (and reachable within the horizon).
+        let reach = self.max_steps as i64;
+        let lo = |s: f64, a: f64| (((a - s) / self.step_m).ceil() as i64).max(-reach) - 1;
+        let hi = |s: f64, b: f64| (((b - s) / self.step_m).floor() as i64).min(reach) + 1;
+        let (i_lo, i_hi) = (lo(start[0], x0), hi(start[0], x1));
+        let (j_lo, j_hi) = (lo(start[1], y0), hi(start[1], y1));
+        let ni = (i_hi - i_lo + 1) as usize;
+        let nj = (j_hi - j_lo + 1) as usize;
+        let n = ni * nj;
+        if n > 50_000_000 {
+            return Err(CoreError::invalid(
+                "step_m",
+                "gives too many lattice points for the planner",
+                n,
+            ));
+        }
+        let idx = |i: i64, j: i64| ((i - i_lo) as usize) * nj + (j - j_lo) as usize;
+        // Transition table: per state and action, reward and next state (usize::MAX = terminal).
+        let mut rew = vec![0.0f64; n * 4];
+        let mut next = vec![usize::MAX; n * 4];
+        let mut inside = vec![false; n];
+        for i in i_lo..=i_hi {
+            for j in j_lo..=j_hi {
+                let qx = start[0] + self.step_m * i as f64;
+                let qy = start[1] + self.step_m * j as f64;
+                let s = idx(i, j);
+                inside[s] = !(qx < x0 || qx > x1 || qy < y0 || qy > y1);
+                if !inside[s] {
+                    continue;
+                }
+                for a in 0..4 {
+                    let (r, term, (ti, tj), _) = self.transition(start, i, j, a);
+                    rew[s * 4 + a] = r;
+                    if !term {
+                        next[s * 4 + a] = idx(ti, tj);
+                    }
+                }
+            }
+        }
+        // Backward induction; policy[t][s] for path extraction.
+        let t_max = self.max_steps;
+        let mut v_next = vec![0.0f64; n];
+        let mut v = vec![0.0f64; n];
+        let mut policy = vec![0u8; t_max * n];
+        for t in (0..t_max).rev() {
+            for s in 0..n {
+                if !inside[s] {
+                    continue;
+                }
+                let mut best = f64::NEG_INFINITY;
+                let mut best_a = 0u8;
+                for a in 0..4 {
+                    let nx = next[s * 4 + a];
+                    let val = rew[s * 4 + a] + if nx == usize::MAX { 0.0 } else { v_next[nx] };
+                    if val > best {
+                        best = val;
+                        best_a = a as u8;
+                    }
+                }
+                v[s] = best;
+                policy[t * n + s] = best_a;
+            }
+            std::mem::swap(&mut v, &mut v_next);
+        }
+        // Replay the policy to get the actions, path and return (summed as the env does).
+        let (mut i, mut j) = (0i64, 0i64);
+        let mut actions = Vec::new();
+        let mut path = vec![start];
+        let mut ret = 0.0;
+        for t in 0..t_max {
+            let a = policy[t * n + idx(i, j)] as usize;
+            let (r, term, (ti, tj), pos) = self.transition(start, i, j, a);
+            actions.push(a as u8);
+            path.push(pos);
+            ret += r;
+            if term {
+                break;
+            }
+            i = ti;
+            j = tj;
+        }
+        Ok(Plan {
+            return_: ret,
+            actions,
+            path,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ndarray::Array2;
+
+    fn task(s: &Array2<f64>, max_steps: usize) -> NavTask<'_> {
+        NavTask {
+            sir_db: s.view(),
+            extent: [0.0, 40.0, 0.0, 30.0],
+            goal: [30.0, 20.0],
+            step_m: 10.0,
+            tol_m: 1.0,
+            max_steps,
+            mu: 0.5,
+            reward: RewardKind::Shortfall,
+            sir_min_db: 10.0,
+            goal_reward: 100.0,
+            out_of_bounds_penalty: 1000.0,
+        }
+    }
+
+    /// Brute force over every action sequence of length <= 7 on a tiny map.
+    #[test]
+    fn matches_brute_force() {
+        let s = Array2::from_shape_fn((3, 4), |(i, j)| ((i * 7 + j * 3) % 11) as f64 * 2.0);
+        let t = task(&s, 7);
+        let start = [0.0, 0.0];
+        fn best(t: &NavTask<'_>, start: [f64; 2], i: i64, j: i64, left: usize) -> f64 {
+            if left == 0 {
+                return 0.0;
+            }
+            (0..4)
+                .map(|a| {
+                    let (r, term, (ti, tj), _) = t.transition(start, i, j, a);
+                    r + if term {
+                        0.0
+                    } else {
+                        best(t, start, ti, tj, left - 1)
+                    }
+                })
+                .fold(f64::NEG_INFINITY, f64::max)
+        }
+        let want = best(&t, start, 0, 0, 7);
+        let plan = t.optimal(start).unwrap();
+        assert!(
+            (plan.return_ - want).abs() < 1e-9,
+            "{} vs {want}",
+            plan.return_
+        );
+        assert!(plan.return_ > 0.0, "the goal is reachable in 5 moves");
+    }
+}
