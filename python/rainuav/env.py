@@ -287,11 +287,12 @@ class UAVNavEnv(gym.Env):
         sir = float(self.field(p[0], p[1]))
         return self.observe(p), self._info(sir)
 
-    def _info(self, sir: float) -> dict[str, Any]:
+    def _info(self, sir: float, arrived: bool = False) -> dict[str, Any]:
         return {
             "sir_db": sir,
             "position_m": self._pos.copy(),
             "outage": bool(sir < self.cfg.sir_min_db),
+            "arrived": arrived,
         }
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
@@ -307,7 +308,7 @@ class UAVNavEnv(gym.Env):
             float(r["reward"][0]),
             bool(r["terminated"][0]),
             bool(r["truncated"][0]),
-            self._info(sir),
+            self._info(sir, bool(r["terminated"][0] and not r["out"][0])),
         )
 
 

@@ -1,0 +1,525 @@
+"""``python -m rainuav.train``: learn to fly from any start to the destination (the main job).
+
+With no arguments: the paper preset at 25 mm/h (radio map built or taken from the cache),
+Table I hyperparameters, seed 0. Writes to ``--out`` (default ``runs/paper``): ``config.toml``,
+``radiomap.npz``, ``log.csv``, TensorBoard events, ``checkpoint.pt`` (every
+``checkpoint_every`` episodes; ``--resume`` continues from it and reproduces the
+uninterrupted run), and at the end ``metrics.json`` (greedy policy from ``eval_starts``
+seeded starts against the exact planner), ``returns.png``, ``trajectories.png`` and
+``stages.png``. Every flag is a field of :class:`TrainConfig` (``--help`` lists them).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import itertools
+import json
+import os
+import random
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import tomli_w
+import tomllib
+import torch
+
+from rainuav import plan as planner
+from rainuav._io import write_atomic
+from rainuav.agent import Agent, DQNConfig, NStepWindow
+from rainuav.env import NavConfig, UAVNavEnv
+from rainuav.errors import InvalidInputError
+
+__all__ = ["TrainConfig", "evaluate", "main", "train"]
+
+
+@dataclass
+class TrainConfig:
+    """Everything a training run depends on (one docstring line per field = one CLI flag)."""
+
+    scenario: str = "paper"
+    """Preset scenario ('paper' or 'urban'), unless --scenario-file is given."""
+    scenario_file: str = ""
+    """A scenario TOML file (overrides --scenario)."""
+    rain_rate: float = 25.0
+    """Homogeneous rain rate, mm/h (0: clear air); -1 keeps the scenario's own weather."""
+    mu: float = 10.0 / 43.0
+    """Weight of the SIR term in the reward."""
+    reward: str = "shortfall"
+    """Reward form: 'shortfall', 'outage' or 'linear'."""
+    max_steps: int = 300
+    """Steps per episode (Table I)."""
+    goal_x_m: float = 1400.0
+    """Destination, east coordinate, m."""
+    goal_y_m: float = 1600.0
+    """Destination, north coordinate, m."""
+    seed: int = 0
+    """Seed of every random choice (python, numpy, torch, environment)."""
+    device: str = "auto"
+    """'auto' (CUDA when available), 'cpu' or 'cuda'."""
+    out: str = "runs/paper"
+    """Output directory."""
+    checkpoint_every: int = 250
+    """Episodes between checkpoints."""
+    eval_starts: int = 200
+    """Greedy evaluation starts (fixed, seeded by eval_seed)."""
+    eval_seed: int = 12345
+    """Seed of the evaluation starts."""
+    stages: int = 4
+    """Training stages at which a few greedy trajectories are recorded for stages.png."""
+    dqn: DQNConfig = field(default_factory=DQNConfig)
+    """Agent hyperparameters."""
+
+
+# -- config plumbing --------------------------------------------------------------------------
+def _field_docs(cls: type) -> dict[str, str]:
+    """Attribute docstrings of a dataclass (the string literal after each field)."""
+    import ast
+    import inspect
+    import textwrap
+
+    tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
+    docs: dict[str, str] = {}
+    body = tree.body[0].body  # type: ignore[attr-defined]
+    for a, b in itertools.pairwise(body):
+        if (
+            isinstance(a, ast.AnnAssign)
+            and isinstance(b, ast.Expr)
+            and isinstance(b.value, ast.Constant)
+        ):
+            docs[a.target.id] = str(b.value.value)  # type: ignore[union-attr]
+    return docs
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """CLI flags generated from TrainConfig and DQNConfig."""
+    ap = argparse.ArgumentParser(
+        prog="python -m rainuav.train",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    ap.add_argument("--config", type=Path, help="a TOML file of TrainConfig fields")
+    ap.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
+    for cls, prefix in ((TrainConfig, ""), (DQNConfig, "")):
+        docs = _field_docs(cls)
+        for f in dataclasses.fields(cls):
+            if f.name == "dqn":
+                continue
+            typ = {int: int, float: float, str: str}.get(type(f.default), str)
+            ap.add_argument(
+                f"--{prefix}{f.name.replace('_', '-')}",
+                dest=f.name,
+                type=typ,
+                default=None,
+                help=f"{docs.get(f.name, '')} (default {f.default})",
+            )
+    return ap
+
+
+def config_from_args(args: argparse.Namespace) -> TrainConfig:
+    base: dict[str, Any] = {}
+    if args.config is not None:
+        base = tomllib.loads(Path(args.config).read_text())
+    dqn_names = {f.name for f in dataclasses.fields(DQNConfig)}
+    top_names = {f.name for f in dataclasses.fields(TrainConfig)} - {"dqn"}
+    unknown = set(base) - top_names - {"dqn"}
+    if unknown:
+        raise InvalidInputError(f"{args.config}: unknown field(s) {sorted(unknown)}")
+    dqn_kw = dict(base.pop("dqn", {}))
+    for name in dqn_names:
+        if getattr(args, name, None) is not None:
+            dqn_kw[name] = getattr(args, name)
+    for name in top_names:
+        if getattr(args, name, None) is not None:
+            base[name] = getattr(args, name)
+    return TrainConfig(**base, dqn=DQNConfig(**dqn_kw))
+
+
+def validate(cfg: TrainConfig) -> None:
+    d = cfg.dqn
+    checks = [
+        ("episodes", d.episodes >= 1),
+        ("target_sync_episodes", d.target_sync_episodes >= 1),
+        ("eps0", 0 <= d.eps0 <= 1),
+        ("eps_decay", 0 < d.eps_decay <= 1),
+        ("replay_capacity", d.replay_capacity >= d.batch_size),
+        ("batch_size", d.batch_size >= 1),
+        ("gamma", 0 < d.gamma <= 1),
+        ("n_step", d.n_step >= 1),
+        ("lr", d.lr > 0),
+        ("hidden", d.hidden >= 1),
+        ("fourier", d.fourier >= 0),
+        ("max_steps", cfg.max_steps >= 1),
+        ("eval_starts", cfg.eval_starts >= 1),
+        ("checkpoint_every", cfg.checkpoint_every >= 1),
+        ("device", cfg.device in ("auto", "cpu", "cuda")),
+        ("rain_rate", cfg.rain_rate == -1 or 0 <= cfg.rain_rate <= 500),
+    ]
+    for name, ok in checks:
+        if not ok:
+            value = getattr(d, name) if hasattr(d, name) else getattr(cfg, name)
+            raise InvalidInputError(f"{name} is out of range (got {value!r})")
+
+
+def to_dict(cfg: TrainConfig) -> dict[str, Any]:
+    return dataclasses.asdict(cfg)
+
+
+# -- environment ------------------------------------------------------------------------------
+def make_scenario(cfg: TrainConfig) -> Any:
+    from rainuav import scenarios
+    from rainuav.scenario import Scenario
+
+    if cfg.scenario_file:
+        scn = Scenario.from_toml(cfg.scenario_file)
+    else:
+        if cfg.scenario not in scenarios.PRESETS:
+            raise InvalidInputError(f"scenario must be one of {sorted(scenarios.PRESETS)}")
+        scn = scenarios.PRESETS[cfg.scenario]()
+    if cfg.rain_rate != -1:
+        scn = scenarios.with_rain(scn, cfg.rain_rate)
+    return scn
+
+
+def make_env(cfg: TrainConfig, sir_db: np.ndarray, extent: Any) -> UAVNavEnv:
+    nav = NavConfig(
+        goal_m=(cfg.goal_x_m, cfg.goal_y_m), mu=cfg.mu, reward=cfg.reward, max_steps=cfg.max_steps
+    )
+    return UAVNavEnv(sir_db=sir_db, extent_m=extent, config=nav)
+
+
+def pick_device(name: str) -> torch.device:
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    if name == "cuda" and not torch.cuda.is_available():
+        raise InvalidInputError("device 'cuda' requested but CUDA is not available")
+    return torch.device(name)
+
+
+def seed_everything(seed: int) -> None:
+    random.seed(seed)
+    torch.manual_seed(seed)
+    torch.use_deterministic_algorithms(True, warn_only=True)
+
+
+# -- evaluation -------------------------------------------------------------------------------
+def greedy_rollout(agent: Agent, env: UAVNavEnv, start: np.ndarray) -> dict[str, Any]:
+    """One greedy episode from ``start`` with the environment's exact semantics."""
+    obs, info = env.reset(options={"start_m": start})
+    path, sirs, ret, steps = [info["position_m"]], [], 0.0, 0
+    while True:
+        obs, r, term, trunc, info = env.step(int(agent.greedy(obs)[0]))
+        ret += r
+        steps += 1
+        path.append(info["position_m"])
+        sirs.append(info["sir_db"])
+        if term or trunc:
+            break
+    return {
+        "return": ret,
+        "steps": steps,
+        "path": np.array(path),
+        "sir": np.array(sirs),
+        "reached": bool(info["arrived"]),
+    }
+
+
+def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return np.array([env.sample_start(rng) for _ in range(n)])
+
+
+def evaluate(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> tuple[dict[str, Any], list]:
+    """Greedy policy from every start against the exact planner."""
+    rolls = [greedy_rollout(agent, env, s) for s in starts]
+    plans = planner.optimal_many(env, starts)
+    rets = np.array([r["return"] for r in rolls])
+    opt = np.array([p.return_ for p in plans])
+    gap = (opt - rets) / np.maximum(np.abs(opt), 1e-9)
+    sirs = np.concatenate([r["sir"] for r in rolls])
+    metrics = {
+        "success_rate": float(np.mean([r["reached"] for r in rolls])),
+        "mean_return": float(rets.mean()),
+        "mean_steps": float(np.mean([r["steps"] for r in rolls])),
+        "mean_sir_db": float(sirs.mean()),
+        "outage_share": float(np.mean(sirs < env.cfg.sir_min_db)),
+        "mean_gap_to_optimal": float(gap.mean()),
+        "worst_gap_to_optimal": float(gap.max()),
+        "optimal_mean_return": float(opt.mean()),
+        "straight_line_mean_return": float(
+            np.mean([planner.straight_line(env, s).return_ for s in starts])
+        ),
+        "eval_starts": len(starts),
+    }
+    return metrics, rolls
+
+
+# -- plots ------------------------------------------------------------------------------------
+def plot_trajectories(env: UAVNavEnv, rolls: list, path: Path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 5.4))
+    x0, x1, y0, y1 = env.field.extent
+    im = ax.imshow(
+        env.field.sir_db, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn", vmin=-10, vmax=30
+    )
+    fig.colorbar(im, ax=ax, label="SIR [dB]")
+    for r in rolls:
+        ax.plot(r["path"][:, 0], r["path"][:, 1], "-", color="k", lw=0.8, alpha=0.7)
+        ax.plot(r["path"][0, 0], r["path"][0, 1], "rx", ms=6)
+    ax.plot(*env.cfg.goal_m, "b^", ms=10, label="destination")
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title)
+    fig.tight_layout()
+    write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
+    plt.close(fig)
+
+
+def plot_returns(returns: list[float], path: Path, window: int = 50) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    r = np.asarray(returns)
+    fig, ax = plt.subplots(figsize=(6.4, 4))
+    ax.plot(r, color="0.8", lw=0.5, label="episode return")
+    if len(r) >= window:
+        ma = np.convolve(r, np.ones(window) / window, mode="valid")
+        ax.plot(np.arange(window - 1, len(r)), ma, "b", label=f"moving average ({window})")
+    ax.set_xlabel("episode")
+    ax.set_ylabel("return")
+    ax.legend()
+    fig.tight_layout()
+    write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
+    plt.close(fig)
+
+
+def plot_stages(env: UAVNavEnv, stages: list[tuple[int, list]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = max(1, len(stages))
+    fig, axs = plt.subplots(1, n, figsize=(3.6 * n, 3.6), squeeze=False)
+    x0, x1, y0, y1 = env.field.extent
+    for ax, (ep, rolls) in zip(axs[0], stages, strict=False):
+        ax.imshow(
+            env.field.sir_db,
+            origin="lower",
+            extent=(x0, x1, y0, y1),
+            cmap="RdYlGn",
+            vmin=-10,
+            vmax=30,
+        )
+        for r in rolls:
+            ax.plot(r["path"][:, 0], r["path"][:, 1], "k-", lw=0.8)
+            ax.plot(r["path"][0, 0], r["path"][0, 1], "rx")
+        ax.plot(*env.cfg.goal_m, "b^")
+        ax.set_title(f"after {ep} episodes")
+        ax.set_xticks([])
+        ax.set_yticks([])
+    fig.tight_layout()
+    write_atomic(path, lambda t: fig.savefig(t, dpi=100, format="png"))
+    plt.close(fig)
+
+
+# -- training ---------------------------------------------------------------------------------
+def _save_checkpoint(path: Path, state: dict[str, Any]) -> None:
+    def write(tmp: Path) -> None:
+        torch.save(state, tmp)
+
+    write_atomic(path, write)
+
+
+def train(
+    cfg: TrainConfig, *, resume: bool = False, progress: bool = True, radio_map: Any = None
+) -> dict[str, Any]:
+    """Runs the whole job and returns the metrics. ``radio_map`` (a RadioMap) replaces the
+    scenario's map (tests use small synthetic maps)."""
+    validate(cfg)
+    out = Path(cfg.out)
+    out.mkdir(parents=True, exist_ok=True)
+    from rainuav.radiomap import RadioMap
+
+    map_path = out / "radiomap.npz"
+    if radio_map is not None:
+        rm = radio_map
+        rm.save(map_path)
+    elif resume and map_path.exists():
+        rm = RadioMap.load(map_path)
+    else:
+        rm = make_scenario(cfg).radio_map(cache=True, progress=progress)
+        rm.save(map_path)
+    write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
+    env = make_env(cfg, rm.sir_db, rm.extent_m)
+    device = pick_device(cfg.device)
+    seed_everything(cfg.seed)
+    agent = Agent(cfg.dqn, cfg.seed, device)
+    env.reset(seed=cfg.seed)
+    d = cfg.dqn
+    start_ep, returns, successes, stages = 0, [], [], []
+    train_seconds = 0.0
+    ckpt = out / "checkpoint.pt"
+    if resume:
+        if not ckpt.exists():
+            raise InvalidInputError(f"--resume: no checkpoint at {ckpt}")
+        st = torch.load(ckpt, weights_only=False)
+        agent.load_state_dict(st["agent"])
+        env.np_random.bit_generator.state = st["env_rng"]
+        start_ep, returns, successes = st["episode"], st["returns"], st["successes"]
+        stages, train_seconds = st["stages"], st["train_seconds"]
+        random.setstate(st["py_rng"])
+        torch.set_rng_state(st["torch_rng"])
+    stage_every = max(1, d.episodes // max(cfg.stages, 1))
+    stage_starts = eval_starts(env, 5, cfg.eval_seed + 1)
+    from torch.utils.tensorboard import SummaryWriter
+
+    tb = SummaryWriter(str(out / "tb"))
+    log_path = out / "log.csv"
+    new_log = not (resume and log_path.exists())
+    log_fh = log_path.open("w" if new_log else "a", newline="")
+    log = csv.writer(log_fh)
+    if new_log:
+        log.writerow(["episode", "return", "steps", "reached", "epsilon", "loss", "seconds"])
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=d.episodes, initial=start_ep, desc="train", unit="ep")
+    t0 = time.perf_counter()
+    window = NStepWindow(d.n_step, d.gamma)
+    try:
+        for ep in range(start_ep, d.episodes):
+            obs, _ = env.reset()
+            ep_ret, steps, losses, reached = 0.0, 0, [], False
+            while True:
+                a = agent.act(obs, ep)
+                nobs, r, term, trunc, info = env.step(a)
+                for tr in window.push(obs, a, r, nobs, term, trunc):
+                    agent.replay.add(*tr)
+                steps += 1
+                ep_ret += r
+                if steps % d.train_every == 0:
+                    loss = agent.learn()
+                    if loss is not None:
+                        losses.append(loss)
+                obs = nobs
+                if term or trunc:
+                    reached = bool(info["arrived"])
+                    break
+            if (ep + 1) % d.target_sync_episodes == 0:
+                agent.sync()
+            returns.append(ep_ret)
+            successes.append(reached)
+            eps = agent.epsilon(ep)
+            mean_loss = float(np.mean(losses)) if losses else float("nan")
+            log.writerow(
+                [
+                    ep,
+                    f"{ep_ret:.4f}",
+                    steps,
+                    int(reached),
+                    f"{eps:.5f}",
+                    f"{mean_loss:.6f}",
+                    f"{time.perf_counter() - t0 + train_seconds:.2f}",
+                ]
+            )
+            tb.add_scalar("return", ep_ret, ep)
+            tb.add_scalar("epsilon", eps, ep)
+            if losses:
+                tb.add_scalar("loss", mean_loss, ep)
+            if (ep + 1) % stage_every == 0:
+                stages.append((ep + 1, [greedy_rollout(agent, env, s) for s in stage_starts]))
+                env.reset()  # greedy rollouts do not consume the training rng
+            if bar is not None:
+                recent = successes[-100:]
+                bar.set_postfix(
+                    ret=f"{np.mean(returns[-100:]):.0f}",
+                    success=f"{np.mean(recent):.2f}",
+                    eps=f"{eps:.3f}",
+                )
+                bar.update(1)
+            if (ep + 1) % cfg.checkpoint_every == 0 or ep + 1 == d.episodes:
+                log_fh.flush()
+                _save_checkpoint(
+                    ckpt,
+                    {
+                        "agent": agent.state_dict(),
+                        "env_rng": env.np_random.bit_generator.state,
+                        "episode": ep + 1,
+                        "returns": returns,
+                        "successes": successes,
+                        "stages": stages,
+                        "train_seconds": time.perf_counter() - t0 + train_seconds,
+                        "py_rng": random.getstate(),
+                        "torch_rng": torch.get_rng_state(),
+                        "config": to_dict(cfg),
+                    },
+                )
+    finally:
+        if bar is not None:
+            bar.close()
+        log_fh.close()
+        tb.close()
+    train_seconds += time.perf_counter() - t0
+    return finish(cfg, agent, env, returns, stages, train_seconds, out)
+
+
+def finish(
+    cfg: TrainConfig,
+    agent: Agent,
+    env: UAVNavEnv,
+    returns: list[float],
+    stages: list,
+    train_seconds: float,
+    out: Path,
+) -> dict[str, Any]:
+    starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
+    metrics, rolls = evaluate(agent, env, starts)
+    metrics["training_seconds"] = train_seconds
+    metrics["episodes"] = cfg.dqn.episodes
+    metrics["device"] = str(agent.device)
+    text = json.dumps(metrics, indent=2)
+    write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
+    plot_returns(returns, out / "returns.png")
+    plot_trajectories(
+        env,
+        rolls[:40],
+        out / "trajectories.png",
+        f"greedy policy, success {100 * metrics['success_rate']:.0f}%",
+    )
+    if stages:
+        plot_stages(env, stages, out / "stages.png")
+    return metrics
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        cfg = config_from_args(args)
+        metrics = train(cfg, resume=args.resume, progress=True)
+    except InvalidInputError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print(json.dumps(metrics, indent=2))
+    print(f"wrote {Path(cfg.out).resolve()}")
+    return 0
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    sys.exit(main())
