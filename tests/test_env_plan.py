@@ -1,0 +1,165 @@
+"""The navigation environment, its batched stepper and the exact planner."""
+
+from __future__ import annotations
+
+import itertools
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import rainuav
+from gymnasium.utils.env_checker import check_env
+from rainuav import plan
+from rainuav.env import BatchStepper, LoiteringWarning, UAVNavEnv
+
+EXT = (0.0, 400.0, 0.0, 300.0)
+
+
+def small_map(seed: int = 0, h: int = 30, w: int = 40) -> np.ndarray:
+    return np.random.default_rng(seed).uniform(-10, 30, (h, w))
+
+
+def env(**kw) -> UAVNavEnv:
+    base = {"sir_db": small_map(), "extent_m": EXT, "goal_m": (300.0, 200.0)}
+    return UAVNavEnv(**{**base, **kw})
+
+
+def test_check_env_and_registration() -> None:
+    e = env()
+    check_env(e, skip_render_check=True)
+    made = gym.make("rainuav/UAVNav-v0", sir_db=small_map(), extent_m=EXT, goal_m=(300.0, 200.0))
+    assert made.observation_space.shape == (2,)
+
+
+def test_sir_interpolation_semantics() -> None:
+    s = np.array([[0.0, 10.0], [20.0, 30.0]])
+    e = UAVNavEnv(sir_db=s, extent_m=(0, 20, 0, 20), goal_m=(10, 10))
+    f = e.field
+    assert f(5.0, 5.0) == 0.0  # sample [0, 0] at the cell centre (5, 5)
+    assert f(15.0, 15.0) == 30.0
+    assert f(10.0, 5.0) == pytest.approx(5.0)  # halfway between [0,0] and [0,1]
+    assert f(0.0, 0.0) == 0.0  # clamp beyond the outermost centres
+    assert f(10.0, 10.0) == pytest.approx(15.0)
+
+
+def test_step_semantics() -> None:
+    e = env(mu=0.5, goal_reward=100.0, out_of_bounds_penalty=1000.0, max_steps=3)
+    obs, info = e.reset(options={"start_m": (5.0, 150.0)})
+    assert obs.dtype == np.float32 and obs == pytest.approx([5 / 400, 0.5])
+    _, r, term, trunc, info = e.step(2)  # -x: leaves the area
+    sir = e.field(0.0, 150.0)
+    assert term and not trunc
+    assert r == pytest.approx(-1 - 0.5 * max(0, 10 - sir) - 1000.0)
+    assert info["position_m"] == pytest.approx([0.0, 150.0])
+    e.reset(options={"start_m": (290.0, 200.0)})
+    _, r, term, _, info = e.step(0)  # +x onto the goal
+    assert term and info["arrived"]
+    assert r == pytest.approx(-1 - 0.5 * max(0, 10 - e.field(300.0, 200.0)) + 100.0)
+    e.reset(options={"start_m": (100.0, 100.0)})
+    outs = [e.step(1)[2:4] for _ in range(3)]
+    assert outs == [(False, False), (False, False), (False, True)]
+
+
+def test_rewards_and_loitering_warning() -> None:
+    e = env(reward="outage", mu=2.0)
+    e.reset(options={"start_m": (100.0, 100.0)})
+    _, r, *_ = e.step(0)
+    assert r in (-1.0, -3.0)
+    with pytest.warns(LoiteringWarning):
+        env(reward="linear")
+
+
+def test_batched_stepper_equals_scalar_env() -> None:
+    e = env()
+    rng = np.random.default_rng(3)
+    n, steps = 64, 40
+    starts = np.array([e.sample_start(rng) for _ in range(n)])
+    actions = rng.integers(0, 4, (steps, n))
+    stepper = BatchStepper(e.field, e.cfg)
+    off = np.zeros((n, 2), dtype=np.int64)
+    t = np.zeros(n, dtype=np.int64)
+    done = np.zeros(n, dtype=bool)
+    batch_rewards = np.zeros((steps, n))
+    for k in range(steps):
+        r = stepper.step(starts, off, t, actions[k])
+        batch_rewards[k] = np.where(done, np.nan, r["reward"])
+        done |= r["terminated"] | r["truncated"]
+        off, t = r["offset"], r["t"]
+    for i in range(n):
+        e.reset(options={"start_m": starts[i]})
+        for k in range(steps):
+            _, rew, term, trunc, _ = e.step(actions[k, i])
+            assert rew == batch_rewards[k, i]  # bit-exact
+            if term or trunc:
+                break
+
+
+def brute_force(e: UAVNavEnv, start: np.ndarray, horizon: int) -> float:
+    best = -np.inf
+    for seq in itertools.product(range(4), repeat=horizon):
+        e.reset(options={"start_m": start})
+        g = 0.0
+        for a in seq:
+            _, r, term, trunc, _ = e.step(a)
+            g += r
+            if term or trunc:
+                break
+        best = max(best, g)
+    return best
+
+
+@pytest.mark.parametrize("reward", ["shortfall", "outage", "linear"])
+def test_planner_against_brute_force(reward: str) -> None:
+    # 6 moves, 4^6 sequences: the DP optimum must equal the best enumerated return.
+    kw = {
+        "sir_db": small_map(1, 4, 5),
+        "extent_m": (0, 50, 0, 40),
+        "goal_m": (30.0, 30.0),
+        "max_steps": 6,
+        "mu": 0.3,
+        "reward": reward,
+        "goal_reward": 50.0,
+    }
+    if reward == "linear":
+        with pytest.warns(LoiteringWarning):
+            e = UAVNavEnv(**kw)
+    else:
+        e = UAVNavEnv(**kw)
+    for start in ([0.0, 0.0], [10.0, 30.0], [45.0, 5.0]):
+        p = plan.optimal(e, start)
+        assert p.return_ == pytest.approx(brute_force(e, np.array(start), 6), abs=1e-9)
+
+
+def test_plans_replay_to_their_return() -> None:
+    e = env(max_steps=120)
+    starts = np.array([e.sample_start(np.random.default_rng(i)) for i in range(20)])
+    for p in plan.optimal_many(e, starts):
+        e.reset(options={"start_m": p.path_m[0]})
+        g = 0.0
+        for k, a in enumerate(p.actions):
+            _, r, *_, info = e.step(a)
+            g += r
+            np.testing.assert_array_equal(info["position_m"], p.path_m[k + 1])
+        assert g == p.return_
+        base = plan.straight_line(e, p.path_m[0])
+        assert base.return_ <= p.return_ + 1e-9
+
+
+@pytest.mark.parametrize(
+    ("kw", "needle"),
+    [
+        ({"sir_db": np.full((3, 3), np.nan)}, "sir_db"),
+        ({"sir_db": np.ones(5)}, "sir_db"),
+        ({"extent_m": (400.0, 0.0, 0.0, 300.0)}, "extent_m"),
+        ({"goal_m": (500.0, 10.0)}, "goal_m"),
+        ({"step_m": 0.0}, "step_m"),
+        ({"tol_m": -1.0}, "tol_m"),
+        ({"max_steps": 0}, "max_steps"),
+        ({"reward": "bonus"}, "reward"),
+        ({"start_m": (-5.0, 0.0)}, "start_m"),
+    ],
+)
+def test_bad_input(kw, needle) -> None:
+    with pytest.raises(ValueError, match=needle) as info:
+        env(**kw)
+    assert isinstance(info.value, rainuav.InvalidInputError)
