@@ -177,18 +177,16 @@ class Replay:
 
 
 def double_q_target(
-    online: nn.Module,
-    target: nn.Module,
+    q_next_online: torch.Tensor,
+    q_next_target: torch.Tensor,
     ret: torch.Tensor,
-    next_obs: torch.Tensor,
     discount: torch.Tensor,
     done: torch.Tensor,
 ) -> torch.Tensor:
-    """y = R + gamma^k (1 - done) Q_target(s', argmax_a Q_online(s', a))."""
-    with torch.no_grad():
-        a_star = online(next_obs).argmax(dim=1, keepdim=True)
-        q_next = target(next_obs).gather(1, a_star).squeeze(1)
-        return ret + discount * (1.0 - done) * q_next
+    """Double-Q target ``R + gamma^k (1 - done) Q_target(s', argmax_a Q_online(s', a))`` from
+    the two networks' Q-values at s' (B, A)."""
+    a_star = q_next_online.argmax(dim=1, keepdim=True)
+    return ret + discount * (1.0 - done) * q_next_target.gather(1, a_star).squeeze(1)
 
 
 class Agent:
@@ -224,15 +222,18 @@ class Agent:
             return None
         b = self.replay.sample(self.rng, self.cfg.batch_size)
         t = {k: torch.as_tensor(v, device=self.device) for k, v in b.items()}
-        y = double_q_target(
-            self.online,
-            self.target,
-            t["ret"] / self.cfg.reward_scale,
-            t["next_obs"],
-            t["discount"],
-            t["done"],
-        )
-        q = self.online(t["obs"]).gather(1, t["action"][:, None]).squeeze(1)
+        n = len(b["obs"])
+        # One online forward for s and s' (the s' half, detached, picks the double-Q action).
+        q_all = self.online(torch.cat([t["obs"], t["next_obs"]]))
+        q = q_all[:n].gather(1, t["action"][:, None]).squeeze(1)
+        with torch.no_grad():
+            y = double_q_target(
+                q_all[n:],
+                self.target(t["next_obs"]),
+                t["ret"] / self.cfg.reward_scale,
+                t["discount"],
+                t["done"],
+            )
         loss = nn.functional.smooth_l1_loss(q, y)
         self.opt.zero_grad(set_to_none=True)
         loss.backward()

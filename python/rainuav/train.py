@@ -367,6 +367,10 @@ def train(
     write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
     env = make_env(cfg, rm.sir_db, rm.extent_m)
     device = pick_device(cfg.device)
+    if device.type == "cpu":
+        # The networks are tiny: one thread is faster than two (no synchronisation) and
+        # keeps CPU runs bit-reproducible.
+        torch.set_num_threads(1)
     seed_everything(cfg.seed)
     agent = Agent(cfg.dqn, cfg.seed, device)
     env.reset(seed=cfg.seed)
@@ -443,8 +447,8 @@ def train(
             if losses:
                 tb.add_scalar("loss", mean_loss, ep)
             if (ep + 1) % stage_every == 0:
+                # Greedy rollouts from given starts draw nothing from the training rng.
                 stages.append((ep + 1, [greedy_rollout(agent, env, s) for s in stage_starts]))
-                env.reset()  # greedy rollouts do not consume the training rng
             if bar is not None:
                 recent = successes[-100:]
                 bar.set_postfix(
@@ -505,6 +509,13 @@ def finish(
     if stages:
         plot_stages(env, stages, out / "stages.png")
     return metrics
+
+
+def load_config(path: Path) -> TrainConfig:
+    """A TrainConfig from a run's config.toml."""
+    data = tomllib.loads(Path(path).read_text())
+    dqn = DQNConfig(**data.pop("dqn", {}))
+    return TrainConfig(**data, dqn=dqn)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
