@@ -285,3 +285,20 @@ def test_height_map_equals_box_building() -> None:
     behind = x > 300
     assert np.all(rh[behind] <= boresight(beam_line().radio_map(cache=False))[1][behind] - 10)
     np.testing.assert_allclose(rh[x < 190], rb[x < 190], atol=1e-6)
+
+
+def test_rate_map_equals_homogeneous_rain() -> None:
+    # A uniform rate map is homogeneous rain: same boresight power to f32 rounding.
+    kw = {"freq_hz": 28e9, "bw": 2.0, "length": 300.0}
+    h, w = beam_line(**kw).area.shape
+    table = np.full((h, w), 25.0).tolist()
+    a = beam_line(**kw, med=Medium(kind="homogeneous", rain_rate_mm_h=25.0)).radio_map(cache=False)
+    b = beam_line(**kw, med=Medium(kind="map", rate_map_mm_h=table)).radio_map(cache=False)
+    _, ra = boresight(a)
+    _, rb = boresight(b)
+    np.testing.assert_allclose(rb, ra, atol=1e-3)
+    scn = beam_line(**kw)
+    scn.medium = Medium(kind="map", rate_map_mm_h=[[0.0, 10.0], [20.0, 30.0]])
+    x0, x1, y0, y1 = scn.area.x_min_m, scn.area.x_max_m, scn.area.y_min_m, scn.area.y_max_m
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    assert radiomap.rain_rate_at(scn, np.array([cx]), np.array([cy]))[0] == pytest.approx(15.0)

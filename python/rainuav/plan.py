@@ -13,7 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from rainuav import _core
-from rainuav.env import MOVES, UAVNavEnv
+from rainuav.env import UAVNavEnv
 from rainuav.errors import InvalidInputError
 
 __all__ = ["Plan", "optimal", "optimal_many", "straight_line"]
@@ -84,5 +84,4 @@ def straight_line(env: UAVNavEnv, start_m: npt.ArrayLike) -> Plan:
         ret += float(r["reward"][0])
         if r["terminated"][0] or r["truncated"][0]:
             break
-    assert MOVES.shape == (4, 2)
     return Plan(ret, np.array(path), np.array(actions, dtype=np.int64))

@@ -46,6 +46,7 @@ import numpy.typing as npt
 
 from rainuav import _core, medium, pwe
 from rainuav._io import write_atomic
+from rainuav.env import SirField
 from rainuav.errors import InvalidInputError
 from rainuav.scenario import Cell, Scenario, Site
 
@@ -255,28 +256,10 @@ def rain_rate_at(scn: Scenario, x: np.ndarray, y: np.ndarray) -> np.ndarray:
             r = r + cell.rate(x, y)
         return np.minimum(r, 500.0)
     table = np.asarray(m.rate_map_mm_h, dtype=float)
-    return _bilinear_on_area(scn, table, x, y)
-
-
-def _bilinear_on_area(scn: Scenario, table: np.ndarray, x: np.ndarray, y: np.ndarray):
-    """Bilinear interpolation of a (rows south-north, cols west-east) table whose samples sit
-    at pixel centres of the area; edge values hold beyond the outermost centres."""
+    # Rates sit at pixel centres of the area and hold beyond the outermost centres: the same
+    # interpolation as the SIR map the UAV flies through.
     a = scn.area
-    h, w = table.shape
-    fx = (np.asarray(x) - a.x_min_m) / (a.x_max_m - a.x_min_m) * w - 0.5
-    fy = (np.asarray(y) - a.y_min_m) / (a.y_max_m - a.y_min_m) * h - 0.5
-    fx = np.clip(fx, 0, w - 1)
-    fy = np.clip(fy, 0, h - 1)
-    j0 = np.minimum(np.floor(fx).astype(int), max(w - 2, 0))
-    i0 = np.minimum(np.floor(fy).astype(int), max(h - 2, 0))
-    tx, ty = fx - j0, fy - i0
-    j1, i1 = np.minimum(j0 + 1, w - 1), np.minimum(i0 + 1, h - 1)
-    return (
-        table[i0, j0] * (1 - tx) * (1 - ty)
-        + table[i0, j1] * tx * (1 - ty)
-        + table[i1, j0] * (1 - tx) * ty
-        + table[i1, j1] * tx * ty
-    )
+    return SirField(table, (a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m))(x, y)
 
 
 def _medium_kwargs(scn: Scenario, site: Site, plan: CellPlan) -> dict[str, Any]:

@@ -466,7 +466,7 @@ impl Marcher {
             (Vec::new(), Vec::new())
         };
 
-        let mut m = Marcher {
+        let m = Marcher {
             // `iter()` walks in logical (ix, iy) order whatever u0's memory layout.
             field: u0.iter().copied().collect(),
             // Used by "pec-v" only; zeros (and untouched by the column pass) otherwise, so the
@@ -489,7 +489,6 @@ impl Marcher {
             pool: ScratchPool::new(),
             spec,
         };
-        m.spectral = false;
         Ok(m)
     }
 
