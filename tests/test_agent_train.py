@@ -12,7 +12,8 @@ import pytest
 import torch
 from rainuav.agent import DQNConfig, DuelingQNet, NStepWindow, Replay, double_q_target
 from rainuav.radiomap import RadioMap
-from rainuav.train import TrainConfig, train
+from rainuav.env import UAVNavEnv
+from rainuav.train import TrainConfig, greedy_rollouts, make_agent, shaping_term, train
 
 
 def test_n_step_window_by_hand() -> None:
@@ -114,6 +115,77 @@ def small_cfg(out: Path, episodes: int) -> TrainConfig:
     )
 
 
+def _env() -> UAVNavEnv:
+    return UAVNavEnv(radio_map=synthetic_map(), goal_m=(300.0, 350.0), max_steps=100)
+
+
+def test_shaping_telescopes_to_a_constant_of_the_start() -> None:
+    # Potential-based shaping must add the same amount to every episode from a start that
+    # ends at the goal or off the map (Ng et al. 1999): sum_t gamma^t F_t = -Phi(s_0).
+    env = _env()
+    d = DQNConfig(gamma=0.99)
+    start = np.array([[37.0, 42.0]])
+    totals = []
+    for actions in (
+        [0] * 26 + [1] * 31,
+        [1] * 31 + [0] * 26,
+        [2, 0, 0, 3, 1, 1] + [0] * 26 + [1] * 31,
+        [3] * 5,
+    ):
+        off, t = np.zeros((1, 2), np.int64), np.zeros(1, np.int64)
+        total, disc = 0.0, 1.0
+        for a in actions:
+            pos = start + env.cfg.step_m * off
+            r = env.stepper.step(start, off, t, np.array([a]))
+            off, t = r["offset"], r["t"]
+            total += disc * float(shaping_term(env, d, pos, r["position"], r["terminated"])[0])
+            disc *= d.gamma
+            if r["terminated"][0]:
+                break
+        assert r["terminated"][0]
+        totals.append(total)
+    # The first three arrive (by different routes), the last leaves the area.
+    np.testing.assert_allclose(totals, totals[0], rtol=0, atol=1e-9)
+    # Phi(s_0) for k = (263 + 308 - 10) / 10 moves: -(1 - g^k) / (1 - g) + g^k * 2000.
+    k = (263 + 308 - 10) / 10
+    phi0 = -(1 - 0.99**k) / 0.01 + 0.99**k * 2000
+    assert totals[0] == pytest.approx(-phi0, rel=1e-12)
+
+
+def test_goal_features_and_time() -> None:
+    env = _env()
+    cfg = small_cfg(Path("unused"), 1)
+    cfg.dqn.time_aware = True
+    agent = make_agent(cfg, env, torch.device("cpu"))
+    obs = agent.observe(env.observe(np.array([[300.0, 350.0], [310.0, 310.0]])), [0, 50])
+    assert obs.shape == (2, 3 + 2 * cfg.dqn.goal_features) and obs.dtype == np.float32
+    np.testing.assert_allclose(obs[:, 2], [0.0, 0.5])  # t / max_steps
+    assert np.all(obs[0, 3:] == 0.0)  # at the goal every goal-relative feature is 0
+    # One move east of the goal: tanh(1 / 4^k) on x; four moves south: tanh(-4 / 4^k) on y.
+    k = np.arange(cfg.dqn.goal_features)
+    np.testing.assert_allclose(
+        obs[1, 3:].reshape(2, -1), [np.tanh(1 / 4.0**k), np.tanh(-4 / 4.0**k)], rtol=1e-5
+    )
+
+
+def test_batched_greedy_rollouts_equal_the_scalar_env() -> None:
+    env = _env()
+    agent = make_agent(small_cfg(Path("unused"), 1), env, torch.device("cpu"))
+    starts = np.array([[12.5, 7.25], [390.0, 20.0], [290.0, 349.0], [5.0, 395.0]])
+    for roll, s in zip(greedy_rollouts(agent, env, starts), starts, strict=True):
+        obs, info = env.reset(options={"start_m": s})
+        ret, t, path = 0.0, 0, [info["position_m"]]
+        while True:
+            obs, r, term, trunc, info = env.step(int(agent.greedy(agent.observe(obs, t))[0]))
+            ret, t = ret + r, t + 1
+            path.append(info["position_m"])
+            if term or trunc:
+                break
+        assert roll["return"] == ret and roll["steps"] == t
+        assert roll["reached"] == info["arrived"]
+        np.testing.assert_array_equal(roll["path"], np.array(path))
+
+
 def test_training_smoke_on_a_synthetic_map(tmp_path: Path) -> None:
     # 300 episodes on a 40 x 40 map take ~30 s here; the greedy policy must reach the goal
     # from most of 50 seeded starts and come close to the exact optimum. Measured for seeds
@@ -136,10 +208,14 @@ def test_training_smoke_on_a_synthetic_map(tmp_path: Path) -> None:
 
 
 def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
-    full = train(small_cfg(tmp_path / "full", 40), progress=False, radio_map=synthetic_map())
+    full = train(small_cfg(tmp_path / "full", 120), progress=False, radio_map=synthetic_map())
     part_dir = tmp_path / "part"
-    train(small_cfg(part_dir, 20), progress=False, radio_map=synthetic_map())
-    resumed = train(small_cfg(part_dir, 40), resume=True, progress=False)
+    # Interrupted after the checkpoint at 50 finished episodes, with lanes in mid-flight.
+    assert (
+        train(small_cfg(part_dir, 120), progress=False, radio_map=synthetic_map(), stop_after=50)
+        == {}
+    )
+    resumed = train(small_cfg(part_dir, 120), resume=True, progress=False)
     for k in ("mean_return", "success_rate", "mean_steps", "mean_gap_to_optimal"):
         assert resumed[k] == full[k], k
     a = torch.load(tmp_path / "full" / "checkpoint.pt", weights_only=False)["agent"]["online"]

@@ -3,9 +3,12 @@
 Reads top to bottom: the network, the N-step sliding window, the replay memory, and the agent
 (act, learn, sync). Choices beyond the paper's Table I, and why:
 
-- discount ``gamma = 0.99`` and ``n_step = 3`` (N1): the goal reward (2000) is up to ~300 moves
-  away; 0.99^300 still leaves it worth ~100 against ~-300 of step costs, and 3-step returns
-  propagate it 3x faster than 1-step returns without the variance of long windows;
+- the agent is *time-aware* (``time_aware``, Pardo et al., "Time limits in reinforcement
+  learning", ICML 2018): it appends the elapsed fraction of the episode, t / max_steps, to the
+  environment's observation, and treats the time limit as the end of the task (no bootstrap
+  past it). The exact optimum of a 300-step episode is non-stationary (a far start cannot
+  afford the detour a near one takes), which a position-only Q-function cannot represent;
+- FIXME gamma/n_step;
 - rewards are divided by ``reward_scale = 100`` inside the learner (targets of order 1-100
   rather than 1e4), Huber loss, Adam with learning rate 5e-4, gradient norm clipped at 10;
 - the state (a position in [0, 1]^2) is expanded with ``fourier`` sine/cosine features per
@@ -24,7 +27,7 @@ import numpy as np
 import torch
 from torch import nn
 
-__all__ = ["Agent", "DQNConfig", "DuelingQNet", "NStepWindow", "Replay"]
+__all__ = ["Agent", "DQNConfig", "DuelingQNet", "GridEncoding", "NStepWindow", "Replay"]
 
 
 @dataclass
@@ -43,33 +46,94 @@ class DQNConfig:
     """Replay memory size C (Table I)."""
     batch_size: int = 16
     """Minibatch size B (Table I)."""
-    gamma: float = 0.99
+    gamma: float = 0.995
     """Discount factor."""
     n_step: int = 3
     """N1: length of the multi-step window."""
-    lr: float = 5e-4
+    lr: float = 1e-3
     """Adam learning rate."""
     hidden: int = 128
     """Width of the two hidden layers."""
     fourier: int = 8
-    """Sine/cosine frequencies per coordinate in the state features (0: raw coordinates)."""
+    """Sine/cosine frequencies per input in the state features (0: none)."""
+    grid_levels: int = 0
+    """Levels of the learned position feature grids (0: none), resolutions grid_base * 2^l."""
+    grid_base: int = 8
+    """Cells per side of the coarsest position grid."""
+    grid_features: int = 4
+    """Features per grid node and level."""
     reward_scale: float = 100.0
     """Rewards are divided by this inside the learner."""
     grad_clip: float = 10.0
     """Gradient-norm clip."""
     learning_starts: int = 1000
     """Transitions stored before learning starts."""
-    train_every: int = 1
-    """Environment steps per gradient step."""
+    train_every: int = 4
+    """Environment steps (transitions, summed over lanes) per gradient step."""
+    lanes: int = 16
+    """UAVs flown at once, each its own episode (1: the paper's one-at-a-time loop)."""
+    time_aware: bool = False
+    """Append t / max_steps to the observation and stop bootstrapping at the time limit."""
+    goal_features: int = 4
+    """Goal-relative inputs tanh(d / (step * 4^k)), k < goal_features, per axis (0: none)."""
+    shaping: float = 1.0
+    """Weight of the potential-based shaping -(steps to the goal); 0: the plain rewards."""
+
+
+class GridEncoding(nn.Module):
+    """Learned feature grids over the unit square at several resolutions, read by bilinear
+    interpolation (the dense form of Mueller et al.'s multiresolution encoding, SIGGRAPH 2022).
+
+    A value function over a radio map has sharp steps at coverage edges; coarse levels carry
+    the broad shape and generalise between nearby states, fine levels resolve the edges,
+    and each gradient step only touches the cells around the sampled positions.
+    """
+
+    def __init__(self, levels: int, base: int, features: int) -> None:
+        super().__init__()
+        self.res = [base * 2**level for level in range(levels)]
+        self.grids = nn.ParameterList(
+            nn.Parameter(torch.empty(1, features, r + 1, r + 1).uniform_(-1e-4, 1e-4))
+            for r in self.res
+        )
+        self.dim = levels * features
+
+    def forward(self, xy: torch.Tensor) -> torch.Tensor:
+        # grid_sample reads (x, y) in [-1, 1] with x along the width; align_corners=True puts
+        # -1 and +1 on the outermost grid nodes, so node spacing is 1 / r.
+        g = (2.0 * xy - 1.0).view(1, -1, 1, 2)
+        feats = [
+            nn.functional.grid_sample(grid, g, mode="bilinear", align_corners=True)
+            for grid in self.grids
+        ]
+        return torch.cat(feats, dim=1).flatten(2).squeeze(0).T  # (B, levels * features)
 
 
 class DuelingQNet(nn.Module):
-    """Q(s, a) = V(s) + A(s, a) - mean_a A(s, a) on Fourier features of the position."""
+    """Q(s, a) = V(s) + A(s, a) - mean_a A(s, a).
 
-    def __init__(self, hidden: int = 128, fourier: int = 8, n_actions: int = 4) -> None:
+    All inputs enter as they are; the first ``smooth_dim`` (the position and the time
+    fraction) also as ``fourier`` sine/cosine frequencies, and the position (the first two)
+    also through a :class:`GridEncoding` when ``grid_levels`` > 0. Two hidden ReLU layers
+    feed the value and advantage heads.
+    """
+
+    def __init__(
+        self,
+        hidden: int = 128,
+        fourier: int = 8,
+        n_actions: int = 4,
+        obs_dim: int = 2,
+        smooth_dim: int | None = None,
+        grid_levels: int = 0,
+        grid_base: int = 8,
+        grid_features: int = 4,
+    ) -> None:
         super().__init__()
         self.register_buffer("freqs", math.pi * torch.arange(1, fourier + 1, dtype=torch.float32))
-        d_in = 2 + 4 * fourier
+        self.grid = GridEncoding(grid_levels, grid_base, grid_features) if grid_levels else None
+        self.smooth_dim = obs_dim if smooth_dim is None else smooth_dim
+        d_in = obs_dim + self.smooth_dim * 2 * fourier + (self.grid.dim if self.grid else 0)
         self.body = nn.Sequential(
             nn.Linear(d_in, hidden), nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU()
         )
@@ -77,10 +141,13 @@ class DuelingQNet(nn.Module):
         self.advantage = nn.Linear(hidden, n_actions)
 
     def features(self, obs: torch.Tensor) -> torch.Tensor:
-        if self.freqs.numel() == 0:
-            return obs
-        ang = obs[..., :, None] * self.freqs  # (B, 2, K)
-        return torch.cat([obs, torch.sin(ang).flatten(-2), torch.cos(ang).flatten(-2)], dim=-1)
+        parts = [obs]
+        if self.freqs.numel():
+            ang = obs[:, : self.smooth_dim, None] * self.freqs  # (B, smooth_dim, K)
+            parts += [torch.sin(ang).flatten(-2), torch.cos(ang).flatten(-2)]
+        if self.grid is not None:
+            parts.append(self.grid(obs[:, :2]))
+        return torch.cat(parts, dim=-1)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
         h = self.body(self.features(obs))
@@ -192,30 +259,81 @@ def double_q_target(
 class Agent:
     """Online and target networks, replay, optimiser and the exploration schedule."""
 
-    def __init__(self, cfg: DQNConfig, seed: int, device: torch.device) -> None:
+    def __init__(
+        self,
+        cfg: DQNConfig,
+        seed: int,
+        device: torch.device,
+        horizon: int,
+        goal: tuple[float, float] = (0.5, 0.5),
+        step: tuple[float, float] = (0.01, 0.01),
+    ) -> None:
+        """``horizon``: the episode's step limit; ``goal`` and ``step``: the destination and
+        one move in the environment's observation units ([0, 1]^2)."""
         self.cfg = cfg
         self.device = device
+        self.horizon = horizon
+        self.goal = np.asarray(goal, dtype=np.float32)
+        self.goal_scale = (
+            np.asarray(step, dtype=np.float32)[:, None] * 4.0 ** np.arange(cfg.goal_features)
+        ).astype(np.float32)  # (2, K)
+        self.n_smooth = 3 if cfg.time_aware else 2
+        self.obs_dim = self.n_smooth + 2 * cfg.goal_features
         torch.manual_seed(seed)
-        self.online = DuelingQNet(cfg.hidden, cfg.fourier).to(device)
-        self.target = DuelingQNet(cfg.hidden, cfg.fourier).to(device)
+        self.online = self.make_net().to(device)
+        self.target = self.make_net().to(device)
         self.target.load_state_dict(self.online.state_dict())
-        self.opt = torch.optim.Adam(self.online.parameters(), lr=cfg.lr)
-        self.replay = Replay(cfg.replay_capacity)
+        # The fused Adam kernel is one call instead of ~10 per parameter tensor: it halves the
+        # cost of a gradient step of these small networks on the CPU.
+        self.opt = torch.optim.Adam(self.online.parameters(), lr=cfg.lr, fused=True)
+        self.replay = Replay(cfg.replay_capacity, self.obs_dim)
         self.rng = np.random.default_rng(seed)
         self.updates = 0
 
-    def epsilon(self, episode: int) -> float:
-        return self.cfg.eps0 * self.cfg.eps_decay**episode
+    def make_net(self) -> DuelingQNet:
+        c = self.cfg
+        return DuelingQNet(
+            c.hidden,
+            c.fourier,
+            obs_dim=self.obs_dim,
+            smooth_dim=self.n_smooth,
+            grid_levels=c.grid_levels,
+            grid_base=c.grid_base,
+            grid_features=c.grid_features,
+        )
+
+    def epsilon(self, episode: Any) -> Any:
+        """eps0 * eps_decay^episode (works on arrays of episode indices)."""
+        return self.cfg.eps0 * self.cfg.eps_decay ** np.asarray(episode, dtype=np.float64)
+
+    def observe(self, env_obs: np.ndarray, t: Any) -> np.ndarray:
+        """The agent's input from the environment's (N, 2) observation: the position, then
+        t / horizon when time-aware, then the goal-relative features (functions of the
+        position and the fixed destination, so no information the environment does not give;
+        they let the network resolve the 10 m arrival disc, which global features blur)."""
+        env_obs = np.atleast_2d(np.asarray(env_obs, dtype=np.float32))
+        parts = [env_obs]
+        if self.cfg.time_aware:
+            frac = (np.asarray(t, dtype=np.float32) / self.horizon).reshape(-1, 1)
+            parts.append(np.broadcast_to(frac, (len(env_obs), 1)))
+        if self.cfg.goal_features:
+            rel = (env_obs - self.goal)[:, :, None] / self.goal_scale  # (N, 2, K)
+            parts.append(np.tanh(rel).reshape(len(env_obs), -1))
+        return np.concatenate(parts, axis=1).astype(np.float32)
+
+    def act(self, obs: np.ndarray, episodes: np.ndarray) -> np.ndarray:
+        """Epsilon-greedy actions for a batch of UAVs, each at its own episode's epsilon.
+        Always draws one uniform and one action per UAV, so the random stream does not
+        depend on the network's choices."""
+        n = len(obs)
+        explore = self.rng.random(n) < self.epsilon(episodes)
+        random_a = self.rng.integers(4, size=n)
+        return np.where(explore, random_a, self.greedy(obs))
 
     def greedy(self, obs: np.ndarray) -> np.ndarray:
         with torch.no_grad():
             x = torch.as_tensor(np.atleast_2d(obs), dtype=torch.float32, device=self.device)
             return self.online(x).argmax(dim=1).cpu().numpy()
-
-    def act(self, obs: np.ndarray, episode: int) -> int:
-        if self.rng.random() < self.epsilon(episode):
-            return int(self.rng.integers(4))
-        return int(self.greedy(obs)[0])
 
     def learn(self) -> float | None:
         if self.replay.size < max(self.cfg.learning_starts, self.cfg.batch_size):
@@ -237,7 +355,7 @@ class Agent:
         loss = nn.functional.smooth_l1_loss(q, y)
         self.opt.zero_grad(set_to_none=True)
         loss.backward()
-        nn.utils.clip_grad_norm_(self.online.parameters(), self.cfg.grad_clip)
+        nn.utils.clip_grad_norm_(self.online.parameters(), self.cfg.grad_clip, foreach=True)
         self.opt.step()
         self.updates += 1
         return float(loss.detach())

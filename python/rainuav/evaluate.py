@@ -16,13 +16,13 @@ from pathlib import Path
 import torch
 
 from rainuav._io import write_atomic
-from rainuav.agent import Agent
 from rainuav.errors import InvalidInputError
 from rainuav.radiomap import RadioMap
 from rainuav.train import (
     eval_starts,
     evaluate,
     load_config,
+    make_agent,
     make_env,
     pick_device,
     plot_trajectories,
@@ -37,7 +37,7 @@ def evaluate_run(run_dir: Path, device: str = "cpu") -> dict:
     cfg = load_config(run / "config.toml")
     rm = RadioMap.load(run / "radiomap.npz")
     env = make_env(cfg, rm.sir_db, rm.extent_m)
-    agent = Agent(cfg.dqn, cfg.seed, pick_device(device))
+    agent = make_agent(cfg, env, pick_device(device))
     state = torch.load(run / "checkpoint.pt", weights_only=False, map_location=agent.device)
     agent.load_state_dict(state["agent"])
     starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)

@@ -97,6 +97,14 @@ def _field_docs(cls: type) -> dict[str, str]:
     return docs
 
 
+def _parse_bool(text: str) -> bool:
+    if text.lower() in ("1", "true", "yes", "on"):
+        return True
+    if text.lower() in ("0", "false", "no", "off"):
+        return False
+    raise argparse.ArgumentTypeError(f"expected true or false (got {text!r})")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """CLI flags generated from TrainConfig and DQNConfig."""
     ap = argparse.ArgumentParser(
@@ -111,7 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
         for f in dataclasses.fields(cls):
             if f.name == "dqn":
                 continue
-            typ = {int: int, float: float, str: str}.get(type(f.default), str)
+            typ = {int: int, float: float, str: str, bool: _parse_bool}.get(type(f.default), str)
             ap.add_argument(
                 f"--{prefix}{f.name.replace('_', '-')}",
                 dest=f.name,
@@ -155,6 +163,11 @@ def validate(cfg: TrainConfig) -> None:
         ("lr", d.lr > 0),
         ("hidden", d.hidden >= 1),
         ("fourier", d.fourier >= 0),
+        ("lanes", d.lanes >= 1),
+        ("train_every", d.train_every >= 1),
+        ("learning_starts", d.learning_starts >= 0),
+        ("reward_scale", d.reward_scale > 0),
+        ("grad_clip", d.grad_clip > 0),
         ("max_steps", cfg.max_steps >= 1),
         ("eval_starts", cfg.eval_starts >= 1),
         ("checkpoint_every", cfg.checkpoint_every >= 1),
@@ -194,6 +207,17 @@ def make_env(cfg: TrainConfig, sir_db: np.ndarray, extent: Any) -> UAVNavEnv:
     return UAVNavEnv(sir_db=sir_db, extent_m=extent, config=nav)
 
 
+def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
+    """An agent for ``env``: the time limit, the destination and one move in observation
+    units."""
+    x0, x1, y0, y1 = env.field.extent
+    s = env.cfg.step_m
+    goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())
+    return Agent(
+        cfg.dqn, cfg.seed, device, cfg.max_steps, goal=goal, step=(s / (x1 - x0), s / (y1 - y0))
+    )
+
+
 def pick_device(name: str) -> torch.device:
     if name == "auto":
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
@@ -209,25 +233,42 @@ def seed_everything(seed: int) -> None:
 
 
 # -- evaluation -------------------------------------------------------------------------------
-def greedy_rollout(agent: Agent, env: UAVNavEnv, start: np.ndarray) -> dict[str, Any]:
-    """One greedy episode from ``start`` with the environment's exact semantics."""
-    obs, info = env.reset(options={"start_m": start})
-    path, sirs, ret, steps = [info["position_m"]], [], 0.0, 0
-    while True:
-        obs, r, term, trunc, info = env.step(int(agent.greedy(obs)[0]))
-        ret += r
-        steps += 1
-        path.append(info["position_m"])
-        sirs.append(info["sir_db"])
-        if term or trunc:
-            break
-    return {
-        "return": ret,
-        "steps": steps,
-        "path": np.array(path),
-        "sir": np.array(sirs),
-        "reached": bool(info["arrived"]),
-    }
+def greedy_rollouts(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> list[dict[str, Any]]:
+    """Greedy episodes from every start at once (the batched stepper gives exactly the scalar
+    environment's transitions), one dict per start: ``return``, ``steps``, ``path`` (T+1, 2),
+    ``sir`` (T,) and ``reached``."""
+    starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
+    n = len(starts)
+    off = np.zeros((n, 2), dtype=np.int64)
+    t = np.zeros(n, dtype=np.int64)
+    live = np.ones(n, dtype=bool)
+    ret = np.zeros(n)
+    reached = np.zeros(n, dtype=bool)
+    paths: list[list[np.ndarray]] = [[s.copy()] for s in starts]
+    sirs: list[list[float]] = [[] for _ in range(n)]
+    while live.any():
+        idx = np.flatnonzero(live)
+        pos = starts[idx] + env.cfg.step_m * off[idx]
+        a = agent.greedy(agent.observe(env.observe(pos), t[idx]))
+        r = env.stepper.step(starts[idx], off[idx], t[idx], a)
+        off[idx], t[idx] = r["offset"], r["t"]
+        ret[idx] += r["reward"]
+        for j, k in enumerate(idx):
+            paths[k].append(r["position"][j].copy())
+            sirs[k].append(float(r["sir_db"][j]))
+        end = r["terminated"] | r["truncated"]
+        reached[idx[r["terminated"] & ~r["out"]]] = True
+        live[idx[end]] = False
+    return [
+        {
+            "return": float(ret[k]),
+            "steps": int(t[k]),
+            "path": np.array(paths[k]),
+            "sir": np.array(sirs[k]),
+            "reached": bool(reached[k]),
+        }
+        for k in range(n)
+    ]
 
 
 def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
@@ -237,7 +278,7 @@ def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
 
 def evaluate(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> tuple[dict[str, Any], list]:
     """Greedy policy from every start against the exact planner."""
-    rolls = [greedy_rollout(agent, env, s) for s in starts]
+    rolls = greedy_rollouts(agent, env, starts)
     plans = planner.optimal_many(env, starts)
     rets = np.array([r["return"] for r in rolls])
     opt = np.array([p.return_ for p in plans])
@@ -250,6 +291,7 @@ def evaluate(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> tuple[dict[str
         "mean_sir_db": float(sirs.mean()),
         "outage_share": float(np.mean(sirs < env.cfg.sir_min_db)),
         "mean_gap_to_optimal": float(gap.mean()),
+        "median_gap_to_optimal": float(np.median(gap)),
         "worst_gap_to_optimal": float(gap.max()),
         "optimal_mean_return": float(opt.mean()),
         "straight_line_mean_return": float(
@@ -345,11 +387,79 @@ def _save_checkpoint(path: Path, state: dict[str, Any]) -> None:
     write_atomic(path, write)
 
 
+def shaping_term(
+    env: UAVNavEnv, d: DQNConfig, pos: np.ndarray, new_pos: np.ndarray, terminated: np.ndarray
+) -> np.ndarray:
+    """Potential-based shaping ``gamma Phi(s') - Phi(s)`` (Ng, Harada and Russell, ICML 1999).
+
+    ``Phi(s) = shaping * V_straight(s)``: the discounted return of flying straight to the
+    destination ignoring the SIR, ``-(1 - gamma^k) / (1 - gamma) + gamma^k R_des`` with ``k``
+    the moves still needed (lattice distance minus the tolerance); ``Phi = 0`` in the
+    absorbing state after arrival or leaving the area. Summed over an episode the terms
+    telescope to ``-Phi(s_0)`` (a truncated episode also keeps ``gamma^T Phi(s_T)``), so the
+    optimal policy is unchanged, while the learner now sees 0 for a move that keeps the
+    straight-line pace and a clear loss for one that does not, instead of 2000 points at the
+    end of a 300-move episode: it only has to learn how the SIR bends the straight route."""
+    if d.shaping == 0.0:
+        return np.zeros(len(pos))
+    c = env.cfg
+    goal = np.asarray(c.goal_m)
+
+    def phi(p: np.ndarray) -> np.ndarray:
+        k = np.maximum(np.abs(p - goal).sum(axis=1) - c.tol_m, 0.0) / c.step_m
+        g = d.gamma**k
+        steps = k if d.gamma == 1.0 else (1.0 - g) / (1.0 - d.gamma)
+        return d.shaping * (-steps + g * c.goal_reward)
+
+    return d.gamma * np.where(terminated, 0.0, phi(new_pos)) - phi(pos)
+
+
+@dataclass
+class _Lanes:
+    """The UAVs in flight: each lane runs one episode at a time (its own start, offset from
+    the start in steps, step count, episode index, return so far and N-step window)."""
+
+    start: np.ndarray
+    offset: np.ndarray
+    t: np.ndarray
+    episode: np.ndarray
+    ret: np.ndarray
+    active: np.ndarray
+    windows: list[NStepWindow]
+
+    @classmethod
+    def empty(cls, k: int, n_step: int, gamma: float) -> _Lanes:
+        return cls(
+            start=np.zeros((k, 2)),
+            offset=np.zeros((k, 2), dtype=np.int64),
+            t=np.zeros(k, dtype=np.int64),
+            episode=np.zeros(k, dtype=np.int64),
+            ret=np.zeros(k),
+            active=np.zeros(k, dtype=bool),
+            windows=[NStepWindow(n_step, gamma) for _ in range(k)],
+        )
+
+    def launch(self, k: int, start: np.ndarray, episode: int) -> None:
+        self.start[k] = start
+        self.offset[k] = 0
+        self.t[k] = 0
+        self.episode[k] = episode
+        self.ret[k] = 0.0
+        self.active[k] = True
+
+
 def train(
-    cfg: TrainConfig, *, resume: bool = False, progress: bool = True, radio_map: Any = None
+    cfg: TrainConfig,
+    *,
+    resume: bool = False,
+    progress: bool = True,
+    radio_map: Any = None,
+    stop_after: int | None = None,
 ) -> dict[str, Any]:
     """Runs the whole job and returns the metrics. ``radio_map`` (a RadioMap) replaces the
-    scenario's map (tests use small synthetic maps)."""
+    scenario's map (tests use small synthetic maps). ``stop_after`` ends the call, as an
+    interruption would, at the first checkpoint with at least that many finished episodes
+    (``resume=True`` then continues exactly); it returns ``{}``."""
     validate(cfg)
     out = Path(cfg.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -372,11 +482,12 @@ def train(
         # keeps CPU runs bit-reproducible.
         torch.set_num_threads(1)
     seed_everything(cfg.seed)
-    agent = Agent(cfg.dqn, cfg.seed, device)
+    agent = make_agent(cfg, env, device)
     env.reset(seed=cfg.seed)
     d = cfg.dqn
-    start_ep, returns, successes, stages = 0, [], [], []
-    train_seconds = 0.0
+    lanes = _Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
+    started, returns, successes, stages = 0, [], [], []
+    train_seconds, update_credit = 0.0, 0.0
     ckpt = out / "checkpoint.pt"
     if resume:
         if not ckpt.exists():
@@ -384,10 +495,16 @@ def train(
         st = torch.load(ckpt, weights_only=False)
         agent.load_state_dict(st["agent"])
         env.np_random.bit_generator.state = st["env_rng"]
-        start_ep, returns, successes = st["episode"], st["returns"], st["successes"]
+        lanes, started = st["lanes"], st["started"]
+        returns, successes = st["returns"], st["successes"]
         stages, train_seconds = st["stages"], st["train_seconds"]
+        update_credit = st["update_credit"]
         random.setstate(st["py_rng"])
         torch.set_rng_state(st["torch_rng"])
+    else:
+        for k in range(len(lanes.t)):
+            lanes.launch(k, env.sample_start(env.np_random), started)
+            started += 1
     stage_every = max(1, d.episodes // max(cfg.stages, 1))
     stage_starts = eval_starts(env, 5, cfg.eval_seed + 1)
     from torch.utils.tensorboard import SummaryWriter
@@ -398,87 +515,115 @@ def train(
     log_fh = log_path.open("w" if new_log else "a", newline="")
     log = csv.writer(log_fh)
     if new_log:
-        log.writerow(["episode", "return", "steps", "reached", "epsilon", "loss", "seconds"])
+        log.writerow(["finished", "episode", "return", "steps", "reached", "epsilon", "seconds"])
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=d.episodes, initial=start_ep, desc="train", unit="ep")
+        bar = tqdm(total=d.episodes, initial=len(returns), desc="train", unit="ep")
     t0 = time.perf_counter()
-    window = NStepWindow(d.n_step, d.gamma)
+    step_m = env.cfg.step_m
+    losses: list[float] = []
+    stopped = False
     try:
-        for ep in range(start_ep, d.episodes):
-            obs, _ = env.reset()
-            ep_ret, steps, losses, reached = 0.0, 0, [], False
-            while True:
-                a = agent.act(obs, ep)
-                nobs, r, term, trunc, info = env.step(a)
-                for tr in window.push(obs, a, r, nobs, term, trunc):
+        while lanes.active.any():
+            idx = np.flatnonzero(lanes.active)
+            pos = lanes.start[idx] + step_m * lanes.offset[idx]
+            obs = agent.observe(env.observe(pos), lanes.t[idx])
+            act = agent.act(obs, lanes.episode[idx])
+            r = env.stepper.step(lanes.start[idx], lanes.offset[idx], lanes.t[idx], act)
+            lanes.offset[idx], lanes.t[idx] = r["offset"], r["t"]
+            lanes.ret[idx] += r["reward"]
+            nobs = agent.observe(env.observe(r["position"]), r["t"])
+            # A time-aware agent knows the episode ends at the limit: no bootstrap past it.
+            stop = r["terminated"] | (r["truncated"] & d.time_aware)
+            learn_r = r["reward"] + shaping_term(env, d, pos, r["position"], r["terminated"])
+            for j, k in enumerate(idx):
+                for tr in lanes.windows[k].push(
+                    obs[j], int(act[j]), float(learn_r[j]), nobs[j], bool(stop[j]),
+                    bool(r["truncated"][j]),
+                ):  # fmt: skip
                     agent.replay.add(*tr)
-                steps += 1
-                ep_ret += r
-                if steps % d.train_every == 0:
-                    loss = agent.learn()
-                    if loss is not None:
-                        losses.append(loss)
-                obs = nobs
-                if term or trunc:
-                    reached = bool(info["arrived"])
-                    break
-            if (ep + 1) % d.target_sync_episodes == 0:
-                agent.sync()
-            returns.append(ep_ret)
-            successes.append(reached)
-            eps = agent.epsilon(ep)
-            mean_loss = float(np.mean(losses)) if losses else float("nan")
-            log.writerow(
-                [
-                    ep,
-                    f"{ep_ret:.4f}",
-                    steps,
-                    int(reached),
-                    f"{eps:.5f}",
-                    f"{mean_loss:.6f}",
-                    f"{time.perf_counter() - t0 + train_seconds:.2f}",
-                ]
-            )
-            tb.add_scalar("return", ep_ret, ep)
-            tb.add_scalar("epsilon", eps, ep)
+            update_credit += len(idx) / d.train_every
+            while update_credit >= 1.0:
+                update_credit -= 1.0
+                loss = agent.learn()
+                if loss is not None:
+                    losses.append(loss)
+            finished_before = len(returns)
+            for j in np.flatnonzero(r["terminated"] | r["truncated"]):
+                k = idx[j]
+                reached = bool(r["terminated"][j] and not r["out"][j])
+                returns.append(float(lanes.ret[k]))
+                successes.append(reached)
+                n_done = len(returns)
+                eps = float(agent.epsilon(lanes.episode[k]))
+                log.writerow(
+                    [
+                        n_done,
+                        int(lanes.episode[k]),
+                        f"{lanes.ret[k]:.4f}",
+                        int(lanes.t[k]),
+                        int(reached),
+                        f"{eps:.5f}",
+                        f"{time.perf_counter() - t0 + train_seconds:.2f}",
+                    ]
+                )
+                tb.add_scalar("return", lanes.ret[k], n_done)
+                tb.add_scalar("epsilon", eps, n_done)
+                if n_done % d.target_sync_episodes == 0:
+                    agent.sync()
+                if n_done % stage_every == 0:
+                    # Greedy rollouts from given starts draw nothing from the training rng.
+                    stages.append((n_done, greedy_rollouts(agent, env, stage_starts)))
+                if started < d.episodes:
+                    lanes.launch(k, env.sample_start(env.np_random), started)
+                    started += 1
+                else:
+                    lanes.active[k] = False
+            n_done = len(returns)
+            if n_done == finished_before:
+                continue
             if losses:
-                tb.add_scalar("loss", mean_loss, ep)
-            if (ep + 1) % stage_every == 0:
-                # Greedy rollouts from given starts draw nothing from the training rng.
-                stages.append((ep + 1, [greedy_rollout(agent, env, s) for s in stage_starts]))
+                tb.add_scalar("loss", float(np.mean(losses)), n_done)
+                losses.clear()
             if bar is not None:
-                recent = successes[-100:]
                 bar.set_postfix(
                     ret=f"{np.mean(returns[-100:]):.0f}",
-                    success=f"{np.mean(recent):.2f}",
-                    eps=f"{eps:.3f}",
+                    success=f"{np.mean(successes[-100:]):.2f}",
+                    eps=f"{agent.epsilon(started - 1):.3f}",
                 )
-                bar.update(1)
-            if (ep + 1) % cfg.checkpoint_every == 0 or ep + 1 == d.episodes:
+                bar.update(n_done - finished_before)
+            crossed = n_done // cfg.checkpoint_every > finished_before // cfg.checkpoint_every
+            if crossed or n_done == d.episodes:
                 log_fh.flush()
                 _save_checkpoint(
                     ckpt,
                     {
                         "agent": agent.state_dict(),
                         "env_rng": env.np_random.bit_generator.state,
-                        "episode": ep + 1,
+                        "lanes": lanes,
+                        "started": started,
                         "returns": returns,
                         "successes": successes,
                         "stages": stages,
+                        "update_credit": update_credit,
                         "train_seconds": time.perf_counter() - t0 + train_seconds,
                         "py_rng": random.getstate(),
                         "torch_rng": torch.get_rng_state(),
                         "config": to_dict(cfg),
                     },
                 )
+                if stop_after is not None and n_done >= stop_after and n_done < d.episodes:
+                    stopped = True
+                    break
     finally:
         if bar is not None:
             bar.close()
         log_fh.close()
         tb.close()
+    if stopped:
+        return {}
     train_seconds += time.perf_counter() - t0
     return finish(cfg, agent, env, returns, stages, train_seconds, out)
 
