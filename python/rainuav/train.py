@@ -1,12 +1,13 @@
 """``python -m rainuav.train``: learn to fly from any start to the destination (the main job).
 
 With no arguments: the paper preset at 25 mm/h (radio map built or taken from the cache),
-Table I hyperparameters, seed 0. Writes to ``--out`` (default ``runs/paper``): ``config.toml``,
-``radiomap.npz``, ``log.csv``, TensorBoard events, ``checkpoint.pt`` (every
-``checkpoint_every`` episodes; ``--resume`` continues from it and reproduces the
-uninterrupted run), and at the end ``metrics.json`` (greedy policy from ``eval_starts``
-seeded starts against the exact planner), ``returns.png``, ``trajectories.png`` and
-``stages.png``. Every flag is a field of :class:`TrainConfig` (``--help`` lists them).
+Table I hyperparameters, seed 0. Writes to ``--out`` (default ``runs/paper``):
+``config.toml``, ``radiomap.npz``, ``log.csv``, TensorBoard events, ``checkpoint.pt`` (every
+``checkpoint_every`` finished episodes; after an interruption, ``--resume`` with the same
+configuration continues from it and reproduces the uninterrupted run), and at the end
+``metrics.json`` (greedy policy from ``eval_starts`` seeded starts against the exact
+planner), ``returns.png``, ``trajectories.png`` and ``stages.png``. Every flag is a field of
+:class:`TrainConfig` or :class:`rainuav.agent.DQNConfig` (``--help`` lists them).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import csv
 import dataclasses
 import itertools
 import json
+import math
 import os
 import random
 import sys
@@ -164,6 +166,8 @@ def validate(cfg: TrainConfig) -> None:
         ("hidden", d.hidden >= 1),
         ("fourier", d.fourier >= 0),
         ("lanes", d.lanes >= 1),
+        ("goal_features", d.goal_features >= 0),
+        ("shaping", d.shaping >= 0 and math.isfinite(d.shaping)),
         ("train_every", d.train_every >= 1),
         ("learning_starts", d.learning_starts >= 0),
         ("reward_scale", d.reward_scale > 0),
