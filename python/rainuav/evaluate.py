@@ -42,7 +42,7 @@ def evaluate_run(run_dir: Path, device: str = "cpu") -> dict:
     agent.load_state_dict(state["agent"])
     starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
     metrics, rolls = evaluate(agent, env, starts)
-    metrics["episodes"] = state["episode"]
+    metrics["episodes"] = len(state["returns"])
     metrics["training_seconds"] = state["train_seconds"]
     text = json.dumps(metrics, indent=2)
     write_atomic(run / "metrics.json", lambda t: t.write_text(text + "\n"))

@@ -443,6 +443,25 @@ class _Lanes:
             windows=[NStepWindow(n_step, gamma) for _ in range(k)],
         )
 
+    def state_dict(self) -> dict[str, Any]:
+        """Plain arrays and lists (a checkpoint must not pickle classes of ``__main__``)."""
+        d: dict[str, Any] = {
+            f.name: getattr(self, f.name).copy()
+            for f in dataclasses.fields(self)
+            if f.name != "windows"
+        }
+        d["windows"] = [list(w.buf) for w in self.windows]
+        return d
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        for name, value in d.items():
+            if name == "windows":
+                for w, buf in zip(self.windows, value, strict=True):
+                    w.buf.clear()
+                    w.buf.extend(buf)
+            else:
+                setattr(self, name, value)
+
     def launch(self, k: int, start: np.ndarray, episode: int) -> None:
         self.start[k] = start
         self.offset[k] = 0
@@ -499,7 +518,8 @@ def train(
         st = torch.load(ckpt, weights_only=False)
         agent.load_state_dict(st["agent"])
         env.np_random.bit_generator.state = st["env_rng"]
-        lanes, started = st["lanes"], st["started"]
+        lanes.load_state_dict(st["lanes"])
+        started = st["started"]
         returns, successes = st["returns"], st["successes"]
         stages, train_seconds = st["stages"], st["train_seconds"]
         update_credit = st["update_credit"]
@@ -606,7 +626,7 @@ def train(
                     {
                         "agent": agent.state_dict(),
                         "env_rng": env.np_random.bit_generator.state,
-                        "lanes": lanes,
+                        "lanes": lanes.state_dict(),
                         "started": started,
                         "returns": returns,
                         "successes": successes,
