@@ -9,7 +9,7 @@ replay size and minibatch. Choices beyond it, each measured on the paper map (25
   policy against detours; the exact finite-horizon optimum of the discounted task gives up
   3.9% (0.998) or 4.7% (0.995) of the undiscounted optimum. Closer to 1 the bias vanishes
   (0.999: 0.2%) but the position-only policy then plans detours that do not fit in 300 moves,
-  and learning slowed: 0.999 reached 68% success, 0.998 97%, 0.995 94.5%.
+  and learning slowed: 0.999 reached 50% success, 0.998 97%, 0.995 94.5%.
 - Potential-based reward shaping inside the learner (``shaping``, see
   :func:`rainuav.train.shaping_term`): it leaves the optimal policy unchanged and tells the
   learner at every move whether it kept the straight-line pace to the goal. At gamma 0.99:
@@ -28,7 +28,7 @@ replay size and minibatch. Choices beyond it, each measured on the paper map (25
   (``train_every = 2``) did not learn better.
 - ``time_aware`` (off by default; Pardo et al., ICML 2018): appends t / max_steps to the input
   and ends bootstrapping at the time limit, which makes the exact finite-horizon optimum
-  representable, but learned more slowly within 3000 episodes (54% success at gamma 0.999).
+  representable, but learned more slowly within 3000 episodes (28% success at gamma 0.999).
 """
 
 from __future__ import annotations
