@@ -238,8 +238,9 @@ class Agent:
         seed: int,
         device: torch.device,
         horizon: int,
-        goal: tuple[float, float] = (0.5, 0.5),
-        step: tuple[float, float] = (0.01, 0.01),
+        *,
+        goal: tuple[float, float],
+        step: tuple[float, float],
     ) -> None:
         """``horizon``: the episode's step limit; ``goal`` and ``step``: the destination and
         one move in the environment's observation units ([0, 1]^2)."""
@@ -256,8 +257,8 @@ class Agent:
         self.online = self.make_net().to(device)
         self.target = self.make_net().to(device)
         self.target.load_state_dict(self.online.state_dict())
-        # The fused Adam kernel is one call instead of ~10 per parameter tensor: it halves the
-        # cost of a gradient step of these small networks on the CPU.
+        # The fused Adam kernel is one call instead of ~10 per parameter tensor: timed alone,
+        # its step takes 108 us against 344 us for the default (of a 1.6 ms gradient step).
         self.opt = torch.optim.Adam(self.online.parameters(), lr=cfg.lr, fused=True)
         self.replay = Replay(cfg.replay_capacity, self.obs_dim)
         self.rng = np.random.default_rng(seed)

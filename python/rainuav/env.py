@@ -159,7 +159,8 @@ class BatchStepper:
         self, start: np.ndarray, offset: np.ndarray, t: np.ndarray, action: np.ndarray
     ) -> dict[str, np.ndarray]:
         """One move for every UAV. Returns new ``offset``, ``t``, ``position`` (after clamping),
-        ``reward``, ``terminated``, ``truncated``, ``sir_db`` and ``out`` (left the area)."""
+        ``reward``, ``terminated``, ``truncated``, ``sir_db``, ``out`` (left the area) and
+        ``arrived`` (reached the goal)."""
         cfg = self.cfg
         x0, x1, y0, y1 = self.field.extent
         new_off = offset + MOVES[action]
@@ -186,6 +187,7 @@ class BatchStepper:
             "truncated": truncated,
             "sir_db": sir,
             "out": out,
+            "arrived": arrived,
         }
 
 
@@ -308,7 +310,7 @@ class UAVNavEnv(gym.Env):
             float(r["reward"][0]),
             bool(r["terminated"][0]),
             bool(r["truncated"][0]),
-            self._info(sir, bool(r["terminated"][0] and not r["out"][0])),
+            self._info(sir, bool(r["arrived"][0])),
         )
 
 

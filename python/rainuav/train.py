@@ -261,7 +261,7 @@ def greedy_rollouts(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> list[di
             paths[k].append(r["position"][j].copy())
             sirs[k].append(float(r["sir_db"][j]))
         end = r["terminated"] | r["truncated"]
-        reached[idx[r["terminated"] & ~r["out"]]] = True
+        reached[idx[r["arrived"]]] = True
         live[idx[end]] = False
     return [
         {
@@ -510,7 +510,7 @@ def train(
     d = cfg.dqn
     lanes = _Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
     started, returns, successes, stages = 0, [], [], []
-    train_seconds, update_credit = 0.0, 0.0
+    train_seconds, pending = 0.0, 0  # pending: transitions not yet paid for by a gradient step
     ckpt = out / "checkpoint.pt"
     if resume:
         if not ckpt.exists():
@@ -522,7 +522,7 @@ def train(
         started = st["started"]
         returns, successes = st["returns"], st["successes"]
         stages, train_seconds = st["stages"], st["train_seconds"]
-        update_credit = st["update_credit"]
+        pending = st["pending"]
         random.setstate(st["py_rng"])
         torch.set_rng_state(st["torch_rng"])
     else:
@@ -568,16 +568,16 @@ def train(
                     bool(r["truncated"][j]),
                 ):  # fmt: skip
                     agent.replay.add(*tr)
-            update_credit += len(idx) / d.train_every
-            while update_credit >= 1.0:
-                update_credit -= 1.0
+            pending += len(idx)
+            for _ in range(pending // d.train_every):
                 loss = agent.learn()
                 if loss is not None:
                     losses.append(loss)
+            pending %= d.train_every
             finished_before = len(returns)
             for j in np.flatnonzero(r["terminated"] | r["truncated"]):
                 k = idx[j]
-                reached = bool(r["terminated"][j] and not r["out"][j])
+                reached = bool(r["arrived"][j])
                 returns.append(float(lanes.ret[k]))
                 successes.append(reached)
                 n_done = len(returns)
@@ -631,7 +631,7 @@ def train(
                         "returns": returns,
                         "successes": successes,
                         "stages": stages,
-                        "update_credit": update_credit,
+                        "pending": pending,
                         "train_seconds": time.perf_counter() - t0 + train_seconds,
                         "py_rng": random.getstate(),
                         "torch_rng": torch.get_rng_state(),
