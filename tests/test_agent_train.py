@@ -13,7 +13,15 @@ import torch
 from rainuav.agent import DQNConfig, DuelingQNet, NStepWindow, Replay, double_q_target
 from rainuav.env import UAVNavEnv
 from rainuav.radiomap import RadioMap
-from rainuav.train import TrainConfig, greedy_rollouts, make_agent, shaping_term, train
+from rainuav.train import (
+    TrainConfig,
+    eval_starts,
+    evaluate,
+    greedy_rollouts,
+    make_agent,
+    shaping_term,
+    train,
+)
 
 
 def test_n_step_window_by_hand() -> None:
@@ -109,6 +117,8 @@ def small_cfg(out: Path, episodes: int) -> TrainConfig:
         eval_starts=50,
         checkpoint_every=50,
         stages=2,
+        select_every=50,
+        select_starts=30,
         dqn=DQNConfig(
             episodes=episodes, learning_starts=200, eps_decay=0.99, target_sync_episodes=2, lr=1e-3
         ),
@@ -201,10 +211,31 @@ def test_training_smoke_on_a_synthetic_map(tmp_path: Path) -> None:
         "stages.png",
         "log.csv",
         "checkpoint.pt",
+        "policy.pt",
         "config.toml",
         "radiomap.npz",
     ):
         assert (tmp_path / name).exists(), name
+    # Model selection kept the network with the smallest validation gap, and that network
+    # (saved to policy.pt) is the one the metrics describe: replaying it gives them exactly.
+    cfg = small_cfg(tmp_path, 300)
+    history = torch.load(tmp_path / "checkpoint.pt", weights_only=False)["select"]["history"]
+    assert len(history) == 300 // cfg.select_every
+    best = min(history, key=lambda h: h[2])
+    assert (m["selected_at_episode"], m["validation_mean_gap"]) == (best[0], best[2])
+    env = _env()
+    agent = make_agent(cfg, env, torch.device("cpu"))
+    agent.online.load_state_dict(torch.load(tmp_path / "policy.pt", weights_only=True)["online"])
+    metrics, _ = evaluate(agent, env, eval_starts(env, cfg.eval_starts, cfg.eval_seed))
+    assert metrics["mean_return"] == m["mean_return"]
+
+
+def test_without_selection_the_final_network_is_evaluated(tmp_path: Path) -> None:
+    cfg = small_cfg(tmp_path, 40)
+    cfg.select_every = 0
+    m = train(cfg, progress=False, radio_map=synthetic_map())
+    assert m["selected_at_episode"] == 40
+    assert m["mean_return"] == m["final_mean_return"]
 
 
 def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
@@ -216,7 +247,14 @@ def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
         == {}
     )
     resumed = train(small_cfg(part_dir, 120), resume=True, progress=False)
-    for k in ("mean_return", "success_rate", "mean_steps", "mean_gap_to_optimal"):
+    for k in (
+        "mean_return",
+        "success_rate",
+        "mean_steps",
+        "mean_gap_to_optimal",
+        "final_mean_return",
+        "selected_at_episode",
+    ):
         assert resumed[k] == full[k], k
     a = torch.load(tmp_path / "full" / "checkpoint.pt", weights_only=False)["agent"]["online"]
     b = torch.load(part_dir / "checkpoint.pt", weights_only=False)["agent"]["online"]

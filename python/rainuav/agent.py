@@ -66,7 +66,9 @@ class DQNConfig:
     n_step: int = 3
     """N1: length of the multi-step window."""
     lr: float = 1e-3
-    """Adam learning rate."""
+    """Adam learning rate at the start."""
+    lr_final: float = 1e-3
+    """Learning rate after the last episode (cosine decay from lr over the episodes)."""
     hidden: int = 128
     """Width of the two hidden layers."""
     fourier: int = 8
@@ -330,6 +332,15 @@ class Agent:
         self.opt.step()
         self.updates += 1
         return float(loss.detach())
+
+    def anneal(self, finished: int) -> None:
+        """Sets the learning rate for ``finished`` episodes done: cosine from ``lr`` to
+        ``lr_final`` over the run."""
+        c = self.cfg
+        frac = min(finished / c.episodes, 1.0)
+        lr = c.lr_final + (c.lr - c.lr_final) * 0.5 * (1.0 + math.cos(math.pi * frac))
+        for group in self.opt.param_groups:
+            group["lr"] = lr
 
     def sync(self) -> None:
         self.target.load_state_dict(self.online.state_dict())

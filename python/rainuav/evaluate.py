@@ -1,8 +1,9 @@
 """``python -m rainuav.evaluate RUN_DIR``: re-evaluate a saved training run.
 
 Loads the run's ``config.toml``, ``radiomap.npz`` and ``checkpoint.pt``, evaluates the greedy
-policy from the run's fixed evaluation starts against the exact planner, and rewrites
-``metrics.json`` and ``trajectories.png``.
+policy of the selected network (and of the final one, as ``final_*``) from the run's fixed
+evaluation starts against the exact planner, and rewrites ``metrics.json`` and
+``trajectories.png``.
 """
 
 from __future__ import annotations
@@ -13,14 +14,15 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
 import torch
 
 from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.radiomap import RadioMap
 from rainuav.train import (
-    eval_starts,
-    evaluate,
+    _Selection,
+    evaluate_selected,
     load_config,
     make_agent,
     make_env,
@@ -40,8 +42,10 @@ def evaluate_run(run_dir: Path, device: str = "cpu") -> dict:
     agent = make_agent(cfg, env, pick_device(device))
     state = torch.load(run / "checkpoint.pt", weights_only=False, map_location=agent.device)
     agent.load_state_dict(state["agent"])
-    starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
-    metrics, rolls = evaluate(agent, env, starts)
+    select = _Selection(np.zeros((0, 2)), np.zeros(0))
+    if "select" in state:
+        select.load_state_dict(state["select"])
+    metrics, rolls = evaluate_selected(cfg, agent, env, select)
     metrics["episodes"] = len(state["returns"])
     metrics["training_seconds"] = state["train_seconds"]
     text = json.dumps(metrics, indent=2)

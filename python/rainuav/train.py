@@ -75,6 +75,10 @@ class TrainConfig:
     """Seed of the evaluation starts."""
     stages: int = 4
     """Training stages at which a few greedy trajectories are recorded for stages.png."""
+    select_every: int = 100
+    """Episodes between greedy checks on validation starts; the best network is kept (0: last)."""
+    select_starts: int = 100
+    """Validation starts for model selection (seed eval_seed + 2, not the evaluation starts)."""
     dqn: DQNConfig = field(default_factory=DQNConfig)
     """Agent hyperparameters."""
 
@@ -163,6 +167,7 @@ def validate(cfg: TrainConfig) -> None:
         ("gamma", 0 < d.gamma <= 1),
         ("n_step", d.n_step >= 1),
         ("lr", d.lr > 0),
+        ("lr_final", 0 < d.lr_final <= d.lr),
         ("hidden", d.hidden >= 1),
         ("fourier", d.fourier >= 0),
         ("lanes", d.lanes >= 1),
@@ -174,6 +179,8 @@ def validate(cfg: TrainConfig) -> None:
         ("grad_clip", d.grad_clip > 0),
         ("max_steps", cfg.max_steps >= 1),
         ("eval_starts", cfg.eval_starts >= 1),
+        ("select_every", cfg.select_every >= 0),
+        ("select_starts", cfg.select_starts >= 1),
         ("checkpoint_every", cfg.checkpoint_every >= 1),
         ("device", cfg.device in ("auto", "cpu", "cuda")),
         ("rain_rate", cfg.rain_rate == -1 or 0 <= cfg.rain_rate <= 500),
@@ -471,6 +478,48 @@ class _Lanes:
         self.active[k] = True
 
 
+@dataclass
+class _Selection:
+    """Model selection: every ``select_every`` finished episodes the greedy policy flies from
+    the validation starts, and the online weights with the smallest mean gap to the exact
+    optimum are kept. DQN's greedy policy swings from one check to the next (a start that
+    arrives at one check leaves the area at the next); keeping the best is early stopping
+    on held-out starts, so the evaluation starts stay unseen."""
+
+    starts: np.ndarray
+    optimum: np.ndarray
+    best_gap: float = math.inf
+    best_at: int = 0
+    best_online: dict[str, torch.Tensor] | None = None
+    history: list[tuple[int, float, float]] = field(default_factory=list)
+
+    def check(self, agent: Agent, env: UAVNavEnv, finished: int) -> tuple[float, float]:
+        """Flies the greedy policy from the validation starts; returns (success, mean gap)."""
+        rolls = greedy_rollouts(agent, env, self.starts)
+        rets = np.array([r["return"] for r in rolls])
+        gap = float(np.mean((self.optimum - rets) / np.maximum(np.abs(self.optimum), 1e-9)))
+        success = float(np.mean([r["reached"] for r in rolls]))
+        self.history.append((finished, success, gap))
+        if gap < self.best_gap:
+            self.best_gap, self.best_at = gap, finished
+            self.best_online = {
+                k: v.detach().cpu().clone() for k, v in agent.online.state_dict().items()
+            }
+        return success, gap
+
+    def state_dict(self) -> dict[str, Any]:
+        return {
+            "best_gap": self.best_gap,
+            "best_at": self.best_at,
+            "best_online": self.best_online,
+            "history": list(self.history),
+        }
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        self.best_gap, self.best_at = d["best_gap"], d["best_at"]
+        self.best_online, self.history = d["best_online"], list(d["history"])
+
+
 def train(
     cfg: TrainConfig,
     *,
@@ -509,6 +558,10 @@ def train(
     env.reset(seed=cfg.seed)
     d = cfg.dqn
     lanes = _Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
+    sel_starts = eval_starts(env, cfg.select_starts, cfg.eval_seed + 2)
+    select = _Selection(
+        sel_starts, np.array([p.return_ for p in planner.optimal_many(env, sel_starts)])
+    )
     started, returns, successes, stages = 0, [], [], []
     train_seconds, pending = 0.0, 0  # pending: transitions not yet paid for by a gradient step
     ckpt = out / "checkpoint.pt"
@@ -523,6 +576,7 @@ def train(
         returns, successes = st["returns"], st["successes"]
         stages, train_seconds = st["stages"], st["train_seconds"]
         pending = st["pending"]
+        select.load_state_dict(st["select"])
         random.setstate(st["py_rng"])
         torch.set_rng_state(st["torch_rng"])
     else:
@@ -595,11 +649,16 @@ def train(
                 )
                 tb.add_scalar("return", lanes.ret[k], n_done)
                 tb.add_scalar("epsilon", eps, n_done)
+                agent.anneal(n_done)
                 if n_done % d.target_sync_episodes == 0:
                     agent.sync()
                 if n_done % stage_every == 0:
                     # Greedy rollouts from given starts draw nothing from the training rng.
                     stages.append((n_done, greedy_rollouts(agent, env, stage_starts)))
+                if cfg.select_every and n_done % cfg.select_every == 0:
+                    success, gap = select.check(agent, env, n_done)
+                    tb.add_scalar("validation/success", success, n_done)
+                    tb.add_scalar("validation/mean_gap", gap, n_done)
                 if started < d.episodes:
                     lanes.launch(k, env.sample_start(env.np_random), started)
                     started += 1
@@ -632,6 +691,7 @@ def train(
                         "successes": successes,
                         "stages": stages,
                         "pending": pending,
+                        "select": select.state_dict(),
                         "train_seconds": time.perf_counter() - t0 + train_seconds,
                         "py_rng": random.getstate(),
                         "torch_rng": torch.get_rng_state(),
@@ -649,7 +709,27 @@ def train(
     if stopped:
         return {}
     train_seconds += time.perf_counter() - t0
-    return finish(cfg, agent, env, returns, stages, train_seconds, out)
+    return finish(cfg, agent, env, returns, stages, train_seconds, out, select)
+
+
+def evaluate_selected(
+    cfg: TrainConfig, agent: Agent, env: UAVNavEnv, select: _Selection
+) -> tuple[dict[str, Any], list]:
+    """Evaluates the final network, then loads the selected one into ``agent`` and evaluates
+    it: its numbers are the run's metrics, the final network's are added as ``final_*``."""
+    starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
+    final, _ = evaluate(agent, env, starts)
+    if select.best_online is not None:
+        agent.online.load_state_dict(select.best_online)
+        metrics, rolls = evaluate(agent, env, starts)
+        metrics["selected_at_episode"] = select.best_at
+        metrics["validation_mean_gap"] = select.best_gap
+    else:
+        metrics, rolls = evaluate(agent, env, starts)
+        metrics["selected_at_episode"] = cfg.dqn.episodes
+    for key in ("success_rate", "mean_return", "mean_gap_to_optimal", "worst_gap_to_optimal"):
+        metrics[f"final_{key}"] = final[key]
+    return metrics, rolls
 
 
 def finish(
@@ -660,9 +740,13 @@ def finish(
     stages: list,
     train_seconds: float,
     out: Path,
+    select: _Selection,
 ) -> dict[str, Any]:
-    starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
-    metrics, rolls = evaluate(agent, env, starts)
+    """Evaluates the run (:func:`evaluate_selected`), saves the selected network's weights
+    to ``policy.pt`` and writes ``metrics.json`` and the figures."""
+    metrics, rolls = evaluate_selected(cfg, agent, env, select)
+    policy = {k: v.detach().cpu() for k, v in agent.online.state_dict().items()}
+    _save_checkpoint(out / "policy.pt", {"online": policy, "config": to_dict(cfg)})
     metrics["training_seconds"] = train_seconds
     metrics["episodes"] = cfg.dqn.episodes
     metrics["device"] = str(agent.device)
