@@ -20,8 +20,13 @@ replay size and minibatch. Choices beyond it, each measured on the paper map (25
   blur the 10 m arrival disc, and policies circled the goal 20-40 m away (without SIR
   costs, 600 episodes: 65.5% success with them, 58% without).
 - Position (and time) also as ``fourier`` sine/cosine features, two hidden layers of 128.
-- Rewards divided by ``reward_scale = 100`` inside the learner, Huber loss, Adam (fused) with
-  learning rate 1e-3, gradient norm clipped at 10.
+- Rewards divided by ``reward_scale = 100`` inside the learner, Huber loss, Adam (fused),
+  gradient norm clipped at 10.
+- Learning rate 1e-3 decaying along a cosine to ``lr_final = 3e-5`` over the episodes. At a
+  constant 1e-3 the greedy policy swung from check to check until the end (success on 100
+  validation starts between 0.30 and 1.00 over the last 1000 episodes) and the final network
+  reached 97% success with a 21.5% mean gap; decaying to 1e-4 gave 99.5% and 5.5%, to 3e-5
+  100% and 5.4% (final networks, seed 0; seeds 1 and 2 at 3e-5: 100% / 5.5%, 99.5% / 6.0%).
 - ``lanes = 16`` UAVs fly at once (each its own episode and epsilon; Table I's 3000 episodes
   in total) and ``train_every = 4``: one gradient step of 16 samples per 4 transitions. A
   quarter of the paper's replay ratio, and 4x faster; twice as many gradient steps
@@ -67,7 +72,7 @@ class DQNConfig:
     """N1: length of the multi-step window."""
     lr: float = 1e-3
     """Adam learning rate at the start."""
-    lr_final: float = 1e-3
+    lr_final: float = 3e-5
     """Learning rate after the last episode (cosine decay from lr over the episodes)."""
     hidden: int = 128
     """Width of the two hidden layers."""

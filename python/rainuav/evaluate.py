@@ -1,7 +1,7 @@
 """``python -m rainuav.evaluate RUN_DIR``: re-evaluate a saved training run.
 
 Loads the run's ``config.toml``, ``radiomap.npz`` and ``checkpoint.pt``, evaluates the greedy
-policy of the selected network (and of the final one, as ``final_*``) from the run's fixed
+policy (the final network, or with ``keep_best`` the best on validation) from the run's fixed
 evaluation starts against the exact planner, and rewrites ``metrics.json`` and
 ``trajectories.png``.
 """
@@ -21,8 +21,8 @@ from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.radiomap import RadioMap
 from rainuav.train import (
-    _Selection,
-    evaluate_selected,
+    Validation,
+    evaluate_run_policy,
     load_config,
     make_agent,
     make_env,
@@ -42,10 +42,10 @@ def evaluate_run(run_dir: Path, device: str = "cpu") -> dict:
     agent = make_agent(cfg, env, pick_device(device))
     state = torch.load(run / "checkpoint.pt", weights_only=False, map_location=agent.device)
     agent.load_state_dict(state["agent"])
-    select = _Selection(np.zeros((0, 2)), np.zeros(0))
-    if "select" in state:
-        select.load_state_dict(state["select"])
-    metrics, rolls = evaluate_selected(cfg, agent, env, select)
+    checks = Validation(np.zeros((0, 2)), np.zeros(0))
+    if "validation" in state:
+        checks.load_state_dict(state["validation"])
+    metrics, rolls = evaluate_run_policy(cfg, agent, env, checks)
     metrics["episodes"] = len(state["returns"])
     metrics["training_seconds"] = state["train_seconds"]
     text = json.dumps(metrics, indent=2)

@@ -230,9 +230,16 @@ impl NavTask<'_> {
                 }
                 for a in 0..4 {
                     let (r, term, (ti, tj), _) = self.transition(start, i, j, a);
-                    rew[s * 4 + a] = r;
-                    if !term {
+                    if term {
+                        rew[s * 4 + a] = r;
+                    } else if (i_lo..=i_hi).contains(&ti) && (j_lo..=j_hi).contains(&tj) {
+                        rew[s * 4 + a] = r;
                         next[s * 4 + a] = idx(ti, tj);
+                    } else {
+                        // Beyond the table, which the horizon cut: only states farther out
+                        // than any step count allows lead there, so their values (now
+                        // -inf) never reach a state the UAV can be in at that time.
+                        rew[s * 4 + a] = f64::NEG_INFINITY;
                     }
                 }
             }
@@ -337,5 +344,20 @@ mod tests {
             plan.return_
         );
         assert!(plan.return_ > 0.0, "the goal is reachable in 5 moves");
+        // Horizons shorter than the area is wide: the planner's table is cut at the
+        // horizon (the edge once indexed past the table), from corners and inside.
+        for max_steps in 1..=4 {
+            let t = task(&s, max_steps);
+            for start in [[0.0, 0.0], [40.0, 30.0], [17.0, 12.0], [3.0, 28.0]] {
+                let want = best(&t, start, 0, 0, max_steps);
+                let plan = t.optimal(start).unwrap();
+                assert!(
+                    (plan.return_ - want).abs() < 1e-9,
+                    "max_steps {max_steps}, start {start:?}: {} vs {want}",
+                    plan.return_
+                );
+                assert!(plan.actions.len() <= max_steps);
+            }
+        }
     }
 }
