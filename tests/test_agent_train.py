@@ -199,11 +199,11 @@ def test_batched_greedy_rollouts_equal_the_scalar_env() -> None:
 def test_training_smoke_on_a_synthetic_map(tmp_path: Path) -> None:
     # 300 episodes on a 40 x 40 map take ~10 s here; the greedy policy must reach the goal
     # from most of 50 seeded starts and come close to the exact optimum. Measured for seeds
-    # 0 / 1 / 2: success 0.96 / 0.90 / 0.92, mean gap 0.045 / 0.106 / 0.085; the bars leave
-    # room for that seed-to-seed spread.
+    # 0 / 1 / 2: success 1.00 / 0.96 / 0.94, mean gap 0.004 / 0.047 / 0.064; the bars leave
+    # room for that seed-to-seed spread (one more failure costs 0.02 and ~0.03).
     m = train(small_cfg(tmp_path, 300), progress=False, radio_map=synthetic_map())
-    assert m["success_rate"] >= 0.85, m
-    assert m["mean_gap_to_optimal"] < 0.2, m
+    assert m["success_rate"] >= 0.88, m
+    assert m["mean_gap_to_optimal"] < 0.15, m
     for name in (
         "metrics.json",
         "returns.png",

@@ -6,7 +6,9 @@ Table I hyperparameters, seed 0. Writes to ``--out`` (default ``runs/paper``):
 ``checkpoint_every`` finished episodes; after an interruption, ``--resume`` with the same
 configuration continues from it and reproduces the uninterrupted run), and at the end
 ``metrics.json`` (greedy policy from ``eval_starts`` seeded starts against the exact
-planner), ``returns.png``, ``trajectories.png`` and ``stages.png``. Every flag is a field of
+planner), ``policy.pt`` (the evaluated network's weights), ``returns.png`` (with the greedy
+policy's success and gap on held-out validation starts during training), ``trajectories.png``
+and ``stages.png``. Every flag is a field of
 :class:`TrainConfig` or :class:`rainuav.agent.DQNConfig` (``--help`` lists them).
 """
 
@@ -374,7 +376,7 @@ def plot_returns(
         ax.set_xlabel("episode")
         ax.set_ylim(0, 105)
         ax.set_title("greedy policy on the validation starts")
-        ax.legend()
+        ax.legend(loc="center right", fontsize="small")
     fig.tight_layout()
     write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
     plt.close(fig)
@@ -790,8 +792,13 @@ def finish(
 def load_config(path: Path) -> TrainConfig:
     """A TrainConfig from a run's config.toml."""
     data = tomllib.loads(Path(path).read_text())
-    dqn = DQNConfig(**data.pop("dqn", {}))
-    return TrainConfig(**data, dqn=dqn)
+    dqn = data.pop("dqn", {})
+    unknown = sorted(set(data) - {f.name for f in dataclasses.fields(TrainConfig)}) + sorted(
+        f"dqn.{k}" for k in set(dqn) - {f.name for f in dataclasses.fields(DQNConfig)}
+    )
+    if unknown:
+        raise InvalidInputError(f"{path}: unknown field(s) {unknown}")
+    return TrainConfig(**data, dqn=DQNConfig(**dqn))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
