@@ -325,9 +325,13 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path) -> None:
     assert bad.returncode == 2 and "lr" in bad.stderr
 
 
-def test_bad_train_config() -> None:
+def test_bad_train_config(tmp_path: Path) -> None:
     from rainuav import InvalidInputError
-    from rainuav.train import validate
+    from rainuav.train import load_config, validate
+
+    (tmp_path / "config.toml").write_text("seed = 1\nsede = 2\n[dqn]\nlr = 0.1\ngama = 0.9\n")
+    with pytest.raises(InvalidInputError, match=r"unknown field\(s\) \['sede', 'dqn.gama'\]"):
+        load_config(tmp_path / "config.toml")
 
     with pytest.raises(InvalidInputError, match="gamma"):
         validate(TrainConfig(dqn=DQNConfig(gamma=1.5)))
