@@ -245,6 +245,14 @@ def test_keep_best_evaluates_the_best_network_on_validation(tmp_path: Path) -> N
     _assert_policy_gives(tmp_path, cfg, m)
 
 
+def test_without_validation_checks(tmp_path: Path) -> None:
+    cfg = small_cfg(tmp_path, 20)
+    cfg.validate_every, cfg.keep_best = 0, True  # nothing to select from: the final network
+    m = train(cfg, progress=False, radio_map=synthetic_map())
+    assert m["selected_at_episode"] == 20 and "final_mean_return" not in m
+    assert torch.load(tmp_path / "checkpoint.pt", weights_only=False)["validation"]["history"] == []
+
+
 def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
     full = train(small_cfg(tmp_path / "full", 120), progress=False, radio_map=synthetic_map())
     part_dir = tmp_path / "part"

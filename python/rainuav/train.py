@@ -289,7 +289,7 @@ def greedy_rollouts(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> list[di
 
 def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
     rng = np.random.default_rng(seed)
-    return np.array([env.sample_start(rng) for _ in range(n)])
+    return np.array([env.sample_start(rng) for _ in range(n)], dtype=np.float64).reshape(-1, 2)
 
 
 def evaluate(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> tuple[dict[str, Any], list]:
@@ -359,8 +359,9 @@ def plot_returns(
     import matplotlib.pyplot as plt
 
     r = np.asarray(returns)
-    fig, axes = plt.subplots(1, 2 if len(validation) else 1, figsize=(11 if validation else 6.4, 4))
-    ax = axes[0] if len(validation) else axes
+    both = len(validation) > 0
+    fig, axes = plt.subplots(1, 2 if both else 1, figsize=(11 if both else 6.4, 4), squeeze=False)
+    ax = axes[0, 0]
     ax.plot(r, color="0.8", lw=0.5, label="episode return")
     if len(r) >= window:
         ma = np.convolve(r, np.ones(window) / window, mode="valid")
@@ -368,9 +369,9 @@ def plot_returns(
     ax.set_xlabel("episode")
     ax.set_ylabel("return")
     ax.legend()
-    if len(validation):
+    if both:
         ep, success, gap = (np.array(v) for v in zip(*validation, strict=True))
-        ax = axes[1]
+        ax = axes[0, 1]
         ax.plot(ep, 100 * success, "g.-", label="success, %")
         ax.plot(ep, 100 * np.minimum(gap, 1.0), "r.-", label="mean gap to optimum, % (cut at 100)")
         ax.set_xlabel("episode")
@@ -584,7 +585,9 @@ def train(
     env.reset(seed=cfg.seed)
     d = cfg.dqn
     lanes = _Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
-    val_starts = eval_starts(env, cfg.validate_starts, cfg.eval_seed + 2)
+    val_starts = eval_starts(
+        env, cfg.validate_starts if cfg.validate_every else 0, cfg.eval_seed + 2
+    )
     checks = Validation(
         val_starts, np.array([p.return_ for p in planner.optimal_many(env, val_starts)])
     )
