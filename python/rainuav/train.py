@@ -292,13 +292,18 @@ def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
     return np.array([env.sample_start(rng) for _ in range(n)], dtype=np.float64).reshape(-1, 2)
 
 
+def relative_gap(optimum: np.ndarray, returns: np.ndarray) -> np.ndarray:
+    """Per start, the share of the exact optimum's return the policy gave up."""
+    return (optimum - returns) / np.maximum(np.abs(optimum), 1e-9)
+
+
 def evaluate(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> tuple[dict[str, Any], list]:
     """Greedy policy from every start against the exact planner."""
     rolls = greedy_rollouts(agent, env, starts)
     plans = planner.optimal_many(env, starts)
     rets = np.array([r["return"] for r in rolls])
     opt = np.array([p.return_ for p in plans])
-    gap = (opt - rets) / np.maximum(np.abs(opt), 1e-9)
+    gap = relative_gap(opt, rets)
     sirs = np.concatenate([r["sir"] for r in rolls])
     metrics = {
         "success_rate": float(np.mean([r["reached"] for r in rolls])),
@@ -524,7 +529,7 @@ class Validation:
         """Flies the greedy policy from the validation starts; returns (success, mean gap)."""
         rolls = greedy_rollouts(agent, env, self.starts)
         rets = np.array([r["return"] for r in rolls])
-        gap = float(np.mean((self.optimum - rets) / np.maximum(np.abs(self.optimum), 1e-9)))
+        gap = float(np.mean(relative_gap(self.optimum, rets)))
         success = float(np.mean([r["reached"] for r in rolls]))
         self.history.append((finished, success, gap))
         if gap < self.best_gap:
