@@ -18,6 +18,7 @@ from rainuav.train import (
     eval_starts,
     evaluate,
     greedy_rollouts,
+    learning_reward,
     make_agent,
     shaping_term,
     train,
@@ -162,6 +163,52 @@ def test_shaping_telescopes_to_a_constant_of_the_start() -> None:
     assert totals[0] == pytest.approx(-phi0, rel=1e-12)
 
 
+def test_shaping_ends_at_the_time_limit_for_a_time_aware_learner() -> None:
+    # For a time-aware learner the time limit ends the episode, so Phi = 0 there too and an
+    # episode that runs out of moves also sums to -Phi(s_0), wherever it stops. (Keeping
+    # gamma^T Phi(s_T) there would pay a truncated flight nearly the destination reward.)
+    env = UAVNavEnv(radio_map=synthetic_map(), goal_m=(300.0, 350.0), max_steps=12)
+    d = DQNConfig(gamma=0.99, time_aware=True, sir_weight=1.0)
+    start = np.array([[37.0, 42.0]])
+    totals = []
+    for actions in ([0] * 12, [1] * 12, [0, 2] * 6):
+        off, t = np.zeros((1, 2), np.int64), np.zeros(1, np.int64)
+        total, disc = 0.0, 1.0
+        for a in actions:
+            pos = start + env.cfg.step_m * off
+            r = env.stepper.step(start, off, t, np.array([a]))
+            off, t = r["offset"], r["t"]
+            # sir_weight 1: the learner's reward is the env's plus the shaping term.
+            shaped = learning_reward(env, d, pos, r) - r["reward"]
+            total += disc * float(shaped[0])
+            disc *= d.gamma
+        assert r["truncated"][0] and not r["terminated"][0]
+        totals.append(total)
+    k = (263 + 308 - 10) / 10
+    phi0 = -(1 - 0.99**k) / 0.01 + 0.99**k * 2000
+    np.testing.assert_allclose(totals, -phi0, rtol=1e-12)
+
+
+def test_sir_weight_scales_only_the_sir_part_of_the_reward() -> None:
+    # Shortfall reward: -1 - mu * max(0, 10 - SIR) (+2000 on arrival, -10000 off the map).
+    # With sir_weight w the learner sees -1 - w * mu * max(0, 10 - SIR) and the same bonuses.
+    env = _env()
+    mu = env.cfg.mu
+    start = np.array([[37.0, 195.0], [295.0, 350.0], [1.0, 195.0]])
+    off, t = np.zeros((3, 2), np.int64), np.zeros(3, np.int64)
+    r = env.stepper.step(start, off, t, np.array([1, 0, 2]))  # a move, an arrival, off the map
+    assert r["arrived"].tolist() == [False, True, False] and r["out"].tolist() == [0, 0, 1]
+    short = np.maximum(0.0, 10.0 - r["sir_db"])
+    assert short[0] == short[2] == 15.0  # both end in the -5 dB band
+    bonus = np.array([0.0, 2000.0, -10000.0])
+    pos = start
+    for w in (1.0, 2.5):
+        d = DQNConfig(sir_weight=w, shaping=0.0)
+        np.testing.assert_allclose(
+            learning_reward(env, d, pos, r), -1 - w * mu * short + bonus, rtol=1e-12
+        )
+
+
 def test_goal_features_and_time() -> None:
     env = _env()
     cfg = small_cfg(Path("unused"), 1)
@@ -178,15 +225,20 @@ def test_goal_features_and_time() -> None:
     )
 
 
-def test_batched_greedy_rollouts_equal_the_scalar_env() -> None:
+@pytest.mark.parametrize("shield", [False, True])
+def test_batched_greedy_rollouts_equal_the_scalar_env(shield: bool) -> None:
     env = _env()
-    agent = make_agent(small_cfg(Path("unused"), 1), env, torch.device("cpu"))
+    cfg = small_cfg(Path("unused"), 1)
+    cfg.dqn.shield = shield
+    agent = make_agent(cfg, env, torch.device("cpu"))
     starts = np.array([[12.5, 7.25], [390.0, 20.0], [290.0, 349.0], [5.0, 395.0]])
     for roll, s in zip(greedy_rollouts(agent, env, starts), starts, strict=True):
         obs, info = env.reset(options={"start_m": s})
         ret, t, path = 0.0, 0, [info["position_m"]]
         while True:
-            obs, r, term, trunc, info = env.step(int(agent.greedy(agent.observe(obs, t))[0]))
+            allowed = env.stepper.safe_actions(info["position_m"], [t]) if shield else None
+            a = int(agent.greedy(agent.observe(obs, t), allowed)[0])
+            obs, r, term, trunc, info = env.step(a)
             ret, t = ret + r, t + 1
             path.append(info["position_m"])
             if term or trunc:
@@ -197,13 +249,17 @@ def test_batched_greedy_rollouts_equal_the_scalar_env() -> None:
 
 
 def test_training_smoke_on_a_synthetic_map(tmp_path: Path) -> None:
-    # 300 episodes on a 40 x 40 map take ~10 s here; the greedy policy must reach the goal
+    # 300 episodes on a 40 x 40 map take ~10 s here; the greedy network must reach the goal
     # from most of 50 seeded starts and come close to the exact optimum. Measured for seeds
-    # 0 / 1 / 2: success 1.00 / 0.96 / 0.94, mean gap 0.004 / 0.047 / 0.064; the bars leave
-    # room for that seed-to-seed spread (one more failure costs 0.02 and ~0.03).
+    # 0 / 1 / 2 without the shield: success 1.00 / 0.96 / 0.94, mean gap 0.004 / 0.047 /
+    # 0.064; the bars leave room for that seed-to-seed spread (one more failure costs 0.02
+    # and ~0.03). With the shield (the default policy) every flight arrives: mean gap
+    # 0.004 / 0.007 / 0.003, against a bar of 0.05.
     m = train(small_cfg(tmp_path, 300), progress=False, radio_map=synthetic_map())
-    assert m["success_rate"] >= 0.88, m
-    assert m["mean_gap_to_optimal"] < 0.15, m
+    assert m["unshielded_success_rate"] >= 0.88, m
+    assert m["unshielded_mean_gap_to_optimal"] < 0.15, m
+    assert m["success_rate"] == 1.0, m
+    assert m["mean_gap_to_optimal"] < 0.05, m
     for name in (
         "metrics.json",
         "returns.png",
@@ -349,3 +405,38 @@ def test_bad_train_config(tmp_path: Path) -> None:
         validate(TrainConfig(dqn=DQNConfig(lr_final=float("nan"))))
     with pytest.raises(InvalidInputError, match="validate_starts must be >= 1"):
         validate(TrainConfig(validate_starts=0))
+
+
+def test_greedy_keeps_to_the_allowed_moves() -> None:
+    env = _env()
+    agent = make_agent(small_cfg(Path("unused"), 1), env, torch.device("cpu"))
+    obs = agent.observe(env.observe(np.array([[100.0, 100.0], [250.0, 30.0]])), [0, 0])
+    q = agent.online(torch.as_tensor(obs)).detach().numpy()
+    for allowed in ([[1, 0, 1, 0], [0, 1, 1, 1]], [[0, 0, 0, 1], [1, 1, 1, 1]]):
+        mask = np.array(allowed, bool)
+        want = [np.flatnonzero(m)[np.argmax(qi[m])] for qi, m in zip(q, mask, strict=True)]
+        assert agent.greedy(obs, mask).tolist() == want
+    assert agent.greedy(obs).tolist() == q.argmax(axis=1).tolist()
+
+
+def test_shielded_greedy_rollouts_arrive_even_untrained() -> None:
+    # The shield alone brings an untrained network's greedy flights in within max_steps
+    # (100 moves; the farthest start needs 64); without it they mostly never arrive.
+    env = _env()
+    cfg = small_cfg(Path("unused"), 1)
+    starts = eval_starts(env, 30, 5)
+    cfg.dqn.shield = True
+    agent = make_agent(cfg, env, torch.device("cpu"))
+    reached = {}
+    for shield in (False, True):
+        rolls = greedy_rollouts(agent, env, starts, shield=shield)
+        reached[shield] = np.mean([r["reached"] for r in rolls])
+        assert all(r["steps"] <= 100 for r in rolls)
+        if not shield:
+            assert all(r["overridden"] == 0 for r in rolls)
+    assert reached[True] == 1.0 and reached[False] < 0.5
+    # The evaluation reports the shielded flights and, beside them, the network without it.
+    metrics, _ = evaluate(agent, env, starts)
+    assert metrics["success_rate"] == 1.0
+    assert metrics["unshielded_success_rate"] == reached[False]
+    assert metrics["shielded_flights"] > 0.5

@@ -163,3 +163,65 @@ def test_bad_input(kw, needle) -> None:
     with pytest.raises(ValueError, match=needle) as info:
         env(**kw)
     assert isinstance(info.value, rainuav.InvalidInputError)
+
+
+def bfs_moves_to_goal(e: UAVNavEnv, start: np.ndarray) -> float:
+    """Breadth-first search over the lattice through ``start`` inside the area."""
+    x0, x1, y0, y1 = e.field.extent
+    s, goal = e.cfg.step_m, np.asarray(e.cfg.goal_m)
+    seen, frontier, depth = {(0, 0)}, [(0, 0)], 0
+    while frontier:
+        nxt = []
+        for k in frontier:
+            q = start + s * np.array(k)
+            if np.hypot(*(q - goal)) <= e.cfg.tol_m:
+                return depth
+            for m in ((1, 0), (0, 1), (-1, 0), (0, -1)):
+                k2 = (k[0] + m[0], k[1] + m[1])
+                q2 = start + s * np.array(k2)
+                if k2 not in seen and x0 <= q2[0] <= x1 and y0 <= q2[1] <= y1:
+                    seen.add(k2)
+                    nxt.append(k2)
+        frontier, depth = nxt, depth + 1
+    return np.inf
+
+
+@pytest.mark.parametrize("tol", [4.0, 10.0, 23.0])
+def test_moves_to_goal_against_search(tol: float) -> None:
+    # Exact integers on every start, including a goal at the area's edge (300 m wide area,
+    # goal at x = 395: part of the arrival disc lies outside) and tolerances below, at and
+    # above the step.
+    rng = np.random.default_rng(3)
+    for goal in ((300.0, 200.0), (395.0, 150.0)):
+        e = env(goal_m=goal, tol_m=tol)
+        starts = rng.uniform((0, 0), (400, 300), (25, 2))
+        want = [bfs_moves_to_goal(e, p) for p in starts]
+        np.testing.assert_array_equal(e.stepper.moves_to_goal(starts), want)
+
+
+def test_shielded_flights_always_arrive_in_time() -> None:
+    # Any policy that keeps to the safe moves arrives within max_steps from every start that
+    # can arrive at all: random safe moves from 200 starts, the tightest limit for each.
+    e = env()
+    rng = np.random.default_rng(4)
+    starts = rng.uniform((0, 0), (400, 300), (200, 2))
+    need = e.stepper.moves_to_goal(starts)
+    for slack in (0, 7):
+        ew = env(max_steps=int(need.max()) + slack)
+        off, t = np.zeros((200, 2), np.int64), np.zeros(200, np.int64)
+        live, arrived = np.ones(200, bool), np.zeros(200, bool)
+        limit = need + slack  # each start's own deadline, counted through t
+        while live.any():
+            i = np.flatnonzero(live)
+            pos = starts[i] + ew.cfg.step_m * off[i]
+            # Shift each UAV's clock so that its own deadline is the env's max_steps.
+            clock = t[i] + (ew.cfg.max_steps - limit[i]).astype(np.int64)
+            ok = ew.stepper.safe_actions(pos, clock)
+            a = np.array([rng.choice(np.flatnonzero(row)) for row in ok])
+            r = ew.stepper.step(starts[i], off[i], clock, a)
+            off[i], t[i] = r["offset"], t[i] + 1
+            assert not r["out"].any()
+            arrived[i[r["arrived"]]] = True
+            live[i[r["terminated"] | r["truncated"]]] = False
+        assert arrived.all()
+        assert np.all(t <= limit)

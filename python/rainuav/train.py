@@ -6,10 +6,11 @@ Table I hyperparameters, seed 0. Writes to ``--out`` (default ``runs/paper``):
 ``checkpoint_every`` finished episodes; after an interruption, ``--resume`` with the same
 configuration continues from it and reproduces the uninterrupted run), and at the end
 ``metrics.json`` (greedy policy from ``eval_starts`` seeded starts against the exact
-planner), ``policy.pt`` (the evaluated network's weights), ``returns.png`` (with the greedy
-policy's success and gap on held-out validation starts during training), ``trajectories.png``
-and ``stages.png``. Every flag is a field of
-:class:`TrainConfig` or :class:`rainuav.agent.DQNConfig` (``--help`` lists them).
+planner; with ``shield``, also the network's numbers without it), ``policy.pt`` (the
+evaluated network's weights), ``returns.png`` (with the greedy policy's success and gap on
+held-out validation starts during training), ``trajectories.png`` and ``stages.png``. Every
+flag is a field of :class:`TrainConfig` or :class:`rainuav.agent.DQNConfig` (``--help`` lists
+them).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ import torch
 from rainuav import plan as planner
 from rainuav._io import write_atomic
 from rainuav.agent import Agent, DQNConfig, NStepWindow
-from rainuav.env import NavConfig, UAVNavEnv
+from rainuav.env import NavConfig, UAVNavEnv, base_reward
 from rainuav.errors import InvalidInputError
 
 __all__ = ["TrainConfig", "evaluate", "main", "train"]
@@ -178,6 +179,7 @@ def validate(cfg: TrainConfig) -> None:
         ("lanes", d.lanes >= 1, ">= 1"),
         ("goal_features", d.goal_features >= 0, ">= 0"),
         ("shaping", 0 <= d.shaping < math.inf, ">= 0 and finite"),
+        ("sir_weight", 0 <= d.sir_weight < math.inf, ">= 0 and finite"),
         ("train_every", d.train_every >= 1, ">= 1"),
         ("learning_starts", d.learning_starts >= 0, ">= 0"),
         ("reward_scale", 0 < d.reward_scale < math.inf, "> 0"),
@@ -249,10 +251,14 @@ def seed_everything(seed: int) -> None:
 
 
 # -- evaluation -------------------------------------------------------------------------------
-def greedy_rollouts(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> list[dict[str, Any]]:
+def greedy_rollouts(
+    agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool | None = None
+) -> list[dict[str, Any]]:
     """Greedy episodes from every start at once (the batched stepper gives exactly the scalar
     environment's transitions), one dict per start: ``return``, ``steps``, ``path`` (T+1, 2),
-    ``sir`` (T,) and ``reached``."""
+    ``sir`` (T,), ``reached`` and ``overridden`` (moves where the shield replaced the
+    network's choice). ``shield``: keep to the safe moves (default: ``agent.cfg.shield``)."""
+    shield = agent.cfg.shield if shield is None else shield
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     n = len(starts)
     off = np.zeros((n, 2), dtype=np.int64)
@@ -260,12 +266,17 @@ def greedy_rollouts(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> list[di
     live = np.ones(n, dtype=bool)
     ret = np.zeros(n)
     reached = np.zeros(n, dtype=bool)
+    overridden = np.zeros(n, dtype=np.int64)
     paths: list[list[np.ndarray]] = [[s.copy()] for s in starts]
     sirs: list[list[float]] = [[] for _ in range(n)]
     while live.any():
         idx = np.flatnonzero(live)
         pos = starts[idx] + env.cfg.step_m * off[idx]
-        a = agent.greedy(agent.observe(env.observe(pos), t[idx]))
+        obs = agent.observe(env.observe(pos), t[idx])
+        a = agent.greedy(obs)
+        if shield:
+            free, a = a, agent.greedy(obs, env.stepper.safe_actions(pos, t[idx]))
+            overridden[idx] += a != free
         r = env.stepper.step(starts[idx], off[idx], t[idx], a)
         off[idx], t[idx] = r["offset"], r["t"]
         ret[idx] += r["reward"]
@@ -282,6 +293,7 @@ def greedy_rollouts(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> list[di
             "path": np.array(paths[k]),
             "sir": np.array(sirs[k]),
             "reached": bool(reached[k]),
+            "overridden": int(overridden[k]),
         }
         for k in range(n)
     ]
@@ -298,12 +310,22 @@ def relative_gap(optimum: np.ndarray, returns: np.ndarray) -> np.ndarray:
 
 
 def evaluate(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> tuple[dict[str, Any], list]:
-    """Greedy policy from every start against the exact planner."""
+    """Greedy policy from every start against the exact planner. With the shield on, also
+    the share of flights it steered and the same network's numbers without it."""
     rolls = greedy_rollouts(agent, env, starts)
     plans = planner.optimal_many(env, starts)
     rets = np.array([r["return"] for r in rolls])
     opt = np.array([p.return_ for p in plans])
     gap = relative_gap(opt, rets)
+    shielded: dict[str, Any] = {}
+    if agent.cfg.shield:
+        free = greedy_rollouts(agent, env, starts, shield=False)
+        free_gap = relative_gap(opt, np.array([r["return"] for r in free]))
+        shielded = {
+            "shielded_flights": float(np.mean([r["overridden"] > 0 for r in rolls])),
+            "unshielded_success_rate": float(np.mean([r["reached"] for r in free])),
+            "unshielded_mean_gap_to_optimal": float(free_gap.mean()),
+        }
     sirs = np.concatenate([r["sir"] for r in rolls])
     metrics = {
         "success_rate": float(np.mean([r["reached"] for r in rolls])),
@@ -319,6 +341,7 @@ def evaluate(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> tuple[dict[str
             np.mean([planner.straight_line(env, s).return_ for s in starts])
         ),
         "eval_starts": len(starts),
+        **shielded,
     }
     return metrics, rolls
 
@@ -426,19 +449,44 @@ def _save_checkpoint(path: Path, state: dict[str, Any]) -> None:
     write_atomic(path, write)
 
 
+def learner_ends(d: DQNConfig, r: dict[str, np.ndarray]) -> np.ndarray:
+    """Where the learner's episode ends (no bootstrap): arrival or leaving the area, and for
+    a time-aware learner, which knows there are no moves left, also the time limit."""
+    return r["terminated"] | (r["truncated"] & d.time_aware)
+
+
+def learning_reward(
+    env: UAVNavEnv, d: DQNConfig, pos: np.ndarray, r: dict[str, np.ndarray]
+) -> np.ndarray:
+    """The reward the learner stores for the moves ``pos -> r["position"]`` of a batch step.
+
+    The env's reward with its SIR part ``b + 1`` weighted by ``sir_weight``, plus the
+    potential-based shaping term (zero potential where :func:`learner_ends`). Discounting
+    and the destination reward make the learner value time above the SIR: a move later
+    costs ``(1 - gamma) gamma^k R_des`` of the destination reward on top of its -1, several
+    times the undiscounted price of a move at gamma 0.998; weighting the SIR part up
+    restores the balance of the undiscounted return the policy is judged by."""
+    reward = r["reward"]
+    if d.sir_weight != 1.0:
+        reward = reward + (d.sir_weight - 1.0) * (base_reward(r["sir_db"], env.cfg) + 1.0)
+    return reward + shaping_term(env, d, pos, r["position"], learner_ends(d, r))
+
+
 def shaping_term(
-    env: UAVNavEnv, d: DQNConfig, pos: np.ndarray, new_pos: np.ndarray, terminated: np.ndarray
+    env: UAVNavEnv, d: DQNConfig, pos: np.ndarray, new_pos: np.ndarray, ended: np.ndarray
 ) -> np.ndarray:
     """Potential-based shaping ``gamma Phi(s') - Phi(s)`` (Ng, Harada and Russell, ICML 1999).
 
     ``Phi(s) = shaping * V_straight(s)``: the discounted return of flying straight to the
     destination ignoring the SIR, ``-(1 - gamma^k) / (1 - gamma) + gamma^k R_des`` with ``k``
-    the moves still needed (lattice distance minus the tolerance); ``Phi = 0`` in the
-    absorbing state after arrival or leaving the area. Summed over an episode the terms
-    telescope to ``-Phi(s_0)`` (a truncated episode also keeps ``gamma^T Phi(s_T)``), so the
-    optimal policy is unchanged, while the learner now sees 0 for a move that keeps the
-    straight-line pace and a clear loss for one that does not, instead of 2000 points at the
-    end of a 300-move episode: it only has to learn how the SIR bends the straight route."""
+    the moves still needed (lattice distance minus the tolerance); ``Phi = 0`` where the
+    learner's episode ends (``ended``): after arrival or leaving the area, and for a
+    time-aware learner also at the time limit. Summed over an episode the terms telescope to
+    ``-Phi(s_0)`` (a truncation the learner bootstraps through keeps ``gamma^T Phi(s_T)``,
+    which its bootstrap value offsets), so the optimal policy is unchanged, while the
+    learner now sees 0 for a move that keeps the straight-line pace and a clear loss for one
+    that does not, instead of 2000 points at the end of a 300-move episode: it only has to
+    learn how the SIR bends the straight route."""
     if d.shaping == 0.0:
         return np.zeros(len(pos))
     c = env.cfg
@@ -450,7 +498,7 @@ def shaping_term(
         steps = k if d.gamma == 1.0 else (1.0 - g) / (1.0 - d.gamma)
         return d.shaping * (-steps + g * c.goal_reward)
 
-    return d.gamma * np.where(terminated, 0.0, phi(new_pos)) - phi(pos)
+    return d.gamma * np.where(ended, 0.0, phi(new_pos)) - phi(pos)
 
 
 @dataclass
@@ -647,9 +695,8 @@ def train(
             lanes.offset[idx], lanes.t[idx] = r["offset"], r["t"]
             lanes.ret[idx] += r["reward"]
             nobs = agent.observe(env.observe(r["position"]), r["t"])
-            # A time-aware agent knows the episode ends at the limit: no bootstrap past it.
-            stop = r["terminated"] | (r["truncated"] & d.time_aware)
-            learn_r = r["reward"] + shaping_term(env, d, pos, r["position"], r["terminated"])
+            stop = learner_ends(d, r)
+            learn_r = learning_reward(env, d, pos, r)
             for j, k in enumerate(idx):
                 for tr in lanes.windows[k].push(
                     obs[j], int(act[j]), float(learn_r[j]), nobs[j], bool(stop[j]),
