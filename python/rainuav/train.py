@@ -464,8 +464,9 @@ def learning_reward(
     potential-based shaping term (zero potential where :func:`learner_ends`). Discounting
     and the destination reward make the learner value time above the SIR: a move later
     costs ``(1 - gamma) gamma^k R_des`` of the destination reward on top of its -1, several
-    times the undiscounted price of a move at gamma 0.998; weighting the SIR part up
-    restores the balance of the undiscounted return the policy is judged by."""
+    times the undiscounted price of a move at gamma 0.998. Weighting the SIR part up
+    restores the balance of the undiscounted return the policy is judged by for a time-aware
+    policy, but makes a position-only one loop (off by default; see :mod:`rainuav.agent`)."""
     reward = r["reward"]
     if d.sir_weight != 1.0:
         reward = reward + (d.sir_weight - 1.0) * (base_reward(r["sir_db"], env.cfg) + 1.0)
