@@ -20,7 +20,6 @@ from rainuav.train import (
     greedy_rollouts,
     learning_reward,
     make_agent,
-    shaping_term,
     train,
 )
 
@@ -130,6 +129,26 @@ def _env() -> UAVNavEnv:
     return UAVNavEnv(radio_map=synthetic_map(), goal_m=(300.0, 350.0), max_steps=100)
 
 
+def _shaping_sum(
+    env: UAVNavEnv, d: DQNConfig, start: np.ndarray, actions: list[int]
+) -> tuple[float, dict]:
+    """Flies ``actions`` from ``start`` until the episode ends; returns the discounted sum of
+    the shaping terms the learner adds (``sir_weight`` 1: its reward minus the env's) and the
+    last step's result."""
+    assert d.sir_weight == 1.0
+    off, t = np.zeros((1, 2), np.int64), np.zeros(1, np.int64)
+    total, disc = 0.0, 1.0
+    for a in actions:
+        pos = start + env.cfg.step_m * off
+        r = env.stepper.step(start, off, t, np.array([a]))
+        off, t = r["offset"], r["t"]
+        total += disc * float((learning_reward(env, d, pos, r) - r["reward"])[0])
+        disc *= d.gamma
+        if r["terminated"][0] or r["truncated"][0]:
+            break
+    return total, r
+
+
 def test_shaping_telescopes_to_a_constant_of_the_start() -> None:
     # Potential-based shaping must add the same amount to every episode from a start that
     # ends at the goal or off the map (Ng et al. 1999): sum_t gamma^t F_t = -Phi(s_0).
@@ -143,16 +162,7 @@ def test_shaping_telescopes_to_a_constant_of_the_start() -> None:
         [2, 0, 0, 3, 1, 1] + [0] * 26 + [1] * 31,
         [3] * 5,
     ):
-        off, t = np.zeros((1, 2), np.int64), np.zeros(1, np.int64)
-        total, disc = 0.0, 1.0
-        for a in actions:
-            pos = start + env.cfg.step_m * off
-            r = env.stepper.step(start, off, t, np.array([a]))
-            off, t = r["offset"], r["t"]
-            total += disc * float(shaping_term(env, d, pos, r["position"], r["terminated"])[0])
-            disc *= d.gamma
-            if r["terminated"][0]:
-                break
+        total, r = _shaping_sum(env, d, start, actions)
         assert r["terminated"][0]
         totals.append(total)
     # The first three arrive (by different routes), the last leaves the area.
@@ -172,16 +182,7 @@ def test_shaping_ends_at_the_time_limit_for_a_time_aware_learner() -> None:
     start = np.array([[37.0, 42.0]])
     totals = []
     for actions in ([0] * 12, [1] * 12, [0, 2] * 6):
-        off, t = np.zeros((1, 2), np.int64), np.zeros(1, np.int64)
-        total, disc = 0.0, 1.0
-        for a in actions:
-            pos = start + env.cfg.step_m * off
-            r = env.stepper.step(start, off, t, np.array([a]))
-            off, t = r["offset"], r["t"]
-            # sir_weight 1: the learner's reward is the env's plus the shaping term.
-            shaped = learning_reward(env, d, pos, r) - r["reward"]
-            total += disc * float(shaped[0])
-            disc *= d.gamma
+        total, r = _shaping_sum(env, d, start, actions)
         assert r["truncated"][0] and not r["terminated"][0]
         totals.append(total)
     k = (263 + 308 - 10) / 10

@@ -76,7 +76,7 @@ import numpy as np
 import torch
 from torch import nn
 
-__all__ = ["Agent", "DQNConfig", "DuelingQNet", "NStepWindow", "Replay"]
+__all__ = ["Agent", "DQNConfig", "DuelingQNet", "NStepWindow", "Replay", "best_action"]
 
 
 @dataclass
@@ -127,6 +127,13 @@ class DQNConfig:
     """Factor on the SIR part of each reward (b + 1) inside the learner; 1: the env's rewards."""
     shield: bool = True
     """Greedy flights keep to moves that stay in the area and can still arrive in max_steps."""
+
+
+def best_action(q: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
+    """Argmax of the (N, 4) values ``q``, among the ``allowed`` (N, 4) actions when given."""
+    if allowed is not None:
+        q = np.where(allowed, q, -np.inf)
+    return q.argmax(axis=1)
 
 
 class DuelingQNet(nn.Module):
@@ -341,14 +348,15 @@ class Agent:
         random_a = self.rng.integers(4, size=n)
         return np.where(explore, random_a, self.greedy(obs))
 
-    def greedy(self, obs: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
-        """The action of highest Q, among the ``allowed`` (N, 4) ones when given."""
+    def q_values(self, obs: np.ndarray) -> np.ndarray:
+        """The online network's (N, 4) action values."""
         with torch.no_grad():
             x = torch.as_tensor(np.atleast_2d(obs), dtype=torch.float32, device=self.device)
-            q = self.online(x).cpu().numpy()
-        if allowed is not None:
-            q = np.where(allowed, q, -np.inf)
-        return q.argmax(axis=1)
+            return self.online(x).cpu().numpy()
+
+    def greedy(self, obs: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
+        """The action of highest Q, among the ``allowed`` (N, 4) ones when given."""
+        return best_action(self.q_values(obs), allowed)
 
     def learn(self) -> float | None:
         if self.replay.size < max(self.cfg.learning_starts, self.cfg.batch_size):

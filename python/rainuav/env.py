@@ -197,33 +197,28 @@ class BatchStepper:
         cfg = self.cfg
         x0, x1, y0, y1 = self.field.extent
         s = cfg.step_m
-        p = np.asarray(position, dtype=np.float64).reshape(-1, 2)
-        centre = np.round((self.goal - p) / s)  # (N, 2) lattice offset nearest the goal
+        p = np.asarray(position, dtype=np.float64).reshape(-1, 1, 2)
         m = int(np.ceil(cfg.tol_m / s)) + 1
-        best = np.full(len(p), np.inf)
-        for da in range(-m, m + 1):
-            for db in range(-m, m + 1):
-                k = centre + np.array([da, db])
-                q = p + s * k
-                ok = (
-                    (np.hypot(q[:, 0] - self.goal[0], q[:, 1] - self.goal[1]) <= cfg.tol_m)
-                    & (q[:, 0] >= x0) & (q[:, 0] <= x1) & (q[:, 1] >= y0) & (q[:, 1] <= y1)
-                )  # fmt: skip
-                best = np.where(ok, np.minimum(best, np.abs(k).sum(axis=1)), best)
-        return best
+        grid = np.stack(np.meshgrid(np.arange(-m, m + 1), np.arange(-m, m + 1)), -1).reshape(-1, 2)
+        # Every lattice offset within m of the one nearest the goal: (N, (2m+1)^2, 2).
+        k = np.round((self.goal - p) / s) + grid
+        q = p + s * k
+        ok = (
+            (np.hypot(q[..., 0] - self.goal[0], q[..., 1] - self.goal[1]) <= cfg.tol_m)
+            & (q[..., 0] >= x0) & (q[..., 0] <= x1) & (q[..., 1] >= y0) & (q[..., 1] <= y1)
+        )  # fmt: skip
+        return np.where(ok, np.abs(k).sum(axis=-1), np.inf).min(axis=-1)
 
     def safe_actions(self, position: np.ndarray, t: np.ndarray) -> np.ndarray:
         """(N, 4) bool: the moves after which the UAV is still in the area and can still
         arrive within ``max_steps`` (a shield: Alshiekh et al., AAAI 2018). Where no move
         qualifies (a start too far to arrive in time) every move is allowed."""
-        p = np.asarray(position, dtype=np.float64).reshape(-1, 2)
-        left = self.cfg.max_steps - np.asarray(t).reshape(-1) - 1  # moves left after this one
+        p = np.asarray(position, dtype=np.float64).reshape(-1, 1, 2)
+        left = self.cfg.max_steps - np.asarray(t).reshape(-1, 1) - 1  # moves left after this one
         x0, x1, y0, y1 = self.field.extent
-        ok = np.empty((len(p), 4), dtype=bool)
-        for a, move in enumerate(MOVES):
-            q = p + self.cfg.step_m * move
-            inside = (q[:, 0] >= x0) & (q[:, 0] <= x1) & (q[:, 1] >= y0) & (q[:, 1] <= y1)
-            ok[:, a] = inside & (self.moves_to_goal(q) <= left)
+        q = p + self.cfg.step_m * MOVES  # (N, 4, 2): the position after each move
+        inside = (q[..., 0] >= x0) & (q[..., 0] <= x1) & (q[..., 1] >= y0) & (q[..., 1] <= y1)
+        ok = inside & (self.moves_to_goal(q).reshape(-1, 4) <= left)
         ok[~ok.any(axis=1)] = True
         return ok
 

@@ -37,7 +37,7 @@ import torch
 
 from rainuav import plan as planner
 from rainuav._io import write_atomic
-from rainuav.agent import Agent, DQNConfig, NStepWindow
+from rainuav.agent import Agent, DQNConfig, NStepWindow, best_action
 from rainuav.env import NavConfig, UAVNavEnv, base_reward
 from rainuav.errors import InvalidInputError
 
@@ -272,10 +272,10 @@ def greedy_rollouts(
     while live.any():
         idx = np.flatnonzero(live)
         pos = starts[idx] + env.cfg.step_m * off[idx]
-        obs = agent.observe(env.observe(pos), t[idx])
-        a = agent.greedy(obs)
+        q = agent.q_values(agent.observe(env.observe(pos), t[idx]))
+        a = best_action(q)
         if shield:
-            free, a = a, agent.greedy(obs, env.stepper.safe_actions(pos, t[idx]))
+            free, a = a, best_action(q, env.stepper.safe_actions(pos, t[idx]))
             overridden[idx] += a != free
         r = env.stepper.step(starts[idx], off[idx], t[idx], a)
         off[idx], t[idx] = r["offset"], r["t"]
