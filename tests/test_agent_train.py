@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from rainuav import plan as planner
 from rainuav.agent import DQNConfig, DuelingQNet, NStepWindow, Replay, double_q_target
 from rainuav.env import UAVNavEnv
 from rainuav.radiomap import RadioMap
@@ -20,6 +21,7 @@ from rainuav.train import (
     greedy_rollouts,
     learning_reward,
     make_agent,
+    shield_moves,
     train,
 )
 
@@ -153,7 +155,7 @@ def test_shaping_telescopes_to_a_constant_of_the_start() -> None:
     # Potential-based shaping must add the same amount to every episode from a start that
     # ends at the goal or off the map (Ng et al. 1999): sum_t gamma^t F_t = -Phi(s_0).
     env = _env()
-    d = DQNConfig(gamma=0.99)
+    d = DQNConfig(gamma=0.99, sir_weight=1.0)
     start = np.array([[37.0, 42.0]])
     totals = []
     for actions in (
@@ -237,7 +239,11 @@ def test_batched_greedy_rollouts_equal_the_scalar_env(shield: bool) -> None:
         obs, info = env.reset(options={"start_m": s})
         ret, t, path = 0.0, 0, [info["position_m"]]
         while True:
-            allowed = env.stepper.safe_actions(info["position_m"], [t]) if shield else None
+            allowed = None
+            if shield:  # the flight's lattice offsets so far, then the shield's moves
+                hist = np.rint((np.array(path) - s) / env.cfg.step_m).astype(np.int64)
+                pos = info["position_m"][None]
+                allowed = shield_moves(env, pos, np.array([t]), hist[-1:], hist[None])
             a = int(agent.greedy(agent.observe(obs, t), allowed)[0])
             obs, r, term, trunc, info = env.step(a)
             ret, t = ret + r, t + 1
@@ -250,15 +256,16 @@ def test_batched_greedy_rollouts_equal_the_scalar_env(shield: bool) -> None:
 
 
 def test_training_smoke_on_a_synthetic_map(tmp_path: Path) -> None:
-    # 300 episodes on a 40 x 40 map take ~10 s here; the greedy network must reach the goal
+    # 300 episodes on a 40 x 40 map take ~11 s here; the greedy network must reach the goal
     # from most of 50 seeded starts and come close to the exact optimum. Measured for seeds
-    # 0 / 1 / 2 without the shield: success 1.00 / 0.96 / 0.94, mean gap 0.004 / 0.047 /
-    # 0.064; the bars leave room for that seed-to-seed spread (one more failure costs 0.02
-    # and ~0.03). With the shield (the default policy) every flight arrives: mean gap
-    # 0.004 / 0.007 / 0.003, against a bar of 0.05.
+    # 0 / 1 / 2 with the defaults (sir_weight 1.25), the network alone: success 1.00 / 0.88 /
+    # 0.88, mean gap 0.006 / 0.129 / 0.130; the bars (0.80, 0.25) leave room for that
+    # seed-to-seed spread (each failure among 50 starts costs 0.02 of success and about
+    # 0.02 of mean gap). With the shield (the default policy) every flight arrives: mean
+    # gap 0.006 / 0.003 / 0.004, against a bar of 0.05.
     m = train(small_cfg(tmp_path, 300), progress=False, radio_map=synthetic_map())
-    assert m["unshielded_success_rate"] >= 0.88, m
-    assert m["unshielded_mean_gap_to_optimal"] < 0.15, m
+    assert m["unshielded_success_rate"] >= 0.80, m
+    assert m["unshielded_mean_gap_to_optimal"] < 0.25, m
     assert m["success_rate"] == 1.0, m
     assert m["mean_gap_to_optimal"] < 0.05, m
     for name in (
@@ -441,3 +448,70 @@ def test_shielded_greedy_rollouts_arrive_even_untrained() -> None:
     assert metrics["success_rate"] == 1.0
     assert metrics["unshielded_success_rate"] == reached[False]
     assert metrics["shielded_flights"] > 0.5
+
+
+STEPS = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]])
+
+
+def _check_revisits(env: UAVNavEnv, path: np.ndarray) -> None:
+    """From the path alone: the flight went back to a visited position only where every safe
+    move led to one (positions keyed on a quarter-step grid, in a plain set)."""
+
+    def key(p: np.ndarray) -> tuple[int, int]:
+        k = np.rint(p / env.cfg.step_m * 4).astype(int)
+        return int(k[0]), int(k[1])
+
+    seen = {key(path[0])}
+    for t in range(len(path) - 1):
+        if key(path[t + 1]) in seen:
+            safe = env.stepper.safe_actions(path[t], [t])[0]
+            nxt = path[t] + env.cfg.step_m * STEPS[safe]
+            assert all(key(q) in seen for q in nxt), (t, path[t])
+        seen.add(key(path[t + 1]))
+
+
+def test_shielded_flights_revisit_only_when_boxed_in() -> None:
+    # Untrained networks loop; the shield's second rule keeps each flight off positions it
+    # has visited while a safe move to a new one exists. Checked from the paths with a plain
+    # set of visited positions, not with shield_moves.
+    env = _env()
+    starts = eval_starts(env, 30, 5)
+    loops = 0
+    for seed in (1, 2, 3):
+        torch.manual_seed(seed)
+        agent = make_agent(small_cfg(Path("unused"), 1), env, torch.device("cpu"))
+        free = greedy_rollouts(agent, env, starts, shield=False)
+        loops += sum(len({tuple(p) for p in r["path"]}) < len(r["path"]) for r in free)
+        for roll in greedy_rollouts(agent, env, starts, shield=True):
+            assert roll["reached"]
+            _check_revisits(env, roll["path"])
+    assert loops > 10  # the rule was exercised: many unshielded flights looped
+
+
+def test_shield_moves_by_hand() -> None:
+    env = _env()
+    pos, t, off = np.array([[200.0, 200.0]]), np.array([3]), np.array([[0, 0]])
+    around = np.array([[[0, 0], [1, 0], [0, 1], [-1, 0], [0, -1]]])  # all four neighbours
+    safe = env.stepper.safe_actions(pos, t)
+    assert safe.all()
+    # Every neighbour visited: no new position, so all safe moves stay allowed.
+    np.testing.assert_array_equal(shield_moves(env, pos, t, off, around), safe)
+    # One neighbour (-y) not visited: only that move remains.
+    np.testing.assert_array_equal(
+        shield_moves(env, pos, t, off, around[:, :4]), [[False, False, False, True]]
+    )
+    # With reward="linear" loitering can pay, so only the safety rule applies.
+    with pytest.warns(UserWarning, match="loitering"):
+        lin = UAVNavEnv(
+            radio_map=synthetic_map(), goal_m=(300.0, 350.0), max_steps=100, reward="linear"
+        )
+    np.testing.assert_array_equal(shield_moves(lin, pos, t, off, around[:, :4]), safe)
+
+
+def test_optimal_flights_never_revisit_a_position() -> None:
+    # The reason the second rule costs nothing: every move costs at least 1, so the exact
+    # planner's paths are simple (checked on 40 starts of the synthetic map).
+    env = _env()
+    for p in planner.optimal_many(env, eval_starts(env, 40, 9)):
+        cells = {tuple(np.rint(q / env.cfg.step_m * 4).astype(int)) for q in p.path_m}
+        assert len(cells) == len(p.path_m)

@@ -38,7 +38,7 @@ import torch
 from rainuav import plan as planner
 from rainuav._io import write_atomic
 from rainuav.agent import Agent, DQNConfig, NStepWindow, best_action
-from rainuav.env import NavConfig, UAVNavEnv, base_reward
+from rainuav.env import MOVES, NavConfig, UAVNavEnv, base_reward
 from rainuav.errors import InvalidInputError
 
 __all__ = ["TrainConfig", "evaluate", "main", "train"]
@@ -251,17 +251,43 @@ def seed_everything(seed: int) -> None:
 
 
 # -- evaluation -------------------------------------------------------------------------------
+def unvisited_moves(offset: np.ndarray, history: np.ndarray) -> np.ndarray:
+    """(N, 4) bool: the moves from lattice ``offset`` (N, 2) to an offset not in ``history``
+    (N, k, 2), each flight's visited offsets."""
+    nxt = offset[:, None, :] + MOVES  # (N, 4, 2)
+    return ~(nxt[:, :, None, :] == history[:, None, :, :]).all(-1).any(-1)
+
+
+def shield_moves(
+    env: UAVNavEnv, pos: np.ndarray, t: np.ndarray, offset: np.ndarray, history: np.ndarray
+) -> np.ndarray:
+    """(N, 4) bool: the moves the shield allows. First the safe moves (still in the area and
+    able to arrive within ``max_steps``, :meth:`rainuav.env.BatchStepper.safe_actions`); among
+    them, the moves to a position the flight has not visited, where there is one. Every
+    reward but ``"linear"`` costs at least 1 per move, so cutting a loop out of a path gains
+    at least its length: an optimal flight never revisits a position, and the second rule
+    only removes moves no optimal flight makes. With ``"linear"`` (loitering can pay) only
+    the first rule applies."""
+    allowed = env.stepper.safe_actions(pos, t)
+    if env.cfg.reward == "linear":
+        return allowed
+    fresh = allowed & unvisited_moves(offset, history)
+    return np.where(fresh.any(axis=1, keepdims=True), fresh, allowed)
+
+
 def greedy_rollouts(
     agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool | None = None
 ) -> list[dict[str, Any]]:
     """Greedy episodes from every start at once (the batched stepper gives exactly the scalar
     environment's transitions), one dict per start: ``return``, ``steps``, ``path`` (T+1, 2),
     ``sir`` (T,), ``reached`` and ``overridden`` (moves where the shield replaced the
-    network's choice). ``shield``: keep to the safe moves (default: ``agent.cfg.shield``)."""
+    network's choice). ``shield``: keep to the moves :func:`shield_moves` allows (default:
+    ``agent.cfg.shield``)."""
     shield = agent.cfg.shield if shield is None else shield
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     n = len(starts)
     off = np.zeros((n, 2), dtype=np.int64)
+    history = np.zeros((n, env.cfg.max_steps + 1, 2), dtype=np.int64)  # offsets visited
     t = np.zeros(n, dtype=np.int64)
     live = np.ones(n, dtype=bool)
     ret = np.zeros(n)
@@ -269,16 +295,20 @@ def greedy_rollouts(
     overridden = np.zeros(n, dtype=np.int64)
     paths: list[list[np.ndarray]] = [[s.copy()] for s in starts]
     sirs: list[list[float]] = [[] for _ in range(n)]
-    while live.any():
+    for step in itertools.count():  # every live flight has made `step` moves
         idx = np.flatnonzero(live)
+        if not len(idx):
+            break
         pos = starts[idx] + env.cfg.step_m * off[idx]
         q = agent.q_values(agent.observe(env.observe(pos), t[idx]))
         a = best_action(q)
         if shield:
-            free, a = a, best_action(q, env.stepper.safe_actions(pos, t[idx]))
+            allowed = shield_moves(env, pos, t[idx], off[idx], history[idx, : step + 1])
+            free, a = a, best_action(q, allowed)
             overridden[idx] += a != free
         r = env.stepper.step(starts[idx], off[idx], t[idx], a)
         off[idx], t[idx] = r["offset"], r["t"]
+        history[idx, step + 1] = off[idx]
         ret[idx] += r["reward"]
         for j, k in enumerate(idx):
             paths[k].append(r["position"][j].copy())
