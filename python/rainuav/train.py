@@ -251,27 +251,37 @@ def seed_everything(seed: int) -> None:
 
 
 # -- evaluation -------------------------------------------------------------------------------
-def unvisited_moves(offset: np.ndarray, history: np.ndarray) -> np.ndarray:
-    """(N, 4) bool: the moves from lattice ``offset`` (N, 2) to an offset not in ``history``
-    (N, k, 2), each flight's visited offsets."""
-    nxt = offset[:, None, :] + MOVES  # (N, 4, 2)
-    return ~(nxt[:, :, None, :] == history[:, None, :, :]).all(-1).any(-1)
+def unvisited_moves(offset: np.ndarray, visited: Sequence[set[tuple[int, int]]]) -> np.ndarray:
+    """(N, 4) bool: the moves from lattice ``offset`` (N, 2) to an offset not in ``visited``,
+    each flight's set of visited offsets."""
+    steps = MOVES.tolist()
+    return np.array(
+        [
+            [(ox + dx, oy + dy) not in seen for dx, dy in steps]
+            for (ox, oy), seen in zip(offset.tolist(), visited, strict=True)
+        ],
+        dtype=bool,
+    ).reshape(-1, 4)
 
 
 def shield_moves(
-    env: UAVNavEnv, pos: np.ndarray, t: np.ndarray, offset: np.ndarray, history: np.ndarray
+    env: UAVNavEnv,
+    pos: np.ndarray,
+    t: np.ndarray,
+    offset: np.ndarray,
+    visited: Sequence[set[tuple[int, int]]],
 ) -> np.ndarray:
     """(N, 4) bool: the moves the shield allows. First the safe moves (still in the area and
     able to arrive within ``max_steps``, :meth:`rainuav.env.BatchStepper.safe_actions`); among
-    them, the moves to a position the flight has not visited, where there is one. Every
-    reward but ``"linear"`` costs at least 1 per move, so cutting a loop out of a path gains
-    at least its length: an optimal flight never revisits a position, and the second rule
-    only removes moves no optimal flight makes. With ``"linear"`` (loitering can pay) only
-    the first rule applies."""
+    them, the moves to a position the flight has not visited (``visited``: each flight's
+    lattice offsets so far), where there is one. Every reward but ``"linear"`` costs at least
+    1 per move, so cutting a loop out of a path gains at least its length: an optimal flight
+    never revisits a position, and the second rule only removes moves no optimal flight
+    makes. With ``"linear"`` (loitering can pay) only the first rule applies."""
     allowed = env.stepper.safe_actions(pos, t)
     if env.cfg.reward == "linear":
         return allowed
-    fresh = allowed & unvisited_moves(offset, history)
+    fresh = allowed & unvisited_moves(offset, visited)
     return np.where(fresh.any(axis=1, keepdims=True), fresh, allowed)
 
 
@@ -287,7 +297,7 @@ def greedy_rollouts(
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     n = len(starts)
     off = np.zeros((n, 2), dtype=np.int64)
-    history = np.zeros((n, env.cfg.max_steps + 1, 2), dtype=np.int64)  # offsets visited
+    visited: list[set[tuple[int, int]]] = [{(0, 0)} for _ in range(n)]  # lattice offsets
     t = np.zeros(n, dtype=np.int64)
     live = np.ones(n, dtype=bool)
     ret = np.zeros(n)
@@ -295,22 +305,20 @@ def greedy_rollouts(
     overridden = np.zeros(n, dtype=np.int64)
     paths: list[list[np.ndarray]] = [[s.copy()] for s in starts]
     sirs: list[list[float]] = [[] for _ in range(n)]
-    for step in itertools.count():  # every live flight has made `step` moves
+    while live.any():
         idx = np.flatnonzero(live)
-        if not len(idx):
-            break
         pos = starts[idx] + env.cfg.step_m * off[idx]
         q = agent.q_values(agent.observe(env.observe(pos), t[idx]))
         a = best_action(q)
         if shield:
-            allowed = shield_moves(env, pos, t[idx], off[idx], history[idx, : step + 1])
+            allowed = shield_moves(env, pos, t[idx], off[idx], [visited[k] for k in idx])
             free, a = a, best_action(q, allowed)
             overridden[idx] += a != free
         r = env.stepper.step(starts[idx], off[idx], t[idx], a)
         off[idx], t[idx] = r["offset"], r["t"]
-        history[idx, step + 1] = off[idx]
         ret[idx] += r["reward"]
         for j, k in enumerate(idx):
+            visited[k].add((int(off[k, 0]), int(off[k, 1])))
             paths[k].append(r["position"][j].copy())
             sirs[k].append(float(r["sir_db"][j]))
         end = r["terminated"] | r["truncated"]
