@@ -50,7 +50,7 @@ replay size and minibatch. Choices beyond it, each measured on the paper map (25
   0.01% at 2 (60 starts). A stationary (position-only) policy cannot use all of that: without
   the clock it plans some detours that do not fit in 300 moves, or loops, which the shield
   below handles. Learned (3000 episodes, greedy from the 200 evaluation starts, mean gap with
-  the shield, the network alone in brackets), at 25 mm/h seeds 0 / 1 / 2 and in clear air
+  the shield; the network alone in parentheses), at 25 mm/h seeds 0 / 1 / 2 and in clear air
   seeds 0 / 1 / 2: weight 1.25, 4.7% / 3.7% / 4.8% and 4.6% / 4.3% / 4.4% (alone 91.5-100%
   success, 4.6-15.3% mean gap); weight 1, 5.4% / 5.5% / 5.3% and 5.0% / 5.5% / 6.4% (alone
   99-100%, 5.0-8.1%); weight 1.5, 3.6% / 9.1% at 25 mm/h seeds 0 / 1 and 3.1% in clear air

@@ -503,8 +503,9 @@ def learning_reward(
     and the destination reward make the learner value time above the SIR: a move later
     costs ``(1 - gamma) gamma^k R_des`` of the destination reward on top of its -1, several
     times the undiscounted price of a move at gamma 0.998. Weighting the SIR part up
-    restores the balance of the undiscounted return the policy is judged by for a time-aware
-    policy, but makes a position-only one loop (off by default; see :mod:`rainuav.agent`)."""
+    restores the balance of the undiscounted return the policy is judged by; a position-only
+    policy then loops from a few starts, which the shield breaks (1.25 by default; see
+    :mod:`rainuav.agent`)."""
     reward = r["reward"]
     if d.sir_weight != 1.0:
         reward = reward + (d.sir_weight - 1.0) * (base_reward(r["sir_db"], env.cfg) + 1.0)
