@@ -58,7 +58,7 @@ replay size and minibatch. Choices beyond it, each measured on the paper map (25
   shield: alone, weight 1 is better. The exact stationary optimum of the weighted discounted
   task, flown with the shield, gives up 3.7% (weight 1), 2.5% (1.25) and 0.6% (1.5) of the
   undiscounted optimum (tabular value iteration, 60 starts at 25 mm/h): the learned weight
-  1.25 policies sit 1.2-2.3 points above their floor.
+  1.25 policies sit 1.1-2.2 points above the 25 mm/h floor.
 - ``shield = True`` (Alshiekh et al., AAAI 2018): greedy flights keep to the moves after which
   the UAV is still in the area and can still arrive within ``max_steps``
   (:meth:`rainuav.env.BatchStepper.safe_actions`), and among those to moves onto a position
