@@ -138,7 +138,8 @@ class DQNConfig:
     sir_weight: float = 1.25
     """Factor on the SIR part of each reward (b + 1) inside the learner; 1: the env's rewards."""
     shield: bool = True
-    """Greedy flights keep to moves that stay in the area and can still arrive in max_steps."""
+    """Greedy flights keep to moves that stay in the area and can still arrive in max_steps,
+    and avoid positions they already visited while they can (rainuav.train.shield_moves)."""
 
 
 def best_action(q: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
