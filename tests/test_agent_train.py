@@ -508,6 +508,11 @@ def test_shield_moves_by_hand() -> None:
             radio_map=synthetic_map(), goal_m=(300.0, 350.0), max_steps=100, reward="linear"
         )
     np.testing.assert_array_equal(shield_moves(lin, pos, t, off, open_y), safe)
+    # So can a negative mu under "shortfall" (a reward for weak SIR); with mu = 0 every move
+    # costs exactly 1 and the rule applies.
+    for mu, want in ((-0.5, safe), (0.0, [[False, False, False, True]])):
+        e = UAVNavEnv(radio_map=synthetic_map(), goal_m=(300.0, 350.0), max_steps=100, mu=mu)
+        np.testing.assert_array_equal(shield_moves(e, pos, t, off, open_y), want)
 
 
 def test_optimal_flights_never_revisit_a_position() -> None:

@@ -274,12 +274,15 @@ def shield_moves(
     """(N, 4) bool: the moves the shield allows. First the safe moves (still in the area and
     able to arrive within ``max_steps``, :meth:`rainuav.env.BatchStepper.safe_actions`); among
     them, the moves to a position the flight has not visited (``visited``: each flight's
-    lattice offsets so far), where there is one. Every reward but ``"linear"`` costs at least
-    1 per move, so cutting a loop out of a path gains at least its length: an optimal flight
-    never revisits a position, and the second rule only removes moves no optimal flight
-    makes. With ``"linear"`` (loitering can pay) only the first rule applies."""
+    lattice offsets so far), where there is one. The second rule applies where every move
+    costs at least 1 (``"shortfall"`` and ``"outage"`` with ``mu >= 0``, ``"linear"`` with
+    ``mu <= 0``): cutting a loop out of a path then gains at least its length, so an optimal
+    flight never revisits a position and the rule only removes moves no optimal flight makes.
+    Elsewhere (the paper's ``"linear"`` with ``mu > 0``: loitering can pay) only the first
+    rule applies."""
     allowed = env.stepper.safe_actions(pos, t)
-    if env.cfg.reward == "linear":
+    loops_can_pay = env.cfg.mu > 0 if env.cfg.reward == "linear" else env.cfg.mu < 0
+    if loops_can_pay:
         return allowed
     fresh = allowed & unvisited_moves(offset, visited)
     return np.where(fresh.any(axis=1, keepdims=True), fresh, allowed)
