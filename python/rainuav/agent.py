@@ -64,9 +64,10 @@ replay size and minibatch. Choices beyond it, each measured on the paper map (25
   (:meth:`rainuav.env.BatchStepper.safe_actions`), and among those to moves onto a position
   the flight has not visited yet, where one exists (:func:`rainuav.train.shield_moves`). The
   first rule sends a wandering flight home when its slack runs out; the second breaks a loop
-  where it closes. Every reward but ``"linear"`` costs at least 1 per move, so an optimal
-  flight never revisits a position and the second rule only removes moves that no optimal
-  flight makes (with ``"linear"`` it is off). The shield acts on evaluation and validation
+  where it closes. With ``mu >= 0`` every reward but ``"linear"`` costs at least 1 per move,
+  so an optimal flight never revisits a position and the second rule only removes moves that
+  no optimal flight makes (where loops can pay, ``"linear"`` or a negative ``mu``, it is
+  off). The shield acts on evaluation and validation
   flights, not while learning: with the first rule in the training flights the stationary
   learner saw loops end in arrivals and learned to loop (weight 1.5: 100% success after 299.8
   moves on average, 73% mean gap). ``metrics.json`` reports how many flights it steered and
