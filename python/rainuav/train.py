@@ -141,16 +141,25 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _read_config(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The TrainConfig fields and the [dqn] fields of a TOML file; unknown names raise."""
+    data = tomllib.loads(Path(path).read_text())
+    dqn = dict(data.pop("dqn", {}))
+    unknown = sorted(set(data) - {f.name for f in dataclasses.fields(TrainConfig)}) + sorted(
+        f"dqn.{k}" for k in set(dqn) - {f.name for f in dataclasses.fields(DQNConfig)}
+    )
+    if unknown:
+        raise InvalidInputError(f"{path}: unknown field(s) {unknown}")
+    return data, dqn
+
+
 def config_from_args(args: argparse.Namespace) -> TrainConfig:
     base: dict[str, Any] = {}
+    dqn_kw: dict[str, Any] = {}
     if args.config is not None:
-        base = tomllib.loads(Path(args.config).read_text())
+        base, dqn_kw = _read_config(args.config)
     dqn_names = {f.name for f in dataclasses.fields(DQNConfig)}
     top_names = {f.name for f in dataclasses.fields(TrainConfig)} - {"dqn"}
-    unknown = set(base) - top_names - {"dqn"}
-    if unknown:
-        raise InvalidInputError(f"{args.config}: unknown field(s) {sorted(unknown)}")
-    dqn_kw = dict(base.pop("dqn", {}))
     for name in dqn_names:
         if getattr(args, name, None) is not None:
             dqn_kw[name] = getattr(args, name)
@@ -889,13 +898,7 @@ def finish(
 
 def load_config(path: Path) -> TrainConfig:
     """A TrainConfig from a run's config.toml."""
-    data = tomllib.loads(Path(path).read_text())
-    dqn = data.pop("dqn", {})
-    unknown = sorted(set(data) - {f.name for f in dataclasses.fields(TrainConfig)}) + sorted(
-        f"dqn.{k}" for k in set(dqn) - {f.name for f in dataclasses.fields(DQNConfig)}
-    )
-    if unknown:
-        raise InvalidInputError(f"{path}: unknown field(s) {unknown}")
+    data, dqn = _read_config(path)
     return TrainConfig(**data, dqn=DQNConfig(**dqn))
 
 
