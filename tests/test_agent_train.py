@@ -405,6 +405,12 @@ def test_bad_train_config(tmp_path: Path) -> None:
     (tmp_path / "config.toml").write_text("seed = 1\nsede = 2\n[dqn]\nlr = 0.1\ngama = 0.9\n")
     with pytest.raises(InvalidInputError, match=r"unknown field\(s\) \['sede', 'dqn.gama'\]"):
         load_config(tmp_path / "config.toml")
+    # The CLI's --config reads the file the same way.
+    from rainuav.train import build_parser, config_from_args
+
+    args = build_parser().parse_args(["--config", str(tmp_path / "config.toml")])
+    with pytest.raises(InvalidInputError, match=r"unknown field\(s\) \['sede', 'dqn.gama'\]"):
+        config_from_args(args)
 
     with pytest.raises(InvalidInputError, match="gamma"):
         validate(TrainConfig(dqn=DQNConfig(gamma=1.5)))
