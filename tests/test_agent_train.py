@@ -12,7 +12,7 @@ import pytest
 import torch
 from rainuav import plan as planner
 from rainuav.agent import DQNConfig, DuelingQNet, NStepWindow, Replay, double_q_target
-from rainuav.env import UAVNavEnv
+from rainuav.env import MOVES, UAVNavEnv
 from rainuav.radiomap import RadioMap
 from rainuav.train import (
     TrainConfig,
@@ -457,24 +457,22 @@ def test_shielded_greedy_rollouts_arrive_even_untrained() -> None:
     assert metrics["shielded_flights"] > 0.5
 
 
-STEPS = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]])
+def _cell(env: UAVNavEnv, p: np.ndarray) -> tuple[int, int]:
+    """A position's key on a quarter-step grid (positions on one lattice never share one)."""
+    k = np.rint(p / env.cfg.step_m * 4).astype(int)
+    return int(k[0]), int(k[1])
 
 
 def _check_revisits(env: UAVNavEnv, path: np.ndarray) -> None:
     """From the path alone: the flight went back to a visited position only where every safe
-    move led to one (positions keyed on a quarter-step grid, in a plain set)."""
-
-    def key(p: np.ndarray) -> tuple[int, int]:
-        k = np.rint(p / env.cfg.step_m * 4).astype(int)
-        return int(k[0]), int(k[1])
-
-    seen = {key(path[0])}
+    move led to one (visited positions in a plain set)."""
+    seen = {_cell(env, path[0])}
     for t in range(len(path) - 1):
-        if key(path[t + 1]) in seen:
+        if _cell(env, path[t + 1]) in seen:
             safe = env.stepper.safe_actions(path[t], [t])[0]
-            nxt = path[t] + env.cfg.step_m * STEPS[safe]
-            assert all(key(q) in seen for q in nxt), (t, path[t])
-        seen.add(key(path[t + 1]))
+            nxt = path[t] + env.cfg.step_m * MOVES[safe]
+            assert all(_cell(env, q) in seen for q in nxt), (t, path[t])
+        seen.add(_cell(env, path[t + 1]))
 
 
 def test_shielded_flights_revisit_only_when_boxed_in() -> None:
@@ -526,5 +524,5 @@ def test_optimal_flights_never_revisit_a_position() -> None:
     # planner's paths are simple (checked on 40 starts of the synthetic map).
     env = _env()
     for p in planner.optimal_many(env, eval_starts(env, 40, 9)):
-        cells = {tuple(np.rint(q / env.cfg.step_m * 4).astype(int)) for q in p.path_m}
+        cells = {_cell(env, q) for q in p.path_m}
         assert len(cells) == len(p.path_m)
