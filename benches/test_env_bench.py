@@ -4,7 +4,7 @@ Gymnasium env doing the same steps one at a time, in the same run."""
 from __future__ import annotations
 
 import numpy as np
-from rainuav.env import BatchStepper, UAVNavEnv
+from rainuav.nav import BatchStepper, UAVNavEnv
 
 N = 8192
 SIR = np.random.default_rng(0).uniform(-10, 30, (200, 200))

@@ -1,4 +1,4 @@
-"""Greedy evaluation flights (``rainuav.train.greedy_rollouts``) with the shield against the
+"""Greedy evaluation flights (``rainuav.rl.collect.greedy_rollouts``) with the shield against the
 same network without it, in the same run: 100 starts on a 200 x 200 map, an untrained network
 (seeded). The two fly different numbers of moves, so each records its moves and the cost is
 compared per move."""
@@ -8,8 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
-from rainuav.env import UAVNavEnv
-from rainuav.train import TrainConfig, eval_starts, greedy_rollouts, make_agent
+from rainuav.nav import UAVNavEnv
+from rainuav.rl.collect import greedy_rollouts
+from rainuav.rl.config import TrainConfig
+from rainuav.rl.evaluation import eval_starts
+from rainuav.rl.setup import make_agent
 
 SIR = np.random.default_rng(0).uniform(-10, 30, (200, 200))
 

@@ -10,20 +10,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from rainuav import plan as planner
-from rainuav.agent import DQNConfig, DuelingQNet, NStepWindow, Replay, double_q_target
-from rainuav.env import MOVES, UAVNavEnv
-from rainuav.radiomap import RadioMap
-from rainuav.train import (
-    TrainConfig,
-    eval_starts,
-    evaluate,
-    greedy_rollouts,
-    learning_reward,
-    make_agent,
-    shield_moves,
-    train,
-)
+from rainuav.nav import MOVES, UAVNavEnv, planner
+from rainuav.nav.shield import shield_moves
+from rainuav.radio import RadioMap
+from rainuav.rl.collect import greedy_rollouts
+from rainuav.rl.config import DQNConfig, TrainConfig
+from rainuav.rl.dqn import DuelingQNet, NStepWindow, Replay, double_q_target
+from rainuav.rl.evaluation import eval_starts, evaluate
+from rainuav.rl.learner import learning_reward
+from rainuav.rl.loop import train
+from rainuav.rl.setup import make_agent
 
 
 def test_n_step_window_by_hand() -> None:
@@ -83,7 +79,7 @@ def test_replay_wraps_around() -> None:
 
 
 def _tiny_scenario():
-    from rainuav.scenario import Area, Scenario, Site
+    from rainuav.radio.scenario import Area, Scenario, Site
 
     area = Area(x_min_m=0, x_max_m=400, y_min_m=0, y_max_m=400, resolution_m=10)
     return Scenario(name="synthetic", area=area, sites=[Site(x_m=200.0, y_m=200.0)])
@@ -341,7 +337,7 @@ def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
 
 
 def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path) -> None:
-    from rainuav.scenario import Area, Cell, Scenario, Site
+    from rainuav.radio.scenario import Area, Cell, Scenario, Site
 
     scn = Scenario(
         name="tiny",
@@ -400,7 +396,7 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path) -> None:
 
 def test_bad_train_config(tmp_path: Path) -> None:
     from rainuav import InvalidInputError
-    from rainuav.train import load_config, validate
+    from rainuav.rl.config import check_config, load_config
 
     (tmp_path / "config.toml").write_text("seed = 1\nsede = 2\n[dqn]\nlr = 0.1\ngama = 0.9\n")
     with pytest.raises(InvalidInputError, match=r"unknown field\(s\) \['sede', 'dqn.gama'\]"):
@@ -413,13 +409,13 @@ def test_bad_train_config(tmp_path: Path) -> None:
         config_from_args(args)
 
     with pytest.raises(InvalidInputError, match="gamma"):
-        validate(TrainConfig(dqn=DQNConfig(gamma=1.5)))
+        check_config(TrainConfig(dqn=DQNConfig(gamma=1.5)))
     with pytest.raises(InvalidInputError, match="device"):
-        validate(TrainConfig(device="tpu"))
+        check_config(TrainConfig(device="tpu"))
     with pytest.raises(InvalidInputError, match=r"lr_final must be > 0 \(got nan\)"):
-        validate(TrainConfig(dqn=DQNConfig(lr_final=float("nan"))))
+        check_config(TrainConfig(dqn=DQNConfig(lr_final=float("nan"))))
     with pytest.raises(InvalidInputError, match="validate_starts must be >= 1"):
-        validate(TrainConfig(validate_starts=0))
+        check_config(TrainConfig(validate_starts=0))
 
 
 def test_greedy_keeps_to_the_allowed_moves() -> None:

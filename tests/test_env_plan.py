@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import rainuav
 from gymnasium.utils.env_checker import check_env
-from rainuav import plan
-from rainuav.env import BatchStepper, LoiteringWarning, UAVNavEnv
+from rainuav.nav import BatchStepper, LoiteringWarning, UAVNavEnv
+from rainuav.nav import planner as plan
 
 EXT = (0.0, 400.0, 0.0, 300.0)
 

@@ -1,5 +1,5 @@
 """Radio maps against Friis, the specific attenuation, rain-cell path integrals, building
-shadows and hand-computed SIR; scenario files, the cache and bad scenarios."""
+shadows and hand-computed SIR; scenario files, the cache and bad presets."""
 
 from __future__ import annotations
 
@@ -11,8 +11,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 import rainuav
-from rainuav import medium, radiomap, scenarios
-from rainuav.scenario import Area, Building, Cell, Medium, PESettings, RainCell, Scenario, Site
+from rainuav import medium
+from rainuav.radio import build_radio_map, cache, presets
+from rainuav.radio import sinr as sinr_mod
+from rainuav.radio.pe_engine import rain_rate_at
+from rainuav.radio.radiomap import RadioMap
+from rainuav.radio.scenario import (
+    Area,
+    Building,
+    Cell,
+    Medium,
+    PESettings,
+    RainCell,
+    Scenario,
+    Site,
+)
 
 C0 = 299_792_458.0
 
@@ -62,7 +75,7 @@ def test_friis_on_boresight() -> None:
     # D = 4 ln2 / (sin(bh/2) sin(bv/2)) (PHYSICS.md beam). zR = 4.7 m here, so beyond 100 m
     # the near-field correction is < 0.01 dB; 0.5 dB is the issue's bar on the calibration.
     scn = beam_line()
-    rm = scn.radio_map(cache=False)
+    rm = build_radio_map(scn, cache=False)
     x, rss = boresight(rm)
     lam = C0 / scn.freq_hz
     s = math.sin(math.radians(4.333 / 2))
@@ -78,9 +91,9 @@ def test_homogeneous_rain_on_boresight() -> None:
     # 4.8 dB/km, so up to 2.4 dB at 500 m); and rain never adds power anywhere (one beam:
     # no interference).
     kw = {"freq_hz": 28e9, "bw": 2.0, "length": 500.0}
-    clear = beam_line(**kw).radio_map(cache=False)
-    rain = beam_line(**kw, med=Medium(kind="homogeneous", rain_rate_mm_h=25.0)).radio_map(
-        cache=False
+    clear = build_radio_map(beam_line(**kw), cache=False)
+    rain = build_radio_map(
+        beam_line(**kw, med=Medium(kind="homogeneous", rain_rate_mm_h=25.0)), cache=False
     )
     x, rc = boresight(clear)
     _, rr = boresight(rain)
@@ -96,9 +109,9 @@ def test_rain_cell_loss_is_the_path_integral() -> None:
     # integral of the specific attenuation of the local rate along the path within 5%.
     cell = RainCell(x_m=250.0, y_m=500.0, radius_m=60.0, peak_rate_mm_h=80.0)
     kw = {"freq_hz": 28e9, "bw": 2.0, "length": 500.0}
-    clear = beam_line(**kw).radio_map(cache=False)
-    rain = beam_line(**kw, med=Medium(kind="cells", rain_rate_mm_h=0.0, cells=[cell])).radio_map(
-        cache=False
+    clear = build_radio_map(beam_line(**kw), cache=False)
+    rain = build_radio_map(
+        beam_line(**kw, med=Medium(kind="cells", rain_rate_mm_h=0.0, cells=[cell])), cache=False
     )
     x, rc = boresight(clear)
     _, rr = boresight(rain)
@@ -114,8 +127,8 @@ def test_building_casts_a_shadow() -> None:
     # A 150 m tall slab across the beam at 200-220 m: behind it the power is at least 10 dB
     # below the same map without it.
     slab = Building(x0_m=200.0, x1_m=220.0, y0_m=300.0, y1_m=700.0, height_m=150.0)
-    free = beam_line().radio_map(cache=False)
-    shadow = beam_line(buildings=[slab]).radio_map(cache=False)
+    free = build_radio_map(beam_line(), cache=False)
+    shadow = build_radio_map(beam_line(buildings=[slab]), cache=False)
     x, rf = boresight(free)
     _, rs = boresight(shadow)
     behind = x > 300
@@ -126,11 +139,11 @@ def test_building_casts_a_shadow() -> None:
 def test_sir_by_hand() -> None:
     # Three cells, three pixels: hand-computed serving cell, SIR and SINR (PHYSICS.md 5).
     p = np.array([[[1.0, 1e-3, 0.0]], [[0.5, 2e-3, 0.0]], [[0.25, 0.0, 0.0]]])
-    serving, sir, sinr = radiomap.sir_from_power(p, noise_dbm=10 * np.log10(0.25))
+    serving, sir, sinr = sinr_mod.sir_from_power(p, noise_dbm=10 * np.log10(0.25))
     assert serving.tolist() == [[0, 1, -1]]
     assert sir[0, 0] == pytest.approx(10 * np.log10(1.0 / 0.75))
     assert sir[0, 1] == pytest.approx(10 * np.log10(2e-3 / 1e-3))
-    assert sir[0, 2] == radiomap.SIR_FLOOR_DB
+    assert sir[0, 2] == sinr_mod.SIR_FLOOR_DB
     assert sinr[0, 0] == pytest.approx(10 * np.log10(1.0 / 1.0))
     assert np.isfinite(sir).all() and np.isfinite(sinr).all()
 
@@ -141,7 +154,7 @@ def test_mirror_symmetric_scenario_gives_mirror_symmetric_map() -> None:
         Site(x_m=700.0, y_m=200.0, cells=[Cell(azimuth_deg=60.0, beamwidth_deg=8.0)]),
         Site(x_m=1300.0, y_m=200.0, cells=[Cell(azimuth_deg=120.0, beamwidth_deg=8.0)]),
     ]
-    rm = Scenario(name="mirror", area=area, sites=sites).radio_map(cache=False)
+    rm = build_radio_map(Scenario(name="mirror", area=area, sites=sites), cache=False)
     a, b = rm.rss_dbm[0], rm.rss_dbm[1][:, ::-1]
     strong = (a > a.max() - 50) | (b > b.max() - 50)
     # The march grids are symmetric up to their one extra sample at -nx/2 (in the absorber):
@@ -153,40 +166,40 @@ def test_mirror_symmetric_scenario_gives_mirror_symmetric_map() -> None:
 
 
 def test_paper_preset_has_good_and_weak_regions() -> None:
-    rm = scenarios.paper(rain_rate_mm_h=25.0).radio_map(cache=True)
+    rm = build_radio_map(presets.paper(rain_rate_mm_h=25.0), cache=True)
     cov = rm.coverage(10.0)
     assert 0.10 <= cov <= 0.95, cov
     assert rm.rss_dbm.shape == (7, 200, 200)
     assert np.isfinite(rm.sir_db).all() and np.isfinite(rm.sinr_db).all()
     # The cache returns the same map, bit for bit.
-    again = scenarios.paper(rain_rate_mm_h=25.0).radio_map(cache=True)
+    again = build_radio_map(presets.paper(rain_rate_mm_h=25.0), cache=True)
     np.testing.assert_array_equal(again.rss_dbm, rm.rss_dbm)
     assert again.build_seconds == 0.0
 
 
 def test_save_load_round_trip_and_corrupt_cache(tmp_path: Path) -> None:
     scn = beam_line(length=200.0, res=10.0)
-    rm = scn.radio_map(cache=True)
+    rm = build_radio_map(scn, cache=True)
     path = rm.save(tmp_path / "m.npz")
-    back = radiomap.RadioMap.load(path)
-    for k in radiomap.RadioMap._ARRAYS:
+    back = RadioMap.load(path)
+    for k in RadioMap._ARRAYS:
         np.testing.assert_array_equal(getattr(back, k), getattr(rm, k))
         assert getattr(back, k).dtype == getattr(rm, k).dtype
     assert back.scenario == scn and back.extent_m == rm.extent_m
     # A corrupt cache entry is rebuilt, not trusted.
-    entry = radiomap.cache_dir() / "radiomaps" / f"{scn.digest()}.npz"
+    entry = cache.map_path(scn.digest())
     entry.write_bytes(b"not a zip")
-    rebuilt = scn.radio_map(cache=True)
+    rebuilt = build_radio_map(scn, cache=True)
     np.testing.assert_array_equal(rebuilt.rss_dbm, rm.rss_dbm)
-    assert radiomap.RadioMap.load(entry).scenario == scn
+    assert RadioMap.load(entry).scenario == scn
     with pytest.raises(rainuav.InvalidInputError, match="radio map"):
-        radiomap.RadioMap.load(tmp_path / "missing.npz")
+        RadioMap.load(tmp_path / "missing.npz")
 
 
 def test_toml_round_trip(tmp_path: Path) -> None:
     for scn in (
-        scenarios.paper(),
-        scenarios.urban(rain_rate_mm_h=0.0),
+        presets.paper(),
+        presets.urban(rain_rate_mm_h=0.0),
         beam_line(med=Medium(kind="cells", cells=[RainCell(1, 2, 3, 4)])),
     ):
         path = scn.to_toml(tmp_path / f"{scn.name}.toml")
@@ -213,10 +226,10 @@ def test_toml_round_trip(tmp_path: Path) -> None:
     ],
 )
 def test_invalid_scenarios(change, needle) -> None:
-    scn = scenarios.paper()
+    scn = presets.paper()
     change(scn)
     with pytest.raises(ValueError, match=re_escape(needle)) as info:
-        scn.validate()
+        scn.check()
     assert isinstance(info.value, rainuav.InvalidInputError)
 
 
@@ -232,13 +245,13 @@ def test_unknown_toml_field_and_grid_beyond_memory(tmp_path: Path) -> None:
     with pytest.raises(rainuav.InvalidInputError, match="unknown field"):
         Scenario.from_toml(bad)
     # 100 GHz, wide beams, 20 km: each march would need far more than this machine has.
-    huge = scenarios.paper(
+    huge = presets.paper(
         freq_hz=1e11,
         area=Area(x_min_m=0, x_max_m=20000, y_min_m=0, y_max_m=20000, resolution_m=50),
         sites=[Site(x_m=100.0, y_m=100.0, cells=[Cell(azimuth_deg=45.0, beamwidth_deg=30.0)])],
     )
     with pytest.raises(rainuav.InvalidInputError, match="GB"):
-        huge.radio_map(cache=False)
+        build_radio_map(huge, cache=False)
 
 
 def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
@@ -263,7 +276,7 @@ def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
         env={"MPLBACKEND": "Agg", "PATH": "", "RAINUAV_CACHE_DIR": str(tmp_path / "c")},
     )
     assert "SIR >= 10 dB" in proc.stdout
-    rm = radiomap.RadioMap.load(out / "radiomap.npz")
+    rm = RadioMap.load(out / "radiomap.npz")
     assert rm.scenario.medium.rain_rate_mm_h == 10.0
     for png in ("rss.png", "sir.png"):
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
@@ -272,18 +285,20 @@ def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
 def test_height_map_equals_box_building() -> None:
     # The same slab as a height map (5 m pixels over the 600 m x 105 m area) and as a box.
     slab = Building(x0_m=200.0, x1_m=220.0, y0_m=447.5, y1_m=552.5, height_m=150.0)
-    box = beam_line(buildings=[slab]).radio_map(cache=False)
+    box = build_radio_map(beam_line(buildings=[slab]), cache=False)
     scn = beam_line()
     h, w = scn.area.shape
     hm = np.zeros((h, w))
     hm[:, 40:44] = 150.0  # x in [200, 220)
     scn.height_map_m = hm.tolist()
-    scn.validate()
-    mapped = scn.radio_map(cache=False)
+    scn.check()
+    mapped = build_radio_map(scn, cache=False)
     x, rb = boresight(box)
     _, rh = boresight(mapped)
     behind = x > 300
-    assert np.all(rh[behind] <= boresight(beam_line().radio_map(cache=False))[1][behind] - 10)
+    assert np.all(
+        rh[behind] <= boresight(build_radio_map(beam_line(), cache=False))[1][behind] - 10
+    )
     np.testing.assert_allclose(rh[x < 190], rb[x < 190], atol=1e-6)
 
 
@@ -292,8 +307,10 @@ def test_rate_map_equals_homogeneous_rain() -> None:
     kw = {"freq_hz": 28e9, "bw": 2.0, "length": 300.0}
     h, w = beam_line(**kw).area.shape
     table = np.full((h, w), 25.0).tolist()
-    a = beam_line(**kw, med=Medium(kind="homogeneous", rain_rate_mm_h=25.0)).radio_map(cache=False)
-    b = beam_line(**kw, med=Medium(kind="map", rate_map_mm_h=table)).radio_map(cache=False)
+    a = build_radio_map(
+        beam_line(**kw, med=Medium(kind="homogeneous", rain_rate_mm_h=25.0)), cache=False
+    )
+    b = build_radio_map(beam_line(**kw, med=Medium(kind="map", rate_map_mm_h=table)), cache=False)
     _, ra = boresight(a)
     _, rb = boresight(b)
     np.testing.assert_allclose(rb, ra, atol=1e-3)
@@ -301,4 +318,4 @@ def test_rate_map_equals_homogeneous_rain() -> None:
     scn.medium = Medium(kind="map", rate_map_mm_h=[[0.0, 10.0], [20.0, 30.0]])
     x0, x1, y0, y1 = scn.area.x_min_m, scn.area.x_max_m, scn.area.y_min_m, scn.area.y_max_m
     cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
-    assert radiomap.rain_rate_at(scn, np.array([cx]), np.array([cy]))[0] == pytest.approx(15.0)
+    assert rain_rate_at(scn, np.array([cx]), np.array([cy]))[0] == pytest.approx(15.0)

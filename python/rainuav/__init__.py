@@ -1,11 +1,25 @@
 """rainuav: flight paths for cellular-connected drones in rain.
 
-Layers, bottom up: :mod:`rainuav.medium` (what rain does to a radio wave) and, in later
-releases, propagation, radio maps and trajectory design. Physics conventions:
-``shared/PHYSICS.md`` (time dependence ``exp(+j w t)``, lossy media have ``Im eps <= 0``).
+Layers, bottom up (each imports only the ones below it):
+
+- :mod:`rainuav.medium`: what rain does to a radio wave (effective permittivity, specific
+  attenuation, ITU-R P.838).
+- :mod:`rainuav.pwe`: the 3-D split-step parabolic-equation march.
+- :mod:`rainuav.radio`: scenarios, presets and radio maps (received power per cell, serving
+  cell, SIR, SINR).
+- :mod:`rainuav.nav`: the navigation task on any map, the Gymnasium environment
+  ``rainuav/UAVNav-v0``, the exact planner and the shield (no torch).
+- :mod:`rainuav.rl`: the dueling double DQN and its training loop (torch).
+
+Entry points: ``python -m rainuav.train``, ``rainuav.evaluate``, ``rainuav.radiomap``,
+``rainuav.validate``. Physics conventions: ``shared/PHYSICS.md`` (time dependence
+``exp(+j w t)``, lossy media have ``Im eps <= 0``).
 """
 
 from __future__ import annotations
+
+import importlib
+from typing import Any
 
 import gymnasium as _gym
 
@@ -14,6 +28,24 @@ from rainuav._core import __version__
 from rainuav.errors import InvalidInputError, RainuavError
 
 if "rainuav/UAVNav-v0" not in _gym.registry:
-    _gym.register(id="rainuav/UAVNav-v0", entry_point="rainuav.env:UAVNavEnv")
+    _gym.register(id="rainuav/UAVNav-v0", entry_point="rainuav.nav.env:UAVNavEnv")
 
-__all__ = ["InvalidInputError", "RainuavError", "__version__", "medium"]
+__all__ = [
+    "InvalidInputError",
+    "RainuavError",
+    "__version__",
+    "medium",
+    "nav",
+    "pwe",
+    "radio",
+    "rl",
+]
+
+_LAZY = ("nav", "pwe", "radio", "rl")
+
+
+def __getattr__(name: str) -> Any:
+    """``rainuav.radio`` and the other layers load on first use (``rl`` imports torch)."""
+    if name in _LAZY:
+        return importlib.import_module(f"rainuav.{name}")
+    raise AttributeError(f"module 'rainuav' has no attribute {name!r}")

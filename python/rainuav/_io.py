@@ -1,4 +1,5 @@
-"""Writing files so that a reader never sees half of one: write beside, then rename."""
+"""Files: writing so that a reader never sees half of one (write beside, then rename), and
+reading TOML with one-line errors that name the file."""
 
 from __future__ import annotations
 
@@ -7,6 +8,11 @@ import os
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
+
+import tomllib
+
+from rainuav.errors import InvalidInputError
 
 
 @contextlib.contextmanager
@@ -30,3 +36,19 @@ def write_atomic(path: str | os.PathLike[str], write: Callable[[Path], None]) ->
     with atomic_path(path) as tmp:
         write(tmp)
     return Path(path)
+
+
+def read_toml(path: str | os.PathLike[str], what: str = "file") -> dict[str, Any]:
+    """The TOML table in ``path``; a missing, unreadable or malformed file raises
+    :class:`InvalidInputError` naming ``what``, the file and the problem in one line."""
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except FileNotFoundError as err:
+        raise InvalidInputError(f"{what} {p}: no such file") from err
+    except (OSError, UnicodeDecodeError) as err:
+        raise InvalidInputError(f"{what} {p}: cannot be read ({err})") from err
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise InvalidInputError(f"{what} {p}: not valid TOML ({err})") from err

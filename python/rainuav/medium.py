@@ -26,14 +26,14 @@ import numpy as np
 import numpy.typing as npt
 
 from rainuav import _core
-from rainuav._core import DropSizeDistribution
-from rainuav._validation import (
+from rainuav._checks import (
     FloatArray,
     as_real_array,
     as_real_scalar,
     broadcast_flat,
     check_choice,
 )
+from rainuav._core import DropSizeDistribution
 
 __all__ = [
     "DropSizeDistribution",

@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from rainuav import _core
-from rainuav._validation import as_real_scalar, check_choice
+from rainuav._checks import as_real_scalar, check_choice
 from rainuav.errors import InvalidInputError
 
 __all__ = ["Marched", "gaussian_beam", "march", "pattern_source"]

@@ -1,7 +1,9 @@
-"""Argument checking and broadcasting shared by the public modules."""
+"""Argument checking and broadcasting shared by the public modules: every check raises
+:class:`rainuav.InvalidInputError` with one line naming the argument and the allowed range."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -49,3 +51,17 @@ def check_choice(name: str, value: Any, allowed: tuple[str, ...]) -> str:
         choices = ", ".join(repr(a) for a in allowed)
         raise InvalidInputError(f"{name} must be one of {choices} (got {value!r})")
     return value
+
+
+def check_number(where: str, value: Any, lo: float, hi: float, unit: str = "") -> float:
+    """``value`` as a float if it is a finite number within ``lo..hi``, else an error naming
+    ``where`` and the range."""
+    if isinstance(value, bool):
+        raise InvalidInputError(f"{where} must be a number (got {value!r})")
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as err:
+        raise InvalidInputError(f"{where} must be a number (got {value!r})") from err
+    if not (math.isfinite(v) and lo <= v <= hi):
+        raise InvalidInputError(f"{where} must be within {lo:g}..{hi:g}{unit} (got {value!r})")
+    return v

@@ -1,0 +1,33 @@
+"""Navigation: the task (:mod:`~rainuav.nav.task`), the signal field
+(:mod:`~rainuav.nav.field`), the Gymnasium environment (:mod:`~rainuav.nav.env`,
+``rainuav/UAVNav-v0``), the batched stepper (:mod:`~rainuav.nav.batch`), the exact planner
+and baselines (:mod:`~rainuav.nav.planner`) and the shield (:mod:`~rainuav.nav.shield`).
+
+Works on any (H, W) map in dB; knows nothing of how maps are built (:mod:`rainuav.radio`) and
+does not import torch.
+"""
+
+from __future__ import annotations
+
+from rainuav.nav.batch import BatchStepper
+from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.field import SirField
+from rainuav.nav.planner import Plan, optimal, optimal_many, straight_line
+from rainuav.nav.shield import shield_moves
+from rainuav.nav.task import MOVES, REWARDS, LoiteringWarning, NavConfig, base_reward
+
+__all__ = [
+    "MOVES",
+    "REWARDS",
+    "BatchStepper",
+    "LoiteringWarning",
+    "NavConfig",
+    "Plan",
+    "SirField",
+    "UAVNavEnv",
+    "base_reward",
+    "optimal",
+    "optimal_many",
+    "shield_moves",
+    "straight_line",
+]

@@ -1,0 +1,90 @@
+"""Many UAVs stepped at once with exactly the scalar environment's transitions."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rainuav.nav.field import SirField
+from rainuav.nav.task import MOVES, NavConfig, base_reward
+
+__all__ = ["BatchStepper"]
+
+
+class BatchStepper:
+    """Steps many UAVs at once with exactly the scalar environment's transitions.
+
+    State per UAV: ``start`` (N, 2) float, ``offset`` (N, 2) int (steps taken in x and y) and
+    ``t`` (N,) steps so far; position = start + step_m * offset.
+    """
+
+    def __init__(self, field: SirField, cfg: NavConfig):
+        self.field = field
+        self.cfg = cfg
+        self.goal = np.asarray(cfg.goal_m, dtype=np.float64)
+
+    def step(
+        self, start: np.ndarray, offset: np.ndarray, t: np.ndarray, action: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        """One move for every UAV. Returns new ``offset``, ``t``, ``position`` (after clamping),
+        ``reward``, ``terminated``, ``truncated``, ``sir_db``, ``out`` (left the area) and
+        ``arrived`` (reached the goal)."""
+        cfg = self.cfg
+        x0, x1, y0, y1 = self.field.extent
+        new_off = offset + MOVES[action]
+        q = start + cfg.step_m * new_off
+        out = (q[:, 0] < x0) | (q[:, 0] > x1) | (q[:, 1] < y0) | (q[:, 1] > y1)
+        qc = np.stack([np.clip(q[:, 0], x0, x1), np.clip(q[:, 1], y0, y1)], axis=1)
+        sir = self.field(qc[:, 0], qc[:, 1])
+        b = base_reward(sir, cfg)
+        arrived = ~out & (np.hypot(q[:, 0] - self.goal[0], q[:, 1] - self.goal[1]) <= cfg.tol_m)
+        reward = (
+            b
+            - np.where(out, cfg.out_of_bounds_penalty, 0.0)
+            + np.where(arrived, cfg.goal_reward, 0.0)
+        )
+        terminated = out | arrived
+        t_new = t + 1
+        truncated = ~terminated & (t_new >= cfg.max_steps)
+        return {
+            "offset": new_off,
+            "t": t_new,
+            "position": qc,
+            "reward": reward,
+            "terminated": terminated,
+            "truncated": truncated,
+            "sir_db": sir,
+            "out": out,
+            "arrived": arrived,
+        }
+
+    def moves_to_goal(self, position: np.ndarray) -> np.ndarray:
+        """Fewest moves from each (N, 2) position to a point of its lattice within ``tol_m``
+        of the destination and inside the area (a monotone lattice path between two points of
+        the rectangle stays in it); ``inf`` where the lattice has no such point."""
+        cfg = self.cfg
+        x0, x1, y0, y1 = self.field.extent
+        s = cfg.step_m
+        p = np.asarray(position, dtype=np.float64).reshape(-1, 1, 2)
+        m = int(np.ceil(cfg.tol_m / s)) + 1
+        grid = np.stack(np.meshgrid(np.arange(-m, m + 1), np.arange(-m, m + 1)), -1).reshape(-1, 2)
+        # Every lattice offset within m of the one nearest the goal: (N, (2m+1)^2, 2).
+        k = np.round((self.goal - p) / s) + grid
+        q = p + s * k
+        ok = (
+            (np.hypot(q[..., 0] - self.goal[0], q[..., 1] - self.goal[1]) <= cfg.tol_m)
+            & (q[..., 0] >= x0) & (q[..., 0] <= x1) & (q[..., 1] >= y0) & (q[..., 1] <= y1)
+        )  # fmt: skip
+        return np.where(ok, np.abs(k).sum(axis=-1), np.inf).min(axis=-1)
+
+    def safe_actions(self, position: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """(N, 4) bool: the moves after which the UAV is still in the area and can still
+        arrive within ``max_steps`` (a shield: Alshiekh et al., AAAI 2018). Where no move
+        qualifies (a start too far to arrive in time) every move is allowed."""
+        p = np.asarray(position, dtype=np.float64).reshape(-1, 1, 2)
+        left = self.cfg.max_steps - np.asarray(t).reshape(-1, 1) - 1  # moves left after this one
+        x0, x1, y0, y1 = self.field.extent
+        q = p + self.cfg.step_m * MOVES  # (N, 4, 2): the position after each move
+        inside = (q[..., 0] >= x0) & (q[..., 0] <= x1) & (q[..., 1] >= y0) & (q[..., 1] <= y1)
+        ok = inside & (self.moves_to_goal(q).reshape(-1, 4) <= left)
+        ok[~ok.any(axis=1)] = True
+        return ok

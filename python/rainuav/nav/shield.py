@@ -1,0 +1,56 @@
+"""A shield for greedy flights (Alshiekh et al., AAAI 2018): which moves a flight may take.
+
+Rule 1 (:meth:`rainuav.nav.batch.BatchStepper.safe_actions`): only moves after which the UAV
+is still in the area and can still arrive within ``max_steps``. Rule 2: among those, moves
+onto a position the flight has not visited, where one exists. The shield is a safety layer
+around a policy, not part of it: metrics report the policy alone first (see
+``docs/learner.md``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.task import MOVES
+
+__all__ = ["shield_moves", "unvisited_moves"]
+
+
+def unvisited_moves(offset: np.ndarray, visited: Sequence[set[tuple[int, int]]]) -> np.ndarray:
+    """(N, 4) bool: the moves from lattice ``offset`` (N, 2) to an offset not in ``visited``,
+    each flight's set of visited offsets."""
+    steps = MOVES.tolist()
+    return np.array(
+        [
+            [(ox + dx, oy + dy) not in seen for dx, dy in steps]
+            for (ox, oy), seen in zip(offset.tolist(), visited, strict=True)
+        ],
+        dtype=bool,
+    ).reshape(-1, 4)
+
+
+def shield_moves(
+    env: UAVNavEnv,
+    pos: np.ndarray,
+    t: np.ndarray,
+    offset: np.ndarray,
+    visited: Sequence[set[tuple[int, int]]],
+) -> np.ndarray:
+    """(N, 4) bool: the moves the shield allows. First the safe moves (still in the area and
+    able to arrive within ``max_steps``, :meth:`rainuav.nav.batch.BatchStepper.safe_actions`); among
+    them, the moves to a position the flight has not visited (``visited``: each flight's
+    lattice offsets so far), where there is one. The second rule applies where every move
+    costs at least 1 (``"shortfall"`` and ``"outage"`` with ``mu >= 0``, ``"linear"`` with
+    ``mu <= 0``): cutting a loop out of a path then gains at least its length, so an optimal
+    flight never revisits a position and the rule only removes moves no optimal flight makes.
+    Elsewhere (the paper's ``"linear"`` with ``mu > 0``: loitering can pay) only the first
+    rule applies."""
+    allowed = env.stepper.safe_actions(pos, t)
+    loops_can_pay = env.cfg.mu > 0 if env.cfg.reward == "linear" else env.cfg.mu < 0
+    if loops_can_pay:
+        return allowed
+    fresh = allowed & unvisited_moves(offset, visited)
+    return np.where(fresh.any(axis=1, keepdims=True), fresh, allowed)

@@ -1,0 +1,111 @@
+"""The navigation task: its configuration, moves and rewards (PHYSICS.md section 6).
+
+- Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y, each one ``step_m`` long.
+- A move ``q' = q + step_m e_a`` earns ``b(q')``: ``"shortfall"`` (default)
+  ``-1 - mu max(0, sir_min_db - SIR)``, ``"outage"`` ``-1 - mu [SIR < sir_min_db]`` or
+  ``"linear"`` ``-1 + mu 10^(SIR/10)`` (the paper's literal form: it pays to loiter near a base
+  station). Leaving the area (a coordinate beyond the bounds): ``b(clamp(q')) -
+  out_of_bounds_penalty``, terminated, the UAV stays at ``clamp(q')``. Reaching the goal
+  (``|q' - goal| <= tol_m``): ``b(q') + goal_reward``, terminated. Truncated after
+  ``max_steps`` steps (unless terminated on that step).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rainuav.errors import InvalidInputError
+
+__all__ = [
+    "MOVES",
+    "REWARDS",
+    "LoiteringWarning",
+    "NavConfig",
+    "base_reward",
+    "check_config",
+    "make_config",
+]
+
+REWARDS = ("shortfall", "outage", "linear")
+#: Unit steps of the four actions: +x, +y, -x, -y.
+MOVES = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]], dtype=np.int64)
+
+
+class LoiteringWarning(UserWarning):
+    """The 'linear' reward pays the UAV to hover near a base station."""
+
+
+@dataclass
+class NavConfig:
+    """The navigation task (defaults: the paper's Table I and PHYSICS.md section 6)."""
+
+    goal_m: tuple[float, float] = (1400.0, 1600.0)
+    """Destination, m."""
+    step_m: float = 10.0
+    """Length of one move, m."""
+    tol_m: float = 10.0
+    """Arrival tolerance D_tol, m."""
+    max_steps: int = 300
+    """Episode length limit."""
+    mu: float = 10.0 / 43.0
+    """Weight of the SIR term."""
+    reward: str = "shortfall"
+    """'shortfall', 'outage' or 'linear'."""
+    sir_min_db: float = 10.0
+    """Minimum SIR, dB."""
+    goal_reward: float = 2000.0
+    """R_des, paid on arrival."""
+    out_of_bounds_penalty: float = 10000.0
+    """P_ob, charged on leaving the area."""
+    start_m: tuple[float, float] | None = None
+    """Fixed start (None: uniform in the area, farther than tol_m from the goal)."""
+
+
+def check_config(cfg: NavConfig, extent: tuple[float, float, float, float]) -> None:
+    """Raises InvalidInputError naming the first field of ``cfg`` out of range for a map over
+    ``extent``."""
+    x0, x1, y0, y1 = extent
+    g = np.asarray(cfg.goal_m, dtype=float)
+    if g.shape != (2,) or not np.all(np.isfinite(g)):
+        raise InvalidInputError(f"goal_m must be two finite numbers (got {cfg.goal_m!r})")
+    if not (x0 <= g[0] <= x1 and y0 <= g[1] <= y1):
+        raise InvalidInputError(f"goal_m must lie inside the area {extent} (got {cfg.goal_m!r})")
+    for name in ("step_m", "tol_m"):
+        v = getattr(cfg, name)
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise InvalidInputError(f"{name} must be finite and > 0 (got {v!r})")
+    if not (isinstance(cfg.max_steps, (int, np.integer)) and cfg.max_steps >= 1):
+        raise InvalidInputError(f"max_steps must be an integer >= 1 (got {cfg.max_steps!r})")
+    for name in ("mu", "sir_min_db", "goal_reward", "out_of_bounds_penalty"):
+        v = getattr(cfg, name)
+        if not (isinstance(v, (int, float)) and math.isfinite(v)):
+            raise InvalidInputError(f"{name} must be a finite number (got {v!r})")
+    if cfg.reward not in REWARDS:
+        raise InvalidInputError(f"reward must be one of {REWARDS} (got {cfg.reward!r})")
+    if cfg.start_m is not None:
+        s = np.asarray(cfg.start_m, dtype=float)
+        if s.shape != (2,) or not (x0 <= s[0] <= x1 and y0 <= s[1] <= y1):
+            raise InvalidInputError(f"start_m must lie inside the area (got {cfg.start_m!r})")
+
+
+def base_reward(sir_db: Any, cfg: NavConfig) -> Any:
+    """b(q') from the SIR at the new position."""
+    if cfg.reward == "shortfall":
+        return -1.0 - cfg.mu * np.maximum(0.0, cfg.sir_min_db - sir_db)
+    if cfg.reward == "outage":
+        return -1.0 - cfg.mu * (sir_db < cfg.sir_min_db)
+    return -1.0 + cfg.mu * 10.0 ** (sir_db / 10.0)
+
+
+def make_config(**kw: Any) -> NavConfig:
+    """A NavConfig from keywords (unknown names are errors)."""
+    names = {f.name for f in dataclasses.fields(NavConfig)}
+    bad = set(kw) - names
+    if bad:
+        raise InvalidInputError(f"unknown NavConfig field(s) {sorted(bad)}")
+    return NavConfig(**kw)

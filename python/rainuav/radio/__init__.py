@@ -1,0 +1,46 @@
+"""Radio maps: a scenario (network, weather, airspace) in, every cell's received power, the
+serving cell, SIR and SINR at the flight altitude out.
+
+Modules, bottom up: :mod:`~rainuav.radio.scenario` (the dataclasses and their TOML form),
+:mod:`~rainuav.radio.presets` (the paper's and our scenarios), :mod:`~rainuav.radio.grid`
+(one cell's PE grid), :mod:`~rainuav.radio.pe_engine` (the march per cell),
+:mod:`~rainuav.radio.sinr`, :mod:`~rainuav.radio.radiomap` (the map and its builder),
+:mod:`~rainuav.radio.cache` and :mod:`~rainuav.radio.plot`. Depends on :mod:`rainuav.medium`
+and :mod:`rainuav.pwe` only; nothing here knows about navigation or learning.
+"""
+
+from __future__ import annotations
+
+from rainuav.radio import presets
+from rainuav.radio.cache import cache_dir, clear_cache
+from rainuav.radio.radiomap import RadioMap, build_radio_map
+from rainuav.radio.scenario import (
+    Area,
+    Building,
+    Cell,
+    Medium,
+    Pattern,
+    PESettings,
+    RainCell,
+    Scenario,
+    Site,
+)
+from rainuav.radio.sinr import sir_from_power
+
+__all__ = [
+    "Area",
+    "Building",
+    "Cell",
+    "Medium",
+    "PESettings",
+    "Pattern",
+    "RadioMap",
+    "RainCell",
+    "Scenario",
+    "Site",
+    "build_radio_map",
+    "cache_dir",
+    "clear_cache",
+    "presets",
+    "sir_from_power",
+]

@@ -1,0 +1,194 @@
+"""Radio maps: received power per cell, the serving cell, SIR and SINR over the flight altitude.
+
+:func:`build_radio_map` grids every cell (:mod:`rainuav.radio.grid`), marches it
+(:mod:`rainuav.radio.pe_engine`), resamples its power onto the map's pixel centres, and
+combines the cells (:mod:`rainuav.radio.sinr`). ``sir_db`` and ``sinr_db`` are clipped to
+[-40, 60] dB: -40 where no cell reaches (and the serving cell is -1), 60 where only one cell
+does. ``rss_dbm`` is -250 dBm where a cell does not reach. Cells are computed one after
+another, each march using every core. Maps are cached on disk (:mod:`rainuav.radio.cache`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import time
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from rainuav import _core
+from rainuav._io import write_atomic
+from rainuav.errors import InvalidInputError
+from rainuav.radio.cache import map_path
+from rainuav.radio.grid import march_grid
+from rainuav.radio.pe_engine import march_cell, resample
+from rainuav.radio.plot import plot_map
+from rainuav.radio.scenario import Scenario
+from rainuav.radio.sinr import RSS_FLOOR_DBM, sir_from_power
+
+__all__ = ["FORMAT_VERSION", "RadioMap", "build_radio_map"]
+
+FORMAT_VERSION = 1
+"""Version of the .npz layout written by :meth:`RadioMap.save`."""
+
+
+@dataclass
+class RadioMap:
+    """Received power per cell, serving cell, SIR and SINR at the flight altitude."""
+
+    x_m: npt.NDArray[np.float64]
+    """(W,) pixel-centre east coordinates."""
+    y_m: npt.NDArray[np.float64]
+    """(H,) pixel-centre north coordinates."""
+    extent_m: tuple[float, float, float, float]
+    """(x_min, x_max, y_min, y_max) of the area."""
+    altitude_m: float
+    """Flight altitude, m."""
+    rss_dbm: npt.NDArray[np.float64]
+    """(M, H, W) received power per cell, isotropic receiver, dBm (-250 where unreached)."""
+    serving_cell: npt.NDArray[np.int64]
+    """(H, W) the strongest cell (-1 where none reaches)."""
+    sir_db: npt.NDArray[np.float64]
+    """(H, W) SIR in dB, clipped to [-40, 60]."""
+    sinr_db: npt.NDArray[np.float64]
+    """(H, W) SINR in dB, clipped to [-40, 60]."""
+    scenario: Scenario
+    """The scenario the map was built from."""
+    cell_site: npt.NDArray[np.int64]
+    """(M,) the site index of each cell."""
+    build_seconds: float = 0.0
+    """Wall time of the build (0 when loaded from the cache)."""
+    timings: dict[str, float] = dataclasses.field(default_factory=dict)
+    """Seconds per phase of the build: source, screens, march, resample (empty if cached)."""
+
+    _ARRAYS = ("x_m", "y_m", "rss_dbm", "serving_cell", "sir_db", "sinr_db", "cell_site")
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Writes an .npz with the scenario as TOML metadata, atomically."""
+        meta = {
+            "format_version": np.int64(FORMAT_VERSION),
+            "extent_m": np.asarray(self.extent_m, dtype=np.float64),
+            "altitude_m": np.float64(self.altitude_m),
+            "scenario_toml": np.asarray(self.scenario.to_toml_string()),
+            "digest": np.asarray(self.scenario.digest()),
+        }
+        arrays = {k: getattr(self, k) for k in self._ARRAYS}
+
+        def write(tmp: Path) -> None:
+            with tmp.open("wb") as fh:
+                np.savez(fh, **arrays, **meta)
+
+        return write_atomic(path, write)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> RadioMap:
+        """Reads a map written by :meth:`save` (bit-exact round trip)."""
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+        except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+            raise InvalidInputError(f"{path}: not a readable radio map ({err})") from err
+        missing = {*cls._ARRAYS, "extent_m", "altitude_m", "scenario_toml"} - set(data)
+        if missing or int(data.get("format_version", -1)) != FORMAT_VERSION:
+            raise InvalidInputError(f"{path}: not a rainuav radio map (missing {missing})")
+        scn = Scenario.from_toml_string(str(data["scenario_toml"]))
+        ext = tuple(float(v) for v in data["extent_m"])
+        out = cls(
+            x_m=data["x_m"],
+            y_m=data["y_m"],
+            extent_m=ext,  # type: ignore[arg-type]
+            altitude_m=float(data["altitude_m"]),
+            rss_dbm=data["rss_dbm"],
+            serving_cell=data["serving_cell"],
+            sir_db=data["sir_db"],
+            sinr_db=data["sinr_db"],
+            scenario=scn,
+            cell_site=data["cell_site"],
+        )
+        h, w = scn.area.shape
+        if out.rss_dbm.shape[1:] != (h, w) or out.sir_db.shape != (h, w):
+            raise InvalidInputError(f"{path}: array shapes do not match its scenario")
+        return out
+
+    def plot(self, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
+        """Draws the map in dB (``kind`` 'sir', 'sinr' or 'rss'; ``cell`` selects one cell's
+        RSS, default the strongest) with the sites marked; returns the matplotlib Axes
+        (:func:`rainuav.radio.plot.plot_map`)."""
+        return plot_map(self, kind, cell, ax)
+
+    def coverage(self, sir_min_db: float = 10.0) -> float:
+        """Share of the area with SIR >= sir_min_db."""
+        return float(np.mean(self.sir_db >= sir_min_db))
+
+
+def _cached(scn: Scenario) -> RadioMap | None:
+    path = map_path(scn.digest())
+    if not path.exists():
+        return None
+    try:
+        rm = RadioMap.load(path)
+    except Exception:  # a corrupt or partial entry is rebuilt, never trusted
+        return None
+    if rm.scenario.digest() != scn.digest():
+        return None
+    return rm
+
+
+def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False) -> RadioMap:
+    """Builds (or loads from the cache) the radio map of ``scn``."""
+    if cache and (hit := _cached(scn)) is not None:
+        return hit
+    t0 = time.perf_counter()
+    a = scn.area
+    h, w = a.shape
+    x_m = a.x_min_m + (np.arange(w) + 0.5) * (a.x_max_m - a.x_min_m) / w
+    y_m = a.y_min_m + (np.arange(h) + 0.5) * (a.y_max_m - a.y_min_m) / h
+    jobs = [(i, site, cell) for i, site in enumerate(scn.sites) for cell in site.cells]
+    grids = [march_grid(scn, site, cell) for _, site, cell in jobs]
+    for grid in grids:
+        if grid is not None:
+            _core.check_memory(grid.bytes)
+    power = np.zeros((len(jobs), h, w))
+    timings: dict[str, float] = {}
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(jobs), desc="radio map", unit="cell")
+    try:
+        for m, ((_, site, cell), grid) in enumerate(zip(jobs, grids, strict=True)):
+            if grid is not None:
+                p = march_cell(scn, site, cell, grid, timings)
+                t_r = time.perf_counter()
+                power[m] = resample(scn, site, grid, p, x_m, y_m)
+                timings["resample"] = timings.get("resample", 0.0) + time.perf_counter() - t_r
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    serving, sir, sinr = sir_from_power(power, scn.noise_dbm)
+    with np.errstate(divide="ignore"):
+        rss = np.where(power > 0, 10 * np.log10(power), RSS_FLOOR_DBM)
+    rm = RadioMap(
+        x_m=x_m,
+        y_m=y_m,
+        extent_m=(a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m),
+        altitude_m=a.altitude_m,
+        rss_dbm=np.maximum(rss, RSS_FLOOR_DBM),
+        serving_cell=serving,
+        sir_db=sir,
+        sinr_db=sinr,
+        scenario=scn,
+        cell_site=np.array([i for i, _, _ in jobs], dtype=np.int64),
+        build_seconds=time.perf_counter() - t0,
+        timings=timings,
+    )
+    if cache:
+        rm.save(map_path(scn.digest()))
+    return rm

@@ -1,0 +1,375 @@
+"""Scenarios: the cellular network, the weather and the airspace, as dataclasses with a TOML
+form. Validated on construction; errors name the field and the allowed range.
+
+Conventions (documented choices the design paper leaves open):
+
+- Global frame: x east, y north, metres; heights above a flat ground at 0.
+- A cell's ``azimuth_deg`` is its boresight direction in the horizontal plane, counter-
+  clockwise from +x (0 = east, 90 = north); ``tilt_deg`` is its elevation (positive up).
+- Transmit power defaults to 46 dBm per cell (a 40 W macro sector); the receiver noise power to
+  -95 dBm (thermal noise over 10 MHz, -104 dBm, plus a 9 dB noise figure).
+- Rain fills every column from the ground up; it varies horizontally (rain cells, rate maps)
+  but not with height below the flight altitude.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import tomli_w
+import tomllib
+
+from rainuav._checks import check_choice as _choice
+from rainuav._checks import check_number as _num
+from rainuav._io import read_toml, write_atomic
+from rainuav.errors import InvalidInputError
+from rainuav.radio.weather import Medium, RainCell
+
+__all__ = [
+    "Area",
+    "Building",
+    "Cell",
+    "Medium",
+    "PESettings",
+    "Pattern",
+    "RainCell",
+    "Scenario",
+    "Site",
+]
+
+
+@dataclass
+class Area:
+    """The airspace: a rectangle at one flight altitude, mapped at one resolution."""
+
+    x_min_m: float = 0.0
+    """West edge, m."""
+    x_max_m: float = 2000.0
+    """East edge, m."""
+    y_min_m: float = 0.0
+    """South edge, m."""
+    y_max_m: float = 2000.0
+    """North edge, m."""
+    altitude_m: float = 100.0
+    """Flight altitude above the ground, m (0.5-3000)."""
+    resolution_m: float = 10.0
+    """Map pixel size, m (0.5-500)."""
+
+    def check(self, where: str = "area") -> None:
+        for k in ("x_min_m", "x_max_m", "y_min_m", "y_max_m"):
+            _num(f"{where}.{k}", getattr(self, k), -1e6, 1e6, " m")
+        if not self.x_max_m > self.x_min_m:
+            raise InvalidInputError(
+                f"{where}.x_max_m must be > x_min_m ({self.x_max_m} <= {self.x_min_m})"
+            )
+        if not self.y_max_m > self.y_min_m:
+            raise InvalidInputError(
+                f"{where}.y_max_m must be > y_min_m ({self.y_max_m} <= {self.y_min_m})"
+            )
+        _num(f"{where}.altitude_m", self.altitude_m, 0.5, 3000.0, " m above the ground")
+        _num(f"{where}.resolution_m", self.resolution_m, 0.5, 500.0, " m")
+        pixels = ((self.x_max_m - self.x_min_m) / self.resolution_m) * (
+            (self.y_max_m - self.y_min_m) / self.resolution_m
+        )
+        if pixels > 4e7:
+            raise InvalidInputError(
+                f"{where}: the map would have {pixels:.3g} pixels "
+                "(at most 4e7); use a coarser resolution_m"
+            )
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(H, W) pixels of the map."""
+        w = max(1, round((self.x_max_m - self.x_min_m) / self.resolution_m))
+        h = max(1, round((self.y_max_m - self.y_min_m) / self.resolution_m))
+        return h, w
+
+
+@dataclass
+class Pattern:
+    """A tabulated antenna power pattern relative to boresight (dB)."""
+
+    azimuth_deg: list[float]
+    """Cross-range angles, increasing."""
+    elevation_deg: list[float]
+    """Elevation angles relative to the tilt, increasing."""
+    gain_db: list[list[float]]
+    """gain_db[i][j] at (azimuth_deg[i], elevation_deg[j]), 0 at boresight."""
+
+
+@dataclass
+class Cell:
+    """One sector of a site: a beam."""
+
+    azimuth_deg: float = 0.0
+    """Boresight direction, degrees counter-clockwise from +x (east)."""
+    tilt_deg: float = 5.0
+    """Boresight elevation, degrees (positive up); the paper's 5."""
+    beamwidth_deg: float = 4.333
+    """Horizontal (cross-range) half-power beamwidth, degrees; the paper's 4.333."""
+    beamwidth_v_deg: float | None = None
+    """Vertical half-power beamwidth, degrees (default: beamwidth_deg)."""
+    tx_power_dbm: float = 46.0
+    """Transmit power, dBm."""
+    pattern: Pattern | None = None
+    """Optional tabulated pattern; replaces the Gaussian beam."""
+
+    def check(self, where: str) -> None:
+        _num(f"{where}.azimuth_deg", self.azimuth_deg, -360.0, 360.0, " degrees")
+        _num(f"{where}.tilt_deg", self.tilt_deg, -45.0, 45.0, " degrees")
+        _num(f"{where}.beamwidth_deg", self.beamwidth_deg, 0.5, 60.0, " degrees")
+        if self.beamwidth_v_deg is not None:
+            _num(f"{where}.beamwidth_v_deg", self.beamwidth_v_deg, 0.5, 60.0, " degrees")
+        _num(f"{where}.tx_power_dbm", self.tx_power_dbm, -30.0, 80.0, " dBm")
+        if self.pattern is not None:
+            p = self.pattern
+            if len(p.gain_db) != len(p.azimuth_deg) or any(
+                len(row) != len(p.elevation_deg) for row in p.gain_db
+            ):
+                raise InvalidInputError(
+                    f"{where}.pattern.gain_db must have shape "
+                    "(len(azimuth_deg), len(elevation_deg))"
+                )
+
+    @property
+    def beamwidths_deg(self) -> tuple[float, float]:
+        """(horizontal, vertical) half-power beamwidths."""
+        v = self.beamwidth_deg if self.beamwidth_v_deg is None else self.beamwidth_v_deg
+        return self.beamwidth_deg, v
+
+
+@dataclass
+class Site:
+    """A base-station site: a mast with one or more cells."""
+
+    x_m: float
+    """East coordinate, m."""
+    y_m: float
+    """North coordinate, m."""
+    height_m: float = 25.0
+    """Antenna height above the ground, m (the paper's 25)."""
+    cells: list[Cell] = field(default_factory=lambda: [Cell()])
+    """The site's cells (sectors)."""
+
+
+@dataclass
+class Building:
+    """A box-shaped building standing on the ground."""
+
+    x0_m: float
+    """West face, m."""
+    x1_m: float
+    """East face, m."""
+    y0_m: float
+    """South face, m."""
+    y1_m: float
+    """North face, m."""
+    height_m: float
+    """Roof height, m."""
+
+
+@dataclass
+class PESettings:
+    """How each cell's parabolic-equation march is gridded (PHYSICS.md section 4)."""
+
+    dynamic_range_db: float = 40.0
+    """The grid resolves every direction where the beam is within this many dB of its peak."""
+    absorber: float = 0.15
+    """Fraction of each open edge of the domain given to the absorbing taper."""
+    dz_m: float | None = None
+    """Range step, m (default: min(resolution_m, 10))."""
+    top_margin_m: float | None = None
+    """Height above max(flight altitude, site) kept inside the domain (default:
+    max(50, altitude / 2))."""
+    propagator: str = "wide"
+    """'wide' or 'narrow'."""
+
+    def check(self, where: str = "pe") -> None:
+        _num(f"{where}.dynamic_range_db", self.dynamic_range_db, 10.0, 120.0, " dB")
+        _num(f"{where}.absorber", self.absorber, 0.05, 0.4)
+        if self.dz_m is not None:
+            _num(f"{where}.dz_m", self.dz_m, 0.01, 1000.0, " m")
+        if self.top_margin_m is not None:
+            _num(f"{where}.top_margin_m", self.top_margin_m, 1.0, 1e4, " m")
+        _choice(f"{where}.propagator", self.propagator, ("wide", "narrow"))
+
+
+@dataclass
+class Scenario:
+    """A network, the weather and the airspace. ``Scenario.from_toml(path)`` / ``.to_toml``."""
+
+    name: str = "custom"
+    """A label."""
+    freq_hz: float = 4.9e9
+    """Carrier frequency, Hz (1e9-1e11)."""
+    polarization: str = "h"
+    """'h' or 'v': sets the ground's image sign and the rain's polarisation."""
+    noise_dbm: float = -95.0
+    """Receiver noise power for SINR, dBm."""
+    area: Area = field(default_factory=Area)
+    """The airspace."""
+    sites: list[Site] = field(default_factory=list)
+    """Base-station sites."""
+    medium: Medium = field(default_factory=lambda: Medium(kind="clear"))
+    """The weather."""
+    ground: str = "pec"
+    """'pec' (flat perfectly conducting ground) or 'none' (free space)."""
+    buildings: list[Building] = field(default_factory=list)
+    """Buildings (boxes)."""
+    height_map_m: list[list[float]] | None = None
+    """Optional obstacle heights (m) over the area, rows south to north, columns west to east;
+    each value covers its pixel of the area (nearest sample). Combined with ``buildings``."""
+    pe: PESettings = field(default_factory=PESettings)
+    """Gridding of the PE marches."""
+
+    def __post_init__(self) -> None:
+        self.check()
+
+    # -- validation -------------------------------------------------------------------------
+    def check(self) -> None:
+        """Checks every field; raises InvalidInputError naming the first bad one."""
+        _num("freq_hz", self.freq_hz, 1e9, 1e11, " Hz")
+        _choice("polarization", self.polarization, ("h", "v"))
+        _num("noise_dbm", self.noise_dbm, -200.0, 50.0, " dBm")
+        _choice("ground", self.ground, ("pec", "none"))
+        self.area.check()
+        self.medium.check()
+        self.pe.check()
+        a = self.area
+        if not self.sites:
+            raise InvalidInputError("sites must hold at least one site")
+        seen: set[tuple[float, float]] = set()
+        for i, s in enumerate(self.sites):
+            w = f"sites[{i}]"
+            _num(f"{w}.x_m", s.x_m, a.x_min_m, a.x_max_m, " m (inside the area)")
+            _num(f"{w}.y_m", s.y_m, a.y_min_m, a.y_max_m, " m (inside the area)")
+            _num(f"{w}.height_m", s.height_m, 1.0, 1000.0, " m")
+            if (s.x_m, s.y_m) in seen:
+                raise InvalidInputError(f"{w} overlaps another site at ({s.x_m}, {s.y_m})")
+            seen.add((s.x_m, s.y_m))
+            if not s.cells:
+                raise InvalidInputError(f"{w}.cells must hold at least one cell (a beam)")
+            beams: set[tuple[float, float]] = set()
+            for j, c in enumerate(s.cells):
+                c.check(f"{w}.cells[{j}]")
+                key = (c.azimuth_deg % 360.0, c.tilt_deg)
+                if key in beams:
+                    raise InvalidInputError(
+                        f"{w}.cells[{j}] overlaps another cell of the site (same azimuth and tilt)"
+                    )
+                beams.add(key)
+        if self.height_map_m is not None:
+            hm = np.asarray(self.height_map_m, dtype=float)
+            if hm.ndim != 2 or min(hm.shape) < 1:
+                raise InvalidInputError(f"height_map_m must be a 2-D table (got shape {hm.shape})")
+            if not (np.all(np.isfinite(hm)) and hm.min() >= 0 and hm.max() <= 1000):
+                raise InvalidInputError("height_map_m must be within 0..1000 m")
+        for i, b in enumerate(self.buildings):
+            w = f"buildings[{i}]"
+            for k in ("x0_m", "x1_m", "y0_m", "y1_m"):
+                _num(f"{w}.{k}", getattr(b, k), -1e6, 1e6, " m")
+            if not (b.x1_m > b.x0_m and b.y1_m > b.y0_m):
+                raise InvalidInputError(f"{w} must have x1_m > x0_m and y1_m > y0_m")
+            _num(f"{w}.height_m", b.height_m, 0.1, 1000.0, " m")
+            for j, s in enumerate(self.sites):
+                if (
+                    b.x0_m <= s.x_m <= b.x1_m
+                    and b.y0_m <= s.y_m <= b.y1_m
+                    and (b.height_m >= s.height_m)
+                ):
+                    raise InvalidInputError(
+                        f"sites[{j}] is inside {w}, which is as tall as its antenna"
+                    )
+
+    # -- identity ---------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """A plain dict (TOML/JSON-ready; None fields dropped)."""
+
+        def clean(v: Any) -> Any:
+            if isinstance(v, dict):
+                return {k: clean(x) for k, x in v.items() if x is not None}
+            if isinstance(v, list):
+                return [clean(x) for x in v]
+            return v
+
+        return clean(dataclasses.asdict(self))
+
+    def digest(self) -> str:
+        """A hash of every field (two scenarios with the same digest describe the same
+        network, weather and airspace). The radio-map cache keys on it together with the
+        engine's fingerprint (:func:`rainuav.radio.cache.engine_fingerprint`)."""
+        text = json.dumps(self.to_dict(), sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+    # -- TOML -------------------------------------------------------------------------------
+    def to_toml(self, path: str | Path) -> Path:
+        """Writes the scenario as TOML (atomically)."""
+        text = tomli_w.dumps(self.to_dict())
+        return write_atomic(path, lambda tmp: tmp.write_text(text))
+
+    def to_toml_string(self) -> str:
+        return tomli_w.dumps(self.to_dict())
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Scenario:
+        """Builds and validates a scenario from a plain dict (unknown keys are errors)."""
+        return _build(cls, d, "scenario")
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Scenario:
+        """Reads and validates a TOML scenario (a missing, unreadable or malformed file is an
+        InvalidInputError naming it)."""
+        return cls.from_dict(read_toml(path, "scenario file"))
+
+    @classmethod
+    def from_toml_string(cls, text: str) -> Scenario:
+        return cls.from_dict(tomllib.loads(text))
+
+    def replace(self, **changes: Any) -> Scenario:
+        """A copy with fields changed (validated)."""
+        return dataclasses.replace(self, **changes)
+
+
+_NESTED: dict[tuple[type, str], type] = {
+    (Scenario, "area"): Area,
+    (Scenario, "medium"): Medium,
+    (Scenario, "pe"): PESettings,
+    (Cell, "pattern"): Pattern,
+}
+_LISTS: dict[tuple[type, str], type] = {
+    (Scenario, "sites"): Site,
+    (Scenario, "buildings"): Building,
+    (Site, "cells"): Cell,
+    (Medium, "cells"): RainCell,
+}
+
+
+def _build(cls: type, d: Any, where: str) -> Any:
+    if not isinstance(d, dict):
+        raise InvalidInputError(f"{where} must be a table (got {type(d).__name__})")
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = set(d) - names
+    if unknown:
+        raise InvalidInputError(
+            f"{where}: unknown field(s) {sorted(unknown)}; known: {sorted(names)}"
+        )
+    kwargs: dict[str, Any] = {}
+    for k, v in d.items():
+        if (cls, k) in _NESTED and v is not None:
+            kwargs[k] = _build(_NESTED[(cls, k)], v, f"{where}.{k}" if where != "scenario" else k)
+        elif (cls, k) in _LISTS:
+            if not isinstance(v, list):
+                raise InvalidInputError(f"{k} must be a list")
+            kwargs[k] = [_build(_LISTS[(cls, k)], x, f"{k}[{i}]") for i, x in enumerate(v)]
+        else:
+            kwargs[k] = v
+    try:
+        return cls(**kwargs)
+    except TypeError as err:
+        raise InvalidInputError(f"{where}: {err}") from err

@@ -1,0 +1,121 @@
+"""Flying the agent: the UAVs in flight during training (:class:`Lanes`) and batched greedy
+flights from given starts (:func:`greedy_rollouts`)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.shield import shield_moves
+from rainuav.rl.dqn import Agent, NStepWindow, best_action
+
+__all__ = ["Lanes", "greedy_rollouts"]
+
+
+@dataclass
+class Lanes:
+    """The UAVs in flight: each lane runs one episode at a time (its own start, offset from
+    the start in steps, step count, episode index, return so far and N-step window)."""
+
+    start: np.ndarray
+    offset: np.ndarray
+    t: np.ndarray
+    episode: np.ndarray
+    ret: np.ndarray
+    active: np.ndarray
+    windows: list[NStepWindow]
+
+    @classmethod
+    def empty(cls, k: int, n_step: int, gamma: float) -> Lanes:
+        return cls(
+            start=np.zeros((k, 2)),
+            offset=np.zeros((k, 2), dtype=np.int64),
+            t=np.zeros(k, dtype=np.int64),
+            episode=np.zeros(k, dtype=np.int64),
+            ret=np.zeros(k),
+            active=np.zeros(k, dtype=bool),
+            windows=[NStepWindow(n_step, gamma) for _ in range(k)],
+        )
+
+    def state_dict(self) -> dict[str, Any]:
+        """Plain arrays and lists (a checkpoint must not pickle classes of ``__main__``)."""
+        d: dict[str, Any] = {
+            f.name: getattr(self, f.name).copy()
+            for f in dataclasses.fields(self)
+            if f.name != "windows"
+        }
+        d["windows"] = [list(w.buf) for w in self.windows]
+        return d
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        for name, value in d.items():
+            if name == "windows":
+                for w, buf in zip(self.windows, value, strict=True):
+                    w.buf.clear()
+                    w.buf.extend(buf)
+            else:
+                setattr(self, name, value)
+
+    def launch(self, k: int, start: np.ndarray, episode: int) -> None:
+        self.start[k] = start
+        self.offset[k] = 0
+        self.t[k] = 0
+        self.episode[k] = episode
+        self.ret[k] = 0.0
+        self.active[k] = True
+
+
+def greedy_rollouts(
+    agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool | None = None
+) -> list[dict[str, Any]]:
+    """Greedy episodes from every start at once (the batched stepper gives exactly the scalar
+    environment's transitions), one dict per start: ``return``, ``steps``, ``path`` (T+1, 2),
+    ``sir`` (T,), ``reached`` and ``overridden`` (moves where the shield replaced the
+    network's choice). ``shield``: keep to the moves :func:`shield_moves` allows (default:
+    ``agent.cfg.shield``)."""
+    shield = agent.cfg.shield if shield is None else shield
+    starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
+    n = len(starts)
+    off = np.zeros((n, 2), dtype=np.int64)
+    visited: list[set[tuple[int, int]]] = [{(0, 0)} for _ in range(n)]  # lattice offsets
+    t = np.zeros(n, dtype=np.int64)
+    live = np.ones(n, dtype=bool)
+    ret = np.zeros(n)
+    reached = np.zeros(n, dtype=bool)
+    overridden = np.zeros(n, dtype=np.int64)
+    paths: list[list[np.ndarray]] = [[s.copy()] for s in starts]
+    sirs: list[list[float]] = [[] for _ in range(n)]
+    while live.any():
+        idx = np.flatnonzero(live)
+        pos = starts[idx] + env.cfg.step_m * off[idx]
+        q = agent.q_values(agent.observe(env.observe(pos), t[idx]))
+        a = best_action(q)
+        if shield:
+            allowed = shield_moves(env, pos, t[idx], off[idx], [visited[k] for k in idx])
+            free, a = a, best_action(q, allowed)
+            overridden[idx] += a != free
+        r = env.stepper.step(starts[idx], off[idx], t[idx], a)
+        off[idx], t[idx] = r["offset"], r["t"]
+        ret[idx] += r["reward"]
+        for j, k in enumerate(idx):
+            visited[k].add((int(off[k, 0]), int(off[k, 1])))
+            paths[k].append(r["position"][j].copy())
+            sirs[k].append(float(r["sir_db"][j]))
+        end = r["terminated"] | r["truncated"]
+        reached[idx[r["arrived"]]] = True
+        live[idx[end]] = False
+    return [
+        {
+            "return": float(ret[k]),
+            "steps": int(t[k]),
+            "path": np.array(paths[k]),
+            "sir": np.array(sirs[k]),
+            "reached": bool(reached[k]),
+            "overridden": int(overridden[k]),
+        }
+        for k in range(n)
+    ]

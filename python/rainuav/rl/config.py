@@ -1,0 +1,241 @@
+"""What a training run depends on: the learner's hyperparameters (:class:`DQNConfig`) and the
+run's settings (:class:`TrainConfig`), their checks, their TOML form and the random streams
+derived from the run's one seed."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rainuav._io import read_toml
+from rainuav.errors import InvalidInputError
+from rainuav.radio import presets
+from rainuav.radio.scenario import Scenario
+
+__all__ = [
+    "DQNConfig",
+    "TrainConfig",
+    "check_config",
+    "config_diff",
+    "load_config",
+    "make_scenario",
+    "random_streams",
+    "read_config",
+    "to_dict",
+]
+
+
+@dataclass
+class DQNConfig:
+    """Hyperparameters of the dueling double DQN (defaults: the paper's Table I where given)."""
+
+    episodes: int = 3000
+    """Training episodes (Table I)."""
+    target_sync_episodes: int = 5
+    """N_update: episodes between target-network syncs (Table I)."""
+    eps0: float = 0.5
+    """Initial exploration rate (Table I)."""
+    eps_decay: float = 0.998
+    """Per-episode decay of the exploration rate, eps0 * eps_decay^episode (Table I)."""
+    replay_capacity: int = 100_000
+    """Replay memory size C (Table I)."""
+    batch_size: int = 16
+    """Minibatch size B (Table I)."""
+    gamma: float = 0.998
+    """Discount factor."""
+    n_step: int = 3
+    """N1: length of the multi-step window."""
+    lr: float = 1e-3
+    """Adam learning rate at the start."""
+    lr_final: float = 3e-5
+    """Learning rate after the last episode (cosine decay from lr over the episodes)."""
+    hidden: int = 128
+    """Width of the two hidden layers."""
+    fourier: int = 8
+    """Sine/cosine frequencies per input in the state features (0: none)."""
+    reward_scale: float = 100.0
+    """Rewards are divided by this inside the learner."""
+    grad_clip: float = 10.0
+    """Gradient-norm clip."""
+    learning_starts: int = 1000
+    """Transitions stored before learning starts."""
+    train_every: int = 4
+    """Environment steps (transitions, summed over lanes) per gradient step."""
+    lanes: int = 16
+    """UAVs flown at once, each its own episode (1: the paper's one-at-a-time loop)."""
+    time_aware: bool = False
+    """Append t / max_steps to the observation and stop bootstrapping at the time limit."""
+    goal_features: int = 4
+    """Goal-relative inputs tanh(d / (step * 4^k)), k < goal_features, per axis (0: none)."""
+    shaping: float = 1.0
+    """Weight of the potential-based shaping -(steps to the goal); 0: the plain rewards."""
+    sir_weight: float = 1.25
+    """Factor on the SIR part of each reward (b + 1) inside the learner; 1: the env's rewards."""
+    shield: bool = True
+    """Greedy flights keep to moves that stay in the area and can still arrive in max_steps,
+    and avoid positions they already visited while they can (rainuav.nav.shield)."""
+
+
+@dataclass
+class TrainConfig:
+    """Everything a training run depends on (one docstring line per field = one CLI flag)."""
+
+    scenario: str = "paper"
+    """Preset scenario ('paper' or 'urban'), unless --scenario-file is given."""
+    scenario_file: str = ""
+    """A scenario TOML file (overrides --scenario)."""
+    rain_rate: float | None = None
+    """Homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the rain
+    model, drop sizes, shape, temperature and wind stay the scenario's); unset: the scenario's
+    own weather (the paper preset rains 25 mm/h)."""
+    mu: float = 10.0 / 43.0
+    """Weight of the SIR term in the reward."""
+    reward: str = "shortfall"
+    """Reward form: 'shortfall', 'outage' or 'linear'."""
+    max_steps: int = 300
+    """Steps per episode (Table I)."""
+    goal_x_m: float = 1400.0
+    """Destination, east coordinate, m."""
+    goal_y_m: float = 1600.0
+    """Destination, north coordinate, m."""
+    seed: int = 0
+    """Seed of every random choice (python, numpy, torch, environment)."""
+    device: str = "auto"
+    """'auto' (CUDA when available), 'cpu' or 'cuda'."""
+    out: str = "runs/paper"
+    """Output directory."""
+    checkpoint_every: int = 250
+    """Episodes between checkpoints."""
+    eval_starts: int = 200
+    """Greedy evaluation starts (fixed, seeded by eval_seed)."""
+    eval_seed: int = 12345
+    """Seed of the evaluation starts."""
+    stages: int = 4
+    """Training stages at which a few greedy trajectories are recorded for stages.png."""
+    validate_every: int = 100
+    """Episodes between greedy checks on held-out validation starts (0: none)."""
+    validate_starts: int = 100
+    """Validation starts (seeded by eval_seed + 2; not the evaluation starts)."""
+    keep_best: bool = False
+    """Evaluate and save the network with the smallest validation gap, not the final one."""
+    dqn: DQNConfig = field(default_factory=DQNConfig)
+    """Agent hyperparameters."""
+
+
+def check_config(cfg: TrainConfig) -> None:
+    """Raises InvalidInputError naming the first field outside its allowed range."""
+    d = cfg.dqn
+    checks = [
+        ("episodes", d.episodes >= 1, ">= 1"),
+        ("target_sync_episodes", d.target_sync_episodes >= 1, ">= 1"),
+        ("eps0", 0 <= d.eps0 <= 1, "in [0, 1]"),
+        ("eps_decay", 0 < d.eps_decay <= 1, "in (0, 1]"),
+        ("replay_capacity", d.replay_capacity >= d.batch_size, ">= batch_size"),
+        ("batch_size", d.batch_size >= 1, ">= 1"),
+        ("gamma", 0 < d.gamma <= 1, "in (0, 1]"),
+        ("n_step", d.n_step >= 1, ">= 1"),
+        ("lr", 0 < d.lr < math.inf, "> 0"),
+        ("lr_final", 0 < d.lr_final < math.inf, "> 0"),
+        ("hidden", d.hidden >= 1, ">= 1"),
+        ("fourier", d.fourier >= 0, ">= 0"),
+        ("lanes", d.lanes >= 1, ">= 1"),
+        ("goal_features", d.goal_features >= 0, ">= 0"),
+        ("shaping", 0 <= d.shaping < math.inf, ">= 0 and finite"),
+        ("sir_weight", 0 <= d.sir_weight < math.inf, ">= 0 and finite"),
+        ("train_every", d.train_every >= 1, ">= 1"),
+        ("learning_starts", d.learning_starts >= 0, ">= 0"),
+        ("reward_scale", 0 < d.reward_scale < math.inf, "> 0"),
+        ("grad_clip", 0 < d.grad_clip < math.inf, "> 0"),
+        ("max_steps", cfg.max_steps >= 1, ">= 1"),
+        ("eval_starts", cfg.eval_starts >= 1, ">= 1"),
+        ("validate_every", cfg.validate_every >= 0, ">= 0"),
+        ("validate_starts", cfg.validate_starts >= 1, ">= 1"),
+        ("checkpoint_every", cfg.checkpoint_every >= 1, ">= 1"),
+        ("device", cfg.device in ("auto", "cpu", "cuda"), "'auto', 'cpu' or 'cuda'"),
+        (
+            "rain_rate",
+            cfg.rain_rate is None or 0 <= cfg.rain_rate <= 500,
+            "unset or in [0, 500] mm/h",
+        ),
+    ]
+    for name, ok, allowed in checks:
+        if not ok:
+            value = getattr(d, name) if hasattr(d, name) else getattr(cfg, name)
+            raise InvalidInputError(f"{name} must be {allowed} (got {value!r})")
+
+
+def to_dict(cfg: TrainConfig) -> dict[str, Any]:
+    """A plain dict of the run (TOML-ready: unset fields are left out)."""
+    return {k: v for k, v in dataclasses.asdict(cfg).items() if v is not None}
+
+
+def read_config(path: str | Path) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The TrainConfig fields and the [dqn] fields of a TOML file; a missing or malformed file
+    and unknown names raise InvalidInputError naming the file."""
+    data = read_toml(path, "config file")
+    dqn = data.pop("dqn", {})
+    if not isinstance(dqn, dict):
+        raise InvalidInputError(f"config file {path}: [dqn] must be a table")
+    unknown = sorted(set(data) - {f.name for f in dataclasses.fields(TrainConfig)}) + sorted(
+        f"dqn.{k}" for k in set(dqn) - {f.name for f in dataclasses.fields(DQNConfig)}
+    )
+    if unknown:
+        raise InvalidInputError(f"{path}: unknown field(s) {unknown}")
+    return data, dict(dqn)
+
+
+def load_config(path: str | Path) -> TrainConfig:
+    """A TrainConfig from a TOML file (a run's ``config.toml``)."""
+    data, dqn = read_config(path)
+    try:
+        return TrainConfig(**data, dqn=DQNConfig(**dqn))
+    except TypeError as err:
+        raise InvalidInputError(f"config file {path}: {err}") from err
+
+
+def config_diff(saved: dict[str, Any], cfg: TrainConfig, ignore: tuple[str, ...] = ()) -> list[str]:
+    """The fields (``dqn.x`` for the learner's) where ``cfg`` differs from the ``saved`` dict
+    of a run, as ``"name: saved -> given"``; ``ignore`` names fields allowed to differ."""
+    given = to_dict(cfg)
+    out = []
+    for key in sorted(set(saved) | set(given)):
+        if key in ignore:
+            continue
+        a, b = saved.get(key), given.get(key)
+        if key == "dqn":
+            a, b = a or {}, b or {}
+            out += [
+                f"dqn.{k}: {a.get(k)!r} -> {b.get(k)!r}"
+                for k in sorted(set(a) | set(b))
+                if a.get(k) != b.get(k)
+            ]
+        elif a != b:
+            out.append(f"{key}: {a!r} -> {b!r}")
+    return out
+
+
+def random_streams(seed: int) -> dict[str, np.random.SeedSequence]:
+    """Independent seed sequences for every random choice of a run, all from ``seed``
+    (``SeedSequence.spawn``): ``"agent"`` (exploration and replay sampling) and ``"env"``
+    (training starts). Seeding both generators with ``seed`` itself would make them draw the
+    same stream."""
+    agent, env = np.random.SeedSequence(seed).spawn(2)
+    return {"agent": agent, "env": env}
+
+
+def make_scenario(cfg: TrainConfig) -> Scenario:
+    """The scenario of a run: the preset or the file, with ``rain_rate`` applied if set."""
+    if cfg.scenario_file:
+        scn = Scenario.from_toml(cfg.scenario_file)
+    else:
+        if cfg.scenario not in presets.PRESETS:
+            raise InvalidInputError(f"scenario must be one of {sorted(presets.PRESETS)}")
+        scn = presets.PRESETS[cfg.scenario]()
+    if cfg.rain_rate is not None:
+        scn = presets.with_rain(scn, cfg.rain_rate)
+    return scn

@@ -1,0 +1,308 @@
+"""The dueling double DQN with multi-step returns (the paper's Algorithm 1), in torch.
+
+Reads top to bottom: the network, the N-step sliding window, the replay memory, the double-Q
+target and the agent (observe, act, learn, sync). Hyperparameters: :class:`rainuav.rl.config.
+DQNConfig`. Every choice beyond the paper's Table I, and what it measured, is in
+``docs/learner.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from rainuav.rl.config import DQNConfig, random_streams
+
+__all__ = ["Agent", "DuelingQNet", "NStepWindow", "Replay", "best_action", "double_q_target"]
+
+
+def best_action(q: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
+    """Argmax of the (N, 4) values ``q``, among the ``allowed`` (N, 4) actions when given."""
+    if allowed is not None:
+        q = np.where(allowed, q, -np.inf)
+    return q.argmax(axis=1)
+
+
+class DuelingQNet(nn.Module):
+    """Q(s, a) = V(s) + A(s, a) - mean_a A(s, a).
+
+    All inputs enter as they are, and the first ``smooth_dim`` (the position and the time
+    fraction) also as ``fourier`` sine/cosine frequencies; two hidden ReLU layers feed the
+    value and advantage heads.
+    """
+
+    def __init__(
+        self,
+        hidden: int = 128,
+        fourier: int = 8,
+        n_actions: int = 4,
+        obs_dim: int = 2,
+        smooth_dim: int | None = None,
+    ) -> None:
+        super().__init__()
+        self.register_buffer("freqs", math.pi * torch.arange(1, fourier + 1, dtype=torch.float32))
+        self.smooth_dim = obs_dim if smooth_dim is None else smooth_dim
+        d_in = obs_dim + self.smooth_dim * 2 * fourier
+        self.body = nn.Sequential(
+            nn.Linear(d_in, hidden), nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU()
+        )
+        self.value = nn.Linear(hidden, 1)
+        self.advantage = nn.Linear(hidden, n_actions)
+
+    def features(self, obs: torch.Tensor) -> torch.Tensor:
+        parts = [obs]
+        if self.freqs.numel():
+            ang = obs[:, : self.smooth_dim, None] * self.freqs  # (B, smooth_dim, K)
+            parts += [torch.sin(ang).flatten(-2), torch.cos(ang).flatten(-2)]
+        return torch.cat(parts, dim=-1)
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        h = self.body(self.features(obs))
+        adv = self.advantage(h)
+        return self.value(h) + adv - adv.mean(dim=-1, keepdim=True)
+
+
+class NStepWindow:
+    """Algorithm 1's sliding window W of the last N1 transitions.
+
+    ``push`` returns the transitions that leave the window, each as
+    ``(obs, action, R, next_obs, discount, done)`` with ``R = sum_i gamma^i r_i`` over up to
+    N1 rewards, ``next_obs`` the state to bootstrap from, ``discount = gamma^k`` (k rewards
+    summed) and ``done`` whether the episode terminated (then there is no bootstrap). At an
+    episode end the window flushes: terminated -> no bootstrap; truncated -> bootstrap from
+    the last state.
+    """
+
+    def __init__(self, n: int, gamma: float) -> None:
+        if n < 1:
+            raise ValueError(f"n_step must be >= 1 (got {n})")
+        self.n, self.gamma = n, gamma
+        self.buf: deque[tuple[Any, int, float]] = deque()
+
+    def _emit(self, next_obs: Any, done: bool) -> tuple[Any, int, float, Any, float, bool]:
+        obs, a, _ = self.buf[0]
+        ret = 0.0
+        for i, (_, _, r) in enumerate(self.buf):
+            ret += self.gamma**i * r
+        disc = self.gamma ** len(self.buf)
+        self.buf.popleft()
+        return obs, a, ret, next_obs, disc, done
+
+    def push(
+        self,
+        obs: Any,
+        action: int,
+        reward: float,
+        next_obs: Any,
+        terminated: bool,
+        truncated: bool,
+    ) -> list[tuple[Any, int, float, Any, float, bool]]:
+        self.buf.append((obs, action, reward))
+        out = []
+        if terminated or truncated:
+            while self.buf:
+                out.append(self._emit(next_obs, terminated))
+        elif len(self.buf) == self.n:
+            out.append(self._emit(next_obs, False))
+        return out
+
+
+class Replay:
+    """Uniform replay memory of capacity C (a ring buffer)."""
+
+    def __init__(self, capacity: int, obs_dim: int = 2) -> None:
+        self.capacity = capacity
+        self.obs = np.zeros((capacity, obs_dim), np.float32)
+        self.action = np.zeros(capacity, np.int64)
+        self.ret = np.zeros(capacity, np.float32)
+        self.next_obs = np.zeros((capacity, obs_dim), np.float32)
+        self.discount = np.zeros(capacity, np.float32)
+        self.done = np.zeros(capacity, np.float32)
+        self.size = 0
+        self.pos = 0
+
+    def add(self, obs: Any, a: int, ret: float, next_obs: Any, disc: float, done: bool) -> None:
+        i = self.pos
+        self.obs[i], self.action[i], self.ret[i] = obs, a, ret
+        self.next_obs[i], self.discount[i], self.done[i] = next_obs, disc, float(done)
+        self.pos = (self.pos + 1) % self.capacity
+        self.size = min(self.size + 1, self.capacity)
+
+    def sample(self, rng: np.random.Generator, batch: int) -> dict[str, np.ndarray]:
+        idx = rng.integers(0, self.size, size=batch)
+        return {
+            "obs": self.obs[idx],
+            "action": self.action[idx],
+            "ret": self.ret[idx],
+            "next_obs": self.next_obs[idx],
+            "discount": self.discount[idx],
+            "done": self.done[idx],
+        }
+
+    def state_dict(self) -> dict[str, Any]:
+        return {
+            k: getattr(self, k)
+            for k in ("obs", "action", "ret", "next_obs", "discount", "done", "size", "pos")
+        }
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        for k, v in d.items():
+            setattr(self, k, v)
+
+
+def double_q_target(
+    q_next_online: torch.Tensor,
+    q_next_target: torch.Tensor,
+    ret: torch.Tensor,
+    discount: torch.Tensor,
+    done: torch.Tensor,
+) -> torch.Tensor:
+    """Double-Q target ``R + gamma^k (1 - done) Q_target(s', argmax_a Q_online(s', a))`` from
+    the two networks' Q-values at s' (B, A)."""
+    a_star = q_next_online.argmax(dim=1, keepdim=True)
+    return ret + discount * (1.0 - done) * q_next_target.gather(1, a_star).squeeze(1)
+
+
+class Agent:
+    """Online and target networks, replay, optimiser and the exploration schedule."""
+
+    def __init__(
+        self,
+        cfg: DQNConfig,
+        seed: int,
+        device: torch.device,
+        horizon: int,
+        *,
+        goal: tuple[float, float],
+        step: tuple[float, float],
+    ) -> None:
+        """``seed``: the run's seed (the network's initial weights; exploration and replay
+        sampling draw from its ``"agent"`` stream, :func:`rainuav.rl.config.random_streams`);
+        ``horizon``: the episode's step limit; ``goal`` and ``step``: the destination and one
+        move in the environment's observation units ([0, 1]^2)."""
+        self.cfg = cfg
+        self.device = device
+        self.horizon = horizon
+        self.goal = np.asarray(goal, dtype=np.float32)
+        self.goal_scale = (
+            np.asarray(step, dtype=np.float32)[:, None] * 4.0 ** np.arange(cfg.goal_features)
+        ).astype(np.float32)  # (2, K)
+        self.n_smooth = 3 if cfg.time_aware else 2
+        self.obs_dim = self.n_smooth + 2 * cfg.goal_features
+        torch.manual_seed(seed)
+        self.online = self.make_net().to(device)
+        self.target = self.make_net().to(device)
+        self.target.load_state_dict(self.online.state_dict())
+        # The fused Adam kernel is one call instead of ~10 per parameter tensor: timed alone,
+        # its step takes 108 us against 344 us for the default (of a 1.6 ms gradient step).
+        self.opt = torch.optim.Adam(self.online.parameters(), lr=cfg.lr, fused=True)
+        self.replay = Replay(cfg.replay_capacity, self.obs_dim)
+        self.rng = np.random.default_rng(random_streams(seed)["agent"])
+        self.updates = 0
+
+    def make_net(self) -> DuelingQNet:
+        c = self.cfg
+        return DuelingQNet(
+            c.hidden,
+            c.fourier,
+            obs_dim=self.obs_dim,
+            smooth_dim=self.n_smooth,
+        )
+
+    def epsilon(self, episode: Any) -> Any:
+        """eps0 * eps_decay^episode (works on arrays of episode indices)."""
+        return self.cfg.eps0 * self.cfg.eps_decay ** np.asarray(episode, dtype=np.float64)
+
+    def observe(self, env_obs: np.ndarray, t: Any) -> np.ndarray:
+        """The agent's input from the environment's (N, 2) observation: the position, then
+        t / horizon when time-aware, then the goal-relative features (functions of the
+        position and the fixed destination, so no information the environment does not give;
+        they let the network resolve the 10 m arrival disc, which global features blur)."""
+        env_obs = np.atleast_2d(np.asarray(env_obs, dtype=np.float32))
+        parts = [env_obs]
+        if self.cfg.time_aware:
+            frac = (np.asarray(t, dtype=np.float32) / self.horizon).reshape(-1, 1)
+            parts.append(np.broadcast_to(frac, (len(env_obs), 1)))
+        if self.cfg.goal_features:
+            rel = (env_obs - self.goal)[:, :, None] / self.goal_scale  # (N, 2, K)
+            parts.append(np.tanh(rel).reshape(len(env_obs), -1))
+        return np.concatenate(parts, axis=1).astype(np.float32)
+
+    def act(self, obs: np.ndarray, episodes: np.ndarray) -> np.ndarray:
+        """Epsilon-greedy actions for a batch of UAVs, each at its own episode's epsilon.
+        Always draws one uniform and one action per UAV, so the random stream does not
+        depend on the network's choices."""
+        n = len(obs)
+        explore = self.rng.random(n) < self.epsilon(episodes)
+        random_a = self.rng.integers(4, size=n)
+        return np.where(explore, random_a, self.greedy(obs))
+
+    def q_values(self, obs: np.ndarray) -> np.ndarray:
+        """The online network's (N, 4) action values."""
+        with torch.no_grad():
+            x = torch.as_tensor(np.atleast_2d(obs), dtype=torch.float32, device=self.device)
+            return self.online(x).cpu().numpy()
+
+    def greedy(self, obs: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
+        """The action of highest Q, among the ``allowed`` (N, 4) ones when given."""
+        return best_action(self.q_values(obs), allowed)
+
+    def learn(self) -> float | None:
+        if self.replay.size < max(self.cfg.learning_starts, self.cfg.batch_size):
+            return None
+        b = self.replay.sample(self.rng, self.cfg.batch_size)
+        t = {k: torch.as_tensor(v, device=self.device) for k, v in b.items()}
+        n = len(b["obs"])
+        # One online forward for s and s' (the s' half, detached, picks the double-Q action).
+        q_all = self.online(torch.cat([t["obs"], t["next_obs"]]))
+        q = q_all[:n].gather(1, t["action"][:, None]).squeeze(1)
+        with torch.no_grad():
+            y = double_q_target(
+                q_all[n:],
+                self.target(t["next_obs"]),
+                t["ret"] / self.cfg.reward_scale,
+                t["discount"],
+                t["done"],
+            )
+        loss = nn.functional.smooth_l1_loss(q, y)
+        self.opt.zero_grad(set_to_none=True)
+        loss.backward()
+        nn.utils.clip_grad_norm_(self.online.parameters(), self.cfg.grad_clip, foreach=True)
+        self.opt.step()
+        self.updates += 1
+        return float(loss.detach())
+
+    def anneal(self, finished: int) -> None:
+        """Sets the learning rate for ``finished`` episodes done: cosine from ``lr`` to
+        ``lr_final`` over the run."""
+        c = self.cfg
+        frac = min(finished / c.episodes, 1.0)
+        lr = c.lr_final + (c.lr - c.lr_final) * 0.5 * (1.0 + math.cos(math.pi * frac))
+        for group in self.opt.param_groups:
+            group["lr"] = lr
+
+    def sync(self) -> None:
+        self.target.load_state_dict(self.online.state_dict())
+
+    def state_dict(self) -> dict[str, Any]:
+        return {
+            "online": self.online.state_dict(),
+            "target": self.target.state_dict(),
+            "opt": self.opt.state_dict(),
+            "replay": self.replay.state_dict(),
+            "rng": self.rng.bit_generator.state,
+            "updates": self.updates,
+        }
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        self.online.load_state_dict(d["online"])
+        self.target.load_state_dict(d["target"])
+        self.opt.load_state_dict(d["opt"])
+        self.replay.load_state_dict(d["replay"])
+        self.rng.bit_generator.state = d["rng"]
+        self.updates = d["updates"]

@@ -1,0 +1,70 @@
+"""What the learner learns from: the reward it stores for a move and where its episodes end.
+
+The environment's reward with its SIR part weighted (:func:`learning_reward`), plus
+potential-based shaping by the straight-line value (:func:`shaping_term`). Why each, and what
+it measured: ``docs/learner.md``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.task import base_reward
+from rainuav.rl.config import DQNConfig
+
+__all__ = ["learner_ends", "learning_reward", "shaping_term"]
+
+
+def learner_ends(d: DQNConfig, r: dict[str, np.ndarray]) -> np.ndarray:
+    """Where the learner's episode ends (no bootstrap): arrival or leaving the area, and for
+    a time-aware learner, which knows there are no moves left, also the time limit."""
+    return r["terminated"] | (r["truncated"] & d.time_aware)
+
+
+def learning_reward(
+    env: UAVNavEnv, d: DQNConfig, pos: np.ndarray, r: dict[str, np.ndarray]
+) -> np.ndarray:
+    """The reward the learner stores for the moves ``pos -> r["position"]`` of a batch step.
+
+    The env's reward with its SIR part ``b + 1`` weighted by ``sir_weight``, plus the
+    potential-based shaping term (zero potential where :func:`learner_ends`). Discounting
+    and the destination reward make the learner value time above the SIR: a move later
+    costs ``(1 - gamma) gamma^k R_des`` of the destination reward on top of its -1, several
+    times the undiscounted price of a move at gamma 0.998. Weighting the SIR part up
+    restores the balance of the undiscounted return the policy is judged by; a position-only
+    policy then loops from a few starts, which the shield breaks (1.25 by default; see
+    ``docs/learner.md``)."""
+    reward = r["reward"]
+    if d.sir_weight != 1.0:
+        reward = reward + (d.sir_weight - 1.0) * (base_reward(r["sir_db"], env.cfg) + 1.0)
+    return reward + shaping_term(env, d, pos, r["position"], learner_ends(d, r))
+
+
+def shaping_term(
+    env: UAVNavEnv, d: DQNConfig, pos: np.ndarray, new_pos: np.ndarray, ended: np.ndarray
+) -> np.ndarray:
+    """Potential-based shaping ``gamma Phi(s') - Phi(s)`` (Ng, Harada and Russell, ICML 1999).
+
+    ``Phi(s) = shaping * V_straight(s)``: the discounted return of flying straight to the
+    destination ignoring the SIR, ``-(1 - gamma^k) / (1 - gamma) + gamma^k R_des`` with ``k``
+    the moves still needed (lattice distance minus the tolerance); ``Phi = 0`` where the
+    learner's episode ends (``ended``): after arrival or leaving the area, and for a
+    time-aware learner also at the time limit. Summed over an episode the terms telescope to
+    ``-Phi(s_0)`` (a truncation the learner bootstraps through keeps ``gamma^T Phi(s_T)``,
+    which its bootstrap value offsets), so the optimal policy is unchanged, while the
+    learner now sees 0 for a move that keeps the straight-line pace and a clear loss for one
+    that does not, instead of 2000 points at the end of a 300-move episode: it only has to
+    learn how the SIR bends the straight route."""
+    if d.shaping == 0.0:
+        return np.zeros(len(pos))
+    c = env.cfg
+    goal = np.asarray(c.goal_m)
+
+    def phi(p: np.ndarray) -> np.ndarray:
+        k = np.maximum(np.abs(p - goal).sum(axis=1) - c.tol_m, 0.0) / c.step_m
+        g = d.gamma**k
+        steps = k if d.gamma == 1.0 else (1.0 - g) / (1.0 - d.gamma)
+        return d.shaping * (-steps + g * c.goal_reward)
+
+    return d.gamma * np.where(ended, 0.0, phi(new_pos)) - phi(pos)

@@ -1,0 +1,308 @@
+"""The training job: Algorithm 1 with several UAVs in flight at once.
+
+:func:`train` builds (or loads) the radio map, the environment and the agent, then runs
+:func:`run_loop`, which reads top to bottom: act, step the UAVs, store their N-step
+transitions, learn (sample, double-Q target, loss, optimiser step), and per finished episode
+anneal, sync the target, record stages, validate and checkpoint. The run ends with
+:func:`finish` (evaluation, ``policy.pt``, ``metrics.json``, figures).
+
+Outputs in ``cfg.out``: ``config.toml``, ``radiomap.npz``, ``log.csv``, TensorBoard events,
+``checkpoint.pt`` (every ``checkpoint_every`` finished episodes; ``resume=True`` with the same
+configuration continues from it and reproduces the uninterrupted run), and at the end
+``metrics.json``, ``policy.pt``, ``returns.png``, ``trajectories.png`` and ``stages.png``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import tomli_w
+import torch
+
+from rainuav._io import write_atomic
+from rainuav.errors import InvalidInputError
+from rainuav.nav import planner
+from rainuav.nav.env import UAVNavEnv
+from rainuav.radio.radiomap import RadioMap, build_radio_map
+from rainuav.rl.collect import Lanes, greedy_rollouts
+from rainuav.rl.config import (
+    TrainConfig,
+    check_config,
+    config_diff,
+    make_scenario,
+    random_streams,
+    to_dict,
+)
+from rainuav.rl.dqn import Agent
+from rainuav.rl.evaluation import Validation, eval_starts, evaluate_run_policy
+from rainuav.rl.learner import learner_ends, learning_reward
+from rainuav.rl.plots import plot_returns, plot_stages, plot_trajectories
+from rainuav.rl.setup import make_agent, make_env, pick_device, torch_settings
+
+__all__ = ["finish", "load_checkpoint", "run_loop", "save_checkpoint", "train"]
+
+RESUME_MAY_DIFFER = ("device",)
+"""Fields a resumed run may change (the rest must equal the checkpoint's)."""
+
+
+# -- setup ------------------------------------------------------------------------------------
+def run_map(cfg: TrainConfig, out: Path, resume: bool, radio_map: Any, progress: bool) -> Any:
+    """The run's radio map: the one given, the run's own when resuming, else the scenario's
+    (built or taken from the cache); saved as ``radiomap.npz``."""
+    path = out / "radiomap.npz"
+    if radio_map is None and resume and path.exists():
+        return RadioMap.load(path)
+    rm = radio_map or build_radio_map(make_scenario(cfg), progress=progress)
+    rm.save(path)
+    return rm
+
+
+def save_checkpoint(path: Path, state: dict[str, Any]) -> None:
+    """``torch.save`` to a temporary file, then rename."""
+    write_atomic(path, lambda tmp: torch.save(state, tmp))
+
+
+def load_checkpoint(path: Path, cfg: TrainConfig) -> dict[str, Any]:
+    """The checkpoint at ``path``, refused if its run's configuration differs from ``cfg``
+    (the differing fields are named)."""
+    if not path.exists():
+        raise InvalidInputError(f"--resume: no checkpoint at {path}")
+    state = torch.load(path, weights_only=False)
+    diff = config_diff(state["config"], cfg, ignore=RESUME_MAY_DIFFER)
+    if diff:
+        raise InvalidInputError(
+            f"--resume: the configuration differs from the checkpoint's in {'; '.join(diff)}"
+        )
+    return state
+
+
+class RunLog:
+    """``log.csv`` (one row per finished episode), TensorBoard scalars and the progress bar."""
+
+    def __init__(self, out: Path, resume: bool, total: int, done: int, progress: bool) -> None:
+        from torch.utils.tensorboard import SummaryWriter
+
+        self.tb = SummaryWriter(str(out / "tb"))
+        path = out / "log.csv"
+        new = not (resume and path.exists())
+        self.fh = path.open("w" if new else "a", newline="")
+        self.csv = csv.writer(self.fh)
+        if new:
+            self.csv.writerow(
+                ["finished", "episode", "return", "steps", "reached", "epsilon", "seconds"]
+            )
+        self.bar = None
+        if progress:
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(total=total, initial=done, desc="train", unit="ep")
+
+    def episode(self, n_done: int, row: tuple[int, float, int, bool, float, float]) -> None:
+        """One finished episode: (episode index, return, steps, reached, epsilon, seconds)."""
+        episode, ret, steps, reached, eps, seconds = row
+        self.csv.writerow(
+            [n_done, episode, f"{ret:.4f}", steps, int(reached), f"{eps:.5f}", f"{seconds:.2f}"]
+        )
+        self.tb.add_scalar("return", ret, n_done)
+        self.tb.add_scalar("epsilon", eps, n_done)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+        self.fh.close()
+        self.tb.close()
+
+
+# -- the job ----------------------------------------------------------------------------------
+def train(
+    cfg: TrainConfig,
+    *,
+    resume: bool = False,
+    progress: bool = True,
+    radio_map: Any = None,
+    stop_after: int | None = None,
+) -> dict[str, Any]:
+    """Runs the whole job and returns the metrics. ``radio_map`` (a RadioMap) replaces the
+    scenario's map (tests use small synthetic maps). ``stop_after`` ends the call, as an
+    interruption would, at the first checkpoint with at least that many finished episodes
+    (``resume=True`` then continues exactly); it returns ``{}``. Sets no process-wide state
+    that outlives the call (torch's thread count and determinism are restored)."""
+    check_config(cfg)
+    out = Path(cfg.out)
+    out.mkdir(parents=True, exist_ok=True)
+    saved = load_checkpoint(out / "checkpoint.pt", cfg) if resume else None
+    rm = run_map(cfg, out, resume, radio_map, progress)
+    write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
+    env = make_env(cfg, rm.sir_db, rm.extent_m)
+    device = pick_device(cfg.device)
+    with torch_settings(device):
+        torch.manual_seed(cfg.seed)
+        agent = make_agent(cfg, env, device)
+        env.np_random = np.random.default_rng(random_streams(cfg.seed)["env"])
+        return run_loop(cfg, agent, env, out, saved, progress, stop_after)
+
+
+def run_loop(
+    cfg: TrainConfig,
+    agent: Agent,
+    env: UAVNavEnv,
+    out: Path,
+    saved: dict[str, Any] | None,
+    progress: bool,
+    stop_after: int | None,
+) -> dict[str, Any]:
+    """Algorithm 1 over ``cfg.dqn.episodes`` episodes, ``lanes`` UAVs at a time; from
+    ``saved`` (a checkpoint's state) when resuming. Returns :func:`finish`'s metrics, or
+    ``{}`` when stopped at ``stop_after``."""
+    d = cfg.dqn
+    lanes = Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
+    n_val = cfg.validate_starts if cfg.validate_every else 0
+    val_starts = eval_starts(env, n_val, cfg.eval_seed + 2)
+    val_optimum = np.array([p.return_ for p in planner.optimal_many(env, val_starts)])
+    checks = Validation(val_starts, val_optimum)
+    stage_every = max(1, d.episodes // max(cfg.stages, 1))
+    stage_starts = eval_starts(env, 5, cfg.eval_seed + 1)
+    started, returns, successes, stages = 0, [], [], []
+    train_seconds, pending = 0.0, 0  # pending: transitions not yet paid for by a gradient step
+    if saved is not None:
+        agent.load_state_dict(saved["agent"])
+        env.np_random.bit_generator.state = saved["env_rng"]
+        lanes.load_state_dict(saved["lanes"])
+        checks.load_state_dict(saved["validation"])
+        torch.set_rng_state(saved["torch_rng"])
+        started, pending, stages = saved["started"], saved["pending"], saved["stages"]
+        returns, successes = saved["returns"], saved["successes"]
+        train_seconds = saved["train_seconds"]
+    else:
+        for k in range(len(lanes.t)):
+            lanes.launch(k, env.sample_start(env.np_random), started)
+            started += 1
+    log = RunLog(out, saved is not None, d.episodes, len(returns), progress)
+    t0 = time.perf_counter()
+    losses: list[float] = []
+    try:
+        while lanes.active.any():
+            # Act and step every UAV in flight.
+            idx = np.flatnonzero(lanes.active)
+            pos = lanes.start[idx] + env.cfg.step_m * lanes.offset[idx]
+            obs = agent.observe(env.observe(pos), lanes.t[idx])
+            act = agent.act(obs, lanes.episode[idx])
+            r = env.stepper.step(lanes.start[idx], lanes.offset[idx], lanes.t[idx], act)
+            lanes.offset[idx], lanes.t[idx] = r["offset"], r["t"]
+            lanes.ret[idx] += r["reward"]
+            # Store: each UAV's N-step window hands finished transitions to the replay.
+            nobs = agent.observe(env.observe(r["position"]), r["t"])
+            stop = learner_ends(d, r)
+            learn_r = learning_reward(env, d, pos, r)
+            for j, k in enumerate(idx):
+                for tr in lanes.windows[k].push(
+                    obs[j], int(act[j]), float(learn_r[j]), nobs[j], bool(stop[j]),
+                    bool(r["truncated"][j]),
+                ):  # fmt: skip
+                    agent.replay.add(*tr)
+            # Learn: one gradient step (sample, double-Q target, loss, step) per train_every.
+            pending += len(idx)
+            for _ in range(pending // d.train_every):
+                loss = agent.learn()
+                if loss is not None:
+                    losses.append(loss)
+            pending %= d.train_every
+            # Finished episodes: log, anneal, sync, stages, validate, relaunch the lane.
+            finished_before = len(returns)
+            for j in np.flatnonzero(r["terminated"] | r["truncated"]):
+                k = idx[j]
+                returns.append(float(lanes.ret[k]))
+                successes.append(bool(r["arrived"][j]))
+                n_done = len(returns)
+                seconds = time.perf_counter() - t0 + train_seconds
+                eps = float(agent.epsilon(lanes.episode[k]))
+                row = (int(lanes.episode[k]), float(lanes.ret[k]), int(lanes.t[k]))
+                log.episode(n_done, (*row, successes[-1], eps, seconds))
+                agent.anneal(n_done)
+                if n_done % d.target_sync_episodes == 0:
+                    agent.sync()
+                if n_done % stage_every == 0:
+                    # Greedy rollouts from given starts draw nothing from the training rng.
+                    stages.append((n_done, greedy_rollouts(agent, env, stage_starts)))
+                if cfg.validate_every and n_done % cfg.validate_every == 0:
+                    success, gap = checks.check(agent, env, n_done)
+                    log.tb.add_scalar("validation/success", success, n_done)
+                    log.tb.add_scalar("validation/mean_gap", gap, n_done)
+                if started < d.episodes:
+                    lanes.launch(k, env.sample_start(env.np_random), started)
+                    started += 1
+                else:
+                    lanes.active[k] = False
+            n_done = len(returns)
+            if n_done == finished_before:
+                continue
+            if losses:
+                log.tb.add_scalar("loss", float(np.mean(losses)), n_done)
+                losses.clear()
+            if log.bar is not None:
+                log.bar.set_postfix(
+                    ret=f"{np.mean(returns[-100:]):.0f}",
+                    success=f"{np.mean(successes[-100:]):.2f}",
+                    eps=f"{agent.epsilon(started - 1):.3f}",
+                )
+                log.bar.update(n_done - finished_before)
+            # Checkpoint at every checkpoint_every finished episodes and at the end.
+            crossed = n_done // cfg.checkpoint_every > finished_before // cfg.checkpoint_every
+            if crossed or n_done == d.episodes:
+                log.fh.flush()
+                save_checkpoint(
+                    out / "checkpoint.pt",
+                    {
+                        "agent": agent.state_dict(),
+                        "env_rng": env.np_random.bit_generator.state,
+                        "lanes": lanes.state_dict(),
+                        "started": started,
+                        "returns": returns,
+                        "successes": successes,
+                        "stages": stages,
+                        "pending": pending,
+                        "validation": checks.state_dict(),
+                        "train_seconds": time.perf_counter() - t0 + train_seconds,
+                        "torch_rng": torch.get_rng_state(),
+                        "config": to_dict(cfg),
+                    },
+                )
+                if stop_after is not None and stop_after <= n_done < d.episodes:
+                    return {}
+    finally:
+        log.close()
+    train_seconds += time.perf_counter() - t0
+    return finish(cfg, agent, env, returns, stages, train_seconds, out, checks)
+
+
+def finish(
+    cfg: TrainConfig,
+    agent: Agent,
+    env: UAVNavEnv,
+    returns: list[float],
+    stages: list,
+    train_seconds: float,
+    out: Path,
+    checks: Validation,
+) -> dict[str, Any]:
+    """Evaluates the run (:func:`rainuav.rl.evaluation.evaluate_run_policy`), saves the
+    evaluated network's weights to ``policy.pt`` and writes ``metrics.json`` and the figures."""
+    metrics, rolls = evaluate_run_policy(cfg, agent, env, checks)
+    policy = {k: v.detach().cpu() for k, v in agent.online.state_dict().items()}
+    save_checkpoint(out / "policy.pt", {"online": policy, "config": to_dict(cfg)})
+    metrics["training_seconds"] = train_seconds
+    metrics["episodes"] = cfg.dqn.episodes
+    metrics["device"] = str(agent.device)
+    text = json.dumps(metrics, indent=2)
+    write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
+    plot_returns(returns, out / "returns.png", checks.history)
+    title = f"greedy policy, success {100 * metrics['success_rate']:.0f}%"
+    plot_trajectories(env, rolls[:40], out / "trajectories.png", title)
+    if stages:
+        plot_stages(env, stages, out / "stages.png")
+    return metrics

@@ -1,0 +1,100 @@
+"""Figures of a training run: returns (with the validation checks), greedy trajectories over
+the map, and trajectories at stages of training. Built with matplotlib's ``Figure`` (no
+pyplot, no backend switch), so plotting sets no process-wide state."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from rainuav._io import write_atomic
+from rainuav.nav.env import UAVNavEnv
+
+__all__ = ["plot_returns", "plot_stages", "plot_trajectories"]
+
+
+def plot_trajectories(env: UAVNavEnv, rolls: list, path: Path, title: str) -> None:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 5.4))
+    ax = fig.subplots()
+    x0, x1, y0, y1 = env.field.extent
+    im = ax.imshow(
+        env.field.sir_db, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn", vmin=-10, vmax=30
+    )
+    fig.colorbar(im, ax=ax, label="SIR [dB]")
+    for r in rolls:
+        ax.plot(r["path"][:, 0], r["path"][:, 1], "-", color="k", lw=0.8, alpha=0.7)
+        ax.plot(r["path"][0, 0], r["path"][0, 1], "rx", ms=6)
+    ax.plot(*env.cfg.goal_m, "b^", ms=10, label="destination")
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title)
+    fig.tight_layout()
+    write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
+
+
+def plot_returns(
+    returns: list[float],
+    path: Path,
+    validation: Sequence[tuple[int, float, float]] = (),
+    window: int = 50,
+) -> None:
+    """The training returns and their moving average; beside them, when given, the greedy
+    policy's success and mean gap on the validation starts."""
+    from matplotlib.figure import Figure
+
+    r = np.asarray(returns)
+    both = len(validation) > 0
+    fig = Figure(figsize=(11 if both else 6.4, 4))
+    axes = fig.subplots(1, 2 if both else 1, squeeze=False)
+    ax = axes[0, 0]
+    ax.plot(r, color="0.8", lw=0.5, label="episode return")
+    if len(r) >= window:
+        ma = np.convolve(r, np.ones(window) / window, mode="valid")
+        ax.plot(np.arange(window - 1, len(r)), ma, "b", label=f"moving average ({window})")
+    ax.set_xlabel("episode")
+    ax.set_ylabel("return")
+    ax.legend()
+    if both:
+        ep, success, gap = (np.array(v) for v in zip(*validation, strict=True))
+        ax = axes[0, 1]
+        ax.plot(ep, 100 * success, "g.-", label="success, %")
+        ax.plot(ep, 100 * np.minimum(gap, 1.0), "r.-", label="mean gap to optimum, % (cut at 100)")
+        ax.set_xlabel("episode")
+        ax.set_ylim(0, 105)
+        ax.set_title("greedy policy on the validation starts")
+        ax.legend(loc="center right", fontsize="small")
+    fig.tight_layout()
+    write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
+
+
+def plot_stages(env: UAVNavEnv, stages: list[tuple[int, list]], path: Path) -> None:
+    from matplotlib.figure import Figure
+
+    n = max(1, len(stages))
+    fig = Figure(figsize=(3.6 * n, 3.6))
+    axs = fig.subplots(1, n, squeeze=False)
+    x0, x1, y0, y1 = env.field.extent
+    for ax, (ep, rolls) in zip(axs[0], stages, strict=False):
+        ax.imshow(
+            env.field.sir_db,
+            origin="lower",
+            extent=(x0, x1, y0, y1),
+            cmap="RdYlGn",
+            vmin=-10,
+            vmax=30,
+        )
+        for r in rolls:
+            ax.plot(r["path"][:, 0], r["path"][:, 1], "k-", lw=0.8)
+            ax.plot(r["path"][0, 0], r["path"][0, 1], "rx")
+        ax.plot(*env.cfg.goal_m, "b^")
+        ax.set_title(f"after {ep} episodes")
+        ax.set_xticks([])
+        ax.set_yticks([])
+    fig.tight_layout()
+    write_atomic(path, lambda t: fig.savefig(t, dpi=100, format="png"))

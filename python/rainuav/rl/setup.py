@@ -1,0 +1,69 @@
+"""Building a run's pieces from its configuration: the environment, the agent, the device,
+and torch's settings for the run (restored afterwards)."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import torch
+
+from rainuav.errors import InvalidInputError
+from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.task import NavConfig
+from rainuav.rl.config import TrainConfig
+from rainuav.rl.dqn import Agent
+
+__all__ = ["make_agent", "make_env", "pick_device", "torch_settings"]
+
+
+def make_env(cfg: TrainConfig, sir_db: np.ndarray, extent: Any) -> UAVNavEnv:
+    """The navigation task of a run over a map."""
+    nav = NavConfig(
+        goal_m=(cfg.goal_x_m, cfg.goal_y_m), mu=cfg.mu, reward=cfg.reward, max_steps=cfg.max_steps
+    )
+    return UAVNavEnv(sir_db=sir_db, extent_m=extent, config=nav)
+
+
+def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
+    """An agent for ``env``: the time limit, the destination and one move in observation
+    units."""
+    x0, x1, y0, y1 = env.field.extent
+    s = env.cfg.step_m
+    goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())
+    return Agent(
+        cfg.dqn,
+        cfg.seed,
+        device,
+        cfg.max_steps,
+        goal=goal,
+        step=(s / (x1 - x0), s / (y1 - y0)),
+    )
+
+
+def pick_device(name: str) -> torch.device:
+    """``"auto"``: CUDA when available, else the CPU."""
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    if name == "cuda" and not torch.cuda.is_available():
+        raise InvalidInputError("device 'cuda' requested but CUDA is not available")
+    return torch.device(name)
+
+
+@contextlib.contextmanager
+def torch_settings(device: torch.device) -> Iterator[None]:
+    """Deterministic algorithms, and on the CPU one thread (the networks are tiny: one thread
+    is faster than two and keeps CPU runs bit-reproducible); restored afterwards."""
+    threads = torch.get_num_threads()
+    deterministic = torch.are_deterministic_algorithms_enabled()
+    warn_only = torch.is_deterministic_algorithms_warn_only_enabled()
+    torch.use_deterministic_algorithms(True, warn_only=True)
+    if device.type == "cpu":
+        torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+        torch.use_deterministic_algorithms(deterministic, warn_only=warn_only)

@@ -1,0 +1,214 @@
+"""The package's shape: every import arrow points down a layer, no import cycle, no module over
+450 lines, and the old module paths still work (with a DeprecationWarning naming the new one).
+
+Read from the source with ``ast`` (every import statement, also inside functions, except under
+``if TYPE_CHECKING:``), so a lazy import cannot hide an upward arrow or a cycle."""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import warnings
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1] / "python" / "rainuav"
+MAX_LINES = 450
+
+# Layers, bottom up. A module may import a lower layer, or its own group; never a group of the
+# same or a higher layer (so radio and nav do not know each other).
+BASE = {"errors", "_io", "_checks", "_sampling", "_core", "_deprecated"}
+LAYERS = {"base": 0, "medium": 1, "pwe": 2, "radio": 3, "nav": 3, "rl": 4, "entry": 5}
+ENTRY = {
+    "__init__",
+    "train",
+    "evaluate",
+    "radiomap",
+    "validate",
+    # Deprecated paths (re-exports for one release).
+    "env",
+    "plan",
+    "agent",
+    "scenario",
+    "scenarios",
+}
+# Third-party packages a group must not import.
+FORBIDDEN = {
+    "medium": {"torch", "gymnasium"},
+    "pwe": {"torch", "gymnasium"},
+    "radio": {"torch", "gymnasium"},
+    "nav": {"torch"},
+}
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def modules() -> dict[str, Path]:
+    return {module_name(p): p for p in sorted(ROOT.rglob("*.py"))}
+
+
+def group(name: str) -> str:
+    parts = name.split(".")
+    if len(parts) == 1:
+        return "entry"  # the package's own __init__
+    head = parts[1]
+    if head in ("radio", "nav", "rl"):
+        return head
+    if head in BASE:
+        return "base"
+    if head in ENTRY:
+        return "entry"
+    return head  # medium, pwe
+
+
+def _type_checking(node: ast.If) -> bool:
+    t = node.test
+    return (isinstance(t, ast.Name) and t.id == "TYPE_CHECKING") or (
+        isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING"
+    )
+
+
+def imports(path: Path, known: set[str]) -> tuple[set[str], set[str]]:
+    """(rainuav modules, top-level third-party packages) that ``path`` imports."""
+    tree = ast.parse(path.read_text())
+    ours: set[str] = set()
+    theirs: set[str] = set()
+
+    def add(name: str) -> None:
+        if name == "rainuav" or name.startswith("rainuav."):
+            # `from rainuav.radio import presets` names the module rainuav.radio.presets.
+            while name not in known and "." in name:
+                name = name.rsplit(".", 1)[0]
+            ours.add(name)
+        else:
+            theirs.add(name.split(".")[0])
+
+    def visit(node: ast.AST) -> None:
+        if isinstance(node, ast.If) and _type_checking(node):
+            for child in node.orelse:
+                visit(child)
+            return
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                add(a.name)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            for a in node.names:
+                full = f"{node.module}.{a.name}"
+                add(full if full in known else node.module)
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(tree)
+    return ours, theirs
+
+
+def graph() -> tuple[dict[str, set[str]], dict[str, set[str]]]:
+    mods = modules()
+    known = {*mods, "rainuav._core"}  # the extension module has no .py source
+    ours, theirs = {}, {}
+    for name, path in mods.items():
+        ours[name], theirs[name] = imports(path, known)
+        ours[name].discard(name)
+    return ours, theirs
+
+
+def test_the_walker_sees_the_packages_modules() -> None:
+    ours, theirs = graph()
+    # A check on the checker: known arrows, including a function-level import.
+    assert "rainuav.radio.scenario" in ours["rainuav.radio.presets"]
+    assert "rainuav.nav.env" in ours["rainuav.nav.planner"]
+    assert "rainuav.rl.loop" in ours["rainuav.train"]  # imported inside main()
+    assert "torch" in theirs["rainuav.rl.dqn"]
+    assert {"rainuav.radio", "rainuav.nav", "rainuav.rl"} <= set(ours)
+
+
+def test_every_arrow_points_down() -> None:
+    ours, _ = graph()
+    upward = []
+    for src, targets in ours.items():
+        gs = group(src)
+        for dst in targets:
+            gd = group(dst)
+            if gd != gs and LAYERS[gd] >= LAYERS[gs]:
+                upward.append(f"{src} ({gs}) -> {dst} ({gd})")
+    assert not upward, "imports that do not point down:\n" + "\n".join(sorted(upward))
+
+
+def test_layers_keep_off_heavy_dependencies() -> None:
+    _, theirs = graph()
+    bad = [
+        f"{name} imports {pkg}"
+        for name, pkgs in theirs.items()
+        for pkg in sorted(pkgs & FORBIDDEN.get(group(name), set()))
+    ]
+    assert not bad, "\n".join(bad)
+
+
+def test_no_import_cycle() -> None:
+    ours, _ = graph()
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    stack: list[str] = []
+    cycles: list[list[str]] = []
+
+    def dfs(n: str) -> None:
+        state[n] = 1
+        stack.append(n)
+        for m in sorted(ours.get(n, ())):
+            if state.get(m) == 1:
+                cycles.append([*stack[stack.index(m) :], m])
+            elif m not in state:
+                dfs(m)
+        stack.pop()
+        state[n] = 2
+
+    for n in sorted(ours):
+        if n not in state:
+            dfs(n)
+    assert not cycles, "import cycles:\n" + "\n".join(" -> ".join(c) for c in cycles)
+
+
+def test_no_module_over_450_lines() -> None:
+    long = {
+        name: n
+        for name, path in modules().items()
+        if (n := len(path.read_text().splitlines())) > MAX_LINES
+    }
+    assert not long, long
+
+
+@pytest.mark.parametrize(
+    ("old", "name", "new"),
+    [
+        ("rainuav.scenarios", "paper", "rainuav.radio.presets"),
+        ("rainuav.scenario", "Scenario", "rainuav.radio.scenario"),
+        ("rainuav.radiomap", "RadioMap", "rainuav.radio.radiomap"),
+        ("rainuav.env", "UAVNavEnv", "rainuav.nav.env"),
+        ("rainuav.env", "BatchStepper", "rainuav.nav.batch"),
+        ("rainuav.plan", "optimal", "rainuav.nav.planner"),
+        ("rainuav.agent", "Agent", "rainuav.rl.dqn"),
+        ("rainuav.agent", "DQNConfig", "rainuav.rl.config"),
+        ("rainuav.train", "TrainConfig", "rainuav.rl.config"),
+    ],
+)
+def test_old_paths_warn_and_give_the_new_object(old: str, name: str, new: str) -> None:
+    mod = importlib.import_module(old)
+    with pytest.warns(DeprecationWarning, match=rf"{old}\.{name} moved to {new}\.{name}"):
+        obj = getattr(mod, name)
+    assert obj is getattr(importlib.import_module(new), name)
+
+
+def test_new_paths_and_entry_points_do_not_warn() -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for name in ("rainuav.radiomap", "rainuav.train", "rainuav.evaluate", "rainuav.validate"):
+            assert callable(importlib.import_module(name).main)
+        import rainuav
+
+        assert rainuav.radio.Scenario is rainuav.radio.scenario.Scenario
+        assert rainuav.nav.UAVNavEnv is rainuav.nav.env.UAVNavEnv
+    with pytest.raises(AttributeError):
+        importlib.import_module("rainuav.env").not_a_name  # noqa: B018
