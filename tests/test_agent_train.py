@@ -377,6 +377,7 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path) -> None:
     subprocess.run(args, check=True, capture_output=True, text=True, env=env)
     m = json.loads((out / "metrics.json").read_text())
     assert m["eval_starts"] == 5 and m["episodes"] == 6
+    before = (out / "metrics.json").read_bytes()
     ev = subprocess.run(
         [sys.executable, "-m", "rainuav.evaluate", str(out)],
         check=True,
@@ -385,6 +386,10 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path) -> None:
         env=env,
     )
     assert json.loads(ev.stdout)["mean_return"] == m["mean_return"]
+    # The evaluation writes its own files; the run's metrics.json stays as training wrote it.
+    assert (out / "metrics.json").read_bytes() == before
+    assert json.loads((out / "evaluation.json").read_text()) == json.loads(ev.stdout)
+    assert (out / "evaluation_trajectories.png").read_bytes()[:4] == b"\x89PNG"
     bad = subprocess.run(
         [*args[:3], "--lr", "-1", "--out", str(tmp_path / "x")],
         capture_output=True,
@@ -522,3 +527,95 @@ def test_optimal_flights_never_revisit_a_position() -> None:
     for p in planner.optimal_many(env, eval_starts(env, 40, 9)):
         cells = {_cell(env, q) for q in p.path_m}
         assert len(cells) == len(p.path_m)
+
+
+def test_resume_refuses_a_different_config(tmp_path: Path) -> None:
+    # --resume with other settings than the checkpoint's would silently mix two runs; it is
+    # refused and the differing fields are named (issue #12, defect 5).
+    from rainuav import InvalidInputError
+
+    def cfg40() -> TrainConfig:
+        cfg = small_cfg(tmp_path, 40)
+        cfg.checkpoint_every = 10
+        return cfg
+
+    assert train(cfg40(), progress=False, radio_map=synthetic_map(), stop_after=20) == {}
+    other = cfg40()
+    other.mu, other.dqn.gamma = 0.5, 0.99
+    with pytest.raises(InvalidInputError, match=r"dqn.gamma: 0.998 -> 0.99; mu: .* -> 0.5"):
+        train(other, resume=True, progress=False)
+    # Only the device may change.
+    same = cfg40()
+    same.device = "cpu"
+    assert train(same, resume=True, progress=False)["episodes"] == 40
+
+
+def test_train_leaves_no_process_wide_state(tmp_path: Path) -> None:
+    # train() used to leave torch on one thread and switch matplotlib's backend for the whole
+    # process (issue #12, defect 5).
+    import matplotlib
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(2)
+    backend = matplotlib.get_backend()
+    deterministic = torch.are_deterministic_algorithms_enabled()
+    try:
+        train(small_cfg(tmp_path, 4), progress=False, radio_map=synthetic_map())
+        assert torch.get_num_threads() == 2
+        assert matplotlib.get_backend() == backend
+        assert torch.are_deterministic_algorithms_enabled() == deterministic
+    finally:
+        torch.set_num_threads(threads)
+
+
+def test_agent_and_start_streams_are_independent(tmp_path: Path) -> None:
+    # The agent's generator and the start sampler come from one seed but draw independent
+    # streams (SeedSequence.spawn), so lane 0's first start and first exploration decision
+    # are not the same uniform (issue #12, defect 6).
+    from rainuav.rl.config import random_streams
+
+    for seed in range(20):
+        s = random_streams(seed)
+        a = np.random.default_rng(s["agent"]).random(4)
+        e = np.random.default_rng(s["env"]).random(4)
+        naive = np.random.default_rng(seed).random(4)
+        assert not np.any(np.isin(a, e)) and not np.any(np.isin(a, naive))
+    # The run uses them: its first start is the env stream's first draw, and the agent's
+    # generator starts as the agent stream does.
+    cfg = small_cfg(tmp_path, 1)
+    cfg.dqn.lanes = 1
+    env = _env()
+    agent = make_agent(cfg, env, torch.device("cpu"))
+    assert agent.rng.random() == np.random.default_rng(random_streams(cfg.seed)["agent"]).random()
+    train(cfg, progress=False, radio_map=synthetic_map())
+    start = env.sample_start(np.random.default_rng(random_streams(cfg.seed)["env"]))
+    log = (tmp_path / "log.csv").read_text().splitlines()
+    assert len(log) == 2
+    path = torch.load(tmp_path / "checkpoint.pt", weights_only=False)["lanes"]["start"][0]
+    np.testing.assert_array_equal(path, start)
+
+
+def test_scenario_file_weather_is_used_as_written(tmp_path: Path) -> None:
+    # A scenario file's rain cells survive unless a rain-rate flag says otherwise: no
+    # sentinel default replaces them (issue #12, defect 1).
+    from rainuav.radio.scenario import Area, Cell, Medium, RainCell, Scenario, Site
+    from rainuav.rl.config import make_scenario
+
+    cells = Medium(
+        kind="cells",
+        rain_rate_mm_h=0.0,
+        cells=[RainCell(x_m=200, y_m=200, radius_m=80, peak_rate_mm_h=60)],
+        dsd="joss-thunderstorm",
+    )
+    scn = Scenario(
+        name="cells",
+        area=Area(x_min_m=0, x_max_m=400, y_min_m=0, y_max_m=400, resolution_m=20),
+        sites=[Site(x_m=100.0, y_m=100.0, cells=[Cell(azimuth_deg=45.0)])],
+        medium=cells,
+    )
+    path = scn.to_toml(tmp_path / "cells.toml")
+    assert make_scenario(TrainConfig(scenario_file=str(path))).medium == cells
+    rained = make_scenario(TrainConfig(scenario_file=str(path), rain_rate=5.0)).medium
+    assert (rained.kind, rained.rain_rate_mm_h, rained.dsd) == ("homogeneous", 5.0, cells.dsd)
+    # The paper preset keeps its own 25 mm/h by default.
+    assert make_scenario(TrainConfig()).medium.rain_rate_mm_h == 25.0

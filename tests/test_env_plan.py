@@ -225,3 +225,20 @@ def test_shielded_flights_always_arrive_in_time() -> None:
             live[i[r["terminated"] | r["truncated"]]] = False
         assert arrived.all()
         assert np.all(t <= limit)
+
+
+def test_planner_refuses_plans_beyond_memory() -> None:
+    # A 40 km x 40 km area at 10 m steps with a 10 000-move horizon: each plan would keep
+    # 16 million lattice points x 10 kB of policy (~160 GB). The planner checks before it
+    # allocates and names the size (issue #12, defect 3); before, the allocation aborted the
+    # Python process.
+    env = UAVNavEnv(
+        sir_db=np.zeros((4, 4)),
+        extent_m=(0.0, 40_000.0, 0.0, 40_000.0),
+        goal_m=(20_000.0, 20_000.0),
+        max_steps=10_000,
+    )
+    with pytest.raises(rainuav.InvalidInputError, match=r"max_steps.*needs \d+\.\d+ GB"):
+        plan.optimal_many(env, [[100.0, 100.0], [39_000.0, 100.0]])
+    with pytest.raises(rainuav.InvalidInputError, match="max_steps"):
+        plan.optimal(env, [100.0, 100.0])

@@ -82,8 +82,14 @@ def test_gaussian_beam_bad_input() -> None:
 
 
 def test_ctrl_c_stops_a_long_march_within_a_second() -> None:
+    # The child is started with SIGINT ignored, as a job started in the background by a
+    # non-interactive shell is (it inherits SIG_IGN); it must install Python's handler itself
+    # to be interruptible, and the test kills it rather than wait forever (issue #12,
+    # defect 7).
     script = (
-        "import numpy as np, sys\n"
+        "import signal, sys\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "import numpy as np\n"
         "from rainuav import pwe\n"
         "u = np.ones((512, 512), dtype=np.complex64)\n"
         "print('ready', flush=True)\n"
@@ -92,9 +98,13 @@ def test_ctrl_c_stops_a_long_march_within_a_second() -> None:
         "except KeyboardInterrupt:\n"
         "    print('interrupted', flush=True); sys.exit(3)\n"
     )
-    with subprocess.Popen(
-        [sys.executable, "-c", script], stdout=subprocess.PIPE, text=True
-    ) as proc:
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script],
+        stdout=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
+    )
+    try:
         assert proc.stdout is not None
         assert proc.stdout.readline().strip() == "ready"
         time.sleep(1.5)  # well into the march
@@ -104,4 +114,10 @@ def test_ctrl_c_stops_a_long_march_within_a_second() -> None:
         elapsed = time.monotonic() - t0
         assert rc == 3
         assert "interrupted" in proc.stdout.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait()
+        if proc.stdout is not None:
+            proc.stdout.close()
     assert elapsed < 1.0, elapsed

@@ -149,10 +149,10 @@ def test_sir_by_hand() -> None:
 
 
 def test_mirror_symmetric_scenario_gives_mirror_symmetric_map() -> None:
-    area = Area(x_min_m=0, x_max_m=2000, y_min_m=0, y_max_m=1000, altitude_m=100, resolution_m=20)
+    area = Area(x_min_m=0, x_max_m=1000, y_min_m=0, y_max_m=600, altitude_m=100, resolution_m=20)
     sites = [
-        Site(x_m=700.0, y_m=200.0, cells=[Cell(azimuth_deg=60.0, beamwidth_deg=8.0)]),
-        Site(x_m=1300.0, y_m=200.0, cells=[Cell(azimuth_deg=120.0, beamwidth_deg=8.0)]),
+        Site(x_m=350.0, y_m=100.0, cells=[Cell(azimuth_deg=60.0, beamwidth_deg=8.0)]),
+        Site(x_m=650.0, y_m=100.0, cells=[Cell(azimuth_deg=120.0, beamwidth_deg=8.0)]),
     ]
     rm = build_radio_map(Scenario(name="mirror", area=area, sites=sites), cache=False)
     a, b = rm.rss_dbm[0], rm.rss_dbm[1][:, ::-1]
@@ -319,3 +319,61 @@ def test_rate_map_equals_homogeneous_rain() -> None:
     x0, x1, y0, y1 = scn.area.x_min_m, scn.area.x_max_m, scn.area.y_min_m, scn.area.y_max_m
     cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
     assert rain_rate_at(scn, np.array([cx]), np.array([cy]))[0] == pytest.approx(15.0)
+
+
+def test_with_rain_changes_only_the_rain() -> None:
+    # --rain-rate replaces the scenario's rain field, never its rain model, drop sizes,
+    # shape, temperature or wind (issue #12, defect 1).
+    weather = Medium(
+        kind="cells",
+        rain_rate_mm_h=2.0,
+        cells=[RainCell(x_m=100.0, y_m=500.0, radius_m=50.0, peak_rate_mm_h=80.0)],
+        model="quasi-static",
+        dsd="joss-drizzle",
+        shape="sphere",
+        temperature_c=10.0,
+        wind_speed_m_s=5.0,
+    )
+    scn = beam_line(med=weather)
+    for rate, kind in ((50.0, "homogeneous"), (0.0, "clear")):
+        got = presets.with_rain(scn, rate).medium
+        assert (got.kind, got.rain_rate_mm_h, got.cells) == (kind, rate, [])
+        for name in ("model", "dsd", "shape", "temperature_c", "wind_speed_m_s"):
+            assert getattr(got, name) == getattr(weather, name), name
+    assert scn.medium == weather  # the original is untouched
+
+
+def test_cache_key_changes_with_the_engine(monkeypatch) -> None:
+    # A map cached by other engine code is not reused (issue #12, defect 2): the key hashes
+    # the engine's fingerprint (version, Python engine sources, compiled core).
+    scn = beam_line(length=200.0, res=10.0)
+    first = build_radio_map(scn, cache=True)
+    assert build_radio_map(scn, cache=True).build_seconds == 0.0  # a cache hit
+    old_path = cache.map_path(scn.digest())
+    monkeypatch.setattr(cache, "ENGINE_VERSION", cache.ENGINE_VERSION + 1)
+    cache.engine_fingerprint.cache_clear()
+    try:
+        assert cache.map_path(scn.digest()) != old_path
+        again = build_radio_map(scn, cache=True)
+        assert again.build_seconds > 0.0  # rebuilt, not taken from the old entry
+        np.testing.assert_array_equal(again.rss_dbm, first.rss_dbm)
+    finally:
+        cache.engine_fingerprint.cache_clear()
+    assert cache.clear_cache() == 2  # both entries
+    assert not list((cache.cache_dir() / "radiomaps").iterdir())
+
+
+def test_cli_clear_cache(tmp_path: Path) -> None:
+    env = {"MPLBACKEND": "Agg", "PATH": "", "RAINUAV_CACHE_DIR": str(tmp_path / "c")}
+    folder = tmp_path / "c" / "radiomaps"
+    folder.mkdir(parents=True)
+    (folder / "0123.npz").write_bytes(b"old map")
+    proc = subprocess.run(
+        [sys.executable, "-m", "rainuav.radiomap", "--clear-cache"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+    assert proc.returncode == 0 and "removed 1 cached map" in proc.stdout
+    assert not list(folder.iterdir())

@@ -127,8 +127,32 @@ class TrainConfig:
     """Agent hyperparameters."""
 
 
+_KINDS = {"int": (int,), "float": (int, float), "str": (str,), "bool": (bool,)}
+
+
+def _check_types(obj: Any, prefix: str = "") -> None:
+    """Each field of the dataclass ``obj`` holds its annotated kind (``X | None`` may be
+    None); a TOML file or a caller can hand in anything."""
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        kinds = str(f.type).replace(" ", "").split("|")
+        if value is None and "None" in kinds:
+            continue
+        allowed = _KINDS.get(kinds[0])
+        if allowed is None:
+            continue
+        ok = isinstance(value, allowed) and (kinds[0] == "bool" or not isinstance(value, bool))
+        if not ok:
+            raise InvalidInputError(f"{prefix}{f.name} must be {kinds[0]} (got {value!r})")
+
+
 def check_config(cfg: TrainConfig) -> None:
-    """Raises InvalidInputError naming the first field outside its allowed range."""
+    """Raises InvalidInputError naming the first field of the wrong kind or outside its
+    allowed range."""
+    if not isinstance(cfg.dqn, DQNConfig):
+        raise InvalidInputError(f"dqn must be a DQNConfig (got {type(cfg.dqn).__name__})")
+    _check_types(cfg)
+    _check_types(cfg.dqn, "dqn.")
     d = cfg.dqn
     checks = [
         ("episodes", d.episodes >= 1, ">= 1"),

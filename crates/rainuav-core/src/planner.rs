@@ -1,4 +1,4 @@
-//! Exact planner for the UAV navigation MDP (PHYSICS.md section 6, `rainuav.env`).
+//! Exact planner for the UAV navigation MDP (PHYSICS.md section 6, `rainuav.nav`).
 //!
 //! Moves are deterministic on the lattice `start + step (i, j)`, so the finite-horizon
 //! optimum is a backward dynamic programme over (steps left, lattice point): `V_T = 0`,
@@ -7,8 +7,12 @@
 //! replayed in the environment earns the same return.
 
 use crate::error::{CoreError, Result, check_range};
+use crate::memory::check_memory_for;
 use ndarray::ArrayView2;
 use std::str::FromStr;
+
+const PLAN_MEMORY_HINT: &str = "each plan keeps max_steps bytes per lattice point; use fewer max_steps, a larger step_m \
+     or a smaller area";
 
 /// Base reward kinds (see `rainuav.env`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -187,9 +191,65 @@ impl NavTask<'_> {
         (b, false, (ni, nj), [qx, qy])
     }
 
-    /// The exact optimum from `start` (inside the area).
-    pub fn optimal(&self, start: [f64; 2]) -> Result<Plan> {
+    /// Lattice offsets `(i_lo, i_hi, j_lo, j_hi)` the plan from `start` tabulates: those
+    /// inside the area and reachable within the horizon, plus one ring.
+    fn lattice(&self, start: [f64; 2]) -> (i64, i64, i64, i64) {
+        let [x0, x1, y0, y1] = self.extent;
+        let reach = self.max_steps as i64;
+        let lo = |s: f64, a: f64| (((a - s) / self.step_m).ceil() as i64).max(-reach) - 1;
+        let hi = |s: f64, b: f64| (((b - s) / self.step_m).floor() as i64).min(reach) + 1;
+        (
+            lo(start[0], x0),
+            hi(start[0], x1),
+            lo(start[1], y0),
+            hi(start[1], y1),
+        )
+    }
+
+    /// Number of lattice points of the plan from `start` (at most 50 million).
+    fn lattice_points(&self, start: [f64; 2]) -> Result<usize> {
+        let (i_lo, i_hi, j_lo, j_hi) = self.lattice(start);
+        let n = ((i_hi - i_lo + 1) as usize).saturating_mul((j_hi - j_lo + 1) as usize);
+        if n > 50_000_000 {
+            return Err(CoreError::invalid(
+                "step_m",
+                "gives too many lattice points for the planner",
+                n,
+            ));
+        }
+        Ok(n)
+    }
+
+    /// Bytes the plan from `start` allocates: per lattice point the transition table (four
+    /// rewards, four successors), the inside flag and two value arrays, and the policy,
+    /// `max_steps` bytes per point.
+    pub fn plan_bytes(&self, start: [f64; 2]) -> Result<usize> {
+        let n = self.lattice_points(start)?;
+        let per_point = 4 * size_of::<f64>() + 4 * size_of::<usize>() + 1 + 2 * size_of::<f64>();
+        Ok(n.saturating_mul(per_point.saturating_add(self.max_steps)))
+    }
+
+    /// Exact optimal plans from many starts, computed in parallel (rayon). Refuses, before
+    /// allocating anything, a batch whose plans in flight at once (one per worker thread)
+    /// would need more than 80% of the available memory.
+    pub fn optimal_many(&self, starts: &[[f64; 2]]) -> Result<Vec<Plan>> {
+        use rayon::prelude::*;
         self.validate()?;
+        let mut largest = 0usize;
+        for &p in starts {
+            self.check_start(p)?;
+            largest = largest.max(self.plan_bytes(p)?);
+        }
+        let at_once = rayon::current_num_threads().min(starts.len()).max(1);
+        check_memory_for(
+            "max_steps",
+            PLAN_MEMORY_HINT,
+            largest.saturating_mul(at_once),
+        )?;
+        starts.par_iter().map(|&p| self.optimal(p)).collect()
+    }
+
+    fn check_start(&self, start: [f64; 2]) -> Result<()> {
         let [x0, x1, y0, y1] = self.extent;
         if !(start[0] >= x0 && start[0] <= x1 && start[1] >= y0 && start[1] <= y1) {
             return Err(CoreError::invalid(
@@ -198,22 +258,18 @@ impl NavTask<'_> {
                 format!("{start:?}"),
             ));
         }
-        // Lattice offsets inside the area (and reachable within the horizon).
-        let reach = self.max_steps as i64;
-        let lo = |s: f64, a: f64| (((a - s) / self.step_m).ceil() as i64).max(-reach) - 1;
-        let hi = |s: f64, b: f64| (((b - s) / self.step_m).floor() as i64).min(reach) + 1;
-        let (i_lo, i_hi) = (lo(start[0], x0), hi(start[0], x1));
-        let (j_lo, j_hi) = (lo(start[1], y0), hi(start[1], y1));
-        let ni = (i_hi - i_lo + 1) as usize;
+        Ok(())
+    }
+
+    /// The exact optimum from `start` (inside the area).
+    pub fn optimal(&self, start: [f64; 2]) -> Result<Plan> {
+        self.validate()?;
+        self.check_start(start)?;
+        let [x0, x1, y0, y1] = self.extent;
+        let (i_lo, i_hi, j_lo, j_hi) = self.lattice(start);
         let nj = (j_hi - j_lo + 1) as usize;
-        let n = ni * nj;
-        if n > 50_000_000 {
-            return Err(CoreError::invalid(
-                "step_m",
-                "gives too many lattice points for the planner",
-                n,
-            ));
-        }
+        let n = self.lattice_points(start)?;
+        check_memory_for("max_steps", PLAN_MEMORY_HINT, self.plan_bytes(start)?)?;
         let idx = |i: i64, j: i64| ((i - i_lo) as usize) * nj + (j - j_lo) as usize;
         // Transition table: per state and action, reward and next state (usize::MAX = terminal).
         let mut rew = vec![0.0f64; n * 4];
