@@ -1,11 +1,13 @@
 # One entry point for everything a developer (and CI) runs.
 #   make test   build the extension, lint everything, run the Rust and Python tests
 #   make bench  criterion benches (cargo bench) and pytest-benchmark comparisons
+#   make wheel  one abi3 wheel (CPython 3.10+) in target/wheels
+#   make wheel-check  install that wheel into a fresh venv away from the source and run it
 #   make fmt    format Rust and Python in place
 PYTHON ?= python
 PYTEST_ARGS ?=
 
-.PHONY: test build lint test-rust test-python bench fmt validate
+.PHONY: test build lint test-rust test-python bench fmt validate wheel wheel-check
 
 test: build lint test-rust test-python
 
@@ -29,6 +31,13 @@ test-python: build
 bench: build
 	cargo bench -p rainuav-core
 	MIEPYTHON_USE_JIT=1 $(PYTHON) -m pytest benches --benchmark-enable --benchmark-only --benchmark-columns=min,median,mean,stddev,rounds
+
+wheel:
+	rm -f target/wheels/rainuav-*.whl
+	maturin build --release --out target/wheels
+
+wheel-check: wheel
+	PYTHON=$(PYTHON) bash .ci/wheel-check target/wheels
 
 fmt:
 	cargo fmt --all

@@ -1,7 +1,25 @@
-"""Shared test settings."""
+"""Shared test settings: deterministic property tests, and one radio-map cache per test
+session (so a map several tests need, such as the paper preset's, is built once, and no test
+writes into the user's own cache)."""
 
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
 from hypothesis import settings
 
 # Property tests call into Rust: keep them deterministic and quick in CI.
 settings.register_profile("rainuav", max_examples=60, deadline=None, derandomize=True)
 settings.load_profile("rainuav")
+
+
+@pytest.fixture(scope="session")
+def session_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The session's radio-map cache directory."""
+    return tmp_path_factory.mktemp("rainuav-cache")
+
+
+@pytest.fixture(autouse=True)
+def _session_cache_dir(session_cache: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("RAINUAV_CACHE_DIR", str(session_cache))

@@ -342,7 +342,7 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path) -> None:
     scn = Scenario(
         name="tiny",
         area=Area(x_min_m=0, x_max_m=400, y_min_m=0, y_max_m=400, resolution_m=20),
-        sites=[Site(x_m=100.0, y_m=100.0, cells=[Cell(azimuth_deg=45.0, beamwidth_deg=20)])],
+        sites=[Site(x_m=100.0, y_m=100.0, cells=[Cell(azimuth_deg=45.0, beamwidth_deg=6.0)])],
     )
     cfg = scn.to_toml(tmp_path / "tiny.toml")
     out = tmp_path / "run"

@@ -53,6 +53,7 @@ MIE_CASES = [
 @pytest.mark.parametrize(("m_eng", "x"), MIE_CASES)
 def test_mie_against_miepython(m_eng: complex, x: float) -> None:
     import miepython  # the test extra installs it: a missing package fails the run
+
     # miepython takes m with Im m <= 0 and returns conj(S_BH) in 'wiscombe' normalisation.
     s1, _ = miepython.S1_S2(m_eng, x, 1.0, norm="wiscombe")
     qext, qsca, *_ = miepython.efficiencies_mx(m_eng, x)
@@ -86,6 +87,7 @@ R_GRID = np.array([0.1, 1.0, 12.5, 50.0, 150.0])
 @pytest.mark.parametrize("elevation_deg", [0.0, 30.0])
 def test_itu_p838_against_itur(polarization: str, elevation_deg: float) -> None:
     import itur.models.itu838 as itur838  # likewise
+
     tau = {"h": 0.0, "v": 90.0, "average": 45.0}[polarization]
     f, r = np.meshgrid(F_GRID_HZ, R_GRID, indexing="ij")
     ours = m.itu_p838(f, r, polarization=polarization, elevation_deg=elevation_deg)

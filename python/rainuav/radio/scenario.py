@@ -329,7 +329,12 @@ class Scenario:
 
     @classmethod
     def from_toml_string(cls, text: str) -> Scenario:
-        return cls.from_dict(tomllib.loads(text))
+        """Reads and validates a TOML scenario from a string."""
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as err:
+            raise InvalidInputError(f"scenario: not valid TOML ({err})") from err
+        return cls.from_dict(data)
 
     def replace(self, **changes: Any) -> Scenario:
         """A copy with fields changed (validated)."""
