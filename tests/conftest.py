@@ -7,7 +7,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import torch
 from hypothesis import settings
+
+# The tests' networks are tiny: one torch thread is several times faster than two (no
+# synchronisation; the tests that fly untrained networks took 15-20 s with two threads on a
+# busy 2-core machine against under 1 s with one) and keeps results bit-reproducible.
+# (rainuav.rl.loop.train sets this itself for a run and restores it afterwards.)
+torch.set_num_threads(1)
 
 # Property tests call into Rust: keep them deterministic and quick in CI.
 settings.register_profile("rainuav", max_examples=60, deadline=None, derandomize=True)
