@@ -19,7 +19,16 @@ MAX_LINES = 450
 # Layers, bottom up. A module may import a lower layer, or its own group; never a group of the
 # same or a higher layer (so radio and nav do not know each other).
 BASE = {"errors", "_io", "_checks", "_sampling", "_core", "_deprecated"}
-LAYERS = {"base": 0, "medium": 1, "pwe": 2, "radio": 3, "nav": 3, "rl": 4, "entry": 5}
+LAYERS = {
+    "base": 0,
+    "medium": 1,
+    "antenna": 1,
+    "pwe": 2,
+    "radio": 3,
+    "nav": 3,
+    "rl": 4,
+    "entry": 5,
+}
 ENTRY = {
     "__init__",
     "train",
@@ -36,6 +45,7 @@ ENTRY = {
 # Third-party packages a group must not import.
 FORBIDDEN = {
     "medium": {"torch", "gymnasium"},
+    "antenna": {"torch", "gymnasium"},
     "pwe": {"torch", "gymnasium"},
     "radio": {"torch", "gymnasium"},
     "nav": {"torch"},
@@ -62,7 +72,7 @@ def group(name: str) -> str:
         return "base"
     if head in ENTRY:
         return "entry"
-    return head  # medium, pwe
+    return head  # medium, antenna, pwe
 
 
 def _type_checking(node: ast.If) -> bool:

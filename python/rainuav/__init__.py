@@ -4,6 +4,8 @@ Layers, bottom up (each imports only the ones below it):
 
 - :mod:`rainuav.medium`: what rain does to a radio wave (effective permittivity, specific
   attenuation, ITU-R P.838).
+- :mod:`rainuav.antenna`: antenna gain patterns (3GPP TR 38.901 element and arrays, the
+  paper's Gaussian beam, tables).
 - :mod:`rainuav.pwe`: the 3-D split-step parabolic-equation march.
 - :mod:`rainuav.radio`: scenarios, presets and radio maps (received power per cell, serving
   cell, SIR, SINR).
@@ -34,6 +36,7 @@ __all__ = [
     "InvalidInputError",
     "RainuavError",
     "__version__",
+    "antenna",
     "medium",
     "nav",
     "pwe",
@@ -41,7 +44,7 @@ __all__ = [
     "rl",
 ]
 
-_LAZY = ("nav", "pwe", "radio", "rl")
+_LAZY = ("antenna", "nav", "pwe", "radio", "rl")
 
 
 def __getattr__(name: str) -> Any:
