@@ -379,3 +379,32 @@ def test_cli_clear_cache(tmp_path: Path) -> None:
     )
     assert proc.returncode == 0 and "removed 1 cached map" in proc.stdout
     assert not list(folder.iterdir())
+
+
+def test_noise_from_bandwidth_and_noise_figure() -> None:
+    # PHYSICS.md section 9: N = -174 dBm/Hz + 10 log10(B) + NF; 20 MHz and 7 dB give -93.99
+    # dBm (PHYSICS rounds to -94); the defaults (10 MHz, 9 dB) give -95 dBm exactly, the
+    # previous fixed noise, so existing maps keep their SINR. An explicit noise_dbm wins.
+    assert beam_line().replace(bandwidth_hz=20e6, noise_figure_db=7.0).noise_power_dbm == (
+        pytest.approx(-174 + 10 * math.log10(20e6) + 7, abs=1e-12)
+    )
+    assert beam_line().noise_power_dbm == -95.0
+    assert beam_line().replace(noise_dbm=-120.0).noise_power_dbm == -120.0
+    for change, needle in (
+        ({"bandwidth_hz": 0.0}, "bandwidth_hz must be within"),
+        ({"noise_figure_db": 31.0}, "noise_figure_db must be within 0..30"),
+        ({"noise_figure_db": float("nan")}, "noise_figure_db"),
+    ):
+        with pytest.raises(rainuav.InvalidInputError, match=needle):
+            beam_line().replace(**change)
+
+
+def test_map_sinr_uses_the_receiver_noise() -> None:
+    # One cell: SINR = S / N, so a 30 dB worse noise figure lowers SINR by 30 dB wherever
+    # neither value is clipped (1e-9: the same powers, only N differs).
+    scn = beam_line(length=200.0, res=10.0)
+    quiet = build_radio_map(scn.replace(noise_figure_db=0.0), cache=False)
+    loud = build_radio_map(scn.replace(noise_figure_db=30.0), cache=False)
+    ok = (quiet.sinr_db < sinr_mod.SIR_CEIL_DB) & (loud.sinr_db > sinr_mod.SIR_FLOOR_DB)
+    assert ok.sum() > 10
+    np.testing.assert_allclose((quiet.sinr_db - loud.sinr_db)[ok], 30.0, atol=1e-9)

@@ -4,8 +4,9 @@
 4.9 GHz, seven sites on a hexagon of radius 667 m around (1, 1) km, antennas at 25 m, one
 Gaussian beam per site with the paper's source (elevation 5 degrees, half-power beamwidth
 4.333 degrees). Choices the paper leaves open, made here: horizontal polarisation over a PEC
-ground; 46 dBm per cell; noise -95 dBm; beam azimuths (below) chosen so that the 100 m map has
-both good and weak regions; Marshall-Palmer rain at 20 C, forward-scattering model.
+ground; 46 dBm per cell; noise -95 dBm (10 MHz, 9 dB noise figure: the scenario defaults);
+beam azimuths (below) chosen so that the 100 m map has both good and weak regions;
+Marshall-Palmer rain at 20 C, forward-scattering model.
 
 ``urban``: the same sites with three cells each (azimuths 30, 150, 270 degrees) and a block of
 buildings south-west of the centre, tall enough to cast shadows at the flight altitude.

@@ -172,7 +172,7 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
     finally:
         if bar is not None:
             bar.close()
-    serving, sir, sinr = sir_from_power(power, scn.noise_dbm)
+    serving, sir, sinr = sir_from_power(power, scn.noise_power_dbm)
     with np.errstate(divide="ignore"):
         rss = np.where(power > 0, 10 * np.log10(power), RSS_FLOOR_DBM)
     rm = RadioMap(

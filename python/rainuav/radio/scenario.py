@@ -6,8 +6,9 @@ Conventions (documented choices the design paper leaves open):
 - Global frame: x east, y north, metres; heights above a flat ground at 0.
 - A cell's ``azimuth_deg`` is its boresight direction in the horizontal plane, counter-
   clockwise from +x (0 = east, 90 = north); ``tilt_deg`` is its elevation (positive up).
-- Transmit power defaults to 46 dBm per cell (a 40 W macro sector); the receiver noise power to
-  -95 dBm (thermal noise over 10 MHz, -104 dBm, plus a 9 dB noise figure).
+- Transmit power defaults to 46 dBm per cell (a 40 W macro sector); the receiver noise is
+  thermal noise over ``bandwidth_hz`` plus ``noise_figure_db`` (PHYSICS.md section 9), by
+  default 10 MHz and 9 dB: -104 + 9 = -95 dBm (``noise_dbm`` overrides it).
 - Rain fills every column from the ground up; it varies horizontally (rain cells, rate maps)
   but not with height below the flight altitude.
 """
@@ -17,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -30,6 +32,9 @@ from rainuav._checks import check_number as _num
 from rainuav._io import read_toml, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.radio.weather import Medium, RainCell
+
+THERMAL_NOISE_DBM_HZ = -174.0
+"""Thermal noise density at 290 K, dBm/Hz."""
 
 __all__ = [
     "Area",
@@ -210,8 +215,13 @@ class Scenario:
     """Carrier frequency, Hz (1e9-1e11)."""
     polarization: str = "h"
     """'h' or 'v': sets the ground's image sign and the rain's polarisation."""
-    noise_dbm: float = -95.0
-    """Receiver noise power for SINR, dBm."""
+    bandwidth_hz: float = 10e6
+    """Receiver bandwidth, Hz (sets the thermal noise)."""
+    noise_figure_db: float = 9.0
+    """Receiver noise figure, dB (0-30)."""
+    noise_dbm: float | None = None
+    """Receiver noise power, dBm, overriding ``-174 + 10 log10(bandwidth_hz) +
+    noise_figure_db`` (PHYSICS.md section 9) when set."""
     area: Area = field(default_factory=Area)
     """The airspace."""
     sites: list[Site] = field(default_factory=list)
@@ -236,7 +246,10 @@ class Scenario:
         """Checks every field; raises InvalidInputError naming the first bad one."""
         _num("freq_hz", self.freq_hz, 1e9, 1e11, " Hz")
         _choice("polarization", self.polarization, ("h", "v"))
-        _num("noise_dbm", self.noise_dbm, -200.0, 50.0, " dBm")
+        _num("bandwidth_hz", self.bandwidth_hz, 1e3, 1e10, " Hz")
+        _num("noise_figure_db", self.noise_figure_db, 0.0, 30.0, " dB")
+        if self.noise_dbm is not None:
+            _num("noise_dbm", self.noise_dbm, -200.0, 50.0, " dBm")
         _choice("ground", self.ground, ("pec", "none"))
         self.area.check()
         self.medium.check()
@@ -286,6 +299,14 @@ class Scenario:
                     raise InvalidInputError(
                         f"sites[{j}] is inside {w}, which is as tall as its antenna"
                     )
+
+    @property
+    def noise_power_dbm(self) -> float:
+        """The receiver noise for SINR: ``noise_dbm`` if set, else thermal noise
+        ``-174 dBm/Hz + 10 log10(bandwidth_hz) + noise_figure_db``."""
+        if self.noise_dbm is not None:
+            return float(self.noise_dbm)
+        return THERMAL_NOISE_DBM_HZ + 10.0 * math.log10(self.bandwidth_hz) + self.noise_figure_db
 
     # -- identity ---------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
