@@ -118,9 +118,14 @@ def tr38901_element(**overrides: float) -> TR38901Element:
 
 # -- uniform arrays -------------------------------------------------------------------------
 def _array_factor(n: int, psi: FloatArray) -> FloatArray:
-    """``|sum_k exp(j k psi)|^2 / n`` for k < n (peak n at psi = 0 mod 2 pi)."""
-    k = np.arange(n)
-    s = np.exp(1j * psi[..., None] * k).sum(axis=-1)
+    """``|sum_k exp(j k psi)|^2 / n`` for k < n (peak n at psi = 0 mod 2 pi), summed term by
+    term into one array (no (..., n) temporary)."""
+    step = np.exp(1j * psi)
+    term = np.ones_like(step)
+    s = np.zeros_like(step)
+    for _ in range(n):
+        s += term
+        term *= step
     return np.abs(s) ** 2 / n
 
 
@@ -262,6 +267,12 @@ class TabulatedPattern:
     gain_db: tuple[tuple[float, ...], ...]
     normalise: bool = True
     norm_db: float = field(init=False, default=0.0)
+    _table: tuple[FloatArray, FloatArray, FloatArray] = field(
+        init=False,
+        repr=False,
+        compare=False,
+        default=None,  # type: ignore[assignment]
+    )
 
     def __post_init__(self) -> None:
         az = as_real_array("azimuth_deg", self.azimuth_deg)
@@ -280,14 +291,13 @@ class TabulatedPattern:
             )
         if not np.all(np.isfinite(g)):
             raise InvalidInputError("gain_db must be finite everywhere (no NaN or inf)")
+        object.__setattr__(self, "_table", (az, el, g))  # the arrays, converted once
         if self.normalise:
             object.__setattr__(self, "norm_db", -10.0 * math.log10(sphere_mean(self)))
 
     def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
         ph, el = _angles(azimuth_deg, elevation_deg)
-        az = np.asarray(self.azimuth_deg, dtype=np.float64)
-        ev = np.asarray(self.elevation_deg, dtype=np.float64)
-        g = np.asarray(self.gain_db, dtype=np.float64)
+        az, ev, g = self._table
         inside = (ph >= az[0]) & (ph <= az[-1]) & (el >= ev[0]) & (el <= ev[-1])
         i = np.clip(np.searchsorted(az, ph, side="right") - 1, 0, az.size - 2)
         j = np.clip(np.searchsorted(ev, el, side="right") - 1, 0, ev.size - 2)

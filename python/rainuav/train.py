@@ -42,8 +42,6 @@ __getattr__ = moved(
     },
 )
 
-_TYPES = {"int": int, "float": float, "str": str}
-
 
 def _field_docs(cls: type) -> dict[str, str]:
     """Attribute docstrings of a dataclass (the string literal after each field)."""
@@ -72,17 +70,11 @@ def _parse_bool(text: str) -> bool:
     raise argparse.ArgumentTypeError(f"expected true or false (got {text!r})")
 
 
-def _flag_type(annotation: Any) -> Any:
-    """The argparse type of a field annotated ``int``, ``float``, ``str``, ``bool`` or
-    ``X | None``."""
-    first = str(annotation).split("|")[0].strip()
-    return _parse_bool if first == "bool" else _TYPES.get(first, str)
-
-
 def build_parser() -> argparse.ArgumentParser:
     """CLI flags generated from TrainConfig and DQNConfig (one per field)."""
-    from rainuav.rl.config import DQNConfig, TrainConfig
+    from rainuav.rl.config import DQNConfig, TrainConfig, field_kind
 
+    flag_types = {"int": int, "float": float, "str": str, "bool": _parse_bool}
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.train",
         description=__doc__,
@@ -99,7 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
             ap.add_argument(
                 f"--{f.name.replace('_', '-')}",
                 dest=f.name,
-                type=_flag_type(f.type),
+                type=flag_types.get(field_kind(f)[0], str),
                 default=None,
                 help=f"{docs.get(f.name, '')} (default {default})",
             )

@@ -265,11 +265,16 @@ impl NavTask<'_> {
     pub fn optimal(&self, start: [f64; 2]) -> Result<Plan> {
         self.validate()?;
         self.check_start(start)?;
+        check_memory_for("max_steps", PLAN_MEMORY_HINT, self.plan_bytes(start)?)?;
+        self.solve(start)
+    }
+
+    /// The dynamic programme from a start already checked (task, start, memory).
+    fn solve(&self, start: [f64; 2]) -> Result<Plan> {
         let [x0, x1, y0, y1] = self.extent;
         let (i_lo, i_hi, j_lo, j_hi) = self.lattice(start);
         let nj = (j_hi - j_lo + 1) as usize;
         let n = self.lattice_points(start)?;
-        check_memory_for("max_steps", PLAN_MEMORY_HINT, self.plan_bytes(start)?)?;
         let idx = |i: i64, j: i64| ((i - i_lo) as usize) * nj + (j - j_lo) as usize;
         // Transition table: per state and action, reward and next state (usize::MAX = terminal).
         let mut rew = vec![0.0f64; n * 4];

@@ -22,6 +22,7 @@ __all__ = [
     "TrainConfig",
     "check_config",
     "config_diff",
+    "field_kind",
     "load_config",
     "make_scenario",
     "random_streams",
@@ -130,20 +131,25 @@ class TrainConfig:
 _KINDS = {"int": (int,), "float": (int, float), "str": (str,), "bool": (bool,)}
 
 
+def field_kind(f: dataclasses.Field) -> tuple[str, bool]:
+    """The kind of a config field (``"int"``, ``"float"``, ``"str"``, ``"bool"``, or the
+    annotation's text for anything else) and whether it may be None (``X | None``). The
+    annotations are strings (``from __future__ import annotations``)."""
+    kinds = str(f.type).replace(" ", "").split("|")
+    return kinds[0], "None" in kinds
+
+
 def _check_types(obj: Any, prefix: str = "") -> None:
     """Each field of the dataclass ``obj`` holds its annotated kind (``X | None`` may be
     None); a TOML file or a caller can hand in anything."""
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
-        kinds = str(f.type).replace(" ", "").split("|")
-        if value is None and "None" in kinds:
+        kind, optional = field_kind(f)
+        allowed = _KINDS.get(kind)
+        if allowed is None or (value is None and optional):
             continue
-        allowed = _KINDS.get(kinds[0])
-        if allowed is None:
-            continue
-        ok = isinstance(value, allowed) and (kinds[0] == "bool" or not isinstance(value, bool))
-        if not ok:
-            raise InvalidInputError(f"{prefix}{f.name} must be {kinds[0]} (got {value!r})")
+        if not isinstance(value, allowed) or (kind != "bool" and isinstance(value, bool)):
+            raise InvalidInputError(f"{prefix}{f.name} must be {kind} (got {value!r})")
 
 
 def check_config(cfg: TrainConfig) -> None:

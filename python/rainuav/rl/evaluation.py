@@ -15,9 +15,11 @@ import torch
 from rainuav.errors import InvalidInputError
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
+from rainuav.radio.radiomap import RadioMap
 from rainuav.rl.collect import greedy_rollouts
-from rainuav.rl.config import TrainConfig
+from rainuav.rl.config import TrainConfig, load_config
 from rainuav.rl.dqn import Agent
+from rainuav.rl.setup import make_agent, make_env, pick_device
 
 __all__ = [
     "Validation",
@@ -142,10 +144,6 @@ def evaluate_saved_run(run_dir: Path, device: str = "cpu") -> tuple[dict[str, An
     """Re-evaluates a saved training run: loads its ``config.toml``, ``radiomap.npz`` and
     ``checkpoint.pt`` and evaluates the policy the run reports (:func:`evaluate_run_policy`).
     Returns the metrics, the greedy flights and the environment; writes nothing."""
-    from rainuav.radio.radiomap import RadioMap
-    from rainuav.rl.config import load_config
-    from rainuav.rl.setup import make_agent, make_env, pick_device
-
     run = Path(run_dir)
     for name in ("config.toml", "radiomap.npz", "checkpoint.pt"):
         if not (run / name).exists():

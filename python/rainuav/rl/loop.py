@@ -141,8 +141,7 @@ def train(
     env = make_env(cfg, rm.sir_db, rm.extent_m)
     device = pick_device(cfg.device)
     with torch_settings(device):
-        torch.manual_seed(cfg.seed)
-        agent = make_agent(cfg, env, device)
+        agent = make_agent(cfg, env, device)  # seeds torch with cfg.seed
         env.np_random = np.random.default_rng(random_streams(cfg.seed)["env"])
         return run_loop(cfg, agent, env, out, saved, progress, stop_after)
 
