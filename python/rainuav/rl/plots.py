@@ -77,7 +77,9 @@ def plot_stages(env: UAVNavEnv, stages: list[tuple[int, list]], path: Path) -> N
     from matplotlib.figure import Figure
 
     n = max(1, len(stages))
-    fig = Figure(figsize=(3.6 * n, 3.6))
+    # Constrained layout keeps the titles inside the figure (tight_layout cut them off the
+    # square image panels).
+    fig = Figure(figsize=(3.6 * n, 3.9), layout="constrained")
     axs = fig.subplots(1, n, squeeze=False)
     x0, x1, y0, y1 = env.field.extent
     for ax, (ep, rolls) in zip(axs[0], stages, strict=False):
@@ -96,5 +98,4 @@ def plot_stages(env: UAVNavEnv, stages: list[tuple[int, list]], path: Path) -> N
         ax.set_title(f"after {ep} episodes")
         ax.set_xticks([])
         ax.set_yticks([])
-    fig.tight_layout()
     write_atomic(path, lambda t: fig.savefig(t, dpi=100, format="png"))
