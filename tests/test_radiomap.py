@@ -3,6 +3,7 @@ shadows and hand-computed SIR; scenario files, the cache and bad presets."""
 
 from __future__ import annotations
 
+import copy
 import math
 import subprocess
 import sys
@@ -216,7 +217,10 @@ def test_toml_round_trip(tmp_path: Path) -> None:
         (lambda s: s.sites.append(Site(x_m=5000.0, y_m=10.0)), "sites[7].x_m"),
         (lambda s: setattr(s.area, "altitude_m", -5.0), "area.altitude_m"),
         (lambda s: setattr(s.area, "altitude_m", 0.0), "area.altitude_m"),
-        (lambda s: s.sites[0].cells.append(Cell(azimuth_deg=0.0)), "overlaps another cell"),
+        (
+            lambda s: s.sites[0].cells.append(copy.deepcopy(s.sites[0].cells[0])),
+            "overlaps another cell",
+        ),
         (lambda s: setattr(s.sites[1], "cells", []), "sites[1].cells"),
         (lambda s: s.sites.append(Site(x_m=1000.0, y_m=1000.0)), "overlaps another site"),
         (lambda s: setattr(s.medium, "rain_rate_mm_h", -1.0), "medium.rain_rate_mm_h"),
@@ -241,18 +245,21 @@ def re_escape(s: str) -> str:
     return re.escape(s)
 
 
-def test_unknown_toml_field_and_grid_beyond_memory(tmp_path: Path) -> None:
+def test_unknown_toml_field_and_budget_too_small_for_any_cone(tmp_path: Path) -> None:
     bad = tmp_path / "bad.toml"
     bad.write_text('name = "x"\nfrequency = 5e9\n')
     with pytest.raises(rainuav.InvalidInputError, match="unknown field"):
         Scenario.from_toml(bad)
-    # 100 GHz, wide beams, 20 km: each march would need far more than this machine has.
+    # 100 GHz, wide beams, 20 km: the march would need far more than its budget (and this
+    # machine's memory: the march's own memory check is tested in test_pwe_errors). The cone
+    # narrows to fit pe.budget_gpoints; a budget too small for any cone is refused by name.
     huge = presets.paper(
         freq_hz=1e11,
         area=Area(x_min_m=0, x_max_m=20000, y_min_m=0, y_max_m=20000, resolution_m=50),
         sites=[Site(x_m=100.0, y_m=100.0, cells=[Cell(azimuth_deg=45.0, beamwidth_deg=30.0)])],
+        pe=PESettings(budget_gpoints=0.001),
     )
-    with pytest.raises(rainuav.InvalidInputError, match="GB"):
+    with pytest.raises(rainuav.InvalidInputError, match=r"pe\.budget_gpoints"):
         build_radio_map(huge, cache=False)
 
 

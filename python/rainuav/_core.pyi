@@ -181,3 +181,26 @@ def plan_optimal(
     out_of_bounds_penalty: float,
 ) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
     """Exact optimal plans from many starts: (return, actions, path) each."""
+
+def ray_power(
+    tx_m: _F,
+    tx_power_mw: _F,
+    g_direct: _F,
+    g_reflect: _F,
+    x_m: _F,
+    y_m: _F,
+    *,
+    altitude_m: float,
+    pixel_m: tuple[float, float],
+    freq_hz: float,
+    ground: str,
+    eps_ground: tuple[float, float],
+    polarization: str,
+    gamma_db_per_m: float,
+    gamma_raster: _F | None,
+    gamma_origin_step: tuple[float, float, float, float],
+    buildings: _F,
+    heights: _F | None,
+    heights_origin_step: tuple[float, float, float, float],
+) -> _F:
+    """Received power (mW) of every transmitter at every pixel, (M, H, W)."""

@@ -24,6 +24,7 @@ pub mod p838;
 pub mod planner;
 pub mod pwe;
 pub mod quadrature;
+pub mod rays;
 pub mod water;
 
 pub use error::{CoreError, Result};

@@ -2,11 +2,12 @@
 //! in as read-only views, owned arrays out without copying, core errors onto the
 //! `rainuav.RainuavError` hierarchy, and long work without the GIL. Broadcasting, defaults
 //! and docs live in `python/rainuav`. One file per layer of the core (`medium`, `pwe`,
-//! `planner`); this file holds what they share and registers them.
+//! `planner`, `rays`); this file holds what they share and registers them.
 
 mod medium;
 mod planner;
 mod pwe;
+mod rays;
 
 use ndarray::ArrayView1;
 use pyo3::prelude::*;
@@ -73,6 +74,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     medium::register(m)?;
     pwe::register(m)?;
     planner::register(m)?;
+    rays::register(m)?;
     m.add_function(wrap_pyfunction!(check_memory, m)?)?;
     Ok(())
 }

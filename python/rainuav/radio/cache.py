@@ -17,17 +17,20 @@ from rainuav import _core
 
 __all__ = ["ENGINE_VERSION", "cache_dir", "clear_cache", "engine_fingerprint", "map_path"]
 
-ENGINE_VERSION = 2
+ENGINE_VERSION = 3
 """Bumped by hand with every change meant to change maps (a reminder in the changelog); the
 fingerprint also hashes the engine's code, so a forgotten bump still misses the cache."""
 
 _ENGINE_MODULES = (
     "rainuav._sampling",
+    "rainuav.antenna",
     "rainuav.medium",
     "rainuav.pwe",
+    "rainuav.radio.cell",
     "rainuav.radio.grid",
     "rainuav.radio.pe_engine",
     "rainuav.radio.radiomap",
+    "rainuav.radio.ray_engine",
     "rainuav.radio.scenario",
     "rainuav.radio.sinr",
 )

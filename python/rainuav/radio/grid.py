@@ -1,25 +1,33 @@
-"""The grid of one cell's PE march (PHYSICS.md section 4).
+"""The grid of one cell's PE march and the cone it carries (PHYSICS.md section 4).
 
-The transverse steps resolve the largest angle at which the beam is within
-``pe.dynamic_range_db`` of its peak, ``d <= lambda / (2 sin theta_max)``, separately across
-range and in height (where the tilt adds to the spread). The domain spans the beam's spread
-over the longest range that reaches the area (or the area's own cross-range extent, if
-smaller), plus the absorbing taper; in height, the ground (or a margin below) up to
-``max(altitude, site) + top_margin_m``, plus the taper. Sizes are rounded up to products of 2,
-3 and 5 for the FFTs. Energy that leaves through the top never returns over flat ground, so
-the top only needs to clear the flight altitude.
+The cone: the widest directions (as direction cosines across range and in height) where the
+cell's pattern is within ``pe.dynamic_range_db`` of its peak, narrowed until the march fits
+``pe.budget_gpoints``. The transverse steps resolve it, ``d = lambda / (2 sin theta_max)``;
+the PE carries the pattern fully inside ``CONE_FULL`` of the cone and tapers it to zero at
+the edge (:func:`cone_weight`); the rays carry the rest in the hybrid engine.
+
+The domain spans the beam's spread over the longest range that reaches the area (or
+the area's own cross-range extent, if smaller), plus the absorbing taper; in height, the
+ground (or a margin below) up to ``max(altitude, site) + top_margin_m``, plus the taper.
+Sizes are rounded up to products of 2, 3 and 5 for the FFTs. Energy that leaves through the
+top never returns over flat ground, so the top only needs to clear the flight altitude.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from rainuav.radio.scenario import Cell, Scenario, Site
+from rainuav.errors import InvalidInputError
+from rainuav.radio.cell import Cell
+from rainuav.radio.cell import _pattern as cell_pattern_by_key
+from rainuav.radio.scenario import Scenario, Site
 
-__all__ = ["C0_M_S", "MarchGrid", "march_grid"]
+__all__ = ["C0_M_S", "CONE_FULL", "MarchGrid", "cone_weight", "march_grid"]
 
 C0_M_S = 299_792_458.0
 """Speed of light, m/s."""
@@ -57,36 +65,75 @@ class MarchGrid:
     alt_frac: float
     """The flight altitude sits between rows alt_row and alt_row + 1 at this fraction."""
     bytes: int
+    sine_h: float
+    """Sine of the cone's half-width across range (the grid's Nyquist angle)."""
+    sine_v: float
+    """Sine of the cone's half-width in height."""
+    gpoints: float
+    """Size of the march, 1e9 grid-point steps (nx x ny x steps)."""
 
 
-def _angles(scn: Scenario, cell: Cell) -> tuple[float, float]:
-    """(cross-range, height) largest angles present within the dynamic range, radians."""
-    t = scn.pe.dynamic_range_db
-    if cell.pattern is not None:
-        g = np.asarray(cell.pattern.gain_db, dtype=float)
-        keep = g >= -t
-        az = np.abs(np.asarray(cell.pattern.azimuth_deg))[keep.any(axis=1)]
-        el = np.asarray(cell.pattern.elevation_deg)[keep.any(axis=0)]
-        ah = math.radians(max(float(az.max()), 0.5))
-        av = math.radians(max(float(np.abs(el + cell.tilt_deg).max()), 0.5))
-        return ah, min(av, math.radians(80))
-    # Gaussian beam: power falls as exp(-ln2 (sin th / sin(bw/2))^2) (PHYSICS.md section 4).
-    spread = math.sqrt(t * math.log(10) / (10 * math.log(2)))
-    bh, bv = cell.beamwidths_deg
-    sh = min(0.95, math.sin(math.radians(bh / 2)) * spread)
-    sv = min(0.95, math.sin(math.radians(bv / 2)) * spread)
-    ah = math.asin(sh)
-    av = min(math.radians(80), math.asin(sv) + math.radians(abs(cell.tilt_deg)))
-    return ah, av
+CONE_FULL = 0.75
+"""The PE carries a pattern fully out to this fraction of its cone's sine and tapers it (cos^2)
+to zero at the cone's edge; the rays carry the rest (:func:`cone_weight`)."""
+_MIN_SINE = math.sin(math.radians(0.5))
+
+
+@functools.lru_cache(maxsize=64)
+def _dynamic_range_cone(key: tuple[Any, ...], tilt_deg: float, dr_db: float) -> tuple[float, float]:
+    """(cross-range, height) sines of the widest directions where the pattern is within
+    ``dr_db`` of its peak, sampled on a grid of direction cosines (forward half-space)."""
+    pattern = cell_pattern_by_key(key)
+    s = np.linspace(-0.98, 0.98, 981)
+    sx, sy = np.meshgrid(s, s, indexing="ij")
+    el = np.degrees(np.arcsin(sy))
+    az = np.degrees(np.arcsin(np.clip(sx / np.sqrt(1 - sy**2), -1, 1)))
+    g = pattern.gain_dbi(az, np.clip(el - tilt_deg, -90, 90))
+    # A flat sidelobe floor (the pattern's minimum) is never part of the cone.
+    keep = g > max(g.max() - dr_db, g.min() + 1e-3)
+    # One sample of margin: the edge sample still lies inside the range.
+    step = s[1] - s[0]
+    sh = float(np.abs(sx[keep]).max()) + step
+    sv = float(np.abs(sy[keep]).max()) + step
+    return min(max(sh, _MIN_SINE), 0.95), min(max(sv, _MIN_SINE), 0.95)
+
+
+def cone_weight(sine_h: float, sine_v: float, sx: Any, sy: Any) -> Any:
+    """The share of a pattern the PE carries at direction cosines (sx, sy): 1 inside
+    ``CONE_FULL`` of the cone, cos^2 down to 0 at its edge, 0 beyond; separable."""
+
+    def one(t: Any) -> Any:
+        u = np.clip((np.abs(t) - CONE_FULL) / (1 - CONE_FULL), 0.0, 1.0)
+        return np.cos(0.5 * np.pi * u) ** 2
+
+    return one(np.asarray(sx) / sine_h) * one(np.asarray(sy) / sine_v)
 
 
 def march_grid(scn: Scenario, site: Site, cell: Cell) -> MarchGrid | None:
-    """The march grid of one cell, or None if the cell points away from the whole area."""
+    """The march grid of one cell, or None if the cell points away from the whole area. The
+    cone is the pattern's ``pe.dynamic_range_db`` cone, narrowed in steps of 15% until the
+    march fits ``pe.budget_gpoints``; a budget too small for a 0.5 degree cone is an
+    InvalidInputError."""
+    sh, sv = _dynamic_range_cone(cell.key(), cell.tilt_deg, scn.pe.dynamic_range_db)
+    while True:
+        grid = _grid(scn, site, cell, sh, sv)
+        if grid is None or grid.gpoints <= scn.pe.budget_gpoints:
+            return grid
+        if max(sh, sv) <= _MIN_SINE:
+            raise InvalidInputError(
+                f"pe.budget_gpoints = {scn.pe.budget_gpoints:g} is too small to carry any "
+                f"cone (a 0.5 degree cone needs {grid.gpoints:.3g}); raise it "
+                "(allowed 0.001..1000) or use engine = 'ray'"
+            )
+        sh, sv = max(sh * 0.85, _MIN_SINE), max(sv * 0.85, _MIN_SINE)
+
+
+def _grid(scn: Scenario, site: Site, cell: Cell, sh: float, sv: float) -> MarchGrid | None:
     a = scn.area
     lam = C0_M_S / scn.freq_hz
-    ah, av = _angles(scn, cell)
-    dx = lam / (2 * math.sin(ah))
-    dy = lam / (2 * math.sin(av))
+    ah = math.asin(sh)
+    dx = lam / (2 * sh)
+    dy = lam / (2 * sv)
     dz = scn.pe.dz_m if scn.pe.dz_m is not None else min(a.resolution_m, 10.0)
     phi = math.radians(cell.azimuth_deg)
     cx = np.array([a.x_min_m, a.x_max_m, a.x_min_m, a.x_max_m]) - site.x_m
@@ -98,15 +145,15 @@ def march_grid(scn: Scenario, site: Site, cell: Cell) -> MarchGrid | None:
         return None
     steps = max(1, math.ceil(r_max / dz))
     r_max = steps * dz
-    bh, _ = cell.beamwidths_deg
-    w0 = math.sqrt(2 * math.log(2)) / (2 * math.pi / lam * math.sin(math.radians(bh / 2)))
+    # The aperture is about half a wavelength over the cone's sine wide.
+    w0 = lam / sh
     reach = r_max * math.tan(ah) + 3 * w0
     x_half = min(float(np.abs(x_c).max()), reach) + 4 * dx
     ab = scn.pe.absorber
     nx = _good_size(math.ceil(2 * x_half / (1 - 2 * ab) / dx))
     margin = scn.pe.top_margin_m or max(50.0, a.altitude_m / 2)
     top = max(a.altitude_m, site.height_m) + margin
-    if scn.ground == "pec":
+    if scn.ground != "none":
         ny = _good_size(math.ceil(top / (1 - ab) / dy))
         y0 = 0.0
     else:
@@ -134,4 +181,7 @@ def march_grid(scn: Scenario, site: Site, cell: Cell) -> MarchGrid | None:
         alt_row=alt_row,
         alt_frac=fy - alt_row,
         bytes=nbytes,
+        sine_h=sh,
+        sine_v=sv,
+        gpoints=nx * ny * steps / 1e9,
     )

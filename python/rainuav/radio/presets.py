@@ -1,4 +1,5 @@
-"""Preset scenarios (``rainuav.radio.presets``).
+"""Preset scenarios (``rainuav.radio.presets``); each takes ``rain_rate_mm_h`` (0: clear
+air), ``freq_hz``, and keyword overrides of top-level Scenario fields.
 
 ``paper``: the design paper's setting (section VI): a 2 km x 2 km airspace, the UAV at 100 m,
 4.9 GHz, seven sites on a hexagon of radius 667 m around (1, 1) km, antennas at 25 m, one
@@ -6,10 +7,27 @@ Gaussian beam per site with the paper's source (elevation 5 degrees, half-power 
 4.333 degrees). Choices the paper leaves open, made here: horizontal polarisation over a PEC
 ground; 46 dBm per cell; noise -95 dBm (10 MHz, 9 dB noise figure: the scenario defaults);
 beam azimuths (below) chosen so that the 100 m map has both good and weak regions;
-Marshall-Palmer rain at 20 C, forward-scattering model.
+Marshall-Palmer rain at 20 C, forward-scattering model; and a sidelobe floor 40 dB below the
+33 dBi peak (-7 dBi: the level of a large reflector's far sidelobes), without which every
+pixel outside the seven beams would receive nothing at all.
 
-``urban``: the same sites with three cells each (azimuths 30, 150, 270 degrees) and a block of
-buildings south-west of the centre, tall enough to cast shadows at the flight altitude.
+``uma``: a 3GPP-style urban-macro layout: the same seven sites with three sectors each
+(azimuths 30, 150, 270 degrees), masts at 25 m, each sector the TR 38.901 element in an
+8-row vertical array at half a wavelength, 10 degrees electrical downtilt, 46 dBm; 20 MHz
+bandwidth and a 7 dB noise figure (-94 dBm); PEC ground, horizontal polarisation; 4.9 GHz by
+default, 28 GHz supported.
+
+``rain_cell``: ``uma`` at 28 GHz in light widespread rain (``rain_rate_mm_h``, default
+5 mm/h) with a convective cell (Gaussian, peak 100 mm/h, 1/e radius 500 m) centred at
+(1200, 1300) m, midway along the straight path from the area's centre to the navigation
+task's default destination (1400, 1600) m.
+
+``urban``: the ``uma`` sectors (4.9 GHz) and a block of buildings south-west of the centre,
+tall enough to cast shadows at the flight altitude.
+
+``SINR_THRESHOLDS_DB`` names, per preset, the SINR (dB) its navigation task counts as
+outage by default, chosen so that between 20% and 80% of its clear-air area falls below
+(the shares measured are in the README): 10 dB would put every pixel of ``uma`` in outage.
 """
 
 from __future__ import annotations
@@ -18,9 +36,9 @@ import dataclasses
 from collections.abc import Callable
 from typing import Any
 
-from rainuav.radio.scenario import Area, Building, Cell, Medium, Scenario, Site
+from rainuav.radio.scenario import Area, Building, Cell, Medium, RainCell, Scenario, Site
 
-__all__ = ["PRESETS", "paper", "urban", "with_rain"]
+__all__ = ["PRESETS", "SINR_THRESHOLDS_DB", "paper", "rain_cell", "uma", "urban", "with_rain"]
 
 #: The paper's seven sites, km.
 PAPER_SITES_KM = [
@@ -53,50 +71,103 @@ def with_rain(scn: Scenario, rain_rate_mm_h: float) -> Scenario:
     return dataclasses.replace(scn, medium=weather)
 
 
-def paper(rain_rate_mm_h: float = 25.0, **overrides: Any) -> Scenario:
-    """The paper's scenario; ``rain_rate_mm_h=0`` is clear air; keyword overrides replace
-    top-level Scenario fields."""
-    sites = [
-        Site(x_m=1000 * x, y_m=1000 * y, height_m=25.0, cells=[Cell(azimuth_deg=az)])
-        for (x, y), az in zip(PAPER_SITES_KM, PAPER_AZIMUTHS_DEG, strict=True)
-    ]
-    fields: dict[str, Any] = {
-        "name": "paper",
-        "freq_hz": 4.9e9,
-        "area": Area(),
-        "sites": sites,
-        "medium": _medium(rain_rate_mm_h),
-    }
-    fields.update(overrides)
-    return Scenario(**fields)
+#: Sector azimuths of the three-sector presets, degrees.
+SECTOR_AZIMUTHS_DEG = (30.0, 150.0, 270.0)
+PAPER_FLOOR_DB = 40.0
+"""The paper preset's sidelobe floor below the beams' peak, dB."""
 
 
-def urban(rain_rate_mm_h: float = 25.0, **overrides: Any) -> Scenario:
-    """Three-cell sites and a block of buildings (shadows at the flight altitude)."""
+def paper(rain_rate_mm_h: float = 25.0, freq_hz: float = 4.9e9, **overrides: Any) -> Scenario:
+    """The paper's scenario (module docstring)."""
     sites = [
         Site(
             x_m=1000 * x,
             y_m=1000 * y,
             height_m=25.0,
-            cells=[Cell(azimuth_deg=a) for a in (30.0, 150.0, 270.0)],
+            cells=[Cell(azimuth_deg=az, floor_db=PAPER_FLOOR_DB)],
         )
-        for x, y in PAPER_SITES_KM
-    ]
-    buildings = [
-        Building(x0_m=x0, x1_m=x0 + 60.0, y0_m=y0, y1_m=y0 + 60.0, height_m=60.0)
-        for x0 in (640.0, 740.0, 840.0)
-        for y0 in (640.0, 740.0, 840.0)
+        for (x, y), az in zip(PAPER_SITES_KM, PAPER_AZIMUTHS_DEG, strict=True)
     ]
     fields: dict[str, Any] = {
-        "name": "urban",
-        "freq_hz": 4.9e9,
+        "name": "paper",
+        "freq_hz": freq_hz,
         "area": Area(),
         "sites": sites,
         "medium": _medium(rain_rate_mm_h),
-        "buildings": buildings,
     }
     fields.update(overrides)
     return Scenario(**fields)
 
 
-PRESETS: dict[str, Callable[..., Scenario]] = {"paper": paper, "urban": urban}
+def _sector(azimuth_deg: float) -> Cell:
+    return Cell(
+        azimuth_deg=azimuth_deg,
+        tilt_deg=0.0,
+        antenna="array",
+        rows=8,
+        spacing=0.5,
+        electrical_tilt_deg=-10.0,
+        tx_power_dbm=46.0,
+    )
+
+
+def _uma_sites() -> list[Site]:
+    return [
+        Site(
+            x_m=1000 * x,
+            y_m=1000 * y,
+            height_m=25.0,
+            cells=[_sector(a) for a in SECTOR_AZIMUTHS_DEG],
+        )
+        for x, y in PAPER_SITES_KM
+    ]
+
+
+def uma(rain_rate_mm_h: float = 0.0, freq_hz: float = 4.9e9, **overrides: Any) -> Scenario:
+    """Seven sites x three TR 38.901 array sectors (module docstring)."""
+    fields: dict[str, Any] = {
+        "name": "uma",
+        "freq_hz": freq_hz,
+        "bandwidth_hz": 20e6,
+        "noise_figure_db": 7.0,
+        "area": Area(),
+        "sites": _uma_sites(),
+        "medium": _medium(rain_rate_mm_h),
+    }
+    fields.update(overrides)
+    return Scenario(**fields)
+
+
+RAIN_CELL = RainCell(x_m=1200.0, y_m=1300.0, radius_m=500.0, peak_rate_mm_h=100.0)
+"""The convective cell of the ``rain_cell`` preset."""
+
+
+def rain_cell(rain_rate_mm_h: float = 5.0, freq_hz: float = 28e9, **overrides: Any) -> Scenario:
+    """``uma`` at 28 GHz with a 100 mm/h rain cell in light rain (module docstring)."""
+    weather = Medium(kind="cells", rain_rate_mm_h=rain_rate_mm_h, cells=[RAIN_CELL])
+    fields: dict[str, Any] = {"name": "rain_cell", "medium": weather}
+    fields.update(overrides)
+    return uma(0.0, freq_hz, **fields)
+
+
+def urban(rain_rate_mm_h: float = 25.0, freq_hz: float = 4.9e9, **overrides: Any) -> Scenario:
+    """The ``uma`` sectors and a block of buildings (shadows at the flight altitude)."""
+    buildings = [
+        Building(x0_m=x0, x1_m=x0 + 60.0, y0_m=y0, y1_m=y0 + 60.0, height_m=60.0)
+        for x0 in (640.0, 740.0, 840.0)
+        for y0 in (640.0, 740.0, 840.0)
+    ]
+    fields: dict[str, Any] = {"name": "urban", "buildings": buildings}
+    fields.update(overrides)
+    return uma(rain_rate_mm_h, freq_hz, **fields)
+
+
+PRESETS: dict[str, Callable[..., Scenario]] = {
+    "paper": paper,
+    "uma": uma,
+    "rain_cell": rain_cell,
+    "urban": urban,
+}
+
+SINR_THRESHOLDS_DB: dict[str, float] = {"paper": 0.0, "uma": -3.0, "rain_cell": -3.0, "urban": -3.0}
+"""Default outage threshold of each preset's navigation task, SINR in dB (module docstring)."""

@@ -11,6 +11,7 @@ another, each march using every core. Maps are cached on disk (:mod:`rainuav.rad
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 import time
 import zipfile
@@ -25,15 +26,16 @@ from rainuav import _core
 from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cache import map_path
-from rainuav.radio.grid import march_grid
+from rainuav.radio.grid import MarchGrid, cone_weight, march_grid
 from rainuav.radio.pe_engine import march_cell, resample
 from rainuav.radio.plot import plot_map
+from rainuav.radio.ray_engine import SOILS, Weight, ray_power
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.sinr import RSS_FLOOR_DBM, sir_from_power
 
 __all__ = ["FORMAT_VERSION", "RadioMap", "build_radio_map"]
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 """Version of the .npz layout written by :meth:`RadioMap.save`."""
 
 
@@ -61,12 +63,28 @@ class RadioMap:
     """The scenario the map was built from."""
     cell_site: npt.NDArray[np.int64]
     """(M,) the site index of each cell."""
+    pe_share: npt.NDArray[np.float32]
+    """(M, H, W) which engine produced each cell's power at each pixel: the PE's share of
+    it (0: rays alone, 1: the PE alone)."""
+    pe_cone_deg: npt.NDArray[np.float64]
+    """(M, 2) each cell's PE cone, half-widths across range and in height, degrees (0: no
+    PE for that cell)."""
     build_seconds: float = 0.0
     """Wall time of the build (0 when loaded from the cache)."""
     timings: dict[str, float] = dataclasses.field(default_factory=dict)
     """Seconds per phase of the build: source, screens, march, resample (empty if cached)."""
 
-    _ARRAYS = ("x_m", "y_m", "rss_dbm", "serving_cell", "sir_db", "sinr_db", "cell_site")
+    _ARRAYS = (
+        "x_m",
+        "y_m",
+        "rss_dbm",
+        "serving_cell",
+        "sir_db",
+        "sinr_db",
+        "cell_site",
+        "pe_share",
+        "pe_cone_deg",
+    )
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Writes an .npz with the scenario as TOML metadata, atomically."""
@@ -109,6 +127,8 @@ class RadioMap:
             sinr_db=data["sinr_db"],
             scenario=scn,
             cell_site=data["cell_site"],
+            pe_share=data["pe_share"],
+            pe_cone_deg=data["pe_cone_deg"],
         )
         h, w = scn.area.shape
         if out.rss_dbm.shape[1:] != (h, w) or out.sir_db.shape != (h, w):
@@ -139,39 +159,77 @@ def _cached(scn: Scenario) -> RadioMap | None:
     return rm
 
 
+def _outside_cone(grid: MarchGrid) -> Weight:
+    """The rays' share of a pattern in the hybrid: all of it behind the antenna, the part
+    outside the PE's cone in front."""
+
+    def weight(sx: np.ndarray, sy: np.ndarray, sz: np.ndarray) -> np.ndarray:
+        inside = cone_weight(grid.sine_h, grid.sine_v, sx, sy)
+        return np.asarray(1.0 - np.where(sz > 0, inside, 0.0))
+
+    return weight
+
+
 def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False) -> RadioMap:
-    """Builds (or loads from the cache) the radio map of ``scn``."""
+    """Builds (or loads from the cache) the radio map of ``scn`` with its engine:
+    ``"pe"`` marches each cell's pattern inside its cone; ``"ray"`` traces two rays per
+    cell and pixel; ``"hybrid"`` adds the two, the PE carrying each pattern inside its cone
+    and the rays the rest (the PE needs a ``pec`` ground or none: over a soil the hybrid is
+    the ray engine)."""
     if cache and (hit := _cached(scn)) is not None:
         return hit
+    if scn.engine == "pe" and scn.ground in SOILS:
+        raise InvalidInputError(
+            f"engine 'pe' needs ground 'pec' or 'none' (got {scn.ground!r}: the PE's ground "
+            "is a perfect conductor); use engine 'ray' or 'hybrid'"
+        )
     t0 = time.perf_counter()
     a = scn.area
     h, w = a.shape
     x_m = a.x_min_m + (np.arange(w) + 0.5) * (a.x_max_m - a.x_min_m) / w
     y_m = a.y_min_m + (np.arange(h) + 0.5) * (a.y_max_m - a.y_min_m) / h
     jobs = [(i, site, cell) for i, site in enumerate(scn.sites) for cell in site.cells]
-    grids = [march_grid(scn, site, cell) for _, site, cell in jobs]
+    use_pe = scn.engine in ("pe", "hybrid") and scn.ground not in SOILS
+    grids = [march_grid(scn, site, cell) if use_pe else None for _, site, cell in jobs]
     for grid in grids:
         if grid is not None:
             _core.check_memory(grid.bytes)
-    power = np.zeros((len(jobs), h, w))
+    pe_power = np.zeros((len(jobs), h, w))
     timings: dict[str, float] = {}
     bar = None
-    if progress:
+    if progress and use_pe:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=len(jobs), desc="radio map", unit="cell")
+        bar = tqdm(total=len(jobs), desc="radio map (PE)", unit="cell")
     try:
         for m, ((_, site, cell), grid) in enumerate(zip(jobs, grids, strict=True)):
             if grid is not None:
                 p = march_cell(scn, site, cell, grid, timings)
                 t_r = time.perf_counter()
-                power[m] = resample(scn, site, grid, p, x_m, y_m)
+                pe_power[m] = resample(scn, site, grid, p, x_m, y_m)
                 timings["resample"] = timings.get("resample", 0.0) + time.perf_counter() - t_r
             if bar is not None:
                 bar.update(1)
     finally:
         if bar is not None:
             bar.close()
+    ray = np.zeros_like(pe_power)
+    if scn.engine in ("ray", "hybrid"):
+        t_r = time.perf_counter()
+        weights = [None if g is None else _outside_cone(g) for g in grids]
+        ray = ray_power(scn, [(s, c) for _, s, c in jobs], x_m, y_m, weights)
+        timings["rays"] = time.perf_counter() - t_r
+    power = pe_power + ray
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pe_share = np.where(power > 0, pe_power / power, 0.0).astype(np.float32)
+    cones = np.array(
+        [
+            [0.0, 0.0]
+            if g is None
+            else [math.degrees(math.asin(g.sine_h)), math.degrees(math.asin(g.sine_v))]
+            for g in grids
+        ]
+    ).reshape(-1, 2)
     serving, sir, sinr = sir_from_power(power, scn.noise_power_dbm)
     with np.errstate(divide="ignore"):
         rss = np.where(power > 0, 10 * np.log10(power), RSS_FLOOR_DBM)
@@ -186,6 +244,8 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
         sinr_db=sinr,
         scenario=scn,
         cell_site=np.array([i for i, _, _ in jobs], dtype=np.int64),
+        pe_share=pe_share,
+        pe_cone_deg=cones,
         build_seconds=time.perf_counter() - t0,
         timings=timings,
     )

@@ -31,10 +31,16 @@ from rainuav._checks import check_choice as _choice
 from rainuav._checks import check_number as _num
 from rainuav._io import read_toml, write_atomic
 from rainuav.errors import InvalidInputError
+from rainuav.radio.cell import Cell, Pattern
 from rainuav.radio.weather import Medium, RainCell
 
 THERMAL_NOISE_DBM_HZ = -174.0
 """Thermal noise density at 290 K, dBm/Hz."""
+
+ENGINES = ("hybrid", "ray", "pe")
+"""Propagation engines (:mod:`rainuav.radio.radiomap`)."""
+GROUNDS = ("pec", "none", "very-dry", "medium-dry", "wet")
+"""Grounds: perfectly conducting, none (free space), or ITU-R P.527 dielectric soils."""
 
 __all__ = [
     "Area",
@@ -97,59 +103,6 @@ class Area:
 
 
 @dataclass
-class Pattern:
-    """A tabulated antenna power pattern relative to boresight (dB)."""
-
-    azimuth_deg: list[float]
-    """Cross-range angles, increasing."""
-    elevation_deg: list[float]
-    """Elevation angles relative to the tilt, increasing."""
-    gain_db: list[list[float]]
-    """gain_db[i][j] at (azimuth_deg[i], elevation_deg[j]), 0 at boresight."""
-
-
-@dataclass
-class Cell:
-    """One sector of a site: a beam."""
-
-    azimuth_deg: float = 0.0
-    """Boresight direction, degrees counter-clockwise from +x (east)."""
-    tilt_deg: float = 5.0
-    """Boresight elevation, degrees (positive up); the paper's 5."""
-    beamwidth_deg: float = 4.333
-    """Horizontal (cross-range) half-power beamwidth, degrees; the paper's 4.333."""
-    beamwidth_v_deg: float | None = None
-    """Vertical half-power beamwidth, degrees (default: beamwidth_deg)."""
-    tx_power_dbm: float = 46.0
-    """Transmit power, dBm."""
-    pattern: Pattern | None = None
-    """Optional tabulated pattern; replaces the Gaussian beam."""
-
-    def check(self, where: str) -> None:
-        _num(f"{where}.azimuth_deg", self.azimuth_deg, -360.0, 360.0, " degrees")
-        _num(f"{where}.tilt_deg", self.tilt_deg, -45.0, 45.0, " degrees")
-        _num(f"{where}.beamwidth_deg", self.beamwidth_deg, 0.5, 60.0, " degrees")
-        if self.beamwidth_v_deg is not None:
-            _num(f"{where}.beamwidth_v_deg", self.beamwidth_v_deg, 0.5, 60.0, " degrees")
-        _num(f"{where}.tx_power_dbm", self.tx_power_dbm, -30.0, 80.0, " dBm")
-        if self.pattern is not None:
-            p = self.pattern
-            if len(p.gain_db) != len(p.azimuth_deg) or any(
-                len(row) != len(p.elevation_deg) for row in p.gain_db
-            ):
-                raise InvalidInputError(
-                    f"{where}.pattern.gain_db must have shape "
-                    "(len(azimuth_deg), len(elevation_deg))"
-                )
-
-    @property
-    def beamwidths_deg(self) -> tuple[float, float]:
-        """(horizontal, vertical) half-power beamwidths."""
-        v = self.beamwidth_deg if self.beamwidth_v_deg is None else self.beamwidth_v_deg
-        return self.beamwidth_deg, v
-
-
-@dataclass
 class Site:
     """A base-station site: a mast with one or more cells."""
 
@@ -194,6 +147,10 @@ class PESettings:
     max(50, altitude / 2))."""
     propagator: str = "wide"
     """'wide' or 'narrow'."""
+    budget_gpoints: float = 1.0
+    """Largest march per cell the hybrid and PE engines may run, in 1e9 grid-point steps
+    (nx x ny x steps): the PE's cone is the pattern's ``dynamic_range_db`` cone, narrowed
+    until the march fits (about 10 s per 1e9 on 2 cores). Raise it to widen the cone."""
 
     def check(self, where: str = "pe") -> None:
         _num(f"{where}.dynamic_range_db", self.dynamic_range_db, 10.0, 120.0, " dB")
@@ -203,6 +160,7 @@ class PESettings:
         if self.top_margin_m is not None:
             _num(f"{where}.top_margin_m", self.top_margin_m, 1.0, 1e4, " m")
         _choice(f"{where}.propagator", self.propagator, ("wide", "narrow"))
+        _num(f"{where}.budget_gpoints", self.budget_gpoints, 1e-3, 1e3, " (1e9 grid-point steps)")
 
 
 @dataclass
@@ -229,7 +187,10 @@ class Scenario:
     medium: Medium = field(default_factory=lambda: Medium(kind="clear"))
     """The weather."""
     ground: str = "pec"
-    """'pec' (flat perfectly conducting ground) or 'none' (free space)."""
+    """'pec' (flat perfectly conducting ground), 'none' (free space), or a dielectric soil of
+    ITU-R P.527: 'very-dry', 'medium-dry', 'wet' (rays only: the PE's ground is PEC)."""
+    engine: str = "hybrid"
+    """'hybrid' (the PE inside its cone, rays outside), 'ray' or 'pe' (its cone only)."""
     buildings: list[Building] = field(default_factory=list)
     """Buildings (boxes)."""
     height_map_m: list[list[float]] | None = None
@@ -250,7 +211,8 @@ class Scenario:
         _num("noise_figure_db", self.noise_figure_db, 0.0, 30.0, " dB")
         if self.noise_dbm is not None:
             _num("noise_dbm", self.noise_dbm, -200.0, 50.0, " dBm")
-        _choice("ground", self.ground, ("pec", "none"))
+        _choice("ground", self.ground, GROUNDS)
+        _choice("engine", self.engine, ENGINES)
         self.area.check()
         self.medium.check()
         self.pe.check()
@@ -271,10 +233,11 @@ class Scenario:
             beams: set[tuple[float, float]] = set()
             for j, c in enumerate(s.cells):
                 c.check(f"{w}.cells[{j}]")
-                key = (c.azimuth_deg % 360.0, c.tilt_deg)
+                key = (c.azimuth_deg % 360.0, c.tilt_deg, c.key())
                 if key in beams:
                     raise InvalidInputError(
-                        f"{w}.cells[{j}] overlaps another cell of the site (same azimuth and tilt)"
+                        f"{w}.cells[{j}] overlaps another cell of the site "
+                        "(same antenna, azimuth and tilt)"
                     )
                 beams.add(key)
         if self.height_map_m is not None:

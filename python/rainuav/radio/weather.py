@@ -63,6 +63,19 @@ class Medium:
     wind_speed_m_s: float = 0.0
     """Wind across the path, m/s."""
 
+    def rain_medium(self, freq_hz: float, polarization: str) -> m.RainMedium:
+        """The effective medium of this weather's rain (model, drops, temperature, wind) at
+        one frequency and polarisation, for any rain rate."""
+        return m.RainMedium(
+            freq_hz,
+            model=self.model,  # type: ignore[arg-type]
+            polarization=polarization,  # type: ignore[arg-type]
+            shape=self.shape,  # type: ignore[arg-type]
+            temperature_c=self.temperature_c,
+            wind_speed_m_s=self.wind_speed_m_s,
+            dsd=self.dsd,
+        )
+
     def check(self, where: str = "medium") -> None:
 
         _choice(f"{where}.kind", self.kind, ("clear", "homogeneous", "cells", "map"))

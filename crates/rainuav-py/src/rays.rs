@@ -1,0 +1,134 @@
+//! Bindings of the ray model (`rainuav.radio.ray_engine` drives them).
+
+use crate::{detached, to_py};
+use ndarray::Array2;
+use num_complex::Complex64;
+use numpy::{IntoPyArray, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
+use pyo3::prelude::*;
+use rainuav_core::CoreError;
+use rainuav_core::rays::{
+    Building, CellRaster, NodeRaster, RainField, RayGround, RayPolarization, RayScene,
+    RayTransmitter,
+};
+
+/// Received power (mW) of every transmitter at every pixel, (M, H, W): direct and
+/// ground-reflected rays with rain and knife-edge losses, averaged over each pixel.
+#[pyfunction]
+#[pyo3(signature = (tx_m, tx_power_mw, g_direct, g_reflect, x_m, y_m, *, altitude_m, pixel_m,
+    freq_hz, ground, eps_ground, polarization, gamma_db_per_m, gamma_raster, gamma_origin_step,
+    buildings, heights, heights_origin_step))]
+#[allow(clippy::too_many_arguments)]
+fn ray_power<'py>(
+    py: Python<'py>,
+    tx_m: PyReadonlyArray2<'py, f64>,
+    tx_power_mw: PyReadonlyArray1<'py, f64>,
+    g_direct: PyReadonlyArray3<'py, f64>,
+    g_reflect: PyReadonlyArray3<'py, f64>,
+    x_m: PyReadonlyArray1<'py, f64>,
+    y_m: PyReadonlyArray1<'py, f64>,
+    altitude_m: f64,
+    pixel_m: [f64; 2],
+    freq_hz: f64,
+    ground: &str,
+    eps_ground: (f64, f64),
+    polarization: &str,
+    gamma_db_per_m: f64,
+    gamma_raster: Option<PyReadonlyArray2<'py, f64>>,
+    gamma_origin_step: [f64; 4],
+    buildings: PyReadonlyArray2<'py, f64>,
+    heights: Option<PyReadonlyArray2<'py, f64>>,
+    heights_origin_step: [f64; 4],
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    let ground = match ground {
+        "none" => RayGround::None,
+        "pec" => RayGround::Pec,
+        "dielectric" => RayGround::Dielectric(Complex64::new(eps_ground.0, eps_ground.1)),
+        other => {
+            return Err(to_py(CoreError::invalid(
+                "ground",
+                "must be 'none', 'pec' or 'dielectric'",
+                other,
+            )));
+        }
+    };
+    let polarization = match polarization {
+        "h" => RayPolarization::H,
+        "v" => RayPolarization::V,
+        other => {
+            return Err(to_py(CoreError::invalid(
+                "polarization",
+                "must be 'h' or 'v'",
+                other,
+            )));
+        }
+    };
+    let tx = tx_m.as_array();
+    let pw = tx_power_mw.as_array();
+    if tx.ncols() != 3 || tx.nrows() != pw.len() {
+        return Err(to_py(CoreError::invalid(
+            "tx_m",
+            "must have shape (M, 3) with M = len(tx_power_mw)",
+            format!("{:?}", tx.dim()),
+        )));
+    }
+    let txs: Vec<RayTransmitter> = tx
+        .rows()
+        .into_iter()
+        .zip(pw.iter())
+        .map(|(r, &p)| RayTransmitter {
+            position_m: [r[0], r[1], r[2]],
+            power_mw: p,
+        })
+        .collect();
+    let b = buildings.as_array();
+    if b.ncols() != 5 && b.nrows() > 0 {
+        return Err(to_py(CoreError::invalid(
+            "buildings",
+            "must have shape (B, 5): x0, x1, y0, y1, height",
+            format!("{:?}", b.dim()),
+        )));
+    }
+    let boxes: Vec<Building> = b
+        .rows()
+        .into_iter()
+        .map(|r| [r[0], r[1], r[2], r[3], r[4]])
+        .collect();
+    let x = x_m.as_array().to_vec();
+    let y = y_m.as_array().to_vec();
+    let gr: Option<Array2<f64>> = gamma_raster.map(|g| g.as_array().to_owned());
+    let hr: Option<Array2<f64>> = heights.map(|h| h.as_array().to_owned());
+    let gd = g_direct.as_array();
+    let gf = g_reflect.as_array();
+    let out = detached(py, || {
+        let rain = match &gr {
+            Some(v) => RainField::Raster(NodeRaster {
+                values: v.view(),
+                origin_step: gamma_origin_step,
+            }),
+            None => RainField::Uniform(gamma_db_per_m),
+        };
+        let scene = RayScene {
+            x_m: &x,
+            y_m: &y,
+            altitude_m,
+            pixel_m,
+            freq_hz,
+            ground,
+            polarization,
+            rain,
+            buildings: &boxes,
+            heights: hr.as_ref().map(|v| CellRaster {
+                values: v.view(),
+                origin_step: heights_origin_step,
+            }),
+        };
+        scene.power(&txs, gd, gf)
+    })?;
+    Ok(out.into_pyarray(py))
+}
+
+/// Adds this layer's functions to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(ray_power, m)?)?;
+    Ok(())
+}
