@@ -14,7 +14,7 @@
 //! `A = (d / rho) integral_0^rho gamma(x(s), y(s)) ds` over the horizontal projection of the
 //! ray (the same line for both rays: the reflection point lies on it), with `gamma` in dB/m:
 //! uniform (`gamma d` exactly) or a raster of nodes, bilinear, held beyond the outermost nodes,
-//! integrated by the trapezoid rule at half the node spacing.
+//! integrated by the trapezoid rule at the node spacing.
 //!
 //! **Buildings.** Boxes standing on the ground, and optionally a raster of obstacle heights.
 //! A ray that passes below an edge gets the ITU-R P.526 single knife-edge loss
@@ -245,7 +245,7 @@ impl RayScene<'_> {
             RainField::Uniform(g) => g,
             RainField::Raster(r) => {
                 let rho = (b[0] - a[0]).hypot(b[1] - a[1]);
-                let n = ((rho / (0.5 * r.spacing())).ceil() as usize).max(1);
+                let n = ((rho / r.spacing()).ceil() as usize).max(1);
                 let mut sum = 0.5 * (r.at(a[0], a[1]) + r.at(b[0], b[1]));
                 for k in 1..n {
                     let t = k as f64 / n as f64;

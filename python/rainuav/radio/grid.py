@@ -73,7 +73,7 @@ class MarchGrid:
     """Size of the march, 1e9 grid-point steps (nx x ny x steps)."""
 
 
-CONE_FULL = 0.75
+CONE_FULL = 0.6
 """The PE carries a pattern fully out to this fraction of its cone's sine and tapers it (cos^2)
 to zero at the cone's edge; the rays carry the rest (:func:`cone_weight`)."""
 _MIN_SINE = math.sin(math.radians(0.5))

@@ -169,5 +169,5 @@ PRESETS: dict[str, Callable[..., Scenario]] = {
     "urban": urban,
 }
 
-SINR_THRESHOLDS_DB: dict[str, float] = {"paper": 0.0, "uma": -3.0, "rain_cell": -3.0, "urban": -3.0}
+SINR_THRESHOLDS_DB: dict[str, float] = {"paper": 0.0, "uma": -2.0, "rain_cell": -2.0, "urban": -1.0}
 """Default outage threshold of each preset's navigation task, SINR in dB (module docstring)."""

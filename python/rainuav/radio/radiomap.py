@@ -63,12 +63,12 @@ class RadioMap:
     """The scenario the map was built from."""
     cell_site: npt.NDArray[np.int64]
     """(M,) the site index of each cell."""
-    pe_share: npt.NDArray[np.float32]
+    pe_share: npt.NDArray[np.float32] = None  # type: ignore[assignment]
     """(M, H, W) which engine produced each cell's power at each pixel: the PE's share of
-    it (0: rays alone, 1: the PE alone)."""
-    pe_cone_deg: npt.NDArray[np.float64]
+    it (0: rays alone, 1: the PE alone; all 0 if not given)."""
+    pe_cone_deg: npt.NDArray[np.float64] = None  # type: ignore[assignment]
     """(M, 2) each cell's PE cone, half-widths across range and in height, degrees (0: no
-    PE for that cell)."""
+    PE for that cell, or not given)."""
     build_seconds: float = 0.0
     """Wall time of the build (0 when loaded from the cache)."""
     timings: dict[str, float] = dataclasses.field(default_factory=dict)
@@ -85,6 +85,12 @@ class RadioMap:
         "pe_share",
         "pe_cone_deg",
     )
+
+    def __post_init__(self) -> None:
+        if self.pe_share is None:
+            self.pe_share = np.zeros(np.shape(self.rss_dbm), np.float32)
+        if self.pe_cone_deg is None:
+            self.pe_cone_deg = np.zeros((len(self.rss_dbm), 2))
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Writes an .npz with the scenario as TOML metadata, atomically."""
@@ -159,13 +165,11 @@ def _cached(scn: Scenario) -> RadioMap | None:
     return rm
 
 
-def _outside_cone(grid: MarchGrid) -> Weight:
-    """The rays' share of a pattern in the hybrid: all of it behind the antenna, the part
-    outside the PE's cone in front."""
+def _inside_cone(grid: MarchGrid) -> Weight:
+    """The PE's share of a pattern: the cone weight in front of the antenna, 0 behind."""
 
     def weight(sx: np.ndarray, sy: np.ndarray, sz: np.ndarray) -> np.ndarray:
-        inside = cone_weight(grid.sine_h, grid.sine_v, sx, sy)
-        return np.asarray(1.0 - np.where(sz > 0, inside, 0.0))
+        return np.asarray(np.where(sz > 0, cone_weight(grid.sine_h, grid.sine_v, sx, sy), 0.0))
 
     return weight
 
@@ -173,9 +177,10 @@ def _outside_cone(grid: MarchGrid) -> Weight:
 def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False) -> RadioMap:
     """Builds (or loads from the cache) the radio map of ``scn`` with its engine:
     ``"pe"`` marches each cell's pattern inside its cone; ``"ray"`` traces two rays per
-    cell and pixel; ``"hybrid"`` adds the two, the PE carrying each pattern inside its cone
-    and the rays the rest (the PE needs a ``pec`` ground or none: over a soil the hybrid is
-    the ray engine)."""
+    cell and pixel; ``"hybrid"`` lets the PE carry each pattern inside its cone and the rays
+    the rest (the PE needs a ``pec`` ground or none: over a soil the hybrid is
+    the ray engine). ``RadioMap.pe_share`` records, per cell and pixel, the share of the
+    power the PE carried."""
     if cache and (hit := _cached(scn)) is not None:
         return hit
     if scn.engine == "pe" and scn.ground in SOILS:
@@ -213,15 +218,29 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
     finally:
         if bar is not None:
             bar.close()
-    ray = np.zeros_like(pe_power)
-    if scn.engine in ("ray", "hybrid"):
+    if scn.engine == "pe":
+        power = pe_power
+        pe_share = (pe_power > 0).astype(np.float32)
+    else:
         t_r = time.perf_counter()
-        weights = [None if g is None else _outside_cone(g) for g in grids]
-        ray = ray_power(scn, [(s, c) for _, s, c in jobs], x_m, y_m, weights)
+        cells = [(s, c) for _, s, c in jobs]
+        power = ray_power(scn, cells, x_m, y_m)
+        pe_share = np.zeros(power.shape, np.float32)
+        if use_pe:
+            # The PE replaces the rays' account of the part of each pattern inside its cone:
+            # P = P_ray(G) + P_pe(G w) - P_ray(G w). Where the two agree this is the ray map,
+            # so the seam is continuous by construction; inside the cone (w = 1) it is the
+            # PE's map (rain cells, buildings as the march sees them).
+            weights = [None if g is None else _inside_cone(g) for g in grids]
+            carried = ray_power(scn, cells, x_m, y_m, weights)
+            for m, g in enumerate(grids):
+                if g is None:
+                    carried[m] = 0.0
+            with np.errstate(divide="ignore", invalid="ignore"):
+                pe_share = np.clip(np.where(power > 0, carried / power, 0.0), 0, 1)
+            pe_share = pe_share.astype(np.float32)
+            power = np.maximum(power - carried + pe_power, pe_power)
         timings["rays"] = time.perf_counter() - t_r
-    power = pe_power + ray
-    with np.errstate(divide="ignore", invalid="ignore"):
-        pe_share = np.where(power > 0, pe_power / power, 0.0).astype(np.float32)
     cones = np.array(
         [
             [0.0, 0.0]

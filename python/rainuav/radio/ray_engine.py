@@ -55,7 +55,7 @@ def gamma_field(
 ) -> tuple[float, np.ndarray | None, tuple[float, float, float, float]]:
     """The rain's specific attenuation for the rays: (uniform dB/m, raster of nodes in dB/m
     or None, (x0, dx, y0, dy) of the raster). Rain cells and rate maps are sampled at nodes
-    ``spacing_m`` apart (default: half the pixel, at most 10 m) over the area."""
+    ``spacing_m`` apart (default: the pixel, at most 10 m) over the area."""
     m = scn.medium
     if m.kind == "clear":
         return 0.0, None, (0.0, 1.0, 0.0, 1.0)
@@ -63,7 +63,7 @@ def gamma_field(
     if m.kind == "homogeneous":
         return float(rm.specific_attenuation(m.rain_rate_mm_h)) / 1000.0, None, (0, 1, 0, 1)
     a = scn.area
-    step = spacing_m or min(a.resolution_m / 2, 10.0)
+    step = spacing_m or min(a.resolution_m, 10.0)
     nx = math.ceil((a.x_max_m - a.x_min_m) / step) + 1
     ny = math.ceil((a.y_max_m - a.y_min_m) / step) + 1
     xs = a.x_min_m + np.arange(nx) * step
