@@ -284,10 +284,10 @@ def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
         check=True,
         env={"MPLBACKEND": "Agg", "PATH": "", "RAINUAV_CACHE_DIR": str(tmp_path / "c")},
     )
-    assert "SIR >= 10 dB" in proc.stdout
+    assert "SINR median" in proc.stdout and "PE share" in proc.stdout
     rm = RadioMap.load(out / "radiomap.npz")
     assert rm.scenario.medium.rain_rate_mm_h == 10.0
-    for png in ("rss.png", "sir.png"):
+    for png in ("rss.png", "sir.png", "sinr.png", "serving.png"):
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
 
 

@@ -1,6 +1,7 @@
 """``python -m rainuav.radiomap``: build a radio map and write it as .npz and PNGs.
 
     python -m rainuav.radiomap --scenario paper --rain-rate 25 --out maps/
+    python -m rainuav.radiomap --scenario uma --freq-ghz 28 --rain-rate 50 --engine hybrid
     python -m rainuav.radiomap --config my_scenario.toml --out maps/
     python -m rainuav.radiomap --clear-cache
 
@@ -44,6 +45,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the "
         "scenario's rain model, drop sizes, shape, temperature and wind are kept)",
     )
+    ap.add_argument("--freq-ghz", type=float, default=None, help="carrier frequency, GHz (1-100)")
+    ap.add_argument(
+        "--engine",
+        choices=("hybrid", "ray", "pe"),
+        default=None,
+        help="propagation engine (default: the scenario's, 'hybrid' for the presets)",
+    )
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
     ap.add_argument("--clear-cache", action="store_true", help="delete every cached map and exit")
@@ -51,6 +59,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    import numpy as np
+
     from rainuav.radio import Scenario, build_radio_map, cache_dir, clear_cache, presets
     from rainuav.radio.plot import save_map_png
 
@@ -66,18 +76,26 @@ def main(argv: Sequence[str] | None = None) -> int:
             scn = presets.PRESETS[args.scenario]()
         if args.rain_rate is not None:
             scn = presets.with_rain(scn, args.rain_rate)
+        if args.freq_ghz is not None:
+            scn = scn.replace(freq_hz=args.freq_ghz * 1e9)
+        if args.engine is not None:
+            scn = scn.replace(engine=args.engine)
         rm = build_radio_map(scn, cache=not args.no_cache, progress=True)
         npz = rm.save(args.out / "radiomap.npz")
-        pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in ("rss", "sir")]
+        kinds = ("sinr", "sir", "serving", "rss")
+        pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in kinds]
     except InvalidInputError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     split = ", ".join(f"{k} {v:.1f} s" for k, v in rm.timings.items()) or "from the cache"
+    sinr = rm.sinr_db
     print(
-        f"{scn.name}: {len(rm.rss_dbm)} cells, SIR >= 10 dB on {100 * rm.coverage():.1f}% "
-        f"of the area; built in {rm.build_seconds:.1f} s ({split})"
+        f"{scn.name} ({scn.engine}, {scn.freq_hz / 1e9:g} GHz): {len(rm.rss_dbm)} cells, SINR "
+        f"median {float(np.median(sinr)):.1f} dB (5-95%: {float(np.percentile(sinr, 5)):.1f} "
+        f"to {float(np.percentile(sinr, 95)):.1f}); PE share of the power "
+        f"{100 * float(rm.pe_share.mean()):.1f}%; built in {rm.build_seconds:.1f} s ({split})"
     )
-    print(f"wrote {npz}, {pngs[0]}, {pngs[1]}")
+    print(f"wrote {npz}, " + ", ".join(str(p) for p in pngs))
     return 0
 
 

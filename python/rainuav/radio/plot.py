@@ -15,15 +15,16 @@ from rainuav.radio.sinr import RSS_FLOOR_DBM
 
 __all__ = ["KINDS", "plot_map", "save_map_png"]
 
-KINDS = ("sir", "sinr", "rss")
+KINDS = ("sir", "sinr", "rss", "serving")
 
 
 def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
-    """Draws the map ``rm`` (a RadioMap) in dB: ``kind`` 'sir', 'sinr' or 'rss' (``cell``
-    selects one cell's RSS, default the strongest), with the sites and beam azimuths marked.
-    Returns the matplotlib Axes (a new pyplot figure when ``ax`` is None)."""
+    """Draws the map ``rm`` (a RadioMap): ``kind`` 'sir', 'sinr', 'rss' (dB; ``cell``
+    selects one cell's RSS, default the strongest) or 'serving' (the serving cell), with
+    the sites and beam azimuths marked. Returns the matplotlib Axes (a new pyplot figure
+    when ``ax`` is None)."""
     if kind not in KINDS:
-        raise InvalidInputError(f"kind must be 'sir', 'sinr' or 'rss' (got {kind!r})")
+        raise InvalidInputError(f"kind must be one of {KINDS} (got {kind!r})")
     if ax is None:
         import matplotlib.pyplot as plt
 
@@ -38,10 +39,19 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
         finite = data[data > RSS_FLOOR_DBM]
         vmin = float(np.percentile(finite, 2)) if finite.size else None
         im = ax.imshow(data, origin="lower", extent=rm.extent_m, cmap="viridis", vmin=vmin)
+    elif kind == "serving":
+        data, label = rm.serving_cell, "serving cell"
+        cells = max(len(rm.rss_dbm), 1)
+        im = ax.imshow(
+            data, origin="lower", extent=rm.extent_m, cmap="tab20", vmin=-0.5, vmax=cells - 0.5
+        )
     else:
         data = rm.sir_db if kind == "sir" else rm.sinr_db
         label = f"{kind.upper()} [dB]"
-        im = ax.imshow(data, origin="lower", extent=rm.extent_m, cmap="RdYlGn", vmin=-10, vmax=30)
+        # Colour scale from the map itself (a physical uma map spans -6..+3 dB).
+        lo = min(-10.0, float(np.percentile(data, 1)))
+        hi = max(float(np.percentile(data, 99)), lo + 10.0)
+        im = ax.imshow(data, origin="lower", extent=rm.extent_m, cmap="RdYlGn", vmin=lo, vmax=hi)
     ax.figure.colorbar(im, ax=ax, label=label)
     xs = [s.x_m for s in rm.scenario.sites]
     ys = [s.y_m for s in rm.scenario.sites]

@@ -179,7 +179,8 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
     ``"pe"`` marches each cell's pattern inside its cone; ``"ray"`` traces two rays per
     cell and pixel; ``"hybrid"`` lets the PE carry each pattern inside its cone and the rays
     the rest (the PE needs a ``pec`` ground or none: over a soil the hybrid is
-    the ray engine). ``RadioMap.pe_share`` records, per cell and pixel, the share of the
+    the ray engine; a cell whose cone carries under 1% of its power at every pixel is not
+    marched). ``RadioMap.pe_share`` records, per cell and pixel, the share of the
     power the PE carried."""
     if cache and (hit := _cached(scn)) is not None:
         return hit
@@ -196,16 +197,35 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
     jobs = [(i, site, cell) for i, site in enumerate(scn.sites) for cell in site.cells]
     use_pe = scn.engine in ("pe", "hybrid") and scn.ground not in SOILS
     grids = [march_grid(scn, site, cell) if use_pe else None for _, site, cell in jobs]
+    cells = [(s, c) for _, s, c in jobs]
+    timings: dict[str, float] = {}
+    power = np.zeros((len(jobs), h, w))
+    carried = np.zeros_like(power)
+    if scn.engine != "pe":
+        t_r = time.perf_counter()
+        power = ray_power(scn, cells, x_m, y_m)
+        if use_pe:
+            # What the PE would carry, by the rays: a cell whose cone carries under 1% of its
+            # power at every pixel (the UAV above a down-tilted sector's cone) is not marched.
+            weights = [None if g is None else _inside_cone(g) for g in grids]
+            carried = ray_power(scn, cells, x_m, y_m, weights)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                frac = np.where(power > 0, carried / power, 0.0)
+            for m in range(len(grids)):
+                if grids[m] is None or float(frac[m].max()) < 0.01:
+                    grids[m] = None
+                    carried[m] = 0.0
+        timings["rays"] = time.perf_counter() - t_r
     for grid in grids:
         if grid is not None:
             _core.check_memory(grid.bytes)
-    pe_power = np.zeros((len(jobs), h, w))
-    timings: dict[str, float] = {}
+    pe_power = np.zeros_like(power)
     bar = None
-    if progress and use_pe:
+    marches = sum(g is not None for g in grids)
+    if progress and marches:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=len(jobs), desc="radio map (PE)", unit="cell")
+        bar = tqdm(total=marches, desc="radio map (PE)", unit="cell")
     try:
         for m, ((_, site, cell), grid) in enumerate(zip(jobs, grids, strict=True)):
             if grid is not None:
@@ -213,8 +233,8 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
                 t_r = time.perf_counter()
                 pe_power[m] = resample(scn, site, grid, p, x_m, y_m)
                 timings["resample"] = timings.get("resample", 0.0) + time.perf_counter() - t_r
-            if bar is not None:
-                bar.update(1)
+                if bar is not None:
+                    bar.update(1)
     finally:
         if bar is not None:
             bar.close()
@@ -222,25 +242,13 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
         power = pe_power
         pe_share = (pe_power > 0).astype(np.float32)
     else:
-        t_r = time.perf_counter()
-        cells = [(s, c) for _, s, c in jobs]
-        power = ray_power(scn, cells, x_m, y_m)
-        pe_share = np.zeros(power.shape, np.float32)
-        if use_pe:
-            # The PE replaces the rays' account of the part of each pattern inside its cone:
-            # P = P_ray(G) + P_pe(G w) - P_ray(G w). Where the two agree this is the ray map,
-            # so the seam is continuous by construction; inside the cone (w = 1) it is the
-            # PE's map (rain cells, buildings as the march sees them).
-            weights = [None if g is None else _inside_cone(g) for g in grids]
-            carried = ray_power(scn, cells, x_m, y_m, weights)
-            for m, g in enumerate(grids):
-                if g is None:
-                    carried[m] = 0.0
-            with np.errstate(divide="ignore", invalid="ignore"):
-                pe_share = np.clip(np.where(power > 0, carried / power, 0.0), 0, 1)
-            pe_share = pe_share.astype(np.float32)
-            power = np.maximum(power - carried + pe_power, pe_power)
-        timings["rays"] = time.perf_counter() - t_r
+        # The PE replaces the rays' account of the part of each pattern inside its cone:
+        # P = P_ray(G) + P_pe(G w) - P_ray(G w). Where the two agree this is the ray map, so
+        # the seam is continuous by construction; inside the cone (w = 1) it is the PE's map
+        # (rain cells and buildings as the march sees them).
+        with np.errstate(divide="ignore", invalid="ignore"):
+            pe_share = np.clip(np.where(power > 0, carried / power, 0.0), 0, 1).astype(np.float32)
+        power = np.maximum(power - carried + pe_power, pe_power)
     cones = np.array(
         [
             [0.0, 0.0]
