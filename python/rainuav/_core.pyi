@@ -24,6 +24,7 @@ __all__ = [
     "itu_p838",
     "mie_forward",
     "plan_optimal",
+    "ray_power",
     "terminal_velocity_m_s",
     "water_permittivity",
 ]

@@ -1,12 +1,14 @@
 """Radio maps: a scenario (network, weather, airspace) in, every cell's received power, the
 serving cell, SIR and SINR at the flight altitude out.
 
-Modules, bottom up: :mod:`~rainuav.radio.scenario` (the dataclasses and their TOML form),
+Modules, bottom up: :mod:`~rainuav.radio.cell` (a cell and its antenna),
+:mod:`~rainuav.radio.scenario` (the dataclasses and their TOML form),
 :mod:`~rainuav.radio.presets` (the paper's and our scenarios), :mod:`~rainuav.radio.grid`
-(one cell's PE grid), :mod:`~rainuav.radio.pe_engine` (the march per cell),
+(one cell's PE grid and cone), :mod:`~rainuav.radio.pe_engine` (the march per cell),
+:mod:`~rainuav.radio.ray_engine` (two rays per cell and pixel, in Rust),
 :mod:`~rainuav.radio.sinr`, :mod:`~rainuav.radio.radiomap` (the map and its builder),
-:mod:`~rainuav.radio.cache` and :mod:`~rainuav.radio.plot`. Depends on :mod:`rainuav.medium`
-and :mod:`rainuav.pwe` only; nothing here knows about navigation or learning.
+:mod:`~rainuav.radio.cache` and :mod:`~rainuav.radio.plot`. Depends on :mod:`rainuav.medium`,
+:mod:`rainuav.antenna` and :mod:`rainuav.pwe` only; nothing here knows about navigation or learning.
 """
 
 from __future__ import annotations
