@@ -48,17 +48,19 @@ pub enum RayPolarization {
     V,
 }
 
-/// Values on a regular grid of nodes, bilinear between them and held beyond the outermost.
+/// A table over a regular grid: `values[i, j]` belongs to `(x0 + j dx, y0 + i dy)`. The rain
+/// reads it as nodes ([`Raster::bilinear`]), the obstacles as cells ([`Raster::cell`]).
 #[derive(Debug, Clone, Copy)]
-pub struct NodeRaster<'a> {
-    /// `values[i, j]` at `(x0 + j dx, y0 + i dy)`.
+pub struct Raster<'a> {
+    /// The values (rows north, columns east).
     pub values: ArrayView2<'a, f64>,
     /// `(x0, dx, y0, dy)`, metres.
     pub origin_step: [f64; 4],
 }
 
-impl NodeRaster<'_> {
-    fn at(&self, x: f64, y: f64) -> f64 {
+impl Raster<'_> {
+    /// Bilinear between nodes, held beyond the outermost.
+    fn bilinear(&self, x: f64, y: f64) -> f64 {
         let [x0, dx, y0, dy] = self.origin_step;
         let (rows, cols) = self.values.dim();
         let fx = ((x - x0) / dx).clamp(0.0, (cols - 1) as f64);
@@ -75,6 +77,19 @@ impl NodeRaster<'_> {
             + v[[i1, j1]] * tx * ty
     }
 
+    /// The value whose cell `x0 + j dx .. x0 + (j + 1) dx` by `y0 + i dy .. y0 + (i + 1) dy`
+    /// holds the point (nearest sample); 0 outside the table.
+    fn cell(&self, x: f64, y: f64) -> f64 {
+        let [x0, dx, y0, dy] = self.origin_step;
+        let (rows, cols) = self.values.dim();
+        let j = ((x - x0) / dx).floor();
+        let i = ((y - y0) / dy).floor();
+        if j < 0.0 || i < 0.0 || j >= cols as f64 || i >= rows as f64 {
+            return 0.0;
+        }
+        self.values[[i as usize, j as usize]]
+    }
+
     fn spacing(&self) -> f64 {
         self.origin_step[1].min(self.origin_step[3])
     }
@@ -85,31 +100,8 @@ impl NodeRaster<'_> {
 pub enum RainField<'a> {
     /// The same everywhere (0 for clear air).
     Uniform(f64),
-    /// Varies horizontally: nodes of a raster.
-    Raster(NodeRaster<'a>),
-}
-
-/// Obstacle heights over a raster whose every value covers its own cell (nearest sample):
-/// `values[i, j]` covers `x0 + j dx .. x0 + (j + 1) dx` by `y0 + i dy .. y0 + (i + 1) dy`.
-#[derive(Debug, Clone, Copy)]
-pub struct CellRaster<'a> {
-    /// Heights, m (0: no obstacle).
-    pub values: ArrayView2<'a, f64>,
-    /// `(x0, dx, y0, dy)`, metres.
-    pub origin_step: [f64; 4],
-}
-
-impl CellRaster<'_> {
-    fn at(&self, x: f64, y: f64) -> f64 {
-        let [x0, dx, y0, dy] = self.origin_step;
-        let (rows, cols) = self.values.dim();
-        let j = ((x - x0) / dx).floor();
-        let i = ((y - y0) / dy).floor();
-        if j < 0.0 || i < 0.0 || j >= cols as f64 || i >= rows as f64 {
-            return 0.0;
-        }
-        self.values[[i as usize, j as usize]]
-    }
+    /// Varies horizontally: nodes of a raster ([`Raster::bilinear`]).
+    Raster(Raster<'a>),
 }
 
 /// A box-shaped building: `[x0, x1, y0, y1, height]`, metres.
@@ -136,8 +128,8 @@ pub struct RayScene<'a> {
     pub rain: RainField<'a>,
     /// Buildings (boxes).
     pub buildings: &'a [Building],
-    /// Further obstacle heights, if any.
-    pub heights: Option<CellRaster<'a>>,
+    /// Further obstacle heights (m, 0: none) over cells of a raster ([`Raster::cell`]).
+    pub heights: Option<Raster<'a>>,
 }
 
 /// One transmitter: position (east, north, height) in metres and power in mW.
@@ -246,10 +238,10 @@ impl RayScene<'_> {
             RainField::Raster(r) => {
                 let rho = (b[0] - a[0]).hypot(b[1] - a[1]);
                 let n = ((rho / r.spacing()).ceil() as usize).max(1);
-                let mut sum = 0.5 * (r.at(a[0], a[1]) + r.at(b[0], b[1]));
+                let mut sum = 0.5 * (r.bilinear(a[0], a[1]) + r.bilinear(b[0], b[1]));
                 for k in 1..n {
                     let t = k as f64 / n as f64;
-                    sum += r.at(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
+                    sum += r.bilinear(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
                 }
                 sum / n as f64
             }
@@ -294,12 +286,12 @@ impl RayScene<'_> {
             }
         }
         if let Some(h) = &self.heights {
-            let step = 0.5 * h.origin_step[1].min(h.origin_step[3]);
+            let step = 0.5 * h.spacing();
             let rho = dx.hypot(dy);
             let n = ((rho / step).ceil() as usize).max(1);
             for k in 0..=n {
                 let t = k as f64 / n as f64;
-                let v = h.at(p[0] + t * dx, p[1] + t * dy);
+                let v = h.cell(p[0] + t * dx, p[1] + t * dy);
                 if v > 0.0 {
                     worst = worst.max(nu_at(t, v));
                 }
@@ -531,7 +523,7 @@ mod tests {
         let a = 10.0 * (clear / one(&s, TX)).log10();
         assert!((a - 0.01 * d).abs() < 1e-9);
         let vals = Array2::from_elem((3, 4), 0.01);
-        s.rain = RainField::Raster(NodeRaster {
+        s.rain = RainField::Raster(Raster {
             values: vals.view(),
             origin_step: [0.0, 500.0, 0.0, 500.0],
         });

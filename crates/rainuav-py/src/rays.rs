@@ -7,8 +7,7 @@ use numpy::{IntoPyArray, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonl
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
 use rainuav_core::rays::{
-    Building, CellRaster, NodeRaster, RainField, RayGround, RayPolarization, RayScene,
-    RayTransmitter,
+    Building, RainField, Raster, RayGround, RayPolarization, RayScene, RayTransmitter,
 };
 
 /// Received power (mW) of every transmitter at every pixel, (M, H, W): direct and
@@ -101,7 +100,7 @@ fn ray_power<'py>(
     let gf = g_reflect.as_array();
     let out = detached(py, || {
         let rain = match &gr {
-            Some(v) => RainField::Raster(NodeRaster {
+            Some(v) => RainField::Raster(Raster {
                 values: v.view(),
                 origin_step: gamma_origin_step,
             }),
@@ -117,7 +116,7 @@ fn ray_power<'py>(
             polarization,
             rain,
             buildings: &boxes,
-            heights: hr.as_ref().map(|v| CellRaster {
+            heights: hr.as_ref().map(|v| Raster {
                 values: v.view(),
                 origin_step: heights_origin_step,
             }),

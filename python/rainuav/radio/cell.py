@@ -30,7 +30,7 @@ from rainuav._checks import check_choice as _choice
 from rainuav._checks import check_number as _num
 from rainuav.errors import InvalidInputError
 
-__all__ = ["ANTENNAS", "Cell", "Pattern", "cell_pattern", "gain_linear"]
+__all__ = ["ANTENNAS", "Cell", "Pattern", "cell_pattern", "gain_linear", "pattern_by_key"]
 
 ANTENNAS = ("gaussian", "tr38901", "array", "table")
 """The antenna kinds a cell can name."""
@@ -137,7 +137,8 @@ class Cell:
 
 
 @functools.lru_cache(maxsize=64)
-def _pattern(key: tuple[Any, ...]) -> antenna.Pattern:
+def pattern_by_key(key: tuple[Any, ...]) -> antenna.Pattern:
+    """The pattern of any cell whose :meth:`Cell.key` is ``key`` (built once, cached)."""
     kind = key[0]
     if kind == "gaussian":
         _, bh, bv, floor = key
@@ -153,7 +154,7 @@ def _pattern(key: tuple[Any, ...]) -> antenna.Pattern:
 
 def cell_pattern(cell: Cell) -> antenna.Pattern:
     """The cell's pattern in its own frame, dBi (shared between cells with equal antennas)."""
-    return _pattern(cell.key())
+    return pattern_by_key(cell.key())
 
 
 def gain_linear(cell: Cell, azimuth_deg: Any, elevation_deg: Any) -> np.ndarray:
@@ -161,11 +162,3 @@ def gain_linear(cell: Cell, azimuth_deg: Any, elevation_deg: Any) -> np.ndarray:
     el = np.clip(np.asarray(elevation_deg, dtype=float) - cell.tilt_deg, -90.0, 90.0)
     az = np.asarray(azimuth_deg, dtype=float) - cell.azimuth_deg
     return np.asarray(10.0 ** (cell_pattern(cell).gain_dbi(az, el) / 10.0))
-
-
-def direction_cosines(cell: Cell, azimuth_deg: Any, elevation_deg: Any) -> tuple[Any, Any]:
-    """(cross-range, height) direction cosines of global directions in the cell's PE frame
-    (range along the cell's azimuth): ``(cos e sin(a - azimuth), sin e)``."""
-    a = np.radians(np.asarray(azimuth_deg, dtype=float) - cell.azimuth_deg)
-    e = np.radians(np.asarray(elevation_deg, dtype=float))
-    return np.cos(e) * np.sin(a), np.sin(e)

@@ -23,8 +23,7 @@ from typing import Any
 import numpy as np
 
 from rainuav.errors import InvalidInputError
-from rainuav.radio.cell import Cell
-from rainuav.radio.cell import _pattern as cell_pattern_by_key
+from rainuav.radio.cell import Cell, pattern_by_key
 from rainuav.radio.scenario import Scenario, Site
 
 __all__ = ["C0_M_S", "CONE_FULL", "MarchGrid", "cone_weight", "march_grid"]
@@ -83,7 +82,7 @@ _MIN_SINE = math.sin(math.radians(0.5))
 def _dynamic_range_cone(key: tuple[Any, ...], tilt_deg: float, dr_db: float) -> tuple[float, float]:
     """(cross-range, height) sines of the widest directions where the pattern is within
     ``dr_db`` of its peak, sampled on a grid of direction cosines (forward half-space)."""
-    pattern = cell_pattern_by_key(key)
+    pattern = pattern_by_key(key)
     s = np.linspace(-0.98, 0.98, 981)
     sx, sy = np.meshgrid(s, s, indexing="ij")
     el = np.degrees(np.arcsin(sy))

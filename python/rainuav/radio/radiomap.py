@@ -203,12 +203,12 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
     carried = np.zeros_like(power)
     if scn.engine != "pe":
         t_r = time.perf_counter()
-        power = ray_power(scn, cells, x_m, y_m)
-        if use_pe:
-            # What the PE would carry, by the rays: a cell whose cone carries under 1% of its
-            # power at every pixel (the UAV above a down-tilted sector's cone) is not marched.
-            weights = [None if g is None else _inside_cone(g) for g in grids]
-            carried = ray_power(scn, cells, x_m, y_m, weights)
+        # What the PE would carry, by the rays: a cell whose cone carries under 1% of its
+        # power at every pixel (the UAV above a down-tilted sector's cone) is not marched.
+        weights = [None if g is None else _inside_cone(g) for g in grids]
+        power, in_cone = ray_power(scn, cells, x_m, y_m, weights if use_pe else None)
+        if in_cone is not None:
+            carried = in_cone
             with np.errstate(divide="ignore", invalid="ignore"):
                 frac = np.where(power > 0, carried / power, 0.0)
             for m in range(len(grids)):

@@ -10,14 +10,16 @@ raster of ``gamma`` nodes integrated along the ray); buildings and the height ma
 P.526 knife-edge loss of the dominant edge. Each pixel holds the mean power over its area
 (ground-reflection fringes finer than a pixel are averaged, not aliased).
 
-``weights`` let the hybrid engine hand the rays only the part of each pattern the PE does not
-carry (:func:`rainuav.radio.radiomap.build_radio_map`).
+With ``weights``, :func:`ray_power` also returns the power of the part of each pattern the
+weights select: what the PE would carry in the hybrid engine
+(:func:`rainuav.radio.radiomap.build_radio_map`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -91,46 +93,54 @@ def _heights(scn: Scenario) -> tuple[np.ndarray | None, tuple[float, float, floa
     )
 
 
-def ray_gains(
-    scn: Scenario, site: Site, cell: Cell, x_m: np.ndarray, y_m: np.ndarray, weight: Weight | None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Linear gains (H, W) of ``cell`` toward every pixel along the direct and the reflected
-    ray, times ``weight`` of each departure direction if given."""
+def _directions(
+    scn: Scenario, site: Site, x_m: np.ndarray, y_m: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Global azimuth (H, W) and the elevations of the direct and the reflected ray, degrees,
+    from ``site`` toward every pixel."""
     ex = x_m[None, :] - site.x_m
     ey = y_m[:, None] - site.y_m
     rho = np.hypot(ex, ey)
-    az = np.degrees(np.arctan2(ey, ex))
     h_s, h_q = site.height_m, scn.area.altitude_m
-    el_direct = np.degrees(np.arctan2(h_q - h_s, rho))
-    el_reflect = np.degrees(-np.arctan2(h_q + h_s, rho))
-    out = []
-    for el in (el_direct, el_reflect):
-        g = gain_linear(cell, az, el)
-        if weight is not None:
-            e = np.radians(el)
-            a = np.radians(az - cell.azimuth_deg)
-            g = g * weight(np.cos(e) * np.sin(a), np.sin(e), np.cos(e) * np.cos(a))
-        out.append(np.ascontiguousarray(g, dtype=np.float64))
-    return out[0], out[1]
+    az = np.degrees(np.arctan2(ey, ex))
+    return az, np.degrees(np.arctan2(h_q - h_s, rho)), np.degrees(-np.arctan2(h_q + h_s, rho))
 
 
-def ray_power(
+def _weight_at(weight: Weight, cell: Cell, az: np.ndarray, el: np.ndarray) -> np.ndarray:
+    e = np.radians(el)
+    a = np.radians(az - cell.azimuth_deg)
+    return weight(np.cos(e) * np.sin(a), np.sin(e), np.cos(e) * np.cos(a))
+
+
+def _trace(
     scn: Scenario,
     jobs: Sequence[tuple[Site, Cell]],
     x_m: np.ndarray,
     y_m: np.ndarray,
-    weights: Sequence[Weight | None] | None = None,
+    gains: tuple[np.ndarray, np.ndarray],
+    medium_args: dict[str, Any],
 ) -> np.ndarray:
-    """Received power (mW, isotropic receiver) of every (site, cell) at every pixel centre,
-    (M, H, W), each the mean over its pixel; ``weights[m]`` (if given) scales cell m's
-    pattern."""
     a = scn.area
-    gd = np.empty((len(jobs), y_m.size, x_m.size))
-    gr = np.empty_like(gd)
-    for m, (site, cell) in enumerate(jobs):
-        gd[m], gr[m] = ray_gains(scn, site, cell, x_m, y_m, None if weights is None else weights[m])
     tx = np.array([[s.x_m, s.y_m, s.height_m] for s, _ in jobs], dtype=float).reshape(-1, 3)
     pw = np.array([10 ** (c.tx_power_dbm / 10) for _, c in jobs], dtype=float)
+    px = ((a.x_max_m - a.x_min_m) / x_m.size, (a.y_max_m - a.y_min_m) / y_m.size)
+    return _core.ray_power(
+        tx,
+        pw,
+        np.ascontiguousarray(gains[0]),
+        np.ascontiguousarray(gains[1]),
+        np.ascontiguousarray(x_m, dtype=float),
+        np.ascontiguousarray(y_m, dtype=float),
+        altitude_m=a.altitude_m,
+        pixel_m=px,
+        freq_hz=scn.freq_hz,
+        polarization=scn.polarization,
+        **medium_args,
+    )
+
+
+def _medium_args(scn: Scenario) -> dict[str, Any]:
+    """The ground, rain and obstacles of ``scn`` as the core takes them."""
     g_uniform, g_raster, g_os = gamma_field(scn)
     heights, h_os = _heights(scn)
     if scn.ground in SOILS:
@@ -140,24 +150,40 @@ def ray_power(
     boxes = np.array(
         [[b.x0_m, b.x1_m, b.y0_m, b.y1_m, b.height_m] for b in scn.buildings], dtype=float
     ).reshape(-1, 5)
-    px = ((a.x_max_m - a.x_min_m) / x_m.size, (a.y_max_m - a.y_min_m) / y_m.size)
-    return _core.ray_power(
-        tx,
-        pw,
-        gd,
-        gr,
-        np.ascontiguousarray(x_m, dtype=float),
-        np.ascontiguousarray(y_m, dtype=float),
-        altitude_m=a.altitude_m,
-        pixel_m=px,
-        freq_hz=scn.freq_hz,
-        ground=ground,
-        eps_ground=(eps.real, eps.imag),
-        polarization=scn.polarization,
-        gamma_db_per_m=g_uniform,
-        gamma_raster=g_raster,
-        gamma_origin_step=g_os,
-        buildings=boxes,
-        heights=heights,
-        heights_origin_step=h_os,
-    )
+    return {
+        "ground": ground,
+        "eps_ground": (eps.real, eps.imag),
+        "gamma_db_per_m": g_uniform,
+        "gamma_raster": g_raster,
+        "gamma_origin_step": g_os,
+        "buildings": boxes,
+        "heights": heights,
+        "heights_origin_step": h_os,
+    }
+
+
+def ray_power(
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    weights: Sequence[Weight | None] | None = None,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Received power (mW, isotropic receiver) of every (site, cell) at every pixel centre,
+    (M, H, W), each the mean over its pixel; and, if ``weights`` are given, the power of the
+    part of each pattern they select (``weights[m]`` scales cell m's pattern; None: nothing).
+    Directions, gains, the rain field and the obstacles are prepared once for both."""
+    shape = (len(jobs), y_m.size, x_m.size)
+    gd, gr = np.empty(shape), np.empty(shape)
+    wd, wr = np.zeros(shape), np.zeros(shape)
+    for m, (site, cell) in enumerate(jobs):
+        az, el_d, el_r = _directions(scn, site, x_m, y_m)
+        gd[m], gr[m] = gain_linear(cell, az, el_d), gain_linear(cell, az, el_r)
+        if weights is not None and weights[m] is not None:
+            wd[m] = _weight_at(weights[m], cell, az, el_d)
+            wr[m] = _weight_at(weights[m], cell, az, el_r)
+    args = _medium_args(scn)
+    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args)
+    if weights is None:
+        return full, None
+    return full, _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args)
