@@ -31,6 +31,7 @@ LAYERS = {
 }
 ENTRY = {
     "__init__",
+    "envs",
     "train",
     "evaluate",
     "radiomap",

@@ -30,7 +30,11 @@ from rainuav._core import __version__
 from rainuav.errors import InvalidInputError, RainuavError
 
 if "rainuav/UAVNav-v0" not in _gym.registry:
-    _gym.register(id="rainuav/UAVNav-v0", entry_point="rainuav.nav.env:UAVNavEnv")
+    _gym.register(
+        id="rainuav/UAVNav-v0",
+        entry_point="rainuav.envs:make_nav_env",
+        vector_entry_point="rainuav.envs:make_nav_vector_env",
+    )
 
 __all__ = [
     "InvalidInputError",

@@ -1,10 +1,18 @@
-"""``python -m rainuav.evaluate RUN_DIR [--out DIR]``: re-evaluate a saved training run.
+"""``python -m rainuav.evaluate RUN_DIR``: fly a trained policy, on its own map or another.
 
-Loads the run's ``config.toml``, ``radiomap.npz`` and ``checkpoint.pt``, evaluates the greedy
-policy (the final network, or with ``keep_best`` the best on validation) from the run's fixed
-evaluation starts against the exact planner (:func:`rainuav.rl.evaluation.evaluate_saved_run`),
-prints the metrics and writes ``evaluation.json`` and ``evaluation_trajectories.png`` into
-``--out`` (default: the run's folder). The run's own ``metrics.json`` is never touched.
+    python -m rainuav.evaluate runs/paper                          # its own map and starts
+    python -m rainuav.evaluate runs/paper --rain-rate 50            # the same network in rain
+    python -m rainuav.evaluate runs/uma --scenario rain_cell --starts 100 --seed 7 --shield
+
+Loads the run's ``config.toml`` and ``checkpoint.pt`` and flies the network the run reports
+(the final one, or with ``keep_best`` the best on validation) from fixed starts, against the
+exact optimum of the map flown and the straight line
+(:func:`rainuav.rl.evaluation.evaluate_saved_run`). ``--scenario``, ``--rain-rate`` and
+``--engine`` fly it on another map (built or taken from the cache): the paper's central
+comparison, a policy trained in clear air flown in rain against one trained in rain. Writes
+``evaluation.json`` and ``evaluation_trajectories.png`` (the network's flights and the exact
+optimum's from the same starts) into ``--out`` (default: the run's folder for its own map,
+``RUN_DIR/eval_<scenario>_<rain>mmh`` for another). The run's own files are never touched.
 """
 
 from __future__ import annotations
@@ -19,26 +27,57 @@ from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 
 
+def _out_dir(args: argparse.Namespace) -> Path:
+    if args.out is not None:
+        return args.out
+    if args.scenario is None and args.rain_rate is None and args.engine is None:
+        return args.run_dir
+    rain = "own" if args.rain_rate is None else f"{args.rain_rate:g}"
+    return args.run_dir / f"eval_{args.scenario or 'same'}_{rain}mmh"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     from rainuav.rl.evaluation import evaluate_saved_run
-    from rainuav.rl.plots import plot_trajectories
+    from rainuav.rl.plots import plot_policy
 
-    ap = argparse.ArgumentParser(prog="python -m rainuav.evaluate", description=__doc__)
+    ap = argparse.ArgumentParser(
+        prog="python -m rainuav.evaluate",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     ap.add_argument("run_dir", type=Path)
+    ap.add_argument("--scenario", default=None, help="fly on this preset's map")
+    ap.add_argument("--rain-rate", type=float, default=None, help="homogeneous rain, mm/h")
+    ap.add_argument("--engine", default=None, choices=("hybrid", "ray", "pe"))
+    ap.add_argument("--starts", type=int, default=None, help="number of fixed starts")
+    ap.add_argument("--seed", type=int, default=None, help="seed of the starts")
+    ap.add_argument("--shield", action="store_true", help="also report shielded flights")
     ap.add_argument("--device", default="cpu", choices=("cpu", "cuda", "auto"))
-    ap.add_argument("--out", type=Path, default=None, help="output folder (default: RUN_DIR)")
+    ap.add_argument("--out", type=Path, default=None, help="output folder")
     args = ap.parse_args(argv)
-    out = args.run_dir if args.out is None else args.out
     try:
-        metrics, rolls, env = evaluate_saved_run(args.run_dir, args.device)
+        if args.starts is not None and args.starts < 1:
+            raise InvalidInputError(f"--starts must be >= 1 (got {args.starts})")
+        metrics, rolls, env = evaluate_saved_run(
+            args.run_dir,
+            args.device,
+            scenario=args.scenario,
+            rain_rate=args.rain_rate,
+            engine=args.engine,
+            starts=args.starts,
+            seed=args.seed,
+            shield=args.shield,
+        )
     except InvalidInputError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    out = _out_dir(args)
+    out.mkdir(parents=True, exist_ok=True)
     text = json.dumps(metrics, indent=2)
     write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))
-    title = f"greedy policy, success {100 * metrics['success_rate']:.0f}%"
-    plot_trajectories(env, rolls[:40], out / "evaluation_trajectories.png", title)
+    plot_policy(env, metrics, rolls[:40], out / "evaluation_trajectories.png")
     print(text)
+    print(f"wrote {out.resolve()}", file=sys.stderr)
     return 0
 
 

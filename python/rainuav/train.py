@@ -100,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def config_from_args(args: argparse.Namespace) -> Any:
     """The run's TrainConfig: the ``--config`` file's fields, overridden by the flags given."""
-    from rainuav.rl.config import DQNConfig, TrainConfig, read_config
+    from rainuav.rl.config import DQNConfig, TrainConfig, apply_preset, read_config
 
     base: dict[str, Any] = {}
     dqn_kw: dict[str, Any] = {}
@@ -112,7 +112,10 @@ def config_from_args(args: argparse.Namespace) -> Any:
     for f in dataclasses.fields(TrainConfig):
         if f.name != "dqn" and getattr(args, f.name, None) is not None:
             base[f.name] = getattr(args, f.name)
-    return TrainConfig(**base, dqn=DQNConfig(**dqn_kw))
+    cfg = TrainConfig(**base, dqn=DQNConfig(**dqn_kw))
+    # A run's own config.toml (--resume) holds the preset's values already: not a clash.
+    given = set(dqn_kw) if not (args.resume and args.config is None) else set()
+    return apply_preset(cfg, given - {"episodes"} if cfg.preset else given)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -3,7 +3,8 @@
 ``rainuav/UAVNav-v0``), the batched stepper (:mod:`~rainuav.nav.batch`), the exact planner
 and baselines (:mod:`~rainuav.nav.planner`) and the shield (:mod:`~rainuav.nav.shield`).
 
-Works on any (H, W) map in dB; knows nothing of how maps are built (:mod:`rainuav.radio`) and
+Works on any (H, W) map in dB (a RadioMap is read through its attributes); knows nothing of
+how maps are built (:mod:`rainuav.radio`; ``rainuav.envs`` joins the two for ``gym.make``) and
 does not import torch.
 """
 
@@ -11,21 +12,32 @@ from __future__ import annotations
 
 from rainuav.nav.batch import BatchStepper
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import SirField
+from rainuav.nav.field import SignalField, SirField
 from rainuav.nav.planner import Plan, optimal, optimal_many, straight_line
 from rainuav.nav.shield import shield_moves
-from rainuav.nav.task import MOVES, REWARDS, LoiteringWarning, NavConfig, base_reward
+from rainuav.nav.task import (
+    MOVES,
+    REWARDS,
+    SIGNALS,
+    LoiteringWarning,
+    NavConfig,
+    base_reward,
+    flight_cost,
+)
 
 __all__ = [
     "MOVES",
     "REWARDS",
+    "SIGNALS",
     "BatchStepper",
     "LoiteringWarning",
     "NavConfig",
     "Plan",
+    "SignalField",
     "SirField",
     "UAVNavEnv",
     "base_reward",
+    "flight_cost",
     "optimal",
     "optimal_many",
     "shield_moves",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rainuav.nav.field import SirField
+from rainuav.nav.field import SignalField
 from rainuav.nav.task import MOVES, NavConfig, base_reward
 
 __all__ = ["BatchStepper"]
@@ -17,7 +17,7 @@ class BatchStepper:
     ``t`` (N,) steps so far; position = start + step_m * offset.
     """
 
-    def __init__(self, field: SirField, cfg: NavConfig):
+    def __init__(self, field: SignalField, cfg: NavConfig):
         self.field = field
         self.cfg = cfg
         self.goal = np.asarray(cfg.goal_m, dtype=np.float64)
@@ -26,7 +26,7 @@ class BatchStepper:
         self, start: np.ndarray, offset: np.ndarray, t: np.ndarray, action: np.ndarray
     ) -> dict[str, np.ndarray]:
         """One move for every UAV. Returns new ``offset``, ``t``, ``position`` (after clamping),
-        ``reward``, ``terminated``, ``truncated``, ``sir_db``, ``out`` (left the area) and
+        ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area) and
         ``arrived`` (reached the goal)."""
         cfg = self.cfg
         x0, x1, y0, y1 = self.field.extent
@@ -34,8 +34,8 @@ class BatchStepper:
         q = start + cfg.step_m * new_off
         out = (q[:, 0] < x0) | (q[:, 0] > x1) | (q[:, 1] < y0) | (q[:, 1] > y1)
         qc = np.stack([np.clip(q[:, 0], x0, x1), np.clip(q[:, 1], y0, y1)], axis=1)
-        sir = self.field(qc[:, 0], qc[:, 1])
-        b = base_reward(sir, cfg)
+        signal = self.field(qc[:, 0], qc[:, 1])
+        b = base_reward(signal, cfg)
         arrived = ~out & (np.hypot(q[:, 0] - self.goal[0], q[:, 1] - self.goal[1]) <= cfg.tol_m)
         reward = (
             b
@@ -52,7 +52,7 @@ class BatchStepper:
             "reward": reward,
             "terminated": terminated,
             "truncated": truncated,
-            "sir_db": sir,
+            "signal_db": signal,
             "out": out,
             "arrived": arrived,
         }

@@ -1,20 +1,28 @@
-"""Gymnasium environment: fly a UAV on a lattice over a SIR map to a destination.
+"""Gymnasium environment: fly a UAV on a lattice over a SINR (or SIR) map to a destination.
 
 Semantics (the planner and the tests rely on them; PHYSICS.md section 6):
 
-- SIR at a position: bilinear interpolation of ``sir_db`` (H, W) whose sample [i, j] sits at
+- Signal at a position: bilinear interpolation of the map (H, W) whose sample [i, j] sits at
   ``x = x_min + (j + 0.5) (x_max - x_min) / W``, ``y = y_min + (i + 0.5) (y_max - y_min) / H``;
-  beyond the outermost centres the edge values hold.
+  beyond the outermost centres the edge values hold. The map is a RadioMap's ``sinr_db``
+  (``signal="sinr"``, default) or ``sir_db`` (``"sir"``, the paper's), or a raw array.
 - Observation: position scaled to [0, 1]^2 (float32). Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y.
-- Moves and rewards: :mod:`rainuav.nav.task` (shortfall below ``sir_min_db`` by default,
+- Moves and rewards: :mod:`rainuav.nav.task` (shortfall below ``min_db`` by default,
   ``goal_reward`` on arrival, ``out_of_bounds_penalty`` on leaving the area, truncated after
-  ``max_steps``).
+  ``max_steps``). ``min_db`` defaults to the map's own threshold (a preset's documented SINR
+  threshold, ``RadioMap.default_min_db``), else 10 dB.
+- ``info``: ``signal_db``, ``serving_cell`` (-1 where the map names none), ``position_m``,
+  ``outage`` and ``arrived``.
 - Positions are kept as the start plus an integer number of steps in x and y, so every visited
   point lies exactly on the start's lattice (the exact planner's state space).
+
+``gym.make("rainuav/UAVNav-v0", scenario="uma", rain_rate_mm_h=50)`` builds the map first
+(:mod:`rainuav.envs`); this class takes a map.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from typing import Any
 
@@ -24,59 +32,98 @@ import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
-from rainuav.nav.field import SirField
-from rainuav.nav.task import LoiteringWarning, NavConfig, check_config
+from rainuav.nav.field import SignalField
+from rainuav.nav.task import SIGNALS, LoiteringWarning, NavConfig, check_config
 
-__all__ = ["UAVNavEnv"]
+__all__ = ["DEFAULT_MIN_DB", "UAVNavEnv", "signal_field"]
+
+DEFAULT_MIN_DB = 10.0
+"""The outage threshold of a map that names none (the paper's minimum SIR), dB."""
+
+
+def signal_field(
+    radio_map: Any, sinr_db: Any, sir_db: Any, extent_m: Any, signal: str | None
+) -> SignalField:
+    """The field a task flies on: the ``signal`` map of ``radio_map``, or the one raw array
+    given (``sinr_db`` or ``sir_db``, which then names the signal)."""
+    if signal is not None and signal not in SIGNALS:
+        raise InvalidInputError(f"signal must be one of {SIGNALS} (got {signal!r})")
+    raw = {k: v for k, v in (("sinr", sinr_db), ("sir", sir_db)) if v is not None}
+    if radio_map is not None:
+        if raw:
+            raise InvalidInputError(f"give radio_map or {next(iter(raw))}_db, not both")
+        signal = signal or "sinr"
+        values = getattr(radio_map, f"{signal}_db", None)
+        if values is None:
+            raise InvalidInputError(
+                f"signal={signal!r}: radio_map has no {signal}_db (rebuild it with this version)"
+            )
+        serving = getattr(radio_map, "serving_cell", None)
+        return SignalField(values, radio_map.extent_m, f"{signal}_db", serving)
+    if len(raw) != 1:
+        raise InvalidInputError("give radio_map, or exactly one of sinr_db and sir_db")
+    kind, values = next(iter(raw.items()))
+    if signal is not None and signal != kind:
+        raise InvalidInputError(f"signal={signal!r} but the map given is {kind}_db")
+    if extent_m is None:
+        raise InvalidInputError(f"extent_m is required with {kind}_db")
+    return SignalField(values, extent_m, f"{kind}_db")
 
 
 class UAVNavEnv(gym.Env):
-    """UAV navigation over a SIR map (registered as ``rainuav/UAVNav-v0``)."""
+    """UAV navigation over a SINR or SIR map (registered as ``rainuav/UAVNav-v0``)."""
 
     metadata = {"render_modes": []}  # noqa: RUF012 - gymnasium's convention
 
     def __init__(
         self,
         radio_map: Any = None,
+        sinr_db: npt.ArrayLike | None = None,
         sir_db: npt.ArrayLike | None = None,
         extent_m: tuple[float, float, float, float] | None = None,
+        *,
+        signal: str | None = None,
+        min_db: float | None = None,
         goal_m: tuple[float, float] = (1400.0, 1600.0),
         step_m: float = 10.0,
         tol_m: float = 10.0,
         max_steps: int = 300,
         mu: float = 10.0 / 43.0,
         reward: str = "shortfall",
-        sir_min_db: float = 10.0,
         goal_reward: float = 2000.0,
         out_of_bounds_penalty: float = 10000.0,
         start_m: tuple[float, float] | None = None,
         config: NavConfig | None = None,
     ) -> None:
+        """A map (``radio_map``, or one raw array with ``extent_m``) and the task: its fields
+        as keywords, or a whole ``config`` (then ``signal`` and ``min_db`` given here win)."""
         super().__init__()
-        if radio_map is not None:
-            if sir_db is not None:
-                raise InvalidInputError("give radio_map or sir_db, not both")
-            sir_db, extent_m = radio_map.sir_db, radio_map.extent_m
-        if sir_db is None or extent_m is None:
-            raise InvalidInputError("sir_db and extent_m are required when radio_map is None")
-        self.field = SirField(sir_db, extent_m)
-        self.cfg = config or NavConfig(
+        cfg = config or NavConfig(
             goal_m=tuple(goal_m),
             step_m=step_m,
             tol_m=tol_m,
             max_steps=max_steps,
             mu=mu,
             reward=reward,
-            sir_min_db=sir_min_db,
             goal_reward=goal_reward,
             out_of_bounds_penalty=out_of_bounds_penalty,
             start_m=None if start_m is None else tuple(start_m),
         )
+        if radio_map is not None:
+            signal = signal or cfg.signal
+        self.field = signal_field(radio_map, sinr_db, sir_db, extent_m, signal)
+        kind = self.field.name.removesuffix("_db")
+        if min_db is None:
+            min_db = cfg.min_db
+        if min_db is None:
+            default = getattr(radio_map, "default_min_db", None)
+            min_db = default(kind) if callable(default) else DEFAULT_MIN_DB
+        self.cfg = dataclasses.replace(cfg, signal=kind, min_db=min_db)
         check_config(self.cfg, self.field.extent)
         if self.cfg.reward == "linear":
             warnings.warn(
-                "reward='linear' (-1 + mu * SIR) is positive near a base station: the UAV "
-                "can earn more by loitering than by arriving",
+                "reward='linear' (-1 + mu * 10^(S/10)) is positive near a base station: the "
+                "UAV can earn more by loitering than by arriving",
                 LoiteringWarning,
                 stacklevel=2,
             )
@@ -125,14 +172,15 @@ class UAVNavEnv(gym.Env):
         self._offset = np.zeros((1, 2), dtype=np.int64)
         self._t = np.zeros(1, dtype=np.int64)
         self._pos = p.copy()
-        sir = float(self.field(p[0], p[1]))
-        return self.observe(p), self._info(sir)
+        return self.observe(p), self._info(float(self.field(p[0], p[1])))
 
-    def _info(self, sir: float, arrived: bool = False) -> dict[str, Any]:
+    def _info(self, signal: float, arrived: bool = False) -> dict[str, Any]:
+        assert self.cfg.min_db is not None  # resolved in __init__
         return {
-            "sir_db": sir,
+            "signal_db": signal,
+            "serving_cell": int(self.field.serving_cell(self._pos[0], self._pos[1])),
             "position_m": self._pos.copy(),
-            "outage": bool(sir < self.cfg.sir_min_db),
+            "outage": bool(signal < self.cfg.min_db),
             "arrived": arrived,
         }
 
@@ -143,11 +191,11 @@ class UAVNavEnv(gym.Env):
         r = self.stepper.step(self._start, self._offset, self._t, np.array([a]))
         self._offset, self._t = r["offset"], r["t"]
         self._pos = r["position"][0].copy()
-        sir = float(r["sir_db"][0])
+        signal = float(r["signal_db"][0])
         return (
             self.observe(self._pos),
             float(r["reward"][0]),
             bool(r["terminated"][0]),
             bool(r["truncated"][0]),
-            self._info(sir, bool(r["arrived"][0])),
+            self._info(signal, bool(r["arrived"][0])),
         )

@@ -43,7 +43,7 @@ def optimal_many(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
     starts = np.ascontiguousarray(np.asarray(starts_m, dtype=np.float64).reshape(-1, 2))
     c = env.cfg
     raw = _core.plan_optimal(
-        env.field.sir_db,
+        env.field.db,
         env.field.extent,
         tuple(c.goal_m),
         starts,
@@ -52,7 +52,7 @@ def optimal_many(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
         max_steps=int(c.max_steps),
         mu=float(c.mu),
         reward=c.reward,
-        sir_min_db=float(c.sir_min_db),
+        sir_min_db=float(c.min_db),  # the Rust planner's name for the threshold
         goal_reward=float(c.goal_reward),
         out_of_bounds_penalty=float(c.out_of_bounds_penalty),
     )
@@ -65,8 +65,8 @@ def optimal(env: UAVNavEnv, start_m: npt.ArrayLike) -> Plan:
 
 
 def straight_line(env: UAVNavEnv, start_m: npt.ArrayLike) -> Plan:
-    """The greedy baseline: every move reduces the larger remaining coordinate gap to the
-    goal (x first on ties), ignoring the SIR."""
+    """The straight-line baseline: every move reduces the larger remaining coordinate gap to
+    the goal (x first on ties), ignoring the signal."""
     env = _as_env(env)
     start = np.asarray(start_m, dtype=np.float64).reshape(1, 2)
     goal = np.asarray(env.cfg.goal_m)

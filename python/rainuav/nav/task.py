@@ -1,13 +1,17 @@
 """The navigation task: its configuration, moves and rewards (PHYSICS.md section 6).
 
 - Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y, each one ``step_m`` long.
+- The signal S is the map's SINR (``signal="sinr"``, default) or SIR (``"sir"``, the
+  paper's), in dB; ``min_db`` is the outage threshold.
 - A move ``q' = q + step_m e_a`` earns ``b(q')``: ``"shortfall"`` (default)
-  ``-1 - mu max(0, sir_min_db - SIR)``, ``"outage"`` ``-1 - mu [SIR < sir_min_db]`` or
-  ``"linear"`` ``-1 + mu 10^(SIR/10)`` (the paper's literal form: it pays to loiter near a base
+  ``-1 - mu max(0, min_db - S)``, ``"outage"`` ``-1 - mu [S < min_db]`` or
+  ``"linear"`` ``-1 + mu 10^(S/10)`` (the paper's literal form: it pays to loiter near a base
   station). Leaving the area (a coordinate beyond the bounds): ``b(clamp(q')) -
   out_of_bounds_penalty``, terminated, the UAV stays at ``clamp(q')``. Reaching the goal
   (``|q' - goal| <= tol_m``): ``b(q') + goal_reward``, terminated. Truncated after
   ``max_steps`` steps (unless terminated on that step).
+- A flight's **cost** is its return without the arrival reward, negated: the moves plus the
+  weighted shortfall (PHYSICS.md section 6, :func:`flight_cost`).
 """
 
 from __future__ import annotations
@@ -24,14 +28,17 @@ from rainuav.errors import InvalidInputError
 __all__ = [
     "MOVES",
     "REWARDS",
+    "SIGNALS",
     "LoiteringWarning",
     "NavConfig",
     "base_reward",
     "check_config",
+    "flight_cost",
     "make_config",
 ]
 
 REWARDS = ("shortfall", "outage", "linear")
+SIGNALS = ("sinr", "sir")
 #: Unit steps of the four actions: +x, +y, -x, -y.
 MOVES = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]], dtype=np.int64)
 
@@ -53,11 +60,14 @@ class NavConfig:
     max_steps: int = 300
     """Episode length limit."""
     mu: float = 10.0 / 43.0
-    """Weight of the SIR term."""
+    """Weight of the signal term."""
     reward: str = "shortfall"
     """'shortfall', 'outage' or 'linear'."""
-    sir_min_db: float = 10.0
-    """Minimum SIR, dB."""
+    signal: str = "sinr"
+    """Which map the task flies on: 'sinr' or 'sir' (the paper's)."""
+    min_db: float | None = None
+    """Outage threshold of the signal, dB. None: the map's default (a preset's documented SINR
+    threshold, 10 dB for SIR and for maps of no preset); the environment resolves it."""
     goal_reward: float = 2000.0
     """R_des, paid on arrival."""
     out_of_bounds_penalty: float = 10000.0
@@ -81,25 +91,39 @@ def check_config(cfg: NavConfig, extent: tuple[float, float, float, float]) -> N
             raise InvalidInputError(f"{name} must be finite and > 0 (got {v!r})")
     if not (isinstance(cfg.max_steps, (int, np.integer)) and cfg.max_steps >= 1):
         raise InvalidInputError(f"max_steps must be an integer >= 1 (got {cfg.max_steps!r})")
-    for name in ("mu", "sir_min_db", "goal_reward", "out_of_bounds_penalty"):
+    for name in ("mu", "min_db", "goal_reward", "out_of_bounds_penalty"):
         v = getattr(cfg, name)
-        if not (isinstance(v, (int, float)) and math.isfinite(v)):
+        if name == "min_db" and v is None:
+            continue
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)):
             raise InvalidInputError(f"{name} must be a finite number (got {v!r})")
     if cfg.reward not in REWARDS:
         raise InvalidInputError(f"reward must be one of {REWARDS} (got {cfg.reward!r})")
+    if cfg.signal not in SIGNALS:
+        raise InvalidInputError(f"signal must be one of {SIGNALS} (got {cfg.signal!r})")
     if cfg.start_m is not None:
         s = np.asarray(cfg.start_m, dtype=float)
         if s.shape != (2,) or not (x0 <= s[0] <= x1 and y0 <= s[1] <= y1):
             raise InvalidInputError(f"start_m must lie inside the area (got {cfg.start_m!r})")
 
 
-def base_reward(sir_db: Any, cfg: NavConfig) -> Any:
-    """b(q') from the SIR at the new position."""
+def base_reward(signal_db: Any, cfg: NavConfig) -> Any:
+    """b(q') from the signal (SINR or SIR, dB) at the new position; ``cfg.min_db`` must be
+    resolved (not None)."""
+    if cfg.min_db is None:
+        raise InvalidInputError("min_db is unresolved: build the task through UAVNavEnv")
     if cfg.reward == "shortfall":
-        return -1.0 - cfg.mu * np.maximum(0.0, cfg.sir_min_db - sir_db)
+        return -1.0 - cfg.mu * np.maximum(0.0, cfg.min_db - signal_db)
     if cfg.reward == "outage":
-        return -1.0 - cfg.mu * (sir_db < cfg.sir_min_db)
-    return -1.0 + cfg.mu * 10.0 ** (sir_db / 10.0)
+        return -1.0 - cfg.mu * (signal_db < cfg.min_db)
+    return -1.0 + cfg.mu * 10.0 ** (signal_db / 10.0)
+
+
+def flight_cost(returns: Any, arrived: Any, cfg: NavConfig) -> Any:
+    """The cost of flights with these undiscounted ``returns``: the return without the arrival
+    reward, negated (moves plus weighted shortfall, PHYSICS.md section 6). Meaningful for
+    flights that arrived (a flight that left the area also pays ``out_of_bounds_penalty``)."""
+    return -(np.asarray(returns, dtype=np.float64) - cfg.goal_reward * np.asarray(arrived))
 
 
 def make_config(**kw: Any) -> NavConfig:

@@ -38,7 +38,16 @@ from typing import Any
 
 from rainuav.radio.scenario import Area, Building, Cell, Medium, RainCell, Scenario, Site
 
-__all__ = ["PRESETS", "SINR_THRESHOLDS_DB", "paper", "rain_cell", "uma", "urban", "with_rain"]
+__all__ = [
+    "DEFAULT_MIN_DB",
+    "PRESETS",
+    "SINR_THRESHOLDS_DB",
+    "paper",
+    "rain_cell",
+    "uma",
+    "urban",
+    "with_rain",
+]
 
 #: The paper's seven sites, km.
 PAPER_SITES_KM = [
@@ -168,6 +177,9 @@ PRESETS: dict[str, Callable[..., Scenario]] = {
     "rain_cell": rain_cell,
     "urban": urban,
 }
+
+DEFAULT_MIN_DB = 10.0
+"""The outage threshold for SIR and for scenarios of no preset: the paper's minimum SIR, dB."""
 
 SINR_THRESHOLDS_DB: dict[str, float] = {"paper": 0.0, "uma": -2.0, "rain_cell": -2.0, "urban": -1.0}
 """Default outage threshold of each preset's navigation task, SINR in dB (module docstring)."""

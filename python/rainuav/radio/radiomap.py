@@ -29,6 +29,7 @@ from rainuav.radio.cache import map_path
 from rainuav.radio.grid import MarchGrid, cone_weight, march_grid
 from rainuav.radio.pe_engine import march_cell, resample
 from rainuav.radio.plot import plot_map
+from rainuav.radio.presets import DEFAULT_MIN_DB, SINR_THRESHOLDS_DB
 from rainuav.radio.ray_engine import SOILS, Weight, ray_power
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.sinr import RSS_FLOOR_DBM, sir_from_power
@@ -91,6 +92,14 @@ class RadioMap:
             self.pe_share = np.zeros(np.shape(self.rss_dbm), np.float32)
         if self.pe_cone_deg is None:
             self.pe_cone_deg = np.zeros((len(self.rss_dbm), 2))
+
+    def default_min_db(self, signal: str = "sinr") -> float:
+        """The outage threshold a navigation task on this map uses unless told otherwise: for
+        SINR the preset's documented one (``presets.SINR_THRESHOLDS_DB``, by the scenario's
+        name); for SIR, and for scenarios of no preset, 10 dB (the paper's minimum SIR)."""
+        if signal == "sinr":
+            return SINR_THRESHOLDS_DB.get(self.scenario.name, DEFAULT_MIN_DB)
+        return DEFAULT_MIN_DB
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Writes an .npz with the scenario as TOML metadata, atomically."""

@@ -74,9 +74,9 @@ def greedy_rollouts(
 ) -> list[dict[str, Any]]:
     """Greedy episodes from every start at once (the batched stepper gives exactly the scalar
     environment's transitions), one dict per start: ``return``, ``steps``, ``path`` (T+1, 2),
-    ``sir`` (T,), ``reached`` and ``overridden`` (moves where the shield replaced the
-    network's choice). ``shield``: keep to the moves :func:`shield_moves` allows (default:
-    ``agent.cfg.shield``)."""
+    ``signal`` (T,) along the path, ``reached`` and ``overridden`` (moves where the shield
+    replaced the network's choice). ``shield``: keep to the moves :func:`shield_moves`
+    allows (default: ``agent.cfg.shield``)."""
     shield = agent.cfg.shield if shield is None else shield
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     n = len(starts)
@@ -88,7 +88,7 @@ def greedy_rollouts(
     reached = np.zeros(n, dtype=bool)
     overridden = np.zeros(n, dtype=np.int64)
     paths: list[list[np.ndarray]] = [[s.copy()] for s in starts]
-    sirs: list[list[float]] = [[] for _ in range(n)]
+    signal: list[list[float]] = [[] for _ in range(n)]
     while live.any():
         idx = np.flatnonzero(live)
         pos = starts[idx] + env.cfg.step_m * off[idx]
@@ -104,7 +104,7 @@ def greedy_rollouts(
         for j, k in enumerate(idx):
             visited[k].add((int(off[k, 0]), int(off[k, 1])))
             paths[k].append(r["position"][j].copy())
-            sirs[k].append(float(r["sir_db"][j]))
+            signal[k].append(float(r["signal_db"][j]))
         end = r["terminated"] | r["truncated"]
         reached[idx[r["arrived"]]] = True
         live[idx[end]] = False
@@ -113,7 +113,7 @@ def greedy_rollouts(
             "return": float(ret[k]),
             "steps": int(t[k]),
             "path": np.array(paths[k]),
-            "sir": np.array(sirs[k]),
+            "signal": np.array(signal[k]),
             "reached": bool(reached[k]),
             "overridden": int(overridden[k]),
         }

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -18,8 +19,10 @@ from rainuav.radio import presets
 from rainuav.radio.scenario import Scenario
 
 __all__ = [
+    "PAPER_LEARNER",
     "DQNConfig",
     "TrainConfig",
+    "apply_preset",
     "check_config",
     "config_diff",
     "field_kind",
@@ -62,7 +65,9 @@ class DQNConfig:
     reward_scale: float = 100.0
     """Rewards are divided by this inside the learner."""
     grad_clip: float = 10.0
-    """Gradient-norm clip."""
+    """Gradient-norm clip (0: none)."""
+    loss: str = "huber"
+    """TD loss: 'huber' (smooth L1) or 'mse' (the paper's squared error)."""
     learning_starts: int = 1000
     """Transitions stored before learning starts."""
     train_every: int = 4
@@ -77,29 +82,47 @@ class DQNConfig:
     """Weight of the potential-based shaping -(steps to the goal); 0: the plain rewards."""
     sir_weight: float = 1.25
     """Factor on the SIR part of each reward (b + 1) inside the learner; 1: the env's rewards."""
-    shield: bool = True
-    """Greedy flights keep to moves that stay in the area and can still arrive in max_steps,
-    and avoid positions they already visited while they can (rainuav.nav.shield)."""
+    shield: bool = False
+    """Also report greedy flights that keep to moves that stay in the area and can still
+    arrive in max_steps, and avoid positions they already visited while they can
+    (rainuav.nav.shield), as shielded_*; the headline stays the network alone."""
 
 
 @dataclass
 class TrainConfig:
     """Everything a training run depends on (one docstring line per field = one CLI flag)."""
 
+    preset: str = ""
+    """Learner preset: '' (the tuned learner, docs/learner.md) or 'paper' (Algorithm 1 and
+    Table I literally: the [dqn] fields are set as docs/learner.md lists, and any given beside
+    it are refused)."""
     scenario: str = "paper"
-    """Preset scenario ('paper' or 'urban'), unless --scenario-file is given."""
+    """Preset scenario ('paper', 'uma', 'rain_cell' or 'urban'), unless --scenario-file."""
     scenario_file: str = ""
     """A scenario TOML file (overrides --scenario)."""
     rain_rate: float | None = None
     """Homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the rain
     model, drop sizes, shape, temperature and wind stay the scenario's); unset: the scenario's
     own weather (the paper preset rains 25 mm/h)."""
+    signal: str = "sinr"
+    """The map the task flies on: 'sinr' or 'sir' (the paper's)."""
+    min_db: float | None = None
+    """Outage threshold of the signal, dB; unset: the preset's documented SINR threshold
+    (10 dB for SIR and for scenario files of no preset)."""
     mu: float = 10.0 / 43.0
-    """Weight of the SIR term in the reward."""
+    """Weight of the signal term in the reward."""
     reward: str = "shortfall"
     """Reward form: 'shortfall', 'outage' or 'linear'."""
     max_steps: int = 300
-    """Steps per episode (Table I)."""
+    """Steps per episode, the horizon (Table I)."""
+    step_m: float = 10.0
+    """Length of one move, m."""
+    tol_m: float = 10.0
+    """Arrival tolerance D_tol, m (Table I)."""
+    goal_reward: float = 2000.0
+    """Arrival reward R_des (Table I)."""
+    out_of_bounds_penalty: float = 10000.0
+    """Penalty P_ob for leaving the area (Table I)."""
     goal_x_m: float = 1400.0
     """Destination, east coordinate, m."""
     goal_y_m: float = 1600.0
@@ -123,7 +146,8 @@ class TrainConfig:
     validate_starts: int = 100
     """Validation starts (seeded by eval_seed + 2; not the evaluation starts)."""
     keep_best: bool = False
-    """Evaluate and save the network with the smallest validation gap, not the final one."""
+    """Evaluate and save the network with the best validation score (success, then excess
+    cost), not the final one."""
     dqn: DQNConfig = field(default_factory=DQNConfig)
     """Agent hyperparameters."""
 
@@ -180,8 +204,16 @@ def check_config(cfg: TrainConfig) -> None:
         ("train_every", d.train_every >= 1, ">= 1"),
         ("learning_starts", d.learning_starts >= 0, ">= 0"),
         ("reward_scale", 0 < d.reward_scale < math.inf, "> 0"),
-        ("grad_clip", 0 < d.grad_clip < math.inf, "> 0"),
+        ("grad_clip", 0 <= d.grad_clip < math.inf, ">= 0 and finite"),
+        ("loss", d.loss in ("huber", "mse"), "'huber' or 'mse'"),
+        ("preset", cfg.preset in ("", "paper"), "'' or 'paper'"),
+        ("signal", cfg.signal in ("sinr", "sir"), "'sinr' or 'sir'"),
+        ("min_db", cfg.min_db is None or math.isfinite(cfg.min_db), "unset or finite"),
         ("max_steps", cfg.max_steps >= 1, ">= 1"),
+        ("step_m", 0 < cfg.step_m < math.inf, "> 0 and finite"),
+        ("tol_m", 0 < cfg.tol_m < math.inf, "> 0 and finite"),
+        ("goal_reward", math.isfinite(cfg.goal_reward), "finite"),
+        ("out_of_bounds_penalty", math.isfinite(cfg.out_of_bounds_penalty), "finite"),
         ("eval_starts", cfg.eval_starts >= 1, ">= 1"),
         ("validate_every", cfg.validate_every >= 0, ">= 0"),
         ("validate_starts", cfg.validate_starts >= 1, ">= 1"),
@@ -197,6 +229,49 @@ def check_config(cfg: TrainConfig) -> None:
         if not ok:
             value = getattr(d, name) if hasattr(d, name) else getattr(cfg, name)
             raise InvalidInputError(f"{name} must be {allowed} (got {value!r})")
+
+
+PAPER_LEARNER: dict[str, Any] = {
+    # Table I.
+    "target_sync_episodes": 5,
+    "eps0": 0.5,
+    "eps_decay": 0.998,
+    "replay_capacity": 100_000,
+    "batch_size": 16,
+    # Algorithm 1: one gradient step per move once |D| >= B, squared loss, one UAV at a
+    # time, the position as the only input, the env's rewards as they are, no safety layer.
+    "learning_starts": 16,
+    "train_every": 1,
+    "loss": "mse",
+    "lanes": 1,
+    "fourier": 0,
+    "goal_features": 0,
+    "time_aware": False,
+    "shaping": 0.0,
+    "sir_weight": 1.0,
+    "reward_scale": 1.0,
+    "grad_clip": 0.0,
+    "shield": False,
+}
+"""The [dqn] fields ``preset = "paper"`` fixes (Algorithm 1 and Table I). The paper is silent
+on ``gamma``, ``n_step``, ``lr`` and ``hidden``: they keep their values (the defaults unless
+given), with a constant learning rate; ``episodes`` (Table I: 3000) may be lowered."""
+
+
+def apply_preset(cfg: TrainConfig, given: Iterable[str] = ()) -> TrainConfig:
+    """``cfg`` with its learner preset applied (``preset = "paper"``: :data:`PAPER_LEARNER`,
+    constant learning rate). ``given``: the [dqn] fields the user set explicitly; one that
+    the preset fixes is refused, naming it."""
+    if cfg.preset != "paper":
+        return cfg
+    clash = sorted(set(given) & set(PAPER_LEARNER))
+    if clash:
+        raise InvalidInputError(
+            f"preset 'paper' fixes dqn.{clash[0]} (Algorithm 1 and Table I); drop the flag or "
+            "the preset"
+        )
+    dqn = dataclasses.replace(cfg.dqn, **PAPER_LEARNER, lr_final=cfg.dqn.lr)
+    return dataclasses.replace(cfg, dqn=dqn)
 
 
 def to_dict(cfg: TrainConfig) -> dict[str, Any]:

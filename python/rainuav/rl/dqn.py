@@ -269,10 +269,14 @@ class Agent:
                 t["discount"],
                 t["done"],
             )
-        loss = nn.functional.smooth_l1_loss(q, y)
+        if self.cfg.loss == "mse":
+            loss = nn.functional.mse_loss(q, y)
+        else:
+            loss = nn.functional.smooth_l1_loss(q, y)
         self.opt.zero_grad(set_to_none=True)
         loss.backward()
-        nn.utils.clip_grad_norm_(self.online.parameters(), self.cfg.grad_clip, foreach=True)
+        if self.cfg.grad_clip > 0:
+            nn.utils.clip_grad_norm_(self.online.parameters(), self.cfg.grad_clip, foreach=True)
         self.opt.step()
         self.updates += 1
         return float(loss.detach())

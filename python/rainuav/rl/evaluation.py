@@ -1,9 +1,11 @@
-"""Measuring a policy: greedy flights from fixed starts against the exact planner
-(:func:`evaluate`), the run's evaluation (:func:`evaluate_run_policy`) and the greedy checks
-on held-out validation starts during training (:class:`Validation`)."""
+"""Measuring a policy: the network's greedy flights from fixed starts against the exact
+planner and the straight-line baseline, by success and excess cost (:func:`evaluate`), the
+run's evaluation (:func:`evaluate_run_policy`) and the greedy checks on held-out validation
+starts during training (:class:`Validation`)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,9 +17,10 @@ import torch
 from rainuav.errors import InvalidInputError
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
-from rainuav.radio.radiomap import RadioMap
+from rainuav.nav.task import flight_cost
+from rainuav.radio.radiomap import RadioMap, build_radio_map
 from rainuav.rl.collect import greedy_rollouts
-from rainuav.rl.config import TrainConfig, load_config
+from rainuav.rl.config import TrainConfig, check_config, load_config, make_scenario
 from rainuav.rl.dqn import Agent
 from rainuav.rl.setup import make_agent, make_env, pick_device
 
@@ -27,7 +30,10 @@ __all__ = [
     "evaluate",
     "evaluate_run_policy",
     "evaluate_saved_run",
+    "flights",
+    "reference_flights",
     "relative_gap",
+    "summarise",
 ]
 
 
@@ -38,75 +44,154 @@ def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
 
 
 def relative_gap(optimum: np.ndarray, returns: np.ndarray) -> np.ndarray:
-    """Per start, the share of the exact optimum's return the policy gave up."""
+    """Per start, the share of the exact optimum's return the policy gave up (a secondary
+    figure: the arrival reward in both returns makes it look about 4x smaller than the extra
+    cost it stands for, PHYSICS.md section 6)."""
     return (optimum - returns) / np.maximum(np.abs(optimum), 1e-9)
 
 
-def evaluate(agent: Agent, env: UAVNavEnv, starts: np.ndarray) -> tuple[dict[str, Any], list]:
-    """Greedy policy from every start against the exact planner. With the shield on, also
-    the share of flights it steered and the same network's numbers without it."""
-    rolls = greedy_rollouts(agent, env, starts)
-    plans = planner.optimal_many(env, starts)
-    rets = np.array([r["return"] for r in rolls])
-    opt = np.array([p.return_ for p in plans])
-    gap = relative_gap(opt, rets)
-    shielded: dict[str, Any] = {}
-    if agent.cfg.shield:
-        free = greedy_rollouts(agent, env, starts, shield=False)
-        free_gap = relative_gap(opt, np.array([r["return"] for r in free]))
-        shielded = {
-            "shielded_flights": float(np.mean([r["overridden"] > 0 for r in rolls])),
-            "unshielded_success_rate": float(np.mean([r["reached"] for r in free])),
-            "unshielded_mean_gap_to_optimal": float(free_gap.mean()),
-        }
-    sirs = np.concatenate([r["sir"] for r in rolls])
-    metrics = {
-        "success_rate": float(np.mean([r["reached"] for r in rolls])),
-        "mean_return": float(rets.mean()),
-        "mean_steps": float(np.mean([r["steps"] for r in rolls])),
-        "mean_sir_db": float(sirs.mean()),
-        "outage_share": float(np.mean(sirs < env.cfg.sir_min_db)),
-        "mean_gap_to_optimal": float(gap.mean()),
-        "median_gap_to_optimal": float(np.median(gap)),
-        "worst_gap_to_optimal": float(gap.max()),
-        "optimal_mean_return": float(opt.mean()),
-        "straight_line_mean_return": float(
-            np.mean([planner.straight_line(env, s).return_ for s in starts])
-        ),
-        "eval_starts": len(starts),
-        **shielded,
+def _arrived(env: UAVNavEnv, path: np.ndarray) -> bool:
+    """Whether a planner's path ends at the destination (inside the area)."""
+    x0, x1, y0, y1 = env.field.extent
+    p, g = path[-1], np.asarray(env.cfg.goal_m)
+    inside = x0 <= p[0] <= x1 and y0 <= p[1] <= y1
+    return bool(inside and np.hypot(*(p - g)) <= env.cfg.tol_m and len(path) > 1)
+
+
+def flights(env: UAVNavEnv, returns: Any, arrived: Any, paths: list) -> dict[str, np.ndarray]:
+    """Per flight: ``return``, ``arrived``, ``cost`` (:func:`rainuav.nav.task.flight_cost`),
+    ``steps``, and the signal along the path (every position after the start): its mean and
+    the share of it below ``min_db``."""
+    signal = [env.field(p[1:, 0], p[1:, 1]) for p in paths]
+    rets = np.asarray(returns, dtype=np.float64)
+    ok = np.asarray(arrived, dtype=bool)
+    return {
+        "return": rets,
+        "arrived": ok,
+        "cost": flight_cost(rets, ok, env.cfg),
+        "steps": np.array([len(p) - 1 for p in paths], dtype=np.float64),
+        "signal_sum": np.array([s.sum() for s in signal]),
+        "outage_sum": np.array([np.sum(s < env.cfg.min_db) for s in signal], dtype=np.float64),
     }
+
+
+def summarise(f: dict[str, np.ndarray], optimum: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Success, excess cost ``(C - C*) / C*`` over the flights that arrived where the optimum
+    did too (None where none did), return gap, flight time in moves, and the mean signal and
+    outage share over every position flown."""
+    both = f["arrived"] & optimum["arrived"]
+    excess = (f["cost"][both] - optimum["cost"][both]) / optimum["cost"][both]
+    gap = relative_gap(optimum["return"], f["return"])
+    moves = max(float(f["steps"].sum()), 1.0)
+    return {
+        "success_rate": float(f["arrived"].mean()),
+        "mean_excess_cost": float(excess.mean()) if both.any() else None,
+        "median_excess_cost": float(np.median(excess)) if both.any() else None,
+        "worst_excess_cost": float(excess.max()) if both.any() else None,
+        "mean_cost": float(f["cost"][f["arrived"]].mean()) if f["arrived"].any() else None,
+        "mean_steps": float(f["steps"].mean()),
+        "mean_signal_db": float(f["signal_sum"].sum() / moves),
+        "outage_share": float(f["outage_sum"].sum() / moves),
+        "mean_gap_to_optimal": float(gap.mean()),
+        "worst_gap_to_optimal": float(gap.max()),
+        "mean_return": float(f["return"].mean()),
+    }
+
+
+def reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """The exact planner's flights (the yardstick) and the straight-line baseline's."""
+    plans = planner.optimal_many(env, starts)
+    lines = [planner.straight_line(env, s) for s in starts]
+    return {
+        name: flights(
+            env,
+            [p.return_ for p in ps],
+            [_arrived(env, p.path_m) for p in ps],
+            [p.path_m for p in ps],
+        )
+        for name, ps in (("optimal", plans), ("straight_line", lines))
+    }
+
+
+def _policy_flights(
+    agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool
+) -> tuple[dict[str, np.ndarray], list]:
+    rolls = greedy_rollouts(agent, env, starts, shield=shield)
+    f = flights(
+        env, [r["return"] for r in rolls], [r["reached"] for r in rolls], [r["path"] for r in rolls]
+    )
+    return f, rolls
+
+
+def evaluate(
+    agent: Agent,
+    env: UAVNavEnv,
+    starts: np.ndarray,
+    references: dict[str, dict[str, np.ndarray]] | None = None,
+) -> tuple[dict[str, Any], list]:
+    """The greedy network alone from every start, against the exact planner, beside the
+    straight-line baseline (``straight_line_*``) and the optimum (``optimal_*``). With the
+    agent's shield on, the shielded flights are reported beside them as ``shielded_*`` (the
+    headline stays the network's own). Returns the metrics and the network's flights."""
+    refs = references or reference_flights(env, starts)
+    opt = refs["optimal"]
+    f, rolls = _policy_flights(agent, env, starts, shield=False)
+    metrics: dict[str, Any] = {
+        "signal": env.cfg.signal,
+        "min_db": env.cfg.min_db,
+        **summarise(f, opt),
+    }
+    for name, ref in refs.items():
+        for key, value in summarise(ref, opt).items():
+            if name == "straight_line" or key not in ("mean_excess_cost", "worst_excess_cost"):
+                metrics[f"{name}_{key}"] = value
+    if agent.cfg.shield:
+        fs, rolls_s = _policy_flights(agent, env, starts, shield=True)
+        s = summarise(fs, opt)
+        keys = ("success_rate", "mean_excess_cost", "worst_excess_cost")
+        metrics.update({f"shielded_{k}": s[k] for k in keys})
+        metrics["shielded_flights"] = float(np.mean([r["overridden"] > 0 for r in rolls_s]))
+    metrics["eval_starts"] = len(starts)
     return metrics, rolls
 
 
 @dataclass
 class Validation:
-    """Greedy checks during training: every ``validate_every`` finished episodes the greedy
-    policy flies from held-out validation starts (never the evaluation starts), and the
-    history of (episodes, success, mean gap to the optimum) and the online weights with the
-    smallest gap are kept. With ``keep_best`` those weights are the run's result (early
-    stopping; when that pays: ``docs/learner.md``)."""
+    """Greedy checks during training: every ``validate_every`` finished episodes the network
+    alone flies from held-out validation starts (never the evaluation starts), and the history
+    of (episodes, success, mean excess cost over the optimum) and the online weights with the
+    best score are kept (highest success, then lowest mean excess cost: ``score``). With
+    ``keep_best`` those weights are the run's result (early stopping; when that pays:
+    ``docs/learner.md``)."""
 
     starts: np.ndarray
-    optimum: np.ndarray
+    optimum: dict[str, np.ndarray]
     best_gap: float = math.inf
+    """The best score so far (:meth:`score`; lower is better)."""
     best_at: int = 0
     best_online: dict[str, torch.Tensor] | None = None
     history: list[tuple[int, float, float]] = field(default_factory=list)
 
+    @staticmethod
+    def score(success: float, excess: float | None) -> float:
+        """Lower is better: each missed flight weighs as much as 100% excess cost."""
+        return (1.0 - success) + (1.0 if excess is None else excess)
+
     def check(self, agent: Agent, env: UAVNavEnv, finished: int) -> tuple[float, float]:
-        """Flies the greedy policy from the validation starts; returns (success, mean gap)."""
-        rolls = greedy_rollouts(agent, env, self.starts)
-        rets = np.array([r["return"] for r in rolls])
-        gap = float(np.mean(relative_gap(self.optimum, rets)))
-        success = float(np.mean([r["reached"] for r in rolls]))
-        self.history.append((finished, success, gap))
-        if gap < self.best_gap:
-            self.best_gap, self.best_at = gap, finished
+        """Flies the network alone from the validation starts; returns (success, mean excess
+        cost; 1 where no flight arrived)."""
+        f, _ = _policy_flights(agent, env, self.starts, shield=False)
+        m = summarise(f, self.optimum)
+        success = m["success_rate"]
+        excess = 1.0 if m["mean_excess_cost"] is None else m["mean_excess_cost"]
+        self.history.append((finished, success, excess))
+        score = self.score(success, excess)
+        if score < self.best_gap:
+            self.best_gap, self.best_at = score, finished
             self.best_online = {
                 k: v.detach().cpu().clone() for k, v in agent.online.state_dict().items()
             }
-        return success, gap
+        return success, excess
 
     def state_dict(self) -> dict[str, Any]:
         return {
@@ -128,36 +213,80 @@ def evaluate_run_policy(
     ``keep_best`` the best on validation (loaded into ``agent``; the final network's numbers
     are then added as ``final_*``)."""
     starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
-    metrics, rolls = evaluate(agent, env, starts)
+    refs = reference_flights(env, starts)
+    metrics, rolls = evaluate(agent, env, starts, refs)
     metrics["selected_at_episode"] = cfg.dqn.episodes
     if cfg.keep_best and checks.best_online is not None and checks.best_at != cfg.dqn.episodes:
         final = metrics
         agent.online.load_state_dict(checks.best_online)
-        metrics, rolls = evaluate(agent, env, starts)
+        metrics, rolls = evaluate(agent, env, starts, refs)
         metrics["selected_at_episode"] = checks.best_at
-        for key in ("success_rate", "mean_return", "mean_gap_to_optimal", "worst_gap_to_optimal"):
+        for key in ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_return"):
             metrics[f"final_{key}"] = final[key]
     return metrics, rolls
 
 
-def evaluate_saved_run(run_dir: Path, device: str = "cpu") -> tuple[dict[str, Any], list, Any]:
-    """Re-evaluates a saved training run: loads its ``config.toml``, ``radiomap.npz`` and
-    ``checkpoint.pt`` and evaluates the policy the run reports (:func:`evaluate_run_policy`).
-    Returns the metrics, the greedy flights and the environment; writes nothing."""
+def evaluate_saved_run(
+    run_dir: Path,
+    device: str = "cpu",
+    *,
+    scenario: str | None = None,
+    rain_rate: float | None = None,
+    engine: str | None = None,
+    starts: int | None = None,
+    seed: int | None = None,
+    shield: bool = False,
+) -> tuple[dict[str, Any], list, Any]:
+    """Flies a saved training run's policy (the network the run reports: the final one, or
+    with ``keep_best`` the best on validation). On the run's own map by default; ``scenario``
+    (a preset), ``rain_rate`` (homogeneous rain, mm/h) and ``engine`` fly it on another map
+    (built or taken from the cache). ``starts``/``seed``: the number and seed of the fixed
+    starts (default: the run's evaluation starts); ``shield``: report shielded flights beside
+    the network's own. Returns the metrics, the flights and the environment; writes nothing."""
     run = Path(run_dir)
     for name in ("config.toml", "radiomap.npz", "checkpoint.pt"):
         if not (run / name).exists():
             raise InvalidInputError(f"{run}: missing {name}; is this a rainuav.train output?")
     cfg = load_config(run / "config.toml")
-    rm = RadioMap.load(run / "radiomap.npz")
-    env = make_env(cfg, rm.sir_db, rm.extent_m)
+    if scenario is None and rain_rate is None and engine is None:
+        rm = RadioMap.load(run / "radiomap.npz")
+    else:
+        flown = dataclasses.replace(
+            cfg,
+            scenario=cfg.scenario if scenario is None else scenario,
+            scenario_file="" if scenario is not None else cfg.scenario_file,
+            rain_rate=cfg.rain_rate if rain_rate is None else rain_rate,
+        )
+        check_config(flown)
+        scn = make_scenario(flown)
+        if engine is not None:
+            scn = dataclasses.replace(scn, engine=engine)
+        rm = build_radio_map(scn, progress=True)
+    env = make_env(cfg, rm)
     agent = make_agent(cfg, env, pick_device(device))
+    agent.cfg.shield = shield
     state = torch.load(run / "checkpoint.pt", weights_only=False, map_location=agent.device)
-    agent.load_state_dict(state["agent"])
-    checks = Validation(np.zeros((0, 2)), np.zeros(0))
+    try:
+        agent.load_state_dict(state["agent"])
+    except (KeyError, RuntimeError) as err:
+        raise InvalidInputError(
+            f"{run / 'checkpoint.pt'}: does not fit the network its config.toml describes "
+            f"(a run from an incompatible version?): {str(err).splitlines()[0]}"
+        ) from err
+    checks = Validation(np.zeros((0, 2)), {})
     if "validation" in state:
         checks.load_state_dict(state["validation"])
-    metrics, rolls = evaluate_run_policy(cfg, agent, env, checks)
+    if cfg.keep_best and checks.best_online is not None and checks.best_at != cfg.dqn.episodes:
+        agent.online.load_state_dict(checks.best_online)
+    pts = eval_starts(
+        env,
+        cfg.eval_starts if starts is None else starts,
+        cfg.eval_seed if seed is None else seed,
+    )
+    metrics, rolls = evaluate(agent, env, pts)
+    metrics["scenario"] = rm.scenario.name
+    metrics["rain_rate_mm_h"] = rm.scenario.medium.rain_rate_mm_h
+    metrics["trained_on"] = {"scenario": cfg.scenario, "rain_rate": cfg.rain_rate}
     metrics["episodes"] = len(state["returns"])
     metrics["training_seconds"] = state["train_seconds"]
     return metrics, rolls, env

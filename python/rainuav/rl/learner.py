@@ -37,7 +37,7 @@ def learning_reward(
     ``docs/learner.md``)."""
     reward = r["reward"]
     if d.sir_weight != 1.0:
-        reward = reward + (d.sir_weight - 1.0) * (base_reward(r["sir_db"], env.cfg) + 1.0)
+        reward = reward + (d.sir_weight - 1.0) * (base_reward(r["signal_db"], env.cfg) + 1.0)
     return reward + shaping_term(env, d, pos, r["position"], learner_ends(d, r))
 
 

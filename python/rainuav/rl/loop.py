@@ -26,12 +26,12 @@ import torch
 
 from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
-from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
 from rainuav.radio.radiomap import RadioMap, build_radio_map
 from rainuav.rl.collect import Lanes, greedy_rollouts
 from rainuav.rl.config import (
     TrainConfig,
+    apply_preset,
     check_config,
     config_diff,
     make_scenario,
@@ -39,9 +39,14 @@ from rainuav.rl.config import (
     to_dict,
 )
 from rainuav.rl.dqn import Agent
-from rainuav.rl.evaluation import Validation, eval_starts, evaluate_run_policy
+from rainuav.rl.evaluation import (
+    Validation,
+    eval_starts,
+    evaluate_run_policy,
+    reference_flights,
+)
 from rainuav.rl.learner import learner_ends, learning_reward
-from rainuav.rl.plots import plot_returns, plot_stages, plot_trajectories
+from rainuav.rl.plots import plot_policy, plot_returns, plot_stages
 from rainuav.rl.setup import make_agent, make_env, pick_device, torch_settings
 
 __all__ = ["finish", "load_checkpoint", "run_loop", "save_checkpoint", "train"]
@@ -132,13 +137,14 @@ def train(
     interruption would, at the first checkpoint with at least that many finished episodes
     (``resume=True`` then continues exactly); it returns ``{}``. Sets no process-wide state
     that outlives the call (torch's thread count and determinism are restored)."""
+    cfg = apply_preset(cfg)
     check_config(cfg)
     out = Path(cfg.out)
     out.mkdir(parents=True, exist_ok=True)
     saved = load_checkpoint(out / "checkpoint.pt", cfg) if resume else None
     rm = run_map(cfg, out, resume, radio_map, progress)
     write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
-    env = make_env(cfg, rm.sir_db, rm.extent_m)
+    env = make_env(cfg, rm)
     device = pick_device(cfg.device)
     with torch_settings(device):
         agent = make_agent(cfg, env, device)  # seeds torch with cfg.seed
@@ -162,8 +168,7 @@ def run_loop(
     lanes = Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
     n_val = cfg.validate_starts if cfg.validate_every else 0
     val_starts = eval_starts(env, n_val, cfg.eval_seed + 2)
-    val_optimum = np.array([p.return_ for p in planner.optimal_many(env, val_starts)])
-    checks = Validation(val_starts, val_optimum)
+    checks = Validation(val_starts, reference_flights(env, val_starts)["optimal"])
     stage_every = max(1, d.episodes // max(cfg.stages, 1))
     stage_starts = eval_starts(env, 5, cfg.eval_seed + 1)
     started, returns, successes, stages = 0, [], [], []
@@ -229,9 +234,9 @@ def run_loop(
                     # Greedy rollouts from given starts draw nothing from the training rng.
                     stages.append((n_done, greedy_rollouts(agent, env, stage_starts)))
                 if cfg.validate_every and n_done % cfg.validate_every == 0:
-                    success, gap = checks.check(agent, env, n_done)
+                    success, excess = checks.check(agent, env, n_done)
                     log.tb.add_scalar("validation/success", success, n_done)
-                    log.tb.add_scalar("validation/mean_gap", gap, n_done)
+                    log.tb.add_scalar("validation/mean_excess_cost", excess, n_done)
                 if started < d.episodes:
                     lanes.launch(k, env.sample_start(env.np_random), started)
                     started += 1
@@ -300,8 +305,7 @@ def finish(
     text = json.dumps(metrics, indent=2)
     write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
     plot_returns(returns, out / "returns.png", checks.history)
-    title = f"greedy policy, success {100 * metrics['success_rate']:.0f}%"
-    plot_trajectories(env, rolls[:40], out / "trajectories.png", title)
+    plot_policy(env, metrics, rolls[:40], out / "trajectories.png")
     if stages:
         plot_stages(env, stages, out / "stages.png")
     return metrics

@@ -6,29 +6,52 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from rainuav._io import write_atomic
 from rainuav.nav.env import UAVNavEnv
 
-__all__ = ["plot_returns", "plot_stages", "plot_trajectories"]
+__all__ = ["map_image", "plot_policy", "plot_returns", "plot_stages", "plot_trajectories"]
 
 
-def plot_trajectories(env: UAVNavEnv, rolls: list, path: Path, title: str) -> None:
+def map_image(ax: Any, env: UAVNavEnv) -> Any:
+    """The task's signal map on ``ax``, its colour scale centred on the outage threshold."""
+    x0, x1, y0, y1 = env.field.extent
+    lo = float(env.cfg.min_db if env.cfg.min_db is not None else 0.0)
+    return ax.imshow(
+        env.field.db,
+        origin="lower",
+        extent=(x0, x1, y0, y1),
+        cmap="RdYlGn",
+        vmin=lo - 15.0,
+        vmax=lo + 15.0,
+    )
+
+
+def plot_trajectories(
+    env: UAVNavEnv, rolls: list, path: Path, title: str, optimal: Sequence[Any] = ()
+) -> None:
+    """The flights over the map (black), starts as red crosses, the destination as a blue
+    triangle; ``optimal``: the exact planner's paths from the same starts (dashed blue)."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(6.4, 5.4))
     ax = fig.subplots()
     x0, x1, y0, y1 = env.field.extent
-    im = ax.imshow(
-        env.field.sir_db, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn", vmin=-10, vmax=30
-    )
-    fig.colorbar(im, ax=ax, label="SIR [dB]")
-    for r in rolls:
-        ax.plot(r["path"][:, 0], r["path"][:, 1], "-", color="k", lw=0.8, alpha=0.7)
+    im = map_image(ax, env)
+    label = f"{env.cfg.signal.upper()} [dB] (outage below {env.cfg.min_db:g})"
+    fig.colorbar(im, ax=ax, label=label)
+    for k, p in enumerate(optimal):
+        ax.plot(p[:, 0], p[:, 1], "--", color="tab:blue", lw=0.9, alpha=0.8,
+                label="exact optimum" if k == 0 else None)  # fmt: skip
+    for k, r in enumerate(rolls):
+        ax.plot(r["path"][:, 0], r["path"][:, 1], "-", color="k", lw=0.8, alpha=0.7,
+                label="policy" if k == 0 else None)  # fmt: skip
         ax.plot(r["path"][0, 0], r["path"][0, 1], "rx", ms=6)
     ax.plot(*env.cfg.goal_m, "b^", ms=10, label="destination")
+    ax.legend(loc="lower right", fontsize="small")
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_xlabel("x [m]")
@@ -38,6 +61,19 @@ def plot_trajectories(env: UAVNavEnv, rolls: list, path: Path, title: str) -> No
     write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
 
 
+def plot_policy(env: UAVNavEnv, metrics: dict[str, Any], rolls: list, path: Path) -> None:
+    """The network's flights beside the exact optimum from the same starts, titled with its
+    success and mean excess cost."""
+    from rainuav.nav import planner
+
+    starts = np.array([r["path"][0] for r in rolls]).reshape(-1, 2)
+    optimal = [p.path_m for p in planner.optimal_many(env, starts)]
+    excess = metrics.get("mean_excess_cost")
+    cost = "n/a" if excess is None else f"{100 * excess:.1f}%"
+    title = f"network alone: success {100 * metrics['success_rate']:.0f}%, excess cost {cost}"
+    plot_trajectories(env, rolls, path, title, optimal)
+
+
 def plot_returns(
     returns: list[float],
     path: Path,
@@ -45,7 +81,7 @@ def plot_returns(
     window: int = 50,
 ) -> None:
     """The training returns and their moving average; beside them, when given, the greedy
-    policy's success and mean gap on the validation starts."""
+    network's success and mean excess cost on the validation starts."""
     from matplotlib.figure import Figure
 
     r = np.asarray(returns)
@@ -64,7 +100,7 @@ def plot_returns(
         ep, success, gap = (np.array(v) for v in zip(*validation, strict=True))
         ax = axes[0, 1]
         ax.plot(ep, 100 * success, "g.-", label="success, %")
-        ax.plot(ep, 100 * np.minimum(gap, 1.0), "r.-", label="mean gap to optimum, % (cut at 100)")
+        ax.plot(ep, 100 * np.minimum(gap, 1.0), "r.-", label="mean excess cost, % (cut at 100)")
         ax.set_xlabel("episode")
         ax.set_ylim(0, 105)
         ax.set_title("greedy policy on the validation starts")
@@ -81,16 +117,8 @@ def plot_stages(env: UAVNavEnv, stages: list[tuple[int, list]], path: Path) -> N
     # square image panels).
     fig = Figure(figsize=(3.6 * n, 3.9), layout="constrained")
     axs = fig.subplots(1, n, squeeze=False)
-    x0, x1, y0, y1 = env.field.extent
     for ax, (ep, rolls) in zip(axs[0], stages, strict=False):
-        ax.imshow(
-            env.field.sir_db,
-            origin="lower",
-            extent=(x0, x1, y0, y1),
-            cmap="RdYlGn",
-            vmin=-10,
-            vmax=30,
-        )
+        map_image(ax, env)
         for r in rolls:
             ax.plot(r["path"][:, 0], r["path"][:, 1], "k-", lw=0.8)
             ax.plot(r["path"][0, 0], r["path"][0, 1], "rx")

@@ -19,12 +19,22 @@ from rainuav.rl.dqn import Agent
 __all__ = ["make_agent", "make_env", "pick_device", "torch_settings"]
 
 
-def make_env(cfg: TrainConfig, sir_db: np.ndarray, extent: Any) -> UAVNavEnv:
-    """The navigation task of a run over a map."""
+def make_env(cfg: TrainConfig, radio_map: Any) -> UAVNavEnv:
+    """The navigation task of a run over a RadioMap (its ``signal`` map; ``min_db`` unset:
+    the map's default threshold)."""
     nav = NavConfig(
-        goal_m=(cfg.goal_x_m, cfg.goal_y_m), mu=cfg.mu, reward=cfg.reward, max_steps=cfg.max_steps
+        goal_m=(cfg.goal_x_m, cfg.goal_y_m),
+        step_m=cfg.step_m,
+        tol_m=cfg.tol_m,
+        max_steps=cfg.max_steps,
+        mu=cfg.mu,
+        reward=cfg.reward,
+        signal=cfg.signal,
+        min_db=cfg.min_db,
+        goal_reward=cfg.goal_reward,
+        out_of_bounds_penalty=cfg.out_of_bounds_penalty,
     )
-    return UAVNavEnv(sir_db=sir_db, extent_m=extent, config=nav)
+    return UAVNavEnv(radio_map=radio_map, config=nav)
 
 
 def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:

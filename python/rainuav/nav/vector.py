@@ -1,0 +1,153 @@
+"""A Gymnasium vector environment over the batched stepper: ``num_envs`` UAVs on one map, each
+its own episode, stepped by one call (:class:`rainuav.nav.batch.BatchStepper`), with exactly
+the scalar environment's transitions.
+
+Autoreset (Gymnasium's ``metadata["autoreset_mode"]``): ``NEXT_STEP`` (Gymnasium's default,
+what CleanRL expects): the step after a UAV's episode ends resets it, ignores its action and
+returns its new start with reward 0; ``SAME_STEP``: the ending step already returns the new
+start, and the last observation of the finished episode is ``info["final_obs"]``.
+``gym.make_vec("rainuav/UAVNav-v0", num_envs=N, vectorization_mode="vector_entry_point")``
+builds one (:mod:`rainuav.envs`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode
+
+from rainuav.errors import InvalidInputError
+from rainuav.nav.env import UAVNavEnv
+
+__all__ = ["UAVNavVectorEnv"]
+
+
+class UAVNavVectorEnv(gym.vector.VectorEnv):
+    """``num_envs`` UAVs flying the task of ``env`` (a :class:`UAVNavEnv`: its map and task;
+    its own state is not used), batched."""
+
+    def __init__(
+        self,
+        env: UAVNavEnv,
+        num_envs: int,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+    ) -> None:
+        if not isinstance(env, UAVNavEnv):
+            raise InvalidInputError(f"env must be a UAVNavEnv (got {type(env).__name__})")
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
+            raise InvalidInputError(f"num_envs must be an integer >= 1 (got {num_envs!r})")
+        if num_envs < 1:
+            raise InvalidInputError(f"num_envs must be an integer >= 1 (got {num_envs!r})")
+        mode = AutoresetMode(autoreset_mode)
+        if mode == AutoresetMode.DISABLED:
+            raise InvalidInputError("autoreset_mode must be NEXT_STEP or SAME_STEP")
+        self.env = env
+        self.num_envs = int(num_envs)
+        self.metadata = {"autoreset_mode": mode}
+        self.single_observation_space = env.observation_space
+        self.single_action_space = env.action_space
+        self.observation_space = gym.vector.utils.batch_space(env.observation_space, num_envs)
+        self.action_space = gym.vector.utils.batch_space(env.action_space, num_envs)
+        n = self.num_envs
+        self._start = np.zeros((n, 2))
+        self._offset = np.zeros((n, 2), dtype=np.int64)
+        self._t = np.zeros(n, dtype=np.int64)
+        self._ended = np.zeros(n, dtype=bool)
+        self._rng = np.random.default_rng()
+
+    # -- helpers ----------------------------------------------------------------------------
+    def _launch(self, mask: np.ndarray, options: dict[str, Any] | None = None) -> None:
+        """New episodes for the UAVs in ``mask``: from ``options["start_m"]`` ((2,) or
+        (num_envs, 2)), the task's fixed start, or uniform starts."""
+        start = (options or {}).get("start_m", self.env.cfg.start_m)
+        for k in np.flatnonzero(mask):
+            if start is None:
+                self._start[k] = self.env.sample_start(self._rng)
+            else:
+                s = np.asarray(start, dtype=np.float64)
+                self._start[k] = s[k] if s.ndim == 2 else s
+        self._offset[mask] = 0
+        self._t[mask] = 0
+        self._ended[mask] = False
+
+    def _position(self) -> np.ndarray:
+        return self._start + self.env.cfg.step_m * self._offset
+
+    def _infos(self, signal: np.ndarray, arrived: np.ndarray) -> dict[str, Any]:
+        pos = self._position()
+        serving = self.env.field.serving_cell(pos[:, 0], pos[:, 1])
+        assert self.env.cfg.min_db is not None  # resolved by UAVNavEnv
+        out: dict[str, Any] = {
+            "signal_db": signal,
+            "serving_cell": serving,
+            "position_m": pos,
+            "outage": signal < self.env.cfg.min_db,
+            "arrived": arrived,
+        }
+        every = np.ones(self.num_envs, dtype=bool)
+        return {**out, **{f"_{k}": every for k in out}}
+
+    # -- gymnasium API ----------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        if options and "start_m" in options:
+            s = np.asarray(options["start_m"], dtype=np.float64)
+            if s.shape not in ((2,), (self.num_envs, 2)) or not np.all(np.isfinite(s)):
+                raise InvalidInputError(
+                    f"options['start_m'] must be (2,) or ({self.num_envs}, 2) (got {s.shape})"
+                )
+        self._launch(np.ones(self.num_envs, dtype=bool), options)
+        pos = self._position()
+        signal = self.env.field(pos[:, 0], pos[:, 1])
+        return self.env.observe(pos), self._infos(signal, np.zeros(self.num_envs, dtype=bool))
+
+    def step(
+        self, actions: Any
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        a = np.asarray(actions)
+        if a.shape != (self.num_envs,) or not np.all((a >= 0) & (a < 4)):
+            raise InvalidInputError(
+                f"actions must be {self.num_envs} integers in 0..3 (got {np.asarray(actions)!r})"
+            )
+        a = a.astype(np.int64)
+        n = self.num_envs
+        reward = np.zeros(n)
+        terminated = np.zeros(n, dtype=bool)
+        truncated = np.zeros(n, dtype=bool)
+        arrived = np.zeros(n, dtype=bool)
+        resetting = self._ended.copy()  # NEXT_STEP: these only reset on this call
+        moving = ~resetting
+        if moving.any():
+            r = self.env.stepper.step(
+                self._start[moving], self._offset[moving], self._t[moving], a[moving]
+            )
+            self._offset[moving], self._t[moving] = r["offset"], r["t"]
+            reward[moving] = r["reward"]
+            terminated[moving], truncated[moving] = r["terminated"], r["truncated"]
+            arrived[moving] = r["arrived"]
+        ended = terminated | truncated
+        pos = self._position()
+        # A UAV that left the area sits at the clamped position (the scalar env's state).
+        x0, x1, y0, y1 = self.env.field.extent
+        pos = np.stack([np.clip(pos[:, 0], x0, x1), np.clip(pos[:, 1], y0, y1)], axis=1)
+        obs = self.env.observe(pos)
+        infos: dict[str, Any] = {}
+        if self.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP:
+            self._launch(resetting)
+            self._ended = ended
+            pos = np.where(resetting[:, None], self._position(), pos)
+            obs = self.env.observe(pos)
+        else:  # SAME_STEP
+            if ended.any():
+                infos["final_obs"] = obs.copy()
+                infos["_final_obs"] = ended.copy()
+            self._launch(ended)
+            pos = np.where(ended[:, None], self._position(), pos)
+            obs = self.env.observe(pos)
+        signal = self.env.field(pos[:, 0], pos[:, 1])
+        return obs, reward, terminated, truncated, {**self._infos(signal, arrived), **infos}
