@@ -234,3 +234,20 @@ def test_train_cli_sets_every_task_field_and_refuses_preset_clashes(
     assert "dqn.lanes" in capsys.readouterr().err
     assert main(["--min-db", "nan", "--out", str(tmp_path)]) == 2
     assert "min_db" in capsys.readouterr().err
+
+
+def test_paper_preset_trains_and_records_its_choices(tmp_path: Path) -> None:
+    import tomllib
+
+    from rainuav.rl.loop import train
+
+    cfg = TrainConfig(
+        preset="paper", out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=60,
+        eval_starts=5, validate_every=0, checkpoint_every=2, dqn=DQNConfig(episodes=4),
+    )  # fmt: skip
+    m = train(cfg, progress=False, radio_map=_map())
+    assert m["episodes"] == 4 and "shielded_success_rate" not in m
+    saved = tomllib.loads((tmp_path / "config.toml").read_text())
+    assert saved["preset"] == "paper"
+    for k, v in PAPER_LEARNER.items():
+        assert saved["dqn"][k] == v, k
