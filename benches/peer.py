@@ -1,13 +1,14 @@
-"""A peer, side by side: rainuav's learner and Stable-Baselines3's DQN on the same task, the same
-wall-clock budget, measured the same way (the network alone, greedy, from the run's 200 fixed
-evaluation starts, against the exact planner).
+"""Peers, side by side: rainuav's default learner, the paper's Algorithm 1 literally
+(``--preset paper``) and Stable-Baselines3's DQN on the same task with the same wall-clock
+budget, measured the same way (the network alone, greedy, from the run's 200 fixed evaluation
+starts, against the exact planner).
 
     pip install 'rainuav[peer]'
     python benches/peer.py --scenario paper --seed 0 --out runs/peer_paper_s0
 
 First trains rainuav's default learner (``rainuav.rl.loop.train``, its own folder under
-``--out``), then SB3's DQN for as many seconds as that training took (``--budget-s`` sets
-another budget), configured as a user would configure it for a 300-step sparse-arrival
+``--out``), then the literal preset (``time_budget_s``) and SB3's DQN for as many seconds as
+that training took (``--budget-s`` sets another budget), configured as a user would configure it for a 300-step sparse-arrival
 task (below), on ``gym.make("rainuav/UAVNav-v0", radio_map=...)``. Writes ``peer.json``
 with both metric sets. Results with the machine go to BENCHMARKS.md.
 """
@@ -15,6 +16,7 @@ with both metric sets. Results with the machine go to BENCHMARKS.md.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 import time
@@ -106,6 +108,13 @@ def main(argv: list[str] | None = None) -> int:
     rm = scenario_map(args.scenario)
     ours = train(cfg, progress=False, radio_map=rm)
     budget = ours["training_seconds"] if args.budget_s is None else args.budget_s
+    literal = train(
+        dataclasses.replace(
+            cfg, preset="paper", time_budget_s=budget, out=str(args.out / "paper_preset")
+        ),
+        progress=False,
+        radio_map=rm,
+    )
     env = make_env(cfg, rm)
     starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
     optimum = reference_flights(env, starts)["optimal"]
@@ -119,6 +128,7 @@ def main(argv: list[str] | None = None) -> int:
         "scenario": args.scenario,
         "seed": args.seed,
         "rainuav": {k: ours[k] for k in keys},
+        "paper_preset": {**{k: literal[k] for k in keys}, "episodes": literal["episodes"]},
         "straight_line_mean_excess_cost": ours["straight_line_mean_excess_cost"],
         "sb3_dqn": {**theirs, **info, "config": SB3_CONFIG},
     }

@@ -38,3 +38,39 @@ def test_bench_scalar_env_steps(benchmark) -> None:
 
     benchmark.pedantic(run, rounds=3, iterations=1)
     benchmark.extra_info["uav_steps_per_call"] = 1000
+
+
+def _vector_pair(n: int):
+    """The batched vector env and Gymnasium's SyncVectorEnv of scalar envs, same task."""
+    from gymnasium.vector import SyncVectorEnv
+    from rainuav.nav.vector import UAVNavVectorEnv
+
+    env = UAVNavEnv(sir_db=SIR, extent_m=(0, 2000, 0, 2000))
+    vec = UAVNavVectorEnv(env, n)
+    sync = SyncVectorEnv([lambda: UAVNavEnv(sir_db=SIR, extent_m=(0, 2000, 0, 2000))] * n)
+    return vec, sync
+
+
+def _steps(envs, n: int, calls: int):
+    actions = np.random.default_rng(2).integers(0, 4, (calls, n))
+    envs.reset(seed=0)
+
+    def run():
+        for a in actions:
+            envs.step(a)
+
+    return run
+
+
+def test_bench_vector_env_steps(benchmark) -> None:
+    # 64 UAVs x 100 calls, autoreset included: rainuav's VectorEnv over the batched stepper.
+    vec, _ = _vector_pair(64)
+    benchmark.pedantic(_steps(vec, 64, 100), rounds=5, iterations=1)
+    benchmark.extra_info["uav_steps_per_call"] = 6400
+
+
+def test_bench_sync_vector_env_steps(benchmark) -> None:
+    # The same steps through Gymnasium's SyncVectorEnv of 64 scalar envs (the reference).
+    _, sync = _vector_pair(64)
+    benchmark.pedantic(_steps(sync, 64, 100), rounds=5, iterations=1)
+    benchmark.extra_info["uav_steps_per_call"] = 6400

@@ -238,7 +238,6 @@ def test_train_cli_sets_every_task_field_and_refuses_preset_clashes(
 
 def test_paper_preset_trains_and_records_its_choices(tmp_path: Path) -> None:
     import tomllib
-
     from rainuav.rl.loop import train
 
     cfg = TrainConfig(
@@ -251,3 +250,16 @@ def test_paper_preset_trains_and_records_its_choices(tmp_path: Path) -> None:
     assert saved["preset"] == "paper"
     for k, v in PAPER_LEARNER.items():
         assert saved["dqn"][k] == v, k
+
+
+def test_time_budget_ends_training_early(tmp_path: Path) -> None:
+    from rainuav.rl.loop import train
+
+    cfg = TrainConfig(
+        out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=60, eval_starts=5,
+        validate_every=0, time_budget_s=1e-9, dqn=DQNConfig(episodes=500, lanes=4),
+    )  # fmt: skip
+    m = train(cfg, progress=False, radio_map=_map())
+    # The budget is spent at once: training ends with the first finished episodes.
+    assert 1 <= m["episodes"] < 20, m["episodes"]
+    assert (tmp_path / "checkpoint.pt").exists() and (tmp_path / "metrics.json").exists()

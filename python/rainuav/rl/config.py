@@ -145,6 +145,9 @@ class TrainConfig:
     """Episodes between greedy checks on held-out validation starts (0: none)."""
     validate_starts: int = 100
     """Validation starts (seeded by eval_seed + 2; not the evaluation starts)."""
+    time_budget_s: float = 0.0
+    """Wall-clock budget of the training, s: it ends at the first finished episode past it
+    (0: none; the schedules still run over dqn.episodes). For comparisons at equal budget."""
     keep_best: bool = False
     """Evaluate and save the network with the best validation score (success, then excess
     cost), not the final one."""
@@ -216,6 +219,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("out_of_bounds_penalty", math.isfinite(cfg.out_of_bounds_penalty), "finite"),
         ("eval_starts", cfg.eval_starts >= 1, ">= 1"),
         ("validate_every", cfg.validate_every >= 0, ">= 0"),
+        ("time_budget_s", 0 <= cfg.time_budget_s < math.inf, ">= 0 and finite"),
         ("validate_starts", cfg.validate_starts >= 1, ">= 1"),
         ("checkpoint_every", cfg.checkpoint_every >= 1, ">= 1"),
         ("device", cfg.device in ("auto", "cpu", "cuda"), "'auto', 'cpu' or 'cuda'"),

@@ -257,7 +257,10 @@ def run_loop(
                 log.bar.update(n_done - finished_before)
             # Checkpoint at every checkpoint_every finished episodes and at the end.
             crossed = n_done // cfg.checkpoint_every > finished_before // cfg.checkpoint_every
-            if crossed or n_done == d.episodes:
+            # A wall-clock budget ends training at the first finished episode past it.
+            spent = time.perf_counter() - t0 + train_seconds
+            over_budget = bool(cfg.time_budget_s) and spent >= cfg.time_budget_s
+            if crossed or n_done == d.episodes or over_budget:
                 log.fh.flush()
                 save_checkpoint(
                     out / "checkpoint.pt",
@@ -278,6 +281,8 @@ def run_loop(
                 )
                 if stop_after is not None and stop_after <= n_done < d.episodes:
                     return {}
+            if over_budget:
+                break
     finally:
         log.close()
     train_seconds += time.perf_counter() - t0
@@ -300,7 +305,7 @@ def finish(
     policy = {k: v.detach().cpu() for k, v in agent.online.state_dict().items()}
     save_checkpoint(out / "policy.pt", {"online": policy, "config": to_dict(cfg)})
     metrics["training_seconds"] = train_seconds
-    metrics["episodes"] = cfg.dqn.episodes
+    metrics["episodes"] = len(returns)
     metrics["device"] = str(agent.device)
     text = json.dumps(metrics, indent=2)
     write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
