@@ -8,9 +8,10 @@ starts, against the exact planner).
 
 First trains rainuav's default learner (``rainuav.rl.loop.train``, its own folder under
 ``--out``), then the literal preset (``time_budget_s``) and SB3's DQN for as many seconds as
-that training took (``--budget-s`` sets another budget), configured as a user would configure it for a 300-step sparse-arrival
-task (below), on ``gym.make("rainuav/UAVNav-v0", radio_map=...)``. Writes ``peer.json``
-with both metric sets. Results with the machine go to BENCHMARKS.md.
+that training took (``--budget-s`` sets another budget); SB3 is configured as a user would
+configure it for a 300-step sparse-arrival task (below), on
+``gym.make("rainuav/UAVNav-v0", radio_map=...)``. Writes ``peer.json`` with the three metric
+sets. Results with the machine go to BENCHMARKS.md.
 """
 
 from __future__ import annotations
