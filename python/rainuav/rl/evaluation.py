@@ -242,7 +242,8 @@ def evaluate_saved_run(
     (a preset), ``rain_rate`` (homogeneous rain, mm/h) and ``engine`` fly it on another map
     (built or taken from the cache). ``starts``/``seed``: the number and seed of the fixed
     starts (default: the run's evaluation starts); ``shield``: report shielded flights beside
-    the network's own. Returns the metrics, the flights and the environment; writes nothing."""
+    the network's own. Another ``scenario`` is flown in its own weather unless ``rain_rate``
+    is given. Returns the metrics, the flights and the environment; writes nothing."""
     run = Path(run_dir)
     for name in ("config.toml", "radiomap.npz", "checkpoint.pt"):
         if not (run / name).exists():
@@ -255,7 +256,10 @@ def evaluate_saved_run(
             cfg,
             scenario=cfg.scenario if scenario is None else scenario,
             scenario_file="" if scenario is not None else cfg.scenario_file,
-            rain_rate=cfg.rain_rate if rain_rate is None else rain_rate,
+            # Another scenario comes in its own weather unless a rain rate is given.
+            rain_rate=rain_rate
+            if (scenario is not None or rain_rate is not None)
+            else cfg.rain_rate,
         )
         check_config(flown)
         scn = make_scenario(flown)
