@@ -252,6 +252,7 @@ def evaluate_saved_run(
     if scenario is None and rain_rate is None and engine is None:
         rm = RadioMap.load(run / "radiomap.npz")
     else:
+        keep = scenario is None and rain_rate is None  # another engine only: the run's weather
         flown = dataclasses.replace(
             cfg,
             scenario=cfg.scenario if scenario is None else scenario,
