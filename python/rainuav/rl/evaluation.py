@@ -258,9 +258,7 @@ def evaluate_saved_run(
             scenario=cfg.scenario if scenario is None else scenario,
             scenario_file="" if scenario is not None else cfg.scenario_file,
             # Another scenario comes in its own weather unless a rain rate is given.
-            rain_rate=rain_rate
-            if (scenario is not None or rain_rate is not None)
-            else cfg.rain_rate,
+            rain_rate=cfg.rain_rate if keep else rain_rate,
         )
         check_config(flown)
         scn = make_scenario(flown)
