@@ -263,3 +263,26 @@ def test_time_budget_ends_training_early(tmp_path: Path) -> None:
     # The budget is spent at once: training ends with the first finished episodes.
     assert 1 <= m["episodes"] < 20, m["episodes"]
     assert (tmp_path / "checkpoint.pt").exists() and (tmp_path / "metrics.json").exists()
+
+
+def test_evaluate_refuses_a_run_from_an_incompatible_version(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from rainuav.evaluate import main
+    from rainuav.rl.loop import train
+
+    cfg = TrainConfig(
+        out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=30, eval_starts=3,
+        validate_every=0, dqn=DQNConfig(episodes=2, lanes=2),
+    )  # fmt: skip
+    train(cfg, progress=False, radio_map=_map())
+    text = (tmp_path / "config.toml").read_text()
+    # A field this version does not know (a run written by another version).
+    (tmp_path / "config.toml").write_text("sir_min_db = 10.0\n" + text)
+    assert main([str(tmp_path)]) == 2
+    assert "sir_min_db" in capsys.readouterr().err
+    # A network that does not fit the checkpoint's weights.
+    (tmp_path / "config.toml").write_text(text.replace("hidden = 128", "hidden = 64"))
+    assert main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "checkpoint.pt" in err and "incompatible" in err, err
