@@ -103,7 +103,7 @@ def plot_returns(
         ax.plot(ep, 100 * np.minimum(gap, 1.0), "r.-", label="mean excess cost, % (cut at 100)")
         ax.set_xlabel("episode")
         ax.set_ylim(0, 105)
-        ax.set_title("greedy policy on the validation starts")
+        ax.set_title("network alone (greedy) on the validation starts")
         ax.legend(loc="center right", fontsize="small")
     fig.tight_layout()
     write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
