@@ -32,36 +32,10 @@ from rainuav.radio.cell import Cell, gain_linear
 from rainuav.radio.grid import C0_M_S, MarchGrid, cone_weight
 from rainuav.radio.scenario import Scenario, Site
 
-__all__ = ["forget_apertures", "march_cell", "rain_rate_at", "resample"]
-
-
-_APERTURES: dict[tuple[Any, ...], tuple[np.ndarray, float]] = {}
-"""The last apertures built, by what they depend on (a cell's pattern but not its azimuth:
-the march runs in the cell's own frame; the 21 sectors of ``uma`` share one)."""
+__all__ = ["march_cell", "rain_rate_at", "resample"]
 
 
 def _aperture(scn: Scenario, site: Site, cell: Cell, grid: MarchGrid) -> tuple[np.ndarray, float]:
-    """:func:`_build_aperture`, reused for cells that differ only in azimuth (a copy: the
-    march may not write into the cached one)."""
-    key = (
-        cell.key(), cell.tilt_deg, scn.freq_hz, site.height_m - grid.y0_m,
-        grid.nx, grid.ny, grid.dx_m, grid.dy_m, grid.sine_h, grid.sine_v,
-    )  # fmt: skip
-    if key not in _APERTURES:
-        _APERTURES.clear()  # one at a time: an aperture can take hundreds of MB
-        _APERTURES[key] = _build_aperture(scn, site, cell, grid)
-    u, share = _APERTURES[key]
-    return u.copy(), share
-
-
-def forget_apertures() -> None:
-    """Drops the cached aperture (the map build calls it when its marches are done)."""
-    _APERTURES.clear()
-
-
-def _build_aperture(
-    scn: Scenario, site: Site, cell: Cell, grid: MarchGrid
-) -> tuple[np.ndarray, float]:
     """The cell's aperture carrying ``pattern x cone_weight`` and the share of the transmitted
     power it carries (``(1 / 4 pi) integral G w dOmega``).
 

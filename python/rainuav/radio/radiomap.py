@@ -27,7 +27,7 @@ from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cache import map_path
 from rainuav.radio.grid import MarchGrid, cone_weight, march_grid
-from rainuav.radio.pe_engine import forget_apertures, march_cell, resample
+from rainuav.radio.pe_engine import march_cell, resample
 from rainuav.radio.plot import plot_map
 from rainuav.radio.presets import DEFAULT_MIN_DB, SINR_THRESHOLDS_DB
 from rainuav.radio.ray_engine import SOILS, Weight, ray_power
@@ -245,7 +245,6 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
                 if bar is not None:
                     bar.update(1)
     finally:
-        forget_apertures()
         if bar is not None:
             bar.close()
     if scn.engine == "pe":
