@@ -27,11 +27,13 @@ LAYERS = {
     "radio": 3,
     "nav": 3,
     "rl": 4,
-    "entry": 5,
+    "studies": 5,
+    "entry": 6,
 }
 ENTRY = {
     "__init__",
     "envs",
+    "study",
     "train",
     "evaluate",
     "radiomap",

@@ -1,0 +1,189 @@
+"""Running a study: each case in its own folder, in parallel worker processes, resumable.
+
+A case computes what the study asks (``map``, ``optimal``, ``learned``) and writes
+``result.json`` last, atomically: a case folder with ``result.json`` is finished and a rerun
+skips it; anything else in a folder without it is redone. Cases run in spawned worker
+processes (``workers``); maps are built once per distinct scenario through the map cache
+(:mod:`rainuav.radio.cache`), before the cases, so parallel cases never build the same map
+twice. ``results.csv`` and ``report.md`` are written from the finished cases in case order,
+so they do not depend on the number of workers.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import multiprocessing as mp
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rainuav._io import write_atomic
+from rainuav.studies.spec import Case, Study, case_scenario, train_config
+
+__all__ = ["COLUMNS", "run_case", "run_study", "write_tables"]
+
+COLUMNS = (
+    "case", "axis", "value", "seed", "scenario", "rain_rate_mm_h", "freq_ghz", "min_db",
+    "map_median_sinr_db", "map_outage_share",
+    "optimal_mean_cost", "optimal_mean_signal_db", "optimal_outage_share",
+    "straight_line_mean_excess_cost",
+    "success_rate", "mean_excess_cost", "worst_excess_cost", "mean_signal_db", "outage_share",
+)  # fmt: skip
+"""The columns of ``results.csv``: same study, same seeds, same file (wall times stay in each
+case's ``result.json``)."""
+
+
+def run_case(case: Case, compute: list[str], eval_starts: int, folder: str) -> dict[str, Any]:
+    """Computes one case into ``folder`` and returns its row (also ``result.json``)."""
+    from rainuav.radio.radiomap import build_radio_map
+    from rainuav.rl.evaluation import eval_starts as starts_of
+    from rainuav.rl.evaluation import reference_flights, summarise
+    from rainuav.rl.loop import train
+    from rainuav.rl.plots import plot_trajectories
+    from rainuav.rl.setup import make_env
+
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    fields = dict(case.fields)
+    cfg = train_config(fields, case.seed, str(out / "run"))
+    cfg.eval_starts = eval_starts
+    scn = case_scenario(fields, cfg)
+    rm = build_radio_map(scn)
+    env = make_env(cfg, rm)
+    assert env.cfg.min_db is not None
+    value = "" if case.axis in ("base", "grid") else fields[case.axis]
+    row: dict[str, Any] = {
+        "case": case.id, "axis": case.axis, "value": value, "seed": case.seed,
+        "scenario": scn.name, "rain_rate_mm_h": scn.medium.rain_rate_mm_h,
+        "freq_ghz": scn.freq_hz / 1e9, "min_db": env.cfg.min_db,
+    }  # fmt: skip
+    if "map" in compute:
+        sig = env.field.db
+        row["map_median_sinr_db"] = float(np.median(sig))
+        row["map_outage_share"] = float(np.mean(sig < env.cfg.min_db))
+    if "optimal" in compute or "learned" in compute:
+        starts = starts_of(env, eval_starts, cfg.eval_seed)
+        refs = reference_flights(env, starts)
+        opt = summarise(refs["optimal"], refs["optimal"])
+        line = summarise(refs["straight_line"], refs["optimal"])
+        row["optimal_mean_cost"] = opt["mean_cost"]
+        row["optimal_mean_signal_db"] = opt["mean_signal_db"]
+        row["optimal_outage_share"] = opt["outage_share"]
+        row["straight_line_mean_excess_cost"] = line["mean_excess_cost"]
+        from rainuav.nav import planner
+
+        paths = [p.path_m for p in planner.optimal_many(env, starts[:20])]
+        plot_trajectories(env, [], out / "optimal.png", f"{case.id}: exact optimum", paths)
+    if "learned" in compute:
+        m = train(cfg, progress=False, radio_map=rm)
+        for k in ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_signal_db"):
+            row[k] = m[k]
+        row["outage_share"] = m["outage_share"]
+        row["training_seconds"] = m["training_seconds"]
+    text = json.dumps(row, indent=2)
+    write_atomic(out / "result.json", lambda t: t.write_text(text + "\n"))
+    return row
+
+
+def _maps(study: Study, cases: list[Case]) -> None:
+    """Builds each distinct scenario's map once (the cache shares it with the cases)."""
+    from rainuav.radio.radiomap import build_radio_map
+
+    seen: set[str] = set()
+    for case in cases:
+        fields = dict(case.fields)
+        scn = case_scenario(fields, train_config(fields, case.seed, "unused"))
+        if scn.digest() not in seen:
+            seen.add(scn.digest())
+            build_radio_map(scn)
+
+
+def run_study(
+    study: Study, out: Path, workers: int = 1, progress: bool = True
+) -> list[dict[str, Any]]:
+    """Runs every unfinished case of ``study`` into ``out/cases/<case id>`` and writes
+    ``results.csv`` and ``report.md``; returns the rows in case order."""
+    cases = study.cases()
+    todo = [c for c in cases if not (out / "cases" / c.id / "result.json").exists()]
+    _maps(study, todo)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(cases), initial=len(cases) - len(todo), desc="study", unit="case")
+    args = [(c, study.compute, study.eval_starts, str(out / "cases" / c.id)) for c in todo]
+    try:
+        if workers <= 1 or len(todo) <= 1:
+            for a in args:
+                run_case(*a)
+                if bar is not None:
+                    bar.update(1)
+        else:
+            ctx = mp.get_context("spawn")
+            with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+                for fut in as_completed([pool.submit(run_case, *a) for a in args]):
+                    fut.result()
+                    if bar is not None:
+                        bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    rows = [json.loads((out / "cases" / c.id / "result.json").read_text()) for c in cases]
+    write_tables(study, rows, out)
+    return rows
+
+
+def _fmt(v: Any) -> str:
+    if v is None or v == "":
+        return ""
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
+    """``results.csv`` (one row per case) and ``report.md`` (the table, then per axis the
+    change of each figure against the base case, mean and spread over seeds)."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(COLUMNS)
+    for r in rows:
+        w.writerow([_fmt(r.get(c)) for c in COLUMNS])
+    write_atomic(out / "results.csv", lambda t: t.write_text(buf.getvalue()))
+    shown = [c for c in COLUMNS if any(r.get(c) not in (None, "") for r in rows)]
+    lines = [f"# Study `{study.name}`", "", f"{len(rows)} cases ({study.sweep}).", ""]
+    lines += ["| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
+    lines += ["| " + " | ".join(_fmt(r.get(c)) for c in shown) + " |" for r in rows]
+    base = [r for r in rows if r["axis"] == "base"]
+    figures = [c for c in shown if c in COLUMNS[8:]]
+    if base:
+        lines += ["", "## Change against the base case, seed by seed (mean, min..max)", ""]
+        lines += [
+            "| axis | value | " + " | ".join(figures) + " |",
+            "|" + "---|" * (2 + len(figures)),
+        ]
+        ref = {r["seed"]: r for r in base}
+        groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+        for r in rows:
+            if r["axis"] != "base":
+                groups.setdefault((r["axis"], _fmt(r["value"])), []).append(r)
+        for (axis, value), rs in groups.items():
+            cells = []
+            for c in figures:
+                d = [
+                    r[c] - ref[r["seed"]][c]
+                    for r in rs
+                    if r.get(c) is not None and ref.get(r["seed"], {}).get(c) is not None
+                ]
+                cells.append("" if not d else f"{np.mean(d):+.4g} ({min(d):+.3g}..{max(d):+.3g})")
+            lines.append(f"| {axis} | {value} | " + " | ".join(cells) + " |")
+    figs = sorted((out / "cases").glob("*/optimal.png"))
+    if figs:
+        lines += ["", "## Exact optimum per case", ""]
+        lines += [f"![{p.parent.name}](cases/{p.parent.name}/optimal.png)" for p in figs]
+    text = "\n".join(lines) + "\n"
+    write_atomic(out / "report.md", lambda t: t.write_text(text))

@@ -1,0 +1,209 @@
+"""A study: a base case and the axes to sweep, read from TOML and checked before any work.
+
+.. code-block:: toml
+
+    name = "paper"
+    sweep = "one_at_a_time"     # or "grid": every combination of the axes
+    seeds = [0]
+    compute = ["map", "optimal", "learned"]
+    eval_starts = 200
+
+    [base]                      # any rainuav.rl.config.TrainConfig field, "dqn.<field>",
+    scenario = "paper"          # or a scenario override: freq_ghz, wind_m_s, engine
+    rain_rate = 25.0
+
+    [axes]                      # each axis: a list of values for one field
+    rain_rate = [0.0, 25.0, 50.0, 100.0]
+    mu = [0.1, 0.2326, 10.0]
+
+    [quick]                     # what --quick changes (any field, as in [base])
+    "dqn.episodes" = 300
+
+``one_at_a_time`` runs the base case, then each axis value with the other fields at the
+base (the change per axis is read against the base); ``grid`` runs every combination. Each
+case runs once per seed. Unknown fields, empty axes and values out of range are refused with
+the field named (:func:`load_study`), before any work starts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from rainuav._io import read_toml
+from rainuav.errors import InvalidInputError
+from rainuav.radio import presets
+from rainuav.radio.scenario import Scenario
+from rainuav.rl.config import DQNConfig, TrainConfig, check_config, make_scenario
+
+__all__ = ["BUILT_IN", "COMPUTE", "SCENARIO_FIELDS", "Case", "Study", "load_study"]
+
+COMPUTE = ("map", "optimal", "learned")
+SCENARIO_FIELDS = ("freq_ghz", "wind_m_s", "engine")
+"""Fields of a case that change the scenario rather than the run."""
+BUILT_IN = ("paper", "mmwave")
+_TOP = {"name", "sweep", "seeds", "compute", "eval_starts", "base", "axes", "quick"}
+
+
+@dataclass(frozen=True)
+class Case:
+    """One case: its index, the axis it varies (``"base"`` for the base case, ``"grid"``
+    for a grid cell), its fields and its seed."""
+
+    index: int
+    axis: str
+    fields: tuple[tuple[str, Any], ...]
+    seed: int
+
+    @property
+    def id(self) -> str:
+        """A folder name: the index, the axis and its value, the seed."""
+        d = dict(self.fields)
+        v = d.get(self.axis)
+        value = (
+            "" if self.axis in ("base", "grid") else f"={v:g}" if isinstance(v, float) else f"={v}"
+        )
+        return f"{self.index:03d}_{self.axis}{value}_s{self.seed}".replace("/", "-")
+
+
+@dataclass
+class Study:
+    name: str
+    base: dict[str, Any]
+    axes: dict[str, list[Any]]
+    seeds: list[int] = field(default_factory=lambda: [0])
+    compute: list[str] = field(default_factory=lambda: list(COMPUTE))
+    sweep: str = "one_at_a_time"
+    eval_starts: int = 200
+    quick: dict[str, Any] = field(default_factory=dict)
+
+    def cases(self) -> list[Case]:
+        """Every case, in a fixed order (the index is the row of ``results.csv``)."""
+        combos: list[tuple[str, dict[str, Any]]] = []
+        if self.sweep == "grid":
+            names = list(self.axes)
+            for values in itertools.product(*(self.axes[n] for n in names)):
+                combos.append(("grid", dict(zip(names, values, strict=True))))
+        else:
+            combos.append(("base", {}))
+            for name, values in self.axes.items():
+                combos += [(name, {name: v}) for v in values if v != self.base.get(name)]
+        out = []
+        for axis, change in combos:
+            merged = {**self.base, **change}
+            for seed in self.seeds:
+                out.append(Case(len(out), axis, tuple(sorted(merged.items())), seed))
+        return out
+
+    def with_quick(self) -> Study:
+        """The study with its ``[quick]`` changes applied to the base case."""
+        return dataclasses.replace(self, base={**self.base, **self.quick})
+
+
+def train_config(fields: dict[str, Any], seed: int, out: str) -> TrainConfig:
+    """The TrainConfig of a case (scenario overrides left out)."""
+    top = {k: v for k, v in fields.items() if "." not in k and k not in SCENARIO_FIELDS}
+    dqn = {k.split(".", 1)[1]: v for k, v in fields.items() if k.startswith("dqn.")}
+    return TrainConfig(**top, seed=seed, out=out, dqn=DQNConfig(**dqn))
+
+
+def case_scenario(fields: dict[str, Any], cfg: TrainConfig) -> Scenario:
+    """The scenario of a case: the run's (preset or file, rain rate), then the overrides."""
+    scn = make_scenario(cfg)
+    if fields.get("freq_ghz") is not None:
+        scn = dataclasses.replace(scn, freq_hz=float(fields["freq_ghz"]) * 1e9)
+    if fields.get("engine") is not None:
+        scn = dataclasses.replace(scn, engine=fields["engine"])
+    if fields.get("wind_m_s") is not None:
+        medium = dataclasses.replace(scn.medium, wind_speed_m_s=float(fields["wind_m_s"]))
+        scn = dataclasses.replace(scn, medium=medium)
+    return scn
+
+
+def _check_fields(where: str, fields: dict[str, Any]) -> None:
+    names = {f.name for f in dataclasses.fields(TrainConfig)} - {"dqn", "seed", "out"}
+    dqn_names = {f.name for f in dataclasses.fields(DQNConfig)}
+    for k in fields:
+        ok = k in names or k in SCENARIO_FIELDS
+        ok = ok or (k.startswith("dqn.") and k.split(".", 1)[1] in dqn_names)
+        if not ok:
+            raise InvalidInputError(
+                f"{where}: unknown field {k!r} (a TrainConfig field, 'dqn.<field>' or one of "
+                f"{list(SCENARIO_FIELDS)})"
+            )
+
+
+def _check_case(where: str, fields: dict[str, Any]) -> None:
+    """Builds the case's configuration and scenario (without its map): every range check
+    of TrainConfig and Scenario runs, naming the field."""
+    try:
+        cfg = train_config(fields, 0, "unused")
+    except TypeError as err:
+        raise InvalidInputError(f"{where}: {err}") from err
+    check_config(cfg)
+    f = fields.get("freq_ghz")
+    if f is not None and not (isinstance(f, (int, float)) and 0.1 <= f <= 100):
+        raise InvalidInputError(f"{where}: freq_ghz must be in [0.1, 100] (got {f!r})")
+    if fields.get("scenario_file") in (None, "") and cfg.scenario not in presets.PRESETS:
+        raise InvalidInputError(
+            f"{where}: scenario must be one of {sorted(presets.PRESETS)} (got {cfg.scenario!r})"
+        )
+    try:
+        case_scenario(fields, cfg)
+    except InvalidInputError as err:
+        raise InvalidInputError(f"{where}: {err}") from err
+
+
+def parse_study(data: dict[str, Any], where: str) -> Study:
+    """A Study from a TOML table, checked (every case's configuration included)."""
+    unknown = sorted(set(data) - _TOP)
+    if unknown:
+        raise InvalidInputError(f"{where}: unknown field {unknown[0]!r} (allowed: {sorted(_TOP)})")
+    base, axes, quick = data.get("base", {}), data.get("axes", {}), data.get("quick", {})
+    for name, table in (("base", base), ("axes", axes), ("quick", quick)):
+        if not isinstance(table, dict):
+            raise InvalidInputError(f"{where}: [{name}] must be a table")
+    _check_fields(f"{where} [base]", base)
+    _check_fields(f"{where} [axes]", axes)
+    _check_fields(f"{where} [quick]", quick)
+    for k, v in axes.items():
+        if not isinstance(v, list) or not v:
+            raise InvalidInputError(f"{where} [axes]: {k} must be a non-empty list of values")
+    seeds = data.get("seeds", [0])
+    if not (isinstance(seeds, list) and seeds and all(type(s) is int for s in seeds)):
+        raise InvalidInputError(f"{where}: seeds must be a non-empty list of integers")
+    compute = data.get("compute", list(COMPUTE))
+    if not (isinstance(compute, list) and compute and set(compute) <= set(COMPUTE)):
+        raise InvalidInputError(f"{where}: compute must be a non-empty subset of {COMPUTE}")
+    sweep = data.get("sweep", "one_at_a_time")
+    if sweep not in ("one_at_a_time", "grid"):
+        raise InvalidInputError(f"{where}: sweep must be 'one_at_a_time' or 'grid'")
+    n = data.get("eval_starts", 200)
+    if type(n) is not int or not 1 <= n <= 100_000:
+        raise InvalidInputError(f"{where}: eval_starts must be an integer in [1, 100000]")
+    name = data.get("name", "study")
+    if not isinstance(name, str) or not name:
+        raise InvalidInputError(f"{where}: name must be a non-empty string")
+    study = Study(name, dict(base), {k: list(v) for k, v in axes.items()}, seeds, compute,
+                  sweep, n, dict(quick))  # fmt: skip
+    for s in (study, study.with_quick()):
+        for case in s.cases():
+            _check_case(f"{where} case {case.id}", dict(case.fields))
+    if math.prod(len(v) for v in axes.values()) > 10_000 and sweep == "grid":
+        raise InvalidInputError(f"{where}: the grid has over 10 000 cases")
+    return study
+
+
+def load_study(name_or_path: str | Path) -> Study:
+    """A built-in study by name (``paper``, ``mmwave``) or a study TOML file."""
+    if str(name_or_path) in BUILT_IN:
+        ref = resources.files("rainuav.studies") / f"{name_or_path}.toml"
+        with resources.as_file(ref) as path:
+            return parse_study(read_toml(path, "study file"), f"study {name_or_path}")
+    path = Path(name_or_path)
+    return parse_study(read_toml(path, "study file"), str(path))

@@ -1,0 +1,99 @@
+"""Studies end to end through the CLI: outputs, resume after an interruption, the same
+results with one or two workers, and bad study files refused before any work."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from rainuav.errors import InvalidInputError
+from rainuav.studies import load_study
+from rainuav.study import main
+
+TINY = """
+name = "tiny"
+seeds = [0]
+compute = ["map", "optimal", "learned"]
+eval_starts = 4
+
+[base]
+scenario = "uma"
+engine = "ray"
+"dqn.episodes" = 3
+"dqn.lanes" = 2
+validate_every = 0
+checkpoint_every = 2
+
+[axes]
+rain_rate = [50.0]
+"""
+
+
+def _write(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "study.toml"
+    p.write_text(text)
+    return p
+
+
+def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(tmp_path: Path) -> None:
+    # Two cases (the base in clear air, 50 mm/h), tiny trainings on the ray engine's map.
+    study = _write(tmp_path, TINY)
+    out = tmp_path / "a"
+    assert main([str(study), "--out", str(out), "--workers", "2"]) == 0
+    cases = sorted(p.name for p in (out / "cases").iterdir())
+    assert cases == ["000_base_s0", "001_rain_rate=50_s0"]
+    for c in cases:
+        for name in ("result.json", "optimal.png", "run/metrics.json", "run/policy.pt"):
+            assert (out / "cases" / c / name).exists(), (c, name)
+    csv = (out / "results.csv").read_text()
+    lines = csv.splitlines()
+    assert len(lines) == 3 and lines[0].startswith("case,axis,value,seed")
+    report = (out / "report.md").read_text()
+    assert "rain_rate | 50" in report and "optimal.png" in report
+    # An interrupted study: one case lost its result (and left a partial folder). The rerun
+    # redoes only that case and writes the same results.csv.
+    done = (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns
+    (out / "cases" / cases[1] / "result.json").unlink()
+    (out / "results.csv").unlink()
+    assert main([str(study), "--out", str(out), "--workers", "1"]) == 0
+    assert (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns == done
+    assert (out / "results.csv").read_text() == csv
+    # The same study from scratch with one worker: the same results.csv.
+    assert main([str(study), "--out", str(tmp_path / "b"), "--workers", "1"]) == 0
+    assert (tmp_path / "b" / "results.csv").read_text() == csv
+
+
+@pytest.mark.parametrize(
+    ("change", "needle"),
+    [
+        (("[axes]", "[axes]\nbogus = [1]"), "bogus"),
+        (("rain_rate = [50.0]", "rain_rate = []"), "rain_rate"),
+        (("rain_rate = [50.0]", "rain_rate = [50.0, 900.0]"), "rain_rate"),
+        (('scenario = "uma"', 'scenario = "nowhere"'), "scenario"),
+        (("eval_starts = 4", "eval_starts = 0"), "eval_starts"),
+        (('name = "tiny"', 'name = "tiny"\nextra = 1'), "extra"),
+        (('"dqn.episodes" = 3', '"dqn.episodes" = -3'), "episodes"),
+    ],
+)
+def test_bad_study_files_are_refused_before_any_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], change: tuple[str, str], needle: str
+) -> None:
+    study = _write(tmp_path, TINY.replace(*change))
+    out = tmp_path / "out"
+    assert main([str(study), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and needle in err, err
+    assert not out.exists()
+
+
+def test_built_in_studies_load_and_name_their_cases() -> None:
+    paper = load_study("paper")
+    ids = [c.id for c in paper.cases()]
+    assert ids[0] == "000_base_s0" and len(ids) == len(set(ids))
+    axes = {c.axis for c in paper.cases()}
+    assert axes == {"base", "rain_rate", "mu", "wind_m_s"}
+    assert {c.axis for c in load_study("mmwave").cases()} == {"base", "rain_rate", "freq_ghz"}
+    quick = paper.with_quick()
+    assert dict(quick.cases()[0].fields)["dqn.episodes"] == 300
+    with pytest.raises(InvalidInputError, match="study file"):
+        load_study("no_such_study.toml")
