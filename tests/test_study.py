@@ -97,3 +97,24 @@ def test_built_in_studies_load_and_name_their_cases() -> None:
     assert dict(quick.cases()[0].fields)["dqn.episodes"] == 300
     with pytest.raises(InvalidInputError, match="study file"):
         load_study("no_such_study.toml")
+
+
+def test_ray_gives_the_local_results(tmp_path: Path) -> None:
+    # The same tiny study as Ray tasks on a local instance (2 CPUs): the same results.csv as
+    # in local worker processes, and every case's files in the driver's folder.
+    import ray
+    from rainuav.studies import run_study
+
+    study = load_study(_write(tmp_path, TINY))
+    local = run_study(study, tmp_path / "local", workers=1, progress=False)
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        remote = run_study(study, tmp_path / "ray", progress=False, ray_address="local")
+    finally:
+        ray.shutdown()
+    assert remote == local
+    a = (tmp_path / "local" / "results.csv").read_text()
+    assert (tmp_path / "ray" / "results.csv").read_text() == a
+    for c in study.cases():
+        for name in ("result.json", "optimal.png", "run/policy.pt"):
+            assert (tmp_path / "ray" / "cases" / c.id / name).exists(), (c.id, name)

@@ -3,7 +3,8 @@
 
 Every case runs in its own folder ``DIR/cases/<case>`` (``result.json`` written last); a
 rerun skips finished cases, so an interrupted study resumes. ``--workers`` cases run at once
-in spawned processes (default: the cores, at most the cases). ``--quick`` applies the
+in spawned processes (default: the cores, at most the cases); ``--ray ADDRESS`` runs each
+case as a task on a Ray cluster instead (``pip install 'rainuav[ray]'``). ``--quick`` applies the
 study's ``[quick]`` changes (short trainings, the ray engine). Writes ``results.csv`` and
 ``report.md`` in ``DIR``. The study file is checked before any work starts: an unknown field,
 an empty axis or a value out of range is refused with the field named (exit 2).
@@ -32,6 +33,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument(
+        "--ray",
+        default=None,
+        metavar="ADDRESS",
+        help="run each case as a Ray task: 'auto' (the cluster this machine is in), an "
+        "address (ray://host:10001), or 'local' (a local instance)",
+    )
     args = ap.parse_args(argv)
     try:
         study = load_study(args.study)
@@ -40,7 +48,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
         if workers < 1:
             raise InvalidInputError(f"--workers must be >= 1 (got {workers})")
-        rows = run_study(study, args.out, workers=min(workers, len(study.cases())))
+        rows = run_study(
+            study, args.out, workers=min(workers, len(study.cases())), ray_address=args.ray
+        )
     except InvalidInputError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

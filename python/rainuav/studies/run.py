@@ -1,5 +1,9 @@
 """Running a study: each case in its own folder, in parallel worker processes, resumable.
 
+On a Ray cluster (``ray_address``) each case is a Ray task (not a Tune trial: a case is a
+fixed computation, with no search or early stopping for Tune to drive, and resuming is the
+folder rule below either way); the maps go to the object store once per scenario.
+
 A case computes what the study asks (``map``, ``optimal``, ``learned``) and writes
 ``result.json`` last, atomically: a case folder with ``result.json`` is finished and a rerun
 skips it; anything else in a folder without it is redone. Cases run in spawned worker
@@ -22,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from rainuav._io import write_atomic
+from rainuav.errors import InvalidInputError
 from rainuav.studies.spec import Case, Study, case_scenario, train_config
 
 __all__ = ["COLUMNS", "run_case", "run_study", "write_tables"]
@@ -37,8 +42,12 @@ COLUMNS = (
 case's ``result.json``)."""
 
 
-def run_case(case: Case, compute: list[str], eval_starts: int, folder: str) -> dict[str, Any]:
-    """Computes one case into ``folder`` and returns its row (also ``result.json``)."""
+def run_case(
+    case: Case, compute: list[str], eval_starts: int, folder: str, radio_map: Any = None
+) -> dict[str, Any]:
+    """Computes one case into ``folder`` and returns its row (also ``result.json``).
+    ``radio_map``: the case's map when the caller has it (Ray passes it from the object
+    store); else it is built or taken from the cache."""
     from rainuav.radio.radiomap import build_radio_map
     from rainuav.rl.evaluation import eval_starts as starts_of
     from rainuav.rl.evaluation import reference_flights, summarise
@@ -52,7 +61,7 @@ def run_case(case: Case, compute: list[str], eval_starts: int, folder: str) -> d
     cfg = train_config(fields, case.seed, str(out / "run"))
     cfg.eval_starts = eval_starts
     scn = case_scenario(fields, cfg)
-    rm = build_radio_map(scn)
+    rm = radio_map if radio_map is not None else build_radio_map(scn)
     env = make_env(cfg, rm)
     assert env.cfg.min_db is not None
     value = "" if case.axis in ("base", "grid") else fields[case.axis]
@@ -89,27 +98,81 @@ def run_case(case: Case, compute: list[str], eval_starts: int, folder: str) -> d
     return row
 
 
-def _maps(study: Study, cases: list[Case]) -> None:
-    """Builds each distinct scenario's map once (the cache shares it with the cases)."""
+def _maps(cases: list[Case]) -> tuple[dict[str, Any], dict[str, str]]:
+    """Each distinct scenario's map, built once (and cached), and each case's scenario
+    digest: ``({digest: RadioMap}, {case id: digest})``."""
     from rainuav.radio.radiomap import build_radio_map
 
-    seen: set[str] = set()
+    maps: dict[str, Any] = {}
+    of: dict[str, str] = {}
     for case in cases:
         fields = dict(case.fields)
         scn = case_scenario(fields, train_config(fields, case.seed, "unused"))
-        if scn.digest() not in seen:
-            seen.add(scn.digest())
-            build_radio_map(scn)
+        key = scn.digest()
+        if key not in maps:
+            maps[key] = build_radio_map(scn)
+        of[case.id] = key
+    return maps, of
+
+
+def _ray_case(
+    case: Case, compute: list[str], eval_starts: int, radio_map: Any
+) -> tuple[dict[str, Any], dict[str, bytes]]:
+    """A case on a Ray worker: computed in a temporary folder there, returned as its row and
+    its files (so the driver's folder holds every case wherever it ran)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        row = run_case(case, compute, eval_starts, tmp, radio_map)
+        files = {
+            str(p.relative_to(tmp)): p.read_bytes() for p in Path(tmp).rglob("*") if p.is_file()
+        }
+    return row, files
+
+
+def _unpack(folder: Path, files: dict[str, bytes]) -> None:
+    """Writes a case's files, ``result.json`` last (each atomically)."""
+    for name in sorted(files, key=lambda n: n == "result.json"):
+        target = folder / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        write_atomic(target, lambda t, b=files[name]: t.write_bytes(b))
+
+
+def _run_ray(study: Study, todo: list[Case], out: Path, ray_address: str, bar: Any) -> None:
+    """Each case as a Ray task (1 CPU) on the cluster at ``ray_address`` (``"auto"``: the
+    one this machine belongs to; ``"local"``: a local instance with the cores here); each
+    distinct map goes to the object store once and is shared by its cases."""
+    try:
+        import ray
+    except ImportError as err:
+        raise InvalidInputError("--ray needs Ray: pip install 'rainuav[ray]'") from err
+    if not ray.is_initialized():
+        ray.init(address=None if ray_address == "local" else ray_address)
+    maps, of = _maps(todo)
+    refs = {k: ray.put(v) for k, v in maps.items()}
+    task = ray.remote(num_cpus=1)(_ray_case)
+    pending = {task.remote(c, study.compute, study.eval_starts, refs[of[c.id]]): c for c in todo}
+    while pending:
+        done, _ = ray.wait(list(pending), num_returns=1)
+        case = pending.pop(done[0])
+        _, files = ray.get(done[0])
+        _unpack(out / "cases" / case.id, files)
+        if bar is not None:
+            bar.update(1)
 
 
 def run_study(
-    study: Study, out: Path, workers: int = 1, progress: bool = True
+    study: Study,
+    out: Path,
+    workers: int = 1,
+    progress: bool = True,
+    ray_address: str | None = None,
 ) -> list[dict[str, Any]]:
-    """Runs every unfinished case of ``study`` into ``out/cases/<case id>`` and writes
-    ``results.csv`` and ``report.md``; returns the rows in case order."""
+    """Runs every unfinished case of ``study`` into ``out/cases/<case id>`` (in ``workers``
+    local processes, or as Ray tasks with ``ray_address``) and writes ``results.csv`` and
+    ``report.md``; returns the rows in case order."""
     cases = study.cases()
     todo = [c for c in cases if not (out / "cases" / c.id / "result.json").exists()]
-    _maps(study, todo)
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -117,12 +180,16 @@ def run_study(
         bar = tqdm(total=len(cases), initial=len(cases) - len(todo), desc="study", unit="case")
     args = [(c, study.compute, study.eval_starts, str(out / "cases" / c.id)) for c in todo]
     try:
-        if workers <= 1 or len(todo) <= 1:
+        if ray_address is not None:
+            _run_ray(study, todo, out, ray_address, bar)
+        elif workers <= 1 or len(todo) <= 1:
+            _maps(todo)  # built once here; the cases find them in the cache
             for a in args:
                 run_case(*a)
                 if bar is not None:
                     bar.update(1)
         else:
+            _maps(todo)
             ctx = mp.get_context("spawn")
             with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
                 for fut in as_completed([pool.submit(run_case, *a) for a in args]):
