@@ -49,7 +49,8 @@ def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(tmp_path: 
     lines = csv.splitlines()
     assert len(lines) == 3 and lines[0].startswith("case,axis,value,seed")
     report = (out / "report.md").read_text()
-    assert "rain_rate | 50" in report and "optimal.png" in report
+    assert "rain_rate | 50" in report and "optimal.png" in report and "maps.png" in report
+    assert (out / "maps.png").read_bytes()[:4] == b"\x89PNG"
     # An interrupted study: one case lost its result (and left a partial folder). The rerun
     # redoes only that case and writes the same results.csv.
     done = (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns

@@ -27,6 +27,7 @@ import numpy as np
 
 from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
+from rainuav.studies.figures import plot_maps
 from rainuav.studies.spec import Case, Study, case_scenario, train_config
 
 __all__ = ["COLUMNS", "run_case", "run_study", "write_tables"]
@@ -200,6 +201,8 @@ def run_study(
         if bar is not None:
             bar.close()
     rows = [json.loads((out / "cases" / c.id / "result.json").read_text()) for c in cases]
+    if "map" in study.compute:
+        plot_maps(cases, out / "maps.png")
     write_tables(study, rows, out)
     return rows
 
@@ -248,6 +251,8 @@ def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
                 ]
                 cells.append("" if not d else f"{np.mean(d):+.4g} ({min(d):+.3g}..{max(d):+.3g})")
             lines.append(f"| {axis} | {value} | " + " | ".join(cells) + " |")
+    if (out / "maps.png").exists():
+        lines += ["", "## SINR maps and their change against the base", "", "![maps](maps.png)"]
     figs = sorted((out / "cases").glob("*/optimal.png"))
     if figs:
         lines += ["", "## Exact optimum per case", ""]
