@@ -46,6 +46,7 @@ def plot_trajectories(
     for k, p in enumerate(optimal):
         ax.plot(p[:, 0], p[:, 1], "--", color="tab:blue", lw=0.9, alpha=0.8,
                 label="exact optimum" if k == 0 else None)  # fmt: skip
+        ax.plot(p[0, 0], p[0, 1], "rx", ms=6)
     for k, r in enumerate(rolls):
         ax.plot(r["path"][:, 0], r["path"][:, 1], "-", color="k", lw=0.8, alpha=0.7,
                 label="policy" if k == 0 else None)  # fmt: skip
