@@ -1,8 +1,12 @@
-"""Studies end to end through the CLI: outputs, resume after an interruption, the same
-results with one or two workers, and bad study files refused before any work."""
+"""Studies end to end through the CLI: outputs (case f and the trajectory figures among them),
+resume after a lost result and after a real kill, the same results with one or two workers
+and on Ray, and bad study files refused before any work."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -50,7 +54,16 @@ def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(tmp_path: 
     assert len(lines) == 3 and lines[0].startswith("case,axis,value,seed")
     report = (out / "report.md").read_text()
     assert "rain_rate | 50" in report and "optimal.png" in report and "maps.png" in report
-    assert (out / "maps.png").read_bytes()[:4] == b"\x89PNG"
+    for png in ("maps.png", "trajectories.png", "cases/001_rain_rate=50_s0/transfer.png"):
+        assert (out / png).read_bytes()[:4] == b"\x89PNG", png
+    # Case (f): the rain case's network flown on the clear base map and the base's network
+    # flown in the rain, each a success rate in [0, 1], in the table and in the report.
+    row = dict(zip(lines[0].split(","), lines[2].split(","), strict=True))
+    for k in ("on_base_success_rate", "base_policy_success_rate"):
+        assert 0.0 <= float(row[k]) <= 1.0, (k, row[k])
+    base_row = dict(zip(lines[0].split(","), lines[1].split(","), strict=True))
+    assert base_row["on_base_success_rate"] == ""  # the base is not flown against itself
+    assert "the paper's case f" in report and "trajectories.png" in report
     # An interrupted study: one case lost its result (and left a partial folder). The rerun
     # redoes only that case and writes the same results.csv.
     done = (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns
@@ -62,6 +75,31 @@ def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(tmp_path: 
     # The same study from scratch with one worker: the same results.csv.
     assert main([str(study), "--out", str(tmp_path / "b"), "--workers", "1"]) == 0
     assert (tmp_path / "b" / "results.csv").read_text() == csv
+
+
+def test_a_study_killed_mid_case_reruns_to_the_same_results(tmp_path: Path) -> None:
+    # A real kill (SIGKILL, no clean-up) while the second case trains; the rerun redoes that
+    # case only and ends with the results.csv of an uninterrupted run.
+    study = _write(tmp_path, TINY)
+    assert main([str(study), "--out", str(tmp_path / "ref"), "--workers", "1"]) == 0
+    out = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "rainuav.study", str(study), "--out", str(out), "--workers", "1"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    second = out / "cases" / "001_rain_rate=50_s0"
+    deadline = time.monotonic() + 240
+    try:
+        while not (second / "run").exists():  # the second case has started training
+            assert proc.poll() is None, "the study ended before it could be killed"
+            assert time.monotonic() < deadline, "the second case never started"
+            time.sleep(0.01)
+    finally:
+        proc.kill()
+        proc.wait(timeout=60)
+    assert not (second / "result.json").exists()  # killed mid-case, not after it
+    first = (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns
+    assert main([str(study), "--out", str(out), "--workers", "1"]) == 0
+    assert (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns == first
+    assert (out / "results.csv").read_text() == (tmp_path / "ref" / "results.csv").read_text()
 
 
 @pytest.mark.parametrize(
@@ -93,7 +131,8 @@ def test_built_in_studies_load_and_name_their_cases() -> None:
     assert ids[0] == "000_base_s0" and len(ids) == len(set(ids))
     axes = {c.axis for c in paper.cases()}
     assert axes == {"base", "rain_rate", "mu", "wind_m_s"}
-    assert {c.axis for c in load_study("mmwave").cases()} == {"base", "rain_rate", "freq_ghz"}
+    mmwave = {c.axis for c in load_study("mmwave").cases()}
+    assert mmwave == {"base", "rain_rate", "freq_ghz", "scenario"}
     quick = paper.with_quick()
     assert dict(quick.cases()[0].fields)["dqn.episodes"] == 300
     with pytest.raises(InvalidInputError, match="study file"):

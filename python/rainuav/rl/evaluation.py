@@ -233,23 +233,32 @@ def evaluate_saved_run(
     scenario: str | None = None,
     rain_rate: float | None = None,
     engine: str | None = None,
+    radio_map: RadioMap | None = None,
     starts: int | None = None,
     seed: int | None = None,
     shield: bool = False,
+    references: dict[Any, Any] | None = None,
 ) -> tuple[dict[str, Any], list, Any]:
     """Flies a saved training run's policy (the network the run reports: the final one, or
     with ``keep_best`` the best on validation). On the run's own map by default; ``scenario``
     (a preset), ``rain_rate`` (homogeneous rain, mm/h) and ``engine`` fly it on another map
-    (built or taken from the cache). ``starts``/``seed``: the number and seed of the fixed
+    (built or taken from the cache); ``radio_map`` flies it on that map (another run's, say;
+    not with those three). ``starts``/``seed``: the number and seed of the fixed
     starts (default: the run's evaluation starts); ``shield``: report shielded flights beside
     the network's own. Another ``scenario`` is flown in its own weather unless ``rain_rate``
-    is given. Returns the metrics, the flights and the environment; writes nothing."""
+    is given. ``references``: a dict the caller keeps to reuse the exact planner's flights
+    between calls on the same map object and task. Returns the metrics, the flights and the
+    environment; writes nothing."""
     run = Path(run_dir)
     for name in ("config.toml", "radiomap.npz", "checkpoint.pt"):
         if not (run / name).exists():
             raise InvalidInputError(f"{run}: missing {name}; is this a rainuav.train output?")
     cfg = load_config(run / "config.toml")
-    if scenario is None and rain_rate is None and engine is None:
+    if radio_map is not None:
+        if not (scenario is None and rain_rate is None and engine is None):
+            raise InvalidInputError("radio_map: give a map or scenario/rain_rate/engine, not both")
+        rm = radio_map
+    elif scenario is None and rain_rate is None and engine is None:
         rm = RadioMap.load(run / "radiomap.npz")
     else:
         keep = scenario is None and rain_rate is None  # another engine only: the run's weather
@@ -281,12 +290,15 @@ def evaluate_saved_run(
         checks.load_state_dict(state["validation"])
     if cfg.keep_best and checks.best_online is not None and checks.best_at != cfg.dqn.episodes:
         agent.online.load_state_dict(checks.best_online)
-    pts = eval_starts(
-        env,
-        cfg.eval_starts if starts is None else starts,
-        cfg.eval_seed if seed is None else seed,
-    )
-    metrics, rolls = evaluate(agent, env, pts)
+    n = cfg.eval_starts if starts is None else starts
+    pts = eval_starts(env, n, cfg.eval_seed if seed is None else seed)
+    refs = None
+    if references is not None:
+        key = (id(rm), repr(env.cfg), pts.tobytes())
+        if key not in references:
+            references[key] = reference_flights(env, pts)
+        refs = references[key]
+    metrics, rolls = evaluate(agent, env, pts, refs)
     metrics["scenario"] = rm.scenario.name
     metrics["rain_rate_mm_h"] = rm.scenario.medium.rain_rate_mm_h
     metrics["trained_on"] = {"scenario": cfg.scenario, "rain_rate": cfg.rain_rate}

@@ -13,7 +13,14 @@ import numpy as np
 from rainuav._io import write_atomic
 from rainuav.nav.env import UAVNavEnv
 
-__all__ = ["map_image", "plot_policy", "plot_returns", "plot_stages", "plot_trajectories"]
+__all__ = [
+    "draw_flights",
+    "map_image",
+    "plot_policy",
+    "plot_returns",
+    "plot_stages",
+    "plot_trajectories",
+]
 
 
 def map_image(ax: Any, env: UAVNavEnv) -> Any:
@@ -30,19 +37,12 @@ def map_image(ax: Any, env: UAVNavEnv) -> Any:
     )
 
 
-def plot_trajectories(
-    env: UAVNavEnv, rolls: list, path: Path, title: str, optimal: Sequence[Any] = ()
-) -> None:
-    """The flights over the map (black), starts as red crosses, the destination as a blue
-    triangle; ``optimal``: the exact planner's paths from the same starts (dashed blue)."""
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(6.4, 5.4))
-    ax = fig.subplots()
+def draw_flights(ax: Any, env: UAVNavEnv, rolls: list, optimal: Sequence[Any] = ()) -> Any:
+    """Flights over the map on ``ax``, the paper's way: the policy's paths (black), starts as
+    red crosses, the destination as a blue triangle; ``optimal``: the exact planner's paths
+    from the same starts (dashed blue). Returns the map's image (for a colour bar)."""
     x0, x1, y0, y1 = env.field.extent
     im = map_image(ax, env)
-    label = f"{env.cfg.signal.upper()} [dB] (outage below {env.cfg.min_db:g})"
-    fig.colorbar(im, ax=ax, label=label)
     for k, p in enumerate(optimal):
         ax.plot(p[:, 0], p[:, 1], "--", color="tab:blue", lw=0.9, alpha=0.8,
                 label="exact optimum" if k == 0 else None)  # fmt: skip
@@ -52,9 +52,23 @@ def plot_trajectories(
                 label="policy" if k == 0 else None)  # fmt: skip
         ax.plot(r["path"][0, 0], r["path"][0, 1], "rx", ms=6)
     ax.plot(*env.cfg.goal_m, "b^", ms=10, label="destination")
-    ax.legend(loc="lower right", fontsize="small")
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
+    return im
+
+
+def plot_trajectories(
+    env: UAVNavEnv, rolls: list, path: Path, title: str, optimal: Sequence[Any] = ()
+) -> None:
+    """The flights over the map (:func:`draw_flights`) with a colour bar, a legend and axes."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 5.4))
+    ax = fig.subplots()
+    im = draw_flights(ax, env, rolls, optimal)
+    label = f"{env.cfg.signal.upper()} [dB] (outage below {env.cfg.min_db:g})"
+    fig.colorbar(im, ax=ax, label=label)
+    ax.legend(loc="lower right", fontsize="small")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title(title)

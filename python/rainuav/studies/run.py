@@ -28,6 +28,7 @@ import numpy as np
 from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.studies.figures import plot_maps
+from rainuav.studies.policies import TRANSFER_COLUMNS, plot_learned, transfer
 from rainuav.studies.spec import Case, Study, case_scenario, train_config
 
 __all__ = ["COLUMNS", "run_case", "run_study", "write_tables"]
@@ -38,6 +39,7 @@ COLUMNS = (
     "optimal_mean_cost", "optimal_mean_signal_db", "optimal_outage_share",
     "straight_line_mean_excess_cost",
     "success_rate", "mean_excess_cost", "worst_excess_cost", "mean_signal_db", "outage_share",
+    *TRANSFER_COLUMNS,
 )  # fmt: skip
 """The columns of ``results.csv``: same study, same seeds, same file (wall times stay in each
 case's ``result.json``)."""
@@ -203,6 +205,11 @@ def run_study(
     rows = [json.loads((out / "cases" / c.id / "result.json").read_text()) for c in cases]
     if "map" in study.compute:
         plot_maps(cases, out / "maps.png")
+    if "learned" in study.compute:
+        moved = transfer(study, cases, out)
+        for r in rows:
+            r.update(moved.get(r["case"], {}))
+        plot_learned(cases, {r["case"]: r for r in rows}, out)
     write_tables(study, rows, out)
     return rows
 
@@ -229,7 +236,7 @@ def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
     lines += ["| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
     lines += ["| " + " | ".join(_fmt(r.get(c)) for c in shown) + " |" for r in rows]
     base = [r for r in rows if r["axis"] == "base"]
-    figures = [c for c in shown if c in COLUMNS[8:]]
+    figures = [c for c in shown if c in COLUMNS[8:] and c not in TRANSFER_COLUMNS]
     if base:
         lines += ["", "## Change against the base case, seed by seed (mean, min..max)", ""]
         lines += [
@@ -253,6 +260,35 @@ def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
             lines.append(f"| {axis} | {value} | " + " | ".join(cells) + " |")
     if (out / "maps.png").exists():
         lines += ["", "## SINR maps and their change against the base", "", "![maps](maps.png)"]
+    if (out / "trajectories.png").exists():
+        lines += ["", "## Learned trajectories (network alone, the same starts in every panel)", ""]
+        lines += ["![trajectories](trajectories.png)"]
+    moved = [r for r in rows if r.get("on_base_success_rate") is not None]
+    if moved:
+        ref = {r["seed"]: r for r in base}
+        lines += ["", "## A policy flown on the other map (the paper's case f)", ""]
+        lines += [
+            "Success and mean excess cost over the exact optimum of the map flown. "
+            "Read each row's 'trained here, flown on base' against 'base's own', and "
+            "'base's policy flown here' against 'trained here, flown here'.",
+            "",
+            "| case | trained here, flown here | trained here, flown on base | "
+            "base's policy, flown here | base's own |",
+            "|---|---|---|---|---|",
+        ]
+
+        def pair(s: Any, e: Any) -> str:
+            return f"{100 * s:.1f}% / " + ("n/a" if e is None else f"{100 * e:.1f}%")
+
+        for r in moved:
+            b = ref[r["seed"]]
+            lines.append(
+                f"| {r['case']} | {pair(r['success_rate'], r['mean_excess_cost'])} | "
+                f"{pair(r['on_base_success_rate'], r['on_base_mean_excess_cost'])} | "
+                f"{pair(r['base_policy_success_rate'], r['base_policy_mean_excess_cost'])} | "
+                f"{pair(b['success_rate'], b['mean_excess_cost'])} |"
+            )
+        lines += [""] + [f"![{r['case']}](cases/{r['case']}/transfer.png)" for r in moved]
     figs = sorted((out / "cases").glob("*/optimal.png"))
     if figs:
         lines += ["", "## Exact optimum per case", ""]

@@ -1,0 +1,153 @@
+"""What a study's learned policies do, once its cases are finished (computed by the driver,
+from the cases' saved runs, so the same on Ray as locally):
+
+- ``trajectories.png``: every case's network (first seed) flying from the same starts over
+  its own map, the exact optimum dashed beside it (the paper's Figs. of learned paths).
+- The paper's case (f), for every case whose axis changes only the map (rain rate, wind,
+  frequency, engine, scenario) against the base case with the same seed: this case's network
+  flown on the base's map (``on_base_*``) and the base's network flown on this case's map
+  (``base_policy_*``), each against the exact optimum of the map flown. With the base in rain
+  and the case in clear air, ``on_base_*`` is "trained in clear air, flown in rain", to be read
+  against the base row's own figures ("trained in rain"). Written to the case's
+  ``transfer.json`` (atomically; a rerun skips it) and drawn in its ``transfer.png``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+from pathlib import Path
+from typing import Any
+
+from rainuav._io import write_atomic
+from rainuav.studies.spec import Case, Study
+
+__all__ = ["MAP_AXES", "TRANSFER_COLUMNS", "plot_learned", "transfer"]
+
+MAP_AXES = ("rain_rate", "freq_ghz", "wind_m_s", "scenario", "scenario_file", "engine")
+"""Axes that change the map and not the task: a policy can be flown on the other's map."""
+TRANSFER_COLUMNS = (
+    "on_base_success_rate", "on_base_mean_excess_cost",
+    "base_policy_success_rate", "base_policy_mean_excess_cost",
+)  # fmt: skip
+FIGURE_STARTS = 8
+"""Starts drawn per panel (the first of the evaluation starts, the same in every panel)."""
+
+
+def _fly(
+    run: Path, radio_map: Any = None, starts: int | None = None, refs: dict | None = None
+) -> tuple[dict, list, Any]:
+    from rainuav.rl.evaluation import evaluate_saved_run
+
+    return evaluate_saved_run(run, radio_map=radio_map, starts=starts, references=refs)
+
+
+def _title(m: dict[str, Any]) -> str:
+    excess = m.get("mean_excess_cost")
+    cost = "n/a" if excess is None else f"{100 * excess:.1f}%"
+    return f"success {100 * m['success_rate']:.0f}%, excess cost {cost}"
+
+
+def _optimal(env: Any, rolls: list) -> list:
+    import numpy as np
+
+    from rainuav.nav import planner
+
+    starts = np.array([r["path"][0] for r in rolls]).reshape(-1, 2)
+    return [p.path_m for p in planner.optimal_many(env, starts)]
+
+
+def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, Any]]:
+    """Case (f) for every map-axis case (module docstring): computes what is missing, returns
+    ``{case id: its transfer figures}`` for every case that has them."""
+    from matplotlib.figure import Figure
+
+    from rainuav.radio.radiomap import RadioMap
+    from rainuav.rl.plots import draw_flights
+
+    if study.sweep != "one_at_a_time" or "learned" not in study.compute:
+        return {}
+    base = {c.seed: c for c in cases if c.axis == "base"}
+    found: dict[str, dict[str, Any]] = {}
+    maps: dict[Path, Any] = {}  # each map loaded once, and the optimum's flights on it
+    refs: dict[Any, Any] = {}
+    for c in cases:
+        if c.axis not in MAP_AXES or c.seed not in base:
+            continue
+        folder, bfolder = out / "cases" / c.id, out / "cases" / base[c.seed].id
+        done = folder / "transfer.json"
+        if not done.exists():
+            own_run, base_run = folder / "run", bfolder / "run"
+            for r in (own_run, base_run):
+                if r not in maps:
+                    maps[r] = RadioMap.load(r / "radiomap.npz")
+            sides = ("own", "base")
+            runs = {"own": own_run, "base": base_run}
+            panels = {
+                (p, f): _fly(runs[p], maps[runs[f]], refs=refs)
+                for p, f in itertools.product(sides, sides)
+            }
+            name = {"own": c.id.rsplit("_s", 1)[0], "base": base[c.seed].id.rsplit("_s", 1)[0]}
+            fig = Figure(figsize=(9.0, 8.4), layout="constrained")
+            axes = fig.subplots(2, 2)
+            for (i, policy), (j, flown) in itertools.product(enumerate(sides), repeat=2):
+                m, rolls, env = panels[(policy, flown)]
+                ax = axes[i, j]
+                shown = rolls[:FIGURE_STARTS]
+                draw_flights(ax, env, shown, _optimal(env, shown))
+                ax.set_title(
+                    f"trained on {name[policy]}, flown on {name[flown]}\n{_title(m)}",
+                    fontsize="small",
+                )
+                ax.set_xticks([])
+                ax.set_yticks([])
+            axes[0, 0].legend(loc="lower right", fontsize="x-small")
+            write_atomic(
+                folder / "transfer.png", lambda t, f=fig: f.savefig(t, dpi=90, format="png")
+            )
+            row = {
+                "on_base_success_rate": panels[("own", "base")][0]["success_rate"],
+                "on_base_mean_excess_cost": panels[("own", "base")][0]["mean_excess_cost"],
+                "base_policy_success_rate": panels[("base", "own")][0]["success_rate"],
+                "base_policy_mean_excess_cost": panels[("base", "own")][0]["mean_excess_cost"],
+            }
+            text = json.dumps(row, indent=2)
+            write_atomic(done, lambda t, x=text: t.write_text(x + "\n"))
+        found[c.id] = json.loads(done.read_text())
+    return found
+
+
+def plot_learned(cases: list[Case], rows: dict[str, dict[str, Any]], out: Path) -> bool:
+    """``trajectories.png``: each case's network (first seed of each case) from the same
+    :data:`FIGURE_STARTS` starts over its own map, the exact optimum dashed. False (and no
+    file) when no case has a run."""
+    import math
+
+    from matplotlib.figure import Figure
+
+    from rainuav.rl.plots import draw_flights
+
+    first = {}
+    for c in cases:
+        key = (c.axis, str(dict(c.fields).get(c.axis, "")))
+        if key not in first and (out / "cases" / c.id / "run" / "policy.pt").exists():
+            first[key] = c
+    if not first:
+        return False
+    n = len(first)
+    cols = min(n, 4)
+    nrows = math.ceil(n / cols)
+    fig = Figure(figsize=(3.5 * cols, 3.6 * nrows), layout="constrained")
+    axes = fig.subplots(nrows, cols, squeeze=False)
+    for ax, c in zip(axes.flat, first.values(), strict=False):
+        _, rolls, env = _fly(out / "cases" / c.id / "run", starts=FIGURE_STARTS)
+        draw_flights(ax, env, rolls, _optimal(env, rolls))
+        r = rows[c.id]
+        ax.set_title(f"{c.id.rsplit('_s', 1)[0]}\n{_title(r)}", fontsize="small")
+        ax.set_xticks([])
+        ax.set_yticks([])
+    for ax in list(axes.flat)[n:]:
+        ax.set_axis_off()
+    axes[0, 0].legend(loc="lower right", fontsize="x-small")
+    write_atomic(out / "trajectories.png", lambda t: fig.savefig(t, dpi=90, format="png"))
+    return True
