@@ -286,3 +286,29 @@ def test_evaluate_refuses_a_run_from_an_incompatible_version(
     assert main([str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "checkpoint.pt" in err and "incompatible" in err, err
+
+
+def test_a_saved_policy_flies_on_another_map_object_with_shared_references(
+    tmp_path: Path,
+) -> None:
+    # What studies use for the paper's case (f): a run's network flown on a map given as an
+    # object. Flying it on its own saved map gives the run's own numbers; reusing the exact
+    # planner's flights (references) changes nothing; a map and a scenario at once is refused.
+    from rainuav.radio.radiomap import RadioMap
+    from rainuav.rl.evaluation import evaluate_saved_run
+    from rainuav.rl.loop import train
+
+    cfg = TrainConfig(
+        out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=30, eval_starts=5,
+        validate_every=0, dqn=DQNConfig(episodes=2, lanes=2),
+    )  # fmt: skip
+    own = train(cfg, progress=False, radio_map=_map())
+    rm = RadioMap.load(tmp_path / "radiomap.npz")
+    refs: dict = {}
+    first, _, _ = evaluate_saved_run(tmp_path, radio_map=rm, references=refs)
+    again, _, _ = evaluate_saved_run(tmp_path, radio_map=rm, references=refs)
+    assert len(refs) == 1  # computed once, reused
+    for k in ("success_rate", "mean_excess_cost", "optimal_mean_cost", "mean_return"):
+        assert first[k] == again[k] == own[k], k
+    with pytest.raises(InvalidInputError, match="radio_map"):
+        evaluate_saved_run(tmp_path, radio_map=rm, rain_rate=10.0)
