@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import rainuav
 from rainuav import medium
+from rainuav.errors import InvalidInputError
 from rainuav.radio import build_radio_map, cache, presets
 from rainuav.radio import sinr as sinr_mod
 from rainuav.radio.pe_engine import rain_rate_at
@@ -342,14 +343,41 @@ def test_with_rain_changes_only_the_rain() -> None:
         shape="sphere",
         temperature_c=10.0,
         wind_speed_m_s=5.0,
+        wind_model="paper",
     )
     scn = beam_line(med=weather)
     for rate, kind in ((50.0, "homogeneous"), (0.0, "clear")):
         got = presets.with_rain(scn, rate).medium
         assert (got.kind, got.rain_rate_mm_h, got.cells) == (kind, rate, [])
-        for name in ("model", "dsd", "shape", "temperature_c", "wind_speed_m_s"):
+        for name in ("model", "dsd", "shape", "temperature_c", "wind_speed_m_s", "wind_model"):
             assert getattr(got, name) == getattr(weather, name), name
     assert scn.medium == weather  # the original is untouched
+
+
+def test_the_scenarios_wind_model_reaches_the_rain_medium(tmp_path: Path) -> None:
+    # A scenario's wind model is the one rainuav.medium applies (the paper's 1/cos factor
+    # against drop canting, both at 5 m/s, 4.9 GHz, 50 mm/h: the same gamma to 1e-12), it
+    # round-trips through TOML and changes the cache key; a model not known is refused.
+    def gamma(weather: Medium) -> float:
+        return float(weather.rain_medium(4.9e9, "h").specific_attenuation(50.0))
+
+    for model in ("canting", "paper"):
+        weather = Medium(kind="homogeneous", rain_rate_mm_h=50.0, wind_speed_m_s=5.0,
+                         wind_model=model)  # fmt: skip
+        direct = float(
+            medium.RainMedium(4.9e9, wind_speed_m_s=5.0, wind_model=model).specific_attenuation(
+                50.0
+            )
+        )
+        assert gamma(weather) == pytest.approx(direct, rel=1e-12)
+    canting = beam_line(med=Medium(kind="homogeneous", wind_speed_m_s=5.0))
+    paper = beam_line(med=Medium(kind="homogeneous", wind_speed_m_s=5.0, wind_model="paper"))
+    assert gamma(paper.medium) > gamma(canting.medium)  # the factor only grows gamma
+    assert canting.digest() != paper.digest()
+    back = Scenario.from_toml(paper.to_toml(tmp_path / "s.toml"))
+    assert back.medium.wind_model == "paper" and back.digest() == paper.digest()
+    with pytest.raises(InvalidInputError, match="wind_model"):
+        beam_line(med=Medium(kind="homogeneous", wind_model="gale"))
 
 
 def test_cache_key_changes_with_the_engine(monkeypatch) -> None:

@@ -112,6 +112,9 @@ def test_a_study_killed_mid_case_reruns_to_the_same_results(tmp_path: Path) -> N
         (("eval_starts = 4", "eval_starts = 0"), "eval_starts"),
         (('name = "tiny"', 'name = "tiny"\nextra = 1'), "extra"),
         (('"dqn.episodes" = 3', '"dqn.episodes" = -3'), "episodes"),
+        (("rain_rate = [50.0]", "rain_rate = [{ bogus = 1.0 }]"), "bogus"),
+        (("rain_rate = [50.0]", "rain_rate = [50.0, { wind_m_s = 2.0 }]"), "rain_rate"),
+        (("rain_rate = [50.0]", 'w = [{ wind_m_s = 2.0, wind_model = "gale" }]'), "wind_model"),
     ],
 )
 def test_bad_study_files_are_refused_before_any_work(
@@ -130,9 +133,14 @@ def test_built_in_studies_load_and_name_their_cases() -> None:
     ids = [c.id for c in paper.cases()]
     assert ids[0] == "000_base_s0" and len(ids) == len(set(ids))
     axes = {c.axis for c in paper.cases()}
-    assert axes == {"base", "rain_rate", "mu", "wind_m_s"}
+    assert axes == {"base", "rain_rate", "mu", "wind_m_s", "paper_wind"}
     mmwave = {c.axis for c in load_study("mmwave").cases()}
     assert mmwave == {"base", "rain_rate", "freq_ghz", "scenario"}
+    # A compound axis sets several fields at once: the paper's wind factor at 2 and 5 m/s.
+    paper_wind = [c for c in paper.cases() if c.axis == "paper_wind"]
+    assert [c.id for c in paper_wind] == ["008_paper_wind=2-paper_s0", "009_paper_wind=5-paper_s0"]
+    assert [dict(c.fields)["wind_model"] for c in paper_wind] == ["paper", "paper"]
+    assert paper.axis_fields("paper_wind") == {"wind_m_s", "wind_model"}
     quick = paper.with_quick()
     assert dict(quick.cases()[0].fields)["dqn.episodes"] == 300
     with pytest.raises(InvalidInputError, match="study file"):

@@ -62,6 +62,9 @@ class Medium:
     """Water temperature, C."""
     wind_speed_m_s: float = 0.0
     """Wind across the path, m/s."""
+    wind_model: str = "canting"
+    """How wind acts: 'canting' (drops cant by atan(v_wind / v_t); PHYSICS.md) or 'paper' (the
+    paper's 1/cos factor, for reproducing it only; rainuav.medium)."""
 
     def rain_medium(self, freq_hz: float, polarization: str) -> m.RainMedium:
         """The effective medium of this weather's rain (model, drops, temperature, wind) at
@@ -74,6 +77,7 @@ class Medium:
             temperature_c=self.temperature_c,
             wind_speed_m_s=self.wind_speed_m_s,
             dsd=self.dsd,
+            wind_model=self.wind_model,  # type: ignore[arg-type]
         )
 
     def check(self, where: str = "medium") -> None:
@@ -85,6 +89,7 @@ class Medium:
         _choice(f"{where}.shape", self.shape, m.SHAPES)
         _num(f"{where}.temperature_c", self.temperature_c, 0.0, 40.0, " C")
         _num(f"{where}.wind_speed_m_s", self.wind_speed_m_s, 0.0, 60.0, " m/s")
+        _choice(f"{where}.wind_model", self.wind_model, m.WIND_MODELS)
         for i, c in enumerate(self.cells):
             w = f"{where}.cells[{i}]"
             _num(f"{w}.x_m", c.x_m, -1e6, 1e6, " m")

@@ -24,8 +24,11 @@ from rainuav.studies.spec import Case, Study
 
 __all__ = ["MAP_AXES", "TRANSFER_COLUMNS", "plot_learned", "transfer"]
 
-MAP_AXES = ("rain_rate", "freq_ghz", "wind_m_s", "scenario", "scenario_file", "engine")
-"""Axes that change the map and not the task: a policy can be flown on the other's map."""
+MAP_AXES = (
+    "rain_rate", "freq_ghz", "wind_m_s", "wind_model", "scenario", "scenario_file", "engine",
+)  # fmt: skip
+"""Fields that change the map and not the task: an axis that sets only these can fly a policy
+on the other's map."""
 TRANSFER_COLUMNS = (
     "on_base_success_rate", "on_base_mean_excess_cost",
     "base_policy_success_rate", "base_policy_mean_excess_cost",
@@ -72,7 +75,8 @@ def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, 
     maps: dict[Path, Any] = {}  # each map loaded once, and the optimum's flights on it
     refs: dict[Any, Any] = {}
     for c in cases:
-        if c.axis not in MAP_AXES or c.seed not in base:
+        fields = study.axis_fields(c.axis)
+        if not fields or not fields <= set(MAP_AXES) or c.seed not in base:
             continue
         folder, bfolder = out / "cases" / c.id, out / "cases" / base[c.seed].id
         done = folder / "transfer.json"

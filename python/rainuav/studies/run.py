@@ -67,7 +67,7 @@ def run_case(
     rm = radio_map if radio_map is not None else build_radio_map(scn)
     env = make_env(cfg, rm)
     assert env.cfg.min_db is not None
-    value = "" if case.axis in ("base", "grid") else fields[case.axis]
+    value = "" if case.axis in ("base", "grid") else fields.get(case.axis, case.value)
     row: dict[str, Any] = {
         "case": case.id, "axis": case.axis, "value": value, "seed": case.seed,
         "scenario": scn.name, "rain_rate_mm_h": scn.medium.rain_rate_mm_h,

@@ -12,9 +12,10 @@
     scenario = "paper"          # or a scenario override: freq_ghz, wind_m_s, engine
     rain_rate = 25.0
 
-    [axes]                      # each axis: a list of values for one field
+    [axes]                      # each axis: a list of values for one field,
     rain_rate = [0.0, 25.0, 50.0, 100.0]
-    mu = [0.1, 0.2326, 10.0]
+    mu = [0.1, 0.2326, 10.0]    # or, under a name of its own, of tables of fields set together
+    paper_wind = [{wind_m_s = 2.0, wind_model = "paper"}, {wind_m_s = 5.0, wind_model = "paper"}]
 
     [quick]                     # what --quick changes (any field, as in [base])
     "dqn.episodes" = 300
@@ -44,30 +45,35 @@ from rainuav.rl.config import DQNConfig, TrainConfig, check_config, make_scenari
 __all__ = ["BUILT_IN", "COMPUTE", "SCENARIO_FIELDS", "Case", "Study", "load_study"]
 
 COMPUTE = ("map", "optimal", "learned")
-SCENARIO_FIELDS = ("freq_ghz", "wind_m_s", "engine")
+SCENARIO_FIELDS = ("freq_ghz", "wind_m_s", "wind_model", "engine")
 """Fields of a case that change the scenario rather than the run."""
 BUILT_IN = ("paper", "mmwave")
 _TOP = {"name", "sweep", "seeds", "compute", "eval_starts", "base", "axes", "quick"}
 
 
+def _label(v: Any) -> str:
+    """An axis value as text: numbers in short form, a table of fields as their values."""
+    if isinstance(v, dict):
+        return "-".join(_label(x) for x in v.values())
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
 @dataclass(frozen=True)
 class Case:
     """One case: its index, the axis it varies (``"base"`` for the base case, ``"grid"``
-    for a grid cell), its fields and its seed."""
+    for a grid cell), its fields, its seed and the axis value as text (``value``; empty for
+    the base and grid cells)."""
 
     index: int
     axis: str
     fields: tuple[tuple[str, Any], ...]
     seed: int
+    value: str = ""
 
     @property
     def id(self) -> str:
         """A folder name: the index, the axis and its value, the seed."""
-        d = dict(self.fields)
-        v = d.get(self.axis)
-        value = (
-            "" if self.axis in ("base", "grid") else f"={v:g}" if isinstance(v, float) else f"={v}"
-        )
+        value = f"={self.value}" if self.value else ""
         return f"{self.index:03d}_{self.axis}{value}_s{self.seed}".replace("/", "-")
 
 
@@ -84,21 +90,34 @@ class Study:
 
     def cases(self) -> list[Case]:
         """Every case, in a fixed order (the index is the row of ``results.csv``)."""
-        combos: list[tuple[str, dict[str, Any]]] = []
+        combos: list[tuple[str, dict[str, Any], str]] = []
         if self.sweep == "grid":
             names = list(self.axes)
             for values in itertools.product(*(self.axes[n] for n in names)):
-                combos.append(("grid", dict(zip(names, values, strict=True))))
+                change: dict[str, Any] = {}
+                for n, v in zip(names, values, strict=True):
+                    change.update(v if isinstance(v, dict) else {n: v})
+                combos.append(("grid", change, ""))
         else:
-            combos.append(("base", {}))
+            combos.append(("base", {}, ""))
             for name, values in self.axes.items():
-                combos += [(name, {name: v}) for v in values if v != self.base.get(name)]
+                for v in values:
+                    change = dict(v) if isinstance(v, dict) else {name: v}
+                    if any(self.base.get(k) != x for k, x in change.items()):
+                        combos.append((name, change, _label(v)))
         out = []
-        for axis, change in combos:
+        for axis, change, label in combos:
             merged = {**self.base, **change}
             for seed in self.seeds:
-                out.append(Case(len(out), axis, tuple(sorted(merged.items())), seed))
+                out.append(Case(len(out), axis, tuple(sorted(merged.items())), seed, label))
         return out
+
+    def axis_fields(self, axis: str) -> set[str]:
+        """The fields an axis sets (its own name, or the keys of its tables)."""
+        keys: set[str] = set()
+        for v in self.axes.get(axis, []):
+            keys |= set(v) if isinstance(v, dict) else {axis}
+        return keys
 
     def with_quick(self) -> Study:
         """The study with its ``[quick]`` changes applied to the base case."""
@@ -122,6 +141,10 @@ def case_scenario(fields: dict[str, Any], cfg: TrainConfig) -> Scenario:
     if fields.get("wind_m_s") is not None:
         medium = dataclasses.replace(scn.medium, wind_speed_m_s=float(fields["wind_m_s"]))
         scn = dataclasses.replace(scn, medium=medium)
+    if fields.get("wind_model") is not None:
+        medium = dataclasses.replace(scn.medium, wind_model=fields["wind_model"])
+        scn = dataclasses.replace(scn, medium=medium)
+        scn.medium.check("medium")
     return scn
 
 
@@ -169,11 +192,22 @@ def parse_study(data: dict[str, Any], where: str) -> Study:
         if not isinstance(table, dict):
             raise InvalidInputError(f"{where}: [{name}] must be a table")
     _check_fields(f"{where} [base]", base)
-    _check_fields(f"{where} [axes]", axes)
     _check_fields(f"{where} [quick]", quick)
     for k, v in axes.items():
         if not isinstance(v, list) or not v:
             raise InvalidInputError(f"{where} [axes]: {k} must be a non-empty list of values")
+        tables = [isinstance(x, dict) for x in v]
+        if any(tables) and not all(tables):
+            raise InvalidInputError(
+                f"{where} [axes]: {k} must hold values of one field or tables of fields, not both"
+            )
+        if all(tables):
+            for x in v:
+                if not x:
+                    raise InvalidInputError(f"{where} [axes]: {k} holds an empty table")
+                _check_fields(f"{where} [axes] {k}", x)
+        else:
+            _check_fields(f"{where} [axes]", {k: v})
     seeds = data.get("seeds", [0])
     if not (isinstance(seeds, list) and seeds and all(type(s) is int for s in seeds)):
         raise InvalidInputError(f"{where}: seeds must be a non-empty list of integers")
