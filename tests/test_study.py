@@ -54,7 +54,12 @@ def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(tmp_path: 
     assert len(lines) == 3 and lines[0].startswith("case,axis,value,seed")
     report = (out / "report.md").read_text()
     assert "rain_rate | 50" in report and "optimal.png" in report and "maps.png" in report
-    for png in ("maps.png", "trajectories.png", "cases/001_rain_rate=50_s0/transfer.png"):
+    for png in (
+        "maps.png",
+        "rss.png",
+        "trajectories.png",
+        "cases/001_rain_rate=50_s0/transfer.png",
+    ):
         assert (out / png).read_bytes()[:4] == b"\x89PNG", png
     # Case (f): the rain case's network flown on the clear base map and the base's network
     # flown in the rain, each a success rate in [0, 1], in the table and in the report.

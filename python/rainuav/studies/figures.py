@@ -1,5 +1,6 @@
-"""A study's map figure: the SINR map of every distinct scenario among its cases on one
-colour scale, and beside each its difference from the base case's map."""
+"""A study's map figures: the SINR (``maps.png``) or the best cell's received power
+(``rss.png``) of every distinct scenario among its cases on one colour scale, and beside each
+its difference from the base case's map."""
 
 from __future__ import annotations
 
@@ -14,10 +15,17 @@ from rainuav.studies.spec import Case, case_scenario, train_config
 __all__ = ["plot_maps"]
 
 
-def plot_maps(cases: list[Case], path: Path) -> bool:
+QUANTITIES = {
+    "sinr": ("SINR [dB]", "RdYlGn", lambda rm: rm.sinr_db),
+    "rss": ("best RSS [dBm]", "viridis", lambda rm: np.max(rm.rss_dbm, axis=0)),
+}
+
+
+def plot_maps(cases: list[Case], path: Path, quantity: str = "sinr") -> bool:
     """Writes ``path`` (PNG): one row per distinct scenario (first seed of each case), its
-    SINR map (shared colour scale) and its difference from the first case's (the base).
-    Returns False when there is only one map (nothing to compare)."""
+    map of ``quantity`` (``"sinr"`` or ``"rss"``, the best cell's received power; shared
+    colour scale) and its difference from the first case's (the base). Returns False when
+    there is only one map (nothing to compare)."""
     from matplotlib.figure import Figure
 
     from rainuav.radio.radiomap import build_radio_map
@@ -33,16 +41,17 @@ def plot_maps(cases: list[Case], path: Path) -> bool:
         maps.append((case.id.rsplit("_s", 1)[0], build_radio_map(scn)))  # from the cache
     if len(maps) < 2:
         return False
-    base = maps[0][1].sinr_db
-    lo, hi = (float(np.percentile(np.stack([m.sinr_db for _, m in maps]), q)) for q in (2, 98))
-    diffs = [m.sinr_db - base for _, m in maps]
+    label, cmap, of = QUANTITIES[quantity]
+    values = [of(m) for _, m in maps]
+    lo, hi = (float(np.percentile(np.stack(values), q)) for q in (2, 98))
+    diffs = [v - values[0] for v in values]
     span = max(float(np.max(np.abs(d))) for d in diffs) or 1.0
     fig = Figure(figsize=(8.0, 3.4 * len(maps)), layout="constrained")
     axes = fig.subplots(len(maps), 2, squeeze=False)
-    for (name, rm), d, (a, b) in zip(maps, diffs, axes, strict=True):
+    for (name, rm), v, d, (a, b) in zip(maps, values, diffs, axes, strict=True):
         extent = rm.extent_m
-        im = a.imshow(rm.sinr_db, origin="lower", extent=extent, cmap="RdYlGn", vmin=lo, vmax=hi)
-        a.set_title(f"{name}: SINR [dB]", fontsize="small")
+        im = a.imshow(v, origin="lower", extent=extent, cmap=cmap, vmin=lo, vmax=hi)
+        a.set_title(f"{name}: {label}", fontsize="small")
         fig.colorbar(im, ax=a)
         im = b.imshow(d, origin="lower", extent=extent, cmap="RdBu", vmin=-span, vmax=span)
         b.set_title(f"{name} minus {maps[0][0]} [dB]", fontsize="small")

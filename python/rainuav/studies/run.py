@@ -204,7 +204,8 @@ def run_study(
             bar.close()
     rows = [json.loads((out / "cases" / c.id / "result.json").read_text()) for c in cases]
     if "map" in study.compute:
-        plot_maps(cases, out / "maps.png")
+        plot_maps(cases, out / "maps.png", "sinr")
+        plot_maps(cases, out / "rss.png", "rss")
     if "learned" in study.compute:
         moved = transfer(study, cases, out)
         for r in rows:
@@ -260,6 +261,9 @@ def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
             lines.append(f"| {axis} | {value} | " + " | ".join(cells) + " |")
     if (out / "maps.png").exists():
         lines += ["", "## SINR maps and their change against the base", "", "![maps](maps.png)"]
+    if (out / "rss.png").exists():
+        lines += ["", "## Received power (best cell) and its change against the base", ""]
+        lines += ["![rss](rss.png)"]
     if (out / "trajectories.png").exists():
         lines += ["", "## Learned trajectories (network alone, the same starts in every panel)", ""]
         lines += ["![trajectories](trajectories.png)"]
