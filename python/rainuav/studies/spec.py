@@ -9,7 +9,7 @@
     eval_starts = 200
 
     [base]                      # any rainuav.rl.config.TrainConfig field, "dqn.<field>",
-    scenario = "paper"          # or a scenario override: freq_ghz, wind_m_s, engine
+    scenario = "paper"          # or a scenario override: freq_ghz, wind_m_s, wind_model, engine
     rain_rate = 25.0
 
     [axes]                      # each axis: a list of values for one field,
