@@ -58,10 +58,10 @@ def _arrived(env: UAVNavEnv, path: np.ndarray) -> bool:
     return bool(inside and np.hypot(*(p - g)) <= env.cfg.tol_m and len(path) > 1)
 
 
-def flights(env: UAVNavEnv, returns: Any, arrived: Any, paths: list) -> dict[str, np.ndarray]:
+def flights(env: UAVNavEnv, returns: Any, arrived: Any, paths: list) -> dict[str, Any]:
     """Per flight: ``return``, ``arrived``, ``cost`` (:func:`rainuav.nav.task.flight_cost`),
-    ``steps``, and the signal along the path (every position after the start): its mean and
-    the share of it below ``min_db``."""
+    ``steps``, the signal along the path (every position after the start): its mean and the
+    share of it below ``min_db``, and the ``paths`` themselves (for figures)."""
     signal = [env.field(p[1:, 0], p[1:, 1]) for p in paths]
     rets = np.asarray(returns, dtype=np.float64)
     ok = np.asarray(arrived, dtype=bool)
@@ -72,6 +72,7 @@ def flights(env: UAVNavEnv, returns: Any, arrived: Any, paths: list) -> dict[str
         "steps": np.array([len(p) - 1 for p in paths], dtype=np.float64),
         "signal_sum": np.array([s.sum() for s in signal]),
         "outage_sum": np.array([np.sum(s < env.cfg.min_db) for s in signal], dtype=np.float64),
+        "paths": paths,
     }
 
 
@@ -98,7 +99,7 @@ def summarise(f: dict[str, np.ndarray], optimum: dict[str, np.ndarray]) -> dict[
     }
 
 
-def reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+def reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dict[str, Any]]:
     """The exact planner's flights (the yardstick) and the straight-line baseline's."""
     plans = planner.optimal_many(env, starts)
     lines = [planner.straight_line(env, s) for s in starts]

@@ -16,6 +16,7 @@ from rainuav.nav.env import UAVNavEnv
 __all__ = [
     "draw_flights",
     "map_image",
+    "optimal_paths",
     "plot_policy",
     "plot_returns",
     "plot_stages",
@@ -76,13 +77,18 @@ def plot_trajectories(
     write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
 
 
-def plot_policy(env: UAVNavEnv, metrics: dict[str, Any], rolls: list, path: Path) -> None:
-    """The network's flights beside the exact optimum from the same starts, titled with its
-    success and mean excess cost."""
+def optimal_paths(env: UAVNavEnv, rolls: list) -> list:
+    """The exact planner's paths from the starts of ``rolls`` (to draw beside them)."""
     from rainuav.nav import planner
 
     starts = np.array([r["path"][0] for r in rolls]).reshape(-1, 2)
-    optimal = [p.path_m for p in planner.optimal_many(env, starts)]
+    return [p.path_m for p in planner.optimal_many(env, starts)]
+
+
+def plot_policy(env: UAVNavEnv, metrics: dict[str, Any], rolls: list, path: Path) -> None:
+    """The network's flights beside the exact optimum from the same starts, titled with its
+    success and mean excess cost."""
+    optimal = optimal_paths(env, rolls)
     excess = metrics.get("mean_excess_cost")
     cost = "n/a" if excess is None else f"{100 * excess:.1f}%"
     title = f"network alone: success {100 * metrics['success_rate']:.0f}%, excess cost {cost}"

@@ -51,22 +51,13 @@ def _title(m: dict[str, Any]) -> str:
     return f"success {100 * m['success_rate']:.0f}%, excess cost {cost}"
 
 
-def _optimal(env: Any, rolls: list) -> list:
-    import numpy as np
-
-    from rainuav.nav import planner
-
-    starts = np.array([r["path"][0] for r in rolls]).reshape(-1, 2)
-    return [p.path_m for p in planner.optimal_many(env, starts)]
-
-
 def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, Any]]:
     """Case (f) for every map-axis case (module docstring): computes what is missing, returns
     ``{case id: its transfer figures}`` for every case that has them."""
     from matplotlib.figure import Figure
 
     from rainuav.radio.radiomap import RadioMap
-    from rainuav.rl.plots import draw_flights
+    from rainuav.rl.plots import draw_flights, optimal_paths
 
     if study.sweep != "one_at_a_time" or "learned" not in study.compute:
         return {}
@@ -98,7 +89,7 @@ def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, 
                 m, rolls, env = panels[(policy, flown)]
                 ax = axes[i, j]
                 shown = rolls[:FIGURE_STARTS]
-                draw_flights(ax, env, shown, _optimal(env, shown))
+                draw_flights(ax, env, shown, optimal_paths(env, shown))
                 ax.set_title(
                     f"trained on {name[policy]}, flown on {name[flown]}\n{_title(m)}",
                     fontsize="small",
@@ -129,7 +120,7 @@ def plot_learned(cases: list[Case], rows: dict[str, dict[str, Any]], out: Path) 
 
     from matplotlib.figure import Figure
 
-    from rainuav.rl.plots import draw_flights
+    from rainuav.rl.plots import draw_flights, optimal_paths
 
     first = {}
     for c in cases:
@@ -145,7 +136,7 @@ def plot_learned(cases: list[Case], rows: dict[str, dict[str, Any]], out: Path) 
     axes = fig.subplots(nrows, cols, squeeze=False)
     for ax, c in zip(axes.flat, first.values(), strict=False):
         _, rolls, env = _fly(out / "cases" / c.id / "run", starts=FIGURE_STARTS)
-        draw_flights(ax, env, rolls, _optimal(env, rolls))
+        draw_flights(ax, env, rolls, optimal_paths(env, rolls))
         r = rows[c.id]
         ax.set_title(f"{c.id.rsplit('_s', 1)[0]}\n{_title(r)}", fontsize="small")
         ax.set_xticks([])

@@ -86,9 +86,7 @@ def run_case(
         row["optimal_mean_signal_db"] = opt["mean_signal_db"]
         row["optimal_outage_share"] = opt["outage_share"]
         row["straight_line_mean_excess_cost"] = line["mean_excess_cost"]
-        from rainuav.nav import planner
-
-        paths = [p.path_m for p in planner.optimal_many(env, starts[:20])]
+        paths = refs["optimal"]["paths"][:20]  # planned above, not again
         plot_trajectories(env, [], out / "optimal.png", f"{case.id}: exact optimum", paths)
     if "learned" in compute:
         m = train(cfg, progress=False, radio_map=rm)
