@@ -16,7 +16,7 @@ from rainuav.radio import RadioMap
 from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.dqn import DuelingQNet, NStepWindow, Replay, double_q_target
-from rainuav.rl.evaluation import Validation, eval_starts, evaluate
+from rainuav.rl.evaluation import Validation, eval_starts, evaluate, evaluate_saved_run
 from rainuav.rl.learner import learning_reward
 from rainuav.rl.loop import train
 from rainuav.rl.setup import make_agent
@@ -314,6 +314,47 @@ def test_without_validation_checks(tmp_path: Path) -> None:
     assert torch.load(tmp_path / "checkpoint.pt", weights_only=False)["validation"]["history"] == []
 
 
+def test_weight_average_is_the_running_mean() -> None:
+    env = _env()
+    agent = make_agent(small_cfg(Path("unused"), 10), env, torch.device("cpu"))
+    snaps = []
+    for k in range(3):
+        with torch.no_grad():
+            for p in agent.online.parameters():
+                p.add_(float(k + 1))
+        snaps.append({n: v.clone() for n, v in agent.online.state_dict().items()})
+        agent.accumulate_average()
+    own = {n: v.clone() for n, v in agent.online.state_dict().items()}
+    assert agent.n_averaged == 3 and agent.average is not None
+    for n, v in agent.average.items():
+        # float32 mean of three snapshots: a few ulps of the weights' size.
+        torch.testing.assert_close(v, sum(s[n] for s in snaps) / 3, rtol=1e-6, atol=1e-6)
+    with agent.reporting():
+        assert all(torch.equal(v, agent.average[n]) for n, v in agent.online.state_dict().items())
+    assert all(torch.equal(v, own[n]) for n, v in agent.online.state_dict().items())
+
+
+def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_path: Path) -> None:
+    plain, averaged = small_cfg(tmp_path / "plain", 120), small_cfg(tmp_path / "avg", 120)
+    plain.dqn.average_from, averaged.dqn.average_from = 1.0, 0.5
+    train(plain, progress=False, radio_map=synthetic_map())
+    m = train(averaged, progress=False, radio_map=synthetic_map())
+    a = torch.load(tmp_path / "plain" / "checkpoint.pt", weights_only=False)["agent"]
+    b = torch.load(tmp_path / "avg" / "checkpoint.pt", weights_only=False)["agent"]
+    # The online network acts and learns as without averaging: the same weights at the end.
+    assert a["average"] is None and a["n_averaged"] == 0
+    for k in a["online"]:
+        assert torch.equal(a["online"][k], b["online"][k]), k
+    # One sample per finished episode after 60 of 120; the mean is what the run reports.
+    assert b["n_averaged"] == 60
+    policy = torch.load(tmp_path / "avg" / "policy.pt", weights_only=True)["online"]
+    assert all(torch.equal(policy[k], b["average"][k].cpu()) for k in policy)
+    assert not all(torch.equal(policy[k], b["online"][k].cpu()) for k in policy)
+    _assert_policy_gives(tmp_path / "avg", averaged, m)
+    again, _, _ = evaluate_saved_run(tmp_path / "avg")
+    assert again["mean_return"] == m["mean_return"]
+
+
 def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
     full = train(small_cfg(tmp_path / "full", 120), progress=False, radio_map=synthetic_map())
     part_dir = tmp_path / "part"
@@ -429,6 +470,8 @@ def test_bad_train_config(tmp_path: Path) -> None:
         check_config(TrainConfig(device="tpu"))
     with pytest.raises(InvalidInputError, match=r"lr_final must be > 0 \(got nan\)"):
         check_config(TrainConfig(dqn=DQNConfig(lr_final=float("nan"))))
+    with pytest.raises(InvalidInputError, match=r"average_from must be in \[0, 1\] \(got 1.5\)"):
+        check_config(TrainConfig(dqn=DQNConfig(average_from=1.5)))
     with pytest.raises(InvalidInputError, match="validate_starts must be >= 1"):
         check_config(TrainConfig(validate_starts=0))
 

@@ -58,6 +58,10 @@ class DQNConfig:
     """Adam learning rate at the start."""
     lr_final: float = 3e-5
     """Learning rate after the last episode (cosine decay from lr over the episodes)."""
+    average_from: float = 1.0
+    """Fraction of the episodes after which the reported network is the running mean of the
+    online weights, one sample per finished episode (weight averaging); 1: the final online
+    network. Training itself is unchanged: the online network still acts and learns."""
     hidden: int = 128
     """Width of the two hidden layers."""
     fourier: int = 8
@@ -198,6 +202,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("n_step", d.n_step >= 1, ">= 1"),
         ("lr", 0 < d.lr < math.inf, "> 0"),
         ("lr_final", 0 < d.lr_final < math.inf, "> 0"),
+        ("average_from", 0 <= d.average_from <= 1, "in [0, 1]"),
         ("hidden", d.hidden >= 1, ">= 1"),
         ("fourier", d.fourier >= 0, ">= 0"),
         ("lanes", d.lanes >= 1, ">= 1"),
@@ -255,6 +260,7 @@ PAPER_LEARNER: dict[str, Any] = {
     "sir_weight": 1.0,
     "reward_scale": 1.0,
     "grad_clip": 0.0,
+    "average_from": 1.0,
     "shield": False,
 }
 """The [dqn] fields ``preset = "paper"`` fixes (Algorithm 1 and Table I). The paper is silent

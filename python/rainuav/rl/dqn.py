@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -204,6 +206,9 @@ class Agent:
         self.replay = Replay(cfg.replay_capacity, self.obs_dim)
         self.rng = np.random.default_rng(random_streams(seed)["agent"])
         self.updates = 0
+        # Running mean of the online weights (``average_from``): the reported network.
+        self.average: dict[str, torch.Tensor] | None = None
+        self.n_averaged = 0
 
     def make_net(self) -> DuelingQNet:
         c = self.cfg
@@ -293,6 +298,35 @@ class Agent:
     def sync(self) -> None:
         self.target.load_state_dict(self.online.state_dict())
 
+    def accumulate_average(self) -> None:
+        """Adds the online weights to their running mean (one sample)."""
+        with torch.no_grad():
+            self.n_averaged += 1
+            if self.average is None:
+                self.average = {k: v.detach().clone() for k, v in self.online.state_dict().items()}
+                return
+            for k, v in self.online.state_dict().items():
+                self.average[k] += (v - self.average[k]) / self.n_averaged
+
+    def reported_weights(self) -> dict[str, torch.Tensor]:
+        """The weights the run reports: the running mean once averaging has begun, else the
+        online network's."""
+        return self.online.state_dict() if self.average is None else self.average
+
+    @contextmanager
+    def reporting(self) -> Iterator[None]:
+        """Within: the online network holds :meth:`reported_weights` (for greedy checks);
+        its own weights are restored after."""
+        if self.average is None:
+            yield
+            return
+        own = {k: v.detach().clone() for k, v in self.online.state_dict().items()}
+        self.online.load_state_dict(self.average)
+        try:
+            yield
+        finally:
+            self.online.load_state_dict(own)
+
     def state_dict(self) -> dict[str, Any]:
         return {
             "online": self.online.state_dict(),
@@ -301,6 +335,8 @@ class Agent:
             "replay": self.replay.state_dict(),
             "rng": self.rng.bit_generator.state,
             "updates": self.updates,
+            "average": self.average,
+            "n_averaged": self.n_averaged,
         }
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
@@ -310,3 +346,5 @@ class Agent:
         self.replay.load_state_dict(d["replay"])
         self.rng.bit_generator.state = d["rng"]
         self.updates = d["updates"]
+        # Checkpoints from before weight averaging hold neither.
+        self.average, self.n_averaged = d.get("average"), d.get("n_averaged", 0)

@@ -240,16 +240,16 @@ def evaluate_saved_run(
     shield: bool = False,
     references: dict[Any, Any] | None = None,
 ) -> tuple[dict[str, Any], list, Any]:
-    """Flies a saved training run's policy (the network the run reports: the final one, or
-    with ``keep_best`` the best on validation). On the run's own map by default; ``scenario``
-    (a preset), ``rain_rate`` (homogeneous rain, mm/h) and ``engine`` fly it on another map
-    (built or taken from the cache); ``radio_map`` flies it on that map (another run's, say;
-    not with those three). ``starts``/``seed``: the number and seed of the fixed
-    starts (default: the run's evaluation starts); ``shield``: report shielded flights beside
-    the network's own. Another ``scenario`` is flown in its own weather unless ``rain_rate``
-    is given. ``references``: a dict the caller keeps to reuse the exact planner's flights
-    between calls on the same map object and task. Returns the metrics, the flights and the
-    environment; writes nothing."""
+    """Flies a saved training run's policy (the network the run reports: the final one, the
+    weight average with ``average_from``, or with ``keep_best`` the best on validation). On
+    the run's own map by default; ``scenario`` (a preset), ``rain_rate`` (homogeneous rain,
+    mm/h) and ``engine`` fly it on another map (built or taken from the cache); ``radio_map``
+    flies it on that map (another run's, say; not with those three). ``starts``/``seed``: the
+    number and seed of the fixed starts (default: the run's evaluation starts); ``shield``:
+    report shielded flights beside the network's own. Another ``scenario`` is flown in its own
+    weather unless ``rain_rate`` is given. ``references``: a dict the caller keeps to reuse
+    the exact planner's flights between calls on the same map object and task. Returns the
+    metrics, the flights and the environment; writes nothing."""
     run = Path(run_dir)
     for name in ("config.toml", "radiomap.npz", "checkpoint.pt"):
         if not (run / name).exists():
@@ -286,6 +286,7 @@ def evaluate_saved_run(
             f"{run / 'checkpoint.pt'}: does not fit the network its config.toml describes "
             f"(a run from an incompatible version?): {str(err).splitlines()[0]}"
         ) from err
+    agent.online.load_state_dict(agent.reported_weights())  # the mean, when averaging
     checks = Validation(np.zeros((0, 2)), {})
     if "validation" in state:
         checks.load_state_dict(state["validation"])

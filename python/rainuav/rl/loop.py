@@ -230,11 +230,16 @@ def run_loop(
                 agent.anneal(n_done)
                 if n_done % d.target_sync_episodes == 0:
                     agent.sync()
+                if n_done > d.average_from * d.episodes:
+                    agent.accumulate_average()
                 if n_done % stage_every == 0:
-                    # Greedy rollouts from given starts draw nothing from the training rng.
-                    stages.append((n_done, greedy_rollouts(agent, env, stage_starts)))
+                    # Greedy rollouts from given starts draw nothing from the training rng;
+                    # they and the checks fly the network the run reports.
+                    with agent.reporting():
+                        stages.append((n_done, greedy_rollouts(agent, env, stage_starts)))
                 if cfg.validate_every and n_done % cfg.validate_every == 0:
-                    success, excess = checks.check(agent, env, n_done)
+                    with agent.reporting():
+                        success, excess = checks.check(agent, env, n_done)
                     log.tb.add_scalar("validation/success", success, n_done)
                     log.tb.add_scalar("validation/mean_excess_cost", excess, n_done)
                 if started < d.episodes:
@@ -301,6 +306,7 @@ def finish(
 ) -> dict[str, Any]:
     """Evaluates the run (:func:`rainuav.rl.evaluation.evaluate_run_policy`), saves the
     evaluated network's weights to ``policy.pt`` and writes ``metrics.json`` and the figures."""
+    agent.online.load_state_dict(agent.reported_weights())  # the mean, when averaging
     metrics, rolls = evaluate_run_policy(cfg, agent, env, checks)
     policy = {k: v.detach().cpu() for k, v in agent.online.state_dict().items()}
     save_checkpoint(out / "policy.pt", {"online": policy, "config": to_dict(cfg)})

@@ -11,7 +11,7 @@
 //! (`exp(+j (kx^2 + ky^2) dz / (2 k0))`) propagator.
 //!
 //! **How a step runs.** Between steps the field is held as y-spectra (each row FFT'd along
-//! y). A step is two passes over memory: a *column pass* that, block by block of 16 columns,
+//! y). A step is two passes over memory: a *column pass* that, block by block of 32 columns,
 //! gathers the columns, FFTs them along x, multiplies by `P`, inverse-FFTs and scatters them
 //! back; and a *row pass* that inverse-FFTs each row along y, applies the phase screen, the
 //! absorbing window and the obstacles, records the requested rows, and FFTs the row again
@@ -21,12 +21,18 @@
 //! **Ground.** A flat PEC ground is the image method: the column `u(x, y >= 0)` is extended
 //! to `2 ny` samples, odd (`"pec-h"`, `u(-y) = -u(y)`, a sine transform) or even (`"pec-v"`,
 //! a cosine transform), and only the `ny` (+1 for the even case) independent spectral values
-//! are stored. The x transforms are unchanged, so a ground costs one y-FFT of length `2 ny`
-//! per row instead of `ny`, about 1.5x the periodic step, and no extra memory of note.
+//! are stored. The x transforms are unchanged. The odd extension's FFT of length `2 ny` is
+//! computed as the sine transform it is, through one FFT of length `ny` (`march::Dst`), so
+//! `"pec-h"` costs about what the periodic step does; `"pec-v"` still FFTs the `2 ny`
+//! extension (about 1.5x the periodic step). No extra memory of note.
 //!
 //! **Accuracy.** Storage and FFTs are complex64 (f32); the propagator and phase screens are
 //! computed in f64 and rounded once to f32. The march is then accurate to f32 rounding
-//! growing like `sqrt(steps) * 1e-7 * log2(n)` relative (about 1e-5 after 1000 steps).
+//! growing like `sqrt(steps) * 1e-7 * log2(n)` relative (about 1e-5 after 1000 steps). The
+//! `"pec-h"` sine transform's running sum makes each of its transforms accurate to about
+//! `1e-7 sqrt(ny)` instead (1.8e-6 at ny = 1296, tested against the definition), about
+//! 3e-5 after 137 steps: the `paper` and `uma` maps moved by at most 0.001 dB when it
+//! replaced the `2 ny` FFT.
 //!
 //! **Memory.** The field (one copy, `8 nx ny` bytes), the propagator table over `|kx|, |ky|`
 //! (a quarter of a copy, half with a ground), and, only when the refractive index is an
