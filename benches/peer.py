@@ -10,8 +10,10 @@ First trains rainuav's default learner (``rainuav.rl.loop.train``, its own folde
 ``--out``), then the literal preset (``time_budget_s``) and SB3's DQN for as many seconds as
 that training took (``--budget-s`` sets another budget); SB3 is configured as a user would
 configure it for a 300-step sparse-arrival task (below), on
-``gym.make("rainuav/UAVNav-v0", radio_map=...)``. Writes ``peer.json`` with the three metric
-sets. Results with the machine go to BENCHMARKS.md.
+``gym.make("rainuav/UAVNav-v0", radio_map=...)``. ``--peers`` picks among them and Tianshou's
+DQN with dueling, double-Q and 3-step returns (``tianshou_dqn``; ``pip install tianshou``),
+configured likewise. Writes ``peer.json`` with the metric sets. Results with the machine go to
+BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -49,6 +51,9 @@ SB3_CONFIG: dict[str, Any] = {
     "exploration_fraction": 0.3,
     "exploration_final_eps": 0.05,
 }
+
+
+PEERS = ("paper_preset", "sb3_dqn", "tianshou_dqn")
 
 
 def policy_flights(predict: Any, env: UAVNavEnv, starts: np.ndarray) -> dict[str, np.ndarray]:
@@ -95,12 +100,99 @@ def run_sb3(env: UAVNavEnv, seed: int, budget_s: float) -> tuple[Any, dict[str, 
     return model, {"training_seconds": time.perf_counter() - t0, "steps": model.num_timesteps}
 
 
+TIANSHOU_CONFIG: dict[str, Any] = {
+    # Tianshou's DQN with the three extensions the issue names (dueling head, double-Q,
+    # n-step), sized like the SB3 configuration above; 8 environments collected at once.
+    "hidden_sizes": [256, 256],
+    "dueling_hidden": [128],
+    "gamma": 0.998,
+    "n_step": 3,
+    "target_update_freq": 1000,
+    "lr": 5e-4,
+    "buffer_size": 100_000,
+    "batch_size": 64,
+    "envs": 8,
+    "collect_steps": 32,
+    "updates_per_collect": 8,
+    "learning_starts": 1000,
+    "eps_start": 1.0,
+    "eps_final": 0.05,
+    "eps_fraction": 0.3,
+}
+
+
+def run_tianshou(make: Any, seed: int, budget_s: float) -> tuple[Any, dict[str, Any]]:
+    """Tianshou 2's DQN (dueling, double-Q, n-step) trained for ``budget_s`` seconds of wall
+    clock on ``TIANSHOU_CONFIG["envs"]`` copies of ``make()``; epsilon falls linearly over the
+    first ``eps_fraction`` of the budget. Returns a greedy ``predict`` and run figures."""
+    import torch
+    from tianshou.algorithm import DQN
+    from tianshou.algorithm.modelfree.dqn import DiscreteQLearningPolicy
+    from tianshou.algorithm.optim import AdamOptimizerFactory
+    from tianshou.data import Batch, Collector, VectorReplayBuffer
+    from tianshou.env import DummyVectorEnv
+    from tianshou.utils.net.common import Net
+
+    c = TIANSHOU_CONFIG
+    np.random.seed(seed)  # noqa: NPY002 - Tianshou's exploration draws from the global stream
+    torch.manual_seed(seed)
+    envs = DummyVectorEnv([make for _ in range(c["envs"])])
+    envs.seed(seed)
+    probe = make()
+    net = Net(
+        state_shape=probe.observation_space.shape,
+        action_shape=int(probe.action_space.n),
+        hidden_sizes=c["hidden_sizes"],
+        dueling_param=({"hidden_sizes": c["dueling_hidden"]},) * 2,
+    )
+    policy = DiscreteQLearningPolicy(
+        model=net, action_space=probe.action_space, eps_training=c["eps_start"]
+    )
+    algo = DQN(
+        policy=policy,
+        optim=AdamOptimizerFactory(lr=c["lr"]),
+        gamma=c["gamma"],
+        n_step_return_horizon=c["n_step"],
+        target_update_freq=c["target_update_freq"],
+        is_double=True,
+    )
+    buf = VectorReplayBuffer(c["buffer_size"], c["envs"])
+    collector = Collector(algo, envs, buf, exploration_noise=True)
+    collector.reset()
+    t0, steps, updates = time.perf_counter(), 0, 0
+    while (spent := time.perf_counter() - t0) < budget_s:
+        frac = min(spent / (c["eps_fraction"] * budget_s), 1.0)
+        policy.set_eps_training(c["eps_start"] + frac * (c["eps_final"] - c["eps_start"]))
+        # What Tianshou's trainer does around a training step (exploration on, updates
+        # allowed), without its epoch and test machinery.
+        policy.is_within_training_step = True
+        steps += collector.collect(n_step=c["collect_steps"]).n_collected_steps
+        if len(buf) >= c["learning_starts"]:
+            algo.train()
+            for _ in range(c["updates_per_collect"]):
+                algo.update(buf, c["batch_size"])
+                updates += 1
+        policy.is_within_training_step = False
+    algo.eval()
+
+    def predict(obs: np.ndarray) -> np.ndarray:
+        with torch.no_grad():
+            return policy(Batch(obs=obs.astype(np.float32), info={})).act
+
+    info = {"training_seconds": time.perf_counter() - t0, "steps": steps, "updates": updates}
+    return predict, info
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--scenario", default="paper")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--budget-s", type=float, default=None)
     ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument(
+        "--peers", nargs="+", choices=PEERS, default=["paper_preset", "sb3_dqn"],
+        help="which peers to train after rainuav's default (tianshou_dqn: pip install tianshou)",
+    )  # fmt: skip
     args = ap.parse_args(argv)
     import torch
 
@@ -109,30 +201,38 @@ def main(argv: list[str] | None = None) -> int:
     rm = scenario_map(args.scenario)
     ours = train(cfg, progress=False, radio_map=rm)
     budget = ours["training_seconds"] if args.budget_s is None else args.budget_s
-    literal = train(
-        dataclasses.replace(
-            cfg, preset="paper", time_budget_s=budget, out=str(args.out / "paper_preset")
-        ),
-        progress=False,
-        radio_map=rm,
-    )
-    env = make_env(cfg, rm)
-    starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
-    optimum = reference_flights(env, starts)["optimal"]
-    sb3_env = gym.make("rainuav/UAVNav-v0", radio_map=rm, **_task(env))
-    model, info = run_sb3(sb3_env.unwrapped, args.seed, budget)
-    theirs = summarise(
-        policy_flights(lambda o: model.predict(o, deterministic=True)[0], env, starts), optimum
-    )
     keys = ("success_rate", "mean_excess_cost", "worst_excess_cost", "training_seconds")
-    report = {
+    report: dict[str, Any] = {
         "scenario": args.scenario,
         "seed": args.seed,
         "rainuav": {k: ours[k] for k in keys},
-        "paper_preset": {**{k: literal[k] for k in keys}, "episodes": literal["episodes"]},
         "straight_line_mean_excess_cost": ours["straight_line_mean_excess_cost"],
-        "sb3_dqn": {**theirs, **info, "config": SB3_CONFIG},
     }
+    if "paper_preset" in args.peers:
+        literal = train(
+            dataclasses.replace(
+                cfg, preset="paper", time_budget_s=budget, out=str(args.out / "paper_preset")
+            ),
+            progress=False,
+            radio_map=rm,
+        )
+        report["paper_preset"] = {**{k: literal[k] for k in keys}, "episodes": literal["episodes"]}
+    env = make_env(cfg, rm)
+    starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
+    optimum = reference_flights(env, starts)["optimal"]
+    if "sb3_dqn" in args.peers:
+        sb3_env = gym.make("rainuav/UAVNav-v0", radio_map=rm, **_task(env))
+        model, info = run_sb3(sb3_env.unwrapped, args.seed, budget)
+        theirs = summarise(
+            policy_flights(lambda o: model.predict(o, deterministic=True)[0], env, starts), optimum
+        )
+        report["sb3_dqn"] = {**theirs, **info, "config": SB3_CONFIG}
+    if "tianshou_dqn" in args.peers:
+        predict, info = run_tianshou(
+            lambda: gym.make("rainuav/UAVNav-v0", radio_map=rm, **_task(env)), args.seed, budget
+        )
+        theirs = summarise(policy_flights(predict, env, starts), optimum)
+        report["tianshou_dqn"] = {**theirs, **info, "config": TIANSHOU_CONFIG}
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "peer.json").write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2))
