@@ -428,16 +428,19 @@ impl Marcher {
     fn real_row(&mut self, ix: usize) -> &[C32] {
         let ny = self.spec.ny;
         let ylen = self.spec.y_len();
-        self.col_buf.resize(ylen, C32::default());
+        // The sine transform's work space and FFT scratch sit after the row (sized once).
+        let extra = self.dst.as_ref().map_or(0, Dst::scratch_len);
+        self.col_buf.resize(ylen + extra, C32::default());
         let row = &self.field[ix * ny..(ix + 1) * ny];
         if let Some(dst) = &self.dst {
             let (out, rest) = self.col_buf.split_at_mut(ny);
+            let (y, scratch) = rest.split_at_mut(ny);
             out.copy_from_slice(row);
-            let mut scratch = vec![C32::default(); dst.scratch_len()];
-            dst.apply(out, &mut rest[..ny], &mut scratch, Dst::INVERSE);
+            dst.apply(out, y, scratch, Dst::INVERSE);
         } else {
-            spectrum_to_ext(self.spec.ground, row, self.nyquist[ix], &mut self.col_buf);
-            self.row_inv.process(&mut self.col_buf);
+            let ext = &mut self.col_buf[..ylen];
+            spectrum_to_ext(self.spec.ground, row, self.nyquist[ix], ext);
+            self.row_inv.process(ext);
         }
         let s = 1.0 / ylen as f32;
         self.col_buf[..ny].iter_mut().for_each(|z| *z *= s);
