@@ -124,6 +124,7 @@ class PeMarcher:
         propagator: str,
         ground: str,
         absorber: float,
+        x_absorber_every: int = 1,
         n_fixed: _C | None = None,
     ) -> PeMarcher: ...
     @property

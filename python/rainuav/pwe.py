@@ -8,7 +8,8 @@ The march runs in Rust (rustfft, rayon) without the GIL, in chunks of about a qu
 second, so Ctrl-C stops it within a second and a progress bar or callback can follow it.
 
 Memory: the field, a propagator table (a quarter of a field, half with a ground) and, only
-for an (nx, ny) refractive index constant along range, its phase screen: at most 2.5 copies of
+for an (nx, ny) refractive index constant along range, its phase screen, and with
+``x_absorber_every`` above 1 a second propagator table (half a field): at most 3 copies of
 the field, plus the recorded rows ``(len(record_rows), steps, nx)`` and column
 ``(steps, ny)``. The job's bytes are estimated before anything is allocated and a job that
 would not fit in 80% of the available memory is refused with the number.
@@ -123,6 +124,7 @@ def march(
     record_column: int | None = None,
     progress: bool | Callable[[int, int], None] = False,
     n_cross_range: npt.ArrayLike | None = None,
+    x_absorber_every: int = 1,
 ) -> Marched:
     """Marches the aperture field ``u0`` (nx, ny) over ``steps`` range steps of ``dz_m``.
 
@@ -148,6 +150,13 @@ def march(
         progress: ``True`` for a progress bar, or a callable ``(done, total)``.
         n_cross_range: instead of ``n``, a (steps, nx) index varying with cross-range only
             (rain cells: rate varies horizontally, not with height); one factor per row.
+        x_absorber_every: on steps with a uniform ``n`` and no obstacles (and no recorded
+            column), apply the lateral part of the window every this many steps, as the
+            window to this power (1-64). The march then stays in the spectral domain and
+            runs its x transforms only on those steps (about 2x faster at 5). The strips'
+            absorption is sampled that much more coarsely in range: keep the distance the
+            widest angle crosses between windows well inside a strip (the radio-map engine
+            allows an eighth).
 
     Returns:
         :class:`Marched` with ``field`` (nx, ny), ``rows`` (len(record_rows), steps, nx) and
@@ -163,6 +172,14 @@ def march(
     prop = check_choice("propagator", propagator, PROPAGATORS)
     gnd = "none" if ground is None else check_choice("ground", ground, GROUNDS)
     absorb = as_real_scalar("absorber", absorber)
+    if (
+        isinstance(x_absorber_every, bool)
+        or not isinstance(x_absorber_every, (int, np.integer))
+        or not 1 <= x_absorber_every <= 64
+    ):
+        raise InvalidInputError(
+            f"x_absorber_every must be an integer within 1..64 (got {x_absorber_every!r})"
+        )
     rows_idx = np.asarray(record_rows, dtype=np.int64).reshape(-1)
     if rows_idx.size and (rows_idx.min() < 0 or rows_idx.max() >= ny):
         raise InvalidInputError(f"record_rows must be within 0..{ny - 1} (got {record_rows!r})")
@@ -198,6 +215,7 @@ def march(
     bytes_needed = (
         2 * nx * ny * c64  # field + the handed-over copy of u0
         + table
+        + ((nx // 2 + 1) * (ny + 1) * c64 if x_absorber_every > 1 else 0)
         + (nx * ny * c64 if n_fixed is not None else 0)
         + rows_idx.size * steps * nx * c64
         + (steps * ny * c64 if record_column is not None else 0)
@@ -213,6 +231,7 @@ def march(
         propagator=prop,
         ground=gnd,
         absorber=absorb,
+        x_absorber_every=int(x_absorber_every),
         n_fixed=n_fixed,
     )
     rows_out = np.zeros((rows_idx.size, steps, nx), dtype=np.complex64)

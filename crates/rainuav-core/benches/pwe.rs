@@ -21,6 +21,7 @@ fn spec(nx: usize, ny: usize, propagator: Propagator, ground: Ground) -> MarchSp
         propagator,
         ground,
         absorber: 0.1,
+        x_absorber_every: 1,
     }
 }
 

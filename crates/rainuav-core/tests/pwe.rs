@@ -27,6 +27,7 @@ fn spec(
         propagator,
         ground,
         absorber: 0.0,
+        x_absorber_every: 1,
     }
 }
 

@@ -29,7 +29,7 @@ impl PeMarcher {
 #[pymethods]
 impl PeMarcher {
     #[new]
-    #[pyo3(signature = (u0, *, dx_m, dy_m, dz_m, freq_hz, propagator, ground, absorber, n_fixed=None))]
+    #[pyo3(signature = (u0, *, dx_m, dy_m, dz_m, freq_hz, propagator, ground, absorber, x_absorber_every=1, n_fixed=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -41,6 +41,7 @@ impl PeMarcher {
         propagator: &str,
         ground: &str,
         absorber: f64,
+        x_absorber_every: usize,
         n_fixed: Option<PyReadonlyArray2<'_, Complex64>>,
     ) -> PyResult<Self> {
         let propagator: Propagator = propagator.parse().map_err(to_py)?;
@@ -57,6 +58,7 @@ impl PeMarcher {
             propagator,
             ground,
             absorber,
+            x_absorber_every,
         };
         let n = n_fixed.as_ref().map(|a| a.as_array());
         let inner = detached(py, || {

@@ -70,6 +70,10 @@ class MarchGrid:
     """Sine of the cone's half-width in height."""
     gpoints: float
     """Size of the march, 1e9 grid-point steps (nx x ny x steps)."""
+    x_absorber_every: int = 1
+    """Steps between applications of the lateral window where the medium is uniform
+    (``pwe.march``'s ``x_absorber_every``): the most that keep the widest angle the grid
+    carries within an eighth of an absorbing strip between windows (at most 16)."""
 
 
 CONE_FULL = 0.6
@@ -161,8 +165,13 @@ def _grid(scn: Scenario, site: Site, cell: Cell, sh: float, sv: float) -> MarchG
         y0 = (top + bottom) / 2 - (ny // 2) * dy
     fy = (a.altitude_m - y0) / dy
     alt_row = min(math.floor(fy), ny - 2)
+    # The widest angle the grid carries (its Nyquist sine, sh) crosses at most an eighth of
+    # a lateral absorbing strip between windows.
+    strip = ab * nx * dx
+    every = int(min(16, max(1, strip / (8 * dz * math.tan(ah)))))
     nbytes = int(
         8 * nx * ny * 3  # field, propagator table (<= 1/2), handed-over aperture
+        + (8 * (nx // 2 + 1) * (ny + 1) if every > 1 else 0)  # the uniform path's table
         + 2 * steps * nx * 8  # the two recorded rows
         + (steps * nx * 16 if scn.medium.kind in ("cells", "map") else 0)
         + (steps * nx * 8 if scn.buildings or scn.height_map_m is not None else 0)
@@ -183,4 +192,5 @@ def _grid(scn: Scenario, site: Site, cell: Cell, sh: float, sv: float) -> MarchG
         sine_h=sh,
         sine_v=sv,
         gpoints=nx * ny * steps / 1e9,
+        x_absorber_every=every,
     )

@@ -161,6 +161,7 @@ def march_cell(
         propagator=scn.pe.propagator,
         ground=ground,
         absorber=scn.pe.absorber,
+        x_absorber_every=grid.x_absorber_every,
         record_rows=[grid.alt_row, grid.alt_row + 1],
         **screens,
     )

@@ -51,6 +51,7 @@ pub fn gaussian_beam(
         propagator: Propagator::Wide,
         ground: Ground::None,
         absorber: 0.0,
+        x_absorber_every: 1,
     };
     spec.validate()?;
     check_memory(nx * ny * size_of::<C32>())?;

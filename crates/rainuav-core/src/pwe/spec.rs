@@ -81,6 +81,10 @@ pub struct MarchSpec {
     /// Fraction of the lateral edges and the top (and bottom without a ground) over which
     /// the absorbing window tapers (cos^2) from 1 to 0; 0 disables it.
     pub absorber: f64,
+    /// On steps with a uniform medium and no obstacles (and no recorded column), the lateral
+    /// part of the window is applied every this many steps, as the window to this power, so
+    /// that the x transforms run only then (1-64; 1: every step, the general step).
+    pub x_absorber_every: usize,
 }
 
 /// Frequencies the PE accepts, Hz.
@@ -124,15 +128,28 @@ impl MarchSpec {
             0.45,
             "must be finite and within 0..0.45 (fraction of each edge)",
         )?;
+        if !(1..=64).contains(&self.x_absorber_every) {
+            return Err(CoreError::invalid(
+                "x_absorber_every",
+                "must be within 1..64 steps",
+                self.x_absorber_every,
+            ));
+        }
         Ok(())
     }
 
-    /// Bytes the marcher itself holds (field, propagator table, optional fixed screen).
+    /// Bytes the marcher itself holds (field, propagator table, the uniform path's table
+    /// when `x_absorber_every > 1`, optional fixed screen).
     pub fn working_bytes(&self, fixed_screen: bool) -> usize {
         let c = size_of::<C32>();
         let field = self.nx * self.ny * c;
         let (rows, cols) = table_shape(self.nx, self.ny, self.ground);
-        field + rows * cols * c + if fixed_screen { field } else { 0 }
+        let fast = if self.x_absorber_every > 1 {
+            (self.nx / 2 + 1) * (self.ny + 1) * c
+        } else {
+            0
+        };
+        field + rows * cols * c + fast + if fixed_screen { field } else { 0 }
     }
 
     /// Length of the y transform: `ny`, or `2 ny` with a ground (image extension).
