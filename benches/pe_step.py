@@ -26,9 +26,7 @@ def main() -> None:
                 x_absorber_every=every,
             )  # fmt: skip
             best = min(best, time.perf_counter() - t)
-        print(
-            f"{nx} x {ny}, pec-h, x_absorber_every={every}: {best / steps * 1e3:.1f} ms per step"
-        )
+        print(f"{nx} x {ny}, pec-h, x_absorber_every={every}: {best / steps * 1e3:.1f} ms per step")
 
 
 if __name__ == "__main__":
