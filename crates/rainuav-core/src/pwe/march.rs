@@ -511,6 +511,14 @@ impl Marcher {
         }
     }
 
+    /// Scratch a row pass needs: the larger of the y FFTs' and the sine transform's.
+    fn row_scratch_len(&self) -> usize {
+        self.row_inv
+            .get_inplace_scratch_len()
+            .max(self.row_fwd.get_inplace_scratch_len())
+            .max(self.dst.as_ref().map_or(0, Dst::scratch_len))
+    }
+
     /// Brings the field back to real space.
     fn bring_to_real_space(&mut self) {
         if self.domain == Domain::Spectra {
@@ -580,37 +588,30 @@ impl Marcher {
         let wy = &self.window_y;
         let (inv, fwd) = (self.row_inv.clone(), self.row_fwd.clone());
         let dst = self.dst.as_ref();
-        let scratch_len = inv
-            .get_inplace_scratch_len()
-            .max(fwd.get_inplace_scratch_len())
-            .max(dst.map_or(0, Dst::scratch_len));
+        let scratch_len = self.row_scratch_len();
         let pool = &self.pool;
-        self.field
-            .par_chunks_mut(ny)
-            .zip(self.nyquist.par_iter_mut())
-            .zip(rec.par_chunks_mut(rec_rows.len().max(1)))
-            .enumerate()
-            .for_each_init(
-                || pool.get(ylen, scratch_len),
-                |g, (ix, ((row, nq), rec_row))| {
-                    let Scratch { a, b } = g.scratch();
-                    let (ext, scratch) = (&mut a[..ylen], b.as_mut_slice());
-                    let kx = ix.min(nx - ix);
-                    let trow = &tab[kx * width..(kx + 1) * width];
-                    row.iter_mut().zip(trow).for_each(|(z, p)| *z *= p);
-                    if width > ny {
-                        *nq *= trow[ny];
-                    }
-                    inverse_row(ground, (&*inv, dst), row, *nq, ext, scratch);
-                    if !wy.is_empty() {
-                        row.iter_mut().zip(wy).for_each(|(z, &w)| *z *= w);
-                    }
-                    for (r, &iy) in rec_rows.iter().enumerate() {
-                        rec_row[r] = row[iy];
-                    }
-                    forward_row(ground, (&*fwd, dst), row, nq, ext, scratch);
-                },
-            );
+        let nr = rec_rows.len().max(1);
+        par_rows(&mut self.field, &mut self.nyquist, rec, ny, nr).for_each_init(
+            || pool.get(ylen, scratch_len),
+            |g, (ix, ((row, nq), rec_row))| {
+                let Scratch { a, b } = g.scratch();
+                let (ext, scratch) = (&mut a[..ylen], b.as_mut_slice());
+                let kx = ix.min(nx - ix);
+                let trow = &tab[kx * width..(kx + 1) * width];
+                row.iter_mut().zip(trow).for_each(|(z, p)| *z *= p);
+                if width > ny {
+                    *nq *= trow[ny];
+                }
+                inverse_row(ground, (&*inv, dst), row, *nq, ext, scratch);
+                if !wy.is_empty() {
+                    row.iter_mut().zip(wy).for_each(|(z, &w)| *z *= w);
+                }
+                for (r, &iy) in rec_rows.iter().enumerate() {
+                    rec_row[r] = row[iy];
+                }
+                forward_row(ground, (&*fwd, dst), row, nq, ext, scratch);
+            },
+        );
     }
 
     fn check_recording(&self, steps: usize, rec: &Recording<'_>) -> Result<()> {
@@ -860,72 +861,65 @@ impl Marcher {
         let inv = self.row_inv.clone();
         let fwd = self.row_fwd.clone();
         let dst = self.dst.as_ref();
-        let scratch_len = inv
-            .get_inplace_scratch_len()
-            .max(fwd.get_inplace_scratch_len())
-            .max(dst.map_or(0, Dst::scratch_len));
+        let scratch_len = self.row_scratch_len();
         let (rec_rows, rec) = record;
-        debug_assert_eq!(rec.len(), nx * rec_rows.len().max(1));
+        let nr = rec_rows.len().max(1);
+        debug_assert_eq!(rec.len(), nx * nr);
         let pool = &self.pool;
-        self.field
-            .par_chunks_mut(ny)
-            .zip(self.nyquist.par_iter_mut())
-            .zip(rec.par_chunks_mut(rec_rows.len().max(1)))
-            .enumerate()
-            .for_each_init(
-                || pool.get(ylen, scratch_len),
-                |g, (ix, ((row, nq), rec_row))| {
-                    let Scratch { a, b } = g.scratch();
-                    let (ext, scratch) = (&mut a[..ylen], b.as_mut_slice());
-                    inverse_row(ground, (&*inv, dst), row, *nq, ext, scratch);
-                    match (uniform, medium) {
-                        (Some(s), _) if s != C32::new(1.0, 0.0) => {
-                            row.iter_mut().for_each(|z| *z *= s);
-                        }
-                        (None, StepMedium::Fixed) => {
-                            let scr = &fixed.expect("checked in advance")[ix * ny..(ix + 1) * ny];
-                            row.iter_mut().zip(scr).for_each(|(z, s)| *z *= s);
-                        }
-                        (None, StepMedium::CrossRange(n)) => {
-                            let f = to_c32(screen_factor(n[ix], half_k0_dz));
-                            row.iter_mut().for_each(|z| *z *= f);
-                        }
-                        (None, StepMedium::Index(n)) => {
-                            row.iter_mut().zip(n.row(ix)).for_each(|(z, &nn)| {
-                                *z *= to_c32(screen_factor(nn, half_k0_dz));
-                            });
-                        }
-                        _ => {}
+        par_rows(&mut self.field, &mut self.nyquist, rec, ny, nr).for_each_init(
+            || pool.get(ylen, scratch_len),
+            |g, (ix, ((row, nq), rec_row))| {
+                let Scratch { a, b } = g.scratch();
+                let (ext, scratch) = (&mut a[..ylen], b.as_mut_slice());
+                inverse_row(ground, (&*inv, dst), row, *nq, ext, scratch);
+                match (uniform, medium) {
+                    (Some(s), _) if s != C32::new(1.0, 0.0) => {
+                        row.iter_mut().for_each(|z| *z *= s);
                     }
-                    if !wx.is_empty() {
-                        let a = wx[ix];
-                        row.iter_mut().zip(wy).for_each(|(z, &b)| *z *= a * b);
+                    (None, StepMedium::Fixed) => {
+                        let scr = &fixed.expect("checked in advance")[ix * ny..(ix + 1) * ny];
+                        row.iter_mut().zip(scr).for_each(|(z, s)| *z *= s);
                     }
-                    match obstacle {
-                        StepObstacle::None => {}
-                        StepObstacle::Mask(mask) => {
-                            row.iter_mut().zip(mask.row(ix)).for_each(|(z, &blocked)| {
-                                if blocked {
-                                    *z = C32::default();
-                                }
-                            });
-                        }
-                        StepObstacle::Heights(h) => {
-                            let hh = h[ix];
-                            if hh >= 0.0 {
-                                let top = ((hh / dy).floor() as usize).min(ny - 1);
-                                row[..=top].iter_mut().for_each(|z| *z = C32::default());
+                    (None, StepMedium::CrossRange(n)) => {
+                        let f = to_c32(screen_factor(n[ix], half_k0_dz));
+                        row.iter_mut().for_each(|z| *z *= f);
+                    }
+                    (None, StepMedium::Index(n)) => {
+                        row.iter_mut().zip(n.row(ix)).for_each(|(z, &nn)| {
+                            *z *= to_c32(screen_factor(nn, half_k0_dz));
+                        });
+                    }
+                    _ => {}
+                }
+                if !wx.is_empty() {
+                    let a = wx[ix];
+                    row.iter_mut().zip(wy).for_each(|(z, &b)| *z *= a * b);
+                }
+                match obstacle {
+                    StepObstacle::None => {}
+                    StepObstacle::Mask(mask) => {
+                        row.iter_mut().zip(mask.row(ix)).for_each(|(z, &blocked)| {
+                            if blocked {
+                                *z = C32::default();
                             }
+                        });
+                    }
+                    StepObstacle::Heights(h) => {
+                        let hh = h[ix];
+                        if hh >= 0.0 {
+                            let top = ((hh / dy).floor() as usize).min(ny - 1);
+                            row[..=top].iter_mut().for_each(|z| *z = C32::default());
                         }
                     }
-                    for (r, &iy) in rec_rows.iter().enumerate() {
-                        rec_row[r] = row[iy];
-                    }
-                    if forward_again {
-                        forward_row(ground, (&*fwd, dst), row, nq, ext, scratch);
-                    }
-                },
-            );
+                }
+                for (r, &iy) in rec_rows.iter().enumerate() {
+                    rec_row[r] = row[iy];
+                }
+                if forward_again {
+                    forward_row(ground, (&*fwd, dst), row, nq, ext, scratch);
+                }
+            },
+        );
     }
 }
 
@@ -962,6 +956,25 @@ fn forward_row(
             *nyq = ext[ny];
         }
     }
+}
+
+/// One row of a row pass: its index, the row, its Nyquist coefficient, its recording slots.
+type RowItem<'a> = (usize, ((&'a mut [C32], &'a mut C32), &'a mut [C32]));
+
+/// The rows of the field (length `ny`), each with its Nyquist coefficient and its `nr` slots
+/// of the recording buffer, in parallel, with the row index.
+fn par_rows<'a>(
+    field: &'a mut [C32],
+    nyquist: &'a mut [C32],
+    rec: &'a mut [C32],
+    ny: usize,
+    nr: usize,
+) -> impl IndexedParallelIterator<Item = RowItem<'a>> {
+    field
+        .par_chunks_mut(ny)
+        .zip(nyquist.par_iter_mut())
+        .zip(rec.par_chunks_mut(nr))
+        .enumerate()
 }
 
 /// Inverse y transform of one row (unnormalised): plain inverse FFT, the sine transform
