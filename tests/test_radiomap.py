@@ -127,7 +127,10 @@ def test_rain_cell_loss_is_the_path_integral() -> None:
 
 def test_building_casts_a_shadow() -> None:
     # A 150 m tall slab across the beam at 200-220 m: behind it the power is at least 10 dB
-    # below the same map without it.
+    # below the same map without it, and before it the two agree to 1e-4 dB. Not exactly: the
+    # map without it marches on the uniform-medium path (lateral window every few steps), the
+    # one with it on the general step; measured 1.3e-5 dB apart (f32 rounding in another order
+    # and the coarser sampling of the absorbing strips).
     slab = Building(x0_m=200.0, x1_m=220.0, y0_m=300.0, y1_m=700.0, height_m=150.0)
     free = build_radio_map(beam_line(), cache=False)
     shadow = build_radio_map(beam_line(buildings=[slab]), cache=False)
@@ -135,7 +138,7 @@ def test_building_casts_a_shadow() -> None:
     _, rs = boresight(shadow)
     behind = x > 300
     assert np.all(rs[behind] <= rf[behind] - 10)
-    np.testing.assert_allclose(rs[x < 190], rf[x < 190], atol=1e-6)
+    np.testing.assert_allclose(rs[x < 190], rf[x < 190], atol=1e-4)
 
 
 def test_sir_by_hand() -> None:
