@@ -479,8 +479,11 @@ impl Marcher {
         let rec_rows = recording.record_rows;
         let nr = rec_rows.len();
         let inv = self.col_inv.clone();
-        let mut line = vec![C32::default(); nx];
-        let mut scratch = vec![C32::default(); inv.get_inplace_scratch_len()];
+        // One recorded row and its FFT scratch, in the marcher's reused buffer (this path
+        // records no column, the buffer's other use).
+        let mut buf = std::mem::take(&mut self.col_buf);
+        buf.resize(nx + inv.get_inplace_scratch_len(), C32::default());
+        let (line, scratch) = buf.split_at_mut(nx);
         for _ in 0..steps {
             let global = self.steps_done;
             let StepMedium::Uniform(n) = medium(global) else {
@@ -496,9 +499,9 @@ impl Marcher {
                     for (ix, v) in line.iter_mut().enumerate() {
                         *v = rec[ix * nr + r];
                     }
-                    inv.process_with_scratch(&mut line, &mut scratch);
+                    inv.process_with_scratch(line, scratch);
                     let mut dst = rows.slice_mut(ndarray::s![r, global, ..]);
-                    for (d, v) in dst.iter_mut().zip(&line) {
+                    for (d, v) in dst.iter_mut().zip(line.iter()) {
                         *d = v * s;
                     }
                 }
@@ -509,6 +512,7 @@ impl Marcher {
             }
             self.steps_done += 1;
         }
+        self.col_buf = buf;
     }
 
     /// Scratch a row pass needs: the larger of the y FFTs' and the sine transform's.
@@ -530,9 +534,7 @@ impl Marcher {
             let (ground, ylen) = (self.spec.ground, self.spec.y_len());
             let inv = self.row_inv.clone();
             let dst = self.dst.as_ref();
-            let scratch_len = inv
-                .get_inplace_scratch_len()
-                .max(dst.map_or(0, Dst::scratch_len));
+            let scratch_len = self.row_scratch_len();
             let pool = &self.pool;
             let s = 1.0 / ylen as f32;
             self.field
