@@ -17,7 +17,7 @@ from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.dqn import DuelingQNet, NStepWindow, Replay, double_q_target
 from rainuav.rl.evaluation import Validation, eval_starts, evaluate, evaluate_saved_run
-from rainuav.rl.learner import learning_reward
+from rainuav.rl.learner import GOAL_START_MOVES, learning_reward, training_start
 from rainuav.rl.loop import train
 from rainuav.rl.setup import make_agent
 
@@ -206,6 +206,35 @@ def test_sir_weight_scales_only_the_sir_part_of_the_reward() -> None:
         np.testing.assert_allclose(
             learning_reward(env, d, pos, r), -1 - w * mu * short + bonus, rtol=1e-12
         )
+
+
+def test_training_starts_near_the_goal_at_the_given_rate() -> None:
+    env = _env()
+    goal = np.asarray(env.cfg.goal_m)
+    half = GOAL_START_MOVES * env.cfg.step_m
+    rng = np.random.default_rng(3)
+    d = DQNConfig(goal_starts=0.25)
+    starts = np.array([training_start(env, d, rng) for _ in range(4000)])
+    x0, x1, y0, y1 = env.field.extent
+    assert np.all((starts >= [x0, y0]) & (starts <= [x1, y1]))
+    assert np.all(np.hypot(*(starts - goal).T) > env.cfg.tol_m)
+    # Near: inside the square around the goal. Uniform starts land there with probability
+    # (area of the square within the map) / (map area) = 200 * 150 / 400^2 (the goal is
+    # 50 m from the north edge), so the expected share is 0.25 + 0.75 * 0.1875 = 0.39; the
+    # binomial standard deviation over 4000 draws is 0.008: 4 of them is the tolerance.
+    near = np.all(np.abs(starts - goal) <= half, axis=1).mean()
+    assert abs(near - (0.25 + 0.75 * 200 * 150 / 400**2)) < 0.032
+    # goal_starts = 0: exactly the environment's own start stream.
+    a, b = np.random.default_rng(5), np.random.default_rng(5)
+    d0 = DQNConfig(goal_starts=0.0)
+    for _ in range(20):
+        np.testing.assert_array_equal(training_start(env, d0, a), env.sample_start(b))
+    # A tolerance that covers the whole square: the start falls back to a uniform one.
+    wide = UAVNavEnv(radio_map=synthetic_map(), goal_m=(300.0, 350.0), tol_m=160.0)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        p = training_start(wide, DQNConfig(goal_starts=1.0), rng)
+        assert np.hypot(*(p - goal)) > 160.0
 
 
 def test_goal_features_and_time() -> None:
@@ -472,6 +501,8 @@ def test_bad_train_config(tmp_path: Path) -> None:
         check_config(TrainConfig(dqn=DQNConfig(lr_final=float("nan"))))
     with pytest.raises(InvalidInputError, match=r"average_from must be in \[0, 1\] \(got 1.5\)"):
         check_config(TrainConfig(dqn=DQNConfig(average_from=1.5)))
+    with pytest.raises(InvalidInputError, match=r"goal_starts must be in \[0, 1\] \(got -0.1\)"):
+        check_config(TrainConfig(dqn=DQNConfig(goal_starts=-0.1)))
     with pytest.raises(InvalidInputError, match="validate_starts must be >= 1"):
         check_config(TrainConfig(validate_starts=0))
 

@@ -82,6 +82,10 @@ class DQNConfig:
     """Append t / max_steps to the observation and stop bootstrapping at the time limit."""
     goal_features: int = 4
     """Goal-relative inputs tanh(d / (step * 4^k)), k < goal_features, per axis (0: none)."""
+    goal_starts: float = 0.25
+    """Fraction of the training episodes that start near the destination (uniform in the
+    square of half side ``GOAL_START_MOVES`` moves around it, outside the arrival disc); the
+    rest, and every validation and evaluation flight, start uniform in the area."""
     shaping: float = 1.0
     """Weight of the potential-based shaping -(steps to the goal); 0: the plain rewards."""
     sir_weight: float = 1.25
@@ -207,6 +211,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("fourier", d.fourier >= 0, ">= 0"),
         ("lanes", d.lanes >= 1, ">= 1"),
         ("goal_features", d.goal_features >= 0, ">= 0"),
+        ("goal_starts", 0 <= d.goal_starts <= 1, "in [0, 1]"),
         ("shaping", 0 <= d.shaping < math.inf, ">= 0 and finite"),
         ("sir_weight", 0 <= d.sir_weight < math.inf, ">= 0 and finite"),
         ("train_every", d.train_every >= 1, ">= 1"),
@@ -256,6 +261,7 @@ PAPER_LEARNER: dict[str, Any] = {
     "fourier": 0,
     "goal_features": 0,
     "time_aware": False,
+    "goal_starts": 0.0,
     "shaping": 0.0,
     "sir_weight": 1.0,
     "reward_scale": 1.0,

@@ -1,4 +1,5 @@
-"""What the learner learns from: the reward it stores for a move and where its episodes end.
+"""What the learner learns from: where its training flights start, the reward it stores for a
+move and where its episodes end.
 
 The environment's reward with its SIR part weighted (:func:`learning_reward`), plus
 potential-based shaping by the straight-line value (:func:`shaping_term`). Why each, and what
@@ -13,7 +14,36 @@ from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import base_reward
 from rainuav.rl.config import DQNConfig
 
-__all__ = ["learner_ends", "learning_reward", "shaping_term"]
+__all__ = ["GOAL_START_MOVES", "learner_ends", "learning_reward", "shaping_term", "training_start"]
+
+GOAL_START_MOVES = 10
+"""Half side, in moves, of the square around the destination where ``goal_starts`` of the
+training flights begin."""
+
+
+def training_start(env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator) -> np.ndarray:
+    """The start of a training flight: with probability ``goal_starts`` uniform in the square
+    of half side :data:`GOAL_START_MOVES` moves around the destination (clipped to the area,
+    outside the arrival disc; uniform in the area where 100 draws found no such point, as
+    when the tolerance covers the square), else uniform in the area (``env.sample_start``).
+
+    Flights from uniform starts reach the destination's neighbourhood once each, at their
+    last move, and late in training almost greedily: the moves into the arrival disc from the
+    side a network gets wrong are then hardly ever tried, and a final network can circle
+    one move from the goal (docs/learner.md). Starting a quarter of the flights near it
+    gives those moves their own experience. Only a start is chosen: the flight, its rewards
+    and the task are the environment's, and nothing here knows the radio map."""
+    if d.goal_starts == 0.0 or rng.random() >= d.goal_starts:
+        return env.sample_start(rng)
+    x0, x1, y0, y1 = env.field.extent
+    goal = np.asarray(env.cfg.goal_m, dtype=np.float64)
+    half = GOAL_START_MOVES * env.cfg.step_m
+    for _ in range(100):
+        p = goal + rng.uniform(-half, half, size=2)
+        p = np.array([np.clip(p[0], x0, x1), np.clip(p[1], y0, y1)])
+        if np.hypot(*(p - goal)) > env.cfg.tol_m:
+            return p
+    return env.sample_start(rng)
 
 
 def learner_ends(d: DQNConfig, r: dict[str, np.ndarray]) -> np.ndarray:

@@ -45,7 +45,7 @@ from rainuav.rl.evaluation import (
     evaluate_run_policy,
     reference_flights,
 )
-from rainuav.rl.learner import learner_ends, learning_reward
+from rainuav.rl.learner import learner_ends, learning_reward, training_start
 from rainuav.rl.plots import plot_policy, plot_returns, plot_stages
 from rainuav.rl.setup import make_agent, make_env, pick_device, torch_settings
 
@@ -184,7 +184,7 @@ def run_loop(
         train_seconds = saved["train_seconds"]
     else:
         for k in range(len(lanes.t)):
-            lanes.launch(k, env.sample_start(env.np_random), started)
+            lanes.launch(k, training_start(env, d, env.np_random), started)
             started += 1
     log = RunLog(out, saved is not None, d.episodes, len(returns), progress)
     t0 = time.perf_counter()
@@ -243,7 +243,7 @@ def run_loop(
                     log.tb.add_scalar("validation/success", success, n_done)
                     log.tb.add_scalar("validation/mean_excess_cost", excess, n_done)
                 if started < d.episodes:
-                    lanes.launch(k, env.sample_start(env.np_random), started)
+                    lanes.launch(k, training_start(env, d, env.np_random), started)
                     started += 1
                 else:
                     lanes.active[k] = False
