@@ -664,15 +664,15 @@ def test_agent_and_start_streams_are_independent(tmp_path: Path) -> None:
         e = np.random.default_rng(s["env"]).random(4)
         naive = np.random.default_rng(seed).random(4)
         assert not np.any(np.isin(a, e)) and not np.any(np.isin(a, naive))
-    # The run uses them: its first start is the env stream's first draw, and the agent's
-    # generator starts as the agent stream does.
+    # The run uses them: its first start is drawn from the env stream (training_start), and
+    # the agent's generator starts as the agent stream does.
     cfg = small_cfg(tmp_path, 1)
     cfg.dqn.lanes = 1
     env = _env()
     agent = make_agent(cfg, env, torch.device("cpu"))
     assert agent.rng.random() == np.random.default_rng(random_streams(cfg.seed)["agent"]).random()
     train(cfg, progress=False, radio_map=synthetic_map())
-    start = env.sample_start(np.random.default_rng(random_streams(cfg.seed)["env"]))
+    start = training_start(env, cfg.dqn, np.random.default_rng(random_streams(cfg.seed)["env"]))
     log = (tmp_path / "log.csv").read_text().splitlines()
     assert len(log) == 2
     path = torch.load(tmp_path / "checkpoint.pt", weights_only=False)["lanes"]["start"][0]
