@@ -1,7 +1,8 @@
 """What the learner learns from: where its training flights start, the reward it stores for a
 move and where its episodes end.
 
-The environment's reward with its SIR part weighted (:func:`learning_reward`), plus
+A share of the training flights starts near the destination (:func:`training_start`). The
+environment's reward with its SIR part weighted (:func:`learning_reward`), plus
 potential-based shaping by the straight-line value (:func:`shaping_term`). Why each, and what
 it measured: ``docs/learner.md``.
 """
@@ -39,8 +40,7 @@ def training_start(env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator) -> np
     goal = np.asarray(env.cfg.goal_m, dtype=np.float64)
     half = GOAL_START_MOVES * env.cfg.step_m
     for _ in range(100):
-        p = goal + rng.uniform(-half, half, size=2)
-        p = np.array([np.clip(p[0], x0, x1), np.clip(p[1], y0, y1)])
+        p = np.clip(goal + rng.uniform(-half, half, size=2), (x0, y0), (x1, y1))
         if np.hypot(*(p - goal)) > env.cfg.tol_m:
             return p
     return env.sample_start(rng)
