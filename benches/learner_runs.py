@@ -5,8 +5,9 @@ network alone from the run's 200 fixed evaluation starts, tabulated.
 
 Each run is ``python -m rainuav.train --scenario S --seed K`` (nothing else changed) in
 ``OUT/S_sK``; a run whose ``metrics.json`` exists is not repeated. Prints a Markdown table
-(success, mean and worst excess cost, the straight line's excess cost, training seconds,
-shielded figures where present) and writes it to ``OUT/table.md``.
+(success, mean and worst excess cost, the straight line's excess cost, moves, SINR, outage,
+training seconds, and where the run reports the weight average, the last online network's
+success and mean excess cost) and writes it to ``OUT/table.md``.
 """
 
 from __future__ import annotations
@@ -27,14 +28,24 @@ def row(name: str, seed: int, m: dict) -> str:
         f"| {name} | {seed} | {pct(m['success_rate'])} | {pct(m['mean_excess_cost'])} | "
         f"{pct(m['worst_excess_cost'])} | {pct(m['straight_line_mean_excess_cost'])} | "
         f"{m['mean_steps']:.1f} | {m['mean_signal_db']:.2f} | {pct(m['outage_share'])} | "
-        f"{m['training_seconds']:.0f} |"
+        f"{m['training_seconds']:.0f} | {online(m)} |"
     )
+
+
+def online(m: dict) -> str:
+    """The last online network's success and mean excess cost, where the run reports the weight
+    average (``average_from`` < 1); else n/a."""
+    if "online_success_rate" not in m:
+        return "n/a"
+    excess = m["online_mean_excess_cost"]
+    cost = "n/a" if excess is None else f"{100 * excess:.1f}%"
+    return f"{100 * m['online_success_rate']:.1f}% / {cost}"
 
 
 HEADER = (
     "| scenario | seed | success | mean excess cost | worst excess cost | straight line's "
-    "mean excess | moves | mean SINR dB | outage | training s |\n"
-    "|---|---|---|---|---|---|---|---|---|---|"
+    "mean excess | moves | mean SINR dB | outage | training s | last online network |\n"
+    "|---|---|---|---|---|---|---|---|---|---|---|"
 )
 
 

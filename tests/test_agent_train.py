@@ -366,7 +366,7 @@ def test_weight_average_is_the_running_mean() -> None:
 def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_path: Path) -> None:
     plain, averaged = small_cfg(tmp_path / "plain", 120), small_cfg(tmp_path / "avg", 120)
     plain.dqn.average_from, averaged.dqn.average_from = 1.0, 0.5
-    train(plain, progress=False, radio_map=synthetic_map())
+    p = train(plain, progress=False, radio_map=synthetic_map())
     m = train(averaged, progress=False, radio_map=synthetic_map())
     a = torch.load(tmp_path / "plain" / "checkpoint.pt", weights_only=False)["agent"]
     b = torch.load(tmp_path / "avg" / "checkpoint.pt", weights_only=False)["agent"]
@@ -380,8 +380,16 @@ def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_pat
     assert all(torch.equal(policy[k], b["average"][k].cpu()) for k in policy)
     assert not all(torch.equal(policy[k], b["online"][k].cpu()) for k in policy)
     _assert_policy_gives(tmp_path / "avg", averaged, m)
+    # The last online network is flown from the same starts beside the mean: it is the plain
+    # run's final network, so its figures are the plain run's.
+    assert not any(k.startswith("online_") for k in p)
+    for k in ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_return"):
+        assert m[f"online_{k}"] == p[k], k
     again, _, _ = evaluate_saved_run(tmp_path / "avg")
-    assert again["mean_return"] == m["mean_return"]
+    assert again["mean_return"] == m["mean_return"] and again["network"] == "reported"
+    # Flying the saved run's last online network instead gives the plain run's figures.
+    own, _, _ = evaluate_saved_run(tmp_path / "avg", online=True)
+    assert own["mean_return"] == p["mean_return"] and own["network"] == "last online"
 
 
 def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
@@ -470,6 +478,15 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path) -> None:
     assert other["eval_starts"] == 3 and other["rain_rate_mm_h"] == 40.0
     assert other["trained_on"]["rain_rate"] == 5.0 and "shielded_success_rate" in other
     assert (out / "eval_same_40mmh" / "evaluation_trajectories.png").exists()
+    # The last online network (the run reports the average of the last episodes' weights):
+    # its own folder, so the reported network's evaluation.json stays.
+    subprocess.run(
+        [sys.executable, "-m", "rainuav.evaluate", str(out), "--online"],
+        check=True, capture_output=True, text=True, env=env,
+    )  # fmt: skip
+    online = json.loads((out / "eval_online" / "evaluation.json").read_text())
+    assert online["network"] == "last online" and online["eval_starts"] == 5
+    assert json.loads((out / "evaluation.json").read_text())["network"] == "reported"
     bad = subprocess.run(
         [*args[:3], "--lr", "-1", "--out", str(tmp_path / "x")],
         capture_output=True,

@@ -5,14 +5,16 @@
     python -m rainuav.evaluate runs/uma --scenario rain_cell --starts 100 --seed 7 --shield
 
 Loads the run's ``config.toml`` and ``checkpoint.pt`` and flies the network the run reports
-(the final one, or with ``keep_best`` the best on validation) from fixed starts, against the
-exact optimum of the map flown and the straight line
+(the weight average of the last episodes, the final one with ``average_from = 1``, or with
+``keep_best`` the best on validation; ``--online``: the last online network) from fixed
+starts, against the exact optimum of the map flown and the straight line
 (:func:`rainuav.rl.evaluation.evaluate_saved_run`). ``--scenario``, ``--rain-rate`` and
 ``--engine`` fly it on another map (built or taken from the cache): the paper's central
 comparison, a policy trained in clear air flown in rain against one trained in rain. Writes
 ``evaluation.json`` and ``evaluation_trajectories.png`` (the network's flights and the exact
 optimum's from the same starts) into ``--out`` (default: the run's folder for its own map,
-``RUN_DIR/eval_<scenario>_<rain>mmh`` for another). The run's own files are never touched.
+``RUN_DIR/eval_<scenario>_<rain>mmh`` for another; with ``--online``, ``RUN_DIR/eval_online``
+and ``..._online``). The run's own files are never touched.
 """
 
 from __future__ import annotations
@@ -31,9 +33,10 @@ def _out_dir(args: argparse.Namespace) -> Path:
     if args.out is not None:
         return args.out
     if args.scenario is None and args.rain_rate is None and args.engine is None:
-        return args.run_dir
+        return args.run_dir / "eval_online" if args.online else args.run_dir
     rain = "own" if args.rain_rate is None else f"{args.rain_rate:g}"
-    return args.run_dir / f"eval_{args.scenario or 'same'}_{rain}mmh"
+    suffix = "_online" if args.online else ""
+    return args.run_dir / f"eval_{args.scenario or 'same'}_{rain}mmh{suffix}"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -52,6 +55,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--starts", type=int, default=None, help="number of fixed starts")
     ap.add_argument("--seed", type=int, default=None, help="seed of the starts")
     ap.add_argument("--shield", action="store_true", help="also report shielded flights")
+    ap.add_argument(
+        "--online",
+        action="store_true",
+        help="fly the last online network, not the one the run reports (the weight average)",
+    )
     ap.add_argument("--device", default="cpu", choices=("cpu", "cuda", "auto"))
     ap.add_argument("--out", type=Path, default=None, help="output folder")
     args = ap.parse_args(argv)
@@ -67,6 +75,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             starts=args.starts,
             seed=args.seed,
             shield=args.shield,
+            online=args.online,
         )
     except InvalidInputError as err:
         print(f"error: {err}", file=sys.stderr)

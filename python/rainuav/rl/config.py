@@ -58,10 +58,11 @@ class DQNConfig:
     """Adam learning rate at the start."""
     lr_final: float = 3e-5
     """Learning rate after the last episode (cosine decay from lr over the episodes)."""
-    average_from: float = 1.0
+    average_from: float = 0.8
     """Fraction of the episodes after which the reported network is the running mean of the
     online weights, one sample per finished episode (weight averaging); 1: the final online
-    network. Training itself is unchanged: the online network still acts and learns."""
+    network. Training itself is unchanged: the online network still acts and learns, and the
+    run reports the last online network's figures beside the mean (``online_*``)."""
     hidden: int = 128
     """Width of the two hidden layers."""
     fourier: int = 8

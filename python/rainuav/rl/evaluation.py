@@ -208,21 +208,37 @@ class Validation:
 
 
 def evaluate_run_policy(
-    cfg: TrainConfig, agent: Agent, env: UAVNavEnv, checks: Validation
+    cfg: TrainConfig,
+    agent: Agent,
+    env: UAVNavEnv,
+    checks: Validation,
+    online: dict[str, torch.Tensor] | None = None,
 ) -> tuple[dict[str, Any], list]:
-    """Evaluates the run's policy from the evaluation starts: the final network, or with
-    ``keep_best`` the best on validation (loaded into ``agent``; the final network's numbers
-    are then added as ``final_*``)."""
+    """Evaluates the run's policy from the evaluation starts: the network in ``agent`` (the
+    final one, or the weight average), or with ``keep_best`` the best on validation (loaded
+    into ``agent``; the first network's numbers are then added as ``final_*``). ``online``:
+    the last online weights where the run reports their average; they are flown from the
+    same starts too and reported beside it as ``online_*``."""
     starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
     refs = reference_flights(env, starts)
+    keys = ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_return")
+    extra: dict[str, Any] = {}
+    if online is not None:
+        reported = {k: v.detach().clone() for k, v in agent.online.state_dict().items()}
+        agent.online.load_state_dict(online)
+        own, _ = evaluate(agent, env, starts, refs)
+        agent.online.load_state_dict(reported)
+        extra = {f"online_{k}": own[k] for k in keys}
     metrics, rolls = evaluate(agent, env, starts, refs)
+    metrics.update(extra)
     metrics["selected_at_episode"] = cfg.dqn.episodes
     if cfg.keep_best and checks.best_online is not None and checks.best_at != cfg.dqn.episodes:
         final = metrics
         agent.online.load_state_dict(checks.best_online)
         metrics, rolls = evaluate(agent, env, starts, refs)
         metrics["selected_at_episode"] = checks.best_at
-        for key in ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_return"):
+        metrics.update(extra)
+        for key in keys:
             metrics[f"final_{key}"] = final[key]
     return metrics, rolls
 
@@ -239,6 +255,7 @@ def evaluate_saved_run(
     seed: int | None = None,
     shield: bool = False,
     references: dict[Any, Any] | None = None,
+    online: bool = False,
 ) -> tuple[dict[str, Any], list, Any]:
     """Flies a saved training run's policy (the network the run reports: the final one, the
     weight average with ``average_from``, or with ``keep_best`` the best on validation). On
@@ -246,7 +263,9 @@ def evaluate_saved_run(
     mm/h) and ``engine`` fly it on another map (built or taken from the cache); ``radio_map``
     flies it on that map (another run's, say; not with those three). ``starts``/``seed``: the
     number and seed of the fixed starts (default: the run's evaluation starts); ``shield``:
-    report shielded flights beside the network's own. Another ``scenario`` is flown in its own
+    report shielded flights beside the network's own; ``online``: fly the last online network
+    instead of the one the run reports (they differ with ``average_from`` < 1 or ``keep_best``).
+    Another ``scenario`` is flown in its own
     weather unless ``rain_rate`` is given. ``references``: a dict the caller keeps to reuse
     the exact planner's flights between calls on the same map object and task. Returns the
     metrics, the flights and the environment; writes nothing."""
@@ -286,12 +305,15 @@ def evaluate_saved_run(
             f"{run / 'checkpoint.pt'}: does not fit the network its config.toml describes "
             f"(a run from an incompatible version?): {str(err).splitlines()[0]}"
         ) from err
-    agent.online.load_state_dict(agent.reported_weights())  # the mean, when averaging
     checks = Validation(np.zeros((0, 2)), {})
     if "validation" in state:
         checks.load_state_dict(state["validation"])
-    if cfg.keep_best and checks.best_online is not None and checks.best_at != cfg.dqn.episodes:
+    if online:
+        pass  # load_state_dict left the last online weights in agent.online
+    elif cfg.keep_best and checks.best_online is not None and checks.best_at != cfg.dqn.episodes:
         agent.online.load_state_dict(checks.best_online)
+    else:
+        agent.online.load_state_dict(agent.reported_weights())  # the mean, when averaging
     n = cfg.eval_starts if starts is None else starts
     pts = eval_starts(env, n, cfg.eval_seed if seed is None else seed)
     refs = None
@@ -304,6 +326,7 @@ def evaluate_saved_run(
     metrics["scenario"] = rm.scenario.name
     metrics["rain_rate_mm_h"] = rm.scenario.medium.rain_rate_mm_h
     metrics["trained_on"] = {"scenario": cfg.scenario, "rain_rate": cfg.rain_rate}
+    metrics["network"] = "last online" if online else "reported"
     metrics["episodes"] = len(state["returns"])
     metrics["training_seconds"] = state["train_seconds"]
     return metrics, rolls, env
