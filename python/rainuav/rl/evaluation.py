@@ -264,11 +264,11 @@ def evaluate_saved_run(
     flies it on that map (another run's, say; not with those three). ``starts``/``seed``: the
     number and seed of the fixed starts (default: the run's evaluation starts); ``shield``:
     report shielded flights beside the network's own; ``online``: fly the last online network
-    instead of the one the run reports (they differ with ``average_from`` < 1 or ``keep_best``).
-    Another ``scenario`` is flown in its own
-    weather unless ``rain_rate`` is given. ``references``: a dict the caller keeps to reuse
-    the exact planner's flights between calls on the same map object and task. Returns the
-    metrics, the flights and the environment; writes nothing."""
+    instead of the one the run reports (they differ with ``average_from`` < 1 or ``keep_best``;
+    ``metrics["network"]`` says which flew). Another ``scenario`` is flown in its own weather
+    unless ``rain_rate`` is given. ``references``: a dict the caller keeps to reuse the exact
+    planner's flights between calls on the same map object and task. Returns the metrics, the
+    flights and the environment; writes nothing."""
     run = Path(run_dir)
     for name in ("config.toml", "radiomap.npz", "checkpoint.pt"):
         if not (run / name).exists():
