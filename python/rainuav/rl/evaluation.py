@@ -208,38 +208,32 @@ class Validation:
 
 
 def evaluate_run_policy(
-    cfg: TrainConfig,
-    agent: Agent,
-    env: UAVNavEnv,
-    checks: Validation,
-    online: dict[str, torch.Tensor] | None = None,
+    cfg: TrainConfig, agent: Agent, env: UAVNavEnv, checks: Validation
 ) -> tuple[dict[str, Any], list]:
-    """Evaluates the run's policy from the evaluation starts: the network in ``agent`` (the
-    final one, or the weight average), or with ``keep_best`` the best on validation (loaded
-    into ``agent``; the first network's numbers are then added as ``final_*``). ``online``:
-    the last online weights where the run reports their average; they are flown from the
-    same starts too and reported beside it as ``online_*``."""
+    """Evaluates the run's policy from the evaluation starts and leaves it in ``agent``.
+
+    ``agent`` comes with its last online weights. The reported network is their mean where the
+    run averaged them (``average_from`` < 1; the last online network is then flown first and
+    reported beside the mean as ``online_*``), else the last online network; with
+    ``keep_best``, the best on validation (the reported network's numbers are then added as
+    ``final_*``)."""
     starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
     refs = reference_flights(env, starts)
     keys = ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_return")
-    extra: dict[str, Any] = {}
-    if online is not None:
-        reported = {k: v.detach().clone() for k, v in agent.online.state_dict().items()}
-        agent.online.load_state_dict(online)
+    online: dict[str, Any] = {}
+    if agent.average is not None:
         own, _ = evaluate(agent, env, starts, refs)
-        agent.online.load_state_dict(reported)
-        extra = {f"online_{k}": own[k] for k in keys}
+        online = {f"online_{k}": own[k] for k in keys}
+        agent.online.load_state_dict(agent.reported_weights())
     metrics, rolls = evaluate(agent, env, starts, refs)
-    metrics.update(extra)
     metrics["selected_at_episode"] = cfg.dqn.episodes
     if cfg.keep_best and checks.best_online is not None and checks.best_at != cfg.dqn.episodes:
         final = metrics
         agent.online.load_state_dict(checks.best_online)
         metrics, rolls = evaluate(agent, env, starts, refs)
         metrics["selected_at_episode"] = checks.best_at
-        metrics.update(extra)
-        for key in keys:
-            metrics[f"final_{key}"] = final[key]
+        metrics.update({f"final_{k}": final[k] for k in keys})
+    metrics.update(online)
     return metrics, rolls
 
 
@@ -308,12 +302,12 @@ def evaluate_saved_run(
     checks = Validation(np.zeros((0, 2)), {})
     if "validation" in state:
         checks.load_state_dict(state["validation"])
-    if online:
-        pass  # load_state_dict left the last online weights in agent.online
-    elif cfg.keep_best and checks.best_online is not None and checks.best_at != cfg.dqn.episodes:
-        agent.online.load_state_dict(checks.best_online)
-    else:
-        agent.online.load_state_dict(agent.reported_weights())  # the mean, when averaging
+    if not online:  # else: load_state_dict left the last online weights in agent.online
+        best = cfg.keep_best and checks.best_online is not None
+        if best and checks.best_at != cfg.dqn.episodes:
+            agent.online.load_state_dict(checks.best_online)
+        else:
+            agent.online.load_state_dict(agent.reported_weights())  # the mean, when averaging
     n = cfg.eval_starts if starts is None else starts
     pts = eval_starts(env, n, cfg.eval_seed if seed is None else seed)
     refs = None

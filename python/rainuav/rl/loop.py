@@ -306,11 +306,7 @@ def finish(
 ) -> dict[str, Any]:
     """Evaluates the run (:func:`rainuav.rl.evaluation.evaluate_run_policy`), saves the
     evaluated network's weights to ``policy.pt`` and writes ``metrics.json`` and the figures."""
-    online = None
-    if agent.average is not None:  # reported: the mean; the last online weights beside it
-        online = {k: v.detach().clone() for k, v in agent.online.state_dict().items()}
-    agent.online.load_state_dict(agent.reported_weights())
-    metrics, rolls = evaluate_run_policy(cfg, agent, env, checks, online)
+    metrics, rolls = evaluate_run_policy(cfg, agent, env, checks)
     policy = {k: v.detach().cpu() for k, v in agent.online.state_dict().items()}
     save_checkpoint(out / "policy.pt", {"online": policy, "config": to_dict(cfg)})
     metrics["training_seconds"] = train_seconds
