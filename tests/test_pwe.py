@@ -97,9 +97,16 @@ def test_pec_ground_against_image_extended_numpy(ground: str) -> None:
     ext[:, ny + 1 :] = sign * u0[:, :0:-1]
     want = numpy_march(ext, d, 0.1, 80)[:, :ny]
     assert rel_l2(got.field, want) < 1e-4
-    # The ground did reflect: the field near the ground is far from the free-space one.
-    free = numpy_march(u0, d, 0.1, 80)
-    assert rel_l2(free, want) > 0.1
+    # The ground did reflect: the source alone, marched on the same extended domain, differs
+    # from the grounded field by exactly the image's field (superposition: to rounding,
+    # 1e-9), and that image is most of the field (0.81 of its norm for pec-h, 0.79 for pec-v
+    # as measured; 0.7-0.9 keeps the check two-sided without tying it to the last digit).
+    source, image = np.zeros_like(ext), np.zeros_like(ext)
+    source[:, :ny], image[:, ny + 1 :] = ext[:, :ny], ext[:, ny + 1 :]
+    alone = numpy_march(source, d, 0.1, 80)[:, :ny]
+    share = float(np.linalg.norm(numpy_march(image, d, 0.1, 80)[:, :ny]) / np.linalg.norm(want))
+    assert rel_l2(alone, want) == pytest.approx(share, abs=1e-9)
+    assert 0.7 < share < 0.9
 
 
 def test_homogeneous_rain_loss_equals_specific_attenuation() -> None:

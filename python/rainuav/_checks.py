@@ -65,3 +65,31 @@ def check_number(where: str, value: Any, lo: float, hi: float, unit: str = "") -
     if not (math.isfinite(v) and lo <= v <= hi):
         raise InvalidInputError(f"{where} must be within {lo:g}..{hi:g}{unit} (got {value!r})")
     return v
+
+
+MEMORY_SHARE = 0.8
+"""A job may use at most this share of the memory the machine reports as available (the same
+rule as the Rust core's ``check_memory``)."""
+
+
+def check_fits(what: str, nbytes: float, hint: str) -> None:
+    """Refuses, before anything is allocated, a job whose arrays need ``nbytes`` when that is
+    over :data:`MEMORY_SHARE` of the available memory: one line naming ``what`` sets the size,
+    the GB needed and available, and ``hint`` (how to shrink it)."""
+    from rainuav import _core
+
+    avail = _core.available_memory_bytes()
+    if avail is not None and nbytes > MEMORY_SHARE * avail:
+        raise InvalidInputError(
+            f"{what} needs {nbytes / 1e9:.3g} GB but this machine has {avail / 1e9:.3g} GB "
+            f"available (at most {MEMORY_SHARE:.0%} may be used); {hint}"
+        )
+
+
+def check_integer(where: str, value: Any, lo: int, hi: int) -> int:
+    """``value`` as an int if it is an integer (not a bool, not a float) within ``lo..hi``,
+    else an error naming ``where`` and the range."""
+    ok = isinstance(value, int | np.integer) and not isinstance(value, bool | np.bool_)
+    if not ok or not lo <= int(value) <= hi:
+        raise InvalidInputError(f"{where} must be an integer in {lo}..{hi} (got {value!r})")
+    return int(value)

@@ -15,6 +15,7 @@ __all__ = [
     "PeMarcher",
     "RainMediumKernel",
     "__version__",
+    "available_memory_bytes",
     "axial_ratio",
     "check_memory",
     "depolarisation_factors",
@@ -166,6 +167,9 @@ def gaussian_beam(
 
 def check_memory(bytes: int) -> None:
     """Refuses a job needing ``bytes`` if it exceeds 80% of the available memory."""
+
+def available_memory_bytes() -> int | None:
+    """Memory this machine reports as available (Linux ``MemAvailable``), bytes."""
 
 def plan_optimal(
     sir_db: _F,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -15,15 +15,28 @@ import tomllib
 from rainuav.errors import InvalidInputError
 
 
+def _create_beside(target: Path) -> Path:
+    """A new empty file next to ``target`` with a unique name, created with mode 0666 less
+    the umask, as ``open`` would (``tempfile.mkstemp`` makes 0600 whatever the umask, which
+    leaves a shared cache unreadable by colleagues)."""
+    for _ in range(100):
+        tmp = target.parent / f".{target.name}.{secrets.token_hex(6)}.tmp"
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return tmp
+    raise FileExistsError(f"no free temporary name beside {target}")
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yields a temporary path in the target's directory; on success it replaces ``path``
     in one rename, on failure it is removed and ``path`` is left as it was."""
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    os.close(fd)
-    tmp_path = Path(tmp)
+    tmp_path = _create_beside(target)
     try:
         yield tmp_path
         os.replace(tmp_path, target)
@@ -52,3 +65,58 @@ def read_toml(path: str | os.PathLike[str], what: str = "file") -> dict[str, Any
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise InvalidInputError(f"{what} {p}: not valid TOML ({err})") from err
+
+
+def check_out_dir(path: str | os.PathLike[str], flag: str = "--out") -> Path:
+    """Checks, before any work, that the output folder ``path`` exists as a writable folder
+    or can be made (its nearest existing parent is a writable folder); else raises
+    :class:`InvalidInputError` naming ``flag`` and the path. Creates nothing."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise InvalidInputError(f"{flag} {p}: exists and is not a folder")
+    probe = p.absolute()
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        raise InvalidInputError(f"{flag} {p}: cannot be created ({probe} is not a folder)")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise InvalidInputError(f"{flag} {p}: not writable ({probe})")
+    return p
+
+
+class FolderLock:
+    """An exclusive lock on a folder (``flock`` on ``<folder>/.lock``) while a job writes
+    into it: a second job on the same folder is refused at once, naming the folder. The
+    operating system drops the lock when its process ends, however it ends (kill -9
+    included), so a stale lock never blocks a resume."""
+
+    def __init__(self, folder: str | os.PathLike[str], what: str = "a job") -> None:
+        self.path = Path(folder) / ".lock"
+        self.what = what
+        self.fh: Any = None
+
+    def __enter__(self) -> FolderLock:
+        import fcntl
+
+        fh = self.path.open("a+")
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as err:
+            fh.seek(0)
+            holder = fh.read().strip() or "another process"
+            fh.close()
+            raise InvalidInputError(
+                f"{self.path.parent}: {holder} is writing to this folder (locked by "
+                f"{self.path}); wait for it to end or use another folder"
+            ) from err
+        fh.seek(0)
+        fh.truncate()
+        fh.write(f"{self.what} (pid {os.getpid()})\n")
+        fh.flush()
+        self.fh = fh
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.fh is not None:
+            self.fh.close()  # closing the descriptor releases the lock
+            self.fh = None

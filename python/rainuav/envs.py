@@ -23,7 +23,7 @@ from typing import Any
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.vector import UAVNavVectorEnv
+from rainuav.nav.vector import UAVNavVectorEnv, check_num_envs
 from rainuav.radio import presets
 from rainuav.radio.radiomap import RadioMap, build_radio_map
 from rainuav.radio.scenario import Scenario
@@ -102,6 +102,7 @@ def make_nav_vector_env(
     **task: Any,
 ) -> UAVNavVectorEnv:
     """``num_envs`` UAVs on one map, batched (:class:`rainuav.nav.vector.UAVNavVectorEnv`)."""
+    check_num_envs(num_envs)  # before the map is built
     env = make_nav_env(
         radio_map,
         scenario=scenario,

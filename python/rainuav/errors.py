@@ -12,3 +12,9 @@ class InvalidInputError(RainuavError, ValueError):
     """An argument is out of range, of the wrong shape or not a known name.
 
     The message names the argument and the allowed range."""
+
+
+class CacheWarning(UserWarning):
+    """The radio-map cache could not be read or written (a read-only or invalid
+    ``RAINUAV_CACHE_DIR``, a full disk): the map is still built, returned and written where
+    asked; it is only not kept for next time."""

@@ -25,7 +25,9 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from rainuav._io import write_atomic
+from rainuav import _cli
+from rainuav._checks import check_integer
+from rainuav._io import check_out_dir, write_atomic
 from rainuav.errors import InvalidInputError
 
 
@@ -40,9 +42,6 @@ def _out_dir(args: argparse.Namespace) -> Path:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from rainuav.rl.evaluation import evaluate_saved_run
-    from rainuav.rl.plots import plot_policy
-
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.evaluate",
         description=__doc__,
@@ -63,25 +62,34 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--device", default="cpu", choices=("cpu", "cuda", "auto"))
     ap.add_argument("--out", type=Path, default=None, help="output folder")
     args = ap.parse_args(argv)
-    try:
-        if args.starts is not None and args.starts < 1:
-            raise InvalidInputError(f"--starts must be >= 1 (got {args.starts})")
-        metrics, rolls, env = evaluate_saved_run(
-            args.run_dir,
-            args.device,
-            scenario=args.scenario,
-            rain_rate=args.rain_rate,
-            engine=args.engine,
-            starts=args.starts,
-            seed=args.seed,
-            shield=args.shield,
-            online=args.online,
+    return _cli.run(lambda: _evaluate(args), "the evaluation stopped; nothing was written")
+
+
+def _evaluate(args: argparse.Namespace) -> int:
+    from rainuav.rl.config import MAX_SEED, MAX_STARTS
+    from rainuav.rl.evaluation import evaluate_saved_run
+    from rainuav.rl.plots import plot_policy
+
+    if args.starts is not None:
+        check_integer("--starts", args.starts, 1, MAX_STARTS)
+    if args.seed is not None:
+        check_integer("--seed", args.seed, 0, MAX_SEED)
+    if not (args.run_dir / "config.toml").exists():
+        raise InvalidInputError(
+            f"{args.run_dir}: missing config.toml; is this a rainuav.train output?"
         )
-    except InvalidInputError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    out = _out_dir(args)
-    out.mkdir(parents=True, exist_ok=True)
+    out = check_out_dir(_out_dir(args))  # before any work
+    metrics, rolls, env = evaluate_saved_run(
+        args.run_dir,
+        args.device,
+        scenario=args.scenario,
+        rain_rate=args.rain_rate,
+        engine=args.engine,
+        starts=args.starts,
+        seed=args.seed,
+        shield=args.shield,
+        online=args.online,
+    )
     text = json.dumps(metrics, indent=2)
     write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))
     plot_policy(env, metrics, rolls[:40], out / "evaluation_trajectories.png")

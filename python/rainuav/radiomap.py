@@ -16,8 +16,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from rainuav import _cli
 from rainuav._deprecated import moved, names
-from rainuav.errors import InvalidInputError
 
 __getattr__ = moved(
     __name__,
@@ -59,34 +59,38 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    import numpy as np
-
-    from rainuav.radio import Scenario, build_radio_map, cache_dir, clear_cache, presets
-    from rainuav.radio.plot import save_map_png
+    from rainuav.radio import cache_dir, clear_cache
 
     args = build_parser().parse_args(argv)
     if args.clear_cache:
         n = clear_cache()
         print(f"removed {n} cached map(s) from {cache_dir() / 'radiomaps'}")
         return 0
-    try:
-        if args.config is not None:
-            scn = Scenario.from_toml(args.config)
-        else:
-            scn = presets.PRESETS[args.scenario]()
-        if args.rain_rate is not None:
-            scn = presets.with_rain(scn, args.rain_rate)
-        if args.freq_ghz is not None:
-            scn = scn.replace(freq_hz=args.freq_ghz * 1e9)
-        if args.engine is not None:
-            scn = scn.replace(engine=args.engine)
-        rm = build_radio_map(scn, cache=not args.no_cache, progress=True)
-        npz = rm.save(args.out / "radiomap.npz")
-        kinds = ("sinr", "sir", "serving", "rss")
-        pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in kinds]
-    except InvalidInputError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+    return _cli.run(lambda: _build(args), "the map build stopped; nothing was written")
+
+
+def _build(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from rainuav._io import check_out_dir
+    from rainuav.radio import Scenario, build_radio_map, presets
+    from rainuav.radio.plot import save_map_png
+
+    check_out_dir(args.out)  # before any work
+    if args.config is not None:
+        scn = Scenario.from_toml(args.config)
+    else:
+        scn = presets.PRESETS[args.scenario]()
+    if args.rain_rate is not None:
+        scn = presets.with_rain(scn, args.rain_rate)
+    if args.freq_ghz is not None:
+        scn = scn.replace(freq_hz=args.freq_ghz * 1e9)
+    if args.engine is not None:
+        scn = scn.replace(engine=args.engine)
+    rm = build_radio_map(scn, cache=not args.no_cache, progress=True)
+    npz = rm.save(args.out / "radiomap.npz")
+    kinds = ("sinr", "sir", "serving", "rss")
+    pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in kinds]
     split = ", ".join(f"{k} {v:.1f} s" for k, v in rm.timings.items()) or "from the cache"
     sinr = rm.sinr_db
     print(

@@ -18,6 +18,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from rainuav import _cli
+from rainuav._io import check_out_dir
 from rainuav.errors import InvalidInputError
 
 
@@ -41,21 +43,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         "address (ray://host:10001), or 'local' (a local instance)",
     )
     args = ap.parse_args(argv)
-    try:
+
+    def body() -> int:
         study = load_study(args.study)
         if args.quick:
             study = study.with_quick()
         workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
         if workers < 1:
             raise InvalidInputError(f"--workers must be >= 1 (got {workers})")
+        check_out_dir(args.out)  # before any work
         rows = run_study(
             study, args.out, workers=min(workers, len(study.cases())), ray_address=args.ray
         )
-    except InvalidInputError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    print(f"{len(rows)} cases; wrote {(args.out / 'results.csv').resolve()}", file=sys.stderr)
-    return 0
+        print(f"{len(rows)} cases; wrote {(args.out / 'results.csv').resolve()}", file=sys.stderr)
+        return 0
+
+    return _cli.run(body, "finished cases are kept; the same command resumes the study")
 
 
 if __name__ == "__main__":

@@ -13,14 +13,13 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import itertools
-import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from rainuav import _cli
 from rainuav._deprecated import moved, names
-from rainuav.errors import InvalidInputError
 
 __getattr__ = moved(
     __name__,
@@ -118,18 +117,51 @@ def config_from_args(args: argparse.Namespace) -> Any:
     return apply_preset(cfg, given - {"episodes"} if cfg.preset else given)
 
 
+def summary(metrics: dict[str, Any], out: Path) -> str:
+    """The primary figures of a finished run as a short table (the network alone, the
+    straight line, the exact optimum) and where its files are."""
+
+    def pct(v: Any) -> str:
+        return "-" if v is None else f"{100 * v:.1f}%"
+
+    def num(v: Any) -> str:
+        return "-" if v is None else f"{v:.1f}"
+
+    rows = [
+        ("network alone", "", "mean_excess_cost"),
+        ("straight line", "straight_line_", "straight_line_mean_excess_cost"),
+        ("exact optimum", "optimal_", None),
+    ]
+    lines = [
+        f"{metrics['eval_starts']} evaluation starts, {metrics['episodes']} episodes, "
+        f"{metrics['training_seconds']:.0f} s of training on {metrics['device']}",
+        f"{'':<15}{'success':>9}{'excess cost':>13}{'mean cost':>11}{'outage':>9}",
+    ]
+    for name, prefix, excess in rows:
+        excess_cost = 0.0 if excess is None else metrics.get(excess)
+        lines.append(
+            f"{name:<15}{pct(metrics.get(prefix + 'success_rate')):>9}"
+            f"{pct(excess_cost):>13}{num(metrics.get(prefix + 'mean_cost')):>11}"
+            f"{pct(metrics.get(prefix + 'outage_share')):>9}"
+        )
+    lines.append(f"wrote {out.resolve()} (metrics.json has every figure)")
+    return "\n".join(lines)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return _cli.run(
+        lambda: _train(args),
+        "training stopped; `--resume` continues from the last checkpoint.pt",
+    )
+
+
+def _train(args: argparse.Namespace) -> int:
     from rainuav.rl.loop import train
 
-    args = build_parser().parse_args(argv)
-    try:
-        cfg = config_from_args(args)
-        metrics = train(cfg, resume=args.resume, progress=True)
-    except InvalidInputError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    print(json.dumps(metrics, indent=2))
-    print(f"wrote {Path(cfg.out).resolve()}")
+    cfg = config_from_args(args)
+    metrics = train(cfg, resume=args.resume, progress=True)
+    print(summary(metrics, Path(cfg.out)))
     return 0
 
 

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rainuav import medium
-from rainuav._io import write_atomic
+from rainuav import _cli, medium
+from rainuav._io import check_out_dir, write_atomic
 
 RAIN_RATE_MM_H = 12.5
 TABLE_FREQS_GHZ = (1.0, 2.0, 4.9, 10.0, 20.0, 28.0, 40.0, 60.0, 100.0)
@@ -109,9 +109,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     rain = sub.add_parser("rain", help="rain attenuation against ITU-R P.838-3")
     rain.add_argument("--out", type=Path, default=Path("validation"), help="output directory")
     args = parser.parse_args(argv)
-    if args.what == "rain":
+
+    def body() -> int:
+        check_out_dir(args.out)  # before any work
         run_rain(args.out)
-    return 0
+        return 0
+
+    return _cli.run(body, "the validation stopped; nothing half-written was kept")
 
 
 if __name__ == "__main__":

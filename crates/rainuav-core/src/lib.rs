@@ -11,7 +11,9 @@
 //! let kernel = RainKernel::new(28e9, &MediumOptions::default()).unwrap();
 //! let gamma = kernel.evaluate(25.0).unwrap().gamma_db_per_km;
 //! let itu = rainuav_core::p838::specific_attenuation(28e9, 25.0, 0.0, 0.0);
-//! assert!(gamma / itu > 0.6 && gamma / itu < 1.6);
+//! // Above 10 GHz the model is within 0.8-1.3 of P.838-3 over 12.5-150 mm/h (README table,
+//! // `python -m rainuav.validate rain`); here 1.08.
+//! assert!(gamma / itu > 0.8 && gamma / itu < 1.3, "{}", gamma / itu);
 //! ```
 
 pub mod drops;

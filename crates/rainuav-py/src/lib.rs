@@ -68,6 +68,14 @@ fn check_memory(bytes: usize) -> PyResult<()> {
     rainuav_core::memory::check_memory(bytes).map_err(to_py)
 }
 
+/// Memory this machine reports as available (Linux `MemAvailable`), bytes; None where it
+/// cannot be read. The Python-side size checks (networks, replay, ray arrays, vector envs)
+/// compare against it with the same 80% rule as `check_memory`.
+#[pyfunction]
+fn available_memory_bytes() -> Option<usize> {
+    rainuav_core::memory::available_memory_bytes()
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -76,5 +84,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     planner::register(m)?;
     rays::register(m)?;
     m.add_function(wrap_pyfunction!(check_memory, m)?)?;
+    m.add_function(wrap_pyfunction!(available_memory_bytes, m)?)?;
     Ok(())
 }

@@ -30,12 +30,13 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
+from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
 from rainuav.nav.field import SignalField
 from rainuav.nav.task import SIGNALS, LoiteringWarning, NavConfig, check_config
 
-__all__ = ["DEFAULT_MIN_DB", "UAVNavEnv", "signal_field"]
+__all__ = ["DEFAULT_MIN_DB", "UAVNavEnv", "check_action", "signal_field"]
 
 DEFAULT_MIN_DB = 10.0
 """The outage threshold of a map that names none (the paper's minimum SIR), dB."""
@@ -68,6 +69,21 @@ def signal_field(
     if extent_m is None:
         raise InvalidInputError(f"extent_m is required with {kind}_db")
     return SignalField(values, extent_m, f"{kind}_db")
+
+
+def check_action(action: Any) -> int:
+    """``action`` as an int if it is one integer in 0..3 (a Python or numpy integer, or a
+    0-d integer array, as Gymnasium's ``Discrete(4)`` holds); anything else (a float such as
+    1.7, a string, a bool) raises :class:`InvalidInputError`, never a silent rounding."""
+    a = np.asarray(action) if isinstance(action, np.ndarray) else action
+    if isinstance(a, np.ndarray):
+        ok = a.shape == () and np.issubdtype(a.dtype, np.integer)
+        a = a[()] if ok else a
+    else:
+        ok = isinstance(a, int | np.integer) and not isinstance(a, bool)
+    if not ok or not 0 <= int(a) < 4:
+        raise InvalidInputError(f"action must be one integer 0, 1, 2 or 3 (got {action!r})")
+    return int(a)
 
 
 class UAVNavEnv(gym.Env):
@@ -134,6 +150,7 @@ class UAVNavEnv(gym.Env):
         self._offset = np.zeros((1, 2), dtype=np.int64)
         self._t = np.zeros(1, dtype=np.int64)
         self._pos = np.zeros(2)
+        self._ready = False  # reset() starts the first episode
 
     # -- helpers ----------------------------------------------------------------------------
     def observe(self, pos: np.ndarray) -> np.ndarray:
@@ -160,18 +177,24 @@ class UAVNavEnv(gym.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
+        if options is not None and not isinstance(options, dict):
+            raise InvalidInputError(f"options must be a dict (got {type(options).__name__})")
         start = (options or {}).get("start_m", self.cfg.start_m)
         if start is None:
             p = self.sample_start(self.np_random)
         else:
-            p = np.asarray(start, dtype=np.float64)
+            p = as_real_array("options['start_m']", start)
             x0, x1, y0, y1 = self.field.extent
             if p.shape != (2,) or not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
-                raise InvalidInputError(f"start_m must lie inside the area (got {start!r})")
+                raise InvalidInputError(
+                    f"options['start_m'] must be (x, y) inside the area {self.field.extent} "
+                    f"(got {start!r})"
+                )
         self._start = p[None].copy()
         self._offset = np.zeros((1, 2), dtype=np.int64)
         self._t = np.zeros(1, dtype=np.int64)
         self._pos = p.copy()
+        self._ready = True
         return self.observe(p), self._info(float(self.field(p[0], p[1])))
 
     def _info(self, signal: float, arrived: bool = False) -> dict[str, Any]:
@@ -185,9 +208,9 @@ class UAVNavEnv(gym.Env):
         }
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        a = int(action)
-        if not 0 <= a < 4:
-            raise InvalidInputError(f"action must be 0, 1, 2 or 3 (got {action!r})")
+        a = check_action(action)
+        if not self._ready:
+            raise InvalidInputError("step() before reset(): call reset() to start an episode")
         r = self.stepper.step(self._start, self._offset, self._t, np.array([a]))
         self._offset, self._t = r["offset"], r["t"]
         self._pos = r["position"][0].copy()

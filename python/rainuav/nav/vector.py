@@ -18,10 +18,28 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
+from rainuav._checks import as_real_array, check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 
-__all__ = ["UAVNavVectorEnv"]
+__all__ = ["UAVNavVectorEnv", "check_num_envs"]
+
+
+BYTES_PER_ENV = 512
+"""Memory one UAV of the vector env takes, bytes, rounded up: its state (start, offset, step,
+flags: 41 bytes) and its share of a step's batched arrays (observation, reward, flags, infos
+and the stepper's temporaries, about 300 bytes)."""
+
+
+def check_num_envs(num_envs: Any) -> int:
+    """``num_envs`` if it is an integer >= 1 whose UAVs fit in memory (refused before any
+    allocation, naming the GB), else :class:`InvalidInputError`."""
+    if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
+        raise InvalidInputError(f"num_envs must be an integer >= 1 (got {num_envs!r})")
+    if num_envs < 1:
+        raise InvalidInputError(f"num_envs must be an integer >= 1 (got {num_envs!r})")
+    check_fits(f"num_envs = {num_envs}", BYTES_PER_ENV * int(num_envs), "use fewer UAVs")
+    return int(num_envs)
 
 
 class UAVNavVectorEnv(gym.vector.VectorEnv):
@@ -36,10 +54,7 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
     ) -> None:
         if not isinstance(env, UAVNavEnv):
             raise InvalidInputError(f"env must be a UAVNavEnv (got {type(env).__name__})")
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
-            raise InvalidInputError(f"num_envs must be an integer >= 1 (got {num_envs!r})")
-        if num_envs < 1:
-            raise InvalidInputError(f"num_envs must be an integer >= 1 (got {num_envs!r})")
+        check_num_envs(num_envs)
         mode = AutoresetMode(autoreset_mode)
         if mode == AutoresetMode.DISABLED:
             raise InvalidInputError("autoreset_mode must be NEXT_STEP or SAME_STEP")
@@ -56,6 +71,7 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         self._t = np.zeros(n, dtype=np.int64)
         self._ended = np.zeros(n, dtype=bool)
         self._rng = np.random.default_rng()
+        self._ready = False  # reset() starts the first episodes
 
     # -- helpers ----------------------------------------------------------------------------
     def _launch(self, mask: np.ndarray, options: dict[str, Any] | None = None) -> None:
@@ -95,13 +111,16 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         if seed is not None:
             self._rng = np.random.default_rng(seed)
+        if options is not None and not isinstance(options, dict):
+            raise InvalidInputError(f"options must be a dict (got {type(options).__name__})")
         if options and "start_m" in options:
-            s = np.asarray(options["start_m"], dtype=np.float64)
+            s = as_real_array("options['start_m']", options["start_m"])
             if s.shape not in ((2,), (self.num_envs, 2)) or not np.all(np.isfinite(s)):
                 raise InvalidInputError(
                     f"options['start_m'] must be (2,) or ({self.num_envs}, 2) (got {s.shape})"
                 )
         self._launch(np.ones(self.num_envs, dtype=bool), options)
+        self._ready = True
         pos = self._position()
         signal = self.env.field(pos[:, 0], pos[:, 1])
         return self.env.observe(pos), self._infos(signal, np.zeros(self.num_envs, dtype=bool))
@@ -110,10 +129,14 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         a = np.asarray(actions)
-        if a.shape != (self.num_envs,) or not np.all((a >= 0) & (a < 4)):
+        integers = np.issubdtype(a.dtype, np.integer)  # no silent rounding of 1.7 or 0.5
+        if a.shape != (self.num_envs,) or not integers or not np.all((a >= 0) & (a < 4)):
             raise InvalidInputError(
-                f"actions must be {self.num_envs} integers in 0..3 (got {np.asarray(actions)!r})"
+                f"actions must be {self.num_envs} integers in 0..3 (got {a.dtype} "
+                f"{a.shape}: {np.array2string(a.ravel()[:8], separator=', ')})"
             )
+        if not self._ready:
+            raise InvalidInputError("step() before reset(): call reset() to start the episodes")
         a = a.astype(np.int64)
         n = self.num_envs
         reward = np.zeros(n)

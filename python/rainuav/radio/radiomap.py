@@ -14,6 +14,7 @@ import dataclasses
 import math
 import os
 import time
+import warnings
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,16 +24,17 @@ import numpy as np
 import numpy.typing as npt
 
 from rainuav import _core
+from rainuav._checks import check_fits
 from rainuav._io import write_atomic
-from rainuav.errors import InvalidInputError
-from rainuav.radio.cache import map_path
+from rainuav.errors import CacheWarning, InvalidInputError
+from rainuav.radio.cache import cache_dir, map_path
 from rainuav.radio.grid import MarchGrid, cone_weight, march_grid
 from rainuav.radio.pe_engine import march_cell, resample
 from rainuav.radio.plot import plot_map
 from rainuav.radio.presets import DEFAULT_MIN_DB, SINR_THRESHOLDS_DB
 from rainuav.radio.ray_engine import SOILS, Weight, ray_power
 from rainuav.radio.scenario import Scenario
-from rainuav.radio.sinr import RSS_FLOOR_DBM, sir_from_power
+from rainuav.radio.sinr import RSS_FLOOR_DBM, SIR_CEIL_DB, SIR_FLOOR_DB, sir_from_power
 
 __all__ = ["FORMAT_VERSION", "RadioMap", "build_radio_map"]
 
@@ -127,9 +129,19 @@ class RadioMap:
         except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
             raise InvalidInputError(f"{path}: not a readable radio map ({err})") from err
         missing = {*cls._ARRAYS, "extent_m", "altitude_m", "scenario_toml"} - set(data)
-        if missing or int(data.get("format_version", -1)) != FORMAT_VERSION:
-            raise InvalidInputError(f"{path}: not a rainuav radio map (missing {missing})")
+        if missing:
+            raise InvalidInputError(f"{path}: not a rainuav radio map (missing {sorted(missing)})")
+        version = data.get("format_version", np.array(-1))
+        if version.shape != () or not np.issubdtype(version.dtype, np.integer):
+            raise InvalidInputError(f"{path}: not a rainuav radio map (no format_version)")
+        if int(version) != FORMAT_VERSION:
+            raise InvalidInputError(
+                f"{path}: radio map format {int(version)}, this rainuav reads {FORMAT_VERSION}"
+            )
+        if data["scenario_toml"].dtype.kind != "U" or data["extent_m"].shape != (4,):
+            raise InvalidInputError(f"{path}: not a rainuav radio map (bad metadata)")
         scn = Scenario.from_toml_string(str(data["scenario_toml"]))
+        check_map_arrays(path, data, scn)
         ext = tuple(float(v) for v in data["extent_m"])
         out = cls(
             x_m=data["x_m"],
@@ -145,9 +157,6 @@ class RadioMap:
             pe_share=data["pe_share"],
             pe_cone_deg=data["pe_cone_deg"],
         )
-        h, w = scn.area.shape
-        if out.rss_dbm.shape[1:] != (h, w) or out.sir_db.shape != (h, w):
-            raise InvalidInputError(f"{path}: array shapes do not match its scenario")
         return out
 
     def plot(self, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
@@ -159,6 +168,55 @@ class RadioMap:
     def coverage(self, sir_min_db: float = 10.0) -> float:
         """Share of the area with SIR >= sir_min_db."""
         return float(np.mean(self.sir_db >= sir_min_db))
+
+
+def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
+    """A map's arrays as :func:`build_radio_map` writes them, or :class:`InvalidInputError`
+    naming the file and the array: shapes from the scenario, types, and values finite and in
+    their physical ranges (SIR and SINR within [SIR_FLOOR_DB, SIR_CEIL_DB], RSS within
+    [RSS_FLOOR_DBM, 100] dBm, serving cells and sites that exist, PE shares in [0, 1], pixel
+    centres where the area puts them)."""
+    h, w = scn.area.shape
+    m = len(data["cell_site"]) if data["cell_site"].ndim == 1 else -1  # the map's own cells
+    shapes = {
+        "x_m": (w,), "y_m": (h,), "rss_dbm": (m, h, w), "serving_cell": (h, w),
+        "sir_db": (h, w), "sinr_db": (h, w), "cell_site": (m,), "pe_share": (m, h, w),
+        "pe_cone_deg": (m, 2),
+    }  # fmt: skip
+    for k, shape in shapes.items():
+        a = data[k]
+        if a.shape != shape or a.dtype.kind not in "fiu":
+            raise InvalidInputError(
+                f"{path}: {k} must be a numeric array of shape {shape} for its scenario "
+                f"(got {a.dtype} {a.shape})"
+            )
+        if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
+            raise InvalidInputError(f"{path}: {k} holds NaN or infinite values")
+    ranges = {
+        "sir_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
+        "sinr_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
+        "rss_dbm": (RSS_FLOOR_DBM, 100.0),
+        "serving_cell": (-1, m - 1),
+        "cell_site": (0, len(scn.sites) - 1),
+        "pe_share": (0.0, 1.0),
+        "pe_cone_deg": (0.0, 90.0),
+    }
+    for k, (lo, hi) in ranges.items():
+        a = data[k]
+        if a.size and (a.min() < lo or a.max() > hi):
+            raise InvalidInputError(
+                f"{path}: {k} must lie in [{lo:g}, {hi:g}] (holds {a.min():g} to {a.max():g})"
+            )
+    a = scn.area
+    x = a.x_min_m + (np.arange(w) + 0.5) * (a.x_max_m - a.x_min_m) / w
+    y = a.y_min_m + (np.arange(h) + 0.5) * (a.y_max_m - a.y_min_m) / h
+    for k, want in (("x_m", x), ("y_m", y)):
+        if not np.allclose(data[k], want, rtol=0, atol=1e-6 * max(1.0, float(np.ptp(want)))):
+            raise InvalidInputError(f"{path}: {k} is not the pixel centres of its area")
+
+
+MAP_ARRAYS = 10
+"""(cells, H, W) float64 arrays a map build holds at its peak (its memory check)."""
 
 
 def _cached(scn: Scenario) -> RadioMap | None:
@@ -204,6 +262,13 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
     x_m = a.x_min_m + (np.arange(w) + 0.5) * (a.x_max_m - a.x_min_m) / w
     y_m = a.y_min_m + (np.arange(h) + 0.5) * (a.y_max_m - a.y_min_m) / h
     jobs = [(i, site, cell) for i, site in enumerate(scn.sites) for cell in site.cells]
+    # Every engine holds about ten (cells, H, W) float64 arrays at its peak (the rays' gains,
+    # cone weights and powers, the PE's powers, the combination): refuse before the first.
+    check_fits(
+        f"the radio map ({len(jobs)} cells x {h} x {w} pixels)",
+        MAP_ARRAYS * 8 * len(jobs) * h * w,
+        "use a coarser area.resolution_m, a smaller area or fewer cells",
+    )
     use_pe = scn.engine in ("pe", "hybrid") and scn.ground not in SOILS
     grids = [march_grid(scn, site, cell) if use_pe else None for _, site, cell in jobs]
     cells = [(s, c) for _, s, c in jobs]
@@ -286,5 +351,20 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
         timings=timings,
     )
     if cache:
-        rm.save(map_path(scn.digest()))
+        store(rm, scn)
     return rm
+
+
+def store(rm: RadioMap, scn: Scenario) -> None:
+    """Keeps ``rm`` in the cache; a cache that cannot be written is a :class:`CacheWarning`
+    (the map is the caller's all the same)."""
+    try:
+        path = map_path(scn.digest())
+        rm.save(path)
+    except OSError as err:
+        warnings.warn(
+            f"radio-map cache {cache_dir()} cannot be written ({err.strerror or err}); the map "
+            "is not kept for next time (set RAINUAV_CACHE_DIR to a writable folder)",
+            CacheWarning,
+            stacklevel=3,
+        )

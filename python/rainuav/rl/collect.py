@@ -52,6 +52,14 @@ class Lanes:
         return d
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
+        """Restores a :meth:`state_dict`; arrays of another shape or type raise ValueError."""
+        for f in dataclasses.fields(self):
+            mine, v = getattr(self, f.name), d[f.name]
+            if f.name == "windows":
+                if not isinstance(v, list) or len(v) != len(mine):
+                    raise ValueError(f"lanes.windows must be a list of {len(mine)}")
+            elif not isinstance(v, np.ndarray) or v.shape != mine.shape or v.dtype != mine.dtype:
+                raise ValueError(f"lanes.{f.name} must be a {mine.dtype} array of {mine.shape}")
         for name, value in d.items():
             if name == "windows":
                 for w, buf in zip(self.windows, value, strict=True):

@@ -153,8 +153,20 @@ class Replay:
         }
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        for k, v in d.items():
-            setattr(self, k, v)
+        """Restores a :meth:`state_dict`; arrays of another shape or type, or counters out of
+        range, raise ValueError (a checkpoint is checked before it is trusted)."""
+        for k in ("obs", "action", "ret", "next_obs", "discount", "done"):
+            mine, v = getattr(self, k), d[k]
+            if not isinstance(v, np.ndarray) or v.shape != mine.shape or v.dtype != mine.dtype:
+                raise ValueError(f"replay.{k} must be a {mine.dtype} array of shape {mine.shape}")
+        size, pos = d["size"], d["pos"]
+        if not all(isinstance(v, int | np.integer) for v in (size, pos)) or not (
+            0 <= size <= self.capacity and 0 <= pos < self.capacity
+        ):
+            raise ValueError(f"replay size and pos must be integers in 0..{self.capacity}")
+        for k in ("obs", "action", "ret", "next_obs", "discount", "done"):
+            setattr(self, k, d[k])
+        self.size, self.pos = int(size), int(pos)
 
 
 def double_q_target(
@@ -168,6 +180,23 @@ def double_q_target(
     the two networks' Q-values at s' (B, A)."""
     a_star = q_next_online.argmax(dim=1, keepdim=True)
     return ret + discount * (1.0 - done) * q_next_target.gather(1, a_star).squeeze(1)
+
+
+def memory_needed(cfg: DQNConfig) -> dict[str, int]:
+    """Bytes the agent of ``cfg`` allocates, by the field that sets them: ``hidden`` (the
+    float32 weights of the network, seven times over: online, target, gradients, Adam's two
+    moments, the weight average and a copy while reporting) and ``replay_capacity`` (the
+    replay's arrays). Computed from the sizes, so a run that cannot fit is refused before
+    anything is built."""
+    n_smooth = 3 if cfg.time_aware else 2
+    obs_dim = n_smooth + 2 * cfg.goal_features
+    d_in = obs_dim + n_smooth * 2 * cfg.fourier
+    h = cfg.hidden
+    params = d_in * h + h + h * h + h + (h + 1) + 4 * (h + 1)
+    return {
+        "dqn.hidden": 7 * 4 * params,
+        "dqn.replay_capacity": cfg.replay_capacity * (2 * 4 * obs_dim + 8 + 3 * 4),
+    }
 
 
 class Agent:
@@ -345,6 +374,16 @@ class Agent:
         self.opt.load_state_dict(d["opt"])
         self.replay.load_state_dict(d["replay"])
         self.rng.bit_generator.state = d["rng"]
-        self.updates = d["updates"]
+        self.updates = int(d["updates"])
         # Checkpoints from before weight averaging hold neither.
-        self.average, self.n_averaged = d.get("average"), d.get("n_averaged", 0)
+        average, n_averaged = d.get("average"), d.get("n_averaged", 0)
+        if average is not None:
+            own = self.online.state_dict()
+            ok = isinstance(average, dict) and set(average) == set(own)
+            if not ok or any(
+                not isinstance(average[k], torch.Tensor) or average[k].shape != v.shape
+                for k, v in own.items()
+            ):
+                raise ValueError("average must hold the online network's tensors")
+            average = {k: v.to(self.device) for k, v in average.items()}
+        self.average, self.n_averaged = average, int(n_averaged)

@@ -14,13 +14,22 @@ from typing import Any
 import numpy as np
 import torch
 
+from rainuav._checks import check_integer
 from rainuav.errors import InvalidInputError
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import flight_cost
 from rainuav.radio.radiomap import RadioMap, build_radio_map
+from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
-from rainuav.rl.config import TrainConfig, check_config, load_config, make_scenario
+from rainuav.rl.config import (
+    MAX_SEED,
+    MAX_STARTS,
+    TrainConfig,
+    check_config,
+    load_config,
+    make_scenario,
+)
 from rainuav.rl.dqn import Agent
 from rainuav.rl.setup import make_agent, make_env, pick_device
 
@@ -35,6 +44,10 @@ __all__ = [
     "relative_gap",
     "summarise",
 ]
+
+
+PLAN_CHUNK = 1000
+"""Starts planned per call of the exact planner: evaluations over more show a progress bar."""
 
 
 def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
@@ -101,7 +114,14 @@ def summarise(f: dict[str, np.ndarray], optimum: dict[str, np.ndarray]) -> dict[
 
 def reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dict[str, Any]]:
     """The exact planner's flights (the yardstick) and the straight-line baseline's."""
-    plans = planner.optimal_many(env, starts)
+    plans = []
+    chunks = range(0, len(starts), PLAN_CHUNK)
+    if len(starts) > PLAN_CHUNK:  # a long evaluation shows its progress
+        from tqdm.auto import tqdm
+
+        chunks = tqdm(chunks, desc="exact plans", unit="chunk", total=len(chunks))
+    for i in chunks:
+        plans += planner.optimal_many(env, starts[i : i + PLAN_CHUNK])
     lines = [planner.straight_line(env, s) for s in starts]
     return {
         name: flights(
@@ -264,10 +284,18 @@ def evaluate_saved_run(
     planner's flights between calls on the same map object and task. Returns the metrics, the
     flights and the environment; writes nothing."""
     run = Path(run_dir)
+    if starts is not None:
+        check_integer("starts", starts, 1, MAX_STARTS)
+    if seed is not None:
+        check_integer("seed", seed, 0, MAX_SEED)
     for name in ("config.toml", "radiomap.npz", "checkpoint.pt"):
         if not (run / name).exists():
             raise InvalidInputError(f"{run}: missing {name}; is this a rainuav.train output?")
     cfg = load_config(run / "config.toml")
+    check_config(cfg)
+    # Read (as data, never code) before any map is built: a bad file is refused at once.
+    path = run / "checkpoint.pt"
+    state = checkpoint.load(path, ("agent", "returns", "train_seconds"))
     if radio_map is not None:
         if not (scenario is None and rain_rate is None and engine is None):
             raise InvalidInputError("radio_map: give a map or scenario/rain_rate/engine, not both")
@@ -288,26 +316,31 @@ def evaluate_saved_run(
         if engine is not None:
             scn = dataclasses.replace(scn, engine=engine)
         rm = build_radio_map(scn, progress=True)
-    env = make_env(cfg, rm)
+    try:
+        env = make_env(cfg, rm)
+    except InvalidInputError as err:
+        where = run / "config.toml"
+        raise InvalidInputError(f"{where}: does not fit the map flown: {err}") from err
     agent = make_agent(cfg, env, pick_device(device))
     agent.cfg.shield = shield
-    state = torch.load(run / "checkpoint.pt", weights_only=False, map_location=agent.device)
+    checks = Validation(np.zeros((0, 2)), {})
     try:
         agent.load_state_dict(state["agent"])
-    except (KeyError, RuntimeError) as err:
+        if "validation" in state:
+            checks.load_state_dict(state["validation"])
+        if not online:  # else: load_state_dict left the last online weights in agent.online
+            best = cfg.keep_best and checks.best_online is not None
+            if best and checks.best_at != cfg.dqn.episodes:
+                agent.online.load_state_dict(checks.best_online)
+            else:
+                agent.online.load_state_dict(agent.reported_weights())  # the mean, if averaged
+        episodes, seconds = len(state["returns"]), float(state["train_seconds"])
+    except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as err:
+        why = str(err).splitlines()[0] if str(err) else repr(err)
         raise InvalidInputError(
-            f"{run / 'checkpoint.pt'}: does not fit the network its config.toml describes "
-            f"(a run from an incompatible version?): {str(err).splitlines()[0]}"
+            f"checkpoint {path}: refused (does not fit the network its config.toml describes; "
+            f"a run from an incompatible version?): {why}"
         ) from err
-    checks = Validation(np.zeros((0, 2)), {})
-    if "validation" in state:
-        checks.load_state_dict(state["validation"])
-    if not online:  # else: load_state_dict left the last online weights in agent.online
-        best = cfg.keep_best and checks.best_online is not None
-        if best and checks.best_at != cfg.dqn.episodes:
-            agent.online.load_state_dict(checks.best_online)
-        else:
-            agent.online.load_state_dict(agent.reported_weights())  # the mean, when averaging
     n = cfg.eval_starts if starts is None else starts
     pts = eval_starts(env, n, cfg.eval_seed if seed is None else seed)
     refs = None
@@ -321,6 +354,6 @@ def evaluate_saved_run(
     metrics["rain_rate_mm_h"] = rm.scenario.medium.rain_rate_mm_h
     metrics["trained_on"] = {"scenario": cfg.scenario, "rain_rate": cfg.rain_rate}
     metrics["network"] = "last online" if online else "reported"
-    metrics["episodes"] = len(state["returns"])
-    metrics["training_seconds"] = state["train_seconds"]
+    metrics["episodes"] = episodes
+    metrics["training_seconds"] = seconds
     return metrics, rolls, env

@@ -24,10 +24,11 @@ import numpy as np
 import tomli_w
 import torch
 
-from rainuav._io import write_atomic
+from rainuav._io import FolderLock, check_out_dir, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.radio.radiomap import RadioMap, build_radio_map
+from rainuav.rl import checkpoint
 from rainuav.rl.collect import Lanes, greedy_rollouts
 from rainuav.rl.config import (
     TrainConfig,
@@ -47,12 +48,14 @@ from rainuav.rl.evaluation import (
 )
 from rainuav.rl.learner import learner_ends, learning_reward, training_start
 from rainuav.rl.plots import plot_policy, plot_returns, plot_stages
-from rainuav.rl.setup import make_agent, make_env, pick_device, torch_settings
+from rainuav.rl.setup import check_fits, make_agent, make_env, pick_device, torch_settings
 
 __all__ = ["finish", "load_checkpoint", "run_loop", "save_checkpoint", "train"]
 
-RESUME_MAY_DIFFER = ("device",)
-"""Fields a resumed run may change (the rest must equal the checkpoint's)."""
+RESUME_MAY_DIFFER = ("device", "out")
+"""Fields a resumed run may change (the rest must equal the checkpoint's): the device, and the
+folder's path (a run folder moved or copied elsewhere resumes where it now is; its results do
+not depend on where it lives)."""
 
 
 # -- setup ------------------------------------------------------------------------------------
@@ -68,22 +71,55 @@ def run_map(cfg: TrainConfig, out: Path, resume: bool, radio_map: Any, progress:
 
 
 def save_checkpoint(path: Path, state: dict[str, Any]) -> None:
-    """``torch.save`` to a temporary file, then rename."""
-    write_atomic(path, lambda tmp: torch.save(state, tmp))
+    """Tensors and plain data only (:mod:`rainuav.rl.checkpoint`), to a temporary file, then
+    rename."""
+    checkpoint.save(path, state)
+
+
+CHECKPOINT_KEYS = (
+    "agent", "env_rng", "lanes", "started", "returns", "successes", "stages", "pending",
+    "validation", "train_seconds", "torch_rng", "config",
+)  # fmt: skip
+"""What a training checkpoint holds."""
 
 
 def load_checkpoint(path: Path, cfg: TrainConfig) -> dict[str, Any]:
-    """The checkpoint at ``path``, refused if its run's configuration differs from ``cfg``
-    (the differing fields are named)."""
+    """The checkpoint at ``path`` (read as data: :func:`rainuav.rl.checkpoint.load`), refused
+    if its run's configuration differs from ``cfg`` (the differing fields are named)."""
     if not path.exists():
         raise InvalidInputError(f"--resume: no checkpoint at {path}")
-    state = torch.load(path, weights_only=False)
+    state = checkpoint.load(path, CHECKPOINT_KEYS)
+    if not isinstance(state["config"], dict):
+        raise InvalidInputError(f"checkpoint {path}: refused (its config is not a table)")
     diff = config_diff(state["config"], cfg, ignore=RESUME_MAY_DIFFER)
     if diff:
         raise InvalidInputError(
             f"--resume: the configuration differs from the checkpoint's in {'; '.join(diff)}"
         )
     return state
+
+
+def cut_log(path: Path, done: int) -> None:
+    """Cuts ``log.csv`` back to the episodes a checkpoint holds (``finished <= done``): the
+    rows an interrupted run logged after its last checkpoint are logged again on resume.
+    Rewritten atomically; a row that does not parse ends the kept part."""
+    with path.open(newline="") as fh:
+        rows = list(csv.reader(fh))
+    keep = rows[:1]
+    for row in rows[1:]:
+        try:
+            finished = int(row[0])
+        except (ValueError, IndexError):
+            break
+        if finished > done:
+            break
+        keep.append(row)
+
+    def write(tmp: Path) -> None:
+        with tmp.open("w", newline="") as fh:
+            csv.writer(fh).writerows(keep)
+
+    write_atomic(path, write)
 
 
 class RunLog:
@@ -95,6 +131,8 @@ class RunLog:
         self.tb = SummaryWriter(str(out / "tb"))
         path = out / "log.csv"
         new = not (resume and path.exists())
+        if not new:
+            cut_log(path, done)
         self.fh = path.open("w" if new else "a", newline="")
         self.csv = csv.writer(self.fh)
         if new:
@@ -139,17 +177,19 @@ def train(
     that outlives the call (torch's thread count and determinism are restored)."""
     cfg = apply_preset(cfg)
     check_config(cfg)
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
-    saved = load_checkpoint(out / "checkpoint.pt", cfg) if resume else None
-    rm = run_map(cfg, out, resume, radio_map, progress)
-    write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
-    env = make_env(cfg, rm)
+    check_fits(cfg)
+    out = check_out_dir(cfg.out, "out")
     device = pick_device(cfg.device)
-    with torch_settings(device):
-        agent = make_agent(cfg, env, device)  # seeds torch with cfg.seed
-        env.np_random = np.random.default_rng(random_streams(cfg.seed)["env"])
-        return run_loop(cfg, agent, env, out, saved, progress, stop_after)
+    out.mkdir(parents=True, exist_ok=True)
+    with FolderLock(out, "a rainuav.train run"):
+        saved = load_checkpoint(out / "checkpoint.pt", cfg) if resume else None
+        rm = run_map(cfg, out, resume, radio_map, progress)
+        write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
+        env = make_env(cfg, rm)
+        with torch_settings(device):
+            agent = make_agent(cfg, env, device)  # seeds torch with cfg.seed
+            env.np_random = np.random.default_rng(random_streams(cfg.seed)["env"])
+            return run_loop(cfg, agent, env, out, saved, progress, stop_after)
 
 
 def run_loop(
@@ -174,14 +214,24 @@ def run_loop(
     started, returns, successes, stages = 0, [], [], []
     train_seconds, pending = 0.0, 0  # pending: transitions not yet paid for by a gradient step
     if saved is not None:
-        agent.load_state_dict(saved["agent"])
-        env.np_random.bit_generator.state = saved["env_rng"]
-        lanes.load_state_dict(saved["lanes"])
-        checks.load_state_dict(saved["validation"])
-        torch.set_rng_state(saved["torch_rng"])
-        started, pending, stages = saved["started"], saved["pending"], saved["stages"]
-        returns, successes = saved["returns"], saved["successes"]
-        train_seconds = saved["train_seconds"]
+        try:
+            agent.load_state_dict(saved["agent"])
+            env.np_random.bit_generator.state = saved["env_rng"]
+            lanes.load_state_dict(saved["lanes"])
+            checks.load_state_dict(saved["validation"])
+            torch.set_rng_state(saved["torch_rng"])
+            started, pending, stages = int(saved["started"]), int(saved["pending"]), saved["stages"]
+            returns, successes = list(saved["returns"]), list(saved["successes"])
+            train_seconds = float(saved["train_seconds"])
+        except (KeyError, TypeError, ValueError, RuntimeError, AttributeError, IndexError) as err:
+            raise InvalidInputError(
+                f"checkpoint {out / 'checkpoint.pt'}: refused (does not fit this run: "
+                f"{type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''})"
+            ) from err
+        if not (0 <= len(returns) <= started <= d.episodes and len(successes) == len(returns)):
+            raise InvalidInputError(
+                f"checkpoint {out / 'checkpoint.pt'}: refused (its episode counts are inconsistent)"
+            )
     else:
         for k in range(len(lanes.t)):
             lanes.launch(k, training_start(env, d, env.np_random), started)

@@ -10,13 +10,14 @@ from typing import Any
 import numpy as np
 import torch
 
+from rainuav._checks import check_fits as check_fits_memory
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import NavConfig
 from rainuav.rl.config import TrainConfig
-from rainuav.rl.dqn import Agent
+from rainuav.rl.dqn import Agent, memory_needed
 
-__all__ = ["make_agent", "make_env", "pick_device", "torch_settings"]
+__all__ = ["check_fits", "make_agent", "make_env", "pick_device", "torch_settings"]
 
 
 def make_env(cfg: TrainConfig, radio_map: Any) -> UAVNavEnv:
@@ -37,9 +38,22 @@ def make_env(cfg: TrainConfig, radio_map: Any) -> UAVNavEnv:
     return UAVNavEnv(radio_map=radio_map, config=nav)
 
 
+def check_fits(cfg: TrainConfig) -> None:
+    """Refuses a run whose agent cannot fit in memory, naming the field and the GB
+    (:func:`rainuav.rl.dqn.memory_needed`); called before any map is built."""
+    need = memory_needed(cfg.dqn)
+    biggest = max(need, key=lambda k: need[k])
+    check_fits_memory(
+        f"{biggest} = {getattr(cfg.dqn, biggest.split('.')[1])}",
+        sum(need.values()),
+        f"lower {biggest}",
+    )
+
+
 def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
     """An agent for ``env``: the time limit, the destination and one move in observation
-    units."""
+    units (refused first if it cannot fit in memory: :func:`check_fits`)."""
+    check_fits(cfg)
     x0, x1, y0, y1 = env.field.extent
     s = env.cfg.step_m
     goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())

@@ -20,9 +20,10 @@ from pathlib import Path
 from typing import Any
 
 from rainuav._io import write_atomic
+from rainuav.errors import InvalidInputError
 from rainuav.studies.spec import Case, Study
 
-__all__ = ["MAP_AXES", "TRANSFER_COLUMNS", "plot_learned", "transfer"]
+__all__ = ["MAP_AXES", "TRANSFER_COLUMNS", "plot_learned", "read_result", "transfer"]
 
 MAP_AXES = (
     "rain_rate", "freq_ghz", "wind_m_s", "wind_model", "scenario", "scenario_file", "engine",
@@ -43,6 +44,21 @@ def _fly(
     from rainuav.rl.evaluation import evaluate_saved_run
 
     return evaluate_saved_run(run, radio_map=radio_map, starts=starts, references=refs)
+
+
+def read_result(path: Path) -> dict[str, Any]:
+    """A case's ``result.json`` or ``transfer.json``; one that is not a JSON table (a study
+    folder handed over with a damaged file) raises :class:`InvalidInputError` naming it."""
+    try:
+        row = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as err:
+        raise InvalidInputError(
+            f"{path}: not a readable case result ({type(err).__name__}); delete it to rerun "
+            "the case"
+        ) from err
+    if not isinstance(row, dict):
+        raise InvalidInputError(f"{path}: not a case result (a JSON table); delete it to rerun")
+    return row
 
 
 def _title(m: dict[str, Any]) -> str:
@@ -108,7 +124,7 @@ def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, 
             }
             text = json.dumps(row, indent=2)
             write_atomic(done, lambda t, x=text: t.write_text(x + "\n"))
-        found[c.id] = json.loads(done.read_text())
+        found[c.id] = read_result(done)
     return found
 
 

@@ -28,7 +28,7 @@ import numpy as np
 from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.studies.figures import plot_maps
-from rainuav.studies.policies import TRANSFER_COLUMNS, plot_learned, transfer
+from rainuav.studies.policies import TRANSFER_COLUMNS, plot_learned, read_result, transfer
 from rainuav.studies.spec import Case, Study, case_scenario, train_config
 
 __all__ = ["COLUMNS", "run_case", "run_study", "write_tables"]
@@ -200,7 +200,7 @@ def run_study(
     finally:
         if bar is not None:
             bar.close()
-    rows = [json.loads((out / "cases" / c.id / "result.json").read_text()) for c in cases]
+    rows = [read_result(out / "cases" / c.id / "result.json") for c in cases]
     if "map" in study.compute:
         plot_maps(cases, out / "maps.png", "sinr")
         plot_maps(cases, out / "rss.png", "rss")

@@ -48,6 +48,8 @@ COMPUTE = ("map", "optimal", "learned")
 SCENARIO_FIELDS = ("freq_ghz", "wind_m_s", "wind_model", "engine")
 """Fields of a case that change the scenario rather than the run."""
 BUILT_IN = ("paper", "mmwave")
+MAX_CASES = 10_000
+"""The most cases a study may have (axes x seeds): every case is at least a map and a plan."""
 _TOP = {"name", "sweep", "seeds", "compute", "eval_starts", "base", "axes", "quick"}
 
 
@@ -223,13 +225,37 @@ def parse_study(data: dict[str, Any], where: str) -> Study:
     name = data.get("name", "study")
     if not isinstance(name, str) or not name:
         raise InvalidInputError(f"{where}: name must be a non-empty string")
+    for k, v in axes.items():
+        seen: list[Any] = []
+        for x in v:
+            if x in seen:
+                raise InvalidInputError(f"{where} [axes]: {k} repeats the value {_label(x)!r}")
+            seen.append(x)
+    repeated = sorted({s for s in seeds if seeds.count(s) > 1})
+    if repeated:
+        raise InvalidInputError(f"{where}: seeds repeats {repeated[0]} (a case runs once a seed)")
+    # Count first: a grid of a million cases is refused at once, not after checking each.
+    if sweep == "grid":
+        n_cases = math.prod(len(v) for v in axes.values()) * len(seeds)
+    else:
+        n_cases = (1 + sum(len(v) for v in axes.values())) * len(seeds)
+    if n_cases > MAX_CASES:
+        raise InvalidInputError(
+            f"{where}: {n_cases} cases (axes x seeds); a study may have at most {MAX_CASES}"
+        )
     study = Study(name, dict(base), {k: list(v) for k, v in axes.items()}, seeds, compute,
                   sweep, n, dict(quick))  # fmt: skip
     for s in (study, study.with_quick()):
+        first: dict[tuple[Any, ...], str] = {}
         for case in s.cases():
             _check_case(f"{where} case {case.id}", dict(case.fields))
-    if math.prod(len(v) for v in axes.values()) > 10_000 and sweep == "grid":
-        raise InvalidInputError(f"{where}: the grid has over 10 000 cases")
+            key = (case.fields, case.seed)
+            if key in first:
+                raise InvalidInputError(
+                    f"{where}: case {case.id} repeats case {first[key]} (the same fields and "
+                    "seed); drop one of the values"
+                )
+            first[key] = case.id
     return study
 
 

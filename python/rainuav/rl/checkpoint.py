@@ -1,0 +1,105 @@
+"""Checkpoints and policy files that are data, never code.
+
+A run folder is something people hand each other, so loading one must not run anything it
+holds. Files are written by :func:`save` with tensors and plain types only (numbers, strings,
+lists, tuples, dicts, None): a numpy array is stored as ``{"__ndarray__": tensor}`` (a numpy
+scalar as a 0-d one) and restored bit for bit by :func:`load`, which reads with
+``torch.load(..., weights_only=True)``: torch's restricted unpickler, which builds tensors and
+plain containers and refuses any other global. A file that needs more (a pickle that would call
+a function, a class, an older checkpoint holding raw numpy objects) or that is not a checkpoint
+at all (empty, truncated, random bytes) is refused with one line naming the file.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from rainuav._io import write_atomic
+from rainuav.errors import InvalidInputError
+
+__all__ = ["from_plain", "load", "save", "to_plain"]
+
+_ARRAY = "__ndarray__"
+
+
+def to_plain(obj: Any) -> Any:
+    """``obj`` with every numpy array or scalar replaced by ``{"__ndarray__": tensor}``
+    (containers are copied; tensors and plain values pass through)."""
+    if isinstance(obj, np.ndarray | np.generic):
+        arr = np.asarray(obj)
+        if arr.dtype == object:
+            raise TypeError("a checkpoint cannot hold numpy object arrays")
+        return {_ARRAY: torch.from_numpy(np.array(arr, order="C", copy=True))}
+    if isinstance(obj, dict):
+        return {k: to_plain(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [to_plain(v) for v in obj]
+    if isinstance(obj, tuple):
+        return tuple(to_plain(v) for v in obj)
+    return obj
+
+
+def from_plain(obj: Any) -> Any:
+    """The inverse of :func:`to_plain`: 0-d arrays come back as numpy scalars."""
+    if isinstance(obj, dict):
+        if set(obj) == {_ARRAY} and isinstance(obj[_ARRAY], torch.Tensor):
+            arr = obj[_ARRAY].numpy()
+            return arr[()] if arr.ndim == 0 else arr
+        return {k: from_plain(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [from_plain(v) for v in obj]
+    if isinstance(obj, tuple):
+        return tuple(from_plain(v) for v in obj)
+    return obj
+
+
+def save(path: str | os.PathLike[str], state: dict[str, Any]) -> Path:
+    """Writes ``state`` (tensors, numpy arrays and plain values) to ``path`` atomically."""
+    plain = to_plain(state)
+    return write_atomic(path, lambda tmp: torch.save(plain, tmp))
+
+
+def load(
+    path: str | os.PathLike[str], required: tuple[str, ...] = (), what: str = "checkpoint"
+) -> dict[str, Any]:
+    """The dict saved at ``path`` by :func:`save`, read without running code
+    (``weights_only=True``, on the CPU); anything else raises :class:`InvalidInputError`
+    naming the file: missing, unreadable, not a checkpoint, holding more than tensors and
+    plain data, or lacking one of the ``required`` keys."""
+    p = Path(path)
+    if not p.is_file():
+        raise InvalidInputError(f"{what} {p}: no such file")
+    try:
+        state = torch.load(p, weights_only=True, map_location="cpu")
+    except Exception as err:  # torch raises many types for a bad file; all mean the same
+        raise InvalidInputError(f"{what} {p}: refused ({_reason(err)})") from err
+    if not isinstance(state, dict):
+        raise InvalidInputError(f"{what} {p}: refused (holds a {type(state).__name__}, not a dict)")
+    missing = [k for k in required if k not in state]
+    if missing:
+        raise InvalidInputError(
+            f"{what} {p}: refused (no {missing[0]!r}; not written by this rainuav version?)"
+        )
+    return from_plain(state)
+
+
+def _reason(err: Exception) -> str:
+    """One line for why torch could not load a file."""
+    text = str(err)
+    if "Unsupported global" in text or "GLOBAL" in text:
+        name = text.split("GLOBAL ", 1)[1].split(" ", 1)[0] if "GLOBAL " in text else "a global"
+        return (
+            f"its pickle calls {name}: it holds more than tensors and plain data, so loading "
+            "it could run code, and rainuav never loads such files"
+        )
+    if isinstance(err, EOFError) or "EOF" in text or "truncated" in text.lower():
+        return "empty or truncated file"
+    if "central directory" in text or "zip archive" in text or "Unsupported operand" in text:
+        return "not a torch checkpoint, or a damaged one"
+    first = text.strip().splitlines()[0] if text.strip() else ""
+    return f"not a torch checkpoint: {type(err).__name__}: {first[:120]}"

@@ -1,0 +1,547 @@
+"""The corpus of bad and hostile inputs (issue #25): what users hand each other (run folders,
+study folders, cached maps, scenario files) and what they type (CLI flags, env calls), each
+with the answer it must get.
+
+Every probe is one of:
+- **refused**: one line naming the file or field (CLIs: ``error: ...`` and exit 2;
+  the Python API: :class:`rainuav.InvalidInputError`), with nothing run, written or lost;
+- **accepted**: rightly taken (a moved run folder resumes, a cache that cannot be written
+  is a warning and the map is still returned and written).
+
+A probe that ends in a traceback, a hang (pytest-timeout) or a wrong result fails its test.
+The last test prints the totals: inputs tried, clean refusals, rightly accepted, and zero
+tracebacks, hangs and silent wrong results. The slow probes (a real Ctrl-C during a map build
+and during a study) are in ``benches/hostile_corpus.py``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+from rainuav import InvalidInputError, evaluate, radiomap, study, train, validate
+from rainuav._io import FolderLock, write_atomic
+from rainuav.errors import CacheWarning
+from rainuav.nav import UAVNavEnv
+from rainuav.nav.vector import UAVNavVectorEnv
+from rainuav.radio import RadioMap, build_radio_map
+from rainuav.radio.cache import map_path
+from rainuav.radio.scenario import Area, Cell, Scenario, Site
+from rainuav.rl import checkpoint
+from rainuav.rl.loop import train as train_run
+from test_agent_train import small_cfg, synthetic_map
+
+TALLY: Counter[str] = Counter()
+"""Outcome of every probe that ran: 'refused' or 'accepted' (anything else fails its test)."""
+
+
+def refused(probe: str, rc: int, err: str, *needles: str) -> None:
+    """A CLI's clean refusal: exit 2, one line ``error: ...`` holding every needle, last on
+    stderr (progress bars may come before it), and no traceback."""
+    lines = err.replace("\r", "\n").strip().splitlines()
+    assert rc == 2, (probe, rc, err)
+    assert "Traceback" not in err, (probe, err)
+    errors = [line for line in lines if line.startswith("error: ")]
+    assert len(errors) == 1 and lines[-1] == errors[0], (probe, err)
+    for n in needles:
+        assert n in errors[0], (probe, n, errors[0])
+    TALLY["refused"] += 1
+
+
+def api_refused(probe: str, call: Any, *needles: str) -> str:
+    """The API's clean refusal: InvalidInputError, a one-line message holding every needle."""
+    with pytest.raises(InvalidInputError) as info:
+        call()
+    msg = str(info.value)
+    assert "\n" not in msg, (probe, msg)
+    for n in needles:
+        assert n in msg, (probe, n, msg)
+    TALLY["refused"] += 1
+    return msg
+
+
+def accepted(probe: str) -> None:
+    TALLY["accepted"] += 1
+
+
+def run_cli(mod: Any, argv: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str]:
+    capsys.readouterr()
+    rc = mod.main([str(a) for a in argv])
+    return rc, capsys.readouterr().err
+
+
+class Hostile:
+    """Unpickling this creates a file: the proof that a loader ran code."""
+
+    def __init__(self, marker: Path) -> None:
+        self.marker = marker
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (open, (str(self.marker), "w"))
+
+
+def tiny_scenario(engine: str = "ray") -> Scenario:
+    return Scenario(
+        name="tiny",
+        area=Area(x_min_m=0, x_max_m=400, y_min_m=0, y_max_m=400, resolution_m=20),
+        sites=[Site(x_m=100.0, y_m=100.0, cells=[Cell(azimuth_deg=45.0, beamwidth_deg=6.0)])],
+        engine=engine,
+    )
+
+
+@pytest.fixture(scope="module")
+def run_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A finished tiny training run (20 episodes on the synthetic 400 m map)."""
+    out = tmp_path_factory.mktemp("run") / "run"
+    torch.set_num_threads(1)
+    train_run(small_cfg(out, 20), progress=False, radio_map=synthetic_map())
+    return out
+
+
+@pytest.fixture
+def run_copy(run_folder: Path, tmp_path: Path) -> Path:
+    """A copy of the run folder, to spoil; its config names its new place."""
+    dst = tmp_path / "handed_over"
+    shutil.copytree(run_folder, dst)
+    cfg = (dst / "config.toml").read_text().replace(str(run_folder), str(dst))
+    (dst / "config.toml").write_text(cfg)
+    return dst
+
+
+# -- 1. A run folder never runs code ---------------------------------------------------------
+def _plant_hostile(run: Path, marker: Path) -> None:
+    state = {"agent": Hostile(marker), "returns": [], "train_seconds": 0.0}
+    torch.save(state, run / "checkpoint.pt")
+
+
+def test_hostile_checkpoint_is_refused_by_evaluate(run_copy: Path, tmp_path: Path, capsys) -> None:
+    marker = tmp_path / "PWNED"
+    _plant_hostile(run_copy, marker)
+    rc, err = run_cli(evaluate, [run_copy, "--out", tmp_path / "ev"], capsys)
+    refused("evaluate hostile", rc, err, "checkpoint.pt", "could run code")
+    assert not marker.exists()
+
+
+def test_hostile_checkpoint_is_refused_by_resume(run_copy: Path, tmp_path: Path, capsys) -> None:
+    marker = tmp_path / "PWNED"
+    _plant_hostile(run_copy, marker)
+    rc, err = run_cli(train, ["--config", run_copy / "config.toml", "--resume"], capsys)
+    refused("resume hostile", rc, err, "checkpoint.pt", "could run code")
+    assert not marker.exists()
+
+
+def test_hostile_checkpoint_is_refused_by_a_study(run_folder: Path, tmp_path: Path, capsys) -> None:
+    # A study folder handed over with its cases finished: the driver only computes the
+    # transfer figures, which fly each case's saved network.
+    spec = tmp_path / "s.toml"
+    spec.write_text(
+        'name = "t"\nseeds = [0]\ncompute = ["learned"]\neval_starts = 5\n'
+        '[base]\nscenario = "paper"\nrain_rate = 25.0\n[axes]\nrain_rate = [0.0]\n'
+    )
+    out, marker = tmp_path / "study", tmp_path / "PWNED"
+    for case in study_cases(spec):
+        folder = out / "cases" / case
+        shutil.copytree(run_folder, folder / "run")
+        (folder / "result.json").write_text(json.dumps({"case": case, "success_rate": 1.0}))
+    _plant_hostile(out / "cases" / "001_rain_rate=0_s0" / "run", marker)
+    rc, err = run_cli(study, [spec, "--out", out, "--workers", "1"], capsys)
+    refused("study hostile", rc, err, "checkpoint.pt", "could run code")
+    assert not marker.exists()
+
+
+def study_cases(spec: Path) -> list[str]:
+    from rainuav.studies import load_study
+
+    return [c.id for c in load_study(spec).cases()]
+
+
+def test_python_dash_m_evaluate_refuses_a_hostile_checkpoint(run_copy, tmp_path) -> None:
+    marker = tmp_path / "PWNED"
+    _plant_hostile(run_copy, marker)
+    proc = subprocess.run(
+        [sys.executable, "-m", "rainuav.evaluate", str(run_copy), "--out", str(tmp_path / "e")],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    refused("python -m evaluate hostile", proc.returncode, proc.stderr, "could run code")
+    assert "Traceback" not in proc.stderr and not marker.exists()
+
+
+def test_no_torch_load_without_weights_only() -> None:
+    # Every torch.load in the package reads with weights_only=True (rainuav.rl.checkpoint).
+    import re
+
+    root = Path(__file__).parents[1]
+    call = re.compile(r"^[^#\"']*\btorch\.load\(")  # a call, not a comment or a string
+    calls = 0
+    for folder in ("python", "benches", "tests"):
+        for f in (root / folder).rglob("*.py"):
+            for line in f.read_text().splitlines():
+                if call.search(line):
+                    calls += 1
+                    assert "weights_only=True" in line, (f, line)
+    assert calls >= 2  # rainuav.rl.checkpoint.load and the tests' policy.pt reads
+
+
+# -- 2. Tracebacks that are now one line -----------------------------------------------------
+@pytest.mark.parametrize(
+    ("kind", "content"),
+    [("empty", b""), ("truncated", None), ("random", bytes(range(256)) * 20)],
+)
+@pytest.mark.parametrize("cli", ["evaluate", "resume"])
+def test_broken_checkpoint_is_one_line(run_copy, tmp_path, capsys, kind, content, cli) -> None:
+    ck = run_copy / "checkpoint.pt"
+    data = ck.read_bytes()[: len(ck.read_bytes()) // 2] if content is None else content
+    ck.write_bytes(data)
+    if cli == "evaluate":
+        rc, err = run_cli(evaluate, [run_copy, "--out", tmp_path / "ev"], capsys)
+    else:
+        rc, err = run_cli(train, ["--config", run_copy / "config.toml", "--resume"], capsys)
+    refused(f"{cli} {kind} checkpoint", rc, err, "checkpoint.pt")
+
+
+def test_checkpoint_holding_other_arrays_is_refused(run_copy, tmp_path, capsys) -> None:
+    # Plain data, but the replay of another size: refused when restored, not trusted.
+    state = checkpoint.load(run_copy / "checkpoint.pt")
+    state["agent"]["replay"]["obs"] = np.zeros((3, 3), np.float32)
+    checkpoint.save(run_copy / "checkpoint.pt", state)
+    rc, err = run_cli(train, ["--config", run_copy / "config.toml", "--resume"], capsys)
+    refused("resume wrong replay", rc, err, "checkpoint.pt", "replay.obs")
+
+
+@pytest.mark.parametrize("cli", ["radiomap", "train", "evaluate", "validate"])
+def test_out_that_is_a_file_is_refused_before_any_work(run_copy, tmp_path, capsys, cli) -> None:
+    target = tmp_path / "a_file"
+    target.write_text("keep me")
+    argv = {
+        "radiomap": (radiomap, ["--scenario", "paper", "--out", target]),
+        "train": (train, ["--out", target, "--episodes", "1"]),
+        "evaluate": (evaluate, [run_copy, "--out", target]),
+        "validate": (validate, ["rain", "--out", target]),
+    }[cli]
+    rc, err = run_cli(*argv, capsys)
+    refused(f"{cli} --out file", rc, err, "a_file", "not a folder")
+    assert target.read_text() == "keep me"
+
+
+@pytest.mark.parametrize("where", ["a file", "/proc", "radiomaps is a file"])
+def test_unwritable_cache_is_a_warning_and_the_map_is_kept(tmp_path, monkeypatch, capsys, where):
+    cache = {
+        "a file": tmp_path / "cachefile",
+        "/proc": Path("/proc/rainuav-cache"),
+        "radiomaps is a file": tmp_path / "cache",
+    }[where]
+    if where == "a file":
+        cache.write_text("")
+    if where == "radiomaps is a file":
+        cache.mkdir()
+        (cache / "radiomaps").write_text("")
+    monkeypatch.setenv("RAINUAV_CACHE_DIR", str(cache))
+    with pytest.warns(CacheWarning, match="cannot be written"):
+        rm = build_radio_map(tiny_scenario())
+    assert rm.sinr_db.shape == (20, 20) and np.all(np.isfinite(rm.sinr_db))
+    cfg = tmp_path / "tiny.toml"
+    tiny_scenario().to_toml(cfg)
+    rc, err = run_cli(radiomap, ["--config", cfg, "--out", tmp_path / "maps"], capsys)
+    assert rc == 0, err
+    assert err.count("warning: radio-map cache") == 1 and "Traceback" not in err
+    assert RadioMap.load(tmp_path / "maps" / "radiomap.npz").sinr_db.shape == (20, 20)
+    accepted(f"cache {where}")
+
+
+@pytest.mark.parametrize("seed", ["-1", str(2**76)])
+def test_seed_out_of_range_is_refused_before_writing(tmp_path, capsys, seed) -> None:
+    out = tmp_path / "run"
+    rc, err = run_cli(train, ["--seed", seed, "--out", out], capsys)
+    refused(f"--seed {seed}", rc, err, "seed", "2^63")
+    assert not (out / "config.toml").exists() and not (out / "radiomap.npz").exists()
+
+
+@pytest.mark.parametrize(
+    ("flag", "value", "field"),
+    [("--hidden", "100000000", "dqn.hidden"), ("--replay-capacity", "10000000000", "replay")],
+)
+def test_sizes_that_cannot_fit_are_refused_naming_the_gb(tmp_path, capsys, flag, value, field):
+    out = tmp_path / "run"
+    rc, err = run_cli(train, [flag, value, "--out", out], capsys)
+    refused(f"{flag} {value}", rc, err, field, "GB")
+    assert not (out / "radiomap.npz").exists()  # refused before the map was built
+
+
+def test_a_map_too_big_for_memory_is_refused_before_allocating() -> None:
+    # 21 cells x 3.6e7 pixels: the ray engine alone would hold three 5.6 GiB arrays.
+    three = [Cell(azimuth_deg=a) for a in (0.0, 120.0, 240.0)]
+    sites = [Site(x_m=1000.0 * (k + 1), y_m=1000.0, cells=list(three)) for k in range(7)]
+    scn = Scenario(
+        name="huge",
+        area=Area(x_min_m=0, x_max_m=60_000, y_min_m=0, y_max_m=60_000, resolution_m=10),
+        sites=sites,
+        engine="ray",
+    )
+    assert sum(len(s.cells) for s in scn.sites) == 21
+    api_refused("ray map 21 x 3.6e7", lambda: build_radio_map(scn, cache=False), "GB", "cells")
+
+
+@pytest.mark.parametrize("n", [10**9, 10**12])
+def test_vector_env_of_too_many_uavs_is_refused(n: int) -> None:
+    import rainuav.envs  # noqa: F401  (registers the env)
+
+    api_refused(
+        f"make_vec {n}",
+        lambda: gym.make_vec(
+            "rainuav/UAVNav-v0", num_envs=n, vectorization_mode="vector_entry_point",
+            radio_map=synthetic_map(), goal_m=(300.0, 350.0),
+        ),
+        "num_envs", "GB",
+    )  # fmt: skip
+
+
+def _env() -> UAVNavEnv:
+    return UAVNavEnv(radio_map=synthetic_map(), goal_m=(300.0, 350.0), max_steps=100)
+
+
+@pytest.mark.parametrize("action", ["up", 1.7, 1.0, True, None, [1], np.array([1, 2])])
+def test_env_refuses_actions_that_are_not_one_integer(action: Any) -> None:
+    env = _env()
+    env.reset(seed=0)
+    api_refused(f"env.step({action!r})", lambda: env.step(action), "action")
+
+
+def test_env_takes_numpy_integers() -> None:
+    env = _env()
+    env.reset(seed=0, options={"start_m": (100.0, 100.0)})
+    a = env.step(np.int64(0))
+    env.reset(seed=0, options={"start_m": (100.0, 100.0)})
+    b = env.step(np.array(0))
+    env.reset(seed=0, options={"start_m": (100.0, 100.0)})
+    c = env.step(0)
+    assert a[1] == b[1] == c[1] and np.array_equal(a[0], c[0])
+    accepted("env.step(numpy integers)")
+
+
+@pytest.mark.parametrize("start", ["here", (float("nan"), 1.0), (1e9, 0.0), (1.0, 2.0, 3.0)])
+def test_env_reset_refuses_a_bad_start(start: Any) -> None:
+    api_refused(
+        f"reset start_m={start!r}", lambda: _env().reset(options={"start_m": start}), "start_m"
+    )
+
+
+def test_step_before_reset_is_refused() -> None:
+    api_refused("step before reset", lambda: _env().step(0), "reset")
+    import rainuav.envs  # noqa: F401
+
+    wrapped = gym.make("rainuav/UAVNav-v0", radio_map=synthetic_map(), goal_m=(300.0, 350.0))
+    with pytest.raises(Exception, match="reset"):  # gymnasium's own order check comes first
+        wrapped.step(0)
+    api_refused("unwrapped step before reset", lambda: wrapped.unwrapped.step(0), "reset")
+    venv = UAVNavVectorEnv(_env(), 4)
+    api_refused("vector step before reset", lambda: venv.step(np.zeros(4, np.int64)), "reset")
+
+
+@pytest.mark.parametrize(
+    "actions", [[0.5, 1.9, 2.2, 3.99], [0.0, 1.0, 2.0, 3.0], ["up"] * 4, [0, 1, 2, 4], [0, 1]]
+)
+def test_vector_env_refuses_non_integral_actions(actions: Any) -> None:
+    venv = UAVNavVectorEnv(_env(), 4)
+    venv.reset(seed=0)
+    api_refused(f"vector step {actions!r}", lambda: venv.step(actions), "integers in 0..3")
+
+
+def test_vector_env_refuses_a_bad_start() -> None:
+    venv = UAVNavVectorEnv(_env(), 4)
+    api_refused("vector reset here", lambda: venv.reset(options={"start_m": "here"}), "start_m")
+
+
+# -- 3. Hangs --------------------------------------------------------------------------------
+def test_a_million_case_grid_is_refused_before_any_case_is_checked(tmp_path, monkeypatch, capsys):
+    from rainuav.studies import spec as spec_mod
+
+    def never(*_: Any) -> None:
+        raise AssertionError("a case was checked before the count")
+
+    monkeypatch.setattr(spec_mod, "_check_case", never)
+    f = tmp_path / "grid.toml"
+    rates = ", ".join(str(float(v)) for v in range(1000))
+    mus = ", ".join(str(0.001 * (k + 1)) for k in range(1000))
+    f.write_text(
+        f'name = "g"\nsweep = "grid"\n[base]\nscenario = "paper"\n'
+        f"[axes]\nrain_rate = [{rates}]\nmu = [{mus}]\n"
+    )
+    rc, err = run_cli(study, [f, "--out", tmp_path / "o"], capsys)
+    refused("grid 10^6", rc, err, "1000000 cases", "10000")
+
+
+def test_evaluate_bounds_its_starts(run_copy: Path, tmp_path: Path, capsys) -> None:
+    rc, err = run_cli(evaluate, [run_copy, "--starts", "1000000000"], capsys)
+    refused("evaluate --starts 1e9", rc, err, "--starts", "100000")
+    rc, err = run_cli(train, ["--eval-starts", "1000000000", "--out", tmp_path / "r"], capsys)
+    refused("train --eval-starts 1e9", rc, err, "eval_starts", "100000")
+
+
+# -- 4. Wrong results that were given without a word -----------------------------------------
+def test_resume_cuts_the_log_back_to_the_checkpoint_even_in_a_moved_folder(tmp_path) -> None:
+    first, moved = tmp_path / "first", tmp_path / "moved"
+    stopped = train_run(
+        small_cfg(first, 120), progress=False, radio_map=synthetic_map(), stop_after=50
+    )
+    assert stopped == {}
+    # As a kill -9 after the log flushed past the checkpoint at 50 would leave it:
+    with (first / "log.csv").open("a", newline="") as fh:
+        for k in range(51, 63):
+            csv.writer(fh).writerow([k, k, "1.0", 10, 0, "0.1", "1.0"])
+    shutil.move(first, moved)  # and the folder handed to someone else, elsewhere
+    m = train_run(small_cfg(moved, 120), resume=True, progress=False)
+    assert m["episodes"] == 120
+    with (moved / "log.csv").open() as fh:
+        finished = [int(r["finished"]) for r in csv.DictReader(fh)]
+    assert finished == list(range(1, 121))
+    accepted("moved run folder resumes")
+
+
+def test_a_second_training_into_the_same_folder_is_refused(run_copy: Path, capsys) -> None:
+    with FolderLock(run_copy, "a rainuav.train run"):
+        rc, err = run_cli(train, ["--config", run_copy / "config.toml", "--resume"], capsys)
+    refused("second train same --out", rc, err, str(run_copy), "is writing to this folder")
+
+
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [("sinr_db", 999.0), ("sinr_db", np.nan), ("rss_dbm", np.inf), ("serving_cell", 7)],
+)
+def test_a_cached_map_holding_garbage_is_rebuilt(tmp_path, key, value) -> None:
+    scn = tiny_scenario()
+    good = build_radio_map(scn)
+    path = map_path(scn.digest())
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files}
+    data[key] = np.full_like(data[key], value)
+    with path.open("wb") as fh:
+        np.savez(fh, **data)  # the right keys and digest, the wrong values
+    api_refused(f"cached {key}={value}", lambda: RadioMap.load(path), key)
+    again = build_radio_map(scn)
+    assert np.array_equal(again.sinr_db, good.sinr_db)
+
+
+def test_a_run_folder_map_holding_garbage_is_refused(run_copy, tmp_path, capsys) -> None:
+    path = run_copy / "radiomap.npz"
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files}
+    data["sir_db"] = np.full_like(data["sir_db"], np.nan)
+    with path.open("wb") as fh:
+        np.savez(fh, **data)
+    rc, err = run_cli(evaluate, [run_copy, "--out", tmp_path / "ev"], capsys)
+    refused("run folder NaN map", rc, err, "radiomap.npz", "sir_db")
+
+
+@pytest.mark.parametrize(
+    ("axes", "seeds", "needle"),
+    [
+        ("rain_rate = [10.0, 10.0, 10.0]", "[0]", "repeats the value"),
+        ("rain_rate = [10.0]", "[0, 0]", "seeds repeats 0"),
+        ("rain_rate = [10.0]\nboth = [{ rain_rate = 10.0 }]", "[0]", "repeats case"),
+    ],
+)
+def test_a_study_repeating_a_case_is_refused(tmp_path, capsys, axes, seeds, needle) -> None:
+    f = tmp_path / "dup.toml"
+    f.write_text(f'name = "d"\nseeds = {seeds}\n[base]\nscenario = "paper"\n[axes]\n{axes}\n')
+    rc, err = run_cli(study, [f, "--out", tmp_path / "o"], capsys)
+    refused(f"study {needle}", rc, err, needle)
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o002, 0o077])
+def test_written_files_honour_the_umask(tmp_path: Path, umask: int) -> None:
+    old = os.umask(umask)
+    try:
+        path = write_atomic(tmp_path / "f.txt", lambda t: t.write_text("x"))
+    finally:
+        os.umask(old)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+    accepted(f"umask {oct(umask)}")
+
+
+# -- 5. What users of this field would try next ----------------------------------------------
+@pytest.mark.parametrize("name", ["config.toml", "radiomap.npz", "checkpoint.pt"])
+@pytest.mark.parametrize("how", ["missing", "empty", "garbage", "a folder"])
+def test_every_file_of_a_run_folder_spoiled(run_copy, tmp_path, capsys, name, how) -> None:
+    f = run_copy / name
+    f.unlink()
+    if how == "empty":
+        f.write_bytes(b"")
+    elif how == "garbage":
+        f.write_bytes(b"\x00\xff not what it claims \x80" * 50)
+    elif how == "a folder":
+        f.mkdir()
+    rc, err = run_cli(evaluate, [run_copy, "--out", tmp_path / "ev"], capsys)
+    refused(f"evaluate {name} {how}", rc, err, name)
+
+
+def test_a_map_file_that_needs_pickle_is_refused(run_copy, tmp_path, capsys) -> None:
+    marker = tmp_path / "PWNED"
+    path = run_copy / "radiomap.npz"
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files}
+    data["sinr_db"] = np.array([Hostile(marker)], dtype=object)
+    with path.open("wb") as fh:
+        np.savez(fh, **data)
+    rc, err = run_cli(evaluate, [run_copy, "--out", tmp_path / "ev"], capsys)
+    refused("map with a pickle", rc, err, "radiomap.npz")
+    assert not marker.exists()
+
+
+def test_a_config_from_a_newer_release_is_refused_naming_the_field(run_copy, tmp_path, capsys):
+    cfg = run_copy / "config.toml"
+    cfg.write_text("storm_seed = 3\n" + cfg.read_text())
+    rc, err = run_cli(evaluate, [run_copy, "--out", tmp_path / "ev"], capsys)
+    refused("newer config.toml", rc, err, "storm_seed")
+    scn = tmp_path / "newer.toml"
+    tiny_scenario().to_toml(scn)
+    scn.write_text(scn.read_text().replace("[area]", "[area]\nterrain_file = 'dem.tif'"))
+    rc, err = run_cli(radiomap, ["--config", scn, "--out", tmp_path / "m"], capsys)
+    refused("newer scenario", rc, err, "terrain_file")
+
+
+def test_ctrl_c_is_one_line_and_exit_130(tmp_path, monkeypatch, capsys) -> None:
+    import rainuav.radio
+    import rainuav.studies.run
+
+    def interrupt(*_: Any, **__: Any) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(rainuav.radio, "build_radio_map", interrupt)
+    rc, err = run_cli(radiomap, ["--scenario", "paper", "--out", tmp_path / "m"], capsys)
+    assert rc == 130 and err.strip().splitlines() == [
+        "interrupted: the map build stopped; nothing was written"
+    ]
+    assert not (tmp_path / "m").exists()
+    monkeypatch.setattr(rainuav.studies.run, "_maps", interrupt)
+    f = tmp_path / "s.toml"
+    f.write_text('name = "s"\ncompute = ["map"]\n[base]\nscenario = "paper"\n[axes]\nmu = [0.1]\n')
+    rc, err = run_cli(study, [f, "--out", tmp_path / "s", "--workers", "1"], capsys)
+    last = err.replace("\r", "\n").strip().splitlines()[-1]
+    assert rc == 130 and "Traceback" not in err
+    assert last == "interrupted: finished cases are kept; the same command resumes the study"
+    TALLY["accepted"] += 2  # a clean stop is the right answer to Ctrl-C
+
+
+def test_the_corpus_totals(capsys) -> None:
+    total = sum(TALLY.values())
+    with capsys.disabled():
+        print(
+            f"\nhostile-input corpus: {total} inputs tried, {TALLY['refused']} cleanly refused, "
+            f"{TALLY['accepted']} rightly accepted, 0 tracebacks, 0 hangs, 0 silent wrong results"
+        )
+    # Every probe that ran ended as one of the two (a traceback, hang or wrong result fails
+    # its own test before this one); with the whole module run, the corpus is this size.
+    assert set(TALLY) <= {"refused", "accepted"}
+    if total:
+        assert TALLY["refused"] > 0
