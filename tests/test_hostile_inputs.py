@@ -383,9 +383,9 @@ def test_a_million_case_grid_is_refused_before_any_case_is_checked(tmp_path, mon
 
 def test_evaluate_bounds_its_starts(run_copy: Path, tmp_path: Path, capsys) -> None:
     rc, err = run_cli(evaluate, [run_copy, "--starts", "1000000000"], capsys)
-    refused("evaluate --starts 1e9", rc, err, "--starts", "100000")
+    refused("evaluate --starts 1e9", rc, err, "--starts", "1..10000")
     rc, err = run_cli(train, ["--eval-starts", "1000000000", "--out", tmp_path / "r"], capsys)
-    refused("train --eval-starts 1e9", rc, err, "eval_starts", "100000")
+    refused("train --eval-starts 1e9", rc, err, "eval_starts", "1..10000")
 
 
 # -- 4. Wrong results that were given without a word -----------------------------------------
@@ -523,6 +523,17 @@ def test_ctrl_c_is_one_line_and_exit_130(tmp_path, monkeypatch, capsys) -> None:
         "interrupted: the map build stopped; nothing was written"
     ]
     assert not (tmp_path / "m").exists()
+    import rainuav.rl.loop
+
+    monkeypatch.setattr(rainuav.rl.loop, "train", interrupt)
+    rc, err = run_cli(train, ["--out", tmp_path / "r"], capsys)
+    assert rc == 130 and err.strip().splitlines() == [
+        "interrupted: training stopped before its first checkpoint; nothing to resume from"
+    ]
+    (tmp_path / "r").mkdir()
+    (tmp_path / "r" / "checkpoint.pt").write_bytes(b"")
+    rc, err = run_cli(train, ["--out", tmp_path / "r"], capsys)
+    assert rc == 130 and "--resume continues from" in err and err.count("\n") == 1
     monkeypatch.setattr(rainuav.studies.run, "_maps", interrupt)
     f = tmp_path / "s.toml"
     f.write_text('name = "s"\ncompute = ["map"]\n[base]\nscenario = "paper"\n[axes]\nmu = [0.1]\n')
@@ -530,7 +541,7 @@ def test_ctrl_c_is_one_line_and_exit_130(tmp_path, monkeypatch, capsys) -> None:
     last = err.replace("\r", "\n").strip().splitlines()[-1]
     assert rc == 130 and "Traceback" not in err
     assert last == "interrupted: finished cases are kept; the same command resumes the study"
-    TALLY["accepted"] += 2  # a clean stop is the right answer to Ctrl-C
+    TALLY["accepted"] += 4  # a clean stop is the right answer to Ctrl-C
 
 
 def test_the_corpus_totals(capsys) -> None:

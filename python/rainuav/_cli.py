@@ -18,10 +18,14 @@ def _one_line(message: Any, category: type[Warning], *_: Any, **__: Any) -> None
     print(f"warning: {message}", file=sys.stderr)
 
 
-def run(body: Callable[[], int], on_interrupt: str = "nothing half-written was kept") -> int:
+def run(
+    body: Callable[[], int],
+    on_interrupt: str | Callable[[], str] = "nothing half-written was kept",
+) -> int:
     """Runs a CLI's ``body`` and returns its exit code: :class:`InvalidInputError` prints
-    ``error: <message>`` and returns 2; Ctrl-C prints ``interrupted: <on_interrupt>`` and
-    returns 130; warnings (the radio-map cache's among them) print as ``warning: <message>``."""
+    ``error: <message>`` and returns 2; Ctrl-C prints ``interrupted: <on_interrupt>`` (a
+    string, or a function that says what was kept) and returns 130; warnings (the radio-map
+    cache's among them) print as ``warning: <message>``."""
     with warnings.catch_warnings():
         warnings.simplefilter("default", CacheWarning)
         warnings.showwarning = _one_line
@@ -31,5 +35,6 @@ def run(body: Callable[[], int], on_interrupt: str = "nothing half-written was k
             print(f"error: {err}", file=sys.stderr)
             return 2
         except KeyboardInterrupt:
-            print(f"interrupted: {on_interrupt}", file=sys.stderr)
+            said = on_interrupt() if callable(on_interrupt) else on_interrupt
+            print(f"interrupted: {said}", file=sys.stderr)
             return 130

@@ -150,19 +150,24 @@ def summary(metrics: dict[str, Any], out: Path) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    return _cli.run(
-        lambda: _train(args),
-        "training stopped; `--resume` continues from the last checkpoint.pt",
-    )
+    out: list[Path] = []  # the run's folder, once its configuration is known
 
+    def kept() -> str:
+        ck = out[0] / "checkpoint.pt" if out else None
+        if ck is None or not ck.exists():
+            return "training stopped before its first checkpoint; nothing to resume from"
+        return f"training stopped; the same command with --resume continues from {ck}"
 
-def _train(args: argparse.Namespace) -> int:
-    from rainuav.rl.loop import train
+    def body() -> int:
+        from rainuav.rl.loop import train
 
-    cfg = config_from_args(args)
-    metrics = train(cfg, resume=args.resume, progress=True)
-    print(summary(metrics, Path(cfg.out)))
-    return 0
+        cfg = config_from_args(args)
+        out.append(Path(cfg.out))
+        metrics = train(cfg, resume=args.resume, progress=True)
+        print(summary(metrics, Path(cfg.out)))
+        return 0
+
+    return _cli.run(body, kept)
 
 
 if __name__ == "__main__":

@@ -167,10 +167,11 @@ class TrainConfig:
 MAX_SEED = 2**63 - 1
 """The largest seed: torch seeds with a 64-bit integer and numpy's SeedSequence takes any
 non-negative one; 0..2^63-1 is what both, and every file format, hold exactly."""
-MAX_STARTS = 100_000
-"""The most evaluation or validation starts: each costs one exact plan (about 2 ms on 2 cores
-for the presets, rainuav.nav.planner), so 100 000 take a few minutes, and the success rate's
-standard error is then under 0.16 points; more would only add time."""
+MAX_STARTS = 10_000
+"""The most evaluation or validation starts: each costs one exact plan (47 ms of the 2-core
+machine's time for the `uma` and `paper` presets: BENCHMARKS.md), so 10 000 take about 8
+minutes, and the success rate's standard error is then at most 0.5 points; more would mostly
+add time."""
 MAX_LANES = 4096
 """The most UAVs in flight at once during training (each is its own Python N-step window;
 the tuned learner flies 16)."""

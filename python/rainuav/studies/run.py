@@ -162,6 +162,26 @@ def _run_ray(study: Study, todo: list[Case], out: Path, ray_address: str, bar: A
             bar.update(1)
 
 
+def _leave_ctrl_c_to_the_driver() -> None:
+    """Worker processes ignore SIGINT: Ctrl-C reaches the whole process group, and only the
+    driver answers it (one line, then it stops the workers), so no worker prints a
+    traceback."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Cancels the cases not started and ends the workers running cases (their folders hold
+    no ``result.json``, so a rerun computes them again)."""
+    workers = list(getattr(pool, "_processes", {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in workers:
+        p.terminate()
+    for p in workers:
+        p.join(timeout=10)
+
+
 def run_study(
     study: Study,
     out: Path,
@@ -192,11 +212,18 @@ def run_study(
         else:
             _maps(todo)
             ctx = mp.get_context("spawn")
-            with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            pool = ProcessPoolExecutor(
+                max_workers=workers, mp_context=ctx, initializer=_leave_ctrl_c_to_the_driver
+            )
+            try:
                 for fut in as_completed([pool.submit(run_case, *a) for a in args]):
                     fut.result()
                     if bar is not None:
                         bar.update(1)
+            except BaseException:
+                _stop(pool)  # Ctrl-C or a failed case: the cases in flight stop now
+                raise
+            pool.shutdown()
     finally:
         if bar is not None:
             bar.close()

@@ -40,7 +40,7 @@ from rainuav._io import read_toml
 from rainuav.errors import InvalidInputError
 from rainuav.radio import presets
 from rainuav.radio.scenario import Scenario
-from rainuav.rl.config import DQNConfig, TrainConfig, check_config, make_scenario
+from rainuav.rl.config import MAX_STARTS, DQNConfig, TrainConfig, check_config, make_scenario
 
 __all__ = ["BUILT_IN", "COMPUTE", "SCENARIO_FIELDS", "Case", "Study", "load_study"]
 
@@ -220,8 +220,8 @@ def parse_study(data: dict[str, Any], where: str) -> Study:
     if sweep not in ("one_at_a_time", "grid"):
         raise InvalidInputError(f"{where}: sweep must be 'one_at_a_time' or 'grid'")
     n = data.get("eval_starts", 200)
-    if type(n) is not int or not 1 <= n <= 100_000:
-        raise InvalidInputError(f"{where}: eval_starts must be an integer in [1, 100000]")
+    if type(n) is not int or not 1 <= n <= MAX_STARTS:
+        raise InvalidInputError(f"{where}: eval_starts must be an integer in 1..{MAX_STARTS}")
     name = data.get("name", "study")
     if not isinstance(name, str) or not name:
         raise InvalidInputError(f"{where}: name must be a non-empty string")
