@@ -418,7 +418,7 @@ def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
         assert torch.equal(a[k], b[k]), k
 
 
-def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path) -> None:
+def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path, capsys) -> None:
     from rainuav.radio.scenario import Area, Cell, Scenario, Site
 
     scn = Scenario(
@@ -479,31 +479,25 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path) -> None:
     assert json.loads((out / "evaluation.json").read_text()) == json.loads(ev.stdout)
     assert (out / "evaluation_trajectories.png").read_bytes()[:4] == b"\x89PNG"
     # The same network flown in other weather, from other starts: its own folder and files.
-    subprocess.run(
-        [sys.executable, "-m", "rainuav.evaluate", str(out), "--rain-rate", "40",
-         "--starts", "3", "--seed", "4", "--shield"],
-        check=True, capture_output=True, text=True, env=env,
-    )  # fmt: skip
+    # (In this process from here on: `python -m` itself was checked above.)
+    from rainuav import evaluate as evaluate_cli
+    from rainuav import train as train_cli
+
+    argv = [str(out), "--rain-rate", "40", "--starts", "3", "--seed", "4", "--shield"]
+    assert evaluate_cli.main(argv) == 0
     other = json.loads((out / "eval_same_40mmh" / "evaluation.json").read_text())
     assert other["eval_starts"] == 3 and other["rain_rate_mm_h"] == 40.0
     assert other["trained_on"]["rain_rate"] == 5.0 and "shielded_success_rate" in other
     assert (out / "eval_same_40mmh" / "evaluation_trajectories.png").exists()
     # The last online network (the run reports the average of the last episodes' weights):
     # its own folder, so the reported network's evaluation.json stays.
-    subprocess.run(
-        [sys.executable, "-m", "rainuav.evaluate", str(out), "--online"],
-        check=True, capture_output=True, text=True, env=env,
-    )  # fmt: skip
+    assert evaluate_cli.main([str(out), "--online"]) == 0
     online = json.loads((out / "eval_online" / "evaluation.json").read_text())
     assert online["network"] == "last online" and online["eval_starts"] == 5
     assert json.loads((out / "evaluation.json").read_text())["network"] == "reported"
-    bad = subprocess.run(
-        [*args[:3], "--lr", "-1", "--out", str(tmp_path / "x")],
-        capture_output=True,
-        text=True,
-        env=env,
-    )
-    assert bad.returncode == 2 and "lr" in bad.stderr
+    capsys.readouterr()
+    assert train_cli.main(["--lr", "-1", "--out", str(tmp_path / "x")]) == 2
+    assert "lr" in capsys.readouterr().err
 
 
 def test_bad_train_config(tmp_path: Path) -> None:

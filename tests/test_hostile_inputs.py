@@ -392,7 +392,7 @@ def test_evaluate_bounds_its_starts(run_copy: Path, tmp_path: Path, capsys) -> N
 def test_resume_cuts_the_log_back_to_the_checkpoint_even_in_a_moved_folder(tmp_path) -> None:
     first, moved = tmp_path / "first", tmp_path / "moved"
     stopped = train_run(
-        small_cfg(first, 120), progress=False, radio_map=synthetic_map(), stop_after=50
+        small_cfg(first, 70), progress=False, radio_map=synthetic_map(), stop_after=50
     )
     assert stopped == {}
     # As a kill -9 after the log flushed past the checkpoint at 50 would leave it:
@@ -400,11 +400,11 @@ def test_resume_cuts_the_log_back_to_the_checkpoint_even_in_a_moved_folder(tmp_p
         for k in range(51, 63):
             csv.writer(fh).writerow([k, k, "1.0", 10, 0, "0.1", "1.0"])
     shutil.move(first, moved)  # and the folder handed to someone else, elsewhere
-    m = train_run(small_cfg(moved, 120), resume=True, progress=False)
-    assert m["episodes"] == 120
+    m = train_run(small_cfg(moved, 70), resume=True, progress=False)
+    assert m["episodes"] == 70
     with (moved / "log.csv").open() as fh:
         finished = [int(r["finished"]) for r in csv.DictReader(fh)]
-    assert finished == list(range(1, 121))
+    assert finished == list(range(1, 71))
     accepted("moved run folder resumes")
 
 
@@ -496,6 +496,26 @@ def test_a_map_file_that_needs_pickle_is_refused(run_copy, tmp_path, capsys) -> 
     rc, err = run_cli(evaluate, [run_copy, "--out", tmp_path / "ev"], capsys)
     refused("map with a pickle", rc, err, "radiomap.npz")
     assert not marker.exists()
+
+
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [
+        ("scenario_toml", np.asarray("[area\nbroken")),
+        ("format_version", np.int64(99)),
+        ("extent_m", np.zeros(3)),
+        ("x_m", np.linspace(0.0, 1.0, 40)),
+    ],
+)
+def test_a_map_with_bad_metadata_is_refused(run_copy, tmp_path, capsys, key, value) -> None:
+    path = run_copy / "radiomap.npz"
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files}
+    data[key] = value
+    with path.open("wb") as fh:
+        np.savez(fh, **data)
+    rc, err = run_cli(evaluate, [run_copy, "--out", tmp_path / "ev"], capsys)
+    refused(f"map {key}", rc, err, "radiomap.npz")
 
 
 def test_a_config_from_a_newer_release_is_refused_naming_the_field(run_copy, tmp_path, capsys):

@@ -39,7 +39,23 @@ def _write(tmp_path: Path, text: str) -> Path:
     return p
 
 
-def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory: pytest.TempPathFactory, session_cache: Path) -> tuple[Path, list]:
+    """The tiny study run once from scratch in one process (its folder and rows): what every
+    other way of running it (two workers, resumed, killed, on Ray) must reproduce."""
+    from rainuav.studies import run_study
+
+    tmp = tmp_path_factory.mktemp("reference")
+    out = tmp / "ref"
+    with pytest.MonkeyPatch.context() as mp:  # the session's map cache, as in every test
+        mp.setenv("RAINUAV_CACHE_DIR", str(session_cache))
+        rows = run_study(load_study(_write(tmp, TINY)), out, workers=1, progress=False)
+    return out, rows
+
+
+def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(
+    tmp_path: Path, reference: tuple[Path, list]
+) -> None:
     # Two cases (the base in clear air, 50 mm/h), tiny trainings on the ray engine's map.
     study = _write(tmp_path, TINY)
     out = tmp_path / "a"
@@ -77,16 +93,16 @@ def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(tmp_path: 
     assert main([str(study), "--out", str(out), "--workers", "1"]) == 0
     assert (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns == done
     assert (out / "results.csv").read_text() == csv
-    # The same study from scratch with one worker: the same results.csv.
-    assert main([str(study), "--out", str(tmp_path / "b"), "--workers", "1"]) == 0
-    assert (tmp_path / "b" / "results.csv").read_text() == csv
+    # The same study from scratch in one process: the same results.csv.
+    assert (reference[0] / "results.csv").read_text() == csv
 
 
-def test_a_study_killed_mid_case_reruns_to_the_same_results(tmp_path: Path) -> None:
+def test_a_study_killed_mid_case_reruns_to_the_same_results(
+    tmp_path: Path, reference: tuple[Path, list]
+) -> None:
     # A real kill (SIGKILL, no clean-up) while the second case trains; the rerun redoes that
     # case only and ends with the results.csv of an uninterrupted run.
     study = _write(tmp_path, TINY)
-    assert main([str(study), "--out", str(tmp_path / "ref"), "--workers", "1"]) == 0
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "rainuav.study", str(study), "--out", str(out), "--workers", "1"]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -104,7 +120,7 @@ def test_a_study_killed_mid_case_reruns_to_the_same_results(tmp_path: Path) -> N
     first = (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns
     assert main([str(study), "--out", str(out), "--workers", "1"]) == 0
     assert (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns == first
-    assert (out / "results.csv").read_text() == (tmp_path / "ref" / "results.csv").read_text()
+    assert (out / "results.csv").read_text() == (reference[0] / "results.csv").read_text()
 
 
 @pytest.mark.parametrize(
@@ -152,14 +168,14 @@ def test_built_in_studies_load_and_name_their_cases() -> None:
         load_study("no_such_study.toml")
 
 
-def test_ray_gives_the_local_results(tmp_path: Path) -> None:
+def test_ray_gives_the_local_results(tmp_path: Path, reference: tuple[Path, list]) -> None:
     # The same tiny study as Ray tasks on a local instance (2 CPUs): the same results.csv as
-    # in local worker processes, and every case's files in the driver's folder.
+    # in a local process, and every case's files in the driver's folder.
     import ray
     from rainuav.studies import run_study
 
     study = load_study(_write(tmp_path, TINY))
-    local = run_study(study, tmp_path / "local", workers=1, progress=False)
+    local = reference[1]
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         remote = run_study(study, tmp_path / "ray", progress=False, ray_address="local")
@@ -170,7 +186,7 @@ def test_ray_gives_the_local_results(tmp_path: Path) -> None:
         return [{k: v for k, v in r.items() if k != "training_seconds"} for r in rows]
 
     assert timeless(remote) == timeless(local)
-    a = (tmp_path / "local" / "results.csv").read_text()
+    a = (reference[0] / "results.csv").read_text()
     assert (tmp_path / "ray" / "results.csv").read_text() == a
     for c in study.cases():
         for name in ("result.json", "optimal.png", "run/policy.pt"):

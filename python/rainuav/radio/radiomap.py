@@ -140,7 +140,10 @@ class RadioMap:
             )
         if data["scenario_toml"].dtype.kind != "U" or data["extent_m"].shape != (4,):
             raise InvalidInputError(f"{path}: not a rainuav radio map (bad metadata)")
-        scn = Scenario.from_toml_string(str(data["scenario_toml"]))
+        try:
+            scn = Scenario.from_toml_string(str(data["scenario_toml"]))
+        except InvalidInputError as err:
+            raise InvalidInputError(f"{path}: its scenario is not valid ({err})") from err
         check_map_arrays(path, data, scn)
         ext = tuple(float(v) for v in data["extent_m"])
         out = cls(

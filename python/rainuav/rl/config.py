@@ -168,10 +168,11 @@ MAX_SEED = 2**63 - 1
 """The largest seed: torch seeds with a 64-bit integer and numpy's SeedSequence takes any
 non-negative one; 0..2^63-1 is what both, and every file format, hold exactly."""
 MAX_STARTS = 10_000
-"""The most evaluation or validation starts: each costs one exact plan (47 ms of the 2-core
-machine's time for the `uma` and `paper` presets: BENCHMARKS.md), so 10 000 take about 8
-minutes, and the success rate's standard error is then at most 0.5 points; more would mostly
-add time."""
+"""The most evaluation or validation starts. Each costs one exact plan (47 ms of the 2-core
+machine for the `uma` and `paper` presets) and, with the network's and the straight line's
+flights, about 80 ms of evaluation (benches/hostile_corpus.py: 2000 starts in 159 s), so
+10 000 take about 13 minutes, with a progress bar; the success rate's standard error is then
+at most 0.5 points, and more starts would mostly add time."""
 MAX_LANES = 4096
 """The most UAVs in flight at once during training (each is its own Python N-step window;
 the tuned learner flies 16)."""
