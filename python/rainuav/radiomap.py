@@ -18,6 +18,7 @@ from pathlib import Path
 
 from rainuav import _cli
 from rainuav._deprecated import moved, names
+from rainuav.errors import InvalidInputError
 
 __getattr__ = moved(
     __name__,
@@ -52,6 +53,18 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="propagation engine (default: the scenario's, 'hybrid' for the presets)",
     )
+    ap.add_argument(
+        "--storm-seed",
+        type=int,
+        default=None,
+        help="with --scenario storm: the storm drawn (default 0; from 1000000: evaluation storms)",
+    )
+    ap.add_argument(
+        "--at-s",
+        type=float,
+        default=None,
+        help="the weather this many seconds into its motion (moving rain cells; default 0)",
+    )
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
     ap.add_argument("--clear-cache", action="store_true", help="delete every cached map and exit")
@@ -77,10 +90,16 @@ def _build(args: argparse.Namespace) -> int:
     from rainuav.radio.plot import save_map_png
 
     check_out_dir(args.out)  # before any work
+    if args.storm_seed is not None and (args.config is not None or args.scenario != "storm"):
+        raise InvalidInputError("--storm-seed: only with --scenario storm")
     if args.config is not None:
         scn = Scenario.from_toml(args.config)
+    elif args.scenario == "storm":
+        scn = presets.storm(seed=0 if args.storm_seed is None else args.storm_seed)
     else:
         scn = presets.PRESETS[args.scenario]()
+    if args.at_s is not None:
+        scn = scn.replace(medium=scn.medium.at(args.at_s))
     if args.rain_rate is not None:
         scn = presets.with_rain(scn, args.rain_rate)
     if args.freq_ghz is not None:

@@ -46,6 +46,7 @@ from rainuav.radio.scenario import (
     Scenario,
     Site,
 )
+from rainuav.radio.storms import draw_storm
 
 __all__ = [
     "DEFAULT_MIN_DB",
@@ -53,6 +54,7 @@ __all__ = [
     "SINR_THRESHOLDS_DB",
     "paper",
     "rain_cell",
+    "storm",
     "uma",
     "urban",
     "with_rain",
@@ -191,15 +193,37 @@ def urban(rain_rate_mm_h: float = 25.0, freq_hz: float = 4.9e9, **overrides: Any
     return uma(rain_rate_mm_h, freq_hz, **fields)
 
 
+def storm(
+    rain_rate_mm_h: float | None = None,
+    freq_hz: float = 28e9,
+    *,
+    seed: int = 0,
+    **overrides: Any,
+) -> Scenario:
+    """``uma`` at 28 GHz under the random storm of ``seed`` (:func:`rainuav.radio.storms.
+    draw_storm`: moving, growing and decaying Gaussian cells over a uniform background; its
+    ``medium.at(t_s)`` is the weather t_s seconds into the storm). ``rain_rate_mm_h`` replaces
+    the drawn background rate. Seeds from 1 000 000 are the evaluation storms."""
+    weather = draw_storm(seed, (0.0, 2000.0, 0.0, 2000.0))
+    if rain_rate_mm_h is not None:
+        weather = dataclasses.replace(weather, rain_rate_mm_h=float(rain_rate_mm_h))
+    fields: dict[str, Any] = {"name": "storm", "medium": weather}
+    fields.update(overrides)
+    return uma(0.0, freq_hz, **fields)
+
+
 PRESETS: dict[str, Callable[..., Scenario]] = {
     "paper": paper,
     "uma": uma,
     "rain_cell": rain_cell,
     "urban": urban,
+    "storm": storm,
 }
 
 DEFAULT_MIN_DB = 10.0
 """The outage threshold for SIR and for scenarios of no preset: the paper's minimum SIR, dB."""
 
-SINR_THRESHOLDS_DB: dict[str, float] = {"paper": 0.0, "uma": -2.0, "rain_cell": -2.0, "urban": -1.0}
+SINR_THRESHOLDS_DB: dict[str, float] = {
+    "paper": 0.0, "uma": -2.0, "rain_cell": -2.0, "urban": -1.0, "storm": -2.0,
+}  # fmt: skip
 """Default outage threshold of each preset's navigation task, SINR in dB (module docstring)."""

@@ -1,7 +1,11 @@
-"""The weather of a scenario: clear air, homogeneous rain, rain cells or a rain-rate map."""
+"""The weather of a scenario: clear air, homogeneous rain, rain cells or a rain-rate map, in
+time: a rain cell may move (``vx_m_s``, ``vy_m_s``) and grow or decay (``growth_s``), and
+:meth:`Medium.at` gives the frozen weather at any instant, to which every static tool applies."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -12,7 +16,15 @@ from rainuav._checks import check_choice as _choice
 from rainuav._checks import check_number as _num
 from rainuav.errors import InvalidInputError
 
-__all__ = ["Medium", "RainCell"]
+__all__ = ["MAX_SPEED_M_S", "Medium", "RainCell"]
+
+MAX_RATE_MM_H = 500.0
+"""The highest rain rate the rain model takes, mm/h."""
+MAX_SPEED_M_S = 60.0
+"""The fastest a rain cell may move, m/s: storm motions beyond 30 m/s are rare, and 60 m/s is
+above any observed; more is a mistake in the input."""
+MIN_GROWTH_S = 60.0
+"""The shortest growth or decay e-folding time, s (convective cells live for tens of minutes)."""
 
 
 @dataclass
@@ -29,6 +41,31 @@ class RainCell:
     """Rate at the centre, mm/h."""
     profile: str = "gaussian"
     """'gaussian' exp(-(d/r)^2), 'exponential' exp(-d/r) or 'uniform' (peak inside r)."""
+    vx_m_s: float = 0.0
+    """Velocity of the centre, east, m/s (convective cells move with the mean wind, 5-20 m/s)."""
+    vy_m_s: float = 0.0
+    """Velocity of the centre, north, m/s."""
+    growth_s: float = 0.0
+    """E-folding time of the peak rate, s: the peak at time t is ``peak exp(t / growth_s)``
+    (positive: growing, negative: decaying; 0: steady)."""
+
+    def at(self, t_s: float) -> RainCell:
+        """The cell at time ``t_s`` (s after the weather's time 0): its centre moved by the
+        velocity, its peak grown or decayed (held within the 500 mm/h the rain model covers);
+        velocity and growth are kept, so ``c.at(a).at(b)`` is ``c.at(a + b)`` (until a peak
+        reaches the bound)."""
+        grow = math.exp(t_s / self.growth_s) if self.growth_s else 1.0
+        return dataclasses.replace(
+            self,
+            x_m=self.x_m + self.vx_m_s * t_s,
+            y_m=self.y_m + self.vy_m_s * t_s,
+            peak_rate_mm_h=min(self.peak_rate_mm_h * grow, MAX_RATE_MM_H),
+        )
+
+    @property
+    def moves(self) -> bool:
+        """Whether the cell changes in time (a velocity or a growth)."""
+        return bool(self.vx_m_s or self.vy_m_s or self.growth_s)
 
     def rate(self, x: Any, y: Any) -> Any:
 
@@ -66,6 +103,19 @@ class Medium:
     """How wind acts: 'canting' (drops cant by atan(v_wind / v_t); PHYSICS.md) or 'paper' (the
     paper's 1/cos factor, for reproducing it only; rainuav.medium)."""
 
+    def at(self, t_s: float) -> Medium:
+        """The weather at time ``t_s``, s: every rain cell moved and grown (:meth:`RainCell.at`);
+        the rest does not change in time. A weather that does not move returns itself."""
+        t = _num("t_s", t_s, -1e6, 1e6, " s")
+        if not self.moves:
+            return self
+        return dataclasses.replace(self, cells=[c.at(t) for c in self.cells])
+
+    @property
+    def moves(self) -> bool:
+        """Whether the weather changes in time."""
+        return self.kind == "cells" and any(c.moves for c in self.cells)
+
     def rain_medium(self, freq_hz: float, polarization: str) -> m.RainMedium:
         """The effective medium of this weather's rain (model, drops, temperature, wind) at
         one frequency and polarisation, for any rain rate."""
@@ -97,6 +147,19 @@ class Medium:
             _num(f"{w}.radius_m", c.radius_m, 1.0, 1e5, " m")
             _num(f"{w}.peak_rate_mm_h", c.peak_rate_mm_h, 0.0, 500.0, " mm/h")
             _choice(f"{w}.profile", c.profile, ("gaussian", "exponential", "uniform"))
+            _num(f"{w}.vx_m_s", c.vx_m_s, -MAX_SPEED_M_S, MAX_SPEED_M_S, " m/s")
+            _num(f"{w}.vy_m_s", c.vy_m_s, -MAX_SPEED_M_S, MAX_SPEED_M_S, " m/s")
+            if math.hypot(c.vx_m_s, c.vy_m_s) > MAX_SPEED_M_S:
+                raise InvalidInputError(
+                    f"{w}: speed must be at most {MAX_SPEED_M_S:g} m/s "
+                    f"(got {math.hypot(c.vx_m_s, c.vy_m_s):g})"
+                )
+            g = _num(f"{w}.growth_s", c.growth_s, -1e7, 1e7, " s")
+            if g and abs(g) < MIN_GROWTH_S:
+                raise InvalidInputError(
+                    f"{w}.growth_s must be 0 (steady) or at least {MIN_GROWTH_S:g} s in size "
+                    f"(got {g:g})"
+                )
         if self.kind == "cells" and not self.cells:
             raise InvalidInputError(
                 f"{where}.cells must hold at least one rain cell when kind is 'cells'"
