@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import os
 import secrets
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -101,7 +102,7 @@ class FolderLock:
         fh = self.path.open("a+")
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as err:
+        except BlockingIOError as err:  # held by another process
             fh.seek(0)
             holder = fh.read().strip() or "another process"
             fh.close()
@@ -109,6 +110,12 @@ class FolderLock:
                 f"{self.path.parent}: {holder} is writing to this folder (locked by "
                 f"{self.path}); wait for it to end or use another folder"
             ) from err
+        except OSError as err:  # a filesystem without locks (some network mounts)
+            warnings.warn(
+                f"{self.path.parent}: cannot be locked ({err.strerror or err}); make sure no "
+                "other job writes to this folder",
+                stacklevel=2,
+            )
         fh.seek(0)
         fh.truncate()
         fh.write(f"{self.what} (pid {os.getpid()})\n")
