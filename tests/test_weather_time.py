@@ -134,3 +134,16 @@ def test_radiomap_cli_refuses_bad_storm_flags(tmp_path, capsys, argv, needle) ->
     assert radiomap.main([*argv, "--out", str(tmp_path / "m")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("error: ") and needle in err, err
+
+
+def test_maps_of_varying_rain_outline_it() -> None:
+    # The map figure outlines the rain (10/30/100 mm/h) where it varies over the area: here
+    # the storm's cells at 150 s; a homogeneous map draws no outline.
+    from matplotlib.figure import Figure
+    from rainuav.radio.plot import plot_map
+
+    scn = presets.storm(seed=5, area=Area(resolution_m=50.0), engine="ray")
+    for weather, outlined in ((scn.medium.at(150.0), True), (Medium(rain_rate_mm_h=25.0), False)):
+        rm = build_radio_map(scn.replace(medium=weather))
+        ax = plot_map(rm, "sinr", ax=Figure().subplots())
+        assert bool(ax.collections) == outlined

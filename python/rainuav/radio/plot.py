@@ -53,6 +53,7 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
         hi = max(float(np.percentile(data, 99)), lo + 10.0)
         im = ax.imshow(data, origin="lower", extent=rm.extent_m, cmap="RdYlGn", vmin=lo, vmax=hi)
     ax.figure.colorbar(im, ax=ax, label=label)
+    _rain_contours(rm, ax)
     xs = [s.x_m for s in rm.scenario.sites]
     ys = [s.y_m for s in rm.scenario.sites]
     ax.plot(xs, ys, "k^", markersize=7, markerfacecolor="white", label="sites")
@@ -69,6 +70,25 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
     ax.set_ylabel("y [m]")
     ax.set_title(f"{rm.scenario.name}: {label}, {rm.altitude_m:g} m")
     return ax
+
+
+RAIN_CONTOURS_MM_H = (10.0, 30.0, 100.0)
+"""Rain rates outlined on maps whose rain varies over the area (cells, storms, rate maps)."""
+
+
+def _rain_contours(rm: Any, ax: Any) -> None:
+    """Outlines the rain at :data:`RAIN_CONTOURS_MM_H` where the weather varies over the area
+    (rain cells, a storm at its instant, a rate map), labelled in mm/h."""
+    from rainuav.radio.pe_engine import rain_rate_at
+
+    if rm.scenario.medium.kind not in ("cells", "map"):
+        return
+    xx, yy = np.meshgrid(rm.x_m, rm.y_m)
+    rate = rain_rate_at(rm.scenario, xx, yy)
+    levels = [v for v in RAIN_CONTOURS_MM_H if rate.min() < v < rate.max()]
+    if levels:
+        cs = ax.contour(xx, yy, rate, levels=levels, colors="navy", linewidths=1.0)
+        ax.clabel(cs, fmt="%g mm/h", fontsize=7)
 
 
 def save_map_png(rm: Any, kind: str, path: str | Path) -> Path:
