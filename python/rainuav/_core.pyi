@@ -25,6 +25,7 @@ __all__ = [
     "itu_p838",
     "mie_forward",
     "plan_optimal",
+    "ray_mean_gamma",
     "ray_power",
     "terminal_velocity_m_s",
     "water_permittivity",
@@ -208,5 +209,17 @@ def ray_power(
     buildings: _F,
     heights: _F | None,
     heights_origin_step: tuple[float, float, float, float],
+    gamma_per_tx: _F | None = None,
 ) -> _F:
     """Received power (mW) of every transmitter at every pixel, (M, H, W)."""
+
+def ray_mean_gamma(
+    sources_m: _F,
+    x_m: _F,
+    y_m: _F,
+    *,
+    gamma_db_per_m: float,
+    gamma_raster: _F | None,
+    gamma_origin_step: tuple[float, float, float, float],
+) -> _F:
+    """Mean specific attenuation (dB/m) from each source (S, 2) to every pixel, (S, H, W)."""

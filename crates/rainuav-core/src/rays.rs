@@ -22,7 +22,7 @@
 //! its dominant edge (the largest `nu`), `nu = h sqrt(2 / lambda (1 / d_a + 1 / d_b))`: a
 //! finite loss, never a blocked ray.
 
-use ndarray::{Array3, ArrayView2, ArrayView3, Axis};
+use ndarray::{Array2, Array3, ArrayView2, ArrayView3, Axis};
 use num_complex::Complex64;
 use rayon::prelude::*;
 
@@ -102,6 +102,24 @@ pub enum RainField<'a> {
     Uniform(f64),
     /// Varies horizontally: nodes of a raster ([`Raster::bilinear`]).
     Raster(Raster<'a>),
+    /// Already integrated: the mean specific attenuation (dB/m) along each transmitter's
+    /// horizontal path to each pixel centre, `(M, H, W)`, as [`RayScene::mean_gamma_map`]
+    /// gives it from a raster (weather in time: one integral per site and instant, shared
+    /// by the site's cells and by both rays).
+    PerPixel(ArrayView3<'a, f64>),
+}
+
+/// The mean of `gamma` (dB/m) along the horizontal line `a -> b` of a uniform or raster rain
+/// field: the trapezoid rule at the raster's spacing.
+fn line_gamma(r: &Raster<'_>, a: [f64; 2], b: [f64; 2]) -> f64 {
+    let rho = (b[0] - a[0]).hypot(b[1] - a[1]);
+    let n = ((rho / r.spacing()).ceil() as usize).max(1);
+    let mut sum = 0.5 * (r.bilinear(a[0], a[1]) + r.bilinear(b[0], b[1]));
+    for k in 1..n {
+        let t = k as f64 / n as f64;
+        sum += r.bilinear(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
+    }
+    sum / n as f64
 }
 
 /// A box-shaped building: `[x0, x1, y0, y1, height]`, metres.
@@ -205,6 +223,15 @@ impl RayScene<'_> {
                 crate::error::check_range("gamma_db_per_m", g, 0.0, 10.0, "must be in 0..10 dB/m")?
             }
             RainField::Raster(r) => check_raster("rain raster", r.values, r.origin_step)?,
+            RainField::PerPixel(g) => {
+                if !g.iter().all(|v| v.is_finite() && (0.0..=10.0).contains(v)) {
+                    return Err(CoreError::invalid(
+                        "gamma_per_tx",
+                        "must be finite, in 0..10 dB/m",
+                        "a bad value",
+                    ));
+                }
+            }
         }
         if let RayGround::Dielectric(e) = self.ground
             && !(e.re.is_finite() && e.im.is_finite() && e.re >= 1.0 && e.im <= 0.0)
@@ -230,22 +257,47 @@ impl RayScene<'_> {
         Ok(())
     }
 
-    /// Rain attenuation (dB) of the horizontal line from `(x0, y0)` to `(x1, y1)`, per metre
-    /// of horizontal distance (the mean of `gamma` along the line).
-    fn mean_gamma(&self, a: [f64; 2], b: [f64; 2]) -> f64 {
+    /// Rain attenuation (dB) of the horizontal line from transmitter `m` at `a` to the
+    /// centre of pixel `(i, j)`, per metre of horizontal distance (the mean of `gamma` along
+    /// the line).
+    fn mean_gamma(&self, m: usize, a: [f64; 2], (i, j): (usize, usize)) -> f64 {
         match self.rain {
             RainField::Uniform(g) => g,
-            RainField::Raster(r) => {
-                let rho = (b[0] - a[0]).hypot(b[1] - a[1]);
-                let n = ((rho / r.spacing()).ceil() as usize).max(1);
-                let mut sum = 0.5 * (r.bilinear(a[0], a[1]) + r.bilinear(b[0], b[1]));
-                for k in 1..n {
-                    let t = k as f64 / n as f64;
-                    sum += r.bilinear(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
-                }
-                sum / n as f64
-            }
+            RainField::Raster(r) => line_gamma(&r, a, [self.x_m[j], self.y_m[i]]),
+            RainField::PerPixel(g) => g[[m, i, j]],
         }
+    }
+
+    /// The mean specific attenuation (dB/m) along the horizontal line from `from` to every
+    /// pixel centre, `(H, W)`: what the rays of any transmitter standing at `from` see
+    /// ([`RainField::PerPixel`]), the same arithmetic as the raster path. Rows in parallel.
+    pub fn mean_gamma_map(&self, from: [f64; 2]) -> Result<Array2<f64>> {
+        self.check()?;
+        let (h, w) = (self.y_m.len(), self.x_m.len());
+        let mut out = Array2::<f64>::zeros((h, w));
+        crate::memory::check_memory(out.len() * 8)?;
+        let RainField::Raster(r) = self.rain else {
+            out.fill(match self.rain {
+                RainField::Uniform(g) => g,
+                _ => {
+                    return Err(CoreError::invalid(
+                        "rain",
+                        "must be uniform or a raster",
+                        "per-pixel",
+                    ));
+                }
+            });
+            return Ok(out);
+        };
+        out.axis_iter_mut(Axis(0))
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(i, mut row)| {
+                for j in 0..w {
+                    row[j] = line_gamma(&r, from, [self.x_m[j], self.y_m[i]]);
+                }
+            });
+        Ok(out)
     }
 
     /// The largest Fresnel-Kirchhoff parameter `nu` of any obstacle edge over the straight
@@ -317,8 +369,16 @@ impl RayScene<'_> {
         knife_edge_loss_db(worst)
     }
 
-    /// Mean received power (mW, isotropic receiver) over one pixel.
-    fn pixel_power(&self, tx: &RayTransmitter, q: [f64; 2], g_direct: f64, g_reflect: f64) -> f64 {
+    /// Mean received power (mW, isotropic receiver) over one pixel; `gamma`: the mean
+    /// specific attenuation along the rays' horizontal path ([`RayScene::mean_gamma`]).
+    fn pixel_power(
+        &self,
+        tx: &RayTransmitter,
+        q: [f64; 2],
+        g_direct: f64,
+        g_reflect: f64,
+        gamma: f64,
+    ) -> f64 {
         let [xs, ys, hs] = tx.position_m;
         let hq = self.altitude_m;
         let k0 = crate::wavenumber(self.freq_hz);
@@ -326,7 +386,6 @@ impl RayScene<'_> {
         let rho = ex.hypot(ey);
         let d1 = (rho * rho + (hq - hs).powi(2)).sqrt().max(1e-3);
         let d2 = (rho * rho + (hq + hs).powi(2)).sqrt();
-        let gamma = self.mean_gamma([xs, ys], q);
         let a1_db = gamma * d1 + self.diffraction_db(&[[xs, ys, hs], [q[0], q[1], hq]]);
         let amp1 = g_direct.max(0.0).sqrt() * 10f64.powf(-a1_db / 20.0) / d1;
         let mut mean = amp1 * amp1;
@@ -392,6 +451,15 @@ impl RayScene<'_> {
                 ));
             }
         }
+        if let RainField::PerPixel(g) = self.rain
+            && g.dim() != shape
+        {
+            return Err(CoreError::invalid(
+                "gamma_per_tx",
+                format!("must have shape {shape:?} (cells, rows, columns)"),
+                format!("{:?}", g.dim()),
+            ));
+        }
         let mut out = Array3::<f64>::zeros(shape);
         crate::memory::check_memory(out.len() * 8)?;
         let w = self.x_m.len();
@@ -403,12 +471,14 @@ impl RayScene<'_> {
                     .axis_iter_mut(Axis(0))
                     .enumerate()
                     .for_each(|(i, mut row)| {
+                        let [xs, ys, _] = txs[m].position_m;
                         for j in 0..w {
                             row[j] = self.pixel_power(
                                 &txs[m],
                                 [self.x_m[j], self.y_m[i]],
                                 g_direct[[m, i, j]],
                                 g_reflect[[m, i, j]],
+                                self.mean_gamma(m, [xs, ys], (i, j)),
                             );
                         }
                     });
@@ -511,6 +581,37 @@ mod tests {
         );
         let want = (1.0 - eps.sqrt()) / (1.0 + eps.sqrt());
         assert!((g - want).norm() < 1e-12);
+    }
+
+    #[test]
+    fn rain_integrated_once_per_site_gives_the_raster_power_exactly() {
+        // Two transmitters at one site, a raster that varies: the per-pixel field from
+        // mean_gamma_map (shared by the site's cells) gives bit for bit the raster's power.
+        let x: Vec<f64> = (0..7).map(|j| 150.0 * j as f64 + 75.0).collect();
+        let y: Vec<f64> = (0..5).map(|i| 200.0 * i as f64 + 100.0).collect();
+        let vals = Array2::from_shape_fn((6, 8), |(i, j)| 0.001 * ((i * 8 + j) % 7) as f64);
+        let mut s = scene(&x, &y, RayGround::Pec);
+        s.rain = RainField::Raster(Raster {
+            values: vals.view(),
+            origin_step: [0.0, 150.0, 0.0, 200.0],
+        });
+        let txs = [
+            TX,
+            RayTransmitter {
+                position_m: [0.0, 0.0, 25.0],
+                power_mw: 2.0,
+            },
+        ];
+        let g = Array3::<f64>::ones((2, 5, 7));
+        let want = s.power(&txs, g.view(), g.view()).unwrap();
+        let one_site = s.mean_gamma_map([0.0, 0.0]).unwrap();
+        let per_tx = ndarray::stack![Axis(0), one_site.view(), one_site.view()];
+        s.rain = RainField::PerPixel(per_tx.view());
+        assert_eq!(s.power(&txs, g.view(), g.view()).unwrap(), want);
+        // A field of the wrong shape is an error, not a panic.
+        let wrong = Array3::<f64>::zeros((1, 5, 7));
+        s.rain = RainField::PerPixel(wrong.view());
+        assert!(s.power(&txs, g.view(), g.view()).is_err());
     }
 
     #[test]

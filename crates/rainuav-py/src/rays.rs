@@ -15,7 +15,7 @@ use rainuav_core::rays::{
 #[pyfunction]
 #[pyo3(signature = (tx_m, tx_power_mw, g_direct, g_reflect, x_m, y_m, *, altitude_m, pixel_m,
     freq_hz, ground, eps_ground, polarization, gamma_db_per_m, gamma_raster, gamma_origin_step,
-    buildings, heights, heights_origin_step))]
+    buildings, heights, heights_origin_step, gamma_per_tx=None))]
 #[allow(clippy::too_many_arguments)]
 fn ray_power<'py>(
     py: Python<'py>,
@@ -37,6 +37,7 @@ fn ray_power<'py>(
     buildings: PyReadonlyArray2<'py, f64>,
     heights: Option<PyReadonlyArray2<'py, f64>>,
     heights_origin_step: [f64; 4],
+    gamma_per_tx: Option<PyReadonlyArray3<'py, f64>>,
 ) -> PyResult<Bound<'py, PyArray3<f64>>> {
     let ground = match ground {
         "none" => RayGround::None,
@@ -98,13 +99,15 @@ fn ray_power<'py>(
     let hr: Option<Array2<f64>> = heights.map(|h| h.as_array().to_owned());
     let gd = g_direct.as_array();
     let gf = g_reflect.as_array();
+    let per_tx = gamma_per_tx.as_ref().map(|g| g.as_array());
     let out = detached(py, || {
-        let rain = match &gr {
-            Some(v) => RainField::Raster(Raster {
+        let rain = match (&per_tx, &gr) {
+            (Some(g), _) => RainField::PerPixel(g.view()),
+            (None, Some(v)) => RainField::Raster(Raster {
                 values: v.view(),
                 origin_step: gamma_origin_step,
             }),
-            None => RainField::Uniform(gamma_db_per_m),
+            (None, None) => RainField::Uniform(gamma_db_per_m),
         };
         let scene = RayScene {
             x_m: &x,
@@ -126,8 +129,65 @@ fn ray_power<'py>(
     Ok(out.into_pyarray(py))
 }
 
+/// The mean specific attenuation (dB/m) along the horizontal line from each source `(S, 2)`
+/// to every pixel centre, `(S, H, W)`, through a raster (or a uniform) rain field: what
+/// `ray_power(gamma_per_tx=...)` takes, computed once per site for all its cells.
+#[pyfunction]
+#[pyo3(signature = (sources_m, x_m, y_m, *, gamma_db_per_m, gamma_raster, gamma_origin_step))]
+fn ray_mean_gamma<'py>(
+    py: Python<'py>,
+    sources_m: PyReadonlyArray2<'py, f64>,
+    x_m: PyReadonlyArray1<'py, f64>,
+    y_m: PyReadonlyArray1<'py, f64>,
+    gamma_db_per_m: f64,
+    gamma_raster: Option<PyReadonlyArray2<'py, f64>>,
+    gamma_origin_step: [f64; 4],
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    let src = sources_m.as_array().to_owned();
+    if src.ncols() != 2 || !src.iter().all(|v| v.is_finite()) {
+        return Err(to_py(CoreError::invalid(
+            "sources_m",
+            "must have shape (S, 2), finite",
+            format!("{:?}", src.dim()),
+        )));
+    }
+    let x = x_m.as_array().to_vec();
+    let y = y_m.as_array().to_vec();
+    let gr: Option<Array2<f64>> = gamma_raster.map(|g| g.as_array().to_owned());
+    let out = detached(py, || {
+        let rain = match &gr {
+            Some(v) => RainField::Raster(Raster {
+                values: v.view(),
+                origin_step: gamma_origin_step,
+            }),
+            None => RainField::Uniform(gamma_db_per_m),
+        };
+        let scene = RayScene {
+            x_m: &x,
+            y_m: &y,
+            altitude_m: 1.0,
+            pixel_m: [0.0, 0.0],
+            freq_hz: 1e9,
+            ground: RayGround::None,
+            polarization: RayPolarization::H,
+            rain,
+            buildings: &[],
+            heights: None,
+        };
+        let mut out = ndarray::Array3::<f64>::zeros((src.nrows(), y.len(), x.len()));
+        rainuav_core::memory::check_memory(out.len() * 8)?;
+        for (k, row) in src.rows().into_iter().enumerate() {
+            let plane = scene.mean_gamma_map([row[0], row[1]])?;
+            out.index_axis_mut(ndarray::Axis(0), k).assign(&plane);
+        }
+        Ok::<_, CoreError>(out)
+    })?;
+    Ok(out.into_pyarray(py))
+}
+
 /// Adds this layer's functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ray_power, m)?)?;
+    m.add_function(wrap_pyfunction!(ray_mean_gamma, m)?)?;
     Ok(())
 }

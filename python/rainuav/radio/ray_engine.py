@@ -29,7 +29,14 @@ from rainuav.radio.grid import C0_M_S
 from rainuav.radio.pe_engine import rain_rate_at
 from rainuav.radio.scenario import Scenario, Site
 
-__all__ = ["SOILS", "gamma_field", "ground_permittivity", "ray_power"]
+__all__ = [
+    "SOILS",
+    "gamma_field",
+    "ground_permittivity",
+    "ray_gains",
+    "ray_power",
+    "ray_power_in_time",
+]
 
 SOILS: dict[str, tuple[float, float, float, float]] = {
     "very-dry": (3.0, 0.0, 0.00015, 2.52),
@@ -162,6 +169,45 @@ def _medium_args(scn: Scenario) -> dict[str, Any]:
     }
 
 
+def ray_gains(
+    scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The linear antenna gain of every (site, cell) toward every pixel along the direct and
+    the reflected ray, two (M, H, W) arrays: the part of a ray map that no weather changes."""
+    shape = (len(jobs), y_m.size, x_m.size)
+    gd, gr = np.empty(shape), np.empty(shape)
+    for m, (site, cell) in enumerate(jobs):
+        az, el_d, el_r = _directions(scn, site, x_m, y_m)
+        gd[m], gr[m] = gain_linear(cell, az, el_d), gain_linear(cell, az, el_r)
+    return gd, gr
+
+
+def ray_power_in_time(
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    gains: tuple[np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """Received power (M, H, W) of ``scn`` (its weather at one instant) from gains computed
+    once (:func:`ray_gains`): the rain is integrated once per site along the horizontal line
+    to every pixel (``_core.ray_mean_gamma``), shared by the site's cells and by both rays,
+    which makes it the same power as :func:`ray_power` to the last bit."""
+    args = _medium_args(scn)
+    places: dict[tuple[float, float], int] = {}  # the integral depends on the position only
+    index = [places.setdefault((s.x_m, s.y_m), len(places)) for s, _ in jobs]
+    per_site = _core.ray_mean_gamma(
+        np.array(list(places), dtype=float).reshape(-1, 2),
+        np.ascontiguousarray(x_m, dtype=float),
+        np.ascontiguousarray(y_m, dtype=float),
+        gamma_db_per_m=args["gamma_db_per_m"],
+        gamma_raster=args["gamma_raster"],
+        gamma_origin_step=args["gamma_origin_step"],
+    )
+    per_tx = np.ascontiguousarray(per_site[np.asarray(index, dtype=np.intp)])
+    return _trace(scn, jobs, x_m, y_m, gains, {**args, "gamma_per_tx": per_tx})
+
+
 def ray_power(
     scn: Scenario,
     jobs: Sequence[tuple[Site, Cell]],
@@ -174,12 +220,11 @@ def ray_power(
     part of each pattern they select (``weights[m]`` scales cell m's pattern; None: nothing).
     Directions, gains, the rain field and the obstacles are prepared once for both."""
     shape = (len(jobs), y_m.size, x_m.size)
-    gd, gr = np.empty(shape), np.empty(shape)
+    gd, gr = ray_gains(scn, jobs, x_m, y_m)
     wd, wr = np.zeros(shape), np.zeros(shape)
     for m, (site, cell) in enumerate(jobs):
-        az, el_d, el_r = _directions(scn, site, x_m, y_m)
-        gd[m], gr[m] = gain_linear(cell, az, el_d), gain_linear(cell, az, el_r)
         if weights is not None and weights[m] is not None:
+            az, el_d, el_r = _directions(scn, site, x_m, y_m)
             wd[m] = _weight_at(weights[m], cell, az, el_d)
             wr[m] = _weight_at(weights[m], cell, az, el_r)
     args = _medium_args(scn)

@@ -1,0 +1,47 @@
+"""Radio maps in time, timed (BENCHMARKS.md, "Radio maps in time"):
+
+    python benches/storm_slices.py [--seed 0] [--slices 61]
+
+The `storm` preset (ray engine, 10 m pixels, 21 cells) at 61 instants 0-300 s: the static part
+(the gains, once), the time per slice, and in the same run a static ray-engine build of the
+frozen weather at three of the instants (the reference a slice replaces), with their ratio.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from rainuav.radio import build_radio_map, presets
+from rainuav.radio.timemap import build_radio_map_series
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--slices", type=int, default=61)
+    args = ap.parse_args()
+    scn = presets.storm(seed=args.seed, engine="ray")
+    times = np.linspace(0.0, 300.0, args.slices)
+    t0 = time.perf_counter()
+    series = build_radio_map_series(scn, times)
+    total = time.perf_counter() - t0
+    per_slice = series.timings["slices"] / len(times)
+    static = []
+    for t in times[[0, len(times) // 2, -1]]:
+        t1 = time.perf_counter()
+        build_radio_map(scn.replace(medium=scn.medium.at(t)), cache=False)
+        static.append(time.perf_counter() - t1)
+    mb = (series.rss_dbm.nbytes + series.sinr_db.nbytes * 2 + series.serving_cell.nbytes) / 1e6
+    print(
+        f"storm seed {args.seed}, {len(times)} slices, {series.rss_dbm.shape[1]} cells x "
+        f"{series.sinr_db.shape[1]} x {series.sinr_db.shape[2]} pixels: total {total:.1f} s, "
+        f"static part {series.timings['static']:.2f} s, {1e3 * per_slice:.0f} ms a slice; "
+        f"a static ray build {np.median(static):.2f} s (median of 3): a slice costs "
+        f"{per_slice / np.median(static):.2f} of it; the series holds {mb:.0f} MB"
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,157 @@
+"""Radio maps in time: a scenario whose weather moves (:meth:`rainuav.radio.weather.Medium.at`)
+mapped at many instants, and the static map of any instant between them.
+
+What does not move is computed once: every cell's antenna gains toward every pixel along both
+rays (:func:`rainuav.radio.ray_engine.ray_gains`). Each slice then integrates the rain of its
+instant once per site along the horizontal line to every pixel (shared by the site's cells and
+by both rays: the reflection point lies on that line, and rain fills every column below the
+flight altitude) and traces the rays with it. A slice is the static ray-engine map of the
+frozen weather at its instant to the last bit (tested). The ray engine only, for now: the
+hybrid's PE part in time is issue #26's next step.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from rainuav._checks import as_real_array, check_fits
+from rainuav.errors import InvalidInputError
+from rainuav.radio.radiomap import RadioMap
+from rainuav.radio.ray_engine import ray_gains, ray_power_in_time
+from rainuav.radio.scenario import Scenario
+from rainuav.radio.sinr import RSS_FLOOR_DBM, sir_from_power
+
+__all__ = ["MAX_SLICES", "RadioMapSeries", "build_radio_map_series"]
+
+MAX_SLICES = 10_000
+"""The most instants one series may hold."""
+
+
+@dataclass
+class RadioMapSeries:
+    """Maps of one scenario at the instants ``t_s`` (s after its weather's time 0)."""
+
+    t_s: npt.NDArray[np.float64]
+    """(T,) instants, strictly increasing."""
+    rss_dbm: npt.NDArray[np.float32]
+    """(T, M, H, W) received power of each cell, dBm (float32: half the memory; 1e-5 dB)."""
+    sinr_db: npt.NDArray[np.float64]
+    """(T, H, W) SINR, dB."""
+    sir_db: npt.NDArray[np.float64]
+    """(T, H, W) SIR, dB."""
+    serving_cell: npt.NDArray[np.int64]
+    """(T, H, W) serving cell (-1: none)."""
+    scenario: Scenario
+    """The scenario, its weather at time 0 (``scenario.medium.at(t)`` is the weather at t)."""
+    x_m: npt.NDArray[np.float64]
+    y_m: npt.NDArray[np.float64]
+    cell_site: npt.NDArray[np.int64]
+    build_seconds: float = 0.0
+    timings: dict[str, float] = field(default_factory=dict)
+
+    def at(self, t_s: float) -> RadioMap:
+        """The static map at ``t_s``: each cell's received power interpolated linearly in dB
+        between the two slices around ``t_s`` (held beyond the first and the last), then
+        serving cell, SIR and SINR from those powers; at a slice's own instant, that slice."""
+        t = float(as_real_array("t_s", t_s))
+        if not math.isfinite(t):
+            raise InvalidInputError(f"t_s must be finite (got {t_s!r})")
+        k = int(np.searchsorted(self.t_s, t))
+        if k < len(self.t_s) and self.t_s[k] == t:
+            rss = self.rss_dbm[k].astype(np.float64)
+            serving, sir, sinr = self.serving_cell[k], self.sir_db[k], self.sinr_db[k]
+        else:
+            if k == 0 or k == len(self.t_s):
+                rss = self.rss_dbm[min(k, len(self.t_s) - 1)].astype(np.float64)
+            else:
+                w = (t - self.t_s[k - 1]) / (self.t_s[k] - self.t_s[k - 1])
+                a, b = self.rss_dbm[k - 1].astype(np.float64), self.rss_dbm[k].astype(np.float64)
+                rss = (1.0 - w) * a + w * b
+            power = np.where(rss > RSS_FLOOR_DBM, 10.0 ** (rss / 10.0), 0.0)
+            serving, sir, sinr = sir_from_power(power, self.scenario.noise_power_dbm)
+        a = self.scenario.area
+        return RadioMap(
+            x_m=self.x_m,
+            y_m=self.y_m,
+            extent_m=(a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m),
+            altitude_m=a.altitude_m,
+            rss_dbm=rss,
+            serving_cell=serving,
+            sir_db=sir,
+            sinr_db=sinr,
+            scenario=self.scenario.replace(medium=self.scenario.medium.at(t)),
+            cell_site=self.cell_site,
+        )
+
+
+def build_radio_map_series(
+    scn: Scenario, times_s: Any, *, progress: bool = False
+) -> RadioMapSeries:
+    """The maps of ``scn`` at the instants ``times_s`` (strictly increasing, s), engine
+    ``"ray"`` (module docstring). Memory is checked before anything is allocated."""
+    if scn.engine != "ray":
+        raise InvalidInputError(
+            f"maps in time need engine 'ray' for now (got {scn.engine!r}); "
+            "use scn.replace(engine='ray')"
+        )
+    t = as_real_array("times_s", times_s)
+    if t.ndim != 1 or not 1 <= t.size <= MAX_SLICES:
+        raise InvalidInputError(f"times_s must be 1 to {MAX_SLICES} instants (got shape {t.shape})")
+    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise InvalidInputError("times_s must be finite and strictly increasing")
+    t0 = time.perf_counter()
+    a = scn.area
+    h, w = a.shape
+    jobs = [(site, cell) for site in scn.sites for cell in site.cells]
+    m = len(jobs)
+    sites = len({(s.x_m, s.y_m) for s in scn.sites})
+    check_fits(
+        f"the map series ({t.size} slices x {m} cells x {h} x {w} pixels)",
+        t.size * (4 * m + 24) * h * w + (6 * m + 2 * sites) * 8 * h * w,
+        "use fewer slices, a coarser area.resolution_m or a smaller area",
+    )
+    x_m = a.x_min_m + (np.arange(w) + 0.5) * (a.x_max_m - a.x_min_m) / w
+    y_m = a.y_min_m + (np.arange(h) + 0.5) * (a.y_max_m - a.y_min_m) / h
+    gains = ray_gains(scn, jobs, x_m, y_m)
+    timings = {"static": time.perf_counter() - t0}
+    rss = np.empty((t.size, m, h, w), np.float32)
+    sinr, sir = np.empty((t.size, h, w)), np.empty((t.size, h, w))
+    serving = np.empty((t.size, h, w), np.int64)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=t.size, desc="radio map slices", unit="slice")
+    t1 = time.perf_counter()
+    try:
+        for k, tk in enumerate(t):
+            power = ray_power_in_time(scn.replace(medium=scn.medium.at(tk)), jobs, x_m, y_m, gains)
+            serving[k], sir[k], sinr[k] = sir_from_power(power, scn.noise_power_dbm)
+            with np.errstate(divide="ignore"):
+                db = np.where(power > 0, 10 * np.log10(power), RSS_FLOOR_DBM)
+            rss[k] = np.maximum(db, RSS_FLOOR_DBM)
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    timings["slices"] = time.perf_counter() - t1
+    return RadioMapSeries(
+        t_s=t.copy(),
+        rss_dbm=rss,
+        sinr_db=sinr,
+        sir_db=sir,
+        serving_cell=serving,
+        scenario=scn,
+        x_m=x_m,
+        y_m=y_m,
+        cell_site=np.array([i for i, s in enumerate(scn.sites) for _ in s.cells], dtype=np.int64),
+        build_seconds=time.perf_counter() - t0,
+        timings=timings,
+    )
