@@ -47,6 +47,9 @@ def test_a_moving_growing_cell_is_the_first_one_shifted_and_scaled() -> None:
     # A decaying cell: negative e-folding time; the peak is held within the model's 500 mm/h.
     assert _cell(growth_s=-600.0).at(600.0).peak_rate_mm_h == pytest.approx(80.0 / math.e)
     assert _cell(growth_s=60.0).at(600.0).peak_rate_mm_h == 500.0
+    # Far in time (a scenario file may ask for any instant): bounded, no overflow.
+    assert _cell(growth_s=60.0).at(1e6).peak_rate_mm_h == 500.0
+    assert _cell(growth_s=-60.0).at(1e6).peak_rate_mm_h == 0.0
 
 
 @pytest.mark.parametrize(

@@ -28,7 +28,6 @@ from pathlib import Path
 from rainuav import _cli
 from rainuav._checks import check_integer
 from rainuav._io import check_out_dir, write_atomic
-from rainuav.errors import InvalidInputError
 
 
 def _out_dir(args: argparse.Namespace) -> Path:
@@ -74,10 +73,6 @@ def _evaluate(args: argparse.Namespace) -> int:
         check_integer("--starts", args.starts, 1, MAX_STARTS)
     if args.seed is not None:
         check_integer("--seed", args.seed, 0, MAX_SEED)
-    if not (args.run_dir / "config.toml").exists():
-        raise InvalidInputError(
-            f"{args.run_dir}: missing config.toml; is this a rainuav.train output?"
-        )
     out = check_out_dir(_out_dir(args))  # before any work
     metrics, rolls, env = evaluate_saved_run(
         args.run_dir,

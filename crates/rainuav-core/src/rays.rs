@@ -276,18 +276,19 @@ impl RayScene<'_> {
         let (h, w) = (self.y_m.len(), self.x_m.len());
         let mut out = Array2::<f64>::zeros((h, w));
         crate::memory::check_memory(out.len() * 8)?;
-        let RainField::Raster(r) = self.rain else {
-            out.fill(match self.rain {
-                RainField::Uniform(g) => g,
-                _ => {
-                    return Err(CoreError::invalid(
-                        "rain",
-                        "must be uniform or a raster",
-                        "per-pixel",
-                    ));
-                }
-            });
-            return Ok(out);
+        let r = match self.rain {
+            RainField::Raster(r) => r,
+            RainField::Uniform(g) => {
+                out.fill(g);
+                return Ok(out);
+            }
+            RainField::PerPixel(_) => {
+                return Err(CoreError::invalid(
+                    "rain",
+                    "must be uniform or a raster",
+                    "per-pixel",
+                ));
+            }
         };
         out.axis_iter_mut(Axis(0))
             .into_par_iter()

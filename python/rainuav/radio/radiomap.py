@@ -210,10 +210,7 @@ def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> N
             raise InvalidInputError(
                 f"{path}: {k} must lie in [{lo:g}, {hi:g}] (holds {a.min():g} to {a.max():g})"
             )
-    a = scn.area
-    x = a.x_min_m + (np.arange(w) + 0.5) * (a.x_max_m - a.x_min_m) / w
-    y = a.y_min_m + (np.arange(h) + 0.5) * (a.y_max_m - a.y_min_m) / h
-    for k, want in (("x_m", x), ("y_m", y)):
+    for k, want in zip(("x_m", "y_m"), scn.area.centres(), strict=True):
         if not np.allclose(data[k], want, rtol=0, atol=1e-6 * max(1.0, float(np.ptp(want)))):
             raise InvalidInputError(f"{path}: {k} is not the pixel centres of its area")
 
@@ -262,8 +259,7 @@ def build_radio_map(scn: Scenario, *, cache: bool = True, progress: bool = False
     t0 = time.perf_counter()
     a = scn.area
     h, w = a.shape
-    x_m = a.x_min_m + (np.arange(w) + 0.5) * (a.x_max_m - a.x_min_m) / w
-    y_m = a.y_min_m + (np.arange(h) + 0.5) * (a.y_max_m - a.y_min_m) / h
+    x_m, y_m = a.centres()
     jobs = [(i, site, cell) for i, site in enumerate(scn.sites) for cell in site.cells]
     # Every engine holds about ten (cells, H, W) float64 arrays at its peak (the rays' gains,
     # cone weights and powers, the PE's powers, the combination): refuse before the first.

@@ -101,6 +101,13 @@ class Area:
         h = max(1, round((self.y_max_m - self.y_min_m) / self.resolution_m))
         return h, w
 
+    def centres(self) -> tuple[np.ndarray, np.ndarray]:
+        """The pixel centres: east coordinates (W,) and north coordinates (H,), m."""
+        h, w = self.shape
+        x = self.x_min_m + (np.arange(w) + 0.5) * (self.x_max_m - self.x_min_m) / w
+        y = self.y_min_m + (np.arange(h) + 0.5) * (self.y_max_m - self.y_min_m) / h
+        return x, y
+
 
 @dataclass
 class Site:

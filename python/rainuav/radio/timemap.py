@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from rainuav._checks import as_real_array, check_fits
+from rainuav._checks import as_real_array, as_real_scalar, check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.radio.radiomap import RadioMap
 from rainuav.radio.ray_engine import ray_gains, ray_power_in_time
@@ -59,7 +59,7 @@ class RadioMapSeries:
         """The static map at ``t_s``: each cell's received power interpolated linearly in dB
         between the two slices around ``t_s`` (held beyond the first and the last), then
         serving cell, SIR and SINR from those powers; at a slice's own instant, that slice."""
-        t = float(as_real_array("t_s", t_s))
+        t = as_real_scalar("t_s", t_s)
         if not math.isfinite(t):
             raise InvalidInputError(f"t_s must be finite (got {t_s!r})")
         k = int(np.searchsorted(self.t_s, t))
@@ -116,8 +116,7 @@ def build_radio_map_series(
         t.size * (4 * m + 24) * h * w + (6 * m + 2 * sites) * 8 * h * w,
         "use fewer slices, a coarser area.resolution_m or a smaller area",
     )
-    x_m = a.x_min_m + (np.arange(w) + 0.5) * (a.x_max_m - a.x_min_m) / w
-    y_m = a.y_min_m + (np.arange(h) + 0.5) * (a.y_max_m - a.y_min_m) / h
+    x_m, y_m = a.centres()
     gains = ray_gains(scn, jobs, x_m, y_m)
     timings = {"static": time.perf_counter() - t0}
     rss = np.empty((t.size, m, h, w), np.float32)

@@ -54,7 +54,8 @@ class RainCell:
         velocity, its peak grown or decayed (held within the 500 mm/h the rain model covers);
         velocity and growth are kept, so ``c.at(a).at(b)`` is ``c.at(a + b)`` (until a peak
         reaches the bound)."""
-        grow = math.exp(t_s / self.growth_s) if self.growth_s else 1.0
+        # The exponent is capped where the peak is past the bound anyway (no overflow).
+        grow = math.exp(min(t_s / self.growth_s, 700.0)) if self.growth_s else 1.0
         return dataclasses.replace(
             self,
             x_m=self.x_m + self.vx_m_s * t_s,
