@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from rainuav import InvalidInputError
 from rainuav.radio import build_radio_map, presets
-from rainuav.radio.ray_engine import _medium_args
+from rainuav.radio.ray_engine import rain_args
 from rainuav.radio.scenario import Area
 from rainuav.radio.timemap import build_radio_map_series
 from rainuav.radio.weather import Medium, RainCell
@@ -26,15 +26,20 @@ def series():
 
 
 def test_every_slice_is_the_static_map_of_its_instant(series) -> None:
-    # The same rays, gains and rain integral as a static ray build: equal to the last bit
-    # (SINR, SIR, serving cell); the received powers are kept as float32 (1e-5 dB).
+    # A slice traces the same rays as a static ray build of the frozen weather at its instant;
+    # only the rain integral differs (a fan of lines from each site, read between lines, for
+    # a line per pixel). Tolerance (the issue's): 0.05 dB at the 99th percentile of SINR and
+    # of every cell's power (where it is above the floor), and at every pixel too; measured
+    # 0.0007 dB at the 99th percentile, 0.001 dB at most.
     scn = _storm()
     for k, t in enumerate(TIMES):
         ref = build_radio_map(scn.replace(medium=scn.medium.at(t)), cache=False)
-        assert np.array_equal(series.sinr_db[k], ref.sinr_db), t
-        assert np.array_equal(series.sir_db[k], ref.sir_db), t
-        assert np.array_equal(series.serving_cell[k], ref.serving_cell), t
-        np.testing.assert_allclose(series.rss_dbm[k], ref.rss_dbm, atol=1e-4)
+        d_sinr = np.abs(series.sinr_db[k] - ref.sinr_db)
+        live = ref.rss_dbm > -200.0
+        d_rss = np.abs(series.rss_dbm[k].astype(float) - ref.rss_dbm)[live]
+        assert np.percentile(d_sinr, 99) < 0.05 and np.percentile(d_rss, 99) < 0.05, t
+        assert d_sinr.max() < 0.05 and d_rss.max() < 0.05, t  # no pixel far off
+        assert np.mean(series.serving_cell[k] == ref.serving_cell) > 0.999, t
     # The storm moves: the slices differ.
     assert not np.array_equal(series.sinr_db[0], series.sinr_db[-1])
 
@@ -45,37 +50,93 @@ def test_still_weather_gives_identical_slices() -> None:
     assert np.array_equal(s.sinr_db[0], s.sinr_db[2]) and np.array_equal(s.rss_dbm[0], s.rss_dbm[1])
 
 
-def test_the_rain_path_integral_against_brute_force_quadrature() -> None:
-    # The mean specific attenuation from a site to every pixel (the raster, bilinear, by the
-    # trapezoid rule at its spacing) against gamma(R(x, y)) of the exact rain field summed at
-    # 1 m steps along each line, 200 random pixels, losses up to 11.7 dB. Tolerance 0.01 dB
-    # of total loss (the issue's): the raster samples the 300 m Gaussian cell at 10 m nodes
-    # and reads it bilinearly; measured at most 0.0033 dB.
+def _rain_loss_db(scn, site, gamma_raster, origin_step) -> np.ndarray:
+    """The direct ray's rain loss (dB) from ``site`` to every pixel of ``scn`` through a raster
+    of gamma (dB/m), by the slicer: unit clear-air power on the direct ray only."""
     from rainuav import _core
 
+    x, y = scn.area.centres()
+    terms = np.zeros((1, y.size, x.size, 3))
+    terms[..., 0] = 1.0
+    slicer = _core.RaySlicer(
+        terms, np.array([[site.x_m, site.y_m, site.height_m]]), np.zeros(1, np.int64), x, y,
+        altitude_m=scn.area.altitude_m, node_spacing_m=origin_step[1],
+    )  # fmt: skip
+    p = slicer.power(gamma_db_per_m=0.0, gamma_raster=gamma_raster, gamma_origin_step=origin_step)
+    return -10.0 * np.log10(p[0])
+
+
+def _direct_length(scn, site, x, y):
+    rho = np.hypot(x - site.x_m, y - site.y_m)
+    return rho, np.hypot(rho, scn.area.altitude_m - site.height_m)
+
+
+def test_the_rain_path_integral_against_brute_force_quadrature() -> None:
+    # The rain loss from a site to every pixel (the raster of the medium's gamma, 10 m nodes,
+    # integrated along a fan of lines) against gamma(R(x, y)) of the exact rain field summed
+    # at 1 m steps along each line, 200 random pixels, losses up to 12 dB. Tolerance 0.01 dB
+    # (the issue's): the raster samples the 300 m Gaussian cell at 10 m nodes and the fan
+    # reads between lines at most 10 m apart; measured at most 0.004 dB.
     cell = RainCell(1100.0, 900.0, 300.0, 120.0, vx_m_s=10.0)
     weather = Medium(kind="cells", rain_rate_mm_h=0.0, cells=[cell])
     scn = presets.uma(0.0, 28e9, engine="ray", medium=weather)
     scn = scn.replace(medium=scn.medium.at(30.0))
-    a = scn.area
-    h, w = a.shape
-    x = a.x_min_m + (np.arange(w) + 0.5) * (a.x_max_m - a.x_min_m) / w
-    y = a.y_min_m + (np.arange(h) + 0.5) * (a.y_max_m - a.y_min_m) / h
-    args = _medium_args(scn)
+    args = rain_args(scn)
     site = scn.sites[0]
-    got = _core.ray_mean_gamma(
-        np.array([[site.x_m, site.y_m]]), x, y, gamma_db_per_m=args["gamma_db_per_m"],
-        gamma_raster=args["gamma_raster"], gamma_origin_step=args["gamma_origin_step"],
-    )[0]  # fmt: skip
+    got = _rain_loss_db(scn, site, args["gamma_raster"], args["gamma_origin_step"])
+    x, y = scn.area.centres()
     rain = scn.medium.rain_medium(scn.freq_hz, scn.polarization)
     rng = np.random.default_rng(0)
-    for i, j in zip(rng.integers(0, h, 200), rng.integers(0, w, 200), strict=True):
-        rho = float(np.hypot(x[j] - site.x_m, y[i] - site.y_m))
+    for i, j in zip(rng.integers(0, y.size, 200), rng.integers(0, x.size, 200), strict=True):
+        rho, d1 = _direct_length(scn, site, x[j], y[i])
         s = np.linspace(0.0, 1.0, max(int(rho), 2))
         px, py = site.x_m + s * (x[j] - site.x_m), site.y_m + s * (y[i] - site.y_m)
         rates = scn.medium.cells[0].rate(px, py)
-        want = float(np.trapezoid(rain.specific_attenuation(rates) / 1e3, s))
-        assert abs(got[i, j] - want) * rho < 0.01, (i, j, got[i, j] * rho, want * rho)
+        want = float(np.trapezoid(rain.specific_attenuation(rates) / 1e3, s)) * d1
+        assert abs(got[i, j] - want) < 0.01, (i, j, got[i, j], want)
+
+
+def test_a_moving_gaussian_cell_against_the_closed_form() -> None:
+    # gamma = k R^alpha (ITU-R P.838 at 28 GHz) through a Gaussian cell moved by 60 s at
+    # 12 m/s: along a line, R^alpha is a Gaussian in the distance s, and its integral is
+    # k R0^alpha exp(-alpha p^2 / r^2) r sqrt(pi / alpha) / 2 [erf((rho - s0) sqrt(alpha) / r)
+    # + erf(s0 sqrt(alpha) / r)] (p: the centre's distance from the line, s0: its foot).
+    # Every pixel of the map, tolerance 0.01 dB (the issue's); measured below 0.005 dB.
+    from rainuav.medium import itu_p838
+    from scipy.special import erf
+
+    cell = RainCell(700.0, 1200.0, 250.0, 100.0, vx_m_s=12.0).at(60.0)
+    scn = presets.uma(0.0, 28e9, engine="ray")
+    k, alpha = _p838_power_law(scn.freq_hz, itu_p838)
+    step = 10.0
+    a = scn.area
+    nx, ny = int((a.x_max_m - a.x_min_m) / step) + 1, int((a.y_max_m - a.y_min_m) / step) + 1
+    xs, ys = a.x_min_m + step * np.arange(nx), a.y_min_m + step * np.arange(ny)
+    raster = k * cell.rate(xs[None, :], ys[:, None]) ** alpha / 1e3
+    site = scn.sites[2]
+    got = _rain_loss_db(scn, site, raster, (a.x_min_m, step, a.y_min_m, step))
+    x, y = a.centres()
+    X, Y = np.meshgrid(x, y)
+    rho, d1 = _direct_length(scn, site, X, Y)
+    ux, uy = (X - site.x_m) / rho, (Y - site.y_m) / rho
+    cx, cy = cell.x_m - site.x_m, cell.y_m - site.y_m
+    s0 = cx * ux + cy * uy
+    p2 = cx**2 + cy**2 - s0**2
+    r, q = cell.radius_m, np.sqrt(alpha) / cell.radius_m
+    integral = (
+        k * cell.peak_rate_mm_h**alpha * np.exp(-alpha * p2 / r**2) * np.sqrt(np.pi) / (2 * q)
+        * (erf((rho - s0) * q) + erf(s0 * q)) / 1e3
+    )  # fmt: skip
+    want = integral * d1 / rho
+    assert want.max() > 5.0  # the cell matters
+    np.testing.assert_allclose(got, want, rtol=0, atol=0.01)
+
+
+def _p838_power_law(freq_hz: float, itu_p838) -> tuple[float, float]:
+    """k and alpha of P.838 at ``freq_hz`` (horizontal): gamma at 1 mm/h is k, and the slope
+    of log gamma against log R is alpha."""
+    g1, g10 = (float(itu_p838(freq_hz, r, polarization="h")) for r in (1.0, 10.0))
+    return g1, float(np.log10(g10 / g1))
 
 
 def test_between_slices_the_powers_are_interpolated(series) -> None:

@@ -14,6 +14,7 @@ __all__ = [
     "MediumConfig",
     "PeMarcher",
     "RainMediumKernel",
+    "RaySlicer",
     "__version__",
     "available_memory_bytes",
     "axial_ratio",
@@ -25,7 +26,6 @@ __all__ = [
     "itu_p838",
     "mie_forward",
     "plan_optimal",
-    "ray_mean_gamma",
     "ray_power",
     "terminal_velocity_m_s",
     "water_permittivity",
@@ -34,6 +34,7 @@ __all__ = [
 __version__: str
 
 _F = npt.NDArray[np.float64]
+_I = npt.NDArray[np.int64]
 _C = npt.NDArray[np.complex128]
 _C64 = npt.NDArray[np.complex64]
 _B = npt.NDArray[np.bool_]
@@ -209,17 +210,33 @@ def ray_power(
     buildings: _F,
     heights: _F | None,
     heights_origin_step: tuple[float, float, float, float],
-    gamma_per_tx: _F | None = None,
+    terms_only: bool = False,
 ) -> _F:
-    """Received power (mW) of every transmitter at every pixel, (M, H, W)."""
+    """Received power (mW) of every transmitter at every pixel, (M, H, W); with
+    ``terms_only``, its clear-air parts [direct, reflect, cross], (M, H, W, 3)."""
 
-def ray_mean_gamma(
-    sources_m: _F,
-    x_m: _F,
-    y_m: _F,
-    *,
-    gamma_db_per_m: float,
-    gamma_raster: _F | None,
-    gamma_origin_step: tuple[float, float, float, float],
-) -> _F:
-    """Mean specific attenuation (dB/m) from each source (S, 2) to every pixel, (S, H, W)."""
+@final
+class RaySlicer:
+    """Every cell's rays traced once; the power at any instant from its rain."""
+
+    def __new__(
+        cls,
+        terms: _F,
+        sites: _F,
+        site_of: _I,
+        x_m: _F,
+        y_m: _F,
+        *,
+        altitude_m: float,
+        node_spacing_m: float,
+    ) -> RaySlicer: ...
+    def power(
+        self,
+        *,
+        gamma_db_per_m: float,
+        gamma_raster: _F | None,
+        gamma_origin_step: tuple[float, float, float, float],
+        rss_dbm_out: npt.NDArray[np.float32] | None = None,
+        rss_floor_dbm: float = ...,
+    ) -> _F:
+        """Power (mW) of every cell at every pixel, (M, H, W), through this rain."""

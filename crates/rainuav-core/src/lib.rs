@@ -27,6 +27,7 @@ pub mod planner;
 pub mod pwe;
 pub mod quadrature;
 pub mod rays;
+pub mod raytime;
 pub mod water;
 
 pub use error::{CoreError, Result};

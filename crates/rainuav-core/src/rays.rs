@@ -22,7 +22,7 @@
 //! its dominant edge (the largest `nu`), `nu = h sqrt(2 / lambda (1 / d_a + 1 / d_b))`: a
 //! finite loss, never a blocked ray.
 
-use ndarray::{Array2, Array3, ArrayView2, ArrayView3, Axis};
+use ndarray::{Array3, Array4, ArrayView2, ArrayView3, Axis};
 use num_complex::Complex64;
 use rayon::prelude::*;
 
@@ -60,7 +60,7 @@ pub struct Raster<'a> {
 
 impl Raster<'_> {
     /// Bilinear between nodes, held beyond the outermost.
-    fn bilinear(&self, x: f64, y: f64) -> f64 {
+    pub(crate) fn bilinear(&self, x: f64, y: f64) -> f64 {
         let [x0, dx, y0, dy] = self.origin_step;
         let (rows, cols) = self.values.dim();
         let fx = ((x - x0) / dx).clamp(0.0, (cols - 1) as f64);
@@ -90,7 +90,7 @@ impl Raster<'_> {
         self.values[[i as usize, j as usize]]
     }
 
-    fn spacing(&self) -> f64 {
+    pub(crate) fn spacing(&self) -> f64 {
         self.origin_step[1].min(self.origin_step[3])
     }
 }
@@ -102,16 +102,11 @@ pub enum RainField<'a> {
     Uniform(f64),
     /// Varies horizontally: nodes of a raster ([`Raster::bilinear`]).
     Raster(Raster<'a>),
-    /// Already integrated: the mean specific attenuation (dB/m) along each transmitter's
-    /// horizontal path to each pixel centre, `(M, H, W)`, as [`RayScene::mean_gamma_map`]
-    /// gives it from a raster (weather in time: one integral per site and instant, shared
-    /// by the site's cells and by both rays).
-    PerPixel(ArrayView3<'a, f64>),
 }
 
 /// The mean of `gamma` (dB/m) along the horizontal line `a -> b` of a uniform or raster rain
 /// field: the trapezoid rule at the raster's spacing.
-fn line_gamma(r: &Raster<'_>, a: [f64; 2], b: [f64; 2]) -> f64 {
+pub(crate) fn line_gamma(r: &Raster<'_>, a: [f64; 2], b: [f64; 2]) -> f64 {
     let rho = (b[0] - a[0]).hypot(b[1] - a[1]);
     let n = ((rho / r.spacing()).ceil() as usize).max(1);
     let mut sum = 0.5 * (r.bilinear(a[0], a[1]) + r.bilinear(b[0], b[1]));
@@ -159,6 +154,47 @@ pub struct RayTransmitter {
     pub power_mw: f64,
 }
 
+/// The lengths (m) of the direct and the ground-reflected ray between a transmitter at height
+/// `hs` and a receiver at height `hq`, `rho` apart horizontally.
+pub(crate) fn ray_lengths(rho: f64, hs: f64, hq: f64) -> (f64, f64) {
+    let d1 = (rho * rho + (hq - hs).powi(2)).sqrt().max(1e-3);
+    let d2 = (rho * rho + (hq + hs).powi(2)).sqrt();
+    (d1, d2)
+}
+
+/// One transmitter's mean power over one pixel (mW) split into what rain does not change:
+/// with the rain's mean specific attenuation `gamma` (dB/m) along the rays' horizontal path,
+/// `P = direct a1^2 + reflect a2^2 + cross a1 a2`, `a_i = 10^(-gamma d_i / 20)`
+/// ([`PixelTerms::power`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PixelTerms {
+    /// Power of the direct ray in clear air, mW.
+    pub direct: f64,
+    /// Power of the reflected ray in clear air, mW.
+    pub reflect: f64,
+    /// Their interference (the pixel mean of `2 Re(E1 conj E2)`) in clear air, mW.
+    pub cross: f64,
+    /// Length of the direct ray, m.
+    pub d1: f64,
+    /// Length of the reflected ray, m.
+    pub d2: f64,
+}
+
+impl PixelTerms {
+    /// The power (mW) with rain of mean specific attenuation `gamma` (dB/m) along the path.
+    pub fn power(&self, gamma: f64) -> f64 {
+        let a1 = db_to_amplitude(gamma * self.d1);
+        let a2 = db_to_amplitude(gamma * self.d2);
+        Self::combine(self.direct, self.reflect, self.cross, a1, a2)
+    }
+
+    /// `direct a1^2 + reflect a2^2 + cross a1 a2` (never below 0): the power of the terms
+    /// with the rays' amplitude factors `a1`, `a2`.
+    pub fn combine(direct: f64, reflect: f64, cross: f64, a1: f64, a2: f64) -> f64 {
+        (direct * a1 * a1 + reflect * a2 * a2 + cross * a1 * a2).max(0.0)
+    }
+}
+
 /// ITU-R P.526 single knife-edge loss in dB (0 for `nu <= -0.78`).
 pub fn knife_edge_loss_db(nu: f64) -> f64 {
     if nu <= -0.78 {
@@ -185,12 +221,21 @@ pub fn reflection_coefficient(ground: RayGround, pol: RayPolarization, psi: f64)
     }
 }
 
+/// The amplitude factor `10^(-loss / 20)` of a loss in dB (1 for no loss, without a `powf`).
+fn db_to_amplitude(loss_db: f64) -> f64 {
+    if loss_db == 0.0 {
+        1.0
+    } else {
+        10f64.powf(-loss_db / 20.0)
+    }
+}
+
 fn sinc(u: f64) -> f64 {
     if u.abs() < 1e-8 { 1.0 } else { u.sin() / u }
 }
 
 impl RayScene<'_> {
-    fn check(&self) -> Result<()> {
+    pub(crate) fn check(&self) -> Result<()> {
         if self.x_m.is_empty() || self.y_m.is_empty() {
             return Err(CoreError::invalid("x_m, y_m", "must not be empty", 0));
         }
@@ -223,15 +268,6 @@ impl RayScene<'_> {
                 crate::error::check_range("gamma_db_per_m", g, 0.0, 10.0, "must be in 0..10 dB/m")?
             }
             RainField::Raster(r) => check_raster("rain raster", r.values, r.origin_step)?,
-            RainField::PerPixel(g) => {
-                if !g.iter().all(|v| v.is_finite() && (0.0..=10.0).contains(v)) {
-                    return Err(CoreError::invalid(
-                        "gamma_per_tx",
-                        "must be finite, in 0..10 dB/m",
-                        "a bad value",
-                    ));
-                }
-            }
         }
         if let RayGround::Dielectric(e) = self.ground
             && !(e.re.is_finite() && e.im.is_finite() && e.re >= 1.0 && e.im <= 0.0)
@@ -257,48 +293,13 @@ impl RayScene<'_> {
         Ok(())
     }
 
-    /// Rain attenuation (dB) of the horizontal line from transmitter `m` at `a` to the
-    /// centre of pixel `(i, j)`, per metre of horizontal distance (the mean of `gamma` along
-    /// the line).
-    fn mean_gamma(&self, m: usize, a: [f64; 2], (i, j): (usize, usize)) -> f64 {
+    /// Rain attenuation (dB) of the horizontal line from `a` to `q`, per metre of
+    /// horizontal distance (the mean of `gamma` along the line).
+    fn mean_gamma(&self, a: [f64; 2], q: [f64; 2]) -> f64 {
         match self.rain {
             RainField::Uniform(g) => g,
-            RainField::Raster(r) => line_gamma(&r, a, [self.x_m[j], self.y_m[i]]),
-            RainField::PerPixel(g) => g[[m, i, j]],
+            RainField::Raster(r) => line_gamma(&r, a, q),
         }
-    }
-
-    /// The mean specific attenuation (dB/m) along the horizontal line from `from` to every
-    /// pixel centre, `(H, W)`: what the rays of any transmitter standing at `from` see
-    /// ([`RainField::PerPixel`]), the same arithmetic as the raster path. Rows in parallel.
-    pub fn mean_gamma_map(&self, from: [f64; 2]) -> Result<Array2<f64>> {
-        self.check()?;
-        let (h, w) = (self.y_m.len(), self.x_m.len());
-        let mut out = Array2::<f64>::zeros((h, w));
-        crate::memory::check_memory(out.len() * 8)?;
-        let r = match self.rain {
-            RainField::Raster(r) => r,
-            RainField::Uniform(g) => {
-                out.fill(g);
-                return Ok(out);
-            }
-            RainField::PerPixel(_) => {
-                return Err(CoreError::invalid(
-                    "rain",
-                    "must be uniform or a raster",
-                    "per-pixel",
-                ));
-            }
-        };
-        out.axis_iter_mut(Axis(0))
-            .into_par_iter()
-            .enumerate()
-            .for_each(|(i, mut row)| {
-                for j in 0..w {
-                    row[j] = line_gamma(&r, from, [self.x_m[j], self.y_m[i]]);
-                }
-            });
-        Ok(out)
     }
 
     /// The largest Fresnel-Kirchhoff parameter `nu` of any obstacle edge over the straight
@@ -370,60 +371,63 @@ impl RayScene<'_> {
         knife_edge_loss_db(worst)
     }
 
-    /// Mean received power (mW, isotropic receiver) over one pixel; `gamma`: the mean
-    /// specific attenuation along the rays' horizontal path ([`RayScene::mean_gamma`]).
-    fn pixel_power(
+    /// The clear-air parts of the mean received power over one pixel ([`PixelTerms`]):
+    /// antenna gains, spreading, ground reflection, the pixel mean of the fringes and the
+    /// knife-edge losses; everything but the rain.
+    pub fn pixel_terms(
         &self,
         tx: &RayTransmitter,
         q: [f64; 2],
         g_direct: f64,
         g_reflect: f64,
-        gamma: f64,
-    ) -> f64 {
+    ) -> PixelTerms {
         let [xs, ys, hs] = tx.position_m;
         let hq = self.altitude_m;
         let k0 = crate::wavenumber(self.freq_hz);
         let (ex, ey) = (q[0] - xs, q[1] - ys);
         let rho = ex.hypot(ey);
-        let d1 = (rho * rho + (hq - hs).powi(2)).sqrt().max(1e-3);
-        let d2 = (rho * rho + (hq + hs).powi(2)).sqrt();
-        let a1_db = gamma * d1 + self.diffraction_db(&[[xs, ys, hs], [q[0], q[1], hq]]);
-        let amp1 = g_direct.max(0.0).sqrt() * 10f64.powf(-a1_db / 20.0) / d1;
-        let mut mean = amp1 * amp1;
+        let (d1, d2) = ray_lengths(rho, hs, hq);
+        let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
+        let scale = tx.power_mw * (lambda / (4.0 * std::f64::consts::PI)).powi(2);
+        let a1_db = self.diffraction_db(&[[xs, ys, hs], [q[0], q[1], hq]]);
+        let amp1 = g_direct.max(0.0).sqrt() * db_to_amplitude(a1_db) / d1;
+        let mut t = PixelTerms {
+            direct: scale * amp1 * amp1,
+            reflect: 0.0,
+            cross: 0.0,
+            d1,
+            d2,
+        };
         if self.ground != RayGround::None {
             let psi = ((hs + hq) / rho.max(1e-9)).atan();
             let gamma_g = reflection_coefficient(self.ground, self.polarization, psi);
             let tr = hs / (hs + hq);
             let bounce = [xs + tr * ex, ys + tr * ey, 0.0];
-            let a2_db = gamma * d2 + self.diffraction_db(&[[xs, ys, hs], bounce, [q[0], q[1], hq]]);
-            let amp2 = g_reflect.max(0.0).sqrt() * 10f64.powf(-a2_db / 20.0) / d2;
+            let a2_db = self.diffraction_db(&[[xs, ys, hs], bounce, [q[0], q[1], hq]]);
+            let amp2 = g_reflect.max(0.0).sqrt() * db_to_amplitude(a2_db) / d2;
             let r = gamma_g * amp2;
-            mean += r.norm_sqr();
+            t.reflect = scale * r.norm_sqr();
             // Cross term 2 Re(E1 conj(E2)) with E_i = a_i exp(-j k0 d_i), averaged over the
             // pixel: the phase k0 (d2 - d1) has gradient k0 (x - xs)(1/d2 - 1/d1) along x.
             let phase = Complex64::from_polar(1.0, -k0 * (d1 - d2));
             let cross = 2.0 * (amp1 * (phase * r.conj())).re;
             let w = k0 * (1.0 / d2 - 1.0 / d1);
             let avg = sinc(0.5 * w * ex * self.pixel_m[0]) * sinc(0.5 * w * ey * self.pixel_m[1]);
-            mean += cross * avg;
+            t.cross = scale * cross * avg;
         }
-        let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
-        let scale = (lambda / (4.0 * std::f64::consts::PI)).powi(2);
-        tx.power_mw * scale * mean.max(0.0)
+        t
     }
 
-    /// Received power (mW) of every transmitter at every pixel, `(M, H, W)`; `g_direct` and
-    /// `g_reflect` are the linear antenna gains `(M, H, W)` of each transmitter toward each
-    /// pixel along the direct and the reflected ray. Rows run in parallel (rayon).
-    pub fn power(
+    /// Checks the transmitters and their gains `(M, H, W)` against the map; the shape.
+    fn check_rays(
         &self,
         txs: &[RayTransmitter],
-        g_direct: ArrayView3<'_, f64>,
-        g_reflect: ArrayView3<'_, f64>,
-    ) -> Result<Array3<f64>> {
+        g_direct: &ArrayView3<'_, f64>,
+        g_reflect: &ArrayView3<'_, f64>,
+    ) -> Result<(usize, usize, usize)> {
         self.check()?;
         let shape = (txs.len(), self.y_m.len(), self.x_m.len());
-        for (name, g) in [("g_direct", &g_direct), ("g_reflect", &g_reflect)] {
+        for (name, g) in [("g_direct", g_direct), ("g_reflect", g_reflect)] {
             if g.dim() != shape {
                 return Err(CoreError::invalid(
                     name,
@@ -452,43 +456,68 @@ impl RayScene<'_> {
                 ));
             }
         }
-        if let RainField::PerPixel(g) = self.rain
-            && g.dim() != shape
-        {
-            return Err(CoreError::invalid(
-                "gamma_per_tx",
-                format!("must have shape {shape:?} (cells, rows, columns)"),
-                format!("{:?}", g.dim()),
-            ));
-        }
+        Ok(shape)
+    }
+
+    /// Received power (mW) of every transmitter at every pixel, `(M, H, W)`; `g_direct` and
+    /// `g_reflect` are the linear antenna gains `(M, H, W)` of each transmitter toward each
+    /// pixel along the direct and the reflected ray. Rows run in parallel (rayon).
+    pub fn power(
+        &self,
+        txs: &[RayTransmitter],
+        g_direct: ArrayView3<'_, f64>,
+        g_reflect: ArrayView3<'_, f64>,
+    ) -> Result<Array3<f64>> {
+        let shape = self.check_rays(txs, &g_direct, &g_reflect)?;
         let mut out = Array3::<f64>::zeros(shape);
         crate::memory::check_memory(out.len() * 8)?;
-        let w = self.x_m.len();
         out.axis_iter_mut(Axis(0))
             .into_par_iter()
             .enumerate()
             .for_each(|(m, mut plane)| {
-                plane
-                    .axis_iter_mut(Axis(0))
-                    .enumerate()
-                    .for_each(|(i, mut row)| {
-                        let [xs, ys, _] = txs[m].position_m;
-                        for j in 0..w {
-                            row[j] = self.pixel_power(
-                                &txs[m],
-                                [self.x_m[j], self.y_m[i]],
-                                g_direct[[m, i, j]],
-                                g_reflect[[m, i, j]],
-                                self.mean_gamma(m, [xs, ys], (i, j)),
-                            );
-                        }
-                    });
+                let [xs, ys, _] = txs[m].position_m;
+                for ((i, j), p) in plane.indexed_iter_mut() {
+                    let q = [self.x_m[j], self.y_m[i]];
+                    let t = self.pixel_terms(&txs[m], q, g_direct[[m, i, j]], g_reflect[[m, i, j]]);
+                    *p = t.power(self.mean_gamma([xs, ys], q));
+                }
+            });
+        Ok(out)
+    }
+
+    /// The clear-air parts of every transmitter's power at every pixel, `(M, H, W, 3)`:
+    /// `[direct, reflect, cross]` of [`PixelTerms`] (the rain of the scene is not used). With
+    /// the rain's mean attenuation along each path they give [`RayScene::power`]'s power
+    /// ([`crate::raytime`]: weather in time, the rays traced once).
+    pub fn terms(
+        &self,
+        txs: &[RayTransmitter],
+        g_direct: ArrayView3<'_, f64>,
+        g_reflect: ArrayView3<'_, f64>,
+    ) -> Result<Array4<f64>> {
+        let (m, h, w) = self.check_rays(txs, &g_direct, &g_reflect)?;
+        let mut out = Array4::<f64>::zeros((m, h, w, 3));
+        crate::memory::check_memory(out.len() * 8)?;
+        out.axis_iter_mut(Axis(0))
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(m, mut plane)| {
+                for i in 0..h {
+                    for j in 0..w {
+                        let q = [self.x_m[j], self.y_m[i]];
+                        let t =
+                            self.pixel_terms(&txs[m], q, g_direct[[m, i, j]], g_reflect[[m, i, j]]);
+                        plane[[i, j, 0]] = t.direct;
+                        plane[[i, j, 1]] = t.reflect;
+                        plane[[i, j, 2]] = t.cross;
+                    }
+                }
             });
         Ok(out)
     }
 }
 
-fn check_raster(name: &'static str, v: ArrayView2<'_, f64>, os: [f64; 4]) -> Result<()> {
+pub(crate) fn check_raster(name: &'static str, v: ArrayView2<'_, f64>, os: [f64; 4]) -> Result<()> {
     if v.nrows() < 1 || v.ncols() < 1 || !v.iter().all(|x| x.is_finite() && *x >= 0.0) {
         return Err(CoreError::invalid(
             name,
@@ -582,37 +611,6 @@ mod tests {
         );
         let want = (1.0 - eps.sqrt()) / (1.0 + eps.sqrt());
         assert!((g - want).norm() < 1e-12);
-    }
-
-    #[test]
-    fn rain_integrated_once_per_site_gives_the_raster_power_exactly() {
-        // Two transmitters at one site, a raster that varies: the per-pixel field from
-        // mean_gamma_map (shared by the site's cells) gives bit for bit the raster's power.
-        let x: Vec<f64> = (0..7).map(|j| 150.0 * j as f64 + 75.0).collect();
-        let y: Vec<f64> = (0..5).map(|i| 200.0 * i as f64 + 100.0).collect();
-        let vals = Array2::from_shape_fn((6, 8), |(i, j)| 0.001 * ((i * 8 + j) % 7) as f64);
-        let mut s = scene(&x, &y, RayGround::Pec);
-        s.rain = RainField::Raster(Raster {
-            values: vals.view(),
-            origin_step: [0.0, 150.0, 0.0, 200.0],
-        });
-        let txs = [
-            TX,
-            RayTransmitter {
-                position_m: [0.0, 0.0, 25.0],
-                power_mw: 2.0,
-            },
-        ];
-        let g = Array3::<f64>::ones((2, 5, 7));
-        let want = s.power(&txs, g.view(), g.view()).unwrap();
-        let one_site = s.mean_gamma_map([0.0, 0.0]).unwrap();
-        let per_tx = ndarray::stack![Axis(0), one_site.view(), one_site.view()];
-        s.rain = RainField::PerPixel(per_tx.view());
-        assert_eq!(s.power(&txs, g.view(), g.view()).unwrap(), want);
-        // A field of the wrong shape is an error, not a panic.
-        let wrong = Array3::<f64>::zeros((1, 5, 7));
-        s.rain = RainField::PerPixel(wrong.view());
-        assert!(s.power(&txs, g.view(), g.view()).is_err());
     }
 
     #[test]

@@ -32,10 +32,13 @@ from rainuav.radio.scenario import Scenario, Site
 __all__ = [
     "SOILS",
     "gamma_field",
+    "gamma_table",
     "ground_permittivity",
+    "rain_args",
     "ray_gains",
     "ray_power",
-    "ray_power_in_time",
+    "ray_slicer",
+    "ray_terms",
 ]
 
 SOILS: dict[str, tuple[float, float, float, float]] = {
@@ -59,30 +62,45 @@ def ground_permittivity(kind: str, freq_hz: float) -> complex:
     return complex(a * f_ghz**b, -60.0 * lam * c * f_ghz**d)
 
 
+def gamma_table(scn: Scenario, max_rate_mm_h: float) -> tuple[np.ndarray, np.ndarray]:
+    """The rain's specific attenuation (dB/km) of ``scn``'s weather tabulated against the rain
+    rate over 0..``max_rate_mm_h`` at 513 points: smooth in the rate, so interpolating it
+    errs far below 1e-4 relative."""
+    rm = scn.medium.rain_medium(scn.freq_hz, scn.polarization)
+    table_r = np.linspace(0.0, max(max_rate_mm_h, 1e-3), 513)
+    return table_r, np.asarray(rm.specific_attenuation(table_r), dtype=float)
+
+
+def _node_spacing(scn: Scenario) -> float:
+    """The spacing of the rain's nodes for the rays: the pixel, at most 10 m."""
+    return min(scn.area.resolution_m, 10.0)
+
+
 def gamma_field(
-    scn: Scenario, spacing_m: float | None = None
+    scn: Scenario,
+    spacing_m: float | None = None,
+    table: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[float, np.ndarray | None, tuple[float, float, float, float]]:
     """The rain's specific attenuation for the rays: (uniform dB/m, raster of nodes in dB/m
     or None, (x0, dx, y0, dy) of the raster). Rain cells and rate maps are sampled at nodes
-    ``spacing_m`` apart (default: the pixel, at most 10 m) over the area."""
+    ``spacing_m`` apart (default: the pixel, at most 10 m) over the area; ``table``
+    (:func:`gamma_table`, covering the field's rates) saves tabulating gamma again."""
     m = scn.medium
     if m.kind == "clear":
         return 0.0, None, (0.0, 1.0, 0.0, 1.0)
-    rm = m.rain_medium(scn.freq_hz, scn.polarization)
     if m.kind == "homogeneous":
+        rm = m.rain_medium(scn.freq_hz, scn.polarization)
         return float(rm.specific_attenuation(m.rain_rate_mm_h)) / 1000.0, None, (0, 1, 0, 1)
     a = scn.area
-    step = spacing_m or min(a.resolution_m, 10.0)
+    step = spacing_m or _node_spacing(scn)
     nx = math.ceil((a.x_max_m - a.x_min_m) / step) + 1
     ny = math.ceil((a.y_max_m - a.y_min_m) / step) + 1
     xs = a.x_min_m + np.arange(nx) * step
     ys = a.y_min_m + np.arange(ny) * step
     rates = rain_rate_at(scn, xs[None, :], ys[:, None])
-    # gamma against rain rate, tabulated once (smooth in the rate: 513 points interpolate to
-    # far below 1e-4 relative) and interpolated.
-    table_r = np.linspace(0.0, max(float(rates.max()), 1e-3), 513)
-    table_g = np.asarray(rm.specific_attenuation(table_r), dtype=float)
-    gamma = np.interp(rates, table_r, table_g) / 1000.0
+    if table is None or table[0][-1] < rates.max():
+        table = gamma_table(scn, float(rates.max()))
+    gamma = np.interp(rates, *table) / 1000.0
     return 0.0, np.ascontiguousarray(gamma), (a.x_min_m, step, a.y_min_m, step)
 
 
@@ -126,6 +144,7 @@ def _trace(
     y_m: np.ndarray,
     gains: tuple[np.ndarray, np.ndarray],
     medium_args: dict[str, Any],
+    terms_only: bool = False,
 ) -> np.ndarray:
     a = scn.area
     tx = np.array([[s.x_m, s.y_m, s.height_m] for s, _ in jobs], dtype=float).reshape(-1, 3)
@@ -142,6 +161,7 @@ def _trace(
         pixel_m=px,
         freq_hz=scn.freq_hz,
         polarization=scn.polarization,
+        terms_only=terms_only,
         **medium_args,
     )
 
@@ -182,30 +202,42 @@ def ray_gains(
     return gd, gr
 
 
-def ray_power_in_time(
-    scn: Scenario,
-    jobs: Sequence[tuple[Site, Cell]],
-    x_m: np.ndarray,
-    y_m: np.ndarray,
-    gains: tuple[np.ndarray, np.ndarray],
+def ray_terms(
+    scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
 ) -> np.ndarray:
-    """Received power (M, H, W) of ``scn`` (its weather at one instant) from gains computed
-    once (:func:`ray_gains`): the rain is integrated once per site along the horizontal line
-    to every pixel (``_core.ray_mean_gamma``), shared by the site's cells and by both rays,
-    which makes it the same power as :func:`ray_power` to the last bit."""
-    args = _medium_args(scn)
-    places: dict[tuple[float, float], int] = {}  # the integral depends on the position only
-    index = [places.setdefault((s.x_m, s.y_m), len(places)) for s, _ in jobs]
-    per_site = _core.ray_mean_gamma(
-        np.array(list(places), dtype=float).reshape(-1, 2),
+    """Everything of a ray map that no weather changes: each cell's clear-air power at every
+    pixel split into direct, reflected and interference parts, (M, H, W, 3) (antenna gains,
+    spreading, ground, pixel means, knife edges). :func:`ray_slice_power` adds the rain."""
+    gains = ray_gains(scn, jobs, x_m, y_m)
+    return _trace(scn, jobs, x_m, y_m, gains, _medium_args(scn), terms_only=True)
+
+
+def ray_slicer(
+    scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
+) -> _core.RaySlicer:
+    """Every cell's rays over the map traced once in clear air (:func:`ray_terms`), with each
+    site's fan of lines for the rain (``rainuav_core::raytime``): ``slicer.power(**rain_args(
+    scn_at_t))`` is the received power (M, H, W) of the weather of any instant, the rain
+    integrated once per site for every pixel at once and shared by the site's cells and both
+    rays."""
+    places: dict[tuple[float, float, float], int] = {}
+    site_of = [places.setdefault((s.x_m, s.y_m, s.height_m), len(places)) for s, _ in jobs]
+    return _core.RaySlicer(
+        ray_terms(scn, jobs, x_m, y_m),
+        np.array(list(places), dtype=float).reshape(-1, 3),
+        np.asarray(site_of, dtype=np.int64),
         np.ascontiguousarray(x_m, dtype=float),
         np.ascontiguousarray(y_m, dtype=float),
-        gamma_db_per_m=args["gamma_db_per_m"],
-        gamma_raster=args["gamma_raster"],
-        gamma_origin_step=args["gamma_origin_step"],
+        altitude_m=scn.area.altitude_m,
+        node_spacing_m=_node_spacing(scn),
     )
-    per_tx = np.ascontiguousarray(per_site[np.asarray(index, dtype=np.intp)])
-    return _trace(scn, jobs, x_m, y_m, gains, {**args, "gamma_per_tx": per_tx})
+
+
+def rain_args(scn: Scenario, table: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, Any]:
+    """The rain of ``scn`` as :meth:`rainuav._core.RaySlicer.power` takes it (``table``: see
+    :func:`gamma_field`)."""
+    g_uniform, g_raster, g_os = gamma_field(scn, table=table)
+    return {"gamma_db_per_m": g_uniform, "gamma_raster": g_raster, "gamma_origin_step": g_os}
 
 
 def ray_power(
