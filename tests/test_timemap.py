@@ -160,3 +160,85 @@ def test_bad_series_input_is_refused(times, needle) -> None:
         build_radio_map_series(_storm().replace(engine="hybrid"), [0.0])
     with pytest.raises(InvalidInputError, match="GB"):
         build_radio_map_series(_storm(10.0), np.arange(10_000.0))
+
+
+def test_a_series_saves_loads_and_is_cached(series, tmp_path, monkeypatch) -> None:
+    from rainuav.radio import RadioMapSeries
+
+    path = series.save(tmp_path / "s.npz")
+    back = RadioMapSeries.load(path)
+    for k in ("t_s", "rss_dbm", "sinr_db", "sir_db", "serving_cell", "x_m", "y_m", "cell_site"):
+        assert np.array_equal(getattr(back, k), getattr(series, k)), k
+    assert back.scenario.digest() == series.scenario.digest()
+    # build_radio_map(times_s=...) is the series; a second build reads the cache.
+    monkeypatch.setenv("RAINUAV_CACHE_DIR", str(tmp_path / "cache"))
+    scn = _storm(100.0)
+    first = build_radio_map(scn, times_s=[0.0, 30.0])
+    again = build_radio_map(scn, times_s=[0.0, 30.0])
+    assert again.build_seconds == 0.0 and np.array_equal(again.sinr_db, first.sinr_db)
+    assert build_radio_map(scn, times_s=[0.0, 40.0]).build_seconds > 0  # other instants
+
+
+def test_a_bad_series_file_is_refused_in_one_line(series, tmp_path) -> None:
+    from rainuav.radio import RadioMapSeries
+
+    good = dict(np.load(series.save(tmp_path / "s.npz")))
+    for name, change, needle in [
+        ("nan", {"sinr_db": np.where(good["sinr_db"] > 0, np.nan, good["sinr_db"])}, "NaN"),
+        ("shape", {"rss_dbm": good["rss_dbm"][:, :2]}, "rss_dbm must be"),
+        ("time", {"t_s": good["t_s"][::-1].copy()}, "increasing"),
+        ("cell", {"serving_cell": good["serving_cell"] + 99}, "serving_cell must lie"),
+        ("missing", {"t_s": None}, "missing"),
+    ]:
+        data = {**good, **change}
+        data = {k: v for k, v in data.items() if v is not None}
+        np.savez(tmp_path / f"{name}.npz", **data)
+        with pytest.raises(InvalidInputError, match=needle):
+            RadioMapSeries.load(tmp_path / f"{name}.npz")
+    (tmp_path / "junk.npz").write_bytes(b"not a zip")
+    with pytest.raises(InvalidInputError, match="not a readable"):
+        RadioMapSeries.load(tmp_path / "junk.npz")
+
+
+@pytest.mark.parametrize(
+    ("duration", "step", "needle"),
+    [
+        (300.0, 7.0, "must divide"),
+        (300.0, 0.0, "slice_s"),
+        (float("nan"), 5.0, "duration_s"),
+        (-10.0, 5.0, "duration_s"),
+        (300.0, 400.0, "slice_s"),
+        (1e6, 1e-3, "slice_s"),
+    ],
+)
+def test_bad_durations_and_steps_are_named(duration, step, needle) -> None:
+    from rainuav.radio.timemap import series_times
+
+    with pytest.raises(InvalidInputError, match=needle):
+        series_times(duration, step)
+    assert np.array_equal(series_times(300.0, 5.0), np.arange(61) * 5.0)
+
+
+def test_the_radiomap_cli_writes_a_series_and_its_gif(tmp_path, monkeypatch, capsys) -> None:
+    from PIL import Image
+    from rainuav import radiomap
+    from rainuav.radio import RadioMapSeries
+
+    monkeypatch.setenv("RAINUAV_CACHE_DIR", str(tmp_path / "cache"))
+    out = tmp_path / "out"
+    argv = ["--scenario", "storm", "--storm-seed", "4", "--duration-s", "20", "--slice-s", "10"]
+    assert radiomap.main([*argv, "--out", str(out)]) == 0
+    s = RadioMapSeries.load(out / "radiomap_series.npz")
+    assert np.array_equal(s.t_s, [0.0, 10.0, 20.0])
+    with Image.open(out / "storm.gif") as gif:
+        assert gif.n_frames == 3
+    assert "3 slices" in capsys.readouterr().out
+    for bad, needle in [
+        (["--slice-s", "7"], "must divide"),
+        (["--engine", "hybrid"], "ray engine"),
+        (["--at-s", "5"], "--at-s"),
+    ]:
+        rest = [] if bad[0] == "--slice-s" else ["--slice-s", "10"]
+        assert radiomap.main([*argv[:6], *rest, *bad, "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert needle in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

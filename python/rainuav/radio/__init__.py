@@ -7,6 +7,8 @@ Modules, bottom up: :mod:`~rainuav.radio.cell` (a cell and its antenna),
 (one cell's PE grid and cone), :mod:`~rainuav.radio.pe_engine` (the march per cell),
 :mod:`~rainuav.radio.ray_engine` (two rays per cell and pixel, in Rust),
 :mod:`~rainuav.radio.sinr`, :mod:`~rainuav.radio.radiomap` (the map and its builder),
+:mod:`~rainuav.radio.weather` and :mod:`~rainuav.radio.storms` (weather in time),
+:mod:`~rainuav.radio.timemap` (maps of a moving weather at many instants),
 :mod:`~rainuav.radio.cache` and :mod:`~rainuav.radio.plot`. Depends on :mod:`rainuav.medium`,
 :mod:`rainuav.antenna` and :mod:`rainuav.pwe` only; nothing here knows about navigation or learning.
 """
@@ -28,6 +30,7 @@ from rainuav.radio.scenario import (
     Site,
 )
 from rainuav.radio.sinr import sir_from_power
+from rainuav.radio.timemap import RadioMapSeries, build_radio_map_series
 
 __all__ = [
     "Area",
@@ -37,10 +40,12 @@ __all__ = [
     "PESettings",
     "Pattern",
     "RadioMap",
+    "RadioMapSeries",
     "RainCell",
     "Scenario",
     "Site",
     "build_radio_map",
+    "build_radio_map_series",
     "cache_dir",
     "clear_cache",
     "presets",

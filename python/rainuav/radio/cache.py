@@ -28,11 +28,13 @@ _ENGINE_MODULES = (
     "rainuav.pwe",
     "rainuav.radio.cell",
     "rainuav.radio.grid",
+    "rainuav.radio.mapdata",
     "rainuav.radio.pe_engine",
     "rainuav.radio.radiomap",
     "rainuav.radio.ray_engine",
     "rainuav.radio.scenario",
     "rainuav.radio.sinr",
+    "rainuav.radio.timemap",
 )
 
 

@@ -13,7 +13,7 @@ from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.radio.sinr import RSS_FLOOR_DBM
 
-__all__ = ["KINDS", "plot_map", "save_map_png"]
+__all__ = ["KINDS", "plot_map", "save_map_png", "save_series_gif"]
 
 KINDS = ("sir", "sinr", "rss", "serving")
 
@@ -54,6 +54,15 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
         im = ax.imshow(data, origin="lower", extent=rm.extent_m, cmap="RdYlGn", vmin=lo, vmax=hi)
     ax.figure.colorbar(im, ax=ax, label=label)
     _rain_contours(rm, ax)
+    _sites(rm, ax)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"{rm.scenario.name}: {label}, {rm.altitude_m:g} m")
+    return ax
+
+
+def _sites(rm: Any, ax: Any) -> None:
+    """Marks the sites and each cell's azimuth."""
     xs = [s.x_m for s in rm.scenario.sites]
     ys = [s.y_m for s in rm.scenario.sites]
     ax.plot(xs, ys, "k^", markersize=7, markerfacecolor="white", label="sites")
@@ -66,10 +75,6 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
                 xytext=(s.x_m, s.y_m),
                 arrowprops={"arrowstyle": "->", "lw": 1},
             )
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_title(f"{rm.scenario.name}: {label}, {rm.altitude_m:g} m")
-    return ax
 
 
 RAIN_CONTOURS_MM_H = (10.0, 30.0, 100.0)
@@ -99,3 +104,54 @@ def save_map_png(rm: Any, kind: str, path: str | Path) -> Path:
     plot_map(rm, kind, ax=fig.subplots())
     fig.tight_layout()
     return write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
+
+
+def save_series_gif(
+    series: Any,
+    path: str | Path,
+    min_db: float | None = None,
+    fps: float = 8.0,
+    progress: bool = False,
+) -> Path:
+    """Writes the SINR of a map series (:class:`rainuav.radio.timemap.RadioMapSeries`) as an
+    animated GIF, one frame a slice on one colour scale, with the rain outlined at each
+    instant (10/30/100 mm/h), the outage edge (SINR = ``min_db``, dashed) and the sites
+    (``progress``: a bar over the frames)."""
+    import io
+
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    lo = min(-10.0, float(np.percentile(series.sinr_db, 1)))
+    hi = max(float(np.percentile(series.sinr_db, 99)), lo + 10.0)
+    from tqdm.auto import tqdm
+
+    frames = []
+    for t in tqdm(series.t_s, desc="storm.gif frames", unit="frame", disable=not progress):
+        rm = series.at(float(t))
+        fig = Figure(figsize=(6.0, 5.0))
+        ax = fig.subplots()
+        im = ax.imshow(
+            rm.sinr_db, origin="lower", extent=rm.extent_m, cmap="RdYlGn", vmin=lo, vmax=hi
+        )
+        fig.colorbar(im, ax=ax, label="SINR [dB]")
+        if min_db is not None and rm.sinr_db.min() < min_db < rm.sinr_db.max():
+            ax.contour(rm.x_m, rm.y_m, rm.sinr_db, levels=[min_db], colors="k",
+                       linestyles="--", linewidths=0.8)  # fmt: skip
+        _rain_contours(rm, ax)
+        _sites(rm, ax)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        edge = "" if min_db is None else f", outage edge {min_db:g} dB dashed"
+        ax.set_title(f"{rm.scenario.name}: SINR at t = {t:.0f} s{edge}", fontsize=9)
+        fig.tight_layout()
+        buf = io.BytesIO()
+        fig.savefig(buf, dpi=80, format="png")
+        frames.append(Image.open(buf).convert("P", palette=Image.Palette.ADAPTIVE))
+    ms = round(1000.0 / fps)
+
+    def write(tmp: Path) -> None:
+        frames[0].save(tmp, format="GIF", save_all=True, append_images=frames[1:],
+                       duration=ms, loop=0)  # fmt: skip
+
+    return write_atomic(path, write)

@@ -14,25 +14,49 @@ engine only, for now: the hybrid's PE part in time is issue #26's next step.
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
 import time
+import zipfile
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from rainuav._checks import as_real_array, as_real_scalar, check_fits
+from rainuav._checks import as_real_array, as_real_scalar, check_fits, check_number
+from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
-from rainuav.radio.radiomap import RadioMap
+from rainuav.radio.cache import map_path
+from rainuav.radio.mapdata import RadioMap, store
 from rainuav.radio.ray_engine import gamma_table, rain_args, ray_slicer
 from rainuav.radio.scenario import Scenario
-from rainuav.radio.sinr import RSS_FLOOR_DBM, sir_from_power
+from rainuav.radio.sinr import RSS_FLOOR_DBM, SIR_CEIL_DB, SIR_FLOOR_DB, sir_from_power
 
-__all__ = ["MAX_SLICES", "RadioMapSeries", "build_radio_map_series"]
+__all__ = ["MAX_SLICES", "RadioMapSeries", "build_radio_map_series", "series_times"]
 
 MAX_SLICES = 10_000
 """The most instants one series may hold."""
+FORMAT_VERSION = 1
+"""Version of the .npz layout :meth:`RadioMapSeries.save` writes."""
+_ARRAYS = ("t_s", "rss_dbm", "sinr_db", "sir_db", "serving_cell", "x_m", "y_m", "cell_site")
+
+
+def series_times(duration_s: float, slice_s: float) -> npt.NDArray[np.float64]:
+    """The instants 0, ``slice_s``, ..., ``duration_s``: the step must divide the duration
+    (to 1e-9 of it) and give 2 to :data:`MAX_SLICES` instants."""
+    d = check_number("duration_s", duration_s, 1e-3, 1e6, " s")
+    step = check_number("slice_s", slice_s, 1e-3, d, f" s (at most duration_s = {d:g})")
+    n = round(d / step)
+    if abs(n * step - d) > 1e-9 * d:
+        raise InvalidInputError(
+            f"slice_s = {step:g} s must divide duration_s = {d:g} s (e.g. {d / max(n, 1):g})"
+        )
+    if n + 1 > MAX_SLICES:
+        raise InvalidInputError(f"duration_s / slice_s gives {n + 1} slices, at most {MAX_SLICES}")
+    return np.linspace(0.0, d, n + 1)
 
 
 @dataclass
@@ -56,6 +80,16 @@ class RadioMapSeries:
     cell_site: npt.NDArray[np.int64]
     build_seconds: float = 0.0
     timings: dict[str, float] = field(default_factory=dict)
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Writes an .npz (the scenario as TOML inside; no pickles), atomically."""
+        return _save(self, path)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> RadioMapSeries:
+        """Reads a series written by :meth:`save`, checked (shapes, ranges, its scenario);
+        bit-exact round trip."""
+        return _load(path)
 
     def at(self, t_s: float) -> RadioMap:
         """The static map at ``t_s``: each cell's received power interpolated linearly in dB
@@ -92,6 +126,82 @@ class RadioMapSeries:
         )
 
 
+def _save(series: RadioMapSeries, path: str | os.PathLike[str]) -> Path:
+    meta = {
+        "format_version": np.int64(FORMAT_VERSION),
+        "scenario_toml": np.asarray(series.scenario.to_toml_string()),
+        "digest": np.asarray(series.scenario.digest()),
+    }
+    arrays = {k: getattr(series, k) for k in _ARRAYS}
+
+    def write(tmp: Path) -> None:
+        with tmp.open("wb") as fh:
+            np.savez(fh, **arrays, **meta)
+
+    return write_atomic(path, write)
+
+
+def _load(path: str | os.PathLike[str]) -> RadioMapSeries:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+        raise InvalidInputError(f"{path}: not a readable radio-map series ({err})") from err
+    missing = {*_ARRAYS, "format_version", "scenario_toml"} - set(data)
+    if missing:
+        raise InvalidInputError(f"{path}: not a rainuav map series (missing {sorted(missing)})")
+    v = data["format_version"]
+    if v.shape != () or v.dtype.kind not in "iu" or int(v) != FORMAT_VERSION:
+        raise InvalidInputError(f"{path}: map series format {v!r}, this rainuav reads 1")
+    if data["scenario_toml"].dtype.kind != "U":
+        raise InvalidInputError(f"{path}: not a rainuav map series (bad metadata)")
+    try:
+        scn = Scenario.from_toml_string(str(data["scenario_toml"]))
+    except InvalidInputError as err:
+        raise InvalidInputError(f"{path}: its scenario is not valid ({err})") from err
+    _check_series_arrays(path, data, scn)
+    return RadioMapSeries(scenario=scn, **{k: data[k] for k in _ARRAYS})
+
+
+def _check_series_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
+    """The arrays of a saved series as :func:`build_radio_map_series` writes them, or one
+    line naming the file and the array (shapes, types, finite, physical ranges)."""
+    t = data["t_s"]
+    if t.ndim != 1 or not 1 <= t.size <= MAX_SLICES or t.dtype.kind != "f":
+        raise InvalidInputError(f"{path}: t_s must be 1 to {MAX_SLICES} instants")
+    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise InvalidInputError(f"{path}: t_s must be finite and strictly increasing")
+    n, (h, w) = t.size, scn.area.shape
+    m = data["cell_site"].shape[0] if data["cell_site"].ndim == 1 else -1
+    shapes = {
+        "rss_dbm": (n, m, h, w), "sinr_db": (n, h, w), "sir_db": (n, h, w),
+        "serving_cell": (n, h, w), "x_m": (w,), "y_m": (h,), "cell_site": (m,),
+    }  # fmt: skip
+    ranges = {
+        "rss_dbm": (RSS_FLOOR_DBM, 100.0), "sinr_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
+        "sir_db": (SIR_FLOOR_DB, SIR_CEIL_DB), "serving_cell": (-1, m - 1),
+        "cell_site": (0, len(scn.sites) - 1),
+    }  # fmt: skip
+    for k, shape in shapes.items():
+        a = data[k]
+        if a.shape != shape or a.dtype.kind not in "fiu":
+            raise InvalidInputError(
+                f"{path}: {k} must be a numeric array of shape {shape} (got {a.dtype} {a.shape})"
+            )
+        if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
+            raise InvalidInputError(f"{path}: {k} holds NaN or infinite values")
+        lo, hi = ranges.get(k, (-np.inf, np.inf))
+        if a.size and (a.min() < lo or a.max() > hi):
+            raise InvalidInputError(f"{path}: {k} must lie in [{lo:g}, {hi:g}]")
+    for k, want in zip(("x_m", "y_m"), scn.area.centres(), strict=True):
+        if not np.allclose(data[k], want, rtol=0, atol=1e-6 * max(1.0, float(np.ptp(want)))):
+            raise InvalidInputError(f"{path}: {k} is not the pixel centres of its area")
+
+
+def _cache_key(scn: Scenario, t: np.ndarray) -> str:
+    return f"{scn.digest()}|series|{hashlib.sha256(t.tobytes()).hexdigest()[:16]}"
+
+
 def _peak_rate(scn: Scenario, t: np.ndarray) -> float:
     """An upper bound of the rain rate anywhere at any of the instants ``t``, mm/h."""
     med = scn.medium
@@ -106,10 +216,12 @@ def _peak_rate(scn: Scenario, t: np.ndarray) -> float:
 
 
 def build_radio_map_series(
-    scn: Scenario, times_s: Any, *, progress: bool = False
+    scn: Scenario, times_s: Any, *, cache: bool = True, progress: bool = False
 ) -> RadioMapSeries:
     """The maps of ``scn`` at the instants ``times_s`` (strictly increasing, s), engine
-    ``"ray"`` (module docstring). Memory is checked before anything is allocated."""
+    ``"ray"`` (module docstring). Memory is checked before anything is allocated. With
+    ``cache``, a series of the same scenario, instants and engine code is read from the map
+    cache (:mod:`rainuav.radio.cache`) and a new one is kept there."""
     if scn.engine != "ray":
         raise InvalidInputError(
             f"maps in time need engine 'ray' for now (got {scn.engine!r}); "
@@ -121,6 +233,13 @@ def build_radio_map_series(
     if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
         raise InvalidInputError("times_s must be finite and strictly increasing")
     t0 = time.perf_counter()
+    if cache:
+        path = map_path(_cache_key(scn, t))
+        if path.exists():
+            try:
+                return _load(path)
+            except InvalidInputError:
+                pass  # a corrupt or partial entry is rebuilt, never trusted
     a = scn.area
     h, w = a.shape
     jobs = [(site, cell) for site in scn.sites for cell in site.cells]
@@ -155,7 +274,7 @@ def build_radio_map_series(
         if bar is not None:
             bar.close()
     timings["slices"] = time.perf_counter() - t1
-    return RadioMapSeries(
+    series = RadioMapSeries(
         t_s=t.copy(),
         rss_dbm=rss,
         sinr_db=sinr,
@@ -168,3 +287,6 @@ def build_radio_map_series(
         build_seconds=time.perf_counter() - t0,
         timings=timings,
     )
+    if cache:
+        store(series, map_path(_cache_key(scn, t)))
+    return series
