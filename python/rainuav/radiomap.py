@@ -48,6 +48,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the "
         "scenario's rain model, drop sizes, shape, temperature and wind are kept)",
     )
+    ap.add_argument(
+        "--rain-file",
+        type=Path,
+        default=None,
+        help="rain rates in time from a NetCDF file, (time, y, x) in mm/h on the area's metres "
+        "(rainuav.radio.rategrid; needs the 'weather' extra)",
+    )
     ap.add_argument("--freq-ghz", type=float, default=None, help="carrier frequency, GHz (1-100)")
     ap.add_argument(
         "--engine",
@@ -110,6 +117,12 @@ def _build(args: argparse.Namespace) -> int:
         scn = presets.storm(seed=0 if args.storm_seed is None else args.storm_seed)
     else:
         scn = presets.PRESETS[args.scenario]()
+    if args.rain_file is not None:
+        from rainuav.radio.rategrid import read_rate_grid
+
+        if args.rain_rate is not None:
+            raise InvalidInputError("--rain-rate: not with --rain-file (which rain?)")
+        scn = scn.replace(medium=read_rate_grid(args.rain_file, scn.area, base=scn.medium))
     if args.at_s is not None:
         scn = scn.replace(medium=scn.medium.at(args.at_s))
     if args.rain_rate is not None:

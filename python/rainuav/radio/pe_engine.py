@@ -79,8 +79,11 @@ def _step_points(site: Site, grid: MarchGrid) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rain_rate_at(scn: Scenario, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Rain rate (mm/h) of the scenario's medium at global points."""
+    """Rain rate (mm/h) of the scenario's medium at global points (a weather in time: at its
+    time 0, as for moving rain cells)."""
     m = scn.medium
+    if m.kind == "map" and m.rate_times_s is not None:
+        m = m.at(0.0)
     if m.kind == "clear":
         return np.zeros(np.shape(x))
     if m.kind == "homogeneous":

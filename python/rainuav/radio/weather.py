@@ -88,8 +88,15 @@ class Medium:
     """Homogeneous rate ('homogeneous'), or the background rate under 'cells'."""
     cells: list[RainCell] = field(default_factory=list)
     """Rain cells ('cells'); their rates add."""
-    rate_map_mm_h: list[list[float]] | None = None
-    """(rows south to north, columns west to east) rates over the area ('map')."""
+    rate_map_mm_h: Any = None
+    """(rows south to north, columns west to east) rates over the area ('map'), at the
+    centres of a regular grid spanning it; with ``rate_times_s``, one such map per instant
+    (time, rows, columns)."""
+    rate_times_s: list[float] | None = None
+    """The instants (s, strictly increasing) of the maps of ``rate_map_mm_h`` when it holds
+    one per instant ('map'): the weather at t is interpolated linearly between the two maps
+    around t (exactly a map at its own instant) and held beyond the first and the last
+    (:func:`read_rate_grid` reads them from a NetCDF file)."""
     model: str = "forward-scattering"
     """Effective-medium model (rainuav.medium)."""
     dsd: str = "marshall-palmer"
@@ -108,6 +115,18 @@ class Medium:
         """The weather at time ``t_s``, s: every rain cell moved and grown (:meth:`RainCell.at`);
         the rest does not change in time. A weather that does not move returns itself."""
         t = _num("t_s", t_s, -1e6, 1e6, " s")
+        if self.kind == "map" and self.rate_times_s is not None:
+            times = np.asarray(self.rate_times_s, dtype=float)
+            maps = np.asarray(self.rate_map_mm_h, dtype=float)
+            k = int(np.clip(np.searchsorted(times, t, side="right"), 1, max(len(times) - 1, 1)))
+            if len(times) == 1 or t <= times[0]:
+                now = maps[0]
+            elif t >= times[-1]:
+                now = maps[-1]
+            else:
+                w = (t - times[k - 1]) / (times[k] - times[k - 1])
+                now = maps[k - 1] if w == 0.0 else (1.0 - w) * maps[k - 1] + w * maps[k]
+            return dataclasses.replace(self, rate_map_mm_h=now.tolist(), rate_times_s=None)
         if not self.moves:
             return self
         return dataclasses.replace(self, cells=[c.at(t) for c in self.cells])
@@ -115,6 +134,8 @@ class Medium:
     @property
     def moves(self) -> bool:
         """Whether the weather changes in time."""
+        if self.kind == "map":
+            return self.rate_times_s is not None and len(self.rate_times_s) > 1
         return self.kind == "cells" and any(c.moves for c in self.cells)
 
     def rain_medium(self, freq_hz: float, polarization: str) -> m.RainMedium:
@@ -161,6 +182,8 @@ class Medium:
                     f"{w}.growth_s must be 0 (steady) or at least {MIN_GROWTH_S:g} s in size "
                     f"(got {g:g})"
                 )
+        if self.rate_times_s is not None and self.kind != "map":
+            raise InvalidInputError(f"{where}.rate_times_s: only with kind 'map'")
         if self.kind == "cells" and not self.cells:
             raise InvalidInputError(
                 f"{where}.cells must hold at least one rain cell when kind is 'cells'"
@@ -168,10 +191,30 @@ class Medium:
         if self.kind == "map":
             if self.rate_map_mm_h is None:
                 raise InvalidInputError(f"{where}.rate_map_mm_h is required when kind is 'map'")
-            arr = np.asarray(self.rate_map_mm_h, dtype=float)
-            if arr.ndim != 2 or min(arr.shape) < 1:
+            try:
+                arr = np.asarray(self.rate_map_mm_h, dtype=float)
+            except (TypeError, ValueError) as err:
                 raise InvalidInputError(
-                    f"{where}.rate_map_mm_h must be a 2-D table (got shape {arr.shape})"
+                    f"{where}.rate_map_mm_h must be a table of numbers"
+                ) from err
+            dims = 2 if self.rate_times_s is None else 3
+            what = "a 2-D table" if dims == 2 else "one 2-D table per rate_times_s instant"
+            if arr.ndim != dims or min(arr.shape) < 1:
+                raise InvalidInputError(
+                    f"{where}.rate_map_mm_h must be {what} (got shape {arr.shape})"
                 )
+            if dims == 3:
+                times = np.asarray(self.rate_times_s, dtype=float)
+                if times.shape != (arr.shape[0],):
+                    raise InvalidInputError(
+                        f"{where}.rate_times_s must give one instant per map "
+                        f"({arr.shape[0]}; got {times.size})"
+                    )
+                ok = np.all(np.isfinite(times)) and np.all(np.abs(times) <= 1e6)
+                if not ok or np.any(np.diff(times) <= 0):
+                    raise InvalidInputError(
+                        f"{where}.rate_times_s must be finite, within +-1e6 s and strictly "
+                        "increasing"
+                    )
             if not (np.all(np.isfinite(arr)) and arr.min() >= 0 and arr.max() <= 500):
                 raise InvalidInputError(f"{where}.rate_map_mm_h must be within 0..500 mm/h")
