@@ -56,7 +56,7 @@ def main() -> None:
         in_frozen, in_storm, moves = 0, 0, 0
         for plan in plans:
             for k, (x, y) in enumerate(plan.path_m[1:], start=1):
-                t = int(round(k * env.cfg.step_m / SPEED_M_S))
+                t = round(k * env.cfg.step_m / SPEED_M_S)
                 if t not in maps:
                     maps[t] = SignalField(series.at(float(min(t, 300))).sinr_db, frozen.extent_m)
                 in_frozen += bool(env.field(x, y) < threshold)
