@@ -9,6 +9,7 @@ import dataclasses
 import os
 import warnings
 import zipfile
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,7 +25,16 @@ from rainuav.radio.presets import DEFAULT_MIN_DB, SINR_THRESHOLDS_DB
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.sinr import RSS_FLOOR_DBM, SIR_CEIL_DB, SIR_FLOOR_DB
 
-__all__ = ["FORMAT_VERSION", "RadioMap", "check_map_arrays", "store"]
+__all__ = [
+    "FORMAT_VERSION",
+    "RadioMap",
+    "check_arrays",
+    "check_map_arrays",
+    "map_ranges",
+    "read_npz",
+    "store",
+    "write_npz",
+]
 
 FORMAT_VERSION = 2
 """Version of the .npz layout written by :meth:`RadioMap.save`."""
@@ -93,48 +103,21 @@ class RadioMap:
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Writes an .npz with the scenario as TOML metadata, atomically."""
-        meta = {
-            "format_version": np.int64(FORMAT_VERSION),
-            "extent_m": np.asarray(self.extent_m, dtype=np.float64),
-            "altitude_m": np.float64(self.altitude_m),
-            "scenario_toml": np.asarray(self.scenario.to_toml_string()),
-            "digest": np.asarray(self.scenario.digest()),
-        }
         arrays = {k: getattr(self, k) for k in self._ARRAYS}
-
-        def write(tmp: Path) -> None:
-            with tmp.open("wb") as fh:
-                np.savez(fh, **arrays, **meta)
-
-        return write_atomic(path, write)
+        arrays["extent_m"] = np.asarray(self.extent_m, dtype=np.float64)
+        arrays["altitude_m"] = np.float64(self.altitude_m)
+        return write_npz(path, arrays, self.scenario, FORMAT_VERSION)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> RadioMap:
         """Reads a map written by :meth:`save` (bit-exact round trip)."""
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
-        except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
-            raise InvalidInputError(f"{path}: not a readable radio map ({err})") from err
-        missing = {*cls._ARRAYS, "extent_m", "altitude_m", "scenario_toml"} - set(data)
-        if missing:
-            raise InvalidInputError(f"{path}: not a rainuav radio map (missing {sorted(missing)})")
-        version = data.get("format_version", np.array(-1))
-        if version.shape != () or not np.issubdtype(version.dtype, np.integer):
-            raise InvalidInputError(f"{path}: not a rainuav radio map (no format_version)")
-        if int(version) != FORMAT_VERSION:
-            raise InvalidInputError(
-                f"{path}: radio map format {int(version)}, this rainuav reads {FORMAT_VERSION}"
-            )
-        if data["scenario_toml"].dtype.kind != "U" or data["extent_m"].shape != (4,):
+        need = (*cls._ARRAYS, "extent_m", "altitude_m")
+        data, scn = read_npz(path, "radio map", need, FORMAT_VERSION)
+        if data["extent_m"].shape != (4,):
             raise InvalidInputError(f"{path}: not a rainuav radio map (bad metadata)")
-        try:
-            scn = Scenario.from_toml_string(str(data["scenario_toml"]))
-        except InvalidInputError as err:
-            raise InvalidInputError(f"{path}: its scenario is not valid ({err})") from err
         check_map_arrays(path, data, scn)
         ext = tuple(float(v) for v in data["extent_m"])
-        out = cls(
+        return cls(
             x_m=data["x_m"],
             y_m=data["y_m"],
             extent_m=ext,  # type: ignore[arg-type]
@@ -148,7 +131,6 @@ class RadioMap:
             pe_share=data["pe_share"],
             pe_cone_deg=data["pe_cone_deg"],
         )
-        return out
 
     def plot(self, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
         """Draws the map in dB (``kind`` 'sir', 'sinr' or 'rss'; ``cell`` selects one cell's
@@ -159,6 +141,83 @@ class RadioMap:
     def coverage(self, sir_min_db: float = 10.0) -> float:
         """Share of the area with SIR >= sir_min_db."""
         return float(np.mean(self.sir_db >= sir_min_db))
+
+
+def write_npz(
+    path: str | os.PathLike[str], arrays: dict[str, Any], scn: Scenario, version: int
+) -> Path:
+    """Writes ``arrays`` with ``scn`` as TOML and the format ``version`` as one .npz (no
+    pickles), atomically: how maps and map series are saved."""
+    meta = {
+        "format_version": np.int64(version),
+        "scenario_toml": np.asarray(scn.to_toml_string()),
+        "digest": np.asarray(scn.digest()),
+    }
+
+    def write(tmp: Path) -> None:
+        with tmp.open("wb") as fh:
+            np.savez(fh, **arrays, **meta)
+
+    return write_atomic(path, write)
+
+
+def read_npz(
+    path: str | os.PathLike[str], what: str, need: Iterable[str], version: int
+) -> tuple[dict[str, np.ndarray], Scenario]:
+    """The arrays and the scenario of an .npz written by :func:`write_npz` (never unpickled),
+    or :class:`InvalidInputError` naming the file: unreadable, missing an array of ``need``,
+    of another format ``version``, or a scenario that is not valid (``what``: the kind of
+    file, for the message)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+        raise InvalidInputError(f"{path}: not a readable {what} ({err})") from err
+    missing = {*need, "scenario_toml"} - set(data)
+    if missing:
+        raise InvalidInputError(f"{path}: not a rainuav {what} (missing {sorted(missing)})")
+    v = data.get("format_version", np.array(-1))
+    if v.shape != () or not np.issubdtype(v.dtype, np.integer):
+        raise InvalidInputError(f"{path}: not a rainuav {what} (no format_version)")
+    if int(v) != version:
+        raise InvalidInputError(f"{path}: {what} format {int(v)}, this rainuav reads {version}")
+    if data["scenario_toml"].dtype.kind != "U":
+        raise InvalidInputError(f"{path}: not a rainuav {what} (bad metadata)")
+    try:
+        scn = Scenario.from_toml_string(str(data["scenario_toml"]))
+    except InvalidInputError as err:
+        raise InvalidInputError(f"{path}: its scenario is not valid ({err})") from err
+    return data, scn
+
+
+def check_arrays(
+    path: Any,
+    data: dict[str, np.ndarray],
+    scn: Scenario,
+    shapes: dict[str, tuple[int, ...]],
+    ranges: dict[str, tuple[float, float]],
+) -> None:
+    """Each array of ``shapes`` numeric, of its shape and finite, each of ``ranges`` within
+    its bounds, and ``x_m``, ``y_m`` the pixel centres of ``scn``'s area; else
+    :class:`InvalidInputError` naming the file and the array."""
+    for k, shape in shapes.items():
+        a = data[k]
+        if a.shape != shape or a.dtype.kind not in "fiu":
+            raise InvalidInputError(
+                f"{path}: {k} must be a numeric array of shape {shape} for its scenario "
+                f"(got {a.dtype} {a.shape})"
+            )
+        if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
+            raise InvalidInputError(f"{path}: {k} holds NaN or infinite values")
+    for k, (lo, hi) in ranges.items():
+        a = data[k]
+        if a.size and (a.min() < lo or a.max() > hi):
+            raise InvalidInputError(
+                f"{path}: {k} must lie in [{lo:g}, {hi:g}] (holds {a.min():g} to {a.max():g})"
+            )
+    for k, want in zip(("x_m", "y_m"), scn.area.centres(), strict=True):
+        if not np.allclose(data[k], want, rtol=0, atol=1e-6 * max(1.0, float(np.ptp(want)))):
+            raise InvalidInputError(f"{path}: {k} is not the pixel centres of its area")
 
 
 def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
@@ -174,33 +233,21 @@ def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> N
         "sir_db": (h, w), "sinr_db": (h, w), "cell_site": (m,), "pe_share": (m, h, w),
         "pe_cone_deg": (m, 2),
     }  # fmt: skip
-    for k, shape in shapes.items():
-        a = data[k]
-        if a.shape != shape or a.dtype.kind not in "fiu":
-            raise InvalidInputError(
-                f"{path}: {k} must be a numeric array of shape {shape} for its scenario "
-                f"(got {a.dtype} {a.shape})"
-            )
-        if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
-            raise InvalidInputError(f"{path}: {k} holds NaN or infinite values")
-    ranges = {
+    check_arrays(path, data, scn, shapes, map_ranges(m, scn) | {
+        "pe_share": (0.0, 1.0), "pe_cone_deg": (0.0, 90.0),
+    })  # fmt: skip
+
+
+def map_ranges(cells: int, scn: Scenario) -> dict[str, tuple[float, float]]:
+    """The physical ranges of a map's (or a series') power, SIR, SINR, serving cell and
+    cell sites, for ``cells`` cells of ``scn``."""
+    return {
         "sir_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
         "sinr_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
         "rss_dbm": (RSS_FLOOR_DBM, 100.0),
-        "serving_cell": (-1, m - 1),
+        "serving_cell": (-1, cells - 1),
         "cell_site": (0, len(scn.sites) - 1),
-        "pe_share": (0.0, 1.0),
-        "pe_cone_deg": (0.0, 90.0),
     }
-    for k, (lo, hi) in ranges.items():
-        a = data[k]
-        if a.size and (a.min() < lo or a.max() > hi):
-            raise InvalidInputError(
-                f"{path}: {k} must lie in [{lo:g}, {hi:g}] (holds {a.min():g} to {a.max():g})"
-            )
-    for k, want in zip(("x_m", "y_m"), scn.area.centres(), strict=True):
-        if not np.allclose(data[k], want, rtol=0, atol=1e-6 * max(1.0, float(np.ptp(want)))):
-            raise InvalidInputError(f"{path}: {k} is not the pixel centres of its area")
 
 
 def store(rm: Any, path: Path) -> None:

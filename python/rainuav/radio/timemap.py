@@ -18,7 +18,6 @@ import hashlib
 import math
 import os
 import time
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,13 +26,19 @@ import numpy as np
 import numpy.typing as npt
 
 from rainuav._checks import as_real_array, as_real_scalar, check_fits, check_number
-from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cache import map_path
-from rainuav.radio.mapdata import RadioMap, store
+from rainuav.radio.mapdata import (
+    RadioMap,
+    check_arrays,
+    map_ranges,
+    read_npz,
+    store,
+    write_npz,
+)
 from rainuav.radio.ray_engine import gamma_table, rain_args, ray_slicer
 from rainuav.radio.scenario import Scenario
-from rainuav.radio.sinr import RSS_FLOOR_DBM, SIR_CEIL_DB, SIR_FLOOR_DB, sir_from_power
+from rainuav.radio.sinr import RSS_FLOOR_DBM, sir_from_power
 
 __all__ = ["MAX_SLICES", "RadioMapSeries", "build_radio_map_series", "series_times"]
 
@@ -127,45 +132,19 @@ class RadioMapSeries:
 
 
 def _save(series: RadioMapSeries, path: str | os.PathLike[str]) -> Path:
-    meta = {
-        "format_version": np.int64(FORMAT_VERSION),
-        "scenario_toml": np.asarray(series.scenario.to_toml_string()),
-        "digest": np.asarray(series.scenario.digest()),
-    }
     arrays = {k: getattr(series, k) for k in _ARRAYS}
-
-    def write(tmp: Path) -> None:
-        with tmp.open("wb") as fh:
-            np.savez(fh, **arrays, **meta)
-
-    return write_atomic(path, write)
+    return write_npz(path, arrays, series.scenario, FORMAT_VERSION)
 
 
 def _load(path: str | os.PathLike[str]) -> RadioMapSeries:
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
-        raise InvalidInputError(f"{path}: not a readable radio-map series ({err})") from err
-    missing = {*_ARRAYS, "format_version", "scenario_toml"} - set(data)
-    if missing:
-        raise InvalidInputError(f"{path}: not a rainuav map series (missing {sorted(missing)})")
-    v = data["format_version"]
-    if v.shape != () or v.dtype.kind not in "iu" or int(v) != FORMAT_VERSION:
-        raise InvalidInputError(f"{path}: map series format {v!r}, this rainuav reads 1")
-    if data["scenario_toml"].dtype.kind != "U":
-        raise InvalidInputError(f"{path}: not a rainuav map series (bad metadata)")
-    try:
-        scn = Scenario.from_toml_string(str(data["scenario_toml"]))
-    except InvalidInputError as err:
-        raise InvalidInputError(f"{path}: its scenario is not valid ({err})") from err
+    data, scn = read_npz(path, "radio-map series", _ARRAYS, FORMAT_VERSION)
     _check_series_arrays(path, data, scn)
     return RadioMapSeries(scenario=scn, **{k: data[k] for k in _ARRAYS})
 
 
 def _check_series_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
     """The arrays of a saved series as :func:`build_radio_map_series` writes them, or one
-    line naming the file and the array (shapes, types, finite, physical ranges)."""
+    line naming the file and the array (instants, shapes, types, finite, physical ranges)."""
     t = data["t_s"]
     if t.ndim != 1 or not 1 <= t.size <= MAX_SLICES or t.dtype.kind != "f":
         raise InvalidInputError(f"{path}: t_s must be 1 to {MAX_SLICES} instants")
@@ -177,25 +156,7 @@ def _check_series_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) 
         "rss_dbm": (n, m, h, w), "sinr_db": (n, h, w), "sir_db": (n, h, w),
         "serving_cell": (n, h, w), "x_m": (w,), "y_m": (h,), "cell_site": (m,),
     }  # fmt: skip
-    ranges = {
-        "rss_dbm": (RSS_FLOOR_DBM, 100.0), "sinr_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
-        "sir_db": (SIR_FLOOR_DB, SIR_CEIL_DB), "serving_cell": (-1, m - 1),
-        "cell_site": (0, len(scn.sites) - 1),
-    }  # fmt: skip
-    for k, shape in shapes.items():
-        a = data[k]
-        if a.shape != shape or a.dtype.kind not in "fiu":
-            raise InvalidInputError(
-                f"{path}: {k} must be a numeric array of shape {shape} (got {a.dtype} {a.shape})"
-            )
-        if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
-            raise InvalidInputError(f"{path}: {k} holds NaN or infinite values")
-        lo, hi = ranges.get(k, (-np.inf, np.inf))
-        if a.size and (a.min() < lo or a.max() > hi):
-            raise InvalidInputError(f"{path}: {k} must lie in [{lo:g}, {hi:g}]")
-    for k, want in zip(("x_m", "y_m"), scn.area.centres(), strict=True):
-        if not np.allclose(data[k], want, rtol=0, atol=1e-6 * max(1.0, float(np.ptp(want)))):
-            raise InvalidInputError(f"{path}: {k} is not the pixel centres of its area")
+    check_arrays(path, data, scn, shapes, map_ranges(m, scn))
 
 
 def _cache_key(scn: Scenario, t: np.ndarray) -> str:
