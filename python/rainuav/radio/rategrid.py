@@ -111,14 +111,13 @@ def read_rate_grid(
         raise InvalidInputError(
             f"rain-rate file {path}: {names[0]} must be finite, within 0..{MAX_RATE_MM_H:g} mm/h"
         )
+    one = len(times) == 1  # a single instant is a weather that stands still
     medium = dataclasses.replace(
         base or Medium(),
         kind="map",
         cells=[],
-        rate_map_mm_h=rates.tolist(),
-        rate_times_s=[float(v) for v in times] if len(times) > 1 else None,
+        rate_map_mm_h=(rates[0] if one else rates).tolist(),
+        rate_times_s=None if one else [float(v) for v in times],
     )
-    if len(times) == 1:
-        medium = dataclasses.replace(medium, rate_map_mm_h=rates[0].tolist())
     medium.check()
     return medium
