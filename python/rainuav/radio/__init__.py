@@ -7,7 +7,8 @@ Modules, bottom up: :mod:`~rainuav.radio.cell` (a cell and its antenna),
 (one cell's PE grid and cone), :mod:`~rainuav.radio.pe_engine` (the march per cell),
 :mod:`~rainuav.radio.ray_engine` (two rays per cell and pixel, in Rust),
 :mod:`~rainuav.radio.sinr`, :mod:`~rainuav.radio.radiomap` (the map and its builder),
-:mod:`~rainuav.radio.weather` and :mod:`~rainuav.radio.storms` (weather in time),
+:mod:`~rainuav.radio.weather`, :mod:`~rainuav.radio.storms`, :mod:`~rainuav.radio.rategrid`
+and :mod:`~rainuav.radio.stochastic` (weather in time),
 :mod:`~rainuav.radio.timemap` (maps of a moving weather at many instants),
 :mod:`~rainuav.radio.cache` and :mod:`~rainuav.radio.plot`. Depends on :mod:`rainuav.medium`,
 :mod:`rainuav.antenna` and :mod:`rainuav.pwe` only; nothing here knows about navigation or learning.

@@ -34,7 +34,9 @@ _ENGINE_MODULES = (
     "rainuav.radio.ray_engine",
     "rainuav.radio.scenario",
     "rainuav.radio.sinr",
+    "rainuav.radio.stochastic",
     "rainuav.radio.timemap",
+    "rainuav.radio.weather",
 )
 
 

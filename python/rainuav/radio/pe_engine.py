@@ -31,6 +31,7 @@ from rainuav._sampling import bilinear
 from rainuav.radio.cell import Cell, gain_linear
 from rainuav.radio.grid import C0_M_S, MarchGrid, cone_weight
 from rainuav.radio.scenario import Scenario, Site
+from rainuav.radio.stochastic import field_rates
 
 __all__ = ["march_cell", "rain_rate_at", "resample"]
 
@@ -88,6 +89,8 @@ def rain_rate_at(scn: Scenario, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         return np.zeros(np.shape(x))
     if m.kind == "homogeneous":
         return np.full(np.shape(x), m.rain_rate_mm_h)
+    if m.kind == "field" and m.field is not None:
+        return field_rates(m.field, x, y)
     if m.kind == "cells":
         r = np.full(np.shape(x), m.rain_rate_mm_h)
         for cell in m.cells:

@@ -86,7 +86,7 @@ def _rain_contours(rm: Any, ax: Any) -> None:
     (rain cells, a storm at its instant, a rate map), labelled in mm/h."""
     from rainuav.radio.pe_engine import rain_rate_at
 
-    if rm.scenario.medium.kind not in ("cells", "map"):
+    if not rm.scenario.medium.varies:
         return
     xx, yy = np.meshgrid(rm.x_m, rm.y_m)
     rate = rain_rate_at(rm.scenario, xx, yy)

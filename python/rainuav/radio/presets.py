@@ -86,7 +86,13 @@ def with_rain(scn: Scenario, rain_rate_mm_h: float) -> Scenario:
     drop shape, temperature and wind stay as they were."""
     kind = "clear" if rain_rate_mm_h == 0 else "homogeneous"
     weather = dataclasses.replace(
-        scn.medium, kind=kind, rain_rate_mm_h=rain_rate_mm_h, cells=[], rate_map_mm_h=None
+        scn.medium,
+        kind=kind,
+        rain_rate_mm_h=rain_rate_mm_h,
+        cells=[],
+        rate_map_mm_h=None,
+        rate_times_s=None,
+        field=None,
     )
     return dataclasses.replace(scn, medium=weather)
 

@@ -32,6 +32,7 @@ from rainuav._checks import check_number as _num
 from rainuav._io import read_toml, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cell import Cell, Pattern
+from rainuav.radio.stochastic import StochasticRain
 from rainuav.radio.weather import Medium, RainCell
 
 THERMAL_NOISE_DBM_HZ = -174.0
@@ -336,6 +337,7 @@ _NESTED: dict[tuple[type, str], type] = {
     (Scenario, "area"): Area,
     (Scenario, "medium"): Medium,
     (Scenario, "pe"): PESettings,
+    (Medium, "field"): StochasticRain,
     (Cell, "pattern"): Pattern,
 }
 _LISTS: dict[tuple[type, str], type] = {

@@ -168,6 +168,8 @@ def _peak_rate(scn: Scenario, t: np.ndarray) -> float:
     med = scn.medium
     if med.kind == "map":
         return float(np.max(med.rate_map_mm_h))
+    if med.kind == "field":
+        return 500.0  # log-normal: the cap
     if med.kind != "cells":
         return med.rain_rate_mm_h
     return max(

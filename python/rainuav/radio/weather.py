@@ -15,6 +15,7 @@ from rainuav import medium as m
 from rainuav._checks import check_choice as _choice
 from rainuav._checks import check_number as _num
 from rainuav.errors import InvalidInputError
+from rainuav.radio.stochastic import StochasticRain
 
 __all__ = ["MAX_SPEED_M_S", "Medium", "RainCell"]
 
@@ -83,7 +84,7 @@ class Medium:
     """The weather: clear air, homogeneous rain, rain cells or a rain-rate map."""
 
     kind: str = "homogeneous"
-    """'clear', 'homogeneous', 'cells' or 'map'."""
+    """'clear', 'homogeneous', 'cells', 'map' or 'field' (stochastic)."""
     rain_rate_mm_h: float = 25.0
     """Homogeneous rate ('homogeneous'), or the background rate under 'cells'."""
     cells: list[RainCell] = field(default_factory=list)
@@ -97,6 +98,8 @@ class Medium:
     one per instant ('map'): the weather at t is interpolated linearly between the two maps
     around t (exactly a map at its own instant) and held beyond the first and the last
     (:func:`read_rate_grid` reads them from a NetCDF file)."""
+    field: StochasticRain | None = None
+    """A stochastic rain field ('field'; :mod:`rainuav.radio.stochastic`)."""
     model: str = "forward-scattering"
     """Effective-medium model (rainuav.medium)."""
     dsd: str = "marshall-palmer"
@@ -129,13 +132,22 @@ class Medium:
             return dataclasses.replace(self, rate_map_mm_h=now.tolist(), rate_times_s=None)
         if not self.moves:
             return self
+        if self.kind == "field" and self.field is not None:
+            return dataclasses.replace(self, field=self.field.at(t))
         return dataclasses.replace(self, cells=[c.at(t) for c in self.cells])
+
+    @property
+    def varies(self) -> bool:
+        """Whether the rain varies over the area (rain cells, rate maps, stochastic fields)."""
+        return self.kind in ("cells", "map", "field")
 
     @property
     def moves(self) -> bool:
         """Whether the weather changes in time."""
         if self.kind == "map":
             return self.rate_times_s is not None and len(self.rate_times_s) > 1
+        if self.kind == "field":
+            return self.field is not None and self.field.moves
         return self.kind == "cells" and any(c.moves for c in self.cells)
 
     def rain_medium(self, freq_hz: float, polarization: str) -> m.RainMedium:
@@ -154,7 +166,11 @@ class Medium:
 
     def check(self, where: str = "medium") -> None:
 
-        _choice(f"{where}.kind", self.kind, ("clear", "homogeneous", "cells", "map"))
+        _choice(f"{where}.kind", self.kind, ("clear", "homogeneous", "cells", "map", "field"))
+        if (self.kind == "field") != (self.field is not None):
+            raise InvalidInputError(f"{where}.field is required with kind 'field' (and only then)")
+        if self.field is not None:
+            self.field.check(f"{where}.field")
         _num(f"{where}.rain_rate_mm_h", self.rain_rate_mm_h, 0.0, 500.0, " mm/h")
         _choice(f"{where}.model", self.model, m.MODELS)
         _choice(f"{where}.dsd", self.dsd, tuple(m.NAMED_DSDS))
