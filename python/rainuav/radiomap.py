@@ -159,12 +159,12 @@ def _build_series(args: argparse.Namespace, scn: Any) -> int:
         raise InvalidInputError("--slice-s: only with --duration-s")
     if args.at_s is not None:
         raise InvalidInputError("--at-s: not with --duration-s (the series starts at 0 s)")
-    if args.engine not in (None, "ray"):
+    if scn.engine == "pe":
         raise InvalidInputError(
-            f"--engine {args.engine}: maps in time use the ray engine for now (leave it out)"
+            "--engine pe: maps in time use the ray or the hybrid engine (a PE march per cell "
+            "and instant is not offered)"
         )
     times = series_times(args.duration_s, 5.0 if args.slice_s is None else args.slice_s)
-    scn = scn.replace(engine="ray")
     series = build_radio_map_series(scn, times, cache=not args.no_cache, progress=True)
     npz = series.save(args.out / "radiomap_series.npz")
     from rainuav.radio.presets import SINR_THRESHOLDS_DB
@@ -172,7 +172,10 @@ def _build_series(args: argparse.Namespace, scn: Any) -> int:
     threshold = SINR_THRESHOLDS_DB.get(scn.name)
     gif = save_series_gif(series, args.out / "storm.gif", min_db=threshold, progress=True)
     split = ", ".join(f"{k} {v:.1f} s" for k, v in series.timings.items()) or "from the cache"
-    line = f"{scn.name} (ray, {scn.freq_hz / 1e9:g} GHz): {len(times)} slices 0-{times[-1]:g} s"
+    line = (
+        f"{scn.name} ({scn.engine}, {scn.freq_hz / 1e9:g} GHz): {len(times)} slices "
+        f"0-{times[-1]:g} s"
+    )
     if threshold is not None:
         out = (series.sinr_db < threshold).mean(axis=(1, 2))
         line += f", outage {100 * out.min():.1f}-{100 * out.max():.1f}% of the area"

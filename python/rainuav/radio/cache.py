@@ -28,6 +28,7 @@ _ENGINE_MODULES = (
     "rainuav.pwe",
     "rainuav.radio.cell",
     "rainuav.radio.grid",
+    "rainuav.radio.hybrid",
     "rainuav.radio.mapdata",
     "rainuav.radio.pe_engine",
     "rainuav.radio.radiomap",

@@ -16,14 +16,12 @@ from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
-from rainuav import _core
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cache import map_path
-from rainuav.radio.grid import MarchGrid, cone_weight, march_grid
+from rainuav.radio.hybrid import engine_parts
 from rainuav.radio.mapdata import FORMAT_VERSION, RadioMap, store
-from rainuav.radio.pe_engine import march_cell, resample
-from rainuav.radio.ray_engine import SOILS, Weight, ray_power
+from rainuav.radio.ray_engine import SOILS
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.sinr import RSS_FLOOR_DBM, sir_from_power
 
@@ -47,15 +45,6 @@ def _cached(scn: Scenario) -> RadioMap | None:
     if rm.scenario.digest() != scn.digest():
         return None
     return rm
-
-
-def _inside_cone(grid: MarchGrid) -> Weight:
-    """The PE's share of a pattern: the cone weight in front of the antenna, 0 behind."""
-
-    def weight(sx: np.ndarray, sy: np.ndarray, sz: np.ndarray) -> np.ndarray:
-        return np.asarray(np.where(sz > 0, cone_weight(grid.sine_h, grid.sine_v, sx, sy), 0.0))
-
-    return weight
 
 
 @overload
@@ -101,49 +90,9 @@ def build_radio_map(
         MAP_ARRAYS * 8 * len(jobs) * h * w,
         "use a coarser area.resolution_m, a smaller area or fewer cells",
     )
-    use_pe = scn.engine in ("pe", "hybrid") and scn.ground not in SOILS
-    grids = [march_grid(scn, site, cell) if use_pe else None for _, site, cell in jobs]
-    cells = [(s, c) for _, s, c in jobs]
-    timings: dict[str, float] = {}
-    power = np.zeros((len(jobs), h, w))
-    carried = np.zeros_like(power)
-    if scn.engine != "pe":
-        t_r = time.perf_counter()
-        # What the PE would carry, by the rays: a cell whose cone carries under 1% of its
-        # power at every pixel (the UAV above a down-tilted sector's cone) is not marched.
-        weights = [None if g is None else _inside_cone(g) for g in grids]
-        power, in_cone = ray_power(scn, cells, x_m, y_m, weights if use_pe else None)
-        if in_cone is not None:
-            carried = in_cone
-            with np.errstate(divide="ignore", invalid="ignore"):
-                frac = np.where(power > 0, carried / power, 0.0)
-            for m in range(len(grids)):
-                if grids[m] is None or float(frac[m].max()) < 0.01:
-                    grids[m] = None
-                    carried[m] = 0.0
-        timings["rays"] = time.perf_counter() - t_r
-    for grid in grids:
-        if grid is not None:
-            _core.check_memory(grid.bytes)
-    pe_power = np.zeros_like(power)
-    bar = None
-    marches = sum(g is not None for g in grids)
-    if progress and marches:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=marches, desc="radio map (PE)", unit="cell")
-    try:
-        for m, ((_, site, cell), grid) in enumerate(zip(jobs, grids, strict=True)):
-            if grid is not None:
-                p = march_cell(scn, site, cell, grid, timings)
-                t_r = time.perf_counter()
-                pe_power[m] = resample(scn, site, grid, p, x_m, y_m)
-                timings["resample"] = timings.get("resample", 0.0) + time.perf_counter() - t_r
-                if bar is not None:
-                    bar.update(1)
-    finally:
-        if bar is not None:
-            bar.close()
+    parts = engine_parts(scn, [(s, c) for _, s, c in jobs], x_m, y_m, progress)
+    power, carried, pe_power, grids = parts.power, parts.carried, parts.pe_power, parts.grids
+    timings = parts.timings
     if scn.engine == "pe":
         power = pe_power
         pe_share = (pe_power > 0).astype(np.float32)

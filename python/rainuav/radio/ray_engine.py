@@ -203,27 +203,60 @@ def ray_gains(
 
 
 def ray_terms(
-    scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    weights: Sequence[Weight | None] | None = None,
 ) -> np.ndarray:
     """Everything of a ray map that no weather changes: each cell's clear-air power at every
     pixel split into direct, reflected and interference parts, (M, H, W, 3) (antenna gains,
-    spreading, ground, pixel means, knife edges). :func:`ray_slice_power` adds the rain."""
-    gains = ray_gains(scn, jobs, x_m, y_m)
-    return _trace(scn, jobs, x_m, y_m, gains, _medium_args(scn), terms_only=True)
+    spreading, ground, pixel means, knife edges); with ``weights`` (as :func:`ray_power`
+    takes them), the parts of the whole pattern less those of the weighted part (what the
+    rays keep where the PE carries the rest). :func:`ray_slicer` adds the rain."""
+    gd, gr = ray_gains(scn, jobs, x_m, y_m)
+    args = _medium_args(scn)
+    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, terms_only=True)
+    if weights is None:
+        return full
+    wd, wr = _weights_at(scn, jobs, x_m, y_m, weights)
+    return full - _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, terms_only=True)
+
+
+def _weights_at(
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    weights: Sequence[Weight | None],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each cell's weight (M, H, W) along the direct and the reflected ray (0: none)."""
+    shape = (len(jobs), y_m.size, x_m.size)
+    wd, wr = np.zeros(shape), np.zeros(shape)
+    for m, (site, cell) in enumerate(jobs):
+        if weights[m] is not None:
+            az, el_d, el_r = _directions(scn, site, x_m, y_m)
+            wd[m] = _weight_at(weights[m], cell, az, el_d)
+            wr[m] = _weight_at(weights[m], cell, az, el_r)
+    return wd, wr
 
 
 def ray_slicer(
-    scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    terms: np.ndarray | None = None,
 ) -> _core.RaySlicer:
-    """Every cell's rays over the map traced once in clear air (:func:`ray_terms`), with each
-    site's fan of lines for the rain (``rainuav_core::raytime``): ``slicer.power(**rain_args(
-    scn_at_t))`` is the received power (M, H, W) of the weather of any instant, the rain
-    integrated once per site for every pixel at once and shared by the site's cells and both
-    rays."""
+    """Every cell's rays over the map traced once in clear air (``terms``, default
+    :func:`ray_terms`), with each site's fan of lines for the rain
+    (``rainuav_core::raytime``): ``slicer.power(**rain_args(scn_at_t))`` is the received
+    power (M, H, W) of the weather of any instant, the rain integrated once per site for every
+    pixel at once and shared by the site's cells and both rays."""
     places: dict[tuple[float, float, float], int] = {}
     site_of = [places.setdefault((s.x_m, s.y_m, s.height_m), len(places)) for s, _ in jobs]
     return _core.RaySlicer(
-        ray_terms(scn, jobs, x_m, y_m),
+        ray_terms(scn, jobs, x_m, y_m) if terms is None else terms,
         np.array(list(places), dtype=float).reshape(-1, 3),
         np.asarray(site_of, dtype=np.int64),
         np.ascontiguousarray(x_m, dtype=float),
@@ -251,16 +284,10 @@ def ray_power(
     (M, H, W), each the mean over its pixel; and, if ``weights`` are given, the power of the
     part of each pattern they select (``weights[m]`` scales cell m's pattern; None: nothing).
     Directions, gains, the rain field and the obstacles are prepared once for both."""
-    shape = (len(jobs), y_m.size, x_m.size)
     gd, gr = ray_gains(scn, jobs, x_m, y_m)
-    wd, wr = np.zeros(shape), np.zeros(shape)
-    for m, (site, cell) in enumerate(jobs):
-        if weights is not None and weights[m] is not None:
-            az, el_d, el_r = _directions(scn, site, x_m, y_m)
-            wd[m] = _weight_at(weights[m], cell, az, el_d)
-            wr[m] = _weight_at(weights[m], cell, az, el_r)
     args = _medium_args(scn)
     full = _trace(scn, jobs, x_m, y_m, (gd, gr), args)
     if weights is None:
         return full, None
+    wd, wr = _weights_at(scn, jobs, x_m, y_m, weights)
     return full, _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args)
