@@ -100,3 +100,15 @@ def test_the_radiomap_cli_maps_a_rain_file_in_time(tmp_path, monkeypatch, capsys
     assert (out / "storm.gif").exists() and "3 slices" in capsys.readouterr().out
     assert radiomap.main([*argv, "--rain-rate", "5", "--out", str(out)]) == 2
     assert "--rain-rate" in capsys.readouterr().err
+
+
+def test_a_file_too_large_for_memory_is_refused_before_it_is_read(tmp_path, monkeypatch) -> None:
+    # The sizes are checked on the lazily opened file, before its data are read: a machine
+    # with 1 MB free refuses the 41 x 41 x 3 grid (and a file a hostile sender made huge).
+    from rainuav import _core
+
+    path = tmp_path / "rain.nc"
+    _grid().to_netcdf(path)
+    monkeypatch.setattr(_core, "available_memory_bytes", lambda: 10_000)
+    with pytest.raises(InvalidInputError, match="GB"):
+        read_rate_grid(path, AREA)

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.radio.scenario import Area
 from rainuav.radio.weather import MAX_RATE_MM_H, Medium
@@ -42,7 +43,7 @@ def _open(path: str | os.PathLike[str]) -> Any:
     if not os.path.isfile(path):
         raise InvalidInputError(f"rain-rate file {path}: no such file")
     try:
-        return xr.open_dataset(path).load()
+        return xr.open_dataset(path)  # lazily: nothing is read before the sizes are checked
     except Exception as err:  # xarray raises many kinds for a file it cannot read
         raise InvalidInputError(
             f"rain-rate file {path}: not a readable NetCDF file ({err})"
@@ -74,7 +75,13 @@ def read_rate_grid(
     """The moving weather of a NetCDF rain-rate file (module docstring) over ``area``: ``base``
     (default: today's rain model at 20 C, no wind) with its rates replaced by the file's;
     anything the file lacks or gets wrong is one line naming the file and the field."""
-    ds = _open(path)
+    with _open(path) as ds:
+        return _read(path, ds, area, base, variable, max_cells)
+
+
+def _read(
+    path: Any, ds: Any, area: Area, base: Medium | None, variable: str | None, max_cells: int
+) -> Medium:
     names = [variable] if variable else [k for k, v in ds.data_vars.items() if v.ndim == 3]
     if len(names) != 1 or names[0] not in ds.data_vars:
         raise InvalidInputError(
@@ -106,7 +113,17 @@ def read_rate_grid(
                 f"rain-rate file {path}: {name} (m) must cover the area, {want[0]:g} to "
                 f"{want[-1]:g} (has {have.min():g} to {have.max():g})"
             )
-    rates = da.transpose("time", "y", "x").sortby("x").sortby("y").interp(x=xs, y=ys).values
+    check_fits(
+        f"rain-rate file {path}: {names[0]} ({da.size} values)",
+        3 * 8 * da.size,
+        "cut the file to the area and the flight's time",
+    )
+    try:
+        rates = da.transpose("time", "y", "x").sortby("x").sortby("y").interp(x=xs, y=ys).values
+    except Exception as err:  # the data itself could not be read
+        raise InvalidInputError(
+            f"rain-rate file {path}: {names[0]} cannot be read ({err})"
+        ) from err
     if not np.all(np.isfinite(rates)) or rates.min() < 0 or rates.max() > MAX_RATE_MM_H:
         raise InvalidInputError(
             f"rain-rate file {path}: {names[0]} must be finite, within 0..{MAX_RATE_MM_H:g} mm/h"
