@@ -26,6 +26,7 @@ __all__ = [
     "itu_p838",
     "mie_forward",
     "plan_optimal",
+    "plan_optimal_in_time",
     "ray_power",
     "terminal_velocity_m_s",
     "water_permittivity",
@@ -189,6 +190,26 @@ def plan_optimal(
     out_of_bounds_penalty: float,
 ) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
     """Exact optimal plans from many starts: (return, actions, path) each."""
+
+def plan_optimal_in_time(
+    sinr_db: _F,
+    t_s: _F,
+    extent_m: tuple[float, float, float, float],
+    goal_m: tuple[float, float],
+    starts_m: _F,
+    *,
+    t0_s: float,
+    dt_s: float,
+    step_m: float,
+    tol_m: float,
+    max_steps: int,
+    mu: float,
+    reward: str,
+    sir_min_db: float,
+    goal_reward: float,
+    out_of_bounds_penalty: float,
+) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
+    """Exact space-time plans from many starts, the signal (K, H, W) at the instants t_s."""
 
 def ray_power(
     tx_m: _F,

@@ -24,6 +24,7 @@ pub mod memory;
 pub mod mie;
 pub mod p838;
 pub mod planner;
+pub mod plantime;
 pub mod pwe;
 pub mod quadrature;
 pub mod rays;

@@ -79,7 +79,26 @@ pub struct Plan {
     pub path: Vec<[f64; 2]>,
 }
 
-const MOVES: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
+pub(crate) const MOVES: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
+
+/// A map (H, W) over `extent` at (x, y): pixel-centred bilinear, edge values beyond the outermost
+/// centres, operation for operation as `rainuav._sampling.bilinear`.
+pub fn bilinear(s: &ArrayView2<'_, f64>, extent: [f64; 4], x: f64, y: f64) -> f64 {
+    let [x0, x1, y0, y1] = extent;
+    let (h, w) = s.dim();
+    let fx = ((x - x0) / (x1 - x0) * w as f64 - 0.5).clamp(0.0, w as f64 - 1.0);
+    let fy = ((y - y0) / (y1 - y0) * h as f64 - 0.5).clamp(0.0, h as f64 - 1.0);
+    let j0 = fx.floor().min(w.saturating_sub(2) as f64) as usize;
+    let i0 = fy.floor().min(h.saturating_sub(2) as f64) as usize;
+    let tx = fx - j0 as f64;
+    let ty = fy - i0 as f64;
+    let j1 = (j0 + 1).min(w - 1);
+    let i1 = (i0 + 1).min(h - 1);
+    s[(i0, j0)] * (1.0 - tx) * (1.0 - ty)
+        + s[(i0, j1)] * tx * (1.0 - ty)
+        + s[(i1, j0)] * (1.0 - tx) * ty
+        + s[(i1, j1)] * tx * ty
+}
 
 impl NavTask<'_> {
     /// Checks the task.
@@ -140,21 +159,7 @@ impl NavTask<'_> {
 
     /// SIR at (x, y): bilinear, edge-clamped, exactly as `rainuav.env.SirField`.
     pub fn sir_at(&self, x: f64, y: f64) -> f64 {
-        let [x0, x1, y0, y1] = self.extent;
-        let (h, w) = self.sir_db.dim();
-        let fx = ((x - x0) / (x1 - x0) * w as f64 - 0.5).clamp(0.0, w as f64 - 1.0);
-        let fy = ((y - y0) / (y1 - y0) * h as f64 - 0.5).clamp(0.0, h as f64 - 1.0);
-        let j0 = fx.floor().min(w.saturating_sub(2) as f64) as usize;
-        let i0 = fy.floor().min(h.saturating_sub(2) as f64) as usize;
-        let tx = fx - j0 as f64;
-        let ty = fy - i0 as f64;
-        let j1 = (j0 + 1).min(w - 1);
-        let i1 = (i0 + 1).min(h - 1);
-        let s = &self.sir_db;
-        s[(i0, j0)] * (1.0 - tx) * (1.0 - ty)
-            + s[(i0, j1)] * tx * (1.0 - ty)
-            + s[(i1, j0)] * (1.0 - tx) * ty
-            + s[(i1, j1)] * tx * ty
+        bilinear(&self.sir_db, self.extent, x, y)
     }
 
     /// b(q') from the SIR there.
@@ -193,7 +198,7 @@ impl NavTask<'_> {
 
     /// Lattice offsets `(i_lo, i_hi, j_lo, j_hi)` the plan from `start` tabulates: those
     /// inside the area and reachable within the horizon, plus one ring.
-    fn lattice(&self, start: [f64; 2]) -> (i64, i64, i64, i64) {
+    pub(crate) fn lattice(&self, start: [f64; 2]) -> (i64, i64, i64, i64) {
         let [x0, x1, y0, y1] = self.extent;
         let reach = self.max_steps as i64;
         let lo = |s: f64, a: f64| (((a - s) / self.step_m).ceil() as i64).max(-reach) - 1;
@@ -207,7 +212,7 @@ impl NavTask<'_> {
     }
 
     /// Number of lattice points of the plan from `start` (at most 50 million).
-    fn lattice_points(&self, start: [f64; 2]) -> Result<usize> {
+    pub(crate) fn lattice_points(&self, start: [f64; 2]) -> Result<usize> {
         let (i_lo, i_hi, j_lo, j_hi) = self.lattice(start);
         let n = ((i_hi - i_lo + 1) as usize).saturating_mul((j_hi - j_lo + 1) as usize);
         if n > 50_000_000 {
@@ -249,7 +254,7 @@ impl NavTask<'_> {
         starts.par_iter().map(|&p| self.optimal(p)).collect()
     }
 
-    fn check_start(&self, start: [f64; 2]) -> Result<()> {
+    pub(crate) fn check_start(&self, start: [f64; 2]) -> Result<()> {
         let [x0, x1, y0, y1] = self.extent;
         if !(start[0] >= x0 && start[0] <= x1 && start[1] >= y0 && start[1] <= y1) {
             return Err(CoreError::invalid(

@@ -2,10 +2,13 @@
 
 use crate::{detached, to_py};
 use ndarray::Array1;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+};
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
-use rainuav_core::planner::NavTask;
+use rainuav_core::planner::{NavTask, Plan};
+use rainuav_core::plantime::Timeline;
 
 /// One plan handed to Python: (return, actions, path).
 type PlanOut<'py> = (f64, Bound<'py, PyArray1<u8>>, Bound<'py, PyArray2<f64>>);
@@ -43,6 +46,13 @@ fn plan_optimal<'py>(
         goal_reward,
         out_of_bounds_penalty,
     };
+    let pts = start_points(&starts_m)?;
+    let plans = detached(py, || task.optimal_many(&pts))?;
+    Ok(plans_out(py, plans))
+}
+
+/// The (N, 2) starts as points.
+fn start_points(starts_m: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; 2]>> {
     let starts = starts_m.as_array();
     if starts.ncols() != 2 {
         return Err(to_py(CoreError::invalid(
@@ -51,9 +61,11 @@ fn plan_optimal<'py>(
             format!("{:?}", starts.dim()),
         )));
     }
-    let pts: Vec<[f64; 2]> = starts.rows().into_iter().map(|r| [r[0], r[1]]).collect();
-    let plans = detached(py, || task.optimal_many(&pts))?;
-    Ok(plans
+    Ok(starts.rows().into_iter().map(|r| [r[0], r[1]]).collect())
+}
+
+fn plans_out(py: Python<'_>, plans: Vec<Plan>) -> Vec<PlanOut<'_>> {
+    plans
         .into_iter()
         .map(|p| {
             let n = p.path.len();
@@ -64,11 +76,76 @@ fn plan_optimal<'py>(
                 path.into_pyarray(py),
             )
         })
-        .collect())
+        .collect()
+}
+
+/// Exact space-time plans from many starts when the signal changes in time: `sinr_db`
+/// (K, H, W) at the instants `t_s` (K,), take-off at `t0_s`, each move `dt_s` long; the
+/// signal between slices is linear in time (`rainuav_core::plantime`).
+#[pyfunction]
+#[pyo3(signature = (sinr_db, t_s, extent_m, goal_m, starts_m, *, t0_s, dt_s, step_m, tol_m,
+    max_steps, mu, reward, sir_min_db, goal_reward, out_of_bounds_penalty))]
+#[allow(clippy::too_many_arguments)]
+fn plan_optimal_in_time<'py>(
+    py: Python<'py>,
+    sinr_db: PyReadonlyArray3<'py, f64>,
+    t_s: PyReadonlyArray1<'py, f64>,
+    extent_m: [f64; 4],
+    goal_m: [f64; 2],
+    starts_m: PyReadonlyArray2<'py, f64>,
+    t0_s: f64,
+    dt_s: f64,
+    step_m: f64,
+    tol_m: f64,
+    max_steps: usize,
+    mu: f64,
+    reward: &str,
+    sir_min_db: f64,
+    goal_reward: f64,
+    out_of_bounds_penalty: f64,
+) -> PyResult<Vec<PlanOut<'py>>> {
+    let slices = sinr_db.as_array();
+    if slices.shape()[0] == 0 {
+        return Err(to_py(CoreError::invalid(
+            "sinr_db",
+            "must hold at least one slice",
+            "0",
+        )));
+    }
+    let times = t_s.as_slice().map_err(|_| {
+        to_py(CoreError::invalid(
+            "t_s",
+            "must be a contiguous 1-D array",
+            "strided",
+        ))
+    })?;
+    let task = NavTask {
+        sir_db: slices.index_axis(ndarray::Axis(0), 0),
+        extent: extent_m,
+        goal: goal_m,
+        step_m,
+        tol_m,
+        max_steps,
+        mu,
+        reward: reward.parse().map_err(to_py)?,
+        sir_min_db,
+        goal_reward,
+        out_of_bounds_penalty,
+    };
+    let tl = Timeline {
+        slices,
+        t_s: times,
+        t0_s,
+        dt_s,
+    };
+    let pts = start_points(&starts_m)?;
+    let plans = detached(py, || task.optimal_many_in_time(&tl, &pts))?;
+    Ok(plans_out(py, plans))
 }
 
 /// Adds this layer's functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(plan_optimal, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_optimal_in_time, m)?)?;
     Ok(())
 }

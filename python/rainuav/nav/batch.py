@@ -14,7 +14,8 @@ class BatchStepper:
     """Steps many UAVs at once with exactly the scalar environment's transitions.
 
     State per UAV: ``start`` (N, 2) float, ``offset`` (N, 2) int (steps taken in x and y) and
-    ``t`` (N,) steps so far; position = start + step_m * offset.
+    ``t`` (N,) steps so far; position = start + step_m * offset, flight time ``t * move_s``
+    (every flight takes off at time 0 of the field).
     """
 
     def __init__(self, field: SignalField, cfg: NavConfig):
@@ -26,15 +27,17 @@ class BatchStepper:
         self, start: np.ndarray, offset: np.ndarray, t: np.ndarray, action: np.ndarray
     ) -> dict[str, np.ndarray]:
         """One move for every UAV. Returns new ``offset``, ``t``, ``position`` (after clamping),
-        ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area) and
-        ``arrived`` (reached the goal)."""
+        ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area),
+        ``arrived`` (reached the goal) and ``t_s`` (the instant the move ends, s)."""
         cfg = self.cfg
         x0, x1, y0, y1 = self.field.extent
         new_off = offset + MOVES[action]
         q = start + cfg.step_m * new_off
         out = (q[:, 0] < x0) | (q[:, 0] > x1) | (q[:, 1] < y0) | (q[:, 1] > y1)
         qc = np.stack([np.clip(q[:, 0], x0, x1), np.clip(q[:, 1], y0, y1)], axis=1)
-        signal = self.field(qc[:, 0], qc[:, 1])
+        t_new = t + 1
+        t_s = self.time_s(t_new)
+        signal = self.field(qc[:, 0], qc[:, 1], t_s)
         b = base_reward(signal, cfg)
         arrived = ~out & (np.hypot(q[:, 0] - self.goal[0], q[:, 1] - self.goal[1]) <= cfg.tol_m)
         reward = (
@@ -43,7 +46,6 @@ class BatchStepper:
             + np.where(arrived, cfg.goal_reward, 0.0)
         )
         terminated = out | arrived
-        t_new = t + 1
         truncated = ~terminated & (t_new >= cfg.max_steps)
         return {
             "offset": new_off,
@@ -55,7 +57,13 @@ class BatchStepper:
             "signal_db": signal,
             "out": out,
             "arrived": arrived,
+            "t_s": t_s,
         }
+
+    def time_s(self, t: np.ndarray) -> np.ndarray:
+        """The instant, s, after ``t`` moves (``rainuav_core::plantime``'s ``time_of_move``:
+        ``0 + t * move_s``, operation for operation)."""
+        return 0.0 + np.asarray(t).astype(np.float64) * self.cfg.move_s
 
     def moves_to_goal(self, position: np.ndarray) -> np.ndarray:
         """Fewest moves from each (N, 2) position to a point of its lattice within ``tol_m``

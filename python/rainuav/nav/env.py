@@ -6,13 +6,17 @@ Semantics (the planner and the tests rely on them; PHYSICS.md section 6):
   ``x = x_min + (j + 0.5) (x_max - x_min) / W``, ``y = y_min + (i + 0.5) (y_max - y_min) / H``;
   beyond the outermost centres the edge values hold. The map is a RadioMap's ``sinr_db``
   (``signal="sinr"``, default) or ``sir_db`` (``"sir"``, the paper's), or a raw array.
-- Observation: position scaled to [0, 1]^2 (float32). Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y.
+- Observation: position scaled to [0, 1]^2 (float32); where the signal changes in time (a
+  :class:`rainuav.nav.field.SignalSeries`), a third entry, the moves so far over
+  ``max_steps`` (the flight time over the horizon). Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y.
+- Time: a move takes ``step_m / speed_m_s`` s and earns the signal at the new position and the
+  instant it ends; every episode takes off at time 0 of the field.
 - Moves and rewards: :mod:`rainuav.nav.task` (shortfall below ``min_db`` by default,
   ``goal_reward`` on arrival, ``out_of_bounds_penalty`` on leaving the area, truncated after
   ``max_steps``). ``min_db`` defaults to the map's own threshold (a preset's documented SINR
   threshold, ``RadioMap.default_min_db``), else 10 dB.
 - ``info``: ``signal_db``, ``serving_cell`` (-1 where the map names none), ``position_m``,
-  ``outage`` and ``arrived``.
+  ``outage``, ``arrived`` and ``t_s`` (the flight time, s).
 - Positions are kept as the start plus an integer number of steps in x and y, so every visited
   point lies exactly on the start's lattice (the exact planner's state space).
 
@@ -33,7 +37,7 @@ import numpy.typing as npt
 from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
-from rainuav.nav.field import SignalField
+from rainuav.nav.field import SignalField, SignalSeries
 from rainuav.nav.task import SIGNALS, LoiteringWarning, NavConfig, check_config
 
 __all__ = ["DEFAULT_MIN_DB", "UAVNavEnv", "check_action", "signal_field"]
@@ -109,10 +113,13 @@ class UAVNavEnv(gym.Env):
         goal_reward: float = 2000.0,
         out_of_bounds_penalty: float = 10000.0,
         start_m: tuple[float, float] | None = None,
+        speed_m_s: float = 10.0,
         config: NavConfig | None = None,
+        field: SignalField | SignalSeries | None = None,
     ) -> None:
-        """A map (``radio_map``, or one raw array with ``extent_m``) and the task: its fields
-        as keywords, or a whole ``config`` (then ``signal`` and ``min_db`` given here win)."""
+        """A map (``radio_map``, one raw array with ``extent_m``, or a built ``field``: a
+        signal in time) and the task: its fields as keywords, or a whole ``config`` (then
+        ``signal`` and ``min_db`` given here win)."""
         super().__init__()
         cfg = config or NavConfig(
             goal_m=tuple(goal_m),
@@ -124,10 +131,19 @@ class UAVNavEnv(gym.Env):
             goal_reward=goal_reward,
             out_of_bounds_penalty=out_of_bounds_penalty,
             start_m=None if start_m is None else tuple(start_m),
+            speed_m_s=speed_m_s,
         )
         if radio_map is not None:
             signal = signal or cfg.signal
-        self.field = signal_field(radio_map, sinr_db, sir_db, extent_m, signal)
+        if field is not None:
+            if radio_map is not None or sinr_db is not None or sir_db is not None:
+                raise InvalidInputError("give field or a map, not both")
+            if not isinstance(field, SignalField | SignalSeries):
+                kind = type(field).__name__
+                raise InvalidInputError(f"field must be a SignalField or SignalSeries (got {kind})")
+            self.field: SignalField | SignalSeries = field
+        else:
+            self.field = signal_field(radio_map, sinr_db, sir_db, extent_m, signal)
         kind = self.field.name.removesuffix("_db")
         if min_db is None:
             min_db = cfg.min_db
@@ -144,7 +160,8 @@ class UAVNavEnv(gym.Env):
                 stacklevel=2,
             )
         self.stepper = BatchStepper(self.field, self.cfg)
-        self.observation_space = gym.spaces.Box(0.0, 1.0, shape=(2,), dtype=np.float32)
+        dims = 3 if self.field.varies else 2
+        self.observation_space = gym.spaces.Box(0.0, 1.0, shape=(dims,), dtype=np.float32)
         self.action_space = gym.spaces.Discrete(4)
         self._start = np.zeros((1, 2))
         self._offset = np.zeros((1, 2), dtype=np.int64)
@@ -153,11 +170,17 @@ class UAVNavEnv(gym.Env):
         self._ready = False  # reset() starts the first episode
 
     # -- helpers ----------------------------------------------------------------------------
-    def observe(self, pos: np.ndarray) -> np.ndarray:
-        """Position scaled to [0, 1]^2, float32 (works on (..., 2) arrays)."""
+    def observe(self, pos: np.ndarray, t: Any = 0) -> np.ndarray:
+        """Position scaled to [0, 1]^2, float32 (works on (..., 2) arrays), and where the
+        signal changes in time the moves so far ``t`` over ``max_steps``."""
         x0, x1, y0, y1 = self.field.extent
         lo = np.array([x0, y0])
-        return ((np.asarray(pos) - lo) / np.array([x1 - x0, y1 - y0])).astype(np.float32)
+        xy = ((np.asarray(pos) - lo) / np.array([x1 - x0, y1 - y0])).astype(np.float32)
+        if not self.field.varies:
+            return xy
+        frac = np.asarray(t, dtype=np.float32) / np.float32(self.cfg.max_steps)
+        frac = np.broadcast_to(frac, xy.shape[:-1])[..., None]
+        return np.concatenate([xy, frac.astype(np.float32)], axis=-1)
 
     def sample_start(self, rng: np.random.Generator) -> np.ndarray:
         """Uniform in the area, farther than tol_m from the goal."""
@@ -195,16 +218,18 @@ class UAVNavEnv(gym.Env):
         self._t = np.zeros(1, dtype=np.int64)
         self._pos = p.copy()
         self._ready = True
-        return self.observe(p), self._info(float(self.field(p[0], p[1])))
+        return self.observe(p, 0), self._info(float(self.field(p[0], p[1], 0.0)))
 
     def _info(self, signal: float, arrived: bool = False) -> dict[str, Any]:
         assert self.cfg.min_db is not None  # resolved in __init__
+        t_s = float(self.stepper.time_s(self._t)[0])
         return {
             "signal_db": signal,
-            "serving_cell": int(self.field.serving_cell(self._pos[0], self._pos[1])),
+            "serving_cell": int(self.field.serving_cell(self._pos[0], self._pos[1], t_s)),
             "position_m": self._pos.copy(),
             "outage": bool(signal < self.cfg.min_db),
             "arrived": arrived,
+            "t_s": t_s,
         }
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
@@ -216,7 +241,7 @@ class UAVNavEnv(gym.Env):
         self._pos = r["position"][0].copy()
         signal = float(r["signal_db"][0])
         return (
-            self.observe(self._pos),
+            self.observe(self._pos, self._t[0]),
             float(r["reward"][0]),
             bool(r["terminated"][0]),
             bool(r["truncated"][0]),

@@ -1,6 +1,12 @@
 """The signal field the UAV flies through: pixel-centred bilinear sampling of a map in dB (SINR
 or SIR, :mod:`rainuav._sampling`), with its input checked once, and the serving cell at the
-nearest pixel when the map names one."""
+nearest pixel when the map names one.
+
+Two kinds, one interface (``field(x, y, t_s)``, ``field.serving_cell(x, y, t_s)``,
+``field.varies``): :class:`SignalField`, one map (time is ignored), and :class:`SignalSeries`,
+maps at instants ``t_s`` (a storm that moves), linear in time between them. The exact planner
+in space-time (``rainuav_core::plantime``) reads the series operation for operation as
+:meth:`SignalSeries.__call__` does."""
 
 from __future__ import annotations
 
@@ -12,7 +18,7 @@ import numpy.typing as npt
 from rainuav._sampling import bilinear
 from rainuav.errors import InvalidInputError
 
-__all__ = ["SignalField", "SirField"]
+__all__ = ["SignalField", "SignalSeries", "SirField"]
 
 
 class SignalField:
@@ -54,21 +60,123 @@ class SignalField:
                 )
             self.serving = sv.astype(np.int64)
 
-    def __call__(self, x: Any, y: Any) -> Any:
+    varies = False
+    """One map: the signal does not change in time."""
+
+    def __call__(self, x: Any, y: Any, t_s: Any = None) -> Any:
         """The map at the points ``(x, y)`` (bilinear between pixel centres, edge values
-        beyond them)."""
+        beyond them); ``t_s`` is ignored (one map)."""
         return bilinear(self.db, self.extent, x, y)
 
-    def serving_cell(self, x: Any, y: Any) -> Any:
+    def serving_cell(self, x: Any, y: Any, t_s: Any = None) -> Any:
         """The serving cell at the pixel holding ``(x, y)`` (-1 where the map names none)."""
+        return _nearest_pixel(self.serving, self.db.shape, self.extent, x, y)
+
+    def frozen(self, t_s: float = 0.0) -> SignalField:
+        """The map at ``t_s``: this one."""
+        return self
+
+
+def _nearest_pixel(
+    serving: np.ndarray | None, shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any
+) -> Any:
+    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    if serving is None:
+        return np.full(np.broadcast(x, y).shape, -1, dtype=np.int64)
+    x0, x1, y0, y1 = extent
+    h, w = shape[-2:]
+    j = np.clip(np.floor((x - x0) / (x1 - x0) * w).astype(np.int64), 0, w - 1)
+    i = np.clip(np.floor((y - y0) / (y1 - y0) * h).astype(np.int64), 0, h - 1)
+    return serving[i, j]
+
+
+class SignalSeries:
+    """Maps ``values_db`` (K, H, W) in dB at the instants ``t_s`` (K,), s, strictly
+    increasing, over ``extent_m``: bilinear in space within a slice, linear in time between the
+    two slices around an instant, held before the first and after the last
+    (``rainuav_core::plantime::Timeline::signal_at``, operation for operation).
+    ``serving_cell`` (K, H, W), optional, is read at the nearest pixel of the latest slice at
+    or before the instant."""
+
+    varies = True
+    """The signal changes in time."""
+
+    def __init__(
+        self,
+        values_db: npt.ArrayLike,
+        t_s: npt.ArrayLike,
+        extent_m: tuple[float, float, float, float],
+        name: str = "sinr_db",
+        serving_cell: npt.ArrayLike | None = None,
+    ):
+        v = np.asarray(values_db, dtype=np.float64)
+        if v.ndim != 3 or min(v.shape) < 1:
+            raise InvalidInputError(f"{name} must be a 3-D (K, H, W) array (got shape {v.shape})")
+        t = np.asarray(t_s, dtype=np.float64)
+        if t.shape != (v.shape[0],) or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise InvalidInputError(
+                f"t_s must be {v.shape[0]} finite, strictly increasing instants (got {t.shape})"
+            )
+        self.slices = [SignalField(v[k], extent_m, name) for k in range(v.shape[0])]
+        self.db = np.ascontiguousarray(v)
+        self.t_s = np.ascontiguousarray(t)
+        self.name = name
+        self.extent = self.slices[0].extent
+        self.serving: np.ndarray | None = None
+        if serving_cell is not None:
+            sv = np.asarray(serving_cell)
+            if sv.shape != v.shape:
+                raise InvalidInputError(
+                    f"serving_cell must have the series' shape {v.shape} (got {sv.shape})"
+                )
+            self.serving = sv.astype(np.int64)
+
+    def bracket(self, t_s: float) -> tuple[int, int, float]:
+        """The slices around ``t_s`` and the later one's weight ``(k0, k1, f)``; ``k0 == k1``
+        at a slice's instant and beyond the first or the last."""
+        t = self.t_s
+        k = int(np.searchsorted(t, t_s, side="left"))
+        if k < len(t) and t[k] == t_s:
+            return k, k, 0.0
+        if k == 0:
+            return 0, 0, 0.0
+        if k == len(t):
+            return k - 1, k - 1, 0.0
+        return k - 1, k, float((t_s - t[k - 1]) / (t[k] - t[k - 1]))
+
+    def __call__(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
+        """The signal at the points ``(x, y)`` at the instants ``t_s`` (a number, or one per
+        point)."""
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        times = np.broadcast_to(np.asarray(t_s, dtype=np.float64), np.broadcast(x, y).shape)
+        out = np.empty(times.shape)
+        for tau in np.unique(times):
+            sel = times == tau
+            xs, ys = np.broadcast_to(x, times.shape)[sel], np.broadcast_to(y, times.shape)[sel]
+            k0, k1, f = self.bracket(float(tau))
+            v0 = self.slices[k0](xs, ys)
+            out[sel] = v0 if k0 == k1 else (1.0 - f) * v0 + f * self.slices[k1](xs, ys)
+        return out[()] if out.ndim == 0 else out
+
+    def serving_cell(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
+        """The serving cell at the pixel holding ``(x, y)`` in the latest slice at or before
+        ``t_s`` (a number, or one per point; -1 where the series names none)."""
+        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        shape = np.broadcast(x, y, np.asarray(t_s)).shape
         if self.serving is None:
-            return np.full(np.broadcast(x, y).shape, -1, dtype=np.int64)
-        x0, x1, y0, y1 = self.extent
-        h, w = self.db.shape
-        j = np.clip(np.floor((x - x0) / (x1 - x0) * w).astype(np.int64), 0, w - 1)
-        i = np.clip(np.floor((y - y0) / (y1 - y0) * h).astype(np.int64), 0, h - 1)
-        return self.serving[i, j]
+            return np.full(shape, -1, dtype=np.int64)
+        k = np.searchsorted(self.t_s, np.broadcast_to(t_s, shape), side="right") - 1
+        flat = self.serving.reshape(len(self.t_s), -1)
+        h, w = self.db.shape[1:]
+        pixel = _nearest_pixel(np.arange(h * w).reshape(h, w), (h, w), self.extent, x, y)
+        return flat[np.maximum(k, 0), np.broadcast_to(pixel, shape)]
+
+    def frozen(self, t_s: float = 0.0) -> SignalField:
+        """The weather of ``t_s`` held still: the one map the series gives at that instant
+        (what a tool that ignores the storm's motion plans on)."""
+        k0, k1, f = self.bracket(float(t_s))
+        v = self.db[k0] if k0 == k1 else (1.0 - f) * self.db[k0] + f * self.db[k1]
+        return SignalField(v, self.extent, self.name)
 
 
 SirField = SignalField

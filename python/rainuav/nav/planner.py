@@ -2,12 +2,17 @@
 
 The moves are deterministic on the start's lattice, so the exact finite-horizon optimum of the
 undiscounted return is a dynamic programme (in Rust; many starts run in parallel). It is the
-yardstick for learned policies.
+yardstick for learned policies. Where the signal changes in time (a
+:class:`rainuav.nav.field.SignalSeries`) the programme's rewards depend on the step: it is then
+the exact optimum on the space-time lattice, the storm's motion known
+(``rainuav_core::plantime``). The baselines a user would try instead (the plan of the weather at
+take-off, re-planning on the weather of the moment) are in :mod:`rainuav.nav.baselines`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -15,6 +20,8 @@ import numpy.typing as npt
 from rainuav import _core
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.field import SignalField
+from rainuav.nav.task import NavConfig
 
 __all__ = ["Plan", "optimal", "optimal_many", "straight_line"]
 
@@ -38,24 +45,33 @@ def _as_env(env: UAVNavEnv) -> UAVNavEnv:
 
 
 def optimal_many(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
-    """Exact optimal plans from each start (N, 2), computed in parallel."""
+    """Exact optimal plans from each start (N, 2), computed in parallel; in space-time where
+    the env's signal changes in time (every flight taking off at time 0)."""
     env = _as_env(env)
+    return plan_on(env.field, env.cfg, starts_m)
+
+
+def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
+    """Exact optimal plans of the task ``cfg`` (``min_db`` resolved) on ``field`` (a
+    :class:`SignalField`, or a series in time) from each start."""
     starts = np.ascontiguousarray(np.asarray(starts_m, dtype=np.float64).reshape(-1, 2))
-    c = env.cfg
-    raw = _core.plan_optimal(
-        env.field.db,
-        env.field.extent,
-        tuple(c.goal_m),
-        starts,
-        step_m=float(c.step_m),
-        tol_m=float(c.tol_m),
-        max_steps=int(c.max_steps),
-        mu=float(c.mu),
-        reward=c.reward,
-        sir_min_db=float(c.min_db),  # the Rust planner's name for the threshold
-        goal_reward=float(c.goal_reward),
-        out_of_bounds_penalty=float(c.out_of_bounds_penalty),
-    )
+    task = {
+        "step_m": float(cfg.step_m),
+        "tol_m": float(cfg.tol_m),
+        "max_steps": int(cfg.max_steps),
+        "mu": float(cfg.mu),
+        "reward": cfg.reward,
+        "sir_min_db": float(cfg.min_db),  # the Rust planner's name for the threshold
+        "goal_reward": float(cfg.goal_reward),
+        "out_of_bounds_penalty": float(cfg.out_of_bounds_penalty),
+    }
+    goal = (float(cfg.goal_m[0]), float(cfg.goal_m[1]))
+    if isinstance(field, SignalField):
+        raw = _core.plan_optimal(field.db, field.extent, goal, starts, **task)
+    else:
+        raw = _core.plan_optimal_in_time(
+            field.db, field.t_s, field.extent, goal, starts, t0_s=0.0, dt_s=cfg.move_s, **task
+        )
     return [Plan(float(r), np.asarray(path), np.asarray(a, dtype=np.int64)) for r, a, path in raw]
 
 

@@ -10,6 +10,9 @@
   out_of_bounds_penalty``, terminated, the UAV stays at ``clamp(q')``. Reaching the goal
   (``|q' - goal| <= tol_m``): ``b(q') + goal_reward``, terminated. Truncated after
   ``max_steps`` steps (unless terminated on that step).
+- Time: each move takes ``step_m / speed_m_s`` seconds, and the signal it earns is the field's
+  at the new position and the instant the move ends (:mod:`rainuav.nav.field`; a single map
+  does not change in time, so time changes nothing there).
 - A flight's **cost** is its return without the arrival reward, negated: the moves plus the
   weighted shortfall (PHYSICS.md section 6, :func:`flight_cost`).
 """
@@ -74,6 +77,13 @@ class NavConfig:
     """P_ob, charged on leaving the area."""
     start_m: tuple[float, float] | None = None
     """Fixed start (None: uniform in the area, farther than tol_m from the goal)."""
+    speed_m_s: float = 10.0
+    """Ground speed, m/s: a move takes step_m / speed_m_s seconds."""
+
+    @property
+    def move_s(self) -> float:
+        """Duration of one move, s."""
+        return self.step_m / self.speed_m_s
 
 
 def check_config(cfg: NavConfig, extent: tuple[float, float, float, float]) -> None:
@@ -85,7 +95,7 @@ def check_config(cfg: NavConfig, extent: tuple[float, float, float, float]) -> N
         raise InvalidInputError(f"goal_m must be two finite numbers (got {cfg.goal_m!r})")
     if not (x0 <= g[0] <= x1 and y0 <= g[1] <= y1):
         raise InvalidInputError(f"goal_m must lie inside the area {extent} (got {cfg.goal_m!r})")
-    for name in ("step_m", "tol_m"):
+    for name in ("step_m", "tol_m", "speed_m_s"):
         v = getattr(cfg, name)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise InvalidInputError(f"{name} must be finite and > 0 (got {v!r})")

@@ -93,7 +93,8 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
 
     def _infos(self, signal: np.ndarray, arrived: np.ndarray) -> dict[str, Any]:
         pos = self._position()
-        serving = self.env.field.serving_cell(pos[:, 0], pos[:, 1])
+        t_s = self.env.stepper.time_s(self._t)
+        serving = self.env.field.serving_cell(pos[:, 0], pos[:, 1], t_s)
         assert self.env.cfg.min_db is not None  # resolved by UAVNavEnv
         out: dict[str, Any] = {
             "signal_db": signal,
@@ -101,6 +102,7 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
             "position_m": pos,
             "outage": signal < self.env.cfg.min_db,
             "arrived": arrived,
+            "t_s": t_s,
         }
         every = np.ones(self.num_envs, dtype=bool)
         return {**out, **{f"_{k}": every for k in out}}
@@ -122,8 +124,9 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         self._launch(np.ones(self.num_envs, dtype=bool), options)
         self._ready = True
         pos = self._position()
-        signal = self.env.field(pos[:, 0], pos[:, 1])
-        return self.env.observe(pos), self._infos(signal, np.zeros(self.num_envs, dtype=bool))
+        signal = self.env.field(pos[:, 0], pos[:, 1], 0.0)
+        obs = self.env.observe(pos, self._t)
+        return obs, self._infos(signal, np.zeros(self.num_envs, dtype=bool))
 
     def step(
         self, actions: Any
@@ -158,19 +161,19 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         # A UAV that left the area sits at the clamped position (the scalar env's state).
         x0, x1, y0, y1 = self.env.field.extent
         pos = np.stack([np.clip(pos[:, 0], x0, x1), np.clip(pos[:, 1], y0, y1)], axis=1)
-        obs = self.env.observe(pos)
+        obs = self.env.observe(pos, self._t)
         infos: dict[str, Any] = {}
         if self.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP:
             self._launch(resetting)
             self._ended = ended
             pos = np.where(resetting[:, None], self._position(), pos)
-            obs = self.env.observe(pos)
+            obs = self.env.observe(pos, self._t)
         else:  # SAME_STEP
             if ended.any():
                 infos["final_obs"] = obs.copy()
                 infos["_final_obs"] = ended.copy()
             self._launch(ended)
             pos = np.where(ended[:, None], self._position(), pos)
-            obs = self.env.observe(pos)
-        signal = self.env.field(pos[:, 0], pos[:, 1])
+            obs = self.env.observe(pos, self._t)
+        signal = self.env.field(pos[:, 0], pos[:, 1], self.env.stepper.time_s(self._t))
         return obs, reward, terminated, truncated, {**self._infos(signal, arrived), **infos}

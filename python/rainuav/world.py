@@ -1,0 +1,254 @@
+"""The world a UAV flies: a signal field in time joined to a navigation task, built from one
+spec (:class:`WorldSpec`) for every entry point: ``gym.make("rainuav/UAVNav-v0")``,
+``python -m rainuav.train``, ``rainuav.evaluate`` and the studies.
+
+Where things go: a new weather is a :class:`rainuav.radio.Medium` kind (``radio``); a new task
+rule goes in :mod:`rainuav.nav` (``NavConfig`` and ``UAVNavEnv``); a new learner goes in
+:mod:`rainuav.rl` and receives a built :class:`World` (or its env), the way Stable-Baselines3's
+``DQN(env).learn()`` does. This module is the only place where a scenario, its weather and a
+task become something to fly; it sits above ``radio`` and ``nav`` and below ``rl``.
+
+A spec names the scenario (a preset, or a scenario file), its weather (the scenario's own,
+homogeneous rain at ``rain_rate``, or the random storm ``storm_seed`` of the ``storm``
+preset), the propagation engine and the task's fields. A weather that moves is mapped at
+instants ``slice_s`` apart over the task's horizon (``max_steps`` moves of ``step_m /
+speed_m_s`` seconds; :mod:`rainuav.radio.timemap`), and the UAV flies the series
+(:class:`rainuav.nav.field.SignalSeries`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from rainuav.errors import InvalidInputError
+from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.field import SignalField, SignalSeries
+from rainuav.nav.task import NavConfig
+from rainuav.nav.vector import UAVNavVectorEnv
+from rainuav.radio import presets
+from rainuav.radio.mapdata import RadioMap
+from rainuav.radio.radiomap import build_radio_map
+from rainuav.radio.scenario import Scenario
+from rainuav.radio.storms import check_storm_seed
+from rainuav.radio.timemap import RadioMapSeries, build_radio_map_series, series_times
+
+__all__ = [
+    "MAP_FILES",
+    "World",
+    "WorldSpec",
+    "build_world",
+    "check_spec",
+    "load_world",
+    "make_scenario",
+    "spec_of",
+    "task_of",
+    "world_from",
+]
+
+MAP_FILES = ("radiomap.npz", "radiomap_series.npz")
+"""The files a world's signal is saved in: a single map, or maps in time."""
+ENGINES = ("", "hybrid", "ray", "pe")
+
+
+@dataclass
+class WorldSpec:
+    """What a world is built from: the scenario and its weather, then the task (one docstring
+    line per field = one CLI flag of ``rainuav.train``)."""
+
+    scenario: str = "paper"
+    """Preset scenario ('paper', 'uma', 'rain_cell', 'urban' or 'storm'), unless
+    --scenario-file."""
+    scenario_file: str = ""
+    """A scenario TOML file (overrides --scenario)."""
+    rain_rate: float | None = None
+    """Homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the rain
+    model, drop sizes, shape, temperature and wind stay the scenario's; for 'storm', the
+    storm's background rate); unset: the scenario's own weather (the paper preset rains
+    25 mm/h)."""
+    engine: str = ""
+    """Propagation engine: 'hybrid', 'ray' or 'pe'; '' the scenario's own."""
+    storm_seed: int = 0
+    """The random storm of the 'storm' scenario (seeds from 1 000 000 are reserved for
+    evaluation)."""
+    slice_s: float = 5.0
+    """Time between the maps of a weather that moves, s (the signal is linear in between)."""
+    signal: str = "sinr"
+    """The map the task flies on: 'sinr' or 'sir' (the paper's)."""
+    min_db: float | None = None
+    """Outage threshold of the signal, dB; unset: the preset's documented SINR threshold
+    (10 dB for SIR and for scenario files of no preset)."""
+    mu: float = 10.0 / 43.0
+    """Weight of the signal term in the reward."""
+    reward: str = "shortfall"
+    """Reward form: 'shortfall', 'outage' or 'linear'."""
+    max_steps: int = 300
+    """Steps per episode, the horizon (Table I)."""
+    step_m: float = 10.0
+    """Length of one move, m."""
+    tol_m: float = 10.0
+    """Arrival tolerance D_tol, m (Table I)."""
+    goal_reward: float = 2000.0
+    """Arrival reward R_des (Table I)."""
+    out_of_bounds_penalty: float = 10000.0
+    """Penalty P_ob for leaving the area (Table I)."""
+    goal_x_m: float = 1400.0
+    """Destination, east coordinate, m."""
+    goal_y_m: float = 1600.0
+    """Destination, north coordinate, m."""
+    speed_m_s: float = 10.0
+    """Ground speed, m/s: a move takes step_m / speed_m_s seconds."""
+
+
+def spec_of(obj: Any) -> WorldSpec:
+    """The world part of ``obj`` (a WorldSpec, or a configuration that extends one)."""
+    return WorldSpec(**{f.name: getattr(obj, f.name) for f in dataclasses.fields(WorldSpec)})
+
+
+def task_of(spec: WorldSpec) -> NavConfig:
+    """The navigation task a spec names: every NavConfig field of the same name, and the
+    destination from ``goal_x_m`` and ``goal_y_m``."""
+    names = {f.name for f in dataclasses.fields(NavConfig)} & {
+        f.name for f in dataclasses.fields(WorldSpec)
+    }
+    fields = {name: getattr(spec, name) for name in names}
+    return NavConfig(goal_m=(spec.goal_x_m, spec.goal_y_m), **fields)
+
+
+def check_spec(spec: Any) -> None:
+    """Raises InvalidInputError naming the first field of the spec outside its range."""
+    checks = [
+        ("engine", spec.engine in ENGINES, "'', 'hybrid', 'ray' or 'pe'"),
+        ("signal", spec.signal in ("sinr", "sir"), "'sinr' or 'sir'"),
+        ("min_db", spec.min_db is None or math.isfinite(spec.min_db), "unset or finite"),
+        ("max_steps", spec.max_steps >= 1, ">= 1"),
+        ("step_m", 0 < spec.step_m < math.inf, "> 0 and finite"),
+        ("tol_m", 0 < spec.tol_m < math.inf, "> 0 and finite"),
+        ("speed_m_s", 0 < spec.speed_m_s < math.inf, "> 0 and finite"),
+        ("slice_s", 0.001 <= spec.slice_s <= 1e6, "in [0.001, 1e6] s"),
+        ("goal_reward", math.isfinite(spec.goal_reward), "finite"),
+        ("out_of_bounds_penalty", math.isfinite(spec.out_of_bounds_penalty), "finite"),
+        ("rain_rate", spec.rain_rate is None or 0 <= spec.rain_rate <= 500,
+         "unset or in [0, 500] mm/h"),
+    ]  # fmt: skip
+    for name, ok, allowed in checks:
+        if not ok:
+            raise InvalidInputError(f"{name} must be {allowed} (got {getattr(spec, name)!r})")
+    check_storm_seed(spec.storm_seed)
+
+
+def make_scenario(spec: Any) -> Scenario:
+    """The scenario of a spec: the preset (the storm of ``storm_seed`` for 'storm') or the
+    file, with ``rain_rate`` and ``engine`` applied if set."""
+    if spec.scenario_file:
+        scn = Scenario.from_toml(spec.scenario_file)
+    elif spec.scenario == "storm":
+        scn = presets.storm(spec.rain_rate, seed=check_storm_seed(spec.storm_seed))
+    elif spec.scenario in presets.PRESETS:
+        scn = presets.PRESETS[spec.scenario]()
+    else:
+        raise InvalidInputError(
+            f"scenario must be one of {sorted(presets.PRESETS)} (got {spec.scenario!r})"
+        )
+    if spec.rain_rate is not None and spec.scenario != "storm":
+        scn = presets.with_rain(scn, spec.rain_rate)
+    if spec.engine:
+        scn = dataclasses.replace(scn, engine=spec.engine)
+    return scn
+
+
+@dataclass
+class World:
+    """A signal (one map, or maps in time) and the task flown on it (``min_db`` resolved)."""
+
+    source: RadioMap | RadioMapSeries
+    """What the signal is read from (saved with a run)."""
+    field: SignalField | SignalSeries
+    """The signal the UAV flies through."""
+    task: NavConfig
+    """The navigation task."""
+
+    @property
+    def varies(self) -> bool:
+        """Whether the signal changes in time."""
+        return self.field.varies
+
+    def env(self) -> UAVNavEnv:
+        """A Gymnasium environment of this world (a fresh one per call)."""
+        return UAVNavEnv(field=self.field, config=self.task)
+
+    def vector_env(self, num_envs: int, autoreset_mode: Any = "NextStep") -> UAVNavVectorEnv:
+        """``num_envs`` UAVs in this world, batched."""
+        return UAVNavVectorEnv(self.env(), num_envs, autoreset_mode)
+
+    def save(self, folder: Path) -> Path:
+        """Writes the signal's source into ``folder`` (:data:`MAP_FILES`), atomically."""
+        name = MAP_FILES[1] if isinstance(self.source, RadioMapSeries) else MAP_FILES[0]
+        return self.source.save(Path(folder) / name)
+
+
+def world_from(source: Any, task: NavConfig) -> World:
+    """The world of a built map or series and a task (``min_db`` unset: the scenario's
+    documented threshold for the signal flown)."""
+    signal = task.signal
+    if isinstance(source, RadioMapSeries):
+        field: SignalField | SignalSeries = SignalSeries(
+            getattr(source, f"{signal}_db"),
+            source.t_s,
+            _extent(source.scenario),
+            f"{signal}_db",
+            source.serving_cell,
+        )
+    elif isinstance(source, RadioMap):
+        field = SignalField(
+            getattr(source, f"{signal}_db"), source.extent_m, f"{signal}_db", source.serving_cell
+        )
+    else:
+        raise InvalidInputError(
+            f"a world needs a RadioMap or RadioMapSeries (got {type(source).__name__})"
+        )
+    min_db = task.min_db
+    if min_db is None:  # the same rule for a map and a series (by the scenario's name)
+        min_db = RadioMap.default_min_db(source, signal)  # type: ignore[arg-type]
+    return World(source, field, dataclasses.replace(task, min_db=min_db))
+
+
+def series_instants(spec: Any) -> Any:
+    """The instants a moving weather is mapped at: every ``slice_s`` from 0 over the task's
+    horizon (rounded up to a whole slice)."""
+    horizon = spec.max_steps * spec.step_m / spec.speed_m_s
+    return series_times(math.ceil(horizon / spec.slice_s - 1e-9) * spec.slice_s, spec.slice_s)
+
+
+def build_world(spec: Any, *, progress: bool = False) -> World:
+    """The world of ``spec`` (a WorldSpec, or a configuration extending one): its scenario's
+    map, or maps in time where its weather moves, built or taken from the cache."""
+    check_spec(spec)
+    task = task_of(spec)
+    scn = make_scenario(spec)
+    if scn.medium.moves:
+        if scn.engine == "pe":
+            scn = dataclasses.replace(scn, engine="hybrid")  # a march per instant is refused
+        source: Any = build_radio_map_series(scn, series_instants(spec), progress=progress)
+    else:
+        source = build_radio_map(scn, progress=progress)
+    return world_from(source, task)
+
+
+def load_world(folder: Path, spec: Any) -> World | None:
+    """The world saved in a run's ``folder`` (:meth:`World.save`) with the task of
+    ``spec``, or None where the folder holds none."""
+    folder = Path(folder)
+    if (folder / MAP_FILES[1]).exists():
+        return world_from(RadioMapSeries.load(folder / MAP_FILES[1]), task_of(spec))
+    if (folder / MAP_FILES[0]).exists():
+        return world_from(RadioMap.load(folder / MAP_FILES[0]), task_of(spec))
+    return None
+
+
+def _extent(scn: Scenario) -> tuple[float, float, float, float]:
+    a = scn.area
+    return (a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m)
