@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from rainuav.world import in_world, saved_world
 from rainuav.nav import MOVES, UAVNavEnv, planner
 from rainuav.nav.shield import shield_moves
 from rainuav.radio import RadioMap
@@ -292,7 +293,7 @@ def test_training_smoke_on_a_synthetic_map(tmp_path: Path) -> None:
     # success 0.80-1.00, excess cost from 0 (no flight beats the exact optimum: a planner
     # check) to 0.9 of the straight line's (seeds: 0.12-0.81 of it). The straight line
     # learns nothing, so its figure is exact: 0.48765.
-    m = train(small_cfg(tmp_path, 300), progress=False, radio_map=synthetic_map())
+    m = train(*in_world(small_cfg(tmp_path, 300), synthetic_map()), progress=False)
     assert 0.80 <= m["success_rate"] <= 1.0, m
     assert m["straight_line_mean_excess_cost"] == pytest.approx(0.48765, abs=1e-4), m
     assert 0.0 <= m["mean_excess_cost"] <= 0.9 * m["straight_line_mean_excess_cost"], m
@@ -329,7 +330,7 @@ def _assert_policy_gives(run: Path, cfg: TrainConfig, m: dict) -> None:
 def test_keep_best_evaluates_the_best_network_on_validation(tmp_path: Path) -> None:
     cfg = small_cfg(tmp_path, 100)
     cfg.validate_every, cfg.keep_best = 10, True
-    m = train(cfg, progress=False, radio_map=synthetic_map())
+    m = train(*in_world(cfg, synthetic_map()), progress=False)
     history = checkpoint.load(tmp_path / "checkpoint.pt")["validation"]["history"]
     # The best score: highest success, then lowest mean excess cost (the first of equals).
     scores = [Validation.score(h[1], h[2]) for h in history]
@@ -342,7 +343,7 @@ def test_keep_best_evaluates_the_best_network_on_validation(tmp_path: Path) -> N
 def test_without_validation_checks(tmp_path: Path) -> None:
     cfg = small_cfg(tmp_path, 20)
     cfg.validate_every, cfg.keep_best = 0, True  # nothing to select from: the final network
-    m = train(cfg, progress=False, radio_map=synthetic_map())
+    m = train(*in_world(cfg, synthetic_map()), progress=False)
     assert m["selected_at_episode"] == 20 and "final_mean_return" not in m
     assert checkpoint.load(tmp_path / "checkpoint.pt")["validation"]["history"] == []
 
@@ -370,8 +371,8 @@ def test_weight_average_is_the_running_mean() -> None:
 def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_path: Path) -> None:
     plain, averaged = small_cfg(tmp_path / "plain", 120), small_cfg(tmp_path / "avg", 120)
     plain.dqn.average_from, averaged.dqn.average_from = 1.0, 0.5
-    p = train(plain, progress=False, radio_map=synthetic_map())
-    m = train(averaged, progress=False, radio_map=synthetic_map())
+    p = train(*in_world(plain, synthetic_map()), progress=False)
+    m = train(*in_world(averaged, synthetic_map()), progress=False)
     a = checkpoint.load(tmp_path / "plain" / "checkpoint.pt")["agent"]
     b = checkpoint.load(tmp_path / "avg" / "checkpoint.pt")["agent"]
     # The online network acts and learns as without averaging: the same weights at the end.
@@ -397,14 +398,14 @@ def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_pat
 
 
 def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
-    full = train(small_cfg(tmp_path / "full", 120), progress=False, radio_map=synthetic_map())
+    full = train(*in_world(small_cfg(tmp_path / "full", 120), synthetic_map()), progress=False)
     part_dir = tmp_path / "part"
     # Interrupted after the checkpoint at 50 finished episodes, with lanes in mid-flight.
     assert (
-        train(small_cfg(part_dir, 120), progress=False, radio_map=synthetic_map(), stop_after=50)
+        train(*in_world(small_cfg(part_dir, 120), synthetic_map()), progress=False, stop_after=50)
         == {}
     )
-    resumed = train(small_cfg(part_dir, 120), resume=True, progress=False)
+    resumed = train(*saved_world(small_cfg(part_dir, 120)), resume=True, progress=False)
     for k in (
         "mean_return",
         "success_rate",
@@ -644,15 +645,15 @@ def test_resume_refuses_a_different_config(tmp_path: Path) -> None:
         cfg.checkpoint_every = 10
         return cfg
 
-    assert train(cfg40(), progress=False, radio_map=synthetic_map(), stop_after=20) == {}
+    assert train(*in_world(cfg40(), synthetic_map()), progress=False, stop_after=20) == {}
     other = cfg40()
     other.mu, other.dqn.gamma = 0.5, 0.99
     with pytest.raises(InvalidInputError, match=r"dqn.gamma: 0.998 -> 0.99; mu: .* -> 0.5"):
-        train(other, resume=True, progress=False)
+        train(*saved_world(other), resume=True, progress=False)
     # Only the device may change.
     same = cfg40()
     same.device = "cpu"
-    assert train(same, resume=True, progress=False)["episodes"] == 40
+    assert train(*saved_world(same), resume=True, progress=False)["episodes"] == 40
 
 
 def test_train_leaves_no_process_wide_state(tmp_path: Path) -> None:
@@ -665,7 +666,7 @@ def test_train_leaves_no_process_wide_state(tmp_path: Path) -> None:
     backend = matplotlib.get_backend()
     deterministic = torch.are_deterministic_algorithms_enabled()
     try:
-        train(small_cfg(tmp_path, 4), progress=False, radio_map=synthetic_map())
+        train(*in_world(small_cfg(tmp_path, 4), synthetic_map()), progress=False)
         assert torch.get_num_threads() == 2
         assert matplotlib.get_backend() == backend
         assert torch.are_deterministic_algorithms_enabled() == deterministic
@@ -692,7 +693,7 @@ def test_agent_and_start_streams_are_independent(tmp_path: Path) -> None:
     env = _env()
     agent = make_agent(cfg, env, torch.device("cpu"))
     assert agent.rng.random() == np.random.default_rng(random_streams(cfg.seed)["agent"]).random()
-    train(cfg, progress=False, radio_map=synthetic_map())
+    train(*in_world(cfg, synthetic_map()), progress=False)
     start = training_start(env, cfg.dqn, np.random.default_rng(random_streams(cfg.seed)["env"]))
     log = (tmp_path / "log.csv").read_text().splitlines()
     assert len(log) == 2
@@ -704,7 +705,7 @@ def test_scenario_file_weather_is_used_as_written(tmp_path: Path) -> None:
     # A scenario file's rain cells survive unless a rain-rate flag says otherwise: no
     # sentinel default replaces them (issue #12, defect 1).
     from rainuav.radio.scenario import Area, Cell, Medium, RainCell, Scenario, Site
-    from rainuav.rl.config import make_scenario
+    from rainuav.world import make_scenario
 
     cells = Medium(
         kind="cells",

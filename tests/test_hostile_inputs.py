@@ -30,6 +30,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
+from rainuav.world import in_world, saved_world
 from rainuav import InvalidInputError, evaluate, radiomap, study, train, validate
 from rainuav._io import FolderLock, write_atomic
 from rainuav.errors import CacheWarning
@@ -105,7 +106,7 @@ def run_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A finished tiny training run (20 episodes on the synthetic 400 m map)."""
     out = tmp_path_factory.mktemp("run") / "run"
     torch.set_num_threads(1)
-    train_run(small_cfg(out, 20), progress=False, radio_map=synthetic_map())
+    train_run(*in_world(small_cfg(out, 20), synthetic_map()), progress=False)
     return out
 
 
@@ -392,7 +393,7 @@ def test_evaluate_bounds_its_starts(run_copy: Path, tmp_path: Path, capsys) -> N
 def test_resume_cuts_the_log_back_to_the_checkpoint_even_in_a_moved_folder(tmp_path) -> None:
     first, moved = tmp_path / "first", tmp_path / "moved"
     stopped = train_run(
-        small_cfg(first, 70), progress=False, radio_map=synthetic_map(), stop_after=50
+        *in_world(small_cfg(first, 70), synthetic_map()), progress=False, stop_after=50
     )
     assert stopped == {}
     # As a kill -9 after the log flushed past the checkpoint at 50 would leave it:
@@ -400,7 +401,7 @@ def test_resume_cuts_the_log_back_to_the_checkpoint_even_in_a_moved_folder(tmp_p
         for k in range(51, 63):
             csv.writer(fh).writerow([k, k, "1.0", 10, 0, "0.1", "1.0"])
     shutil.move(first, moved)  # and the folder handed to someone else, elsewhere
-    m = train_run(small_cfg(moved, 70), resume=True, progress=False)
+    m = train_run(*saved_world(small_cfg(moved, 70)), resume=True, progress=False)
     assert m["episodes"] == 70
     with (moved / "log.csv").open() as fh:
         finished = [int(r["finished"]) for r in csv.DictReader(fh)]
@@ -520,9 +521,9 @@ def test_a_map_with_bad_metadata_is_refused(run_copy, tmp_path, capsys, key, val
 
 def test_a_config_from_a_newer_release_is_refused_naming_the_field(run_copy, tmp_path, capsys):
     cfg = run_copy / "config.toml"
-    cfg.write_text("storm_seed = 3\n" + cfg.read_text())
+    cfg.write_text("gust_front_m_s = 3\n" + cfg.read_text())
     rc, err = run_cli(evaluate, [run_copy, "--out", tmp_path / "ev"], capsys)
-    refused("newer config.toml", rc, err, "storm_seed")
+    refused("newer config.toml", rc, err, "gust_front_m_s")
     scn = tmp_path / "newer.toml"
     tiny_scenario().to_toml(scn)
     scn.write_text(scn.read_text().replace("[area]", "[area]\nterrain_file = 'dem.tif'"))

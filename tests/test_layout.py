@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import ast
 import importlib
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -18,7 +20,7 @@ MAX_LINES = 450
 
 # Layers, bottom up. A module may import a lower layer, or its own group; never a group of the
 # same or a higher layer (so radio and nav do not know each other).
-BASE = {"errors", "_io", "_checks", "_sampling", "_core", "_deprecated", "_cli"}
+BASE = {"errors", "_io", "_checks", "_sampling", "_core", "_cli"}
 LAYERS = {
     "base": 0,
     "medium": 1,
@@ -26,9 +28,10 @@ LAYERS = {
     "pwe": 2,
     "radio": 3,
     "nav": 3,
-    "rl": 4,
-    "studies": 5,
-    "entry": 6,
+    "world": 4,
+    "rl": 5,
+    "studies": 6,
+    "entry": 7,
 }
 ENTRY = {
     "__init__",
@@ -38,12 +41,6 @@ ENTRY = {
     "evaluate",
     "radiomap",
     "validate",
-    # Deprecated paths (re-exports for one release).
-    "env",
-    "plan",
-    "agent",
-    "scenario",
-    "scenarios",
 }
 # Third-party packages a group must not import.
 FORBIDDEN = {
@@ -52,6 +49,7 @@ FORBIDDEN = {
     "pwe": {"torch", "gymnasium"},
     "radio": {"torch", "gymnasium"},
     "nav": {"torch"},
+    "world": {"torch"},
 }
 
 
@@ -69,7 +67,7 @@ def group(name: str) -> str:
     if len(parts) == 1:
         return "entry"  # the package's own __init__
     head = parts[1]
-    if head in ("radio", "nav", "rl"):
+    if head in ("radio", "nav", "rl", "world"):
         return head
     if head in BASE:
         return "base"
@@ -193,27 +191,6 @@ def test_no_module_over_450_lines() -> None:
     assert not long, long
 
 
-@pytest.mark.parametrize(
-    ("old", "name", "new"),
-    [
-        ("rainuav.scenarios", "paper", "rainuav.radio.presets"),
-        ("rainuav.scenario", "Scenario", "rainuav.radio.scenario"),
-        ("rainuav.radiomap", "RadioMap", "rainuav.radio.radiomap"),
-        ("rainuav.env", "UAVNavEnv", "rainuav.nav.env"),
-        ("rainuav.env", "BatchStepper", "rainuav.nav.batch"),
-        ("rainuav.plan", "optimal", "rainuav.nav.planner"),
-        ("rainuav.agent", "Agent", "rainuav.rl.dqn"),
-        ("rainuav.agent", "DQNConfig", "rainuav.rl.config"),
-        ("rainuav.train", "TrainConfig", "rainuav.rl.config"),
-    ],
-)
-def test_old_paths_warn_and_give_the_new_object(old: str, name: str, new: str) -> None:
-    mod = importlib.import_module(old)
-    with pytest.warns(DeprecationWarning, match=rf"{old}\.{name} moved to {new}\.{name}"):
-        obj = getattr(mod, name)
-    assert obj is getattr(importlib.import_module(new), name)
-
-
 def test_new_paths_and_entry_points_do_not_warn() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -223,5 +200,20 @@ def test_new_paths_and_entry_points_do_not_warn() -> None:
 
         assert rainuav.radio.Scenario is rainuav.radio.scenario.Scenario
         assert rainuav.nav.UAVNavEnv is rainuav.nav.env.UAVNavEnv
-    with pytest.raises(AttributeError):
-        importlib.import_module("rainuav.env").not_a_name  # noqa: B018
+    for old in ("env", "plan", "agent", "scenario", "scenarios", "_deprecated"):
+        with pytest.raises(ModuleNotFoundError):  # the 0.1 shims are gone
+            importlib.import_module(f"rainuav.{old}")
+
+
+def test_importing_the_physics_does_not_import_gymnasium_or_torch() -> None:
+    code = (
+        "import sys, rainuav.medium, rainuav.radio; "
+        "print(sorted(m for m in ('gymnasium', 'torch') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
+    # and gym.make still finds the environment when Gymnasium is imported after rainuav
+    code = "import rainuav, gymnasium as gym; print('rainuav/UAVNav-v0' in gym.registry)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.stdout.strip() == "True", out.stderr

@@ -13,6 +13,7 @@ import pytest
 import rainuav  # noqa: F401 - registers rainuav/UAVNav-v0
 from gymnasium.utils.env_checker import check_env
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
+from rainuav.world import in_world
 from rainuav.errors import InvalidInputError
 from rainuav.nav import UAVNavEnv, flight_cost, planner
 from rainuav.nav.vector import UAVNavVectorEnv
@@ -244,7 +245,7 @@ def test_paper_preset_trains_and_records_its_choices(tmp_path: Path) -> None:
         preset="paper", out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=60,
         eval_starts=5, validate_every=0, checkpoint_every=2, dqn=DQNConfig(episodes=4),
     )  # fmt: skip
-    m = train(cfg, progress=False, radio_map=_map())
+    m = train(*in_world(cfg, _map()), progress=False)
     assert m["episodes"] == 4 and "shielded_success_rate" not in m
     saved = tomllib.loads((tmp_path / "config.toml").read_text())
     assert saved["preset"] == "paper"
@@ -259,7 +260,7 @@ def test_time_budget_ends_training_early(tmp_path: Path) -> None:
         out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=60, eval_starts=5,
         validate_every=0, time_budget_s=1e-9, dqn=DQNConfig(episodes=500, lanes=4),
     )  # fmt: skip
-    m = train(cfg, progress=False, radio_map=_map())
+    m = train(*in_world(cfg, _map()), progress=False)
     # The budget is spent at once: training ends with the first finished episodes.
     assert 1 <= m["episodes"] < 20, m["episodes"]
     assert (tmp_path / "checkpoint.pt").exists() and (tmp_path / "metrics.json").exists()
@@ -275,7 +276,7 @@ def test_evaluate_refuses_a_run_from_an_incompatible_version(
         out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=30, eval_starts=3,
         validate_every=0, dqn=DQNConfig(episodes=2, lanes=2),
     )  # fmt: skip
-    train(cfg, progress=False, radio_map=_map())
+    train(*in_world(cfg, _map()), progress=False)
     text = (tmp_path / "config.toml").read_text()
     # A field this version does not know (a run written by another version).
     (tmp_path / "config.toml").write_text("sir_min_db = 10.0\n" + text)
@@ -293,7 +294,7 @@ def test_a_saved_policy_flies_on_another_map_object_with_shared_references(
 ) -> None:
     # What studies use for the paper's case (f): a run's network flown on a map given as an
     # object. Flying it on its own saved map gives the run's own numbers; reusing the exact
-    # planner's flights (references) changes nothing; a map and a scenario at once is refused.
+    # planner's flights (references) changes nothing; a map and a world at once is refused.
     from rainuav.radio.radiomap import RadioMap
     from rainuav.rl.evaluation import evaluate_saved_run
     from rainuav.rl.loop import train
@@ -302,7 +303,7 @@ def test_a_saved_policy_flies_on_another_map_object_with_shared_references(
         out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=30, eval_starts=5,
         validate_every=0, dqn=DQNConfig(episodes=2, lanes=2),
     )  # fmt: skip
-    own = train(cfg, progress=False, radio_map=_map())
+    own = train(*in_world(cfg, _map()), progress=False)
     rm = RadioMap.load(tmp_path / "radiomap.npz")
     refs: dict = {}
     first, _, _ = evaluate_saved_run(tmp_path, radio_map=rm, references=refs)
@@ -311,4 +312,4 @@ def test_a_saved_policy_flies_on_another_map_object_with_shared_references(
     for k in ("success_rate", "mean_excess_cost", "optimal_mean_cost", "mean_return"):
         assert first[k] == again[k] == own[k], k
     with pytest.raises(InvalidInputError, match="radio_map"):
-        evaluate_saved_run(tmp_path, radio_map=rm, rain_rate=10.0)
+        evaluate_saved_run(tmp_path, radio_map=rm, world=in_world(cfg, rm)[1])

@@ -9,32 +9,68 @@ Layers, bottom up (each imports only the ones below it):
 - :mod:`rainuav.pwe`: the 3-D split-step parabolic-equation march.
 - :mod:`rainuav.radio`: scenarios, presets and radio maps (received power per cell, serving
   cell, SIR, SINR).
-- :mod:`rainuav.nav`: the navigation task on any map, the Gymnasium environment
-  ``rainuav/UAVNav-v0``, the exact planner and the shield (no torch).
-- :mod:`rainuav.rl`: the dueling double DQN and its training loop (torch).
+- :mod:`rainuav.nav`: the navigation task on any map or maps in time, the Gymnasium
+  environment, the exact planner (in space-time), the baselines and the shield (no torch).
+- :mod:`rainuav.world`: a world, a signal in time joined to a task, built from one spec for
+  every entry point (``gym.make("rainuav/UAVNav-v0")``, train, evaluate, studies).
+- :mod:`rainuav.rl`: the dueling double DQN and its training loop (torch), given a world.
 
 Entry points: ``python -m rainuav.train``, ``rainuav.evaluate``, ``rainuav.radiomap``,
-``rainuav.validate``. Physics conventions: ``shared/PHYSICS.md`` (time dependence
+``rainuav.validate``, ``rainuav.study``. Physics conventions: ``shared/PHYSICS.md`` (time dependence
 ``exp(+j w t)``, lossy media have ``Im eps <= 0``).
 """
 
 from __future__ import annotations
 
 import importlib
+import importlib.abc
+import importlib.util
+import sys
 from typing import Any
-
-import gymnasium as _gym
 
 from rainuav import medium
 from rainuav._core import __version__
 from rainuav.errors import InvalidInputError, RainuavError
 
-if "rainuav/UAVNav-v0" not in _gym.registry:
-    _gym.register(
-        id="rainuav/UAVNav-v0",
-        entry_point="rainuav.envs:make_nav_env",
-        vector_entry_point="rainuav.envs:make_nav_vector_env",
-    )
+
+def _register() -> None:
+    """Registers ``rainuav/UAVNav-v0`` with Gymnasium (once)."""
+    import gymnasium as gym
+
+    if "rainuav/UAVNav-v0" not in gym.registry:
+        gym.register(
+            id="rainuav/UAVNav-v0",
+            entry_point="rainuav.envs:make_nav_env",
+            vector_entry_point="rainuav.envs:make_nav_vector_env",
+        )
+
+
+class _RegisterWithGymnasium(importlib.abc.MetaPathFinder):
+    """Registers the environment right after Gymnasium is first imported, so that importing
+    rainuav (or ``rainuav.medium``) does not import Gymnasium, yet ``gym.make`` finds the
+    environment whichever of the two was imported first."""
+
+    def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
+        if name != "gymnasium":
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(name)
+        if spec is None or spec.loader is None:
+            return spec
+        run = spec.loader.exec_module
+
+        def exec_module(module: Any) -> None:
+            run(module)
+            _register()
+
+        spec.loader.exec_module = exec_module  # type: ignore[method-assign]
+        return spec
+
+
+if "gymnasium" in sys.modules:
+    _register()
+elif not any(isinstance(f, _RegisterWithGymnasium) for f in sys.meta_path):
+    sys.meta_path.insert(0, _RegisterWithGymnasium())
 
 __all__ = [
     "InvalidInputError",
@@ -46,9 +82,10 @@ __all__ = [
     "pwe",
     "radio",
     "rl",
+    "world",
 ]
 
-_LAZY = ("antenna", "nav", "pwe", "radio", "rl")
+_LAZY = ("antenna", "nav", "pwe", "radio", "rl", "world")
 
 
 def __getattr__(name: str) -> Any:

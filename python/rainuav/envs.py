@@ -1,19 +1,23 @@
-"""The registered environment ``rainuav/UAVNav-v0``: a map joined to the navigation task.
+"""The registered environment ``rainuav/UAVNav-v0``: a world (:mod:`rainuav.world`) as a
+Gymnasium environment.
 
 ``gym.make("rainuav/UAVNav-v0", ...)`` calls :func:`make_nav_env` and
 ``gym.make_vec("rainuav/UAVNav-v0", num_envs=N, vectorization_mode="vector_entry_point")``
-calls :func:`make_nav_vector_env`. Either takes one map source:
+calls :func:`make_nav_vector_env`. Either takes one signal source:
 
 - ``radio_map=`` a :class:`rainuav.radio.RadioMap`;
-- ``scenario=`` a preset name (``"paper"``, ``"uma"``, ``"rain_cell"``, ``"urban"``) or a
-  :class:`rainuav.radio.Scenario`, with ``rain_rate_mm_h`` (homogeneous rain in place of its
-  weather), ``freq_hz`` and ``engine`` optional: the map is built, or taken from the cache
+- ``scenario=`` a preset name (``"paper"``, ``"uma"``, ``"rain_cell"``, ``"urban"``,
+  ``"storm"``) or a :class:`rainuav.radio.Scenario`, with ``rain_rate_mm_h`` (homogeneous
+  rain in place of its weather), ``freq_hz``, ``engine``, ``storm_seed`` (the ``storm``
+  preset's storm) and ``slice_s`` (time between the maps of a weather that moves) optional:
+  the world is built (:func:`rainuav.world.build_world`), or taken from the cache
   (``engine="ray"`` builds any preset in about a second; the default hybrid takes longer);
+  a weather that moves gives an environment whose signal changes in time;
 - a raw ``sinr_db`` or ``sir_db`` array with ``extent_m``;
 
-and the task's fields as keywords (:class:`rainuav.nav.UAVNavEnv`: ``signal``, ``min_db``,
-``goal_m``, ``step_m``, ...). Without ``min_db`` a preset's map uses the preset's documented
-SINR threshold (``rainuav.radio.presets.SINR_THRESHOLDS_DB``).
+and the task's fields as keywords (:class:`rainuav.nav.task.NavConfig`: ``signal``,
+``min_db``, ``goal_m``, ``step_m``, ``speed_m_s``, ...). Without ``min_db`` a preset's map uses
+the preset's documented SINR threshold (``rainuav.radio.presets.SINR_THRESHOLDS_DB``).
 """
 
 from __future__ import annotations
@@ -23,56 +27,37 @@ from typing import Any
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.task import make_config
 from rainuav.nav.vector import UAVNavVectorEnv, check_num_envs
-from rainuav.radio import presets
-from rainuav.radio.radiomap import RadioMap, build_radio_map
+from rainuav.radio.radiomap import RadioMap
 from rainuav.radio.scenario import Scenario
+from rainuav.world import WorldSpec, build_world
 
-__all__ = ["make_nav_env", "make_nav_vector_env", "scenario_map"]
+__all__ = ["make_nav_env", "make_nav_vector_env"]
 
 
-def scenario_map(
-    scenario: str | Scenario,
-    rain_rate_mm_h: float | None = None,
-    freq_hz: float | None = None,
-    engine: str | None = None,
-    progress: bool = False,
-) -> RadioMap:
-    """The radio map of a preset (by name) or a Scenario, with homogeneous rain at
-    ``rain_rate_mm_h`` (0: clear air), the carrier ``freq_hz`` and the propagation ``engine``
-    (``"hybrid"``, ``"ray"`` or ``"pe"``) in place of its own when given; built, or taken from
-    the cache."""
-    if isinstance(scenario, str):
-        if scenario not in presets.PRESETS:
-            raise InvalidInputError(
-                f"scenario must be one of {sorted(presets.PRESETS)} or a Scenario "
-                f"(got {scenario!r})"
-            )
-        scn = presets.PRESETS[scenario]()
-    elif isinstance(scenario, Scenario):
-        scn = scenario
-    else:
+def _world_env(
+    scenario: str | Scenario, weather: dict[str, Any], task: dict[str, Any]
+) -> UAVNavEnv:
+    """The environment of a scenario's world with these weather and task keywords."""
+    if not isinstance(scenario, str | Scenario):
         raise InvalidInputError(
             f"scenario must be a preset name or a Scenario (got {type(scenario).__name__})"
         )
-    if freq_hz is not None:
-        scn = dataclasses.replace(scn, freq_hz=freq_hz)
-    if engine is not None:
-        scn = dataclasses.replace(scn, engine=engine)
-    if rain_rate_mm_h is not None:
-        scn = presets.with_rain(scn, rain_rate_mm_h)
-    return build_radio_map(scn, progress=progress)
-
-
-def _map_kwargs(radio_map: Any, scenario: Any, weather: dict[str, Any]) -> dict[str, Any]:
-    if scenario is None:
-        given = sorted(k for k, v in weather.items() if v is not None)
-        if given:
-            raise InvalidInputError(f"{given[0]} needs scenario=")
-        return {"radio_map": radio_map} if radio_map is not None else {}
-    if radio_map is not None:
-        raise InvalidInputError("give radio_map or scenario, not both")
-    return {"radio_map": scenario_map(scenario, **weather)}
+    nav = make_config(**task)
+    shared = {f.name for f in dataclasses.fields(WorldSpec)} & set(task) - {"goal_m"}
+    freq = weather.get("freq_hz")
+    spec = WorldSpec(
+        scenario=scenario if isinstance(scenario, str) else "paper",
+        rain_rate=weather.get("rain_rate_mm_h"),
+        engine=weather.get("engine") or "",
+        freq_ghz=None if freq is None else float(freq) / 1e9,
+        storm_seed=weather.get("storm_seed") or 0,
+        slice_s=weather.get("slice_s") or 5.0,
+        **{k: task[k] for k in shared},
+    )
+    given = None if isinstance(scenario, str) else scenario
+    return build_world(spec, task=nav, scenario=given).env()
 
 
 def make_nav_env(
@@ -82,33 +67,37 @@ def make_nav_env(
     rain_rate_mm_h: float | None = None,
     freq_hz: float | None = None,
     engine: str | None = None,
+    storm_seed: int | None = None,
+    slice_s: float | None = None,
     **task: Any,
 ) -> UAVNavEnv:
-    """The navigation environment over a map, a scenario's map or a raw array (module
+    """The navigation environment over a map, a scenario's world or a raw array (module
     docstring)."""
-    weather = {"rain_rate_mm_h": rain_rate_mm_h, "freq_hz": freq_hz, "engine": engine}
-    return UAVNavEnv(**_map_kwargs(radio_map, scenario, weather), **task)
+    weather = {
+        "rain_rate_mm_h": rain_rate_mm_h,
+        "freq_hz": freq_hz,
+        "engine": engine,
+        "storm_seed": storm_seed,
+        "slice_s": slice_s,
+    }
+    if scenario is None:
+        given = sorted(k for k, v in weather.items() if v is not None)
+        if given:
+            raise InvalidInputError(f"{given[0]} needs scenario=")
+        return UAVNavEnv(radio_map, **task)
+    if radio_map is not None:
+        raise InvalidInputError("give radio_map or scenario, not both")
+    return _world_env(scenario, weather, task)
 
 
 def make_nav_vector_env(
     num_envs: int = 1,
     radio_map: RadioMap | None = None,
     *,
-    scenario: str | Scenario | None = None,
-    rain_rate_mm_h: float | None = None,
-    freq_hz: float | None = None,
-    engine: str | None = None,
     autoreset_mode: Any = "NextStep",
-    **task: Any,
+    **kw: Any,
 ) -> UAVNavVectorEnv:
-    """``num_envs`` UAVs on one map, batched (:class:`rainuav.nav.vector.UAVNavVectorEnv`)."""
+    """``num_envs`` UAVs in one world, batched (:class:`rainuav.nav.vector.UAVNavVectorEnv`);
+    the other keywords as :func:`make_nav_env`."""
     check_num_envs(num_envs)  # before the map is built
-    env = make_nav_env(
-        radio_map,
-        scenario=scenario,
-        rain_rate_mm_h=rain_rate_mm_h,
-        freq_hz=freq_hz,
-        engine=engine,
-        **task,
-    )
-    return UAVNavVectorEnv(env, num_envs, autoreset_mode)
+    return UAVNavVectorEnv(make_nav_env(radio_map, **kw), num_envs, autoreset_mode)

@@ -3,14 +3,18 @@
     python -m rainuav.evaluate runs/paper                          # its own map and starts
     python -m rainuav.evaluate runs/paper --rain-rate 50            # the same network in rain
     python -m rainuav.evaluate runs/uma --scenario rain_cell --starts 100 --seed 7 --shield
+    python -m rainuav.evaluate runs/storm0 --scenario storm --storm-seed 1000003
 
 Loads the run's ``config.toml`` and ``checkpoint.pt`` and flies the network the run reports
 (the weight average of the last episodes, the final one with ``average_from = 1``, or with
 ``keep_best`` the best on validation; ``--online``: the last online network) from fixed
 starts, against the exact optimum of the map flown and the straight line
-(:func:`rainuav.rl.evaluation.evaluate_saved_run`). ``--scenario``, ``--rain-rate`` and
-``--engine`` fly it on another map (built or taken from the cache): the paper's central
-comparison, a policy trained in clear air flown in rain against one trained in rain. Writes
+(:func:`rainuav.rl.evaluation.evaluate_saved_run`). ``--scenario``, ``--rain-rate``,
+``--engine`` and ``--storm-seed`` fly it in another world (the run's spec with those
+changed, built or taken from the cache: :func:`rainuav.world.build_world`): the paper's
+central comparison, a policy trained in clear air flown in rain against one trained in rain,
+or a network trained on one storm flown through another. In a weather that moves, the plan of
+the weather at take-off and re-planning are reported beside it. Writes
 ``evaluation.json`` and ``evaluation_trajectories.png`` (the network's flights and the exact
 optimum's from the same starts) into ``--out`` (default: the run's folder for its own map,
 ``RUN_DIR/eval_<scenario>_<rain>mmh`` for another; with ``--online``, ``RUN_DIR/eval_online``
@@ -28,16 +32,43 @@ from pathlib import Path
 from rainuav import _cli
 from rainuav._checks import check_integer
 from rainuav._io import check_out_dir, write_atomic
+from rainuav.errors import InvalidInputError
+
+OTHER_WORLD = ("scenario", "rain_rate", "engine", "storm_seed")
+"""The flags that fly the run in another world."""
 
 
 def _out_dir(args: argparse.Namespace) -> Path:
     if args.out is not None:
         return args.out
-    if args.scenario is None and args.rain_rate is None and args.engine is None:
+    if all(getattr(args, k) is None for k in OTHER_WORLD):
         return args.run_dir / "eval_online" if args.online else args.run_dir
     rain = "own" if args.rain_rate is None else f"{args.rain_rate:g}"
+    storm = "" if args.storm_seed is None else f"_storm{args.storm_seed}"
     suffix = "_online" if args.online else ""
-    return args.run_dir / f"eval_{args.scenario or 'same'}_{rain}mmh{suffix}"
+    return args.run_dir / f"eval_{args.scenario or 'same'}_{rain}mmh{storm}{suffix}"
+
+
+def _world(args: argparse.Namespace) -> object:
+    """The world to fly in: None (the run's own), or the run's spec with the flags given."""
+    import dataclasses
+
+    from rainuav.rl.config import load_config
+    from rainuav.world import build_world, spec_of
+
+    if all(getattr(args, k) is None for k in OTHER_WORLD):
+        return None
+    path = args.run_dir / "config.toml"
+    if not path.exists():
+        raise InvalidInputError(
+            f"{args.run_dir}: missing config.toml; is this a rainuav.train output?"
+        )
+    spec = spec_of(load_config(path))
+    changes = {k: getattr(args, k) for k in OTHER_WORLD if getattr(args, k) is not None}
+    if args.scenario is not None:
+        changes["scenario_file"] = ""  # another preset comes in its own weather
+        changes.setdefault("rain_rate", None)
+    return build_world(dataclasses.replace(spec, **changes), progress=True)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -50,6 +81,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--scenario", default=None, help="fly on this preset's map")
     ap.add_argument("--rain-rate", type=float, default=None, help="homogeneous rain, mm/h")
     ap.add_argument("--engine", default=None, choices=("hybrid", "ray", "pe"))
+    ap.add_argument("--storm-seed", type=int, default=None, help="fly through this storm")
     ap.add_argument("--starts", type=int, default=None, help="number of fixed starts")
     ap.add_argument("--seed", type=int, default=None, help="seed of the starts")
     ap.add_argument("--shield", action="store_true", help="also report shielded flights")
@@ -77,9 +109,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     metrics, rolls, env = evaluate_saved_run(
         args.run_dir,
         args.device,
-        scenario=args.scenario,
-        rain_rate=args.rain_rate,
-        engine=args.engine,
+        world=_world(args),  # type: ignore[arg-type]
         starts=args.starts,
         seed=args.seed,
         shield=args.shield,

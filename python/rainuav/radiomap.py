@@ -6,8 +6,7 @@
     python -m rainuav.radiomap --scenario storm --storm-seed 3 --duration-s 300 --slice-s 5
     python -m rainuav.radiomap --clear-cache
 
-The library lives in :mod:`rainuav.radio`; importing the map classes from here still works
-for one release, with a DeprecationWarning.
+The library lives in :mod:`rainuav.radio`.
 """
 
 from __future__ import annotations
@@ -19,18 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from rainuav import _cli
-from rainuav._deprecated import moved, names
 from rainuav.errors import InvalidInputError
-
-__getattr__ = moved(
-    __name__,
-    {
-        **names("rainuav.radio.radiomap", "RadioMap", "build_radio_map"),
-        **names("rainuav.radio.cache", "cache_dir"),
-        **names("rainuav.radio.sinr", "sir_from_power"),
-        **names("rainuav.radio.pe_engine", "rain_rate_at", "march_cell", "resample"),
-    },
-)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -5,7 +5,8 @@ from the cache), Table I hyperparameters, seed 0, results in ``runs/paper``. Eve
 field of :class:`rainuav.rl.config.TrainConfig` or :class:`rainuav.rl.config.DQNConfig`
 (``--help`` lists them); ``--config run.toml`` reads them from a file, and flags given beside
 it win. ``--resume`` continues an interrupted run from its checkpoint (same configuration).
-The job itself: :func:`rainuav.rl.loop.train`.
+The world (map or maps in time, and the task) is built here from the configuration's world
+part (:func:`rainuav.world.build_world`) and handed to the job, :func:`rainuav.rl.loop.train`.
 """
 
 from __future__ import annotations
@@ -19,45 +20,27 @@ from pathlib import Path
 from typing import Any
 
 from rainuav import _cli
-from rainuav._deprecated import moved, names
-
-__getattr__ = moved(
-    __name__,
-    {
-        **names("rainuav.rl.config", "TrainConfig", "DQNConfig", "load_config", "to_dict"),
-        **names("rainuav.rl.loop", "train", "finish"),
-        **names("rainuav.rl.setup", "make_agent", "make_env", "pick_device"),
-        **names(
-            "rainuav.rl.evaluation",
-            "Validation",
-            "eval_starts",
-            "evaluate",
-            "evaluate_run_policy",
-            "relative_gap",
-        ),
-        **names("rainuav.rl.collect", "greedy_rollouts"),
-        **names("rainuav.rl.learner", "learning_reward", "shaping_term", "learner_ends"),
-        **names("rainuav.nav.shield", "shield_moves", "unvisited_moves"),
-    },
-)
 
 
 def _field_docs(cls: type) -> dict[str, str]:
-    """Attribute docstrings of a dataclass (the string literal after each field)."""
+    """Attribute docstrings of a dataclass and the dataclasses it extends (the string literal
+    after each field)."""
     import ast
     import inspect
     import textwrap
 
-    tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
     docs: dict[str, str] = {}
-    body = tree.body[0].body  # type: ignore[attr-defined]
-    for a, b in itertools.pairwise(body):
-        if (
-            isinstance(a, ast.AnnAssign)
-            and isinstance(b, ast.Expr)
-            and isinstance(b.value, ast.Constant)
-        ):
-            docs[a.target.id] = " ".join(str(b.value.value).split())  # type: ignore[union-attr]
+    for klass in reversed([k for k in cls.__mro__ if dataclasses.is_dataclass(k)]):
+        tree = ast.parse(textwrap.dedent(inspect.getsource(klass)))
+        body = tree.body[0].body  # type: ignore[attr-defined]
+        for a, b in itertools.pairwise(body):
+            if (
+                isinstance(a, ast.AnnAssign)
+                and isinstance(b, ast.Expr)
+                and isinstance(b.value, ast.Constant)
+            ):
+                text = " ".join(str(b.value.value).split())
+                docs[a.target.id] = text  # type: ignore[union-attr]
     return docs
 
 
@@ -159,11 +142,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         return f"training stopped; the same command with --resume continues from {ck}"
 
     def body() -> int:
+        from rainuav.rl.config import check_config
         from rainuav.rl.loop import train
+        from rainuav.world import build_world, load_world
 
         cfg = config_from_args(args)
+        check_config(cfg)
         out.append(Path(cfg.out))
-        metrics = train(cfg, resume=args.resume, progress=True)
+        # The run's world: its own saved signal when resuming, else built from its spec.
+        world = load_world(Path(cfg.out), cfg) if args.resume else None
+        world = world or build_world(cfg, progress=True)
+        metrics = train(cfg, world, resume=args.resume, progress=True)
         print(summary(metrics, Path(cfg.out)))
         return 0
 

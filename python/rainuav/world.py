@@ -42,7 +42,9 @@ __all__ = [
     "WorldSpec",
     "build_world",
     "check_spec",
+    "in_world",
     "load_world",
+    "saved_world",
     "make_scenario",
     "spec_of",
     "task_of",
@@ -71,6 +73,8 @@ class WorldSpec:
     25 mm/h)."""
     engine: str = ""
     """Propagation engine: 'hybrid', 'ray' or 'pe'; '' the scenario's own."""
+    freq_ghz: float | None = None
+    """Carrier frequency, GHz (1-100), in place of the scenario's; unset: the scenario's."""
     storm_seed: int = 0
     """The random storm of the 'storm' scenario (seeds from 1 000 000 are reserved for
     evaluation)."""
@@ -122,6 +126,7 @@ def check_spec(spec: Any) -> None:
     """Raises InvalidInputError naming the first field of the spec outside its range."""
     checks = [
         ("engine", spec.engine in ENGINES, "'', 'hybrid', 'ray' or 'pe'"),
+        ("freq_ghz", spec.freq_ghz is None or 1 <= spec.freq_ghz <= 100, "unset or in [1, 100]"),
         ("signal", spec.signal in ("sinr", "sir"), "'sinr' or 'sir'"),
         ("min_db", spec.min_db is None or math.isfinite(spec.min_db), "unset or finite"),
         ("max_steps", spec.max_steps >= 1, ">= 1"),
@@ -140,10 +145,13 @@ def check_spec(spec: Any) -> None:
     check_storm_seed(spec.storm_seed)
 
 
-def make_scenario(spec: Any) -> Scenario:
+def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
     """The scenario of a spec: the preset (the storm of ``storm_seed`` for 'storm') or the
-    file, with ``rain_rate`` and ``engine`` applied if set."""
-    if spec.scenario_file:
+    file, or ``scenario`` where given, with ``rain_rate``, ``freq_ghz`` and ``engine`` applied
+    if set."""
+    if scenario is not None:
+        scn = scenario
+    elif spec.scenario_file:
         scn = Scenario.from_toml(spec.scenario_file)
     elif spec.scenario == "storm":
         scn = presets.storm(spec.rain_rate, seed=check_storm_seed(spec.storm_seed))
@@ -153,8 +161,10 @@ def make_scenario(spec: Any) -> Scenario:
         raise InvalidInputError(
             f"scenario must be one of {sorted(presets.PRESETS)} (got {spec.scenario!r})"
         )
-    if spec.rain_rate is not None and spec.scenario != "storm":
+    if spec.rain_rate is not None and (scenario is not None or spec.scenario != "storm"):
         scn = presets.with_rain(scn, spec.rain_rate)
+    if spec.freq_ghz is not None:
+        scn = dataclasses.replace(scn, freq_hz=spec.freq_ghz * 1e9)
     if spec.engine:
         scn = dataclasses.replace(scn, engine=spec.engine)
     return scn
@@ -223,19 +233,25 @@ def series_instants(spec: Any) -> Any:
     return series_times(math.ceil(horizon / spec.slice_s - 1e-9) * spec.slice_s, spec.slice_s)
 
 
-def build_world(spec: Any, *, progress: bool = False) -> World:
+def build_world(
+    spec: Any,
+    *,
+    task: NavConfig | None = None,
+    scenario: Scenario | None = None,
+    progress: bool = False,
+) -> World:
     """The world of ``spec`` (a WorldSpec, or a configuration extending one): its scenario's
-    map, or maps in time where its weather moves, built or taken from the cache."""
+    map, or maps in time where its weather moves, built or taken from the cache, and its task
+    (``task``, where given, in place of the spec's; ``scenario`` in place of its preset)."""
     check_spec(spec)
-    task = task_of(spec)
-    scn = make_scenario(spec)
+    scn = make_scenario(spec, scenario)
     if scn.medium.moves:
         if scn.engine == "pe":
             scn = dataclasses.replace(scn, engine="hybrid")  # a march per instant is refused
         source: Any = build_radio_map_series(scn, series_instants(spec), progress=progress)
     else:
         source = build_radio_map(scn, progress=progress)
-    return world_from(source, task)
+    return world_from(source, task_of(spec) if task is None else task)
 
 
 def load_world(folder: Path, spec: Any) -> World | None:
@@ -252,3 +268,16 @@ def load_world(folder: Path, spec: Any) -> World | None:
 def _extent(scn: Scenario) -> tuple[float, float, float, float]:
     a = scn.area
     return (a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m)
+
+
+def in_world(spec: Any, source: Any) -> tuple[Any, World]:
+    """``(spec, world)``: the spec and the world of its task on a map or series already built
+    (tests and scripts that hand ``rainuav.rl.loop.train`` a small synthetic map:
+    ``train(*in_world(cfg, my_map))``)."""
+    return spec, world_from(source, task_of(spec))
+
+
+def saved_world(cfg: Any) -> tuple[Any, World | None]:
+    """``(cfg, world)``: a run's configuration and the world saved in its folder ``cfg.out``
+    (None where it holds none), to resume it: ``train(*saved_world(cfg), resume=True)``."""
+    return cfg, load_world(Path(cfg.out), cfg)

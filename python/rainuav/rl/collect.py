@@ -100,7 +100,7 @@ def greedy_rollouts(
     while live.any():
         idx = np.flatnonzero(live)
         pos = starts[idx] + env.cfg.step_m * off[idx]
-        q = agent.q_values(agent.observe(env.observe(pos), t[idx]))
+        q = agent.q_values(agent.observe(env.observe(pos, t[idx]), t[idx]))
         a = best_action(q)
         if shield:
             allowed = shield_moves(env, pos, t[idx], off[idx], [visited[k] for k in idx])

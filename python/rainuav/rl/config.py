@@ -15,8 +15,7 @@ import numpy as np
 
 from rainuav._io import read_toml
 from rainuav.errors import InvalidInputError
-from rainuav.radio import presets
-from rainuav.radio.scenario import Scenario
+from rainuav.world import WorldSpec, check_spec
 
 __all__ = [
     "PAPER_LEARNER",
@@ -27,7 +26,6 @@ __all__ = [
     "config_diff",
     "field_kind",
     "load_config",
-    "make_scenario",
     "random_streams",
     "read_config",
     "to_dict",
@@ -98,44 +96,15 @@ class DQNConfig:
 
 
 @dataclass
-class TrainConfig:
-    """Everything a training run depends on (one docstring line per field = one CLI flag)."""
+class TrainConfig(WorldSpec):
+    """Everything a training run depends on: the world's spec (:class:`rainuav.world.WorldSpec`:
+    scenario, weather, task), the run's settings below and the learner's hyperparameters
+    (``dqn``). One docstring line per field = one CLI flag."""
 
     preset: str = ""
     """Learner preset: '' (the tuned learner, docs/learner.md) or 'paper' (Algorithm 1 and
     Table I literally: the [dqn] fields are set as docs/learner.md lists, and any given beside
     it are refused)."""
-    scenario: str = "paper"
-    """Preset scenario ('paper', 'uma', 'rain_cell' or 'urban'), unless --scenario-file."""
-    scenario_file: str = ""
-    """A scenario TOML file (overrides --scenario)."""
-    rain_rate: float | None = None
-    """Homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the rain
-    model, drop sizes, shape, temperature and wind stay the scenario's); unset: the scenario's
-    own weather (the paper preset rains 25 mm/h)."""
-    signal: str = "sinr"
-    """The map the task flies on: 'sinr' or 'sir' (the paper's)."""
-    min_db: float | None = None
-    """Outage threshold of the signal, dB; unset: the preset's documented SINR threshold
-    (10 dB for SIR and for scenario files of no preset)."""
-    mu: float = 10.0 / 43.0
-    """Weight of the signal term in the reward."""
-    reward: str = "shortfall"
-    """Reward form: 'shortfall', 'outage' or 'linear'."""
-    max_steps: int = 300
-    """Steps per episode, the horizon (Table I)."""
-    step_m: float = 10.0
-    """Length of one move, m."""
-    tol_m: float = 10.0
-    """Arrival tolerance D_tol, m (Table I)."""
-    goal_reward: float = 2000.0
-    """Arrival reward R_des (Table I)."""
-    out_of_bounds_penalty: float = 10000.0
-    """Penalty P_ob for leaving the area (Table I)."""
-    goal_x_m: float = 1400.0
-    """Destination, east coordinate, m."""
-    goal_y_m: float = 1600.0
-    """Destination, north coordinate, m."""
     seed: int = 0
     """Seed of every random choice (python, numpy, torch, environment)."""
     device: str = "auto"
@@ -157,6 +126,9 @@ class TrainConfig:
     time_budget_s: float = 0.0
     """Wall-clock budget of the training, s: it ends at the first finished episode past it
     (0: none; the schedules still run over dqn.episodes). For comparisons at equal budget."""
+    replan_every: int = 10
+    """Moves between re-plans of the replanning baseline reported beside a run in a moving
+    weather (rainuav.nav.baselines.replans)."""
     keep_best: bool = False
     """Evaluate and save the network with the best validation score (success, then excess
     cost), not the final one."""
@@ -234,9 +206,6 @@ def check_config(cfg: TrainConfig) -> None:
         ("grad_clip", 0 <= d.grad_clip < math.inf, ">= 0 and finite"),
         ("loss", d.loss in ("huber", "mse"), "'huber' or 'mse'"),
         ("preset", cfg.preset in ("", "paper"), "'' or 'paper'"),
-        ("signal", cfg.signal in ("sinr", "sir"), "'sinr' or 'sir'"),
-        ("min_db", cfg.min_db is None or math.isfinite(cfg.min_db), "unset or finite"),
-        ("max_steps", cfg.max_steps >= 1, ">= 1"),
         ("step_m", 0 < cfg.step_m < math.inf, "> 0 and finite"),
         ("tol_m", 0 < cfg.tol_m < math.inf, "> 0 and finite"),
         ("goal_reward", math.isfinite(cfg.goal_reward), "finite"),
@@ -249,16 +218,13 @@ def check_config(cfg: TrainConfig) -> None:
         ("validate_starts", 1 <= cfg.validate_starts <= MAX_STARTS, f"in 1..{MAX_STARTS}"),
         ("checkpoint_every", cfg.checkpoint_every >= 1, ">= 1"),
         ("device", cfg.device in ("auto", "cpu", "cuda"), "'auto', 'cpu' or 'cuda'"),
-        (
-            "rain_rate",
-            cfg.rain_rate is None or 0 <= cfg.rain_rate <= 500,
-            "unset or in [0, 500] mm/h",
-        ),
+        ("replan_every", cfg.replan_every >= 1, ">= 1"),
     ]
     for name, ok, allowed in checks:
         if not ok:
             value = getattr(d, name) if hasattr(d, name) else getattr(cfg, name)
             raise InvalidInputError(f"{name} must be {allowed} (got {value!r})")
+    check_spec(cfg)
 
 
 PAPER_LEARNER: dict[str, Any] = {
@@ -363,16 +329,3 @@ def random_streams(seed: int) -> dict[str, np.random.SeedSequence]:
     same stream."""
     agent, env = np.random.SeedSequence(seed).spawn(2)
     return {"agent": agent, "env": env}
-
-
-def make_scenario(cfg: TrainConfig) -> Scenario:
-    """The scenario of a run: the preset or the file, with ``rain_rate`` applied if set."""
-    if cfg.scenario_file:
-        scn = Scenario.from_toml(cfg.scenario_file)
-    else:
-        if cfg.scenario not in presets.PRESETS:
-            raise InvalidInputError(f"scenario must be one of {sorted(presets.PRESETS)}")
-        scn = presets.PRESETS[cfg.scenario]()
-    if cfg.rain_rate is not None:
-        scn = presets.with_rain(scn, cfg.rain_rate)
-    return scn

@@ -211,11 +211,14 @@ class Agent:
         *,
         goal: tuple[float, float],
         step: tuple[float, float],
+        env_dims: int = 2,
     ) -> None:
         """``seed``: the run's seed (the network's initial weights; exploration and replay
         sampling draw from its ``"agent"`` stream, :func:`rainuav.rl.config.random_streams`);
         ``horizon``: the episode's step limit; ``goal`` and ``step``: the destination and one
-        move in the environment's observation units ([0, 1]^2)."""
+        move in the environment's observation units ([0, 1]^2); ``env_dims``: the
+        environment's observation size (2: the position; 3: and the time, where the signal
+        changes in time)."""
         self.cfg = cfg
         self.device = device
         self.horizon = horizon
@@ -223,7 +226,9 @@ class Agent:
         self.goal_scale = (
             np.asarray(step, dtype=np.float32)[:, None] * 4.0 ** np.arange(cfg.goal_features)
         ).astype(np.float32)  # (2, K)
-        self.n_smooth = 3 if cfg.time_aware else 2
+        # The time is an input where the env gives it, or where the learner is time-aware.
+        self.adds_time = cfg.time_aware and env_dims == 2
+        self.n_smooth = env_dims + int(self.adds_time)
         self.obs_dim = self.n_smooth + 2 * cfg.goal_features
         torch.manual_seed(seed)
         self.online = self.make_net().to(device)
@@ -253,17 +258,19 @@ class Agent:
         return self.cfg.eps0 * self.cfg.eps_decay ** np.asarray(episode, dtype=np.float64)
 
     def observe(self, env_obs: np.ndarray, t: Any) -> np.ndarray:
-        """The agent's input from the environment's (N, 2) observation: the position, then
-        t / horizon when time-aware, then the goal-relative features (functions of the
-        position and the fixed destination, so no information the environment does not give;
-        they let the network resolve the 10 m arrival disc, which global features blur)."""
+        """The agent's input from the environment's (N, 2) observation (the position; (N, 3)
+        with the time where the signal changes in time): the observation, then t / horizon
+        when time-aware and the env does not give it, then the goal-relative features
+        (functions of the position and the fixed destination, so no information the
+        environment does not give; they let the network resolve the 10 m arrival disc, which
+        global features blur)."""
         env_obs = np.atleast_2d(np.asarray(env_obs, dtype=np.float32))
         parts = [env_obs]
-        if self.cfg.time_aware:
+        if self.adds_time:
             frac = (np.asarray(t, dtype=np.float32) / self.horizon).reshape(-1, 1)
             parts.append(np.broadcast_to(frac, (len(env_obs), 1)))
         if self.cfg.goal_features:
-            rel = (env_obs - self.goal)[:, :, None] / self.goal_scale  # (N, 2, K)
+            rel = (env_obs[:, :2] - self.goal)[:, :, None] / self.goal_scale  # (N, 2, K)
             parts.append(np.tanh(rel).reshape(len(env_obs), -1))
         return np.concatenate(parts, axis=1).astype(np.float32)
 

@@ -1,11 +1,12 @@
 """Measuring a policy: the network's greedy flights from fixed starts against the exact
-planner and the straight-line baseline, by success and excess cost (:func:`evaluate`), the
+planner and the baselines (the straight line; where the weather moves, the plan of the weather
+at take-off and re-planning: :mod:`rainuav.nav.baselines`), by success and excess cost
+(:func:`evaluate`), the
 run's evaluation (:func:`evaluate_run_policy`) and the greedy checks on held-out validation
 starts during training (:class:`Validation`)."""
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,10 +17,10 @@ import torch
 
 from rainuav._checks import check_integer
 from rainuav.errors import InvalidInputError
-from rainuav.nav import planner
+from rainuav.nav import baselines, planner
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import flight_cost
-from rainuav.radio.radiomap import RadioMap, build_radio_map
+from rainuav.radio.radiomap import RadioMap
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import (
@@ -28,10 +29,10 @@ from rainuav.rl.config import (
     TrainConfig,
     check_config,
     load_config,
-    make_scenario,
 )
 from rainuav.rl.dqn import Agent
-from rainuav.rl.setup import make_agent, make_env, pick_device
+from rainuav.rl.setup import make_agent, pick_device
+from rainuav.world import World, load_world, task_of, world_from
 
 __all__ = [
     "Validation",
@@ -75,7 +76,8 @@ def flights(env: UAVNavEnv, returns: Any, arrived: Any, paths: list) -> dict[str
     """Per flight: ``return``, ``arrived``, ``cost`` (:func:`rainuav.nav.task.flight_cost`),
     ``steps``, the signal along the path (every position after the start): its mean and the
     share of it below ``min_db``, and the ``paths`` themselves (for figures)."""
-    signal = [env.field(p[1:, 0], p[1:, 1]) for p in paths]
+    time_s = env.stepper.time_s  # the instant of each move, for a signal that changes
+    signal = [env.field(p[1:, 0], p[1:, 1], time_s(np.arange(1, len(p)))) for p in paths]
     rets = np.asarray(returns, dtype=np.float64)
     ok = np.asarray(arrived, dtype=bool)
     return {
@@ -112,8 +114,13 @@ def summarise(f: dict[str, np.ndarray], optimum: dict[str, np.ndarray]) -> dict[
     }
 
 
-def reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dict[str, Any]]:
-    """The exact planner's flights (the yardstick) and the straight-line baseline's."""
+def reference_flights(
+    env: UAVNavEnv, starts: np.ndarray, replan_every: int = baselines.DEFAULT_REPLAN_EVERY
+) -> dict[str, dict[str, Any]]:
+    """The exact planner's flights (the yardstick) and the baselines': the straight line, and
+    where the signal changes in time the plan of the weather at take-off (``frozen_plan``) and
+    re-planning every ``replan_every`` moves (``replan``), each flown through the moving
+    weather."""
     plans = []
     chunks = range(0, len(starts), PLAN_CHUNK)
     if len(starts) > PLAN_CHUNK:  # a long evaluation shows its progress
@@ -122,7 +129,10 @@ def reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dict[str,
         chunks = tqdm(chunks, desc="exact plans", unit="chunk", total=len(chunks))
     for i in chunks:
         plans += planner.optimal_many(env, starts[i : i + PLAN_CHUNK])
-    lines = [planner.straight_line(env, s) for s in starts]
+    flown = {"optimal": plans, "straight_line": [planner.straight_line(env, s) for s in starts]}
+    if env.field.varies:
+        flown["frozen_plan"] = baselines.frozen_plans(env, starts)
+        flown["replan"] = baselines.replans(env, starts, replan_every)
     return {
         name: flights(
             env,
@@ -130,7 +140,7 @@ def reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dict[str,
             [_arrived(env, p.path_m) for p in ps],
             [p.path_m for p in ps],
         )
-        for name, ps in (("optimal", plans), ("straight_line", lines))
+        for name, ps in flown.items()
     }
 
 
@@ -151,7 +161,8 @@ def evaluate(
     references: dict[str, dict[str, np.ndarray]] | None = None,
 ) -> tuple[dict[str, Any], list]:
     """The greedy network alone from every start, against the exact planner, beside the
-    straight-line baseline (``straight_line_*``) and the optimum (``optimal_*``). With the
+    baselines (``straight_line_*``; ``frozen_plan_*`` and ``replan_*`` where the weather
+    moves) and the optimum (``optimal_*``). With the
     agent's shield on, the shielded flights are reported beside them as ``shielded_*`` (the
     headline stays the network's own). Returns the metrics and the network's flights."""
     refs = references or reference_flights(env, starts)
@@ -164,7 +175,7 @@ def evaluate(
     }
     for name, ref in refs.items():
         for key, value in summarise(ref, opt).items():
-            if name == "straight_line" or key not in ("mean_excess_cost", "worst_excess_cost"):
+            if name != "optimal" or key not in ("mean_excess_cost", "worst_excess_cost"):
                 metrics[f"{name}_{key}"] = value
     if agent.cfg.shield:
         fs, rolls_s = _policy_flights(agent, env, starts, shield=True)
@@ -238,7 +249,7 @@ def evaluate_run_policy(
     ``keep_best``, the best on validation (the reported network's numbers are then added as
     ``final_*``)."""
     starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
-    refs = reference_flights(env, starts)
+    refs = reference_flights(env, starts, cfg.replan_every)
     keys = ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_return")
     online: dict[str, Any] = {}
     if agent.average is not None:
@@ -261,9 +272,7 @@ def evaluate_saved_run(
     run_dir: Path,
     device: str = "cpu",
     *,
-    scenario: str | None = None,
-    rain_rate: float | None = None,
-    engine: str | None = None,
+    world: World | None = None,
     radio_map: RadioMap | None = None,
     starts: int | None = None,
     seed: int | None = None,
@@ -272,55 +281,44 @@ def evaluate_saved_run(
     online: bool = False,
 ) -> tuple[dict[str, Any], list, Any]:
     """Flies a saved training run's policy (the network the run reports: the final one, the
-    weight average with ``average_from``, or with ``keep_best`` the best on validation). On
-    the run's own map by default; ``scenario`` (a preset), ``rain_rate`` (homogeneous rain,
-    mm/h) and ``engine`` fly it on another map (built or taken from the cache); ``radio_map``
-    flies it on that map (another run's, say; not with those three). ``starts``/``seed``: the
-    number and seed of the fixed starts (default: the run's evaluation starts); ``shield``:
-    report shielded flights beside the network's own; ``online``: fly the last online network
-    instead of the one the run reports (they differ with ``average_from`` < 1 or ``keep_best``;
-    ``metrics["network"]`` says which flew). Another ``scenario`` is flown in its own weather
-    unless ``rain_rate`` is given. ``references``: a dict the caller keeps to reuse the exact
-    planner's flights between calls on the same map object and task. Returns the metrics, the
-    flights and the environment; writes nothing."""
+    weight average with ``average_from``, or with ``keep_best`` the best on validation). In
+    the run's own world by default; ``world`` (built by the caller, e.g. another scenario,
+    rain rate or storm: :func:`rainuav.world.build_world`) or ``radio_map`` (another map, with
+    the run's task) fly it elsewhere. ``starts``/``seed``: the number and seed of the fixed
+    starts (default: the run's evaluation starts); ``shield``: report shielded flights beside
+    the network's own; ``online``: fly the last online network instead of the one the run
+    reports (they differ with ``average_from`` < 1 or ``keep_best``; ``metrics["network"]``
+    says which flew). ``references``: a dict the caller keeps to reuse the exact planner's
+    flights between calls on the same world and task. Returns the metrics, the flights and the
+    environment; writes nothing."""
     run = Path(run_dir)
     if starts is not None:
         check_integer("starts", starts, 1, MAX_STARTS)
     if seed is not None:
         check_integer("seed", seed, 0, MAX_SEED)
-    for name in ("config.toml", "radiomap.npz", "checkpoint.pt"):
+    for name in ("config.toml", "checkpoint.pt"):
         if not (run / name).exists():
             raise InvalidInputError(f"{run}: missing {name}; is this a rainuav.train output?")
     cfg = load_config(run / "config.toml")
     check_config(cfg)
-    # Read (as data, never code) before any map is built: a bad file is refused at once.
+    # Read (as data, never code) before any map is read: a bad file is refused at once.
     path = run / "checkpoint.pt"
     state = checkpoint.load(path, ("agent", "returns", "train_seconds"))
-    if radio_map is not None:
-        if not (scenario is None and rain_rate is None and engine is None):
-            raise InvalidInputError("radio_map: give a map or scenario/rain_rate/engine, not both")
-        rm = radio_map
-    elif scenario is None and rain_rate is None and engine is None:
-        rm = RadioMap.load(run / "radiomap.npz")
-    else:
-        keep = scenario is None and rain_rate is None  # another engine only: the run's weather
-        flown = dataclasses.replace(
-            cfg,
-            scenario=cfg.scenario if scenario is None else scenario,
-            scenario_file="" if scenario is not None else cfg.scenario_file,
-            # Another scenario comes in its own weather unless a rain rate is given.
-            rain_rate=cfg.rain_rate if keep else rain_rate,
-        )
-        check_config(flown)
-        scn = make_scenario(flown)
-        if engine is not None:
-            scn = dataclasses.replace(scn, engine=engine)
-        rm = build_radio_map(scn, progress=True)
+    if world is not None and radio_map is not None:
+        raise InvalidInputError("give world or radio_map, not both")
     try:
-        env = make_env(cfg, rm)
+        if radio_map is not None:
+            world = world_from(radio_map, task_of(cfg))
+        elif world is None:
+            world = load_world(run, cfg)
+            if world is None:
+                raise InvalidInputError(
+                    f"{run}: missing radiomap.npz; is this a rainuav.train output?"
+                )
+        env = world.env()
     except InvalidInputError as err:
         where = run / "config.toml"
-        raise InvalidInputError(f"{where}: does not fit the map flown: {err}") from err
+        raise InvalidInputError(f"{where}: does not fit the world flown: {err}") from err
     agent = make_agent(cfg, env, pick_device(device))
     agent.cfg.shield = shield
     checks = Validation(np.zeros((0, 2)), {})
@@ -345,14 +343,21 @@ def evaluate_saved_run(
     pts = eval_starts(env, n, cfg.eval_seed if seed is None else seed)
     refs = None
     if references is not None:
-        key = (id(rm), repr(env.cfg), pts.tobytes())
+        key = (id(world.source), repr(env.cfg), pts.tobytes())
         if key not in references:
-            references[key] = reference_flights(env, pts)
+            references[key] = reference_flights(env, pts, cfg.replan_every)
         refs = references[key]
+    else:
+        refs = reference_flights(env, pts, cfg.replan_every)
     metrics, rolls = evaluate(agent, env, pts, refs)
-    metrics["scenario"] = rm.scenario.name
-    metrics["rain_rate_mm_h"] = rm.scenario.medium.rain_rate_mm_h
-    metrics["trained_on"] = {"scenario": cfg.scenario, "rain_rate": cfg.rain_rate}
+    scn = world.source.scenario
+    metrics["scenario"] = scn.name
+    metrics["rain_rate_mm_h"] = scn.medium.rain_rate_mm_h
+    metrics["trained_on"] = {
+        "scenario": cfg.scenario,
+        "rain_rate": cfg.rain_rate,
+        **({"storm_seed": cfg.storm_seed} if cfg.scenario == "storm" else {}),
+    }
     metrics["network"] = "last online" if online else "reported"
     metrics["episodes"] = episodes
     metrics["training_seconds"] = seconds

@@ -1,12 +1,14 @@
 """The training job: Algorithm 1 with several UAVs in flight at once.
 
-:func:`train` builds (or loads) the radio map, the environment and the agent, then runs
+:func:`train` receives a built world (:mod:`rainuav.world`: the signal and the task), builds
+its environment and the agent, then runs
 :func:`run_loop`, which reads top to bottom: act, step the UAVs, store their N-step
 transitions, learn (sample, double-Q target, loss, optimiser step), and per finished episode
 anneal, sync the target, record stages, validate and checkpoint. The run ends with
 :func:`finish` (evaluation, ``policy.pt``, ``metrics.json``, figures).
 
-Outputs in ``cfg.out``: ``config.toml``, ``radiomap.npz``, ``log.csv``, TensorBoard events,
+Outputs in ``cfg.out``: ``config.toml``, the world's signal (``radiomap.npz``, or
+``radiomap_series.npz`` for a weather that moves), ``log.csv``, TensorBoard events,
 ``checkpoint.pt`` (every ``checkpoint_every`` finished episodes; ``resume=True`` with the same
 configuration continues from it and reproduces the uninterrupted run), and at the end
 ``metrics.json``, ``policy.pt``, ``returns.png``, ``trajectories.png`` and ``stages.png``.
@@ -15,6 +17,7 @@ configuration continues from it and reproduces the uninterrupted run), and at th
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -27,7 +30,7 @@ import torch
 from rainuav._io import FolderLock, check_out_dir, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.radio.radiomap import RadioMap, build_radio_map
+from rainuav.radio.storms import check_storm_seed
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import Lanes, greedy_rollouts
 from rainuav.rl.config import (
@@ -35,7 +38,6 @@ from rainuav.rl.config import (
     apply_preset,
     check_config,
     config_diff,
-    make_scenario,
     random_streams,
     to_dict,
 )
@@ -48,7 +50,8 @@ from rainuav.rl.evaluation import (
 )
 from rainuav.rl.learner import learner_ends, learning_reward, training_start
 from rainuav.rl.plots import plot_policy, plot_returns, plot_stages
-from rainuav.rl.setup import check_fits, make_agent, make_env, pick_device, torch_settings
+from rainuav.rl.setup import check_fits, make_agent, pick_device, torch_settings
+from rainuav.world import World, task_of
 
 __all__ = ["finish", "load_checkpoint", "run_loop", "save_checkpoint", "train"]
 
@@ -59,17 +62,6 @@ not depend on where it lives)."""
 
 
 # -- setup ------------------------------------------------------------------------------------
-def run_map(cfg: TrainConfig, out: Path, resume: bool, radio_map: Any, progress: bool) -> Any:
-    """The run's radio map: the one given, the run's own when resuming, else the scenario's
-    (built or taken from the cache); saved as ``radiomap.npz``."""
-    path = out / "radiomap.npz"
-    if radio_map is None and resume and path.exists():
-        return RadioMap.load(path)
-    rm = radio_map or build_radio_map(make_scenario(cfg), progress=progress)
-    rm.save(path)
-    return rm
-
-
 def save_checkpoint(path: Path, state: dict[str, Any]) -> None:
     """Tensors and plain data only (:mod:`rainuav.rl.checkpoint`), to a temporary file, then
     rename."""
@@ -164,28 +156,37 @@ class RunLog:
 # -- the job ----------------------------------------------------------------------------------
 def train(
     cfg: TrainConfig,
+    world: World,
     *,
     resume: bool = False,
     progress: bool = True,
-    radio_map: Any = None,
     stop_after: int | None = None,
 ) -> dict[str, Any]:
-    """Runs the whole job and returns the metrics. ``radio_map`` (a RadioMap) replaces the
-    scenario's map (tests use small synthetic maps). ``stop_after`` ends the call, as an
+    """Runs the whole job in ``world`` (built by the caller from the configuration's world
+    part, :func:`rainuav.world.build_world`; tests hand in small synthetic worlds; its task
+    must be the configuration's) and returns the metrics; the world's signal is saved with
+    the run. ``stop_after`` ends the call, as an
     interruption would, at the first checkpoint with at least that many finished episodes
     (``resume=True`` then continues exactly); it returns ``{}``. Sets no process-wide state
     that outlives the call (torch's thread count and determinism are restored)."""
     cfg = apply_preset(cfg)
     check_config(cfg)
+    if cfg.scenario == "storm" and not cfg.scenario_file:
+        check_storm_seed(cfg.storm_seed, training=True)
+    if not isinstance(world, World):
+        raise InvalidInputError(f"world must be a rainuav.world.World (got {type(world).__name__})")
+    want = task_of(cfg)
+    if dataclasses.replace(world.task, min_db=want.min_db) != want:
+        raise InvalidInputError(f"the world's task {world.task} is not the configuration's {want}")
     check_fits(cfg)
     out = check_out_dir(cfg.out, "out")
     device = pick_device(cfg.device)
     out.mkdir(parents=True, exist_ok=True)
     with FolderLock(out, "a rainuav.train run"):
         saved = load_checkpoint(out / "checkpoint.pt", cfg) if resume else None
-        rm = run_map(cfg, out, resume, radio_map, progress)
+        world.save(out)
         write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
-        env = make_env(cfg, rm)
+        env = world.env()
         with torch_settings(device):
             agent = make_agent(cfg, env, device)  # seeds torch with cfg.seed
             env.np_random = np.random.default_rng(random_streams(cfg.seed)["env"])
@@ -244,13 +245,13 @@ def run_loop(
             # Act and step every UAV in flight.
             idx = np.flatnonzero(lanes.active)
             pos = lanes.start[idx] + env.cfg.step_m * lanes.offset[idx]
-            obs = agent.observe(env.observe(pos), lanes.t[idx])
+            obs = agent.observe(env.observe(pos, lanes.t[idx]), lanes.t[idx])
             act = agent.act(obs, lanes.episode[idx])
             r = env.stepper.step(lanes.start[idx], lanes.offset[idx], lanes.t[idx], act)
             lanes.offset[idx], lanes.t[idx] = r["offset"], r["t"]
             lanes.ret[idx] += r["reward"]
             # Store: each UAV's N-step window hands finished transitions to the replay.
-            nobs = agent.observe(env.observe(r["position"]), r["t"])
+            nobs = agent.observe(env.observe(r["position"], r["t"]), r["t"])
             stop = learner_ends(d, r)
             learn_r = learning_reward(env, d, pos, r)
             for j, k in enumerate(idx):

@@ -1,11 +1,11 @@
-"""Building a run's pieces from its configuration: the environment, the agent, the device,
-and torch's settings for the run (restored afterwards)."""
+"""Building a run's pieces from its configuration: the agent for an environment, the device,
+and torch's settings for the run (restored afterwards). The environment comes from the world
+(:mod:`rainuav.world`)."""
 
 from __future__ import annotations
 
 import contextlib
 from collections.abc import Iterator
-from typing import Any
 
 import numpy as np
 import torch
@@ -13,29 +13,10 @@ import torch
 from rainuav._checks import check_fits as check_fits_memory
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.task import NavConfig
 from rainuav.rl.config import TrainConfig
 from rainuav.rl.dqn import Agent, memory_needed
 
-__all__ = ["check_fits", "make_agent", "make_env", "pick_device", "torch_settings"]
-
-
-def make_env(cfg: TrainConfig, radio_map: Any) -> UAVNavEnv:
-    """The navigation task of a run over a RadioMap (its ``signal`` map; ``min_db`` unset:
-    the map's default threshold)."""
-    nav = NavConfig(
-        goal_m=(cfg.goal_x_m, cfg.goal_y_m),
-        step_m=cfg.step_m,
-        tol_m=cfg.tol_m,
-        max_steps=cfg.max_steps,
-        mu=cfg.mu,
-        reward=cfg.reward,
-        signal=cfg.signal,
-        min_db=cfg.min_db,
-        goal_reward=cfg.goal_reward,
-        out_of_bounds_penalty=cfg.out_of_bounds_penalty,
-    )
-    return UAVNavEnv(radio_map=radio_map, config=nav)
+__all__ = ["check_fits", "make_agent", "pick_device", "torch_settings"]
 
 
 def check_fits(cfg: TrainConfig) -> None:
@@ -61,9 +42,10 @@ def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
         cfg.dqn,
         cfg.seed,
         device,
-        cfg.max_steps,
+        env.cfg.max_steps,
         goal=goal,
         step=(s / (x1 - x0), s / (y1 - y0)),
+        env_dims=int(env.observation_space.shape[0]),
     )
 
 

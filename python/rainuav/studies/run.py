@@ -56,7 +56,7 @@ def run_case(
     from rainuav.rl.evaluation import reference_flights, summarise
     from rainuav.rl.loop import train
     from rainuav.rl.plots import plot_trajectories
-    from rainuav.rl.setup import make_env
+    from rainuav.world import task_of, world_from
 
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
@@ -65,7 +65,8 @@ def run_case(
     cfg.eval_starts = eval_starts
     scn = case_scenario(fields, cfg)
     rm = radio_map if radio_map is not None else build_radio_map(scn)
-    env = make_env(cfg, rm)
+    world = world_from(rm, task_of(cfg))
+    env = world.env()
     assert env.cfg.min_db is not None
     value = "" if case.axis in ("base", "grid") else fields.get(case.axis, case.value)
     row: dict[str, Any] = {
@@ -89,7 +90,7 @@ def run_case(
         paths = refs["optimal"]["paths"][:20]  # planned above, not again
         plot_trajectories(env, [], out / "optimal.png", f"{case.id}: exact optimum", paths)
     if "learned" in compute:
-        m = train(cfg, progress=False, radio_map=rm)
+        m = train(cfg, world, progress=False)
         for k in ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_signal_db"):
             row[k] = m[k]
         row["outage_share"] = m["outage_share"]

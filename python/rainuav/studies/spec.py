@@ -40,7 +40,8 @@ from rainuav._io import read_toml
 from rainuav.errors import InvalidInputError
 from rainuav.radio import presets
 from rainuav.radio.scenario import Scenario
-from rainuav.rl.config import MAX_STARTS, DQNConfig, TrainConfig, check_config, make_scenario
+from rainuav.rl.config import MAX_STARTS, DQNConfig, TrainConfig, check_config
+from rainuav.world import make_scenario
 
 __all__ = ["BUILT_IN", "COMPUTE", "SCENARIO_FIELDS", "Case", "Study", "load_study"]
 
