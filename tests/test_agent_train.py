@@ -10,7 +10,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from rainuav.world import in_world, saved_world
 from rainuav.nav import MOVES, UAVNavEnv, planner
 from rainuav.nav.shield import shield_moves
 from rainuav.radio import RadioMap
@@ -22,6 +21,7 @@ from rainuav.rl.evaluation import Validation, eval_starts, evaluate, evaluate_sa
 from rainuav.rl.learner import GOAL_START_MOVES, learning_reward, training_start
 from rainuav.rl.loop import train
 from rainuav.rl.setup import make_agent
+from rainuav.world import in_world, saved_world
 
 
 def test_n_step_window_by_hand() -> None:

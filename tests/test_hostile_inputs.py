@@ -30,7 +30,6 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-from rainuav.world import in_world, saved_world
 from rainuav import InvalidInputError, evaluate, radiomap, study, train, validate
 from rainuav._io import FolderLock, write_atomic
 from rainuav.errors import CacheWarning
@@ -41,6 +40,7 @@ from rainuav.radio.cache import map_path
 from rainuav.radio.scenario import Area, Cell, Scenario, Site
 from rainuav.rl import checkpoint
 from rainuav.rl.loop import train as train_run
+from rainuav.world import in_world, saved_world
 from test_agent_train import small_cfg, synthetic_map
 
 TALLY: Counter[str] = Counter()

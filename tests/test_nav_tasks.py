@@ -13,7 +13,6 @@ import pytest
 import rainuav  # noqa: F401 - registers rainuav/UAVNav-v0
 from gymnasium.utils.env_checker import check_env
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
-from rainuav.world import in_world
 from rainuav.errors import InvalidInputError
 from rainuav.nav import UAVNavEnv, flight_cost, planner
 from rainuav.nav.vector import UAVNavVectorEnv
@@ -21,6 +20,7 @@ from rainuav.radio.radiomap import RadioMap
 from rainuav.radio.scenario import Area, Scenario, Site
 from rainuav.rl.config import PAPER_LEARNER, DQNConfig, TrainConfig, apply_preset
 from rainuav.rl.evaluation import flights, reference_flights, summarise
+from rainuav.world import in_world
 
 
 def _map(name: str = "uma", sinr_shift: float = -6.0) -> RadioMap:
