@@ -1,0 +1,165 @@
+"""Flights through weather that moves (issue #27): time in the task, the exact space-time
+optimum against an independent brute force, the environment's return along the planner's
+path, the baselines, the world built from a spec, and static maps unchanged."""
+
+from __future__ import annotations
+
+import itertools
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from rainuav.errors import InvalidInputError
+from rainuav.nav import UAVNavEnv, planner
+from rainuav.nav.baselines import fly_actions, frozen_plans, replans
+from rainuav.nav.field import SignalField, SignalSeries
+from rainuav.nav.vector import UAVNavVectorEnv
+from rainuav.world import WorldSpec, build_world
+
+EXT = (0.0, 60.0, 0.0, 50.0)
+
+
+def series(k: int = 4, seed: int = 0) -> SignalSeries:
+    """A small signal in time whose slices differ strongly (so timing matters)."""
+    rng = np.random.default_rng(seed)
+    return SignalSeries(rng.normal(0.0, 12.0, (k, 5, 6)), np.arange(k) * 3.0, EXT)
+
+
+def storm_env(**kw) -> UAVNavEnv:
+    task = {"goal_m": (45.0, 35.0), "step_m": 10.0, "tol_m": 1.0, "max_steps": 7, "mu": 0.5}
+    return UAVNavEnv(field=series(), min_db=0.0, speed_m_s=5.0, **{**task, **kw})
+
+
+def brute_force(env: UAVNavEnv, start: np.ndarray) -> float:
+    """The best return over every action sequence, each flown through the environment itself
+    (an independent route: no dynamic programme, the env's own stepper and signal)."""
+    best = -np.inf
+    for seq in itertools.product(range(4), repeat=env.cfg.max_steps):
+        env.reset(options={"start_m": start})
+        ret = 0.0
+        for a in seq:
+            _, r, term, trunc, _ = env.step(a)
+            ret += r
+            if term or trunc:
+                break
+        best = max(best, ret)
+    return best
+
+
+def test_space_time_optimum_equals_brute_force_through_the_env() -> None:
+    # Tolerance 1e-9: the planner reads the signal operation for operation as the env does.
+    env = storm_env(max_steps=6)
+    for start in ([0.0, 0.0], [15.0, 25.0], [55.0, 5.0]):
+        s = np.array(start)
+        assert planner.optimal(env, s).return_ == pytest.approx(brute_force(env, s), abs=1e-9)
+
+
+def test_planner_value_is_the_env_return_along_its_path() -> None:
+    env = storm_env(max_steps=40, goal_m=(45.0, 35.0))
+    rng = np.random.default_rng(1)
+    starts = np.array([env.sample_start(rng) for _ in range(12)])
+    plans = planner.optimal_many(env, starts)
+    flown = fly_actions(env, starts, [p.actions for p in plans])
+    for p, f in zip(plans, flown, strict=True):
+        assert f.return_ == pytest.approx(p.return_, abs=1e-9)
+        np.testing.assert_allclose(f.path_m, p.path_m, atol=1e-12)
+    # and the planner's exact optimum beats (or ties) every baseline from every start
+    for base in (frozen_plans(env, starts), replans(env, starts, 2)):
+        assert all(b.return_ <= p.return_ + 1e-9 for b, p in zip(base, plans, strict=True))
+    lines = [planner.straight_line(env, s) for s in starts]
+    assert all(b.return_ <= p.return_ + 1e-9 for b, p in zip(lines, plans, strict=True))
+
+
+def test_on_a_single_map_the_baselines_are_the_optimum_and_nothing_changed() -> None:
+    rng = np.random.default_rng(2)
+    values = rng.normal(5.0, 8.0, (5, 6))
+    env = UAVNavEnv(sinr_db=values, extent_m=EXT, goal_m=(45.0, 35.0), max_steps=30, tol_m=1.0)
+    starts = np.array([env.sample_start(rng) for _ in range(10)])
+    opt = [p.return_ for p in planner.optimal_many(env, starts)]
+    # Exactly (to rounding) the optimum: a single map does not change while the UAV flies.
+    np.testing.assert_allclose([p.return_ for p in frozen_plans(env, starts)], opt, atol=1e-9)
+    np.testing.assert_allclose([p.return_ for p in replans(env, starts, 3)], opt, atol=1e-9)
+    # A series of one repeated slice is that map: same plans, same returns, bit for bit.
+    same = UAVNavEnv(
+        field=SignalSeries(np.stack([values, values]), [0.0, 1.0], EXT),
+        goal_m=(45.0, 35.0), max_steps=30, tol_m=1.0, min_db=env.cfg.min_db,
+    )  # fmt: skip
+    assert [p.return_ for p in planner.optimal_many(same, starts)] == opt
+    # The static env's observation is the position alone, as before; info carries the time.
+    obs, info = env.reset(seed=0)
+    assert obs.shape == (2,) and info["t_s"] == 0.0
+    _, _, _, _, info = env.step(0)
+    assert info["t_s"] == pytest.approx(env.cfg.step_m / env.cfg.speed_m_s)
+
+
+def test_time_is_in_the_observation_and_the_signal_is_read_at_the_move_instant() -> None:
+    env = storm_env(max_steps=20)
+    obs, info = env.reset(options={"start_m": [5.0, 5.0]})
+    assert env.observation_space.shape == (3,) and obs[2] == 0.0
+    obs, _, _, _, info = env.step(0)  # 10 m at 5 m/s: 2 s
+    assert info["t_s"] == pytest.approx(2.0)
+    assert obs[2] == pytest.approx(1 / 20)
+    f = env.field
+    # Linear in time between the slices at 0 s and 3 s, bilinear in space.
+    expected = (1 / 3) * f.slices[0](15.0, 5.0) + (2 / 3) * f.slices[1](15.0, 5.0)
+    assert info["signal_db"] == pytest.approx(expected, abs=1e-12)
+    assert env.observation_space.contains(obs)
+
+
+def test_vector_env_in_time_matches_the_scalar_env() -> None:
+    env = storm_env(max_steps=15)
+    n = 6
+    vec = UAVNavVectorEnv(env, n)
+    scalars = [storm_env(max_steps=15) for _ in range(n)]
+    starts = np.array([[5.0 + 8 * k, 5.0 + 6 * k] for k in range(n)])
+    obs, _ = vec.reset(options={"start_m": starts})
+    for k, e in enumerate(scalars):
+        o, _ = e.reset(options={"start_m": starts[k]})
+        np.testing.assert_array_equal(obs[k], o)
+    rng = np.random.default_rng(3)
+    ended = np.zeros(n, dtype=bool)
+    for _ in range(10):
+        a = rng.integers(0, 4, n)
+        obs, r, term, trunc, info = vec.step(a)
+        for k, e in enumerate(scalars):
+            if ended[k]:
+                continue
+            o, rk, tk, uk, ik = e.step(int(a[k]))
+            assert r[k] == rk and info["t_s"][k] == ik["t_s"]
+            np.testing.assert_array_equal(obs[k], o)
+            ended[k] = tk or uk
+        if ended.all():
+            break
+
+
+def test_frozen_field_and_bad_series_are_refused_cleanly() -> None:
+    f = series()
+    assert isinstance(f.frozen(0.0), SignalField)
+    np.testing.assert_array_equal(f.frozen(3.0).db, f.db[1])
+    with pytest.raises(InvalidInputError, match="t_s"):
+        SignalSeries(np.zeros((2, 3, 3)), [1.0, 1.0], EXT)
+    with pytest.raises(InvalidInputError, match="speed_m_s"):
+        UAVNavEnv(field=f, goal_m=(45.0, 35.0), speed_m_s=0.0)
+    with pytest.raises(InvalidInputError, match="replan_every"):
+        replans(storm_env(), np.array([[5.0, 5.0]]), 0)
+
+
+@pytest.mark.timeout(240)
+def test_a_storm_world_from_a_spec_for_gym_make_train_and_evaluate() -> None:
+    spec = WorldSpec(scenario="storm", storm_seed=2, engine="ray", max_steps=60, slice_s=10.0)
+    world = build_world(spec)
+    assert world.varies and world.field.db.shape[0] == 7  # 60 moves of 1 s: 0..60 s
+    env = world.env()
+    assert env.observation_space.shape == (3,) and env.cfg.min_db == -2.0
+    made = gym.make(
+        "rainuav/UAVNav-v0", scenario="storm", storm_seed=2, engine="ray", slice_s=10.0,
+        max_steps=60, goal_m=(1400.0, 1600.0),
+    )  # fmt: skip
+    np.testing.assert_array_equal(made.unwrapped.field.db, world.field.db)
+    # A storm seed reserved for evaluation is refused for training, naming it.
+    from rainuav.rl.config import TrainConfig
+    from rainuav.rl.loop import train
+
+    cfg = TrainConfig(scenario="storm", storm_seed=1_000_001, max_steps=60, slice_s=10.0)
+    with pytest.raises(InvalidInputError, match="evaluation storm"):
+        train(cfg, world)
