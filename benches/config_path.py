@@ -3,7 +3,8 @@
 The path: every call of a rainuav function that is handed the configuration or a part of it
 (an argument that is a ``TrainConfig``, ``WorldSpec``, ``DQNConfig`` or ``NavConfig``), in order,
 from the entry point until the training loop starts (``rainuav.rl.loop.run_loop``): where a
-configuration becomes a world, an environment and an agent. Each call is labelled with its module's layer (``tests/test_layout.py``:
+configuration becomes a world, an environment and an agent. Each call is labelled with its
+module's layer (``tests/test_layout.py``:
 base < medium, antenna < pwe < radio, nav < world < rl < studies < entry; base modules, the
 errors and the checks, are left out), and the path "goes back up" at each call into a higher
 layer than the call before it: control returned from below and came down again, or a lower
@@ -18,6 +19,7 @@ merged). ``tests/test_layout.py`` asserts the count stays under 10 (issue #27).
 
 from __future__ import annotations
 
+import itertools
 import sys
 import tempfile
 from pathlib import Path
@@ -75,7 +77,7 @@ def ups(calls: list[tuple[str, str]]) -> tuple[int, int]:
     """(calls into a higher layer than the call before, of them from nav into rl), each
     distinct pair of functions counted once."""
     seen = set()
-    for (a, f), (b, g) in zip(calls, calls[1:], strict=False):
+    for (a, f), (b, g) in itertools.pairwise(calls):
         if LAYERS[b] > LAYERS[a]:
             seen.add((a, f, b, g))
     return len(seen), sum((a, b) == ("nav", "rl") for a, _, b, _ in seen)

@@ -120,7 +120,7 @@ def test_vector_env_in_time_matches_the_scalar_env() -> None:
     ended = np.zeros(n, dtype=bool)
     for _ in range(10):
         a = rng.integers(0, 4, n)
-        obs, r, term, trunc, info = vec.step(a)
+        obs, r, _, _, info = vec.step(a)
         for k, e in enumerate(scalars):
             if ended[k]:
                 continue

@@ -14,10 +14,13 @@ from typing import Any
 import numpy as np
 
 
-def bilinear(values: np.ndarray, extent: tuple[float, float, float, float], x: Any, y: Any) -> Any:
-    """``values`` (H, W) sampled at the points ``(x, y)`` (any broadcastable shapes)."""
+def bilinear(
+    values: np.ndarray, extent: tuple[float, float, float, float], x: Any, y: Any, k: Any = None
+) -> Any:
+    """``values`` (H, W) sampled at the points ``(x, y)`` (any broadcastable shapes); with
+    ``k``, ``values`` is (K, H, W) and each point reads its own slice ``k``."""
     x0, x1, y0, y1 = extent
-    h, w = values.shape
+    h, w = values.shape[-2:]
     fx = np.clip((np.asarray(x, dtype=np.float64) - x0) / (x1 - x0) * w - 0.5, 0.0, w - 1.0)
     fy = np.clip((np.asarray(y, dtype=np.float64) - y0) / (y1 - y0) * h - 0.5, 0.0, h - 1.0)
     j0 = np.minimum(np.floor(fx), max(w - 2, 0)).astype(np.int64)
@@ -26,10 +29,20 @@ def bilinear(values: np.ndarray, extent: tuple[float, float, float, float], x: A
     ty = fy - i0
     j1 = np.minimum(j0 + 1, w - 1)
     i1 = np.minimum(i0 + 1, h - 1)
-    s = values
+    s = values if k is None else _Slice(values, np.asarray(k))
     return (
         s[i0, j0] * (1.0 - tx) * (1.0 - ty)
         + s[i0, j1] * tx * (1.0 - ty)
         + s[i1, j0] * (1.0 - tx) * ty
         + s[i1, j1] * tx * ty
     )
+
+
+class _Slice:
+    """``values[k, i, j]`` indexed as ``values[i, j]`` (each point its own slice)."""
+
+    def __init__(self, values: np.ndarray, k: np.ndarray) -> None:
+        self.values, self.k = values, k
+
+    def __getitem__(self, ij: tuple[Any, Any]) -> Any:
+        return self.values[self.k, ij[0], ij[1]]

@@ -113,8 +113,12 @@ def summary(metrics: dict[str, Any], out: Path) -> str:
     rows = [
         ("network alone", "", "mean_excess_cost"),
         ("straight line", "straight_line_", "straight_line_mean_excess_cost"),
+        ("frozen plan", "frozen_plan_", "frozen_plan_mean_excess_cost"),
+        ("replanning", "replan_", "replan_mean_excess_cost"),
         ("exact optimum", "optimal_", None),
     ]
+    # The plan of the weather at take-off and re-planning are there where the weather moves.
+    rows = [r for r in rows if r[1] == "" or f"{r[1]}success_rate" in metrics]
     lines = [
         f"{metrics['eval_starts']} evaluation starts, {metrics['episodes']} episodes, "
         f"{metrics['training_seconds']:.0f} s of training on {metrics['device']}",

@@ -78,6 +78,9 @@ class WorldSpec:
     storm_seed: int = 0
     """The random storm of the 'storm' scenario (seeds from 1 000 000 are reserved for
     evaluation)."""
+    storm_speed_m_s: float | None = None
+    """The 'storm' scenario's speed, m/s, in place of the drawn one (every cell's velocity
+    scaled alike; 0: cells stay put and only grow or decay); unset: as drawn."""
     slice_s: float = 5.0
     """Time between the maps of a weather that moves, s (the signal is linear in between)."""
     signal: str = "sinr"
@@ -133,6 +136,8 @@ def check_spec(spec: Any) -> None:
         ("step_m", 0 < spec.step_m < math.inf, "> 0 and finite"),
         ("tol_m", 0 < spec.tol_m < math.inf, "> 0 and finite"),
         ("speed_m_s", 0 < spec.speed_m_s < math.inf, "> 0 and finite"),
+        ("storm_speed_m_s", spec.storm_speed_m_s is None or 0 <= spec.storm_speed_m_s <= 100,
+         "unset or in [0, 100] m/s"),
         ("slice_s", 0.001 <= spec.slice_s <= 1e6, "in [0.001, 1e6] s"),
         ("goal_reward", math.isfinite(spec.goal_reward), "finite"),
         ("out_of_bounds_penalty", math.isfinite(spec.out_of_bounds_penalty), "finite"),
@@ -154,7 +159,9 @@ def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
     elif spec.scenario_file:
         scn = Scenario.from_toml(spec.scenario_file)
     elif spec.scenario == "storm":
-        scn = presets.storm(spec.rain_rate, seed=check_storm_seed(spec.storm_seed))
+        scn = presets.storm(
+            spec.rain_rate, seed=check_storm_seed(spec.storm_seed), speed_m_s=spec.storm_speed_m_s
+        )
     elif spec.scenario in presets.PRESETS:
         scn = presets.PRESETS[spec.scenario]()
     else:

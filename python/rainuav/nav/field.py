@@ -148,15 +148,23 @@ class SignalSeries:
         """The signal at the points ``(x, y)`` at the instants ``t_s`` (a number, or one per
         point)."""
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        times = np.broadcast_to(np.asarray(t_s, dtype=np.float64), np.broadcast(x, y).shape)
-        out = np.empty(times.shape)
-        for tau in np.unique(times):
-            sel = times == tau
-            xs, ys = np.broadcast_to(x, times.shape)[sel], np.broadcast_to(y, times.shape)[sel]
-            k0, k1, f = self.bracket(float(tau))
-            v0 = self.slices[k0](xs, ys)
-            out[sel] = v0 if k0 == k1 else (1.0 - f) * v0 + f * self.slices[k1](xs, ys)
+        tau = np.broadcast_to(np.asarray(t_s, dtype=np.float64), np.broadcast(x, y).shape)
+        k0, k1, f = self.brackets(tau)
+        v0 = bilinear(self.db, self.extent, x, y, k0)
+        v1 = bilinear(self.db, self.extent, x, y, k1)
+        out = np.where(k0 == k1, v0, (1.0 - f) * v0 + f * v1)
         return out[()] if out.ndim == 0 else out
+
+    def brackets(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`bracket` for every instant of ``tau`` at once."""
+        t = self.t_s
+        k = np.searchsorted(t, tau, side="left")
+        hit = (k < len(t)) & (t[np.minimum(k, len(t) - 1)] == tau)
+        k1 = np.where(hit, k, np.clip(k, 0, len(t) - 1))
+        k0 = np.where(hit | (k == 0), k1, np.where(k == len(t), len(t) - 1, k - 1))
+        lo, hi = t[k0], t[k1]
+        f = np.where(k0 == k1, 0.0, (tau - lo) / np.where(hi > lo, hi - lo, 1.0))
+        return k0, k1, f
 
     def serving_cell(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
         """The serving cell at the pixel holding ``(x, y)`` in the latest slice at or before
@@ -165,11 +173,12 @@ class SignalSeries:
         shape = np.broadcast(x, y, np.asarray(t_s)).shape
         if self.serving is None:
             return np.full(shape, -1, dtype=np.int64)
-        k = np.searchsorted(self.t_s, np.broadcast_to(t_s, shape), side="right") - 1
-        flat = self.serving.reshape(len(self.t_s), -1)
+        k = np.maximum(np.searchsorted(self.t_s, np.broadcast_to(t_s, shape), side="right") - 1, 0)
+        x0, x1, y0, y1 = self.extent
         h, w = self.db.shape[1:]
-        pixel = _nearest_pixel(np.arange(h * w).reshape(h, w), (h, w), self.extent, x, y)
-        return flat[np.maximum(k, 0), np.broadcast_to(pixel, shape)]
+        j = np.clip(np.floor((x - x0) / (x1 - x0) * w).astype(np.int64), 0, w - 1)
+        i = np.clip(np.floor((y - y0) / (y1 - y0) * h).astype(np.int64), 0, h - 1)
+        return self.serving[k, i, j]
 
     def frozen(self, t_s: float = 0.0) -> SignalField:
         """The weather of ``t_s`` held still: the one map the series gives at that instant

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from rainuav._checks import check_integer
+from rainuav._checks import check_integer, check_number
 from rainuav.errors import InvalidInputError
 from rainuav.radio.weather import Medium, RainCell
 
@@ -65,23 +65,30 @@ def check_storm_seed(seed: object, training: bool = False) -> int:
 
 
 def draw_storm(
-    seed: int, extent_m: tuple[float, float, float, float] = (0.0, 2000.0, 0.0, 2000.0)
+    seed: int,
+    extent_m: tuple[float, float, float, float] = (0.0, 2000.0, 0.0, 2000.0),
+    speed_m_s: float | None = None,
 ) -> Medium:
     """The storm of ``seed`` over the area ``extent_m`` (x0, x1, y0, y1), as a weather whose
     cells move (:meth:`rainuav.radio.weather.Medium.at` gives it at any instant; time 0 is the
-    storm's start). The distribution is the module docstring's."""
+    storm's start). The distribution is the module docstring's; ``speed_m_s``, where given,
+    scales every cell's velocity by the factor that makes the storm's speed that (the same
+    draws: 0 keeps each cell at its mid-storm place)."""
     rng = np.random.default_rng(check_storm_seed(seed))
+    if speed_m_s is not None:
+        speed_m_s = check_number("speed_m_s", speed_m_s, 0.0, 100.0, " m/s")
     x0, x1, y0, y1 = extent_m
     background = float(rng.uniform(*BACKGROUND_MM_H))
     n = int(rng.integers(CELLS[0], CELLS[1] + 1))
     speed = float(rng.uniform(*STORM_SPEED_M_S))
     heading = float(rng.uniform(0.0, 2.0 * math.pi))
     vx, vy = speed * math.cos(heading), speed * math.sin(heading)
+    scale = 1.0 if speed_m_s is None else speed_m_s / speed
     mid = STORM_DURATION_S / 2.0
     cells = []
     for _ in range(n):
         r, a = CELL_SPREAD_M_S * math.sqrt(float(rng.uniform())), float(rng.uniform(0, 2 * math.pi))
-        cvx, cvy = vx + r * math.cos(a), vy + r * math.sin(a)
+        cvx, cvy = scale * (vx + r * math.cos(a)), scale * (vy + r * math.sin(a))
         peak = float(math.exp(rng.uniform(math.log(PEAK_MM_H[0]), math.log(PEAK_MM_H[1]))))
         radius = float(rng.uniform(*RADIUS_M))
         efold = 60.0 * float(rng.uniform(*EFOLD_MIN)) * (1.0 if rng.uniform() < 0.5 else -1.0)
