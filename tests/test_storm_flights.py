@@ -163,3 +163,13 @@ def test_a_storm_world_from_a_spec_for_gym_make_train_and_evaluate() -> None:
     cfg = TrainConfig(scenario="storm", storm_seed=1_000_001, max_steps=60, slice_s=10.0)
     with pytest.raises(InvalidInputError, match="evaluation storm"):
         train(cfg, world)
+
+
+def test_flights_in_time_are_drawn_over_the_signal_at_take_off(tmp_path) -> None:
+    from rainuav.rl.plots import plot_trajectories
+
+    env = storm_env(max_steps=20)
+    starts = np.array([[5.0, 5.0], [55.0, 5.0]])
+    paths = [p.path_m for p in planner.optimal_many(env, starts)]
+    plot_trajectories(env, [], tmp_path / "f.png", "storm", paths)
+    assert (tmp_path / "f.png").stat().st_size > 1000

@@ -25,11 +25,12 @@ __all__ = [
 
 
 def map_image(ax: Any, env: UAVNavEnv) -> Any:
-    """The task's signal map on ``ax``, its colour scale centred on the outage threshold."""
+    """The task's signal map on ``ax`` (where it changes in time, at take-off), its colour
+    scale centred on the outage threshold."""
     x0, x1, y0, y1 = env.field.extent
     lo = float(env.cfg.min_db if env.cfg.min_db is not None else 0.0)
     return ax.imshow(
-        env.field.db,
+        env.field.frozen(0.0).db,
         origin="lower",
         extent=(x0, x1, y0, y1),
         cmap="RdYlGn",
