@@ -1,5 +1,5 @@
-"""``python -m rainuav.study NAME --out DIR``: run a study (a built-in one, ``paper`` or
-``mmwave``, or a study TOML file; format: :mod:`rainuav.studies.spec`).
+"""``python -m rainuav.study NAME --out DIR``: run a study (a built-in one, ``paper``,
+``mmwave`` or ``storms``, or a study TOML file; format: :mod:`rainuav.studies.spec`).
 
 Every case runs in its own folder ``DIR/cases/<case>`` (``result.json`` written last); a
 rerun skips finished cases, so an interrupted study resumes. ``--workers`` cases run at once

@@ -40,12 +40,14 @@ __all__ = [
     "MAP_FILES",
     "World",
     "WorldSpec",
+    "build_source",
     "build_world",
     "check_spec",
     "in_world",
     "load_world",
     "make_scenario",
     "saved_world",
+    "source_key",
     "spec_of",
     "task_of",
     "world_from",
@@ -251,14 +253,28 @@ def build_world(
     map, or maps in time where its weather moves, built or taken from the cache, and its task
     (``task``, where given, in place of the spec's; ``scenario`` in place of its preset)."""
     check_spec(spec)
-    scn = make_scenario(spec, scenario)
+    source = build_source(spec, make_scenario(spec, scenario), progress=progress)
+    return world_from(source, task_of(spec) if task is None else task)
+
+
+def build_source(spec: Any, scn: Scenario, *, progress: bool = False) -> Any:
+    """The signal's source for the scenario ``scn`` of ``spec``: its map, or where its
+    weather moves its maps at :func:`series_instants` (engine 'pe' then becomes 'hybrid': a
+    march per cell and instant is refused); built, or taken from the cache."""
     if scn.medium.moves:
         if scn.engine == "pe":
-            scn = dataclasses.replace(scn, engine="hybrid")  # a march per instant is refused
-        source: Any = build_radio_map_series(scn, series_instants(spec), progress=progress)
-    else:
-        source = build_radio_map(scn, progress=progress)
-    return world_from(source, task_of(spec) if task is None else task)
+            scn = dataclasses.replace(scn, engine="hybrid")
+        return build_radio_map_series(scn, series_instants(spec), progress=progress)
+    return build_radio_map(scn, progress=progress)
+
+
+def source_key(spec: Any, scn: Scenario) -> str:
+    """What identifies the source :func:`build_source` gives (the scenario, and for a
+    weather that moves its instants)."""
+    if not scn.medium.moves:
+        return scn.digest()
+    t = series_instants(spec)
+    return f"{scn.digest()}-{t[-1]:g}-{len(t)}"
 
 
 def load_world(folder: Path, spec: Any) -> World | None:

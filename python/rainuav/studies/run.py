@@ -35,9 +35,12 @@ __all__ = ["COLUMNS", "run_case", "run_study", "write_tables"]
 
 COLUMNS = (
     "case", "axis", "value", "seed", "scenario", "rain_rate_mm_h", "freq_ghz", "min_db",
+    "storm_seed", "storm_speed_m_s",
     "map_median_sinr_db", "map_outage_share",
     "optimal_mean_cost", "optimal_mean_signal_db", "optimal_outage_share",
     "straight_line_mean_excess_cost",
+    "frozen_plan_mean_excess_cost", "replan_mean_excess_cost", "frozen_plan_outage_share",
+    "replan_outage_share",
     "success_rate", "mean_excess_cost", "worst_excess_cost", "mean_signal_db", "outage_share",
     *TRANSFER_COLUMNS,
 )  # fmt: skip
@@ -49,14 +52,13 @@ def run_case(
     case: Case, compute: list[str], eval_starts: int, folder: str, radio_map: Any = None
 ) -> dict[str, Any]:
     """Computes one case into ``folder`` and returns its row (also ``result.json``).
-    ``radio_map``: the case's map when the caller has it (Ray passes it from the object
-    store); else it is built or taken from the cache."""
-    from rainuav.radio.radiomap import build_radio_map
+    ``radio_map``: the case's map (or maps in time) when the caller has it (Ray passes it
+    from the object store); else it is built or taken from the cache."""
     from rainuav.rl.evaluation import eval_starts as starts_of
     from rainuav.rl.evaluation import reference_flights, summarise
     from rainuav.rl.loop import train
     from rainuav.rl.plots import plot_trajectories
-    from rainuav.world import task_of, world_from
+    from rainuav.world import build_source, task_of, world_from
 
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
@@ -64,7 +66,7 @@ def run_case(
     cfg = train_config(fields, case.seed, str(out / "run"))
     cfg.eval_starts = eval_starts
     scn = case_scenario(fields, cfg)
-    rm = radio_map if radio_map is not None else build_radio_map(scn)
+    rm = radio_map if radio_map is not None else build_source(cfg, scn)
     world = world_from(rm, task_of(cfg))
     env = world.env()
     assert env.cfg.min_db is not None
@@ -74,15 +76,24 @@ def run_case(
         "scenario": scn.name, "rain_rate_mm_h": scn.medium.rain_rate_mm_h,
         "freq_ghz": scn.freq_hz / 1e9, "min_db": env.cfg.min_db,
     }  # fmt: skip
+    if cfg.scenario == "storm" and not cfg.scenario_file:
+        row["storm_seed"] = cfg.storm_seed
+        speed = cfg.storm_speed_m_s
+        row["storm_speed_m_s"] = "as drawn" if speed is None else speed
     if "map" in compute:
         sig = env.field.db
         row["map_median_sinr_db"] = float(np.median(sig))
         row["map_outage_share"] = float(np.mean(sig < env.cfg.min_db))
     if "optimal" in compute or "learned" in compute:
         starts = starts_of(env, eval_starts, cfg.eval_seed)
-        refs = reference_flights(env, starts)
+        refs = reference_flights(env, starts, cfg.replan_every)
         opt = summarise(refs["optimal"], refs["optimal"])
         line = summarise(refs["straight_line"], refs["optimal"])
+        for name in ("frozen_plan", "replan"):  # where the weather moves
+            if name in refs:
+                base = summarise(refs[name], refs["optimal"])
+                row[f"{name}_mean_excess_cost"] = base["mean_excess_cost"]
+                row[f"{name}_outage_share"] = base["outage_share"]
         row["optimal_mean_cost"] = opt["mean_cost"]
         row["optimal_mean_signal_db"] = opt["mean_signal_db"]
         row["optimal_outage_share"] = opt["outage_share"]
@@ -101,18 +112,19 @@ def run_case(
 
 
 def _maps(cases: list[Case]) -> tuple[dict[str, Any], dict[str, str]]:
-    """Each distinct scenario's map, built once (and cached), and each case's scenario
-    digest: ``({digest: RadioMap}, {case id: digest})``."""
-    from rainuav.radio.radiomap import build_radio_map
+    """Each distinct scenario's map (or maps in time), built once (and cached), and each
+    case's key: ``({key: map or series}, {case id: key})``."""
+    from rainuav.world import build_source, source_key
 
     maps: dict[str, Any] = {}
     of: dict[str, str] = {}
     for case in cases:
         fields = dict(case.fields)
-        scn = case_scenario(fields, train_config(fields, case.seed, "unused"))
-        key = scn.digest()
+        cfg = train_config(fields, case.seed, "unused")
+        scn = case_scenario(fields, cfg)
+        key = source_key(cfg, scn)
         if key not in maps:
-            maps[key] = build_radio_map(scn)
+            maps[key] = build_source(cfg, scn)
         of[case.id] = key
     return maps, of
 
@@ -263,7 +275,7 @@ def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
     lines += ["| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
     lines += ["| " + " | ".join(_fmt(r.get(c)) for c in shown) + " |" for r in rows]
     base = [r for r in rows if r["axis"] == "base"]
-    figures = [c for c in shown if c in COLUMNS[8:] and c not in TRANSFER_COLUMNS]
+    figures = [c for c in shown if c in COLUMNS[10:] and c not in TRANSFER_COLUMNS]
     if base:
         lines += ["", "## Change against the base case, seed by seed (mean, min..max)", ""]
         lines += [

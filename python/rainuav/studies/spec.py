@@ -48,7 +48,7 @@ __all__ = ["BUILT_IN", "COMPUTE", "SCENARIO_FIELDS", "Case", "Study", "load_stud
 COMPUTE = ("map", "optimal", "learned")
 SCENARIO_FIELDS = ("freq_ghz", "wind_m_s", "wind_model", "engine")
 """Fields of a case that change the scenario rather than the run."""
-BUILT_IN = ("paper", "mmwave")
+BUILT_IN = ("paper", "mmwave", "storms")
 MAX_CASES = 10_000
 """The most cases a study may have (axes x seeds): every case is at least a map and a plan."""
 _TOP = {"name", "sweep", "seeds", "compute", "eval_starts", "base", "axes", "quick"}
@@ -123,8 +123,11 @@ class Study:
         return keys
 
     def with_quick(self) -> Study:
-        """The study with its ``[quick]`` changes applied to the base case."""
-        return dataclasses.replace(self, base={**self.base, **self.quick})
+        """The study with its ``[quick]`` changes applied to the base case (an
+        ``eval_starts`` there sets the study's number of evaluation starts)."""
+        quick = dict(self.quick)
+        starts = quick.pop("eval_starts", self.eval_starts)
+        return dataclasses.replace(self, base={**self.base, **quick}, eval_starts=starts)
 
 
 def train_config(fields: dict[str, Any], seed: int, out: str) -> TrainConfig:
