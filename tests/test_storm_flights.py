@@ -173,3 +173,28 @@ def test_flights_in_time_are_drawn_over_the_signal_at_take_off(tmp_path) -> None
     paths = [p.path_m for p in planner.optimal_many(env, starts)]
     plot_trajectories(env, [], tmp_path / "f.png", "storm", paths)
     assert (tmp_path / "f.png").stat().st_size > 1000
+
+
+@pytest.mark.timeout(240)
+def test_train_on_one_storm_and_evaluate_on_another_from_the_cli(tmp_path, capsys) -> None:
+    import json
+
+    from rainuav import evaluate, train
+
+    run = tmp_path / "run"
+    argv = [
+        "--scenario", "storm", "--storm-seed", "0", "--engine", "ray", "--slice-s", "30",
+        "--max-steps", "40", "--goal-x-m", "300", "--goal-y-m", "300", "--episodes", "4",
+        "--lanes", "2", "--eval-starts", "4", "--validate-every", "0", "--out", str(run),
+    ]  # fmt: skip
+    assert train.main(argv) == 0
+    assert (run / "radiomap_series.npz").exists() and (run / "trajectories.png").exists()
+    metrics = json.loads((run / "metrics.json").read_text())
+    assert {"frozen_plan_success_rate", "replan_success_rate"} <= set(metrics)
+    out = tmp_path / "ev"
+    rc = evaluate.main([str(run), "--scenario", "storm", "--storm-seed", "1", "--out", str(out)])
+    assert rc == 0
+    flown = json.loads((out / "evaluation.json").read_text())
+    assert flown["trained_on"] == {"scenario": "storm", "rain_rate": None, "storm_seed": 0}
+    assert "replan_mean_return" in flown and flown["eval_starts"] == 4
+    capsys.readouterr()
