@@ -188,7 +188,8 @@ def test_train_on_one_storm_and_evaluate_on_another_from_the_cli(tmp_path, capsy
         "--lanes", "2", "--eval-starts", "4", "--validate-every", "0", "--out", str(run),
     ]  # fmt: skip
     assert train.main(argv) == 0
-    assert (run / "radiomap_series.npz").exists() and (run / "trajectories.png").exists()
+    for name in ("radiomap_series.npz", "trajectories.png", "storm_flights.png"):
+        assert (run / name).exists(), name
     metrics = json.loads((run / "metrics.json").read_text())
     assert {"frozen_plan_success_rate", "replan_success_rate"} <= set(metrics)
     out = tmp_path / "ev"
@@ -197,4 +198,5 @@ def test_train_on_one_storm_and_evaluate_on_another_from_the_cli(tmp_path, capsy
     flown = json.loads((out / "evaluation.json").read_text())
     assert flown["trained_on"] == {"scenario": "storm", "rain_rate": None, "storm_seed": 0}
     assert "replan_mean_return" in flown and flown["eval_starts"] == 4
+    assert (out / "evaluation_storm_flights.png").stat().st_size > 1000
     capsys.readouterr()

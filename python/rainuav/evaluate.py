@@ -99,7 +99,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _evaluate(args: argparse.Namespace) -> int:
     from rainuav.rl.config import MAX_SEED, MAX_STARTS
     from rainuav.rl.evaluation import evaluate_saved_run
-    from rainuav.rl.plots import plot_policy
+    from rainuav.rl.plots import plot_policy, plot_storm_flights
 
     if args.starts is not None:
         check_integer("--starts", args.starts, 1, MAX_STARTS)
@@ -118,6 +118,8 @@ def _evaluate(args: argparse.Namespace) -> int:
     text = json.dumps(metrics, indent=2)
     write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))
     plot_policy(env, metrics, rolls[:40], out / "evaluation_trajectories.png")
+    if env.field.varies:
+        plot_storm_flights(env, rolls[:6], out / "evaluation_storm_flights.png")
     print(text)
     print(f"wrote {out.resolve()}", file=sys.stderr)
     return 0

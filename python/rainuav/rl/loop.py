@@ -49,7 +49,7 @@ from rainuav.rl.evaluation import (
     reference_flights,
 )
 from rainuav.rl.learner import learner_ends, learning_reward, training_start
-from rainuav.rl.plots import plot_policy, plot_returns, plot_stages
+from rainuav.rl.plots import plot_policy, plot_returns, plot_stages, plot_storm_flights
 from rainuav.rl.setup import check_fits, make_agent, pick_device, torch_settings
 from rainuav.world import World, task_of
 
@@ -367,6 +367,8 @@ def finish(
     write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
     plot_returns(returns, out / "returns.png", checks.history)
     plot_policy(env, metrics, rolls[:40], out / "trajectories.png")
+    if env.field.varies:
+        plot_storm_flights(env, rolls[:6], out / "storm_flights.png")
     if stages:
         plot_stages(env, stages, out / "stages.png")
     return metrics

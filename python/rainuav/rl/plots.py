@@ -20,6 +20,7 @@ __all__ = [
     "plot_policy",
     "plot_returns",
     "plot_stages",
+    "plot_storm_flights",
     "plot_trajectories",
 ]
 
@@ -148,4 +149,48 @@ def plot_stages(env: UAVNavEnv, stages: list[tuple[int, list]], path: Path) -> N
         ax.set_title(f"after {ep} episodes")
         ax.set_xticks([])
         ax.set_yticks([])
+    write_atomic(path, lambda t: fig.savefig(t, dpi=100, format="png"))
+
+
+def plot_storm_flights(env: UAVNavEnv, rolls: list, path: Path, panels: int = 3) -> None:
+    """Flights through a signal that changes in time: ``panels`` instants from take-off to
+    two thirds of the longest flight, each over the SINR of that instant, with the network's
+    flights (black), the frozen take-off plan's (orange) and the exact space-time optimum's
+    (dashed blue) from the same starts, drawn up to that instant (a dot: where the UAV is)."""
+    from matplotlib.figure import Figure
+
+    from rainuav.nav import baselines, planner
+
+    starts = np.array([r["path"][0] for r in rolls]).reshape(-1, 2)
+    flights = {
+        "network alone": ([r["path"] for r in rolls], "-"),
+        "frozen take-off plan": ([p.path_m for p in baselines.frozen_plans(env, starts)], "-"),
+        "exact optimum": ([p.path_m for p in planner.optimal_many(env, starts)], "--"),
+    }
+    colours = {"network alone": "k", "frozen take-off plan": "tab:orange", "exact optimum": "b"}
+    longest = max(len(p) for ps, _ in flights.values() for p in ps) - 1
+    moves = [round(k * 2 * longest / (3 * max(panels - 1, 1))) for k in range(panels)]
+    fig = Figure(figsize=(4.2 * panels, 4.4), layout="constrained")
+    axs = fig.subplots(1, panels, squeeze=False)[0]
+    x0, x1, y0, y1 = env.field.extent
+    lo = float(env.cfg.min_db if env.cfg.min_db is not None else 0.0)
+    for ax, m in zip(axs, moves, strict=True):
+        t_s = float(env.stepper.time_s(np.array([m]))[0])
+        im = ax.imshow(
+            env.field.frozen(t_s).db, origin="lower", extent=(x0, x1, y0, y1),
+            cmap="RdYlGn", vmin=lo - 15.0, vmax=lo + 15.0,
+        )  # fmt: skip
+        for name, (paths, style) in flights.items():
+            for i, p in enumerate(paths):
+                now = p[: m + 1]
+                ax.plot(p[:, 0], p[:, 1], style, color=colours[name], lw=0.6, alpha=0.25)
+                ax.plot(now[:, 0], now[:, 1], style, color=colours[name], lw=1.2,
+                        label=name if i == 0 else None)  # fmt: skip
+                ax.plot(*now[-1], "o", color=colours[name], ms=3)
+        ax.plot(*env.cfg.goal_m, "b^")
+        ax.set_title(f"t = {t_s:.0f} s")
+        ax.set_xticks([])
+        ax.set_yticks([])
+    axs[0].legend(loc="lower right", fontsize="x-small")
+    fig.colorbar(im, ax=list(axs), label=f"{env.cfg.signal.upper()} [dB]", shrink=0.8)
     write_atomic(path, lambda t: fig.savefig(t, dpi=100, format="png"))
