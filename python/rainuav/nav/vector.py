@@ -146,6 +146,7 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         terminated = np.zeros(n, dtype=bool)
         truncated = np.zeros(n, dtype=bool)
         arrived = np.zeros(n, dtype=bool)
+        signal = np.zeros(n)
         resetting = self._ended.copy()  # NEXT_STEP: these only reset on this call
         moving = ~resetting
         if moving.any():
@@ -156,6 +157,7 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
             reward[moving] = r["reward"]
             terminated[moving], truncated[moving] = r["terminated"], r["truncated"]
             arrived[moving] = r["arrived"]
+            signal[moving] = r["signal_db"]  # at the (clamped) new position and instant
         ended = terminated | truncated
         pos = self._position()
         # A UAV that left the area sits at the clamped position (the scalar env's state).
@@ -164,16 +166,17 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         obs = self.env.observe(pos, self._t)
         infos: dict[str, Any] = {}
         if self.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP:
+            fresh = resetting
             self._launch(resetting)
             self._ended = ended
-            pos = np.where(resetting[:, None], self._position(), pos)
-            obs = self.env.observe(pos, self._t)
         else:  # SAME_STEP
+            fresh = ended
             if ended.any():
                 infos["final_obs"] = obs.copy()
                 infos["_final_obs"] = ended.copy()
             self._launch(ended)
-            pos = np.where(ended[:, None], self._position(), pos)
+        if fresh.any():  # new episodes: their starts, at time 0
+            pos = np.where(fresh[:, None], self._position(), pos)
             obs = self.env.observe(pos, self._t)
-        signal = self.env.field(pos[:, 0], pos[:, 1], self.env.stepper.time_s(self._t))
+            signal[fresh] = self.env.field(pos[fresh, 0], pos[fresh, 1], 0.0)
         return obs, reward, terminated, truncated, {**self._infos(signal, arrived), **infos}
