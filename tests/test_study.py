@@ -197,6 +197,7 @@ def test_the_storms_study_grids_speeds_and_storms_and_reports_the_baselines(tmp_
     storms = load_study("storms")
     cases = storms.cases()
     speeds = sorted({dict(c.fields)["storm_speed_m_s"] for c in cases})
+    assert cases[1].id == "001_grid=0,1_s0"  # speed 0, storm 1
     assert speeds == [0.0, 5.0, 10.0, 20.0] and len(cases) == 8
     assert storms.with_quick().eval_starts == 20 and storms.eval_starts == 100
     # A small moving-weather case: the frozen take-off plan and re-planning are reported

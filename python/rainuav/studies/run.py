@@ -70,7 +70,7 @@ def run_case(
     world = world_from(rm, task_of(cfg))
     env = world.env()
     assert env.cfg.min_db is not None
-    value = "" if case.axis in ("base", "grid") else fields.get(case.axis, case.value)
+    value = {"base": "", "grid": case.value}.get(case.axis, fields.get(case.axis, case.value))
     row: dict[str, Any] = {
         "case": case.id, "axis": case.axis, "value": value, "seed": case.seed,
         "scenario": scn.name, "rain_rate_mm_h": scn.medium.rain_rate_mm_h,

@@ -64,8 +64,8 @@ def _label(v: Any) -> str:
 @dataclass(frozen=True)
 class Case:
     """One case: its index, the axis it varies (``"base"`` for the base case, ``"grid"``
-    for a grid cell), its fields, its seed and the axis value as text (``value``; empty for
-    the base and grid cells)."""
+    for a grid cell), its fields, its seed and the axis value as text (``value``; for a grid
+    cell each axis's value in the axes' order, comma-separated; empty for the base)."""
 
     index: int
     axis: str
@@ -100,7 +100,7 @@ class Study:
                 change: dict[str, Any] = {}
                 for n, v in zip(names, values, strict=True):
                     change.update(v if isinstance(v, dict) else {n: v})
-                combos.append(("grid", change, ""))
+                combos.append(("grid", change, ",".join(_label(v) for v in values)))
         else:
             combos.append(("base", {}, ""))
             for name, values in self.axes.items():
