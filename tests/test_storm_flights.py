@@ -205,3 +205,14 @@ def test_train_on_one_storm_and_evaluate_on_another_from_the_cli(tmp_path, capsy
     assert "replan_mean_return" in flown and flown["eval_starts"] == 4
     assert (out / "evaluation_storm_flights.png").stat().st_size > 1000
     capsys.readouterr()
+
+
+def test_the_train_cli_refuses_an_evaluation_storm_before_building_anything(tmp_path, capsys):
+    from rainuav import train
+
+    rc = train.main(
+        ["--scenario", "storm", "--storm-seed", "1000000", "--out", str(tmp_path / "r")]
+    )
+    err = capsys.readouterr().err
+    assert rc == 2 and "evaluation storm" in err and "Traceback" not in err
+    assert not (tmp_path / "r").exists()

@@ -146,12 +146,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         return f"training stopped; the same command with --resume continues from {ck}"
 
     def body() -> int:
+        from rainuav._io import check_out_dir
+        from rainuav.radio.storms import check_storm_seed
         from rainuav.rl.config import check_config
         from rainuav.rl.loop import train
+        from rainuav.rl.setup import check_fits
         from rainuav.world import build_world, load_world
 
         cfg = config_from_args(args)
         check_config(cfg)
+        # Refused before any map is built: a run that cannot fit, a bad --out, a storm
+        # reserved for evaluation.
+        check_fits(cfg)
+        check_out_dir(cfg.out, "out")
+        if cfg.scenario == "storm" and not cfg.scenario_file:
+            check_storm_seed(cfg.storm_seed, training=True)
         out.append(Path(cfg.out))
         # The run's world: its own saved signal when resuming, else built from its spec.
         world = load_world(Path(cfg.out), cfg) if args.resume else None
