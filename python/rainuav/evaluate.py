@@ -32,7 +32,6 @@ from pathlib import Path
 from rainuav import _cli
 from rainuav._checks import check_integer
 from rainuav._io import check_out_dir, write_atomic
-from rainuav.errors import InvalidInputError
 
 OTHER_WORLD = ("scenario", "rain_rate", "engine", "storm_seed")
 """The flags that fly the run in another world."""
@@ -50,25 +49,23 @@ def _out_dir(args: argparse.Namespace) -> Path:
 
 
 def _world(args: argparse.Namespace) -> object:
-    """The world to fly in: None (the run's own), or the run's spec with the flags given."""
+    """The world to fly in: None (the run's own), or a function of the run's configuration
+    that builds its spec with the flags given (called once the run's files are read)."""
     import dataclasses
 
-    from rainuav.rl.config import load_config
     from rainuav.world import build_world, spec_of
 
     if all(getattr(args, k) is None for k in OTHER_WORLD):
         return None
-    path = args.run_dir / "config.toml"
-    if not path.exists():
-        raise InvalidInputError(
-            f"{args.run_dir}: missing config.toml; is this a rainuav.train output?"
-        )
-    spec = spec_of(load_config(path))
     changes = {k: getattr(args, k) for k in OTHER_WORLD if getattr(args, k) is not None}
     if args.scenario is not None:
         changes["scenario_file"] = ""  # another preset comes in its own weather
         changes.setdefault("rain_rate", None)
-    return build_world(dataclasses.replace(spec, **changes), progress=True)
+
+    def build(cfg: object) -> object:
+        return build_world(dataclasses.replace(spec_of(cfg), **changes), progress=True)
+
+    return build
 
 
 def main(argv: Sequence[str] | None = None) -> int:

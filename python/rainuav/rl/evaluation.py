@@ -8,6 +8,7 @@ starts during training (:class:`Validation`)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -272,7 +273,7 @@ def evaluate_saved_run(
     run_dir: Path,
     device: str = "cpu",
     *,
-    world: World | None = None,
+    world: World | Callable[[TrainConfig], World] | None = None,
     radio_map: RadioMap | None = None,
     starts: int | None = None,
     seed: int | None = None,
@@ -283,12 +284,13 @@ def evaluate_saved_run(
     """Flies a saved training run's policy (the network the run reports: the final one, the
     weight average with ``average_from``, or with ``keep_best`` the best on validation). In
     the run's own world by default; ``world`` (built by the caller, e.g. another scenario,
-    rain rate or storm: :func:`rainuav.world.build_world`) or ``radio_map`` (another map, with
-    the run's task) fly it elsewhere. ``starts``/``seed``: the number and seed of the fixed
-    starts (default: the run's evaluation starts); ``shield``: report shielded flights beside
-    the network's own; ``online``: fly the last online network instead of the one the run
-    reports (they differ with ``average_from`` < 1 or ``keep_best``; ``metrics["network"]``
-    says which flew). ``references``: a dict the caller keeps to reuse the exact planner's
+    rain rate or storm: :func:`rainuav.world.build_world`; or a function of the run's
+    configuration that builds it, called once the run's files are read) or ``radio_map``
+    (another map, with the run's task) fly it elsewhere. ``starts``/``seed``: the number and
+    seed of the fixed starts (default: the run's evaluation starts); ``shield``: report
+    shielded flights beside the network's own; ``online``: fly the last online network
+    instead of the one the run reports (they differ with ``average_from`` < 1 or
+    ``keep_best``; ``metrics["network"]`` says which flew). ``references``: a dict the caller keeps to reuse the exact planner's
     flights between calls on the same world and task. Returns the metrics, the flights and the
     environment; writes nothing."""
     run = Path(run_dir)
@@ -306,6 +308,8 @@ def evaluate_saved_run(
     state = checkpoint.load(path, ("agent", "returns", "train_seconds"))
     if world is not None and radio_map is not None:
         raise InvalidInputError("give world or radio_map, not both")
+    if callable(world):
+        world = world(cfg)
     try:
         if radio_map is not None:
             world = world_from(radio_map, task_of(cfg))
