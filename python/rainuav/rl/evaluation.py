@@ -290,9 +290,9 @@ def evaluate_saved_run(
     seed of the fixed starts (default: the run's evaluation starts); ``shield``: report
     shielded flights beside the network's own; ``online``: fly the last online network
     instead of the one the run reports (they differ with ``average_from`` < 1 or
-    ``keep_best``; ``metrics["network"]`` says which flew). ``references``: a dict the caller keeps to reuse the exact planner's
-    flights between calls on the same world and task. Returns the metrics, the flights and the
-    environment; writes nothing."""
+    ``keep_best``; ``metrics["network"]`` says which flew). ``references``: a dict the caller
+    keeps to reuse the exact planner's flights between calls on the same world and task.
+    Returns the metrics, the flights and the environment; writes nothing."""
     run = Path(run_dir)
     if starts is not None:
         check_integer("starts", starts, 1, MAX_STARTS)
