@@ -545,7 +545,9 @@ def test_ctrl_c_is_one_line_and_exit_130(tmp_path, monkeypatch, capsys) -> None:
     ]
     assert not (tmp_path / "m").exists()
     import rainuav.rl.loop
+    import rainuav.world
 
+    monkeypatch.setattr(rainuav.world, "build_world", lambda *_, **__: None)  # no map here
     monkeypatch.setattr(rainuav.rl.loop, "train", interrupt)
     rc, err = run_cli(train, ["--out", tmp_path / "r"], capsys)
     assert rc == 130 and err.strip().splitlines() == [
