@@ -180,13 +180,26 @@ impl NavTask<'_> {
         j: i64,
         a: usize,
     ) -> (f64, bool, (i64, i64), [f64; 2]) {
+        self.transition_with(start, i, j, a, |x, y| self.sir_at(x, y))
+    }
+
+    /// `transition` with the signal read by `signal(x, y)` at the (clamped) new position:
+    /// the one move rule the static and the space-time planners share.
+    pub(crate) fn transition_with(
+        &self,
+        start: [f64; 2],
+        i: i64,
+        j: i64,
+        a: usize,
+        signal: impl Fn(f64, f64) -> f64,
+    ) -> (f64, bool, (i64, i64), [f64; 2]) {
         let [x0, x1, y0, y1] = self.extent;
         let (ni, nj) = (i + MOVES[a].0, j + MOVES[a].1);
         let qx = start[0] + self.step_m * ni as f64;
         let qy = start[1] + self.step_m * nj as f64;
         let out = qx < x0 || qx > x1 || qy < y0 || qy > y1;
         let (cx, cy) = (qx.clamp(x0, x1), qy.clamp(y0, y1));
-        let b = self.base_reward(self.sir_at(cx, cy));
+        let b = self.base_reward(signal(cx, cy));
         if out {
             return (b - self.out_of_bounds_penalty, true, (ni, nj), [cx, cy]);
         }
@@ -194,6 +207,40 @@ impl NavTask<'_> {
             return (b + self.goal_reward, true, (ni, nj), [qx, qy]);
         }
         (b, false, (ni, nj), [qx, qy])
+    }
+
+    /// The plan a backward programme's `policy` (`t_max` rows of `n` lattice states, indexed
+    /// by `idx`) gives from `start`: its actions, path and return, each move's reward from
+    /// `step(t, i, j, a)` summed as the environment does.
+    pub(crate) fn replay(
+        &self,
+        start: [f64; 2],
+        policy: &[u8],
+        n: usize,
+        idx: impl Fn(i64, i64) -> usize,
+        step: impl Fn(usize, i64, i64, usize) -> (f64, bool, (i64, i64), [f64; 2]),
+    ) -> Plan {
+        let (mut i, mut j) = (0i64, 0i64);
+        let mut actions = Vec::new();
+        let mut path = vec![start];
+        let mut ret = 0.0;
+        for t in 0..policy.len() / n {
+            let a = policy[t * n + idx(i, j)] as usize;
+            let (r, term, (ti, tj), pos) = step(t, i, j, a);
+            actions.push(a as u8);
+            path.push(pos);
+            ret += r;
+            if term {
+                break;
+            }
+            i = ti;
+            j = tj;
+        }
+        Plan {
+            return_: ret,
+            actions,
+            path,
+        }
     }
 
     /// Lattice offsets `(i_lo, i_hi, j_lo, j_hi)` the plan from `start` tabulates: those
@@ -353,27 +400,9 @@ impl NavTask<'_> {
             std::mem::swap(&mut v, &mut v_next);
         }
         // Replay the policy to get the actions, path and return (summed as the env does).
-        let (mut i, mut j) = (0i64, 0i64);
-        let mut actions = Vec::new();
-        let mut path = vec![start];
-        let mut ret = 0.0;
-        for t in 0..t_max {
-            let a = policy[t * n + idx(i, j)] as usize;
-            let (r, term, (ti, tj), pos) = self.transition(start, i, j, a);
-            actions.push(a as u8);
-            path.push(pos);
-            ret += r;
-            if term {
-                break;
-            }
-            i = ti;
-            j = tj;
-        }
-        Ok(Plan {
-            return_: ret,
-            actions,
-            path,
-        })
+        Ok(self.replay(start, &policy, n, idx, |_, i, j, a| {
+            self.transition(start, i, j, a)
+        }))
     }
 }
 

@@ -287,27 +287,9 @@ impl NavTask<'_> {
             std::mem::swap(&mut v, &mut v_next);
         }
         // Replay: the rewards summed as the environment does, at each move's instant.
-        let (mut i, mut j) = (0i64, 0i64);
-        let mut actions = Vec::new();
-        let mut path = vec![start];
-        let mut ret = 0.0;
-        for t in 0..t_max {
-            let a = policy[t * n + idx(i, j)] as usize;
-            let (r, term, (ti, tj), pos) = self.transition_at(tl, start, i, j, a, t);
-            actions.push(a as u8);
-            path.push(pos);
-            ret += r;
-            if term {
-                break;
-            }
-            i = ti;
-            j = tj;
-        }
-        Ok(Plan {
-            return_: ret,
-            actions,
-            path,
-        })
+        Ok(self.replay(start, &policy, n, idx, |t, i, j, a| {
+            self.transition_at(tl, start, i, j, a, t)
+        }))
     }
 
     /// `transition` with the signal of move `t`'s instant: `(reward, terminal, new offset,
@@ -321,20 +303,8 @@ impl NavTask<'_> {
         a: usize,
         t: usize,
     ) -> (f64, bool, (i64, i64), [f64; 2]) {
-        let [x0, x1, y0, y1] = self.extent;
-        let (ni, nj) = (i + MOVES[a].0, j + MOVES[a].1);
-        let qx = start[0] + self.step_m * ni as f64;
-        let qy = start[1] + self.step_m * nj as f64;
-        let out = qx < x0 || qx > x1 || qy < y0 || qy > y1;
-        let (cx, cy) = (qx.clamp(x0, x1), qy.clamp(y0, y1));
-        let b = self.base_reward(tl.signal_at(self.extent, cx, cy, tl.time_of_move(t)));
-        if out {
-            return (b - self.out_of_bounds_penalty, true, (ni, nj), [cx, cy]);
-        }
-        if (qx - self.goal[0]).hypot(qy - self.goal[1]) <= self.tol_m {
-            return (b + self.goal_reward, true, (ni, nj), [qx, qy]);
-        }
-        (b, false, (ni, nj), [qx, qy])
+        let tau = tl.time_of_move(t);
+        self.transition_with(start, i, j, a, |x, y| tl.signal_at(self.extent, x, y, tau))
     }
 }
 
