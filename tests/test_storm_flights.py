@@ -106,7 +106,8 @@ def test_time_is_in_the_observation_and_the_signal_is_read_at_the_move_instant()
     assert obs[2] == pytest.approx(1 / 20)
     f = env.field
     # Linear in time between the slices at 0 s and 3 s, bilinear in space.
-    expected = (1 / 3) * f.slices[0](15.0, 5.0) + (2 / 3) * f.slices[1](15.0, 5.0)
+    s0, s1 = (SignalField(f.db[k], EXT)(15.0, 5.0) for k in (0, 1))
+    expected = (1 / 3) * s0 + (2 / 3) * s1
     assert info["signal_db"] == pytest.approx(expected, abs=1e-12)
     assert env.observation_space.contains(obs)
 

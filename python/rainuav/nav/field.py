@@ -21,11 +21,57 @@ from rainuav.errors import InvalidInputError
 __all__ = ["SignalField", "SignalSeries", "SirField"]
 
 
+def _checked(
+    values_db: npt.ArrayLike,
+    extent_m: Any,
+    name: str,
+    serving_cell: npt.ArrayLike | None,
+    dims: str,
+) -> tuple[np.ndarray, tuple[float, float, float, float], np.ndarray | None]:
+    """The values (``dims``: ``"(H, W)"`` or ``"(K, H, W)"``), finite; the extent; the
+    serving cells of the same shape, if given. Anything else: one line naming the field."""
+    ndim = dims.count(",") + 1
+    v = np.asarray(values_db, dtype=np.float64)
+    if v.ndim != ndim or min(v.shape) < 1:
+        raise InvalidInputError(f"{name} must be a {ndim}-D {dims} array (got shape {v.shape})")
+    if not np.all(np.isfinite(v)):
+        raise InvalidInputError(f"{name} must be finite everywhere (no NaN or inf)")
+    e = np.asarray(extent_m, dtype=np.float64)
+    if e.shape != (4,) or not np.all(np.isfinite(e)):
+        raise InvalidInputError(f"extent_m must be (x_min, x_max, y_min, y_max) (got {extent_m!r})")
+    if not (e[1] > e[0] and e[3] > e[2]):
+        raise InvalidInputError(
+            f"extent_m must have x_max > x_min and y_max > y_min (got {extent_m!r})"
+        )
+    serving = None
+    if serving_cell is not None:
+        sv = np.asarray(serving_cell)
+        if sv.shape != v.shape:
+            raise InvalidInputError(
+                f"serving_cell must have the shape of {name}, {v.shape} (got {sv.shape})"
+            )
+        serving = sv.astype(np.int64)
+    extent = (float(e[0]), float(e[1]), float(e[2]), float(e[3]))
+    return np.ascontiguousarray(v), extent, serving
+
+
+def _pixel(shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any) -> tuple[Any, Any]:
+    """The (row, column) of the pixel holding each point ``(x, y)`` (clamped to the map)."""
+    x0, x1, y0, y1 = extent
+    h, w = shape[-2:]
+    j = np.clip(np.floor((np.asarray(x, dtype=np.float64) - x0) / (x1 - x0) * w), 0, w - 1)
+    i = np.clip(np.floor((np.asarray(y, dtype=np.float64) - y0) / (y1 - y0) * h), 0, h - 1)
+    return i.astype(np.int64), j.astype(np.int64)
+
+
 class SignalField:
     """A SINR (or SIR) map in dB over ``extent_m = (x_min, x_max, y_min, y_max)``, sampled
     bilinearly between pixel centres (:func:`rainuav._sampling.bilinear`). ``name`` is the
     array's name in error messages; ``serving_cell`` (H, W), optional, is looked up at the
     nearest pixel."""
+
+    varies = False
+    """One map: the signal does not change in time."""
 
     def __init__(
         self,
@@ -34,34 +80,10 @@ class SignalField:
         name: str = "sinr_db",
         serving_cell: npt.ArrayLike | None = None,
     ):
-        s = np.asarray(values_db, dtype=np.float64)
-        if s.ndim != 2 or min(s.shape) < 1:
-            raise InvalidInputError(f"{name} must be a 2-D (H, W) array (got shape {s.shape})")
-        if not np.all(np.isfinite(s)):
-            raise InvalidInputError(f"{name} must be finite everywhere (no NaN or inf)")
-        e = np.asarray(extent_m, dtype=np.float64)
-        if e.shape != (4,) or not np.all(np.isfinite(e)):
-            raise InvalidInputError(
-                f"extent_m must be (x_min, x_max, y_min, y_max) (got {extent_m!r})"
-            )
-        if not (e[1] > e[0] and e[3] > e[2]):
-            raise InvalidInputError(
-                f"extent_m must have x_max > x_min and y_max > y_min (got {extent_m!r})"
-            )
-        self.db = np.ascontiguousarray(s)
+        self.db, self.extent, self.serving = _checked(
+            values_db, extent_m, name, serving_cell, "(H, W)"
+        )
         self.name = name
-        self.extent = (float(e[0]), float(e[1]), float(e[2]), float(e[3]))
-        self.serving: np.ndarray | None = None
-        if serving_cell is not None:
-            sv = np.asarray(serving_cell)
-            if sv.shape != s.shape:
-                raise InvalidInputError(
-                    f"serving_cell must have the map's shape {s.shape} (got {sv.shape})"
-                )
-            self.serving = sv.astype(np.int64)
-
-    varies = False
-    """One map: the signal does not change in time."""
 
     def __call__(self, x: Any, y: Any, t_s: Any = None) -> Any:
         """The map at the points ``(x, y)`` (bilinear between pixel centres, edge values
@@ -70,24 +92,13 @@ class SignalField:
 
     def serving_cell(self, x: Any, y: Any, t_s: Any = None) -> Any:
         """The serving cell at the pixel holding ``(x, y)`` (-1 where the map names none)."""
-        return _nearest_pixel(self.serving, self.db.shape, self.extent, x, y)
+        if self.serving is None:
+            return np.full(np.broadcast(np.asarray(x), np.asarray(y)).shape, -1, dtype=np.int64)
+        return self.serving[_pixel(self.db.shape, self.extent, x, y)]
 
     def frozen(self, t_s: float = 0.0) -> SignalField:
         """The map at ``t_s``: this one."""
         return self
-
-
-def _nearest_pixel(
-    serving: np.ndarray | None, shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any
-) -> Any:
-    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-    if serving is None:
-        return np.full(np.broadcast(x, y).shape, -1, dtype=np.int64)
-    x0, x1, y0, y1 = extent
-    h, w = shape[-2:]
-    j = np.clip(np.floor((x - x0) / (x1 - x0) * w).astype(np.int64), 0, w - 1)
-    i = np.clip(np.floor((y - y0) / (y1 - y0) * h).astype(np.int64), 0, h - 1)
-    return serving[i, j]
 
 
 class SignalSeries:
@@ -109,55 +120,23 @@ class SignalSeries:
         name: str = "sinr_db",
         serving_cell: npt.ArrayLike | None = None,
     ):
-        v = np.asarray(values_db, dtype=np.float64)
-        if v.ndim != 3 or min(v.shape) < 1:
-            raise InvalidInputError(f"{name} must be a 3-D (K, H, W) array (got shape {v.shape})")
+        self.db, self.extent, self.serving = _checked(
+            values_db, extent_m, name, serving_cell, "(K, H, W)"
+        )
         t = np.asarray(t_s, dtype=np.float64)
-        if t.shape != (v.shape[0],) or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        k = self.db.shape[0]
+        if t.shape != (k,) or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
             raise InvalidInputError(
-                f"t_s must be {v.shape[0]} finite, strictly increasing instants (got {t.shape})"
+                f"t_s must be {k} finite, strictly increasing instants (got {t.shape})"
             )
-        self.slices = [SignalField(v[k], extent_m, name) for k in range(v.shape[0])]
-        self.db = np.ascontiguousarray(v)
         self.t_s = np.ascontiguousarray(t)
         self.name = name
-        self.extent = self.slices[0].extent
-        self.serving: np.ndarray | None = None
-        if serving_cell is not None:
-            sv = np.asarray(serving_cell)
-            if sv.shape != v.shape:
-                raise InvalidInputError(
-                    f"serving_cell must have the series' shape {v.shape} (got {sv.shape})"
-                )
-            self.serving = sv.astype(np.int64)
 
-    def bracket(self, t_s: float) -> tuple[int, int, float]:
-        """The slices around ``t_s`` and the later one's weight ``(k0, k1, f)``; ``k0 == k1``
-        at a slice's instant and beyond the first or the last."""
-        t = self.t_s
-        k = int(np.searchsorted(t, t_s, side="left"))
-        if k < len(t) and t[k] == t_s:
-            return k, k, 0.0
-        if k == 0:
-            return 0, 0, 0.0
-        if k == len(t):
-            return k - 1, k - 1, 0.0
-        return k - 1, k, float((t_s - t[k - 1]) / (t[k] - t[k - 1]))
-
-    def __call__(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
-        """The signal at the points ``(x, y)`` at the instants ``t_s`` (a number, or one per
-        point)."""
-        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        tau = np.broadcast_to(np.asarray(t_s, dtype=np.float64), np.broadcast(x, y).shape)
-        k0, k1, f = self.brackets(tau)
-        v0 = bilinear(self.db, self.extent, x, y, k0)
-        v1 = bilinear(self.db, self.extent, x, y, k1)
-        out = np.where(k0 == k1, v0, (1.0 - f) * v0 + f * v1)
-        return out[()] if out.ndim == 0 else out
-
-    def brackets(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`bracket` for every instant of ``tau`` at once."""
-        t = self.t_s
+    def brackets(self, tau: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For each instant of ``tau``: the slices around it and the later one's weight
+        ``(k0, k1, f)``; ``k0 == k1`` at a slice's own instant and beyond the first or the
+        last (``Timeline::bracket``)."""
+        t, tau = self.t_s, np.asarray(tau, dtype=np.float64)
         k = np.searchsorted(t, tau, side="left")
         hit = (k < len(t)) & (t[np.minimum(k, len(t) - 1)] == tau)
         k1 = np.where(hit, k, np.clip(k, 0, len(t) - 1))
@@ -166,24 +145,30 @@ class SignalSeries:
         f = np.where(k0 == k1, 0.0, (tau - lo) / np.where(hi > lo, hi - lo, 1.0))
         return k0, k1, f
 
+    def __call__(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
+        """The signal at the points ``(x, y)`` at the instants ``t_s`` (a number, or one per
+        point)."""
+        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        k0, k1, f = self.brackets(np.broadcast_to(t_s, np.broadcast(x, y).shape))
+        v0 = bilinear(self.db, self.extent, x, y, k0)
+        v1 = bilinear(self.db, self.extent, x, y, k1)
+        out = np.where(k0 == k1, v0, (1.0 - f) * v0 + f * v1)
+        return out[()] if out.ndim == 0 else out
+
     def serving_cell(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
         """The serving cell at the pixel holding ``(x, y)`` in the latest slice at or before
         ``t_s`` (a number, or one per point; -1 where the series names none)."""
-        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        shape = np.broadcast(x, y, np.asarray(t_s)).shape
+        shape = np.broadcast(np.asarray(x), np.asarray(y), np.asarray(t_s)).shape
         if self.serving is None:
             return np.full(shape, -1, dtype=np.int64)
-        k = np.maximum(np.searchsorted(self.t_s, np.broadcast_to(t_s, shape), side="right") - 1, 0)
-        x0, x1, y0, y1 = self.extent
-        h, w = self.db.shape[1:]
-        j = np.clip(np.floor((x - x0) / (x1 - x0) * w).astype(np.int64), 0, w - 1)
-        i = np.clip(np.floor((y - y0) / (y1 - y0) * h).astype(np.int64), 0, h - 1)
-        return self.serving[k, i, j]
+        k = np.searchsorted(self.t_s, np.broadcast_to(t_s, shape), side="right") - 1
+        i, j = _pixel(self.db.shape, self.extent, x, y)
+        return self.serving[np.maximum(k, 0), i, j]
 
     def frozen(self, t_s: float = 0.0) -> SignalField:
         """The weather of ``t_s`` held still: the one map the series gives at that instant
         (what a tool that ignores the storm's motion plans on)."""
-        k0, k1, f = self.bracket(float(t_s))
+        k0, k1, f = (int(a) if a.dtype.kind == "i" else float(a) for a in self.brackets(t_s))
         v = self.db[k0] if k0 == k1 else (1.0 - f) * self.db[k0] + f * self.db[k1]
         return SignalField(v, self.extent, self.name)
 
