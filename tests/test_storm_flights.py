@@ -217,3 +217,14 @@ def test_the_train_cli_refuses_an_evaluation_storm_before_building_anything(tmp_
     err = capsys.readouterr().err
     assert rc == 2 and "evaluation storm" in err and "Traceback" not in err
     assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize(
+    ("kw", "field"),
+    [({"slice_s": 0.0}, "slice_s"), ({"freq_hz": "abc"}, "freq_hz"),
+     ({"rain_rate_mm_h": "abc"}, "rain_rate"), ({"storm_seed": 1.5}, "storm_seed")],
+)  # fmt: skip
+def test_gym_make_refuses_a_bad_weather_keyword_in_one_line(kw, field) -> None:
+    # Not silently replaced by a default (slice_s = 0 once became 5 s), never a TypeError.
+    with pytest.raises(InvalidInputError, match=field):
+        gym.make("rainuav/UAVNav-v0", scenario="storm", engine="ray", **kw)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -93,3 +94,28 @@ def check_integer(where: str, value: Any, lo: int, hi: int) -> int:
     if not ok or not lo <= int(value) <= hi:
         raise InvalidInputError(f"{where} must be an integer in {lo}..{hi} (got {value!r})")
     return int(value)
+
+
+_KINDS = {"int": (int,), "float": (int, float), "str": (str,), "bool": (bool,)}
+
+
+def field_kind(f: dataclasses.Field) -> tuple[str, bool]:
+    """The kind of a dataclass field (``"int"``, ``"float"``, ``"str"``, ``"bool"``, or the
+    annotation's text for anything else) and whether it may be None (``X | None``). The
+    annotations are strings (``from __future__ import annotations``)."""
+    kinds = str(f.type).replace(" ", "").split("|")
+    return kinds[0], "None" in kinds
+
+
+def check_field_kinds(obj: Any, prefix: str = "", only: type | None = None) -> None:
+    """Each field of the dataclass ``obj`` (of the dataclass ``only``, where given) holds its
+    annotated kind (``X | None`` may be None; a bool is not a number); a TOML file or a
+    caller can hand in anything."""
+    for f in dataclasses.fields(only or obj):
+        value = getattr(obj, f.name)
+        kind, optional = field_kind(f)
+        allowed = _KINDS.get(kind)
+        if allowed is None or (value is None and optional):
+            continue
+        if not isinstance(value, allowed) or (kind != "bool" and isinstance(value, bool)):
+            raise InvalidInputError(f"{prefix}{f.name} must be {kind} (got {value!r})")

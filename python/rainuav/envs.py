@@ -25,6 +25,9 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
+import numpy as np
+
+from rainuav._checks import check_number
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import make_config
@@ -46,18 +49,23 @@ def _world_env(
         )
     nav = make_config(**task)
     shared = {f.name for f in dataclasses.fields(WorldSpec)} & set(task) - {"goal_m"}
-    freq = weather.get("freq_hz")
+    freq = weather["freq_hz"]
+    given = {
+        "rain_rate": weather["rain_rate_mm_h"],
+        "engine": weather["engine"],
+        "freq_ghz": None if freq is None else check_number("freq_hz", freq, 1e9, 100e9) / 1e9,
+        "storm_seed": weather["storm_seed"],
+        "slice_s": weather["slice_s"],
+    }
+    # numpy scalars (a seed from an rng, say) as the plain numbers a spec holds
+    given = {k: v.item() if isinstance(v, np.generic) else v for k, v in given.items()}
     spec = WorldSpec(
         scenario=scenario if isinstance(scenario, str) else "paper",
-        rain_rate=weather.get("rain_rate_mm_h"),
-        engine=weather.get("engine") or "",
-        freq_ghz=None if freq is None else float(freq) / 1e9,
-        storm_seed=weather.get("storm_seed") or 0,
-        slice_s=weather.get("slice_s") or 5.0,
+        **{k: v for k, v in given.items() if v is not None},
         **{k: task[k] for k in shared},
     )
-    given = None if isinstance(scenario, str) else scenario
-    return build_world(spec, task=nav, scenario=given).env()
+    scn = None if isinstance(scenario, str) else scenario
+    return build_world(spec, task=nav, scenario=scn).env()
 
 
 def make_nav_env(

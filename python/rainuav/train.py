@@ -54,7 +54,8 @@ def _parse_bool(text: str) -> bool:
 
 def build_parser() -> argparse.ArgumentParser:
     """CLI flags generated from TrainConfig and DQNConfig (one per field)."""
-    from rainuav.rl.config import DQNConfig, TrainConfig, field_kind
+    from rainuav._checks import field_kind
+    from rainuav.rl.config import DQNConfig, TrainConfig
 
     flag_types = {"int": int, "float": float, "str": str, "bool": _parse_bool}
     ap = argparse.ArgumentParser(

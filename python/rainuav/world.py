@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from rainuav._checks import check_field_kinds
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField, SignalSeries
@@ -128,7 +129,9 @@ def task_of(spec: WorldSpec) -> NavConfig:
 
 
 def check_spec(spec: Any) -> None:
-    """Raises InvalidInputError naming the first field of the spec outside its range."""
+    """Raises InvalidInputError naming the first field of the spec of the wrong kind or
+    outside its range."""
+    check_field_kinds(spec, only=WorldSpec)  # the kinds first: a caller can hand in anything
     checks = [
         ("engine", spec.engine in ENGINES, "'', 'hybrid', 'ray' or 'pe'"),
         ("freq_ghz", spec.freq_ghz is None or 1 <= spec.freq_ghz <= 100, "unset or in [1, 100]"),

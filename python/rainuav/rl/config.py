@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from rainuav._checks import check_field_kinds
 from rainuav._io import read_toml
 from rainuav.errors import InvalidInputError
 from rainuav.world import WorldSpec, check_spec
@@ -24,7 +25,6 @@ __all__ = [
     "apply_preset",
     "check_config",
     "config_diff",
-    "field_kind",
     "load_config",
     "random_streams",
     "read_config",
@@ -149,37 +149,14 @@ MAX_LANES = 4096
 """The most UAVs in flight at once during training (each is its own Python N-step window;
 the tuned learner flies 16)."""
 
-_KINDS = {"int": (int,), "float": (int, float), "str": (str,), "bool": (bool,)}
-
-
-def field_kind(f: dataclasses.Field) -> tuple[str, bool]:
-    """The kind of a config field (``"int"``, ``"float"``, ``"str"``, ``"bool"``, or the
-    annotation's text for anything else) and whether it may be None (``X | None``). The
-    annotations are strings (``from __future__ import annotations``)."""
-    kinds = str(f.type).replace(" ", "").split("|")
-    return kinds[0], "None" in kinds
-
-
-def _check_types(obj: Any, prefix: str = "") -> None:
-    """Each field of the dataclass ``obj`` holds its annotated kind (``X | None`` may be
-    None); a TOML file or a caller can hand in anything."""
-    for f in dataclasses.fields(obj):
-        value = getattr(obj, f.name)
-        kind, optional = field_kind(f)
-        allowed = _KINDS.get(kind)
-        if allowed is None or (value is None and optional):
-            continue
-        if not isinstance(value, allowed) or (kind != "bool" and isinstance(value, bool)):
-            raise InvalidInputError(f"{prefix}{f.name} must be {kind} (got {value!r})")
-
 
 def check_config(cfg: TrainConfig) -> None:
     """Raises InvalidInputError naming the first field of the wrong kind or outside its
     allowed range."""
     if not isinstance(cfg.dqn, DQNConfig):
         raise InvalidInputError(f"dqn must be a DQNConfig (got {type(cfg.dqn).__name__})")
-    _check_types(cfg)
-    _check_types(cfg.dqn, "dqn.")
+    check_field_kinds(cfg)
+    check_field_kinds(cfg.dqn, "dqn.")
     d = cfg.dqn
     checks = [
         ("episodes", d.episodes >= 1, ">= 1"),
