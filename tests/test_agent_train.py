@@ -16,10 +16,11 @@ from rainuav.radio import RadioMap
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import DQNConfig, TrainConfig
-from rainuav.rl.dqn import DuelingQNet, NStepWindow, Replay, double_q_target
+from rainuav.rl.dqn import NStepWindow, Replay, double_q_target
 from rainuav.rl.evaluation import Validation, eval_starts, evaluate, evaluate_saved_run
 from rainuav.rl.learner import GOAL_START_MOVES, learning_reward, training_start
 from rainuav.rl.loop import train
+from rainuav.rl.networks import DuelingQNet
 from rainuav.rl.setup import make_agent
 from rainuav.world import in_world, saved_world
 

@@ -4,6 +4,12 @@
     python -m rainuav.evaluate runs/paper --rain-rate 50            # the same network in rain
     python -m rainuav.evaluate runs/uma --scenario rain_cell --starts 100 --seed 7 --shield
     python -m rainuav.evaluate runs/storm0 --scenario storm --storm-seed 1000003
+    python -m rainuav.evaluate runs/storms --storm-seeds 1000000-1000049 --starts 20
+
+``--storm-seeds A-B`` flies the network through every storm of the range (20 starts each by
+default; ``--random-goals``: each start to its own destination) with every baseline and
+writes the per-storm figures and their mean (:mod:`rainuav.rl.storm_eval`) into
+``RUN_DIR/eval_storms_A-B`` with ``evaluation_storm_flights.png`` of the first storm.
 
 Loads the run's ``config.toml`` and ``checkpoint.pt`` and flies the network the run reports
 (the weight average of the last episodes, the final one with ``average_from = 1``, or with
@@ -79,6 +85,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--rain-rate", type=float, default=None, help="homogeneous rain, mm/h")
     ap.add_argument("--engine", default=None, choices=("hybrid", "ray", "pe"))
     ap.add_argument("--storm-seed", type=int, default=None, help="fly through this storm")
+    ap.add_argument("--storm-seeds", default=None, help="fly through every storm A-B (inclusive)")
+    ap.add_argument(
+        "--random-goals", action="store_true", help="with --storm-seeds: a destination per start"
+    )
     ap.add_argument("--starts", type=int, default=None, help="number of fixed starts")
     ap.add_argument("--seed", type=int, default=None, help="seed of the starts")
     ap.add_argument("--shield", action="store_true", help="also report shielded flights")
@@ -102,6 +112,8 @@ def _evaluate(args: argparse.Namespace) -> int:
         check_integer("--starts", args.starts, 1, MAX_STARTS)
     if args.seed is not None:
         check_integer("--seed", args.seed, 0, MAX_SEED)
+    if args.storm_seeds is not None:
+        return _evaluate_storms(args)
     out = check_out_dir(_out_dir(args))  # before any work
     metrics, rolls, env = evaluate_saved_run(
         args.run_dir,
@@ -118,6 +130,38 @@ def _evaluate(args: argparse.Namespace) -> int:
     if env.field.varies:
         plot_storm_flights(env, rolls[:6], out / "evaluation_storm_flights.png")
     print(text)
+    print(f"wrote {out.resolve()}", file=sys.stderr)
+    return 0
+
+
+def _evaluate_storms(args: argparse.Namespace) -> int:
+    from rainuav.errors import InvalidInputError
+    from rainuav.rl.plots import plot_storm_flights
+    from rainuav.rl.storm_eval import evaluate_storms, parse_seeds
+
+    seeds = parse_seeds(args.storm_seeds)
+    others = [k for k in OTHER_WORLD if getattr(args, k) is not None] + ["online"] * args.online
+    if others or args.shield:
+        raise InvalidInputError(
+            "--storm-seeds: give no --scenario, --rain-rate, --engine, "
+            "--storm-seed, --online or --shield beside it"
+        )
+    goals = "_random_goals" if args.random_goals else ""
+    name = f"eval_storms_{seeds[0]}-{seeds[-1]}{goals}"
+    out = check_out_dir(args.out if args.out is not None else args.run_dir / name)
+    result, first = evaluate_storms(
+        args.run_dir,
+        seeds,
+        starts=20 if args.starts is None else args.starts,
+        seed=args.seed,
+        random_goals=args.random_goals,
+        device=args.device,
+    )
+    text = json.dumps(result, indent=2)
+    write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))
+    if first is not None:
+        plot_storm_flights(first[0], first[1], out / "evaluation_storm_flights.png")
+    print(json.dumps(result["mean"], indent=2))
     print(f"wrote {out.resolve()}", file=sys.stderr)
     return 0
 

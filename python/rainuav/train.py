@@ -52,6 +52,21 @@ def _parse_bool(text: str) -> bool:
     raise argparse.ArgumentTypeError(f"expected true or false (got {text!r})")
 
 
+DEFAULT_POOL = 16
+"""Storms flown at once by ``--storm-seed random`` (one per UAV of the default 16 in flight)."""
+
+
+def _storm_seed(text: str) -> int | str:
+    """A storm seed, or 'random': the storm distribution (a pool of training storms)."""
+    if text == "random":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        msg = f"expected an integer or 'random' (got {text!r})"
+        raise argparse.ArgumentTypeError(msg) from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     """CLI flags generated from TrainConfig and DQNConfig (one per field)."""
     from rainuav._checks import field_kind
@@ -71,12 +86,19 @@ def build_parser() -> argparse.ArgumentParser:
             if f.name == "dqn":
                 continue
             default = "unset" if f.default is None else f.default
+            kind = _storm_seed if f.name == "storm_seed" else flag_types.get(field_kind(f)[0], str)
+            more = (
+                "; 'random': train one network over the storm distribution (--storm-pool "
+                f"{DEFAULT_POOL}, --observation weather, --random-goal true unless given)"
+                if f.name == "storm_seed"
+                else ""
+            )
             ap.add_argument(
                 f"--{f.name.replace('_', '-')}",
                 dest=f.name,
-                type=flag_types.get(field_kind(f)[0], str),
+                type=kind,
                 default=None,
-                help=f"{docs.get(f.name, '')} (default {default})",
+                help=f"{docs.get(f.name, '')}{more} (default {default})",
             )
     return ap
 
@@ -95,6 +117,11 @@ def config_from_args(args: argparse.Namespace) -> Any:
     for f in dataclasses.fields(TrainConfig):
         if f.name != "dqn" and getattr(args, f.name, None) is not None:
             base[f.name] = getattr(args, f.name)
+    if base.get("storm_seed") == "random":  # the storm distribution: a pool of storms
+        base["storm_seed"] = 0
+        base.setdefault("storm_pool", DEFAULT_POOL)
+        base.setdefault("observation", "weather")
+        base.setdefault("random_goal", True)
     cfg = TrainConfig(**base, dqn=DQNConfig(**dqn_kw))
     # A run's own config.toml (--resume) holds the preset's values already: not a clash.
     given = set(dqn_kw) if not (args.resume and args.config is None) else set()
@@ -153,6 +180,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         from rainuav.rl.loop import train
         from rainuav.rl.setup import check_fits
         from rainuav.world import build_world, load_world
+        from rainuav.world.pool import StormPool
 
         cfg = config_from_args(args)
         check_config(cfg)
@@ -165,6 +193,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         out.append(Path(cfg.out))
         # The run's world: its own saved signal when resuming, else built from its spec.
         world = load_world(Path(cfg.out), cfg) if args.resume else None
+        if cfg.storm_pool:
+            world = StormPool(cfg, cfg.seed).world()
         world = world or build_world(cfg, progress=True)
         metrics = train(cfg, world, resume=args.resume, progress=True)
         print(summary(metrics, Path(cfg.out)))

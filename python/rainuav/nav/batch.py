@@ -24,12 +24,21 @@ class BatchStepper:
         self.goal = np.asarray(cfg.goal_m, dtype=np.float64)
 
     def step(
-        self, start: np.ndarray, offset: np.ndarray, t: np.ndarray, action: np.ndarray
+        self,
+        start: np.ndarray,
+        offset: np.ndarray,
+        t: np.ndarray,
+        action: np.ndarray,
+        goal: np.ndarray | None = None,
+        world: np.ndarray | None = None,
     ) -> dict[str, np.ndarray]:
         """One move for every UAV. Returns new ``offset``, ``t``, ``position`` (after clamping),
         ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area),
-        ``arrived`` (reached the goal) and ``t_s`` (the instant the move ends, s)."""
+        ``arrived`` (reached the goal) and ``t_s`` (the instant the move ends, s). ``goal``
+        (N, 2): each UAV's destination (default: the task's); ``world`` (N,): each UAV's world
+        where the field is a :class:`rainuav.nav.field.SignalBank`."""
         cfg = self.cfg
+        g = self.goal if goal is None else np.asarray(goal, dtype=np.float64).reshape(-1, 2).T
         x0, x1, y0, y1 = self.field.extent
         new_off = offset + MOVES[action]
         q = start + cfg.step_m * new_off
@@ -37,9 +46,12 @@ class BatchStepper:
         qc = np.stack([np.clip(q[:, 0], x0, x1), np.clip(q[:, 1], y0, y1)], axis=1)
         t_new = t + 1
         t_s = self.time_s(t_new)
-        signal = self.field(qc[:, 0], qc[:, 1], t_s)
+        if world is None:
+            signal = self.field(qc[:, 0], qc[:, 1], t_s)
+        else:
+            signal = self.field(qc[:, 0], qc[:, 1], t_s, world)
         b = base_reward(signal, cfg)
-        arrived = ~out & (np.hypot(q[:, 0] - self.goal[0], q[:, 1] - self.goal[1]) <= cfg.tol_m)
+        arrived = ~out & (np.hypot(q[:, 0] - g[0], q[:, 1] - g[1]) <= cfg.tol_m)
         reward = (
             b
             - np.where(out, cfg.out_of_bounds_penalty, 0.0)
@@ -65,34 +77,40 @@ class BatchStepper:
         ``0 + t * move_s``, operation for operation)."""
         return 0.0 + np.asarray(t).astype(np.float64) * self.cfg.move_s
 
-    def moves_to_goal(self, position: np.ndarray) -> np.ndarray:
+    def moves_to_goal(self, position: np.ndarray, goal: np.ndarray | None = None) -> np.ndarray:
         """Fewest moves from each (N, 2) position to a point of its lattice within ``tol_m``
-        of the destination and inside the area (a monotone lattice path between two points of
-        the rectangle stays in it); ``inf`` where the lattice has no such point."""
+        of the destination (``goal`` (N, 2) or the task's) and inside the area (a monotone
+        lattice path between two points of the rectangle stays in it); ``inf`` where the
+        lattice has no such point."""
         cfg = self.cfg
+        g = self.goal if goal is None else np.asarray(goal, dtype=np.float64).reshape(-1, 1, 2)
         x0, x1, y0, y1 = self.field.extent
         s = cfg.step_m
         p = np.asarray(position, dtype=np.float64).reshape(-1, 1, 2)
         m = int(np.ceil(cfg.tol_m / s)) + 1
         grid = np.stack(np.meshgrid(np.arange(-m, m + 1), np.arange(-m, m + 1)), -1).reshape(-1, 2)
         # Every lattice offset within m of the one nearest the goal: (N, (2m+1)^2, 2).
-        k = np.round((self.goal - p) / s) + grid
+        k = np.round((g - p) / s) + grid
         q = p + s * k
         ok = (
-            (np.hypot(q[..., 0] - self.goal[0], q[..., 1] - self.goal[1]) <= cfg.tol_m)
+            (np.hypot(q[..., 0] - g[..., 0], q[..., 1] - g[..., 1]) <= cfg.tol_m)
             & (q[..., 0] >= x0) & (q[..., 0] <= x1) & (q[..., 1] >= y0) & (q[..., 1] <= y1)
         )  # fmt: skip
         return np.where(ok, np.abs(k).sum(axis=-1), np.inf).min(axis=-1)
 
-    def safe_actions(self, position: np.ndarray, t: np.ndarray) -> np.ndarray:
+    def safe_actions(
+        self, position: np.ndarray, t: np.ndarray, goal: np.ndarray | None = None
+    ) -> np.ndarray:
         """(N, 4) bool: the moves after which the UAV is still in the area and can still
-        arrive within ``max_steps`` (a shield: Alshiekh et al., AAAI 2018). Where no move
-        qualifies (a start too far to arrive in time) every move is allowed."""
+        arrive within ``max_steps`` (a shield: Alshiekh et al., AAAI 2018) at its ``goal``
+        (N, 2; default the task's). Where no move qualifies (a start too far to arrive in
+        time) every move is allowed."""
         p = np.asarray(position, dtype=np.float64).reshape(-1, 1, 2)
         left = self.cfg.max_steps - np.asarray(t).reshape(-1, 1) - 1  # moves left after this one
         x0, x1, y0, y1 = self.field.extent
         q = p + self.cfg.step_m * MOVES  # (N, 4, 2): the position after each move
         inside = (q[..., 0] >= x0) & (q[..., 0] <= x1) & (q[..., 1] >= y0) & (q[..., 1] <= y1)
-        ok = inside & (self.moves_to_goal(q).reshape(-1, 4) <= left)
+        gq = None if goal is None else np.repeat(np.asarray(goal, np.float64).reshape(-1, 2), 4, 0)
+        ok = inside & (self.moves_to_goal(q.reshape(-1, 2), gq).reshape(-1, 4) <= left)
         ok[~ok.any(axis=1)] = True
         return ok

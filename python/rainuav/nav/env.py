@@ -37,10 +37,16 @@ import numpy.typing as npt
 from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
-from rainuav.nav.field import SignalField, SignalSeries
+from rainuav.nav.field import SignalBank, SignalField, SignalSeries
 from rainuav.nav.task import SIGNALS, LoiteringWarning, NavConfig, check_config
+from rainuav.nav.views import WeatherView, sample_goal, sample_start_for
 
-__all__ = ["DEFAULT_MIN_DB", "UAVNavEnv", "check_action", "signal_field"]
+__all__ = ["DEFAULT_MIN_DB", "OBSERVATIONS", "UAVNavEnv", "check_action", "signal_field"]
+
+OBSERVATIONS = ("position", "weather")
+"""What the UAV observes: its position (and the time where the signal moves), or the weather
+around it and over the area with its position, time and destination
+(:class:`rainuav.nav.views.WeatherView`)."""
 
 DEFAULT_MIN_DB = 10.0
 """The outage threshold of a map that names none (the paper's minimum SIR), dB."""
@@ -115,11 +121,17 @@ class UAVNavEnv(gym.Env):
         start_m: tuple[float, float] | None = None,
         speed_m_s: float = 10.0,
         config: NavConfig | None = None,
-        field: SignalField | SignalSeries | None = None,
+        field: SignalField | SignalSeries | SignalBank | None = None,
+        observation: str = "position",
+        view: WeatherView | None = None,
+        random_goal: bool = False,
     ) -> None:
         """A map (``radio_map``, one raw array with ``extent_m``, or a built ``field``: a
-        signal in time) and the task: its fields as keywords, or a whole ``config`` (then
-        ``signal`` and ``min_db`` given here win)."""
+        signal in time, or a bank of worlds, one drawn per episode) and the task: its fields
+        as keywords, or a whole ``config`` (then ``signal`` and ``min_db`` given here win).
+        ``observation``: :data:`OBSERVATIONS` (``view`` sets the weather's grids);
+        ``random_goal``: a destination per episode (:func:`rainuav.nav.views.sample_goal`;
+        needs the weather observation, which shows it)."""
         super().__init__()
         cfg = config or NavConfig(
             goal_m=tuple(goal_m),
@@ -138,10 +150,12 @@ class UAVNavEnv(gym.Env):
         if field is not None:
             if radio_map is not None or sinr_db is not None or sir_db is not None:
                 raise InvalidInputError("give field or a map, not both")
-            if not isinstance(field, SignalField | SignalSeries):
+            if not isinstance(field, SignalField | SignalSeries | SignalBank):
                 kind = type(field).__name__
-                raise InvalidInputError(f"field must be a SignalField or SignalSeries (got {kind})")
-            self.field: SignalField | SignalSeries = field
+                raise InvalidInputError(
+                    f"field must be a SignalField, SignalSeries or SignalBank (got {kind})"
+                )
+            self.field: SignalField | SignalSeries | SignalBank = field
         else:
             self.field = signal_field(radio_map, sinr_db, sir_db, extent_m, signal)
         kind = self.field.name.removesuffix("_db")
@@ -159,10 +173,28 @@ class UAVNavEnv(gym.Env):
                 LoiteringWarning,
                 stacklevel=2,
             )
+        if observation not in OBSERVATIONS:
+            raise InvalidInputError(
+                f"observation must be one of {OBSERVATIONS} (got {observation!r})"
+            )
+        if random_goal and observation != "weather":
+            raise InvalidInputError(
+                "random_goal needs observation='weather' (the position alone does not show "
+                "the destination)"
+            )
+        if isinstance(self.field, SignalBank) and observation != "weather":
+            raise InvalidInputError("a bank of worlds needs observation='weather'")
+        self.observation, self.random_goal = observation, bool(random_goal)
+        self.view = (view or WeatherView()) if observation == "weather" else None
         self.stepper = BatchStepper(self.field, self.cfg)
-        dims = 3 if self.field.varies else 2
-        self.observation_space = gym.spaces.Box(0.0, 1.0, shape=(dims,), dtype=np.float32)
+        if self.view is not None:
+            self.observation_space: gym.spaces.Space = self.view.space()
+        else:
+            dims = 3 if self.field.varies else 2
+            self.observation_space = gym.spaces.Box(0.0, 1.0, shape=(dims,), dtype=np.float32)
         self.action_space = gym.spaces.Discrete(4)
+        self._goal = np.asarray(self.cfg.goal_m, dtype=np.float64)[None]
+        self._world = np.zeros(1, dtype=np.int64)
         self._start = np.zeros((1, 2))
         self._offset = np.zeros((1, 2), dtype=np.int64)
         self._t = np.zeros(1, dtype=np.int64)
@@ -170,9 +202,15 @@ class UAVNavEnv(gym.Env):
         self._ready = False  # reset() starts the first episode
 
     # -- helpers ----------------------------------------------------------------------------
-    def observe(self, pos: np.ndarray, t: Any = 0) -> np.ndarray:
-        """Position scaled to [0, 1]^2, float32 (works on (..., 2) arrays), and where the
-        signal changes in time the moves so far ``t`` over ``max_steps``."""
+    def observe(self, pos: np.ndarray, t: Any = 0, goal: Any = None, world: Any = None) -> Any:
+        """The observation at ``pos`` after ``t`` moves. Position observation: the position
+        scaled to [0, 1]^2, float32 (works on (..., 2) arrays), and where the signal changes
+        in time ``t`` over ``max_steps``. Weather observation: the
+        :class:`~rainuav.nav.views.WeatherView` dict for the destinations ``goal`` (N, 2;
+        default the task's) and, in a bank, the ``world`` (N,) each UAV flies; batched for
+        (N, 2) positions, one for a (2,) position."""
+        if self.view is not None:
+            return self._weather(pos, t, goal, world)
         x0, x1, y0, y1 = self.field.extent
         lo = np.array([x0, y0])
         xy = ((np.asarray(pos) - lo) / np.array([x1 - x0, y1 - y0])).astype(np.float32)
@@ -182,14 +220,57 @@ class UAVNavEnv(gym.Env):
         frac = np.broadcast_to(frac, xy.shape[:-1])[..., None]
         return np.concatenate([xy, frac.astype(np.float32)], axis=-1)
 
-    def sample_start(self, rng: np.random.Generator) -> np.ndarray:
-        """Uniform in the area, farther than tol_m from the goal."""
+    def _weather(self, pos: Any, t: Any, goal: Any, world: Any) -> dict[str, np.ndarray]:
+        assert self.view is not None and self.cfg.min_db is not None
+        p = np.asarray(pos, dtype=np.float64)
+        one = p.ndim == 1
+        p = p.reshape(-1, 2)
+        t = np.broadcast_to(np.asarray(t), (len(p),))
+        t_s = self.stepper.time_s(t)[:, None]
+        if isinstance(self.field, SignalBank):
+            w = np.broadcast_to(np.asarray(0 if world is None else world), (len(p),))[:, None]
+            field = self.field
+
+            def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+                return field(x, y, t_s, w)
+        else:
+
+            def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+                return self.field(x, y, t_s)
+
+        g = self.cfg.goal_m if goal is None else goal
+        frac = t.astype(np.float32) / np.float32(self.cfg.max_steps)
+        obs = self.view.observe(sample, self.field.extent, p, frac, g, self.cfg.min_db)
+        return {k: v[0] for k, v in obs.items()} if one else obs
+
+    def sample_start(self, rng: np.random.Generator, goal: Any = None) -> np.ndarray:
+        """Uniform in the area, farther than tol_m from the destination (``goal``, default
+        the task's)."""
         x0, x1, y0, y1 = self.field.extent
-        g = np.asarray(self.cfg.goal_m)
+        g = np.asarray(self.cfg.goal_m if goal is None else goal)
         while True:
             p = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1)])
             if np.hypot(*(p - g)) > self.cfg.tol_m:
                 return p
+
+    def draw_task(
+        self, rng: np.random.Generator, goal: Any = None
+    ) -> tuple[np.ndarray, np.ndarray, int]:
+        """A new episode's (start, destination, world): the world uniform among a bank's (0
+        otherwise), then the destination (``goal`` where given; drawn,
+        :func:`~rainuav.nav.views.sample_goal`, where ``random_goal``; else the task's), then
+        the start (:meth:`sample_start`, or within reach of a drawn destination)."""
+        world = int(rng.integers(self.field.worlds)) if isinstance(self.field, SignalBank) else 0
+        if goal is None and not self.random_goal:
+            return self.sample_start(rng), np.asarray(self.cfg.goal_m, dtype=np.float64), world
+        g = sample_goal(rng, self.field.extent) if goal is None else np.asarray(goal, float)
+        return sample_start_for(rng, self.field.extent, g, self.cfg), g, world
+
+    def signal(self, x: Any, y: Any, t_s: Any, world: Any = 0) -> Any:
+        """The signal at ``(x, y)`` at ``t_s`` (in a bank, of world ``world``)."""
+        if isinstance(self.field, SignalBank):
+            return self.field(x, y, t_s, world)
+        return self.field(x, y, t_s)
 
     @property
     def position_m(self) -> np.ndarray:
@@ -202,46 +283,80 @@ class UAVNavEnv(gym.Env):
         super().reset(seed=seed)
         if options is not None and not isinstance(options, dict):
             raise InvalidInputError(f"options must be a dict (got {type(options).__name__})")
-        start = (options or {}).get("start_m", self.cfg.start_m)
-        if start is None:
-            p = self.sample_start(self.np_random)
+        opts = options or {}
+        p = opts.get("start_m", self.cfg.start_m)
+        if p is not None:
+            p = self._inside("options['start_m']", p)
+        goal = opts.get("goal_m")
+        if goal is not None:
+            goal = self._inside("options['goal_m']", goal)
+        if self.view is None:
+            if goal is not None:
+                raise InvalidInputError("options['goal_m'] needs observation='weather'")
+            p = self.sample_start(self.np_random) if p is None else p
+            goal, world = np.asarray(self.cfg.goal_m, dtype=np.float64), 0
         else:
-            p = as_real_array("options['start_m']", start)
-            x0, x1, y0, y1 = self.field.extent
-            if p.shape != (2,) or not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
-                raise InvalidInputError(
-                    f"options['start_m'] must be (x, y) inside the area {self.field.extent} "
-                    f"(got {start!r})"
-                )
+            drawn, goal, world = self.draw_task(self.np_random, goal)
+            p = drawn if p is None else p
+            if "world" in opts:
+                world = self._world_option(opts["world"])
         self._start = p[None].copy()
+        self._goal, self._world = goal[None].copy(), np.array([world], dtype=np.int64)
         self._offset = np.zeros((1, 2), dtype=np.int64)
         self._t = np.zeros(1, dtype=np.int64)
         self._pos = p.copy()
         self._ready = True
-        return self.observe(p, 0), self._info(float(self.field(p[0], p[1], 0.0)))
+        obs = self.observe(p, 0, self._goal, self._world)
+        return obs, self._info(float(self.signal(p[0], p[1], 0.0, world)))
+
+    def _inside(self, name: str, value: Any) -> np.ndarray:
+        p = as_real_array(name, value)
+        x0, x1, y0, y1 = self.field.extent
+        if p.shape != (2,) or not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
+            raise InvalidInputError(
+                f"{name} must be (x, y) inside the area {self.field.extent} (got {value!r})"
+            )
+        return p
+
+    def _world_option(self, value: Any) -> int:
+        n = self.field.worlds if isinstance(self.field, SignalBank) else 1
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 0 <= value < n:
+            raise InvalidInputError(f"options['world'] must be an integer in 0..{n - 1}")
+        return int(value)
 
     def _info(self, signal: float, arrived: bool = False) -> dict[str, Any]:
         assert self.cfg.min_db is not None  # resolved in __init__
         t_s = float(self.stepper.time_s(self._t)[0])
-        return {
+        serving = getattr(self.field, "serving_cell", None)
+        info = {
             "signal_db": signal,
-            "serving_cell": int(self.field.serving_cell(self._pos[0], self._pos[1], t_s)),
+            "serving_cell": -1 if serving is None else int(serving(*self._pos, t_s)),
             "position_m": self._pos.copy(),
             "outage": bool(signal < self.cfg.min_db),
             "arrived": arrived,
             "t_s": t_s,
         }
+        if self.view is not None:
+            info["goal_m"] = self._goal[0].copy()
+            info["world"] = int(self._world[0])
+        return info
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         a = check_action(action)
         if not self._ready:
             raise InvalidInputError("step() before reset(): call reset() to start an episode")
-        r = self.stepper.step(self._start, self._offset, self._t, np.array([a]))
+        if self.view is None:
+            r = self.stepper.step(self._start, self._offset, self._t, np.array([a]))
+        else:
+            world = self._world if isinstance(self.field, SignalBank) else None
+            r = self.stepper.step(
+                self._start, self._offset, self._t, np.array([a]), self._goal, world
+            )
         self._offset, self._t = r["offset"], r["t"]
         self._pos = r["position"][0].copy()
         signal = float(r["signal_db"][0])
         return (
-            self.observe(self._pos, self._t[0]),
+            self.observe(self._pos, self._t[0], self._goal, self._world),
             float(r["reward"][0]),
             bool(r["terminated"][0]),
             bool(r["truncated"][0]),

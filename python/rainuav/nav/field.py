@@ -18,7 +18,7 @@ import numpy.typing as npt
 from rainuav._sampling import bilinear
 from rainuav.errors import InvalidInputError
 
-__all__ = ["SignalField", "SignalSeries", "SirField"]
+__all__ = ["SignalBank", "SignalField", "SignalSeries", "SirField"]
 
 
 def _checked(
@@ -171,6 +171,66 @@ class SignalSeries:
         k0, k1, f = (int(a) if a.dtype.kind == "i" else float(a) for a in self.brackets(t_s))
         v = self.db[k0] if k0 == k1 else (1.0 - f) * self.db[k0] + f * self.db[k1]
         return SignalField(v, self.extent, self.name)
+
+
+class SignalBank:
+    """Several worlds' signals in one array, each point reading its own world: ``values_db``
+    (P, K, H, W), the P worlds' maps at the common instants ``t_s`` (K,) over one extent, read
+    as each world's :class:`SignalSeries` reads it (a one-instant bank is P still maps). The
+    UAVs of one training batch fly different storms through one call; a world's slot is
+    replaced in place (:meth:`put`) when the learner moves on to a new storm."""
+
+    varies = True
+    """The worlds' signals may change in time (a bank of still maps says False)."""
+
+    def __init__(
+        self,
+        values_db: npt.ArrayLike,
+        t_s: npt.ArrayLike,
+        extent_m: tuple[float, float, float, float],
+        name: str = "sinr_db",
+    ):
+        v = np.asarray(values_db, dtype=np.float64)
+        if v.ndim != 4:
+            raise InvalidInputError(f"{name} must be a 4-D (P, K, H, W) array (got {v.shape})")
+        p, k, h, w = v.shape
+        self._series = SignalSeries(v.reshape(p * k, h, w), np.arange(p * k), extent_m, name)
+        self.db = self._series.db.reshape(p, k, h, w)
+        self.extent, self.name = self._series.extent, name
+        self._times = SignalSeries(np.zeros((k, 1, 1)), t_s, extent_m, "t_s")
+        self.t_s = self._times.t_s
+        self.varies = k > 1
+
+    @property
+    def worlds(self) -> int:
+        return self.db.shape[0]
+
+    def put(self, world: int, values_db: npt.ArrayLike) -> None:
+        """Replaces world ``world``'s maps (K, H, W) (checked: the bank's shape, finite)."""
+        v = np.asarray(values_db, dtype=np.float64)
+        if v.shape != self.db.shape[1:] or not np.all(np.isfinite(v)):
+            raise InvalidInputError(
+                f"{self.name} must be finite, of shape {self.db.shape[1:]} (got {v.shape})"
+            )
+        self.db[world] = v
+
+    def __call__(self, x: Any, y: Any, t_s: Any, world: Any) -> Any:
+        """The signal of world ``world`` (one per point, or one) at the points ``(x, y)`` at
+        the instants ``t_s``, as that world's :class:`SignalSeries` gives it."""
+        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        shape = np.broadcast(x, y, np.asarray(t_s), np.asarray(world)).shape
+        k0, k1, f = self._times.brackets(np.broadcast_to(t_s, shape))
+        base = np.broadcast_to(np.asarray(world, dtype=np.int64), shape) * self.db.shape[1]
+        v0 = bilinear(self._series.db, self.extent, x, y, base + k0)
+        v1 = bilinear(self._series.db, self.extent, x, y, base + k1)
+        out = np.where(k0 == k1, v0, (1.0 - f) * v0 + f * v1)
+        return out[()] if out.ndim == 0 else out
+
+    def member(self, world: int) -> SignalField | SignalSeries:
+        """World ``world``'s signal on its own (a copy)."""
+        if self.db.shape[1] == 1:
+            return SignalField(self.db[world, 0].copy(), self.extent, self.name)
+        return SignalSeries(self.db[world].copy(), self.t_s, self.extent, self.name)
 
 
 SirField = SignalField

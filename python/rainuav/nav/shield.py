@@ -38,6 +38,7 @@ def shield_moves(
     t: np.ndarray,
     offset: np.ndarray,
     visited: Sequence[set[tuple[int, int]]],
+    goal: np.ndarray | None = None,
 ) -> np.ndarray:
     """(N, 4) bool: the moves the shield allows. First the safe moves (still in the area and
     able to arrive within ``max_steps``, :meth:`rainuav.nav.batch.BatchStepper.safe_actions`); among
@@ -47,8 +48,8 @@ def shield_moves(
     ``mu <= 0``): cutting a loop out of a path then gains at least its length, so an optimal
     flight never revisits a position and the rule only removes moves no optimal flight makes.
     Elsewhere (the paper's ``"linear"`` with ``mu > 0``: loitering can pay) only the first
-    rule applies."""
-    allowed = env.stepper.safe_actions(pos, t)
+    rule applies. ``goal`` (N, 2): each flight's destination (default: the task's)."""
+    allowed = env.stepper.safe_actions(pos, t, goal)
     loops_can_pay = env.cfg.mu > 0 if env.cfg.reward == "linear" else env.cfg.mu < 0
     if loops_can_pay:
         return allowed

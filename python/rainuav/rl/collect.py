@@ -19,7 +19,8 @@ __all__ = ["Lanes", "greedy_rollouts"]
 @dataclass
 class Lanes:
     """The UAVs in flight: each lane runs one episode at a time (its own start, offset from
-    the start in steps, step count, episode index, return so far and N-step window)."""
+    the start in steps, step count, episode index, return so far, destination, world and
+    N-step window)."""
 
     start: np.ndarray
     offset: np.ndarray
@@ -27,6 +28,8 @@ class Lanes:
     episode: np.ndarray
     ret: np.ndarray
     active: np.ndarray
+    goal: np.ndarray
+    world: np.ndarray
     windows: list[NStepWindow]
 
     @classmethod
@@ -38,6 +41,8 @@ class Lanes:
             episode=np.zeros(k, dtype=np.int64),
             ret=np.zeros(k),
             active=np.zeros(k, dtype=bool),
+            goal=np.zeros((k, 2)),
+            world=np.zeros(k, dtype=np.int64),
             windows=[NStepWindow(n_step, gamma) for _ in range(k)],
         )
 
@@ -68,8 +73,12 @@ class Lanes:
             else:
                 setattr(self, name, value)
 
-    def launch(self, k: int, start: np.ndarray, episode: int) -> None:
+    def launch(
+        self, k: int, start: np.ndarray, episode: int, goal: np.ndarray, world: int = 0
+    ) -> None:
         self.start[k] = start
+        self.goal[k] = goal
+        self.world[k] = world
         self.offset[k] = 0
         self.t[k] = 0
         self.episode[k] = episode
@@ -78,16 +87,22 @@ class Lanes:
 
 
 def greedy_rollouts(
-    agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool | None = None
+    agent: Agent,
+    env: UAVNavEnv,
+    starts: np.ndarray,
+    shield: bool | None = None,
+    goals: np.ndarray | None = None,
 ) -> list[dict[str, Any]]:
     """Greedy episodes from every start at once (the batched stepper gives exactly the scalar
     environment's transitions), one dict per start: ``return``, ``steps``, ``path`` (T+1, 2),
     ``signal`` (T,) along the path, ``reached`` and ``overridden`` (moves where the shield
     replaced the network's choice). ``shield``: keep to the moves :func:`shield_moves`
-    allows (default: ``agent.cfg.shield``)."""
+    allows (default: ``agent.cfg.shield``). ``goals`` (N, 2): each flight's destination
+    (default: the task's)."""
     shield = agent.cfg.shield if shield is None else shield
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     n = len(starts)
+    goal = None if goals is None else np.asarray(goals, dtype=np.float64).reshape(n, 2)
     off = np.zeros((n, 2), dtype=np.int64)
     visited: list[set[tuple[int, int]]] = [{(0, 0)} for _ in range(n)]  # lattice offsets
     t = np.zeros(n, dtype=np.int64)
@@ -100,13 +115,14 @@ def greedy_rollouts(
     while live.any():
         idx = np.flatnonzero(live)
         pos = starts[idx] + env.cfg.step_m * off[idx]
-        q = agent.q_values(agent.observe(env.observe(pos, t[idx]), t[idx]))
+        g = None if goal is None else goal[idx]
+        q = agent.q_values(agent.observe(env.observe(pos, t[idx], g), t[idx]))
         a = best_action(q)
         if shield:
-            allowed = shield_moves(env, pos, t[idx], off[idx], [visited[k] for k in idx])
+            allowed = shield_moves(env, pos, t[idx], off[idx], [visited[k] for k in idx], g)
             free, a = a, best_action(q, allowed)
             overridden[idx] += a != free
-        r = env.stepper.step(starts[idx], off[idx], t[idx], a)
+        r = env.stepper.step(starts[idx], off[idx], t[idx], a, g)
         off[idx], t[idx] = r["offset"], r["t"]
         ret[idx] += r["reward"]
         for j, k in enumerate(idx):

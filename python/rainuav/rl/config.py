@@ -129,6 +129,8 @@ class TrainConfig(WorldSpec):
     replan_every: int = 10
     """Moves between re-plans of the replanning baseline reported beside a run in a moving
     weather (rainuav.nav.baselines.replans)."""
+    storm_episodes: int = 32
+    """Episodes flown in one storm of a storm pool before it is renewed (--storm-pool)."""
     keep_best: bool = False
     """Evaluate and save the network with the best validation score (success, then excess
     cost), not the final one."""
@@ -196,6 +198,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("checkpoint_every", cfg.checkpoint_every >= 1, ">= 1"),
         ("device", cfg.device in ("auto", "cpu", "cuda"), "'auto', 'cpu' or 'cuda'"),
         ("replan_every", cfg.replan_every >= 1, ">= 1"),
+        ("storm_episodes", cfg.storm_episodes >= 1, ">= 1"),
     ]
     for name, ok, allowed in checks:
         if not ok:

@@ -18,9 +18,15 @@ import numpy as np
 import torch
 from torch import nn
 
+from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig, random_streams
+from rainuav.rl.networks import PositionEncoder, WeatherEncoder
 
-__all__ = ["Agent", "DuelingQNet", "NStepWindow", "Replay", "best_action", "double_q_target"]
+Encoder = PositionEncoder | WeatherEncoder
+"""How an env's observation becomes the network's input, and the network
+(:mod:`rainuav.rl.networks`)."""
+
+__all__ = ["Agent", "Encoder", "NStepWindow", "Replay", "best_action", "double_q_target"]
 
 
 def best_action(q: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
@@ -28,45 +34,6 @@ def best_action(q: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
     if allowed is not None:
         q = np.where(allowed, q, -np.inf)
     return q.argmax(axis=1)
-
-
-class DuelingQNet(nn.Module):
-    """Q(s, a) = V(s) + A(s, a) - mean_a A(s, a).
-
-    All inputs enter as they are, and the first ``smooth_dim`` (the position and the time
-    fraction) also as ``fourier`` sine/cosine frequencies; two hidden ReLU layers feed the
-    value and advantage heads.
-    """
-
-    def __init__(
-        self,
-        hidden: int = 128,
-        fourier: int = 8,
-        n_actions: int = 4,
-        obs_dim: int = 2,
-        smooth_dim: int | None = None,
-    ) -> None:
-        super().__init__()
-        self.register_buffer("freqs", math.pi * torch.arange(1, fourier + 1, dtype=torch.float32))
-        self.smooth_dim = obs_dim if smooth_dim is None else smooth_dim
-        d_in = obs_dim + self.smooth_dim * 2 * fourier
-        self.body = nn.Sequential(
-            nn.Linear(d_in, hidden), nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU()
-        )
-        self.value = nn.Linear(hidden, 1)
-        self.advantage = nn.Linear(hidden, n_actions)
-
-    def features(self, obs: torch.Tensor) -> torch.Tensor:
-        parts = [obs]
-        if self.freqs.numel():
-            ang = obs[:, : self.smooth_dim, None] * self.freqs  # (B, smooth_dim, K)
-            parts += [torch.sin(ang).flatten(-2), torch.cos(ang).flatten(-2)]
-        return torch.cat(parts, dim=-1)
-
-    def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        h = self.body(self.features(obs))
-        adv = self.advantage(h)
-        return self.value(h) + adv - adv.mean(dim=-1, keepdim=True)
 
 
 class NStepWindow:
@@ -182,17 +149,23 @@ def double_q_target(
     return ret + discount * (1.0 - done) * q_next_target.gather(1, a_star).squeeze(1)
 
 
-def memory_needed(cfg: DQNConfig) -> dict[str, int]:
+def memory_needed(cfg: DQNConfig, view: WeatherView | None = None) -> dict[str, int]:
     """Bytes the agent of ``cfg`` allocates, by the field that sets them: ``hidden`` (the
     float32 weights of the network, seven times over: online, target, gradients, Adam's two
     moments, the weight average and a copy while reporting) and ``replay_capacity`` (the
-    replay's arrays). Computed from the sizes, so a run that cannot fit is refused before
-    anything is built."""
-    n_smooth = 3 if cfg.time_aware else 2
-    obs_dim = n_smooth + 2 * cfg.goal_features
-    d_in = obs_dim + n_smooth * 2 * cfg.fourier
+    replay's arrays). ``view``: the weather observation where the env gives it (its network
+    is built on the CPU to count its weights, a few ms). Computed from the sizes, so a run
+    that cannot fit is refused before anything is built."""
     h = cfg.hidden
-    params = d_in * h + h + h * h + h + (h + 1) + 4 * (h + 1)
+    if view is None:
+        n_smooth = 3 if cfg.time_aware else 2
+        obs_dim = n_smooth + 2 * cfg.goal_features
+        d_in = obs_dim + n_smooth * 2 * cfg.fourier
+        params = d_in * h + h + h * h + h + (h + 1) + 4 * (h + 1)
+    else:
+        enc = WeatherEncoder(cfg, view, (1.0, 1.0))
+        obs_dim = enc.dim
+        params = sum(p.numel() for p in enc.make_net().parameters())
     return {
         "dqn.hidden": 7 * 4 * params,
         "dqn.replay_capacity": cfg.replay_capacity * (2 * 4 * obs_dim + 8 + 3 * 4),
@@ -202,37 +175,18 @@ def memory_needed(cfg: DQNConfig) -> dict[str, int]:
 class Agent:
     """Online and target networks, replay, optimiser and the exploration schedule."""
 
-    def __init__(
-        self,
-        cfg: DQNConfig,
-        seed: int,
-        device: torch.device,
-        horizon: int,
-        *,
-        goal: tuple[float, float],
-        step: tuple[float, float],
-        env_dims: int = 2,
-    ) -> None:
+    def __init__(self, cfg: DQNConfig, seed: int, device: torch.device, encoder: Encoder) -> None:
         """``seed``: the run's seed (the network's initial weights; exploration and replay
         sampling draw from its ``"agent"`` stream, :func:`rainuav.rl.config.random_streams`);
-        ``horizon``: the episode's step limit; ``goal`` and ``step``: the destination and one
-        move in the environment's observation units ([0, 1]^2); ``env_dims``: the
-        environment's observation size (2: the position; 3: and the time, where the signal
-        changes in time)."""
+        ``encoder``: how the env's observations become the network's input, and the network
+        (:mod:`rainuav.rl.networks`)."""
         self.cfg = cfg
         self.device = device
-        self.horizon = horizon
-        self.goal = np.asarray(goal, dtype=np.float32)
-        self.goal_scale = (
-            np.asarray(step, dtype=np.float32)[:, None] * 4.0 ** np.arange(cfg.goal_features)
-        ).astype(np.float32)  # (2, K)
-        # The time is an input where the env gives it, or where the learner is time-aware.
-        self.adds_time = cfg.time_aware and env_dims == 2
-        self.n_smooth = env_dims + int(self.adds_time)
-        self.obs_dim = self.n_smooth + 2 * cfg.goal_features
+        self.encoder = encoder
+        self.obs_dim = encoder.dim
         torch.manual_seed(seed)
-        self.online = self.make_net().to(device)
-        self.target = self.make_net().to(device)
+        self.online = encoder.make_net().to(device)
+        self.target = encoder.make_net().to(device)
         self.target.load_state_dict(self.online.state_dict())
         # The fused Adam kernel: one call instead of ~10 per parameter tensor (timed in
         # BENCHMARKS.md, training section).
@@ -244,35 +198,14 @@ class Agent:
         self.average: dict[str, torch.Tensor] | None = None
         self.n_averaged = 0
 
-    def make_net(self) -> DuelingQNet:
-        c = self.cfg
-        return DuelingQNet(
-            c.hidden,
-            c.fourier,
-            obs_dim=self.obs_dim,
-            smooth_dim=self.n_smooth,
-        )
-
     def epsilon(self, episode: Any) -> Any:
         """eps0 * eps_decay^episode (works on arrays of episode indices)."""
         return self.cfg.eps0 * self.cfg.eps_decay ** np.asarray(episode, dtype=np.float64)
 
-    def observe(self, env_obs: np.ndarray, t: Any) -> np.ndarray:
-        """The agent's input from the environment's (N, 2) observation (the position; (N, 3)
-        with the time where the signal changes in time): the observation, then t / horizon
-        when time-aware and the env does not give it, then the goal-relative features
-        (functions of the position and the fixed destination, so no information the
-        environment does not give; they let the network resolve the 10 m arrival disc, which
-        global features blur)."""
-        env_obs = np.atleast_2d(np.asarray(env_obs, dtype=np.float32))
-        parts = [env_obs]
-        if self.adds_time:
-            frac = (np.asarray(t, dtype=np.float32) / self.horizon).reshape(-1, 1)
-            parts.append(np.broadcast_to(frac, (len(env_obs), 1)))
-        if self.cfg.goal_features:
-            rel = (env_obs[:, :2] - self.goal)[:, :, None] / self.goal_scale  # (N, 2, K)
-            parts.append(np.tanh(rel).reshape(len(env_obs), -1))
-        return np.concatenate(parts, axis=1).astype(np.float32)
+    def observe(self, env_obs: Any, t: Any) -> np.ndarray:
+        """The network's (N, dim) input from a batch of the env's observations after ``t``
+        moves (the encoder's)."""
+        return self.encoder(env_obs, t)
 
     def act(self, obs: np.ndarray, episodes: np.ndarray) -> np.ndarray:
         """Epsilon-greedy actions for a batch of UAVs, each at its own episode's epsilon.

@@ -269,6 +269,34 @@ def evaluate_run_policy(
     return metrics, rolls
 
 
+def load_agent(
+    path: Path, state: dict[str, Any], cfg: TrainConfig, env: UAVNavEnv, device: str, online: bool
+) -> tuple[Agent, int, float]:
+    """The agent of a run's checkpoint ``state`` (read from ``path``) for ``env``, holding the
+    network the run reports (or with ``online`` its last online one); with its episodes and
+    training seconds. A checkpoint that does not fit is refused in one line."""
+    agent = make_agent(cfg, env, pick_device(device))
+    checks = Validation(np.zeros((0, 2)), {})
+    try:
+        agent.load_state_dict(state["agent"])
+        if "validation" in state:
+            checks.load_state_dict(state["validation"])
+        if not online:  # else: load_state_dict left the last online weights in agent.online
+            best = cfg.keep_best and checks.best_online is not None
+            if best and checks.best_at != cfg.dqn.episodes:
+                agent.online.load_state_dict(checks.best_online)
+            else:
+                agent.online.load_state_dict(agent.reported_weights())  # the mean, if averaged
+        episodes, seconds = len(state["returns"]), float(state["train_seconds"])
+    except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as err:
+        why = str(err).splitlines()[0] if str(err) else repr(err)
+        raise InvalidInputError(
+            f"checkpoint {path}: refused (does not fit the network its config.toml describes; "
+            f"a run from an incompatible version?): {why}"
+        ) from err
+    return agent, episodes, seconds
+
+
 def evaluate_saved_run(
     run_dir: Path,
     device: str = "cpu",
@@ -314,6 +342,11 @@ def evaluate_saved_run(
         if radio_map is not None:
             world = world_from(radio_map, task_of(cfg))
         elif world is None:
+            if cfg.storm_pool:
+                raise InvalidInputError(
+                    f"{run}: a run over the storm distribution has no world of its own; "
+                    "fly it with --storm-seed K or --storm-seeds A-B"
+                )
             world = load_world(run, cfg)
             if world is None:
                 raise InvalidInputError(
@@ -323,26 +356,8 @@ def evaluate_saved_run(
     except InvalidInputError as err:
         where = run / "config.toml"
         raise InvalidInputError(f"{where}: does not fit the world flown: {err}") from err
-    agent = make_agent(cfg, env, pick_device(device))
+    agent, episodes, seconds = load_agent(path, state, cfg, env, device, online)
     agent.cfg.shield = shield
-    checks = Validation(np.zeros((0, 2)), {})
-    try:
-        agent.load_state_dict(state["agent"])
-        if "validation" in state:
-            checks.load_state_dict(state["validation"])
-        if not online:  # else: load_state_dict left the last online weights in agent.online
-            best = cfg.keep_best and checks.best_online is not None
-            if best and checks.best_at != cfg.dqn.episodes:
-                agent.online.load_state_dict(checks.best_online)
-            else:
-                agent.online.load_state_dict(agent.reported_weights())  # the mean, if averaged
-        episodes, seconds = len(state["returns"]), float(state["train_seconds"])
-    except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as err:
-        why = str(err).splitlines()[0] if str(err) else repr(err)
-        raise InvalidInputError(
-            f"checkpoint {path}: refused (does not fit the network its config.toml describes; "
-            f"a run from an incompatible version?): {why}"
-        ) from err
     n = cfg.eval_starts if starts is None else starts
     pts = eval_starts(env, n, cfg.eval_seed if seed is None else seed)
     refs = None

@@ -15,11 +15,48 @@ from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import base_reward
 from rainuav.rl.config import DQNConfig
 
-__all__ = ["GOAL_START_MOVES", "learner_ends", "learning_reward", "shaping_term", "training_start"]
+__all__ = [
+    "GOAL_START_MOVES",
+    "learner_ends",
+    "learning_reward",
+    "shaping_term",
+    "training_start",
+    "training_task",
+]
 
 GOAL_START_MOVES = 10
 """Half side, in moves, of the square around the destination where ``goal_starts`` of the
 training flights begin."""
+
+
+def training_task(
+    env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """A training flight's (start, destination, world). The env's fixed destination and
+    :func:`training_start` where the env observes the position (the draws of the single-map
+    learner, unchanged); where it observes the weather, the env's draw
+    (:meth:`~rainuav.nav.env.UAVNavEnv.draw_task`: a random destination where the env has
+    them), its start then moved near the destination with probability ``goal_starts``."""
+    if env.view is None:
+        return training_start(env, d, rng), np.asarray(env.cfg.goal_m, dtype=np.float64), 0
+    start, goal, world = env.draw_task(rng)
+    if d.goal_starts and rng.random() < d.goal_starts:
+        near = near_goal(env, goal, rng)
+        start = start if near is None else near
+    return start, goal, world
+
+
+def near_goal(env: UAVNavEnv, goal: np.ndarray, rng: np.random.Generator) -> np.ndarray | None:
+    """Uniform in the square of half side :data:`GOAL_START_MOVES` moves around ``goal``
+    (clipped to the area), outside the arrival disc; None where 100 draws found no such
+    point."""
+    x0, x1, y0, y1 = env.field.extent
+    half = GOAL_START_MOVES * env.cfg.step_m
+    for _ in range(100):
+        p = np.clip(goal + rng.uniform(-half, half, size=2), (x0, y0), (x1, y1))
+        if np.hypot(*(p - goal)) > env.cfg.tol_m:
+            return p
+    return None
 
 
 def training_start(env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator) -> np.ndarray:
@@ -36,14 +73,8 @@ def training_start(env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator) -> np
     and the task are the environment's, and nothing here knows the radio map."""
     if d.goal_starts == 0.0 or rng.random() >= d.goal_starts:
         return env.sample_start(rng)
-    x0, x1, y0, y1 = env.field.extent
-    goal = np.asarray(env.cfg.goal_m, dtype=np.float64)
-    half = GOAL_START_MOVES * env.cfg.step_m
-    for _ in range(100):
-        p = np.clip(goal + rng.uniform(-half, half, size=2), (x0, y0), (x1, y1))
-        if np.hypot(*(p - goal)) > env.cfg.tol_m:
-            return p
-    return env.sample_start(rng)
+    p = near_goal(env, np.asarray(env.cfg.goal_m, dtype=np.float64), rng)
+    return env.sample_start(rng) if p is None else p
 
 
 def learner_ends(d: DQNConfig, r: dict[str, np.ndarray]) -> np.ndarray:
@@ -53,7 +84,11 @@ def learner_ends(d: DQNConfig, r: dict[str, np.ndarray]) -> np.ndarray:
 
 
 def learning_reward(
-    env: UAVNavEnv, d: DQNConfig, pos: np.ndarray, r: dict[str, np.ndarray]
+    env: UAVNavEnv,
+    d: DQNConfig,
+    pos: np.ndarray,
+    r: dict[str, np.ndarray],
+    goal: np.ndarray | None = None,
 ) -> np.ndarray:
     """The reward the learner stores for the moves ``pos -> r["position"]`` of a batch step.
 
@@ -64,15 +99,20 @@ def learning_reward(
     times the undiscounted price of a move at gamma 0.998. Weighting the SIR part up
     restores the balance of the undiscounted return the policy is judged by; a position-only
     policy then loops from a few starts, which the shield breaks (1.25 by default; see
-    ``docs/learner.md``)."""
+    ``docs/learner.md``). ``goal`` (N, 2): each UAV's destination (default: the task's)."""
     reward = r["reward"]
     if d.sir_weight != 1.0:
         reward = reward + (d.sir_weight - 1.0) * (base_reward(r["signal_db"], env.cfg) + 1.0)
-    return reward + shaping_term(env, d, pos, r["position"], learner_ends(d, r))
+    return reward + shaping_term(env, d, pos, r["position"], learner_ends(d, r), goal)
 
 
 def shaping_term(
-    env: UAVNavEnv, d: DQNConfig, pos: np.ndarray, new_pos: np.ndarray, ended: np.ndarray
+    env: UAVNavEnv,
+    d: DQNConfig,
+    pos: np.ndarray,
+    new_pos: np.ndarray,
+    ended: np.ndarray,
+    goal: np.ndarray | None = None,
 ) -> np.ndarray:
     """Potential-based shaping ``gamma Phi(s') - Phi(s)`` (Ng, Harada and Russell, ICML 1999).
 
@@ -89,7 +129,7 @@ def shaping_term(
     if d.shaping == 0.0:
         return np.zeros(len(pos))
     c = env.cfg
-    goal = np.asarray(c.goal_m)
+    goal = np.asarray(c.goal_m) if goal is None else np.asarray(goal).reshape(-1, 2)
 
     def phi(p: np.ndarray) -> np.ndarray:
         k = np.maximum(np.abs(p - goal).sum(axis=1) - c.tol_m, 0.0) / c.step_m

@@ -48,12 +48,13 @@ from rainuav.rl.evaluation import (
     evaluate_run_policy,
     reference_flights,
 )
-from rainuav.rl.learner import learner_ends, learning_reward, training_start
+from rainuav.rl.learner import learner_ends, learning_reward, training_task
 from rainuav.rl.plots import plot_policy, plot_returns, plot_stages, plot_storm_flights
 from rainuav.rl.setup import check_fits, make_agent, pick_device, torch_settings
-from rainuav.world import World, task_of
+from rainuav.world import World, build_world, task_of
+from rainuav.world.pool import VALIDATION_SEEDS, StormPool
 
-__all__ = ["finish", "load_checkpoint", "run_loop", "save_checkpoint", "train"]
+__all__ = ["finish", "load_checkpoint", "run_loop", "save_checkpoint", "storm_slot", "train"]
 
 RESUME_MAY_DIFFER = ("device", "out")
 """Fields a resumed run may change (the rest must equal the checkpoint's): the device, and the
@@ -187,10 +188,45 @@ def train(
         world.save(out)
         write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
         env = world.env()
+        # A storm pool's run is checked, validated and evaluated on a validation storm, with
+        # the task's fixed destination.
+        ref_env = None
+        if world.pool is not None:
+            spec = dataclasses.replace(
+                cfg, storm_pool=0, storm_seed=VALIDATION_SEEDS[0], random_goal=False
+            )
+            ref_env = build_world(spec).env()
         with torch_settings(device):
             agent = make_agent(cfg, env, device)  # seeds torch with cfg.seed
             env.np_random = np.random.default_rng(random_streams(cfg.seed)["env"])
-            return run_loop(cfg, agent, env, out, saved, progress, stop_after)
+            return run_loop(cfg, agent, env, out, saved, progress, stop_after, ref_env, world.pool)
+
+
+def storm_slot(
+    pool: StormPool, lanes: Lanes, k: int, per_storm: np.ndarray, storm_episodes: int
+) -> int:
+    """The storm of the pool lane ``k``'s next episode flies, counted in ``per_storm``.
+
+    Of the storms that have had ``storm_episodes`` episodes, the one with the fewest UAVs in
+    flight drains: it takes no new episode (unless it is the only storm), so it stays the
+    emptiest, and once no UAV flies it any more it is renewed (:meth:`StormPool.renew`); one
+    at a time, so the others keep the UAVs flying.
+    The lane takes the storm with the fewest UAVs in flight (the first on ties), so with as
+    many storms as lanes each UAV has its own."""
+    others = lanes.active.copy()
+    others[k] = False
+    load = np.bincount(lanes.world[others], minlength=len(per_storm))
+    drain = -1
+    if (per_storm >= storm_episodes).any():
+        big = np.iinfo(np.int64).max
+        drain = int(np.argmin(np.where(per_storm >= storm_episodes, load, big)))
+        if load[drain] == 0:
+            pool.renew(drain)
+            per_storm[drain], drain = 0, -1
+    choices = np.array([s for s in range(len(per_storm)) if s != drain] or [drain])
+    slot = int(choices[np.argmin(load[choices])])
+    per_storm[slot] += 1
+    return slot
 
 
 def run_loop(
@@ -201,17 +237,31 @@ def run_loop(
     saved: dict[str, Any] | None,
     progress: bool,
     stop_after: int | None,
+    ref_env: UAVNavEnv | None = None,
+    pool: StormPool | None = None,
 ) -> dict[str, Any]:
     """Algorithm 1 over ``cfg.dqn.episodes`` episodes, ``lanes`` UAVs at a time; from
     ``saved`` (a checkpoint's state) when resuming. Returns :func:`finish`'s metrics, or
-    ``{}`` when stopped at ``stop_after``."""
+    ``{}`` when stopped at ``stop_after``. ``pool``: the storms the UAVs fly
+    (:func:`storm_slot`); validation, stages and the evaluation then fly ``ref_env``
+    (default: ``env``)."""
     d = cfg.dqn
+    ref = env if ref_env is None else ref_env
     lanes = Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
     n_val = cfg.validate_starts if cfg.validate_every else 0
-    val_starts = eval_starts(env, n_val, cfg.eval_seed + 2)
-    checks = Validation(val_starts, reference_flights(env, val_starts)["optimal"])
+    val_starts = eval_starts(ref, n_val, cfg.eval_seed + 2)
+    checks = Validation(val_starts, reference_flights(ref, val_starts)["optimal"])
     stage_every = max(1, d.episodes // max(cfg.stages, 1))
-    stage_starts = eval_starts(env, 5, cfg.eval_seed + 1)
+    stage_starts = eval_starts(ref, 5, cfg.eval_seed + 1)
+    weather = env.view is not None
+    per_storm = np.zeros(pool.bank.worlds if pool else 1, dtype=np.int64)
+
+    def launch(k: int, episode: int) -> None:
+        start, goal, world = training_task(env, d, env.np_random)
+        if pool is not None:
+            world = storm_slot(pool, lanes, k, per_storm, cfg.storm_episodes)
+        lanes.launch(k, start, episode, goal, world)
+
     started, returns, successes, stages = 0, [], [], []
     train_seconds, pending = 0.0, 0  # pending: transitions not yet paid for by a gradient step
     if saved is not None:
@@ -224,6 +274,9 @@ def run_loop(
             started, pending, stages = int(saved["started"]), int(saved["pending"]), saved["stages"]
             returns, successes = list(saved["returns"]), list(saved["successes"])
             train_seconds = float(saved["train_seconds"])
+            if pool is not None:
+                pool.load_state_dict(saved["pool"]["pool"])
+                per_storm[:] = np.asarray(saved["pool"]["per_storm"], dtype=np.int64)
         except (KeyError, TypeError, ValueError, RuntimeError, AttributeError, IndexError) as err:
             raise InvalidInputError(
                 f"checkpoint {out / 'checkpoint.pt'}: refused (does not fit this run: "
@@ -235,7 +288,7 @@ def run_loop(
             )
     else:
         for k in range(len(lanes.t)):
-            lanes.launch(k, training_start(env, d, env.np_random), started)
+            launch(k, started)
             started += 1
     log = RunLog(out, saved is not None, d.episodes, len(returns), progress)
     t0 = time.perf_counter()
@@ -245,15 +298,19 @@ def run_loop(
             # Act and step every UAV in flight.
             idx = np.flatnonzero(lanes.active)
             pos = lanes.start[idx] + env.cfg.step_m * lanes.offset[idx]
-            obs = agent.observe(env.observe(pos, lanes.t[idx]), lanes.t[idx])
+            goal = lanes.goal[idx] if weather else None  # each UAV's destination and world
+            world = lanes.world[idx] if pool is not None else None
+            obs = agent.observe(env.observe(pos, lanes.t[idx], goal, world), lanes.t[idx])
             act = agent.act(obs, lanes.episode[idx])
-            r = env.stepper.step(lanes.start[idx], lanes.offset[idx], lanes.t[idx], act)
+            r = env.stepper.step(
+                lanes.start[idx], lanes.offset[idx], lanes.t[idx], act, goal, world
+            )
             lanes.offset[idx], lanes.t[idx] = r["offset"], r["t"]
             lanes.ret[idx] += r["reward"]
             # Store: each UAV's N-step window hands finished transitions to the replay.
-            nobs = agent.observe(env.observe(r["position"], r["t"]), r["t"])
+            nobs = agent.observe(env.observe(r["position"], r["t"], goal, world), r["t"])
             stop = learner_ends(d, r)
-            learn_r = learning_reward(env, d, pos, r)
+            learn_r = learning_reward(env, d, pos, r, goal)
             for j, k in enumerate(idx):
                 for tr in lanes.windows[k].push(
                     obs[j], int(act[j]), float(learn_r[j]), nobs[j], bool(stop[j]),
@@ -287,14 +344,14 @@ def run_loop(
                     # Greedy rollouts from given starts draw nothing from the training rng;
                     # they and the checks fly the network the run reports.
                     with agent.reporting():
-                        stages.append((n_done, greedy_rollouts(agent, env, stage_starts)))
+                        stages.append((n_done, greedy_rollouts(agent, ref, stage_starts)))
                 if cfg.validate_every and n_done % cfg.validate_every == 0:
                     with agent.reporting():
-                        success, excess = checks.check(agent, env, n_done)
+                        success, excess = checks.check(agent, ref, n_done)
                     log.tb.add_scalar("validation/success", success, n_done)
                     log.tb.add_scalar("validation/mean_excess_cost", excess, n_done)
                 if started < d.episodes:
-                    lanes.launch(k, training_start(env, d, env.np_random), started)
+                    launch(k, started)
                     started += 1
                 else:
                     lanes.active[k] = False
@@ -333,6 +390,9 @@ def run_loop(
                         "train_seconds": time.perf_counter() - t0 + train_seconds,
                         "torch_rng": torch.get_rng_state(),
                         "config": to_dict(cfg),
+                        "pool": None
+                        if pool is None
+                        else {"pool": pool.state_dict(), "per_storm": per_storm.copy()},
                     },
                 )
                 if stop_after is not None and stop_after <= n_done < d.episodes:
@@ -342,7 +402,9 @@ def run_loop(
     finally:
         log.close()
     train_seconds += time.perf_counter() - t0
-    return finish(cfg, agent, env, returns, stages, train_seconds, out, checks)
+    if pool is not None:
+        pool.close()
+    return finish(cfg, agent, ref, returns, stages, train_seconds, out, checks, pool)
 
 
 def finish(
@@ -354,6 +416,7 @@ def finish(
     train_seconds: float,
     out: Path,
     checks: Validation,
+    pool: StormPool | None = None,
 ) -> dict[str, Any]:
     """Evaluates the run (:func:`rainuav.rl.evaluation.evaluate_run_policy`), saves the
     evaluated network's weights to ``policy.pt`` and writes ``metrics.json`` and the figures."""
@@ -363,6 +426,11 @@ def finish(
     metrics["training_seconds"] = train_seconds
     metrics["episodes"] = len(returns)
     metrics["device"] = str(agent.device)
+    if pool is not None:  # where the training time went, and which storms it flew
+        metrics["storms_flown"] = len(pool.flown)
+        metrics["storm_map_seconds"] = pool.map_seconds
+        metrics["storm_wait_seconds"] = pool.wait_seconds
+        metrics["evaluated_on_storm_seed"] = VALIDATION_SEEDS[0]
     text = json.dumps(metrics, indent=2)
     write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
     plot_returns(returns, out / "returns.png", checks.history)

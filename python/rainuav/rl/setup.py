@@ -13,16 +13,18 @@ import torch
 from rainuav._checks import check_fits as check_fits_memory
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.rl.config import TrainConfig
-from rainuav.rl.dqn import Agent, memory_needed
+from rainuav.nav.views import WeatherView
+from rainuav.rl.config import DQNConfig, TrainConfig
+from rainuav.rl.dqn import Agent, Encoder, memory_needed
+from rainuav.rl.networks import PositionEncoder, WeatherEncoder
 
-__all__ = ["check_fits", "make_agent", "pick_device", "torch_settings"]
+__all__ = ["check_fits", "make_agent", "make_encoder", "pick_device", "torch_settings"]
 
 
 def check_fits(cfg: TrainConfig) -> None:
     """Refuses a run whose agent cannot fit in memory, naming the field and the GB
     (:func:`rainuav.rl.dqn.memory_needed`); called before any map is built."""
-    need = memory_needed(cfg.dqn)
+    need = memory_needed(cfg.dqn, WeatherView() if cfg.observation == "weather" else None)
     biggest = max(need, key=lambda k: need[k])
     check_fits_memory(
         f"{biggest} = {getattr(cfg.dqn, biggest.split('.')[1])}",
@@ -37,16 +39,19 @@ def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
     check_fits(cfg)
     x0, x1, y0, y1 = env.field.extent
     s = env.cfg.step_m
+    step = (s / (x1 - x0), s / (y1 - y0))
+    return Agent(cfg.dqn, cfg.seed, device, make_encoder(cfg.dqn, env, step))
+
+
+def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Encoder:
+    """The encoder (and network) for ``env``'s observation (:mod:`rainuav.rl.networks`):
+    the weather-reading one where the env shows the weather, else the position one (with
+    the env's fixed destination)."""
+    if env.view is not None:
+        return WeatherEncoder(d, env.view, step)
     goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())
-    return Agent(
-        cfg.dqn,
-        cfg.seed,
-        device,
-        env.cfg.max_steps,
-        goal=goal,
-        step=(s / (x1 - x0), s / (y1 - y0)),
-        env_dims=int(env.observation_space.shape[0]),
-    )
+    dims = int(env.observation_space.shape[0])  # type: ignore[index]
+    return PositionEncoder(d, env.cfg.max_steps, goal, step, dims)
 
 
 def pick_device(name: str) -> torch.device:

@@ -27,7 +27,7 @@ from typing import Any
 from rainuav._checks import check_field_kinds
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import SignalField, SignalSeries
+from rainuav.nav.field import SignalBank, SignalField, SignalSeries
 from rainuav.nav.task import NavConfig
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio import presets
@@ -57,6 +57,8 @@ __all__ = [
 MAP_FILES = ("radiomap.npz", "radiomap_series.npz")
 """The files a world's signal is saved in: a single map, or maps in time."""
 ENGINES = ("", "hybrid", "ray", "pe")
+MAX_POOL = 64
+"""The most storms flown at once (each holds its maps in time: about 20 MB)."""
 
 
 @dataclass
@@ -111,6 +113,17 @@ class WorldSpec:
     """Destination, north coordinate, m."""
     speed_m_s: float = 10.0
     """Ground speed, m/s: a move takes step_m / speed_m_s seconds."""
+    observation: str = "position"
+    """What the UAV observes: 'position' (and the time where the weather moves) or 'weather'
+    (the SINR around it and over the area, its position, time and destination:
+    rainuav.nav.views)."""
+    random_goal: bool = False
+    """A destination drawn per episode (rainuav.nav.views.sample_goal; needs --observation
+    weather) in place of the fixed one."""
+    storm_pool: int = 0
+    """Train over the storm distribution: this many storms flown at once, each renewed with
+    a new training storm as training goes (--storm-seed random sets 8; needs --scenario storm
+    and --observation weather); 0: the one storm of storm_seed."""
 
 
 def spec_of(obj: Any) -> WorldSpec:
@@ -144,6 +157,13 @@ def check_spec(spec: Any) -> None:
         ("storm_speed_m_s", spec.storm_speed_m_s is None or 0 <= spec.storm_speed_m_s <= 100,
          "unset or in [0, 100] m/s"),
         ("slice_s", 0.001 <= spec.slice_s <= 1e6, "in [0.001, 1e6] s"),
+        ("observation", spec.observation in ("position", "weather"), "'position' or 'weather'"),
+        ("random_goal", not spec.random_goal or spec.observation == "weather",
+         "false unless observation = 'weather' (the position alone does not show it)"),
+        ("storm_pool", 0 <= spec.storm_pool <= MAX_POOL, f"in 0..{MAX_POOL}"),
+        ("storm_pool", spec.storm_pool == 0 or (spec.scenario == "storm"
+         and not spec.scenario_file and spec.observation == "weather"),
+         "0 unless scenario = 'storm' and observation = 'weather'"),
         ("goal_reward", math.isfinite(spec.goal_reward), "finite"),
         ("out_of_bounds_penalty", math.isfinite(spec.out_of_bounds_penalty), "finite"),
         ("rain_rate", spec.rain_rate is None or 0 <= spec.rain_rate <= 500,
@@ -186,12 +206,18 @@ def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
 class World:
     """A signal (one map, or maps in time) and the task flown on it (``min_db`` resolved)."""
 
-    source: RadioMap | RadioMapSeries
-    """What the signal is read from (saved with a run)."""
-    field: SignalField | SignalSeries
+    source: RadioMap | RadioMapSeries | None
+    """What the signal is read from (saved with a run; None for a storm pool's bank)."""
+    field: SignalField | SignalSeries | SignalBank
     """The signal the UAV flies through."""
     task: NavConfig
     """The navigation task."""
+    observation: str = "position"
+    """What the UAV observes (``UAVNavEnv``'s ``observation``)."""
+    random_goal: bool = False
+    """A destination drawn per episode."""
+    pool: Any = None
+    """The :class:`StormPool` whose bank is the field, where the world is one."""
 
     @property
     def varies(self) -> bool:
@@ -200,14 +226,22 @@ class World:
 
     def env(self) -> UAVNavEnv:
         """A Gymnasium environment of this world (a fresh one per call)."""
-        return UAVNavEnv(field=self.field, config=self.task)
+        return UAVNavEnv(
+            field=self.field,
+            config=self.task,
+            observation=self.observation,
+            random_goal=self.random_goal,
+        )
 
     def vector_env(self, num_envs: int, autoreset_mode: Any = "NextStep") -> UAVNavVectorEnv:
         """``num_envs`` UAVs in this world, batched."""
         return UAVNavVectorEnv(self.env(), num_envs, autoreset_mode)
 
-    def save(self, folder: Path) -> Path:
-        """Writes the signal's source into ``folder`` (:data:`MAP_FILES`), atomically."""
+    def save(self, folder: Path) -> Path | None:
+        """Writes the signal's source into ``folder`` (:data:`MAP_FILES`), atomically (a
+        storm pool's storms are not saved: their seeds rebuild them)."""
+        if self.source is None:
+            return None
         name = MAP_FILES[1] if isinstance(self.source, RadioMapSeries) else MAP_FILES[0]
         return self.source.save(Path(folder) / name)
 
@@ -251,23 +285,30 @@ def build_world(
     task: NavConfig | None = None,
     scenario: Scenario | None = None,
     progress: bool = False,
+    cache: bool = True,
 ) -> World:
     """The world of ``spec`` (a WorldSpec, or a configuration extending one): its scenario's
     map, or maps in time where its weather moves, built or taken from the cache, and its task
-    (``task``, where given, in place of the spec's; ``scenario`` in place of its preset)."""
+    (``task``, where given, in place of the spec's; ``scenario`` in place of its preset;
+    ``cache=False``: a storm flown once, not kept in the map cache)."""
     check_spec(spec)
-    source = build_source(spec, make_scenario(spec, scenario), progress=progress)
-    return world_from(source, task_of(spec) if task is None else task)
+    source = build_source(spec, make_scenario(spec, scenario), progress=progress, cache=cache)
+    return _observed(world_from(source, task_of(spec) if task is None else task), spec)
 
 
-def build_source(spec: Any, scn: Scenario, *, progress: bool = False) -> Any:
+def _observed(world: World, spec: Any) -> World:
+    """``world`` with the spec's observation and destinations."""
+    return dataclasses.replace(world, observation=spec.observation, random_goal=spec.random_goal)
+
+
+def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: bool = True) -> Any:
     """The signal's source for the scenario ``scn`` of ``spec``: its map, or where its
     weather moves its maps at :func:`series_instants` (engine 'pe' then becomes 'hybrid': a
     march per cell and instant is refused); built, or taken from the cache."""
     if scn.medium.moves:
         if scn.engine == "pe":
             scn = dataclasses.replace(scn, engine="hybrid")
-        return build_radio_map_series(scn, series_instants(spec), progress=progress)
+        return build_radio_map_series(scn, series_instants(spec), progress=progress, cache=cache)
     return build_radio_map(scn, progress=progress)
 
 
@@ -283,24 +324,21 @@ def source_key(spec: Any, scn: Scenario) -> str:
 def load_world(folder: Path, spec: Any) -> World | None:
     """The world saved in a run's ``folder`` (:meth:`World.save`) with the task of
     ``spec``, or None where the folder holds none."""
-    folder = Path(folder)
-    if (folder / MAP_FILES[1]).exists():
-        return world_from(RadioMapSeries.load(folder / MAP_FILES[1]), task_of(spec))
-    if (folder / MAP_FILES[0]).exists():
-        return world_from(RadioMap.load(folder / MAP_FILES[0]), task_of(spec))
+    for name, kind in zip(MAP_FILES, (RadioMap, RadioMapSeries), strict=True):
+        if (Path(folder) / name).exists():
+            return _observed(world_from(kind.load(Path(folder) / name), task_of(spec)), spec)
     return None
 
 
 def _extent(scn: Scenario) -> tuple[float, float, float, float]:
-    a = scn.area
-    return (a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m)
+    return (scn.area.x_min_m, scn.area.x_max_m, scn.area.y_min_m, scn.area.y_max_m)
 
 
 def in_world(spec: Any, source: Any) -> tuple[Any, World]:
     """``(spec, world)``: the spec and the world of its task on a map or series already built
     (tests and scripts that hand ``rainuav.rl.loop.train`` a small synthetic map:
     ``train(*in_world(cfg, my_map))``)."""
-    return spec, world_from(source, task_of(spec))
+    return spec, _observed(world_from(source, task_of(spec)), spec)
 
 
 def saved_world(cfg: Any) -> tuple[Any, World | None]:

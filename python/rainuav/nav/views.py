@@ -1,0 +1,172 @@
+"""What a UAV that reads the weather sees, and where its destinations come from.
+
+:class:`WeatherView` is the observation of a policy that flies any storm it is shown
+(``UAVNavEnv(observation="weather")``): a Gymnasium ``Dict`` of
+
+- ``position``, ``goal``: the UAV's position and its destination, scaled to [0, 1]^2;
+- ``time``: the moves so far over ``max_steps``;
+- ``local``: the signal now on a ``window`` x ``window`` grid centred on the UAV,
+  ``window_step_m`` apart (11 x 11 at 40 m by default: 200 m each way, 20 moves);
+- ``area``: the signal now at the centres of an ``area`` x ``area`` grid over the whole area
+  (16 x 16: 125 m cells), where the route's big detours are decided.
+
+Signal values enter as ``tanh((S - min_db) / scale_db)`` (0 at the outage threshold, +-0.76
+10 dB either side), so every storm and every map reads on one scale. "Now" is the instant of
+the UAV's last move: the weather as an operator with a radar would know it; the network is not
+shown the future. Grid points beyond the area read the edge values, as the field does.
+
+Destinations (:func:`sample_goal`): uniform in the area shrunk by :data:`GOAL_MARGIN_M` on
+every side; the start then uniform in the area, farther than ``tol_m`` from the destination and
+at most :data:`REACH` of the horizon away (lattice moves), so every flight can arrive in time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from rainuav.errors import InvalidInputError
+from rainuav.nav.task import NavConfig
+
+__all__ = ["GOAL_MARGIN_M", "REACH", "WeatherView", "sample_goal", "sample_start_for"]
+
+GOAL_MARGIN_M = 100.0
+"""Random destinations keep this far from the area's edges, m."""
+REACH = 0.75
+"""A start for a random destination is at most this share of the horizon's moves away."""
+KEYS = ("position", "goal", "time", "local", "area")
+"""The observation's parts, in the order the flat encoding concatenates them."""
+
+
+@dataclass(frozen=True)
+class WeatherView:
+    """The weather-reading observation (module docstring)."""
+
+    window: int = 11
+    """Side of the local grid, samples (odd: the UAV at its centre)."""
+    window_step_m: float = 40.0
+    """Spacing of the local grid, m."""
+    area: int = 16
+    """Side of the whole-area grid, samples."""
+    scale_db: float = 10.0
+    """Signal scale: a sample is tanh((S - min_db) / scale_db)."""
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.window, int) and self.window >= 1 and self.window % 2 == 1):
+            raise InvalidInputError(f"window must be an odd integer >= 1 (got {self.window!r})")
+        if not (isinstance(self.area, int) and 1 <= self.area <= 256):
+            raise InvalidInputError(f"area must be an integer in 1..256 (got {self.area!r})")
+        for name in ("window_step_m", "scale_db"):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and 0 < v < np.inf):
+                raise InvalidInputError(f"{name} must be finite and > 0 (got {v!r})")
+
+    @property
+    def sizes(self) -> dict[str, int]:
+        """Floats per part of the flat encoding (:data:`KEYS` order)."""
+        return {"position": 2, "goal": 2, "time": 1, "local": self.window**2, "area": self.area**2}
+
+    def space(self) -> gym.spaces.Dict:
+        """The Gymnasium observation space."""
+        box = gym.spaces.Box
+        return gym.spaces.Dict(
+            {
+                "position": box(0.0, 1.0, shape=(2,), dtype=np.float32),
+                "goal": box(0.0, 1.0, shape=(2,), dtype=np.float32),
+                "time": box(0.0, 1.0, shape=(1,), dtype=np.float32),
+                "local": box(-1.0, 1.0, shape=(1, self.window, self.window), dtype=np.float32),
+                "area": box(-1.0, 1.0, shape=(1, self.area, self.area), dtype=np.float32),
+            }
+        )
+
+    def local_offsets(self) -> np.ndarray:
+        """(window^2, 2) offsets of the local grid from the UAV, m: row i (south to north),
+        column j (west to east), row-major."""
+        h = self.window // 2
+        d = self.window_step_m * np.arange(-h, h + 1, dtype=np.float64)
+        gx, gy = np.meshgrid(d, d)
+        return np.stack([gx.ravel(), gy.ravel()], axis=1)
+
+    def area_points(self, extent: tuple[float, float, float, float]) -> np.ndarray:
+        """(area^2, 2) centres of the whole-area grid's cells, m, row-major (south to north)."""
+        x0, x1, y0, y1 = extent
+        n = self.area
+        gx, gy = np.meshgrid(
+            x0 + (np.arange(n) + 0.5) * (x1 - x0) / n, y0 + (np.arange(n) + 0.5) * (y1 - y0) / n
+        )
+        return np.stack([gx.ravel(), gy.ravel()], axis=1)
+
+    def observe(
+        self,
+        sample: Callable[[np.ndarray, np.ndarray], np.ndarray],
+        extent: tuple[float, float, float, float],
+        pos: np.ndarray,
+        t_frac: np.ndarray,
+        goal: np.ndarray,
+        min_db: float,
+    ) -> dict[str, np.ndarray]:
+        """The observations of N UAVs at ``pos`` (N, 2) heading for ``goal`` (N, 2), at the
+        time fractions ``t_frac`` (N,); ``sample(x, y)`` gives the signal, dB, at points
+        (N, M) (row n: UAV n's world and instant)."""
+        x0, x1, y0, y1 = extent
+        lo, span = np.array([x0, y0]), np.array([x1 - x0, y1 - y0])
+        pos = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
+        n = len(pos)
+        loc = pos[:, None, :] + self.local_offsets()[None]
+        pts = np.broadcast_to(self.area_points(extent)[None], (n, self.area**2, 2))
+        xy = np.concatenate([loc, pts], axis=1)
+        s = np.tanh((np.asarray(sample(xy[..., 0], xy[..., 1])) - min_db) / self.scale_db)
+        s = s.astype(np.float32)
+        w2 = self.window**2
+        g = np.broadcast_to(np.asarray(goal, dtype=np.float64).reshape(-1, 2), (n, 2))
+        return {
+            "position": ((pos - lo) / span).astype(np.float32),
+            "goal": ((g - lo) / span).astype(np.float32),
+            "time": np.broadcast_to(np.asarray(t_frac, np.float32).reshape(-1, 1), (n, 1)).copy(),
+            "local": s[:, :w2].reshape(n, 1, self.window, self.window),
+            "area": s[:, w2:].reshape(n, 1, self.area, self.area),
+        }
+
+    def flat(self, obs: dict[str, Any]) -> np.ndarray:
+        """(N, sum of :attr:`sizes`) float32: the parts of a batch of observations (or of
+        one) concatenated in :data:`KEYS` order, the form a replay memory stores."""
+        first = np.asarray(obs["position"])
+        n = 1 if first.ndim == 1 else len(first)
+        return np.concatenate(
+            [np.asarray(obs[k], dtype=np.float32).reshape(n, -1) for k in KEYS], axis=1
+        )
+
+
+def sample_goal(rng: np.random.Generator, extent: tuple[float, float, float, float]) -> np.ndarray:
+    """A destination uniform in the area shrunk by :data:`GOAL_MARGIN_M` on every side (the
+    whole area where it is narrower than twice the margin)."""
+    x0, x1, y0, y1 = extent
+    mx = GOAL_MARGIN_M if x1 - x0 > 2 * GOAL_MARGIN_M else 0.0
+    my = GOAL_MARGIN_M if y1 - y0 > 2 * GOAL_MARGIN_M else 0.0
+    return np.array([rng.uniform(x0 + mx, x1 - mx), rng.uniform(y0 + my, y1 - my)])
+
+
+def sample_start_for(
+    rng: np.random.Generator,
+    extent: tuple[float, float, float, float],
+    goal: np.ndarray,
+    cfg: NavConfig,
+) -> np.ndarray:
+    """A start uniform in the area, farther than ``tol_m`` from ``goal`` and at most
+    :data:`REACH` of ``max_steps`` moves from it (Manhattan distance); refused where 1000
+    draws found none (an area the arrival disc covers)."""
+    x0, x1, y0, y1 = extent
+    reach = REACH * cfg.max_steps * cfg.step_m
+    for _ in range(1000):
+        p = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1)])
+        d = np.abs(p - goal).sum()
+        if np.hypot(*(p - goal)) > cfg.tol_m and d <= reach:
+            return p
+    raise InvalidInputError(
+        f"no start farther than tol_m = {cfg.tol_m} m and within {reach:g} m of the "
+        f"destination {tuple(goal)} in the area {extent}"
+    )

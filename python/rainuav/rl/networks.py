@@ -1,0 +1,182 @@
+"""The parts a learner is built from: how an environment's observation becomes the network's
+input (an *encoder*), and the network. The DQN (:mod:`rainuav.rl.dqn`) takes any encoder and
+never looks inside the observation.
+
+- :class:`PositionEncoder` + :class:`DuelingQNet`: the single-map learner. The position (and
+  the time where the signal moves), goal-relative features of the fixed destination, into an
+  MLP with Fourier features.
+- :class:`WeatherEncoder` + :class:`WeatherQNet`: the learner that reads the weather
+  (``UAVNavEnv(observation="weather")``). The ``Dict`` observation
+  (:class:`rainuav.nav.views.WeatherView`) is flattened in a fixed order for the replay; the
+  network splits it again: two small convolutional stacks read the local window and the
+  whole-area grid, an MLP reads them with the position, the destination, the time and
+  goal-relative features.
+
+An encoder has ``dim`` (floats per encoded observation), ``__call__(env_obs, t)`` (a batch
+of the env's observations after ``t`` moves -> (N, dim) float32) and ``make_net()``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from rainuav.nav.views import WeatherView
+from rainuav.rl.config import DQNConfig
+
+__all__ = ["DuelingQNet", "PositionEncoder", "WeatherEncoder", "WeatherQNet", "goal_features"]
+
+
+def goal_features(rel: Any, scale: Any) -> Any:
+    """``tanh(rel / scale)`` per axis and scale: (N, 2) offsets to the destination and (2, K)
+    scales give (N, 2K). Works on numpy arrays and torch tensors."""
+    if isinstance(rel, torch.Tensor):
+        return torch.tanh(rel[:, :, None] / scale).flatten(1)
+    return np.tanh(rel[:, :, None] / scale).reshape(len(rel), -1)
+
+
+class DuelingQNet(nn.Module):
+    """Q(s, a) = V(s) + A(s, a) - mean_a A(s, a).
+
+    All inputs enter as they are, and the first ``smooth_dim`` (the position and the time
+    fraction) also as ``fourier`` sine/cosine frequencies; two hidden ReLU layers feed the
+    value and advantage heads.
+    """
+
+    def __init__(
+        self,
+        hidden: int = 128,
+        fourier: int = 8,
+        n_actions: int = 4,
+        obs_dim: int = 2,
+        smooth_dim: int | None = None,
+    ) -> None:
+        super().__init__()
+        self.register_buffer("freqs", math.pi * torch.arange(1, fourier + 1, dtype=torch.float32))
+        self.smooth_dim = obs_dim if smooth_dim is None else smooth_dim
+        d_in = obs_dim + self.smooth_dim * 2 * fourier
+        self.body = nn.Sequential(
+            nn.Linear(d_in, hidden), nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU()
+        )
+        self.value = nn.Linear(hidden, 1)
+        self.advantage = nn.Linear(hidden, n_actions)
+
+    def features(self, obs: torch.Tensor) -> torch.Tensor:
+        parts = [obs]
+        if self.freqs.numel():
+            ang = obs[:, : self.smooth_dim, None] * self.freqs  # (B, smooth_dim, K)
+            parts += [torch.sin(ang).flatten(-2), torch.cos(ang).flatten(-2)]
+        return torch.cat(parts, dim=-1)
+
+    def head(self, h: torch.Tensor) -> torch.Tensor:
+        adv = self.advantage(h)
+        return self.value(h) + adv - adv.mean(dim=-1, keepdim=True)
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        return self.head(self.body(self.features(obs)))
+
+
+class PositionEncoder:
+    """The single-map learner's input: the env's (N, 2) position (N, 3 with the time where
+    the signal moves), then t / horizon when time-aware and the env does not give it, then
+    the goal-relative features ``tanh(d / (step 4^k))`` (functions of the position and the
+    fixed destination, so nothing the environment does not give; they let the network
+    resolve the 10 m arrival disc, which global features blur)."""
+
+    def __init__(
+        self,
+        cfg: DQNConfig,
+        horizon: int,
+        goal: tuple[float, float],
+        step: tuple[float, float],
+        env_dims: int = 2,
+    ) -> None:
+        self.cfg, self.horizon = cfg, horizon
+        self.goal = np.asarray(goal, dtype=np.float32)
+        self.goal_scale = (
+            np.asarray(step, dtype=np.float32)[:, None] * 4.0 ** np.arange(cfg.goal_features)
+        ).astype(np.float32)  # (2, K)
+        # The time is an input where the env gives it, or where the learner is time-aware.
+        self.adds_time = cfg.time_aware and env_dims == 2
+        self.n_smooth = env_dims + int(self.adds_time)
+        self.dim = self.n_smooth + 2 * cfg.goal_features
+
+    def __call__(self, env_obs: Any, t: Any) -> np.ndarray:
+        env_obs = np.atleast_2d(np.asarray(env_obs, dtype=np.float32))
+        parts = [env_obs]
+        if self.adds_time:
+            frac = (np.asarray(t, dtype=np.float32) / self.horizon).reshape(-1, 1)
+            parts.append(np.broadcast_to(frac, (len(env_obs), 1)))
+        if self.cfg.goal_features:
+            parts.append(goal_features(env_obs[:, :2] - self.goal, self.goal_scale))
+        return np.concatenate(parts, axis=1).astype(np.float32)
+
+    def make_net(self) -> nn.Module:
+        c = self.cfg
+        return DuelingQNet(c.hidden, c.fourier, obs_dim=self.dim, smooth_dim=self.n_smooth)
+
+
+class WeatherQNet(DuelingQNet):
+    """The dueling head on features of the weather: the flat observation (``WeatherView``
+    order: position, goal, time, local window, whole-area grid) split into its parts; each
+    grid through two 3x3 convolutions (16 and 32 channels, the second with stride 2; the
+    area's first also strided), flattened; the position, destination and time with
+    ``fourier`` sine/cosine frequencies, and goal-relative features at ``len(goal_scale)``
+    scales; two hidden ReLU layers of ``hidden``."""
+
+    def __init__(
+        self, view: WeatherView, hidden: int, fourier: int, goal_scale: np.ndarray
+    ) -> None:
+        super().__init__(hidden, fourier, obs_dim=5, smooth_dim=5)
+        self.window, self.area = view.window, view.area
+        self.register_buffer("goal_scale", torch.as_tensor(goal_scale, dtype=torch.float32))
+
+        def stack(first_stride: int) -> nn.Sequential:
+            return nn.Sequential(
+                nn.Conv2d(1, 16, 3, stride=first_stride, padding=1), nn.ReLU(),
+                nn.Conv2d(16, 32, 3, stride=2, padding=1), nn.ReLU(), nn.Flatten(),
+            )  # fmt: skip
+
+        self.local, self.whole = stack(1), stack(2)
+
+        def out(n: int, first: int) -> int:
+            n = (n - 1) // first + 1
+            return 32 * ((n - 1) // 2 + 1) ** 2
+
+        d_grid = out(self.window, 1) + out(self.area, 2)
+        d_vec = 5 + 5 * 2 * fourier + 2 * goal_scale.shape[1]
+        self.body = nn.Sequential(
+            nn.Linear(d_grid + d_vec, hidden), nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU()
+        )
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        w2, a2 = self.window**2, self.area**2
+        vec = obs[:, :5]
+        local = obs[:, 5 : 5 + w2].reshape(-1, 1, self.window, self.window)
+        whole = obs[:, 5 + w2 : 5 + w2 + a2].reshape(-1, 1, self.area, self.area)
+        rel = goal_features(vec[:, 2:4] - vec[:, 0:2], self.goal_scale)
+        x = torch.cat([self.features(vec), rel, self.local(local), self.whole(whole)], dim=1)
+        return self.head(self.body(x))
+
+
+class WeatherEncoder:
+    """The weather-reading learner's input: the env's ``Dict`` observation flattened
+    (:meth:`WeatherView.flat`); the network splits it (:class:`WeatherQNet`)."""
+
+    def __init__(self, cfg: DQNConfig, view: WeatherView, step: tuple[float, float]) -> None:
+        self.cfg, self.view = cfg, view
+        self.dim = sum(view.sizes.values())
+        k = max(cfg.goal_features, 1)
+        self.goal_scale = (np.asarray(step, np.float32)[:, None] * 4.0 ** np.arange(k)).astype(
+            np.float32
+        )
+
+    def __call__(self, env_obs: Any, t: Any) -> np.ndarray:
+        return self.view.flat(env_obs)
+
+    def make_net(self) -> nn.Module:
+        return WeatherQNet(self.view, self.cfg.hidden, self.cfg.fourier, self.goal_scale)

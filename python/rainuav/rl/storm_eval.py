@@ -1,0 +1,132 @@
+"""One saved network flown through many storms it was not trained on (``python -m
+rainuav.evaluate RUN --storm-seeds A-B``): per storm the network alone, the exact space-time
+optimum, the frozen take-off plan, re-planning and the straight line from the same fixed
+starts, then the mean over the storms.
+
+Destinations: the task's fixed one, or with ``random_goals`` one per start, drawn as training
+draws them (:func:`rainuav.nav.views.sample_goal`, the start within reach of it), each flight
+then planned and judged against its own destination's optimum.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rainuav._checks import check_integer
+from rainuav.errors import InvalidInputError
+from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.views import sample_goal, sample_start_for
+from rainuav.radio.storms import EVAL_SEEDS_FROM, MAX_STORM_SEED
+from rainuav.rl import checkpoint
+from rainuav.rl.config import check_config, load_config
+from rainuav.rl.evaluation import eval_starts, evaluate, load_agent, reference_flights
+from rainuav.world import build_world, spec_of
+
+__all__ = ["MAX_STORMS", "SUMMARY_KEYS", "evaluate_storms", "parse_seeds"]
+
+MAX_STORMS = 1000
+"""The most storms one evaluation flies (each is mapped, about 2 s, and planned)."""
+SUMMARY_KEYS = (
+    "success_rate", "mean_excess_cost", "worst_excess_cost", "outage_share",
+    "optimal_outage_share", "straight_line_success_rate", "straight_line_mean_excess_cost",
+    "frozen_plan_success_rate", "frozen_plan_mean_excess_cost", "replan_success_rate",
+    "replan_mean_excess_cost",
+)  # fmt: skip
+"""The figures averaged over the storms (``worst_excess_cost``: the worst over them)."""
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``"A-B"`` (inclusive) or ``"K"``: the storm seeds, each in 0..2^63-1, at most
+    :data:`MAX_STORMS` of them."""
+    parts = str(text).split("-")
+    try:
+        lo, hi = (int(parts[0]), int(parts[-1])) if len(parts) <= 2 else (None, None)
+    except ValueError:
+        lo = hi = None
+    if lo is None or hi is None or not 0 <= lo <= hi <= MAX_STORM_SEED:
+        raise InvalidInputError(f"--storm-seeds must be A-B with 0 <= A <= B (got {text!r})")
+    if hi - lo + 1 > MAX_STORMS:
+        raise InvalidInputError(f"--storm-seeds: at most {MAX_STORMS} storms (got {hi - lo + 1})")
+    return list(range(lo, hi + 1))
+
+
+def _flights(agent: Any, env: UAVNavEnv, pts: np.ndarray, replan_every: int) -> dict[str, Any]:
+    return evaluate(agent, env, pts, reference_flights(env, pts, replan_every))[0]
+
+
+def evaluate_storms(
+    run_dir: Path,
+    seeds: list[int],
+    *,
+    starts: int = 20,
+    seed: int | None = None,
+    random_goals: bool = False,
+    device: str = "cpu",
+    progress: bool = True,
+) -> tuple[dict[str, Any], Any]:
+    """Flies the network run ``run_dir`` reports through the storms ``seeds`` from
+    ``starts`` fixed starts each (seeded by ``seed``, default the run's ``eval_seed``; the same
+    starts in every storm). Returns ``{"mean": ..., "storms": [...]}`` and, for figures, the
+    first storm's (env, flights)."""
+    check_integer("starts", starts, 1, 10_000)
+    run = Path(run_dir)
+    for name in ("config.toml", "checkpoint.pt"):
+        if not (run / name).exists():
+            raise InvalidInputError(f"{run}: missing {name}; is this a rainuav.train output?")
+    cfg = load_config(run / "config.toml")
+    check_config(cfg)
+    if cfg.scenario != "storm":
+        raise InvalidInputError(f"--storm-seeds flies storms: {run} was trained on {cfg.scenario}")
+    state = checkpoint.load(run / "checkpoint.pt", ("agent", "returns", "train_seconds"))
+    base = dataclasses.replace(spec_of(cfg), storm_pool=0, random_goal=False)
+    rows, agent, first = [], None, None
+    it: Any = seeds
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(seeds, desc="storms", unit="storm")
+    for k in it:
+        world = build_world(dataclasses.replace(base, storm_seed=k), cache=False)
+        env = world.env()
+        if agent is None:
+            agent, _, _ = load_agent(run / "checkpoint.pt", state, cfg, env, device, False)
+        rng = np.random.default_rng(cfg.eval_seed if seed is None else seed)
+        if not random_goals:
+            pts = eval_starts(env, starts, cfg.eval_seed if seed is None else seed)
+            m = _flights(agent, env, pts, cfg.replan_every)
+            if first is None:
+                from rainuav.rl.collect import greedy_rollouts
+
+                first = (env, greedy_rollouts(agent, env, pts[:6]))
+        else:
+            per = []
+            for _ in range(starts):
+                goal = sample_goal(rng, env.field.extent)
+                start = sample_start_for(rng, env.field.extent, goal, env.cfg)
+                task = dataclasses.replace(world.task, goal_m=(float(goal[0]), float(goal[1])))
+                e = dataclasses.replace(world, task=task).env()
+                per.append(_flights(agent, e, start[None], cfg.replan_every))
+            m = _mean(per, worst=True)
+        m["storm_seed"] = k
+        rows.append(m)
+    summary = _mean(rows, worst=True)
+    summary.update(storms=len(rows), starts_per_storm=starts, random_goals=random_goals)
+    summary["held_out"] = all(k >= EVAL_SEEDS_FROM for k in seeds)
+    return {"mean": summary, "storms": rows}, first
+
+
+def _mean(rows: list[dict[str, Any]], worst: bool) -> dict[str, Any]:
+    """The mean of each :data:`SUMMARY_KEYS` figure over ``rows`` (None values left out;
+    ``worst_excess_cost`` the largest)."""
+    out: dict[str, Any] = {}
+    for key in SUMMARY_KEYS:
+        vals = [r[key] for r in rows if r.get(key) is not None]
+        if key.startswith("worst_") and worst:
+            out[key] = max(vals) if vals else None
+        else:
+            out[key] = float(np.mean(vals)) if vals else None
+    return out

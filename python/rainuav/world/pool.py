@@ -1,0 +1,132 @@
+"""Storms of the distribution as a training run needs them (:class:`StormPool`): the worlds of
+a network that learns to fly any storm (``python -m rainuav.train --storm-seed random``).
+
+Seeds: training storms are drawn in :data:`TRAINING_SEEDS`; :data:`VALIDATION_SEEDS` are for
+choices made while building a learner; from 1 000 000 the evaluation storms
+(:data:`rainuav.radio.storms.EVAL_SEEDS_FROM`), never trained or tuned on.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Any
+
+import numpy as np
+
+from rainuav.errors import InvalidInputError
+from rainuav.nav.field import SignalBank, SignalSeries
+from rainuav.radio.timemap import build_radio_map_series
+from rainuav.world import (
+    World,
+    check_spec,
+    make_scenario,
+    series_instants,
+    spec_of,
+    task_of,
+    world_from,
+)
+
+__all__ = ["TRAINING_SEEDS", "VALIDATION_SEEDS", "StormPool"]
+
+
+TRAINING_SEEDS = (0, 900_000)
+"""A storm pool draws its storms' seeds uniformly in [lo, hi): the training storms."""
+VALIDATION_SEEDS = (900_000, 1_000_000)
+"""Storms for choices made while building a learner (validation); never drawn for training.
+The evaluation storms start at 1 000 000 (:data:`rainuav.radio.storms.EVAL_SEEDS_FROM`)."""
+
+
+class StormPool:
+    """Storms of the distribution as a training run needs them: ``spec.storm_pool`` storms in
+    one :class:`SignalBank` (world ``k``'s slot is renewed with :meth:`renew`), their seeds
+    drawn from ``numpy.random.default_rng(seed)`` in :data:`TRAINING_SEEDS`. The next storm
+    is mapped in a background thread while training goes on (the engine releases the GIL);
+    the maps are not cached on disk (each storm is flown once). ``map_seconds``: the time
+    spent mapping storms, and ``wait_seconds``: the part training waited for."""
+
+    def __init__(self, spec: Any, seed: int, *, progress: bool = False) -> None:
+        check_spec(spec)
+        if spec.storm_pool < 1:
+            raise InvalidInputError("a storm pool needs storm_pool >= 1")
+        self.spec = spec
+        self.rng = np.random.default_rng(seed)
+        self.map_seconds = self.wait_seconds = 0.0
+        self.seeds: list[int] = []
+        self.flown: list[int] = []
+        first = [self._build(self._draw()) for _ in range(spec.storm_pool)]
+        field = first[0][1].field
+        assert isinstance(field, SignalSeries)  # a storm moves
+        self.task = first[0][1].task
+        self.bank = SignalBank([w.field.db for _, w in first], field.t_s, field.extent)
+        self.seeds = [k for k, _ in first]
+        self._executor = ThreadPoolExecutor(1)
+        self._next_seed = self._draw()
+        self._next: Future[Any] = self._executor.submit(self._build, self._next_seed)
+
+    def _draw(self) -> int:
+        return int(self.rng.integers(*TRAINING_SEEDS))
+
+    def _build(self, storm_seed: int) -> tuple[int, World]:
+        t0 = time.perf_counter()
+        spec = dataclasses.replace(spec_of(self.spec), storm_seed=storm_seed, storm_pool=0)
+        source = build_radio_map_series(make_scenario(spec), series_instants(spec), cache=False)
+        world = world_from(source, task_of(spec))
+        self.map_seconds += time.perf_counter() - t0
+        self.flown.append(storm_seed)
+        return storm_seed, world
+
+    def world(self) -> World:
+        """The pool as one world (its field the bank; ``observation`` and ``random_goal``
+        the spec's)."""
+        return World(
+            None, self.bank, self.task, self.spec.observation, self.spec.random_goal, pool=self
+        )
+
+    def renew(self, slot: int) -> int:
+        """Puts the next storm in world ``slot`` (waiting for its maps if they are not done)
+        and starts mapping the one after; returns the new storm's seed."""
+        t0 = time.perf_counter()
+        storm_seed, world = self._next.result()
+        self.wait_seconds += time.perf_counter() - t0
+        self.bank.put(slot, world.field.db)
+        self.seeds[slot] = storm_seed
+        self._next_seed = self._draw()
+        self._next = self._executor.submit(self._build, self._next_seed)
+        return self.seeds[slot]
+
+    def state_dict(self) -> dict[str, Any]:
+        """Plain data that restores the pool (:meth:`load_state_dict`): the storms in the
+        slots, the one being mapped next, the seed stream's state and the storms flown."""
+        return {
+            "seeds": list(self.seeds),
+            "next_seed": self._next_seed,
+            "rng": self.rng.bit_generator.state,
+            "flown": list(self.flown),
+        }
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        """Restores a :meth:`state_dict`: maps again the storms of the slots that differ
+        (maps are a function of their seed) and the next one. Anything malformed raises
+        ValueError."""
+        seeds, nxt = d["seeds"], d["next_seed"]
+        ok = isinstance(seeds, list) and len(seeds) == len(self.seeds)
+        if not ok or not all(isinstance(k, int) and 0 <= k < TRAINING_SEEDS[1] for k in seeds):
+            raise ValueError(f"pool.seeds must be {len(self.seeds)} training storm seeds")
+        if not (isinstance(nxt, int) and 0 <= nxt < TRAINING_SEEDS[1]):
+            raise ValueError("pool.next_seed must be a training storm seed")
+        if not self._next.cancel():
+            self._next.result()  # the storm being mapped finishes; the state says what follows
+        for slot, k in enumerate(seeds):
+            if k != self.seeds[slot]:
+                self.bank.put(slot, self._build(k)[1].field.db)
+                self.seeds[slot] = k
+        self.rng.bit_generator.state = d["rng"]
+        self.flown = [int(k) for k in d["flown"]]
+        self._next_seed = nxt
+        self._next = self._executor.submit(self._build, nxt)
+
+    def close(self) -> None:
+        """Stops the background mapping (the storm being mapped is finished first)."""
+        self._executor.shutdown(wait=True, cancel_futures=True)

@@ -1,0 +1,222 @@
+"""One network for every storm (issue #28): the weather observation against the map it claims
+to show, the destination distribution, a bank of worlds against its members, per-UAV
+destinations in the batched stepper against the scalar env, the storm pool's seeds, and a
+seeded run over the storm distribution reproduced."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+from rainuav.errors import InvalidInputError
+from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.field import SignalBank, SignalSeries
+from rainuav.nav.task import NavConfig
+from rainuav.nav.views import GOAL_MARGIN_M, REACH, WeatherView, sample_goal, sample_start_for
+
+EXTENT = (0.0, 1000.0, 0.0, 800.0)
+H, W = 40, 50  # 20 m pixels over 1000 x 800 m
+T_S = np.array([0.0, 10.0, 20.0])
+
+
+def plane(a: float, b: float, c: float, d: float) -> np.ndarray:
+    """A signal linear in x, y and t, dB, sampled at the pixel centres of (K, H, W): bilinear
+    in space and linear in time reproduce it exactly between the outermost centres."""
+    x = EXTENT[0] + (np.arange(W) + 0.5) * (EXTENT[1] - EXTENT[0]) / W
+    y = EXTENT[2] + (np.arange(H) + 0.5) * (EXTENT[3] - EXTENT[2]) / H
+    return a * x[None, None, :] + b * y[None, :, None] + c * T_S[:, None, None] + d
+
+
+def exact(x: np.ndarray, y: np.ndarray, t: float, coef: tuple[float, ...]) -> np.ndarray:
+    """The analytic plane at (x, y, t), with the edge values beyond the outermost centres."""
+    a, b, c, d = coef
+    x = np.clip(x, EXTENT[0] + 10.0, EXTENT[1] - 10.0)
+    y = np.clip(y, EXTENT[2] + 10.0, EXTENT[3] - 10.0)
+    return a * x + b * y + c * np.clip(t, T_S[0], T_S[-1]) + d
+
+
+COEF = (0.02, -0.015, 0.3, -4.0)
+
+
+def weather_env(**kw: object) -> UAVNavEnv:
+    field = SignalSeries(plane(*COEF), T_S, EXTENT)
+    task = NavConfig(goal_m=(700.0, 500.0), max_steps=50, speed_m_s=5.0, min_db=-2.0)
+    return UAVNavEnv(field=field, config=task, observation="weather", **kw)
+
+
+def test_weather_observation_shows_the_map_it_claims() -> None:
+    """Every sample of the local window and of the whole-area grid equals the analytic signal
+    at its documented point and instant, through tanh((S - min_db) / scale_db), to float32
+    rounding (the field is linear, so the map's interpolation is exact: 1e-5)."""
+    env = weather_env()
+    v = env.view
+    assert v is not None
+    pos = np.array([[330.0, 410.0], [20.0, 780.0]])  # the second: the window leaves the area
+    t = np.array([3, 7])
+    goal = np.array([[700.0, 500.0], [100.0, 100.0]])
+    obs = env.observe(pos, t, goal)
+    assert env.observation_space.contains({k: val[0] for k, val in obs.items()})
+    for n in range(2):
+        t_s = t[n] * env.cfg.move_s
+        h = v.window // 2
+        for i in range(v.window):
+            for j in range(v.window):
+                x = pos[n, 0] + (j - h) * v.window_step_m
+                y = pos[n, 1] + (i - h) * v.window_step_m
+                want = np.tanh((exact(x, y, t_s, COEF) + 2.0) / v.scale_db)
+                assert obs["local"][n, 0, i, j] == pytest.approx(want, abs=1e-5)
+        for i in range(v.area):
+            for j in range(v.area):
+                x = (j + 0.5) * 1000.0 / v.area
+                y = (i + 0.5) * 800.0 / v.area
+                want = np.tanh((exact(x, y, t_s, COEF) + 2.0) / v.scale_db)
+                assert obs["area"][n, 0, i, j] == pytest.approx(want, abs=1e-5)
+        assert obs["time"][n, 0] == pytest.approx(t[n] / 50)
+    np.testing.assert_allclose(obs["position"], pos / [1000.0, 800.0], atol=1e-6)
+    np.testing.assert_allclose(obs["goal"], goal / [1000.0, 800.0], atol=1e-6)
+    flat = v.flat(obs)
+    assert flat.shape == (2, sum(v.sizes.values()))
+    np.testing.assert_array_equal(flat[:, 5 : 5 + v.window**2], obs["local"].reshape(2, -1))
+
+
+def test_weather_env_passes_gymnasiums_checker() -> None:
+    from gymnasium.utils.env_checker import check_env
+
+    check_env(weather_env(random_goal=True), skip_render_check=True)
+
+
+def test_destination_distribution() -> None:
+    """Destinations are uniform in the area shrunk by the margin (20 000 draws: the range
+    within 1%, the mean within 3 standard errors, each quartile within 1% of the side);
+    starts lie within reach of theirs and outside the arrival disc."""
+    rng = np.random.default_rng(0)
+    g = np.array([sample_goal(rng, EXTENT) for _ in range(20_000)])
+    for axis, (lo, hi) in enumerate([(EXTENT[0], EXTENT[1]), (EXTENT[2], EXTENT[3])]):
+        a, b = lo + GOAL_MARGIN_M, hi - GOAL_MARGIN_M
+        assert g[:, axis].min() >= a and g[:, axis].max() <= b
+        assert g[:, axis].min() < a + 0.01 * (b - a) and g[:, axis].max() > b - 0.01 * (b - a)
+        se = (b - a) / np.sqrt(12 * len(g))
+        assert abs(g[:, axis].mean() - (a + b) / 2) < 3 * se
+        q = np.quantile(g[:, axis], [0.25, 0.5, 0.75])
+        np.testing.assert_allclose(
+            q, a + (b - a) * np.array([0.25, 0.5, 0.75]), atol=0.01 * (b - a)
+        )
+    cfg = NavConfig(max_steps=40)
+    for goal in g[:500]:
+        s = sample_start_for(rng, EXTENT, goal, cfg)
+        assert np.abs(s - goal).sum() <= REACH * 40 * cfg.step_m
+        assert np.hypot(*(s - goal)) > cfg.tol_m
+    env = weather_env(random_goal=True)
+    goals = []
+    for k in range(50):
+        obs, info = env.reset(seed=k)
+        goals.append(info["goal_m"])
+        np.testing.assert_allclose(obs["goal"], info["goal_m"] / [1000.0, 800.0], atol=1e-6)
+    assert len({tuple(x) for x in goals}) == 50  # drawn per episode
+
+
+def test_fixed_destination_stays_the_tasks() -> None:
+    env = weather_env()
+    for k in range(5):
+        _, info = env.reset(seed=k)
+        assert tuple(info["goal_m"]) == (700.0, 500.0)
+
+
+def test_bank_reads_each_world_as_its_series() -> None:
+    """A bank of three worlds gives, point by point, what each world's own series gives
+    (bit for bit: the same operations); put() replaces one world."""
+    worlds = [plane(0.01 * k, -0.02, 0.1 * k, k) for k in range(3)]
+    bank = SignalBank(worlds, T_S, EXTENT)
+    rng = np.random.default_rng(1)
+    x, y = rng.uniform(-50, 1050, 300), rng.uniform(-50, 850, 300)
+    t = rng.uniform(-5, 25, 300)
+    w = rng.integers(0, 3, 300)
+    got = bank(x, y, t, w)
+    for k in range(3):
+        own = SignalSeries(worlds[k], T_S, EXTENT)
+        np.testing.assert_array_equal(got[w == k], own(x[w == k], y[w == k], t[w == k]))
+    bank.put(1, worlds[2])
+    np.testing.assert_array_equal(bank(x, y, t, 1), SignalSeries(worlds[2], T_S, EXTENT)(x, y, t))
+    with pytest.raises(InvalidInputError, match="sinr_db must be finite"):
+        bank.put(0, np.full_like(worlds[0], np.nan))
+
+
+def test_batched_destinations_match_scalar_envs() -> None:
+    """UAVs with their own destinations stepped at once (the batched stepper, as training
+    steps them) get exactly the transitions of scalar envs built with those destinations."""
+    env = weather_env()
+    rng = np.random.default_rng(2)
+    n = 12
+    goals = np.array([sample_goal(rng, EXTENT) for _ in range(n)])
+    starts = np.array([sample_start_for(rng, EXTENT, g, env.cfg) for g in goals])
+    off, t = np.zeros((n, 2), dtype=np.int64), np.zeros(n, dtype=np.int64)
+    singles = []
+    for s, g in zip(starts, goals, strict=True):
+        e = UAVNavEnv(
+            field=env.field,
+            config=dataclasses.replace(env.cfg, goal_m=tuple(g)),
+            observation="weather",
+        )
+        e.reset(options={"start_m": s})
+        singles.append(e)
+    live = np.ones(n, dtype=bool)
+    for _ in range(60):
+        idx = np.flatnonzero(live)
+        if not len(idx):
+            break
+        a = rng.integers(0, 4, len(idx))
+        r = env.stepper.step(starts[idx], off[idx], t[idx], a, goals[idx])
+        off[idx], t[idx] = r["offset"], r["t"]
+        for j, k in enumerate(idx):
+            _, rew, term, trunc, _ = singles[k].step(int(a[j]))
+            assert rew == r["reward"][j]
+            assert (term, trunc) == (r["terminated"][j], r["truncated"][j])
+            if term or trunc:
+                live[k] = False
+    assert not live.any() or t.max() == 60
+
+
+def test_bad_weather_options_are_refused() -> None:
+    with pytest.raises(InvalidInputError, match="random_goal needs observation='weather'"):
+        UAVNavEnv(field=weather_env().field, goal_m=(500.0, 500.0), random_goal=True)
+    with pytest.raises(InvalidInputError, match="observation must be one of"):
+        UAVNavEnv(field=weather_env().field, goal_m=(500.0, 500.0), observation="radar")
+    with pytest.raises(InvalidInputError, match="window must be an odd integer"):
+        WeatherView(window=4)
+    with pytest.raises(InvalidInputError, match=r"options\['goal_m'\] must be"):
+        weather_env().reset(options={"goal_m": (5000.0, 0.0)})
+
+
+@pytest.mark.timeout(240)
+def test_storm_pool_run_is_seeded_and_never_flies_reserved_storms(tmp_path) -> None:
+    """Two runs over the storm distribution with the same seed give the same log and
+    metrics (CPU); every storm the pool mapped is a training storm (below the validation
+    seeds, so also below the evaluation seeds); its storms are renewed as asked."""
+    from rainuav.rl.config import DQNConfig, TrainConfig
+    from rainuav.rl.loop import train
+    from rainuav.world.pool import TRAINING_SEEDS, StormPool
+
+    def run(out: str) -> tuple[str, dict, StormPool]:
+        cfg = TrainConfig(
+            scenario="storm", observation="weather", random_goal=True, storm_pool=2,
+            storm_episodes=3, max_steps=40, out=str(tmp_path / out), eval_starts=3,
+            validate_every=0, stages=1, checkpoint_every=1000,
+            dqn=DQNConfig(episodes=16, lanes=4, learning_starts=50, replay_capacity=2000,
+                          hidden=16),
+        )  # fmt: skip
+        pool = StormPool(cfg, cfg.seed)
+        metrics = train(cfg, pool.world(), progress=False)
+        rows = (tmp_path / out / "log.csv").read_text().splitlines()
+        return "\n".join(",".join(r.split(",")[:-1]) for r in rows), metrics, pool
+
+    log_a, m_a, pool = run("a")
+    log_b, m_b, _ = run("b")
+    assert log_a == log_b
+    keep = [k for k in m_a if "seconds" not in k]
+    assert json.dumps({k: m_a[k] for k in keep}) == json.dumps({k: m_b[k] for k in keep})
+    # 16 episodes over 2 storms renewed every 3: at least 4 renewals, all training seeds.
+    assert m_a["storms_flown"] >= 6
+    assert all(TRAINING_SEEDS[0] <= k < TRAINING_SEEDS[1] for k in pool.flown)
+    assert m_a["evaluated_on_storm_seed"] == 900_000
