@@ -9,10 +9,10 @@ starts, against the exact planner).
 First trains rainuav's default learner (``rainuav.rl.loop.train``, its own folder under
 ``--out``), then the literal preset (``time_budget_s``) and SB3's DQN for as many seconds as
 that training took (``--budget-s`` sets another budget); SB3 is configured as a user would
-configure it for a 300-step sparse-arrival task (below), on
-``gym.make("rainuav/UAVNav-v0", radio_map=...)``. ``--peers`` picks among them and Tianshou's
-DQN with dueling, double-Q and 3-step returns (``tianshou_dqn``; ``pip install tianshou``),
-configured likewise. Writes ``peer.json`` with the metric sets. Results with the machine go to
+configure it for a 300-step sparse-arrival task (below), on the same world's env
+(:func:`rainuav.world.build_world`). ``--peers`` picks among them and Tianshou's DQN with
+dueling, double-Q and 3-step returns (``tianshou_dqn``; ``pip install tianshou``), configured
+likewise. Writes ``peer.json`` with the metric sets. Results with the machine go to
 BENCHMARKS.md.
 """
 
@@ -26,15 +26,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
-import rainuav  # noqa: F401 - registers rainuav/UAVNav-v0
-from rainuav.envs import scenario_map
 from rainuav.nav.env import UAVNavEnv
 from rainuav.rl.config import TrainConfig
 from rainuav.rl.evaluation import eval_starts, flights, reference_flights, summarise
 from rainuav.rl.loop import train
-from rainuav.rl.setup import make_env
+from rainuav.world import build_world
 
 SB3_CONFIG: dict[str, Any] = {
     # A user's configuration for a long-horizon task: a wide MLP, a long discount, a big
@@ -198,8 +195,8 @@ def main(argv: list[str] | None = None) -> int:
 
     torch.set_num_threads(1)
     cfg = TrainConfig(scenario=args.scenario, seed=args.seed, out=str(args.out / "rainuav"))
-    rm = scenario_map(args.scenario)
-    ours = train(cfg, progress=False, radio_map=rm)
+    world = build_world(cfg)
+    ours = train(cfg, world, progress=False)
     budget = ours["training_seconds"] if args.budget_s is None else args.budget_s
     keys = ("success_rate", "mean_excess_cost", "worst_excess_cost", "training_seconds")
     report: dict[str, Any] = {
@@ -213,39 +210,27 @@ def main(argv: list[str] | None = None) -> int:
             dataclasses.replace(
                 cfg, preset="paper", time_budget_s=budget, out=str(args.out / "paper_preset")
             ),
+            world,
             progress=False,
-            radio_map=rm,
         )
         report["paper_preset"] = {**{k: literal[k] for k in keys}, "episodes": literal["episodes"]}
-    env = make_env(cfg, rm)
+    env = world.env()
     starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
     optimum = reference_flights(env, starts)["optimal"]
     if "sb3_dqn" in args.peers:
-        sb3_env = gym.make("rainuav/UAVNav-v0", radio_map=rm, **_task(env))
-        model, info = run_sb3(sb3_env.unwrapped, args.seed, budget)
+        model, info = run_sb3(world.env(), args.seed, budget)
         theirs = summarise(
             policy_flights(lambda o: model.predict(o, deterministic=True)[0], env, starts), optimum
         )
         report["sb3_dqn"] = {**theirs, **info, "config": SB3_CONFIG}
     if "tianshou_dqn" in args.peers:
-        predict, info = run_tianshou(
-            lambda: gym.make("rainuav/UAVNav-v0", radio_map=rm, **_task(env)), args.seed, budget
-        )
+        predict, info = run_tianshou(world.env, args.seed, budget)
         theirs = summarise(policy_flights(predict, env, starts), optimum)
         report["tianshou_dqn"] = {**theirs, **info, "config": TIANSHOU_CONFIG}
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "peer.json").write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2))
     return 0
-
-
-def _task(env: UAVNavEnv) -> dict[str, Any]:
-    c = env.cfg
-    return {
-        "goal_m": c.goal_m, "step_m": c.step_m, "tol_m": c.tol_m, "max_steps": c.max_steps,
-        "mu": c.mu, "reward": c.reward, "signal": c.signal, "min_db": c.min_db,
-        "goal_reward": c.goal_reward, "out_of_bounds_penalty": c.out_of_bounds_penalty,
-    }  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -137,7 +137,13 @@ def test_bank_reads_each_world_as_its_series() -> None:
     for k in range(3):
         own = SignalSeries(worlds[k], T_S, EXTENT)
         np.testing.assert_array_equal(got[w == k], own(x[w == k], y[w == k], t[w == k]))
+    pts = np.stack([x[:40], y[:40]], axis=1)  # fixed points (an area grid) at many instants
+    np.testing.assert_allclose(
+        bank.at_points(pts, t, w), bank(pts[None, :, 0], pts[None, :, 1], t[:, None], w[:, None]),
+        rtol=0, atol=1e-12,
+    )  # fmt: skip
     bank.put(1, worlds[2])
+    np.testing.assert_allclose(bank.at_points(pts, t, 1)[:, :3], bank(x[:3], y[:3], t[:, None], 1))
     np.testing.assert_array_equal(bank(x, y, t, 1), SignalSeries(worlds[2], T_S, EXTENT)(x, y, t))
     with pytest.raises(InvalidInputError, match="sinr_db must be finite"):
         bank.put(0, np.full_like(worlds[0], np.nan))
@@ -220,3 +226,51 @@ def test_storm_pool_run_is_seeded_and_never_flies_reserved_storms(tmp_path) -> N
     assert m_a["storms_flown"] >= 6
     assert all(TRAINING_SEEDS[0] <= k < TRAINING_SEEDS[1] for k in pool.flown)
     assert m_a["evaluated_on_storm_seed"] == 900_000
+    # The run flown through a held-out storm it never saw (the figures' plumbing; the
+    # numbers of a real run are in the README), and refused where it has no world of its own.
+    from rainuav.evaluate import main as evaluate_main
+    from rainuav.rl.storm_eval import evaluate_storms
+
+    result, first = evaluate_storms(tmp_path / "a", [1_000_000], starts=2, progress=False)
+    row = result["storms"][0]
+    assert result["mean"]["held_out"] and row["storm_seed"] == 1_000_000
+    assert row["eval_starts"] == 2 and 0.0 <= row["success_rate"] <= 1.0
+    assert "frozen_plan_mean_excess_cost" in row and "replan_success_rate" in row
+    assert first is not None
+    assert evaluate_main([str(tmp_path / "a")]) == 2
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [("5-3", "must be A-B"), ("x", "must be A-B"), ("1-2-3", "must be A-B"), ("0-5000", "at most")],
+)
+def test_storm_seed_ranges_are_checked(text: str, match: str) -> None:
+    from rainuav.rl.storm_eval import parse_seeds
+
+    with pytest.raises(InvalidInputError, match=match):
+        parse_seeds(text)
+    assert parse_seeds("7-9") == [7, 8, 9] and parse_seeds("4") == [4]
+
+
+def test_gym_make_gives_the_weather_observation() -> None:
+    """``gym.make`` passes observation and random_goal through (a Dict space; SB3's
+    MultiInputPolicy reads it); the vector env keeps one destination and says so."""
+    import gymnasium as gym
+    import rainuav  # noqa: F401 - registers the env
+
+    kw = {"sinr_db": plane(*COEF)[0], "extent_m": EXTENT, "goal_m": (500.0, 400.0)}
+    env = gym.make("rainuav/UAVNav-v0", observation="weather", random_goal=True, **kw)
+    assert isinstance(env.observation_space, gym.spaces.Dict)
+    obs, info = env.reset(seed=3)
+    assert env.observation_space.contains(obs) and "goal_m" in info
+    vec = gym.make_vec(
+        "rainuav/UAVNav-v0", num_envs=3, vectorization_mode="vector_entry_point",
+        observation="weather", **kw,
+    )  # fmt: skip
+    obs, _ = vec.reset(seed=0)
+    assert obs["local"].shape == (3, 1, 11, 11)
+    with pytest.raises(InvalidInputError, match="random_goal: the vector env"):
+        gym.make_vec(
+            "rainuav/UAVNav-v0", num_envs=3, vectorization_mode="vector_entry_point",
+            observation="weather", random_goal=True, **kw,
+        )  # fmt: skip

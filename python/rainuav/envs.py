@@ -16,8 +16,11 @@ calls :func:`make_nav_vector_env`. Either takes one signal source:
 - a raw ``sinr_db`` or ``sir_db`` array with ``extent_m``;
 
 and the task's fields as keywords (:class:`rainuav.nav.task.NavConfig`: ``signal``,
-``min_db``, ``goal_m``, ``step_m``, ``speed_m_s``, ...). Without ``min_db`` a preset's map uses
-the preset's documented SINR threshold (``rainuav.radio.presets.SINR_THRESHOLDS_DB``).
+``min_db``, ``goal_m``, ``step_m``, ``speed_m_s``, ...), with ``observation="weather"`` (a
+``Dict`` of the SINR around the UAV and over the area, its position, time and destination:
+:mod:`rainuav.nav.views`) and ``random_goal=True`` (a destination per episode) optional.
+Without ``min_db`` a preset's map uses the preset's documented SINR threshold
+(``rainuav.radio.presets.SINR_THRESHOLDS_DB``).
 """
 
 from __future__ import annotations
@@ -47,6 +50,7 @@ def _world_env(
         raise InvalidInputError(
             f"scenario must be a preset name or a Scenario (got {type(scenario).__name__})"
         )
+    shown = {k: task.pop(k) for k in ("observation", "random_goal") if k in task}
     nav = make_config(**task)
     shared = {f.name for f in dataclasses.fields(WorldSpec)} & set(task) - {"goal_m"}
     freq = weather["freq_hz"]
@@ -63,6 +67,7 @@ def _world_env(
         scenario=scenario if isinstance(scenario, str) else "paper",
         **{k: v for k, v in given.items() if v is not None},
         **{k: task[k] for k in shared},
+        **shown,
     )
     scn = None if isinstance(scenario, str) else scenario
     return build_world(spec, task=nav, scenario=scn).env()

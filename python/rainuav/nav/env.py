@@ -227,8 +227,8 @@ class UAVNavEnv(gym.Env):
         p = p.reshape(-1, 2)
         t = np.broadcast_to(np.asarray(t), (len(p),))
         t_s = self.stepper.time_s(t)[:, None]
+        w = np.broadcast_to(np.asarray(0 if world is None else world), (len(p),))[:, None]
         if isinstance(self.field, SignalBank):
-            w = np.broadcast_to(np.asarray(0 if world is None else world), (len(p),))[:, None]
             field = self.field
 
             def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -238,9 +238,11 @@ class UAVNavEnv(gym.Env):
             def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
                 return self.field(x, y, t_s)
 
+        grid = self.view.area_points(self.field.extent)
+        area = self.field.at_points(grid, t_s[:, 0], w[:, 0])  # every slice sampled once
         g = self.cfg.goal_m if goal is None else goal
         frac = t.astype(np.float32) / np.float32(self.cfg.max_steps)
-        obs = self.view.observe(sample, self.field.extent, p, frac, g, self.cfg.min_db)
+        obs = self.view.observe(sample, self.field.extent, p, frac, g, self.cfg.min_db, area)
         return {k: v[0] for k, v in obs.items()} if one else obs
 
     def sample_start(self, rng: np.random.Generator, goal: Any = None) -> np.ndarray:

@@ -64,6 +64,29 @@ def _pixel(shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any) ->
     return i.astype(np.int64), j.astype(np.int64)
 
 
+def _lerp(g: np.ndarray, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Rows ``g[k0]`` and ``g[k1]`` mixed by ``f`` per row, as the fields mix slices."""
+    v0, v1 = g[k0], g[k1]
+    f = f[:, None]
+    return np.where((k0 == k1)[:, None], v0, (1.0 - f) * v0 + f * v1)
+
+
+class _PointCache:
+    """Samples of every slice at fixed points (a UAV's whole-area grid), kept per points."""
+
+    def __init__(self) -> None:
+        self.rows: dict[bytes, np.ndarray] = {}
+
+    def get(self, db: np.ndarray, extent: Any, points: np.ndarray) -> np.ndarray:
+        key = points.tobytes()
+        if key not in self.rows:
+            k = np.arange(int(np.prod(db.shape[:-2])))[:, None]
+            flat = db.reshape(-1, *db.shape[-2:])
+            vals = bilinear(flat, extent, points[:, 0], points[:, 1], k)
+            self.rows[key] = vals.reshape(*db.shape[:-2], len(points))
+        return self.rows[key]
+
+
 class SignalField:
     """A SINR (or SIR) map in dB over ``extent_m = (x_min, x_max, y_min, y_max)``, sampled
     bilinearly between pixel centres (:func:`rainuav._sampling.bilinear`). ``name`` is the
@@ -99,6 +122,14 @@ class SignalField:
     def frozen(self, t_s: float = 0.0) -> SignalField:
         """The map at ``t_s``: this one."""
         return self
+
+    def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
+        """(N, M): the map at the fixed points (M, 2) for each of the N instants ``t_s``
+        (the same row: one map); sampled once per set of points."""
+        if not hasattr(self, "_points"):
+            self._points = _PointCache()
+        g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
+        return np.broadcast_to(g, (np.size(t_s), len(g)))
 
 
 class SignalSeries:
@@ -172,6 +203,14 @@ class SignalSeries:
         v = self.db[k0] if k0 == k1 else (1.0 - f) * self.db[k0] + f * self.db[k1]
         return SignalField(v, self.extent, self.name)
 
+    def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
+        """(N, M): the signal at the fixed points (M, 2) at each of the N instants ``t_s``,
+        as :meth:`__call__` gives it; every slice is sampled once per set of points."""
+        if not hasattr(self, "_points"):
+            self._points = _PointCache()
+        g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
+        return _lerp(g, *self.brackets(np.atleast_1d(t_s)))
+
 
 class SignalBank:
     """Several worlds' signals in one array, each point reading its own world: ``values_db``
@@ -213,6 +252,20 @@ class SignalBank:
                 f"{self.name} must be finite, of shape {self.db.shape[1:]} (got {v.shape})"
             )
         self.db[world] = v
+        self._points = _PointCache()  # samples of the old storm are stale
+
+    def at_points(self, points: np.ndarray, t_s: Any, world: Any) -> np.ndarray:
+        """(N, M): world ``world[n]``'s signal at the fixed points (M, 2) at the instants
+        ``t_s[n]``, as :meth:`__call__` gives it; every slice sampled once per set of
+        points (until :meth:`put`)."""
+        if not hasattr(self, "_points"):
+            self._points = _PointCache()
+        g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
+        t = np.atleast_1d(t_s)
+        w = np.broadcast_to(np.asarray(world, dtype=np.int64), t.shape)
+        k0, k1, f = self._times.brackets(t)
+        kk = self.db.shape[1]
+        return _lerp(g.reshape(-1, g.shape[-1]), w * kk + k0, w * kk + k1, f)
 
     def __call__(self, x: Any, y: Any, t_s: Any, world: Any) -> Any:
         """The signal of world ``world`` (one per point, or one) at the points ``(x, y)`` at

@@ -55,6 +55,11 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         if not isinstance(env, UAVNavEnv):
             raise InvalidInputError(f"env must be a UAVNavEnv (got {type(env).__name__})")
         check_num_envs(num_envs)
+        if env.random_goal:
+            raise InvalidInputError(
+                "random_goal: the vector env flies the task's fixed destination (use the scalar "
+                "env, or the batched stepper with one destination per UAV)"
+            )
         mode = AutoresetMode(autoreset_mode)
         if mode == AutoresetMode.DISABLED:
             raise InvalidInputError("autoreset_mode must be NEXT_STEP or SAME_STEP")

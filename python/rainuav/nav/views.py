@@ -108,19 +108,24 @@ class WeatherView:
         t_frac: np.ndarray,
         goal: np.ndarray,
         min_db: float,
+        area_db: np.ndarray | None = None,
     ) -> dict[str, np.ndarray]:
         """The observations of N UAVs at ``pos`` (N, 2) heading for ``goal`` (N, 2), at the
         time fractions ``t_frac`` (N,); ``sample(x, y)`` gives the signal, dB, at points
-        (N, M) (row n: UAV n's world and instant)."""
+        (N, M) (row n: UAV n's world and instant). ``area_db`` (N, area^2): the signal at
+        :meth:`area_points` where the caller has it (sampled once per map), else sampled."""
         x0, x1, y0, y1 = extent
         lo, span = np.array([x0, y0]), np.array([x1 - x0, y1 - y0])
         pos = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
         n = len(pos)
         loc = pos[:, None, :] + self.local_offsets()[None]
-        pts = np.broadcast_to(self.area_points(extent)[None], (n, self.area**2, 2))
-        xy = np.concatenate([loc, pts], axis=1)
-        s = np.tanh((np.asarray(sample(xy[..., 0], xy[..., 1])) - min_db) / self.scale_db)
-        s = s.astype(np.float32)
+        if area_db is None:
+            pts = np.broadcast_to(self.area_points(extent)[None], (n, self.area**2, 2))
+            loc = np.concatenate([loc, pts], axis=1)
+        db = np.asarray(sample(loc[..., 0], loc[..., 1]))
+        if area_db is not None:
+            db = np.concatenate([db, np.asarray(area_db).reshape(n, -1)], axis=1)
+        s = np.tanh((db - min_db) / self.scale_db).astype(np.float32)
         w2 = self.window**2
         g = np.broadcast_to(np.asarray(goal, dtype=np.float64).reshape(-1, 2), (n, 2))
         return {

@@ -162,6 +162,7 @@ def train(
     resume: bool = False,
     progress: bool = True,
     stop_after: int | None = None,
+    yardstick: bool = False,
 ) -> dict[str, Any]:
     """Runs the whole job in ``world`` (built by the caller from the configuration's world
     part, :func:`rainuav.world.build_world`; tests hand in small synthetic worlds; its task
@@ -169,10 +170,12 @@ def train(
     the run. ``stop_after`` ends the call, as an
     interruption would, at the first checkpoint with at least that many finished episodes
     (``resume=True`` then continues exactly); it returns ``{}``. Sets no process-wide state
-    that outlives the call (torch's thread count and determinism are restored)."""
+    that outlives the call (torch's thread count and determinism are restored).
+    ``yardstick``: allow an evaluation storm (a per-storm network trained on the very storm
+    a generalist is judged on, as the specialist it is compared with; not on the CLI)."""
     cfg = apply_preset(cfg)
     check_config(cfg)
-    if cfg.scenario == "storm" and not cfg.scenario_file:
+    if cfg.scenario == "storm" and not cfg.scenario_file and not yardstick:
         check_storm_seed(cfg.storm_seed, training=True)
     if not isinstance(world, World):
         raise InvalidInputError(f"world must be a rainuav.world.World (got {type(world).__name__})")

@@ -1,0 +1,67 @@
+"""One decision for 64 UAVs by the weather-reading network, on the CPU (issue #28: at most
+1 ms), beside the single-map network doing the same decision in the same run.
+
+    python benches/decision.py
+
+A decision: the observation of every UAV (``env.observe``: the SINR window and whole-area grid
+sampled from a 61-slice storm) encoded, and the network's greedy actions (one torch thread, as
+training and evaluation run). The weights are the initial ones: the time does not depend on
+them. Prints the median of 200 timed decisions (after 20 warm-up ones) for the observation,
+the network and both, for each learner.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+import torch
+from rainuav.nav import UAVNavEnv
+from rainuav.nav.field import SignalSeries
+from rainuav.rl.config import DQNConfig
+from rainuav.rl.dqn import Agent
+from rainuav.rl.setup import make_encoder
+
+EXT = (0.0, 2000.0, 0.0, 2000.0)
+N = 64
+
+
+def median_ms(fn: Callable[[], object], reps: int = 200) -> float:
+    for _ in range(20):
+        fn()
+    times = []
+    for _ in range(reps):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return 1e3 * float(np.median(times))
+
+
+def main() -> None:
+    torch.set_num_threads(1)
+    rng = np.random.default_rng(0)
+    field = SignalSeries(rng.normal(5.0, 8.0, (61, 200, 200)), np.arange(61) * 5.0, EXT)
+    pos = rng.uniform(0.0, 2000.0, (N, 2))
+    t = rng.integers(0, 300, N)
+    goals = rng.uniform(100.0, 1900.0, (N, 2))
+    for name, observation in (("weather network", "weather"), ("position network", "position")):
+        env = UAVNavEnv(field=field, goal_m=(1400.0, 1600.0), min_db=-2.0, observation=observation)
+        d = DQNConfig()
+        agent = Agent(d, 0, torch.device("cpu"), make_encoder(d, env, (0.005, 0.005)))
+        g = goals if observation == "weather" else None
+        x = agent.observe(env.observe(pos, t, g), t)
+        obs_ms = median_ms(lambda env=env, g=g: env.observe(pos, t, g))
+        net_ms = median_ms(lambda agent=agent, x=x: agent.greedy(x))
+        both_ms = median_ms(
+            lambda agent=agent, env=env, g=g: agent.greedy(agent.observe(env.observe(pos, t, g), t))
+        )
+        params = sum(p.numel() for p in agent.online.parameters())
+        print(
+            f"{name} ({params:,} weights, input {x.shape[1]}): {N} UAVs: observation "
+            f"{obs_ms:.3f} ms, network {net_ms:.3f} ms, decision {both_ms:.3f} ms"
+        )
+
+
+if __name__ == "__main__":
+    main()

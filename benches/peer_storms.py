@@ -1,0 +1,188 @@
+"""Peers over the storm distribution (issue #28): Stable-Baselines3's DQN and PPO with
+``MultiInputPolicy`` on the same env as rainuav's network that reads the weather, each for the
+same wall-clock budget, all measured the same way on held-out storms.
+
+    pip install 'rainuav[peer]'
+    python benches/peer_storms.py --budget-s 900 --storms 10 --out runs/peer_storms
+
+The env: ``UAVNavEnv(observation="weather", random_goal=True)`` over a pool of 16 training
+storms (:class:`rainuav.world.pool.StormPool`, the pool ``python -m rainuav.train --storm-seed
+random`` trains on), one drawn per episode, a storm renewed every 32 episodes. rainuav's
+learner trains first with ``time_budget_s`` = the budget (``--skip-rainuav RUN``: take a run
+already trained, e.g. the README's, and its training time as the budget). Each peer is then
+flown greedily from the same 20 fixed starts to the fixed destination in the storms
+1 000 000 .. 1 000 000 + ``--storms`` - 1 (never trained on), against each storm's exact
+space-time optimum. Writes ``peer_storms.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from rainuav.nav.env import UAVNavEnv
+from rainuav.rl.config import DQNConfig, TrainConfig, load_config
+from rainuav.rl.evaluation import eval_starts, flights, reference_flights, summarise
+from rainuav.rl.loop import train
+from rainuav.rl.storm_eval import SUMMARY_KEYS
+from rainuav.world import build_world, spec_of
+from rainuav.world.pool import StormPool
+
+SB3: dict[str, dict[str, Any]] = {
+    # A user's configurations for a long-horizon task with a Dict observation.
+    "sb3_dqn": {
+        "policy_kwargs": {"net_arch": [256, 256]},
+        "gamma": 0.998,
+        "buffer_size": 100_000,
+        "learning_starts": 1000,
+        "batch_size": 64,
+        "learning_rate": 5e-4,
+        "train_freq": 4,
+        "target_update_interval": 1000,
+        "exploration_fraction": 0.3,
+        "exploration_final_eps": 0.05,
+    },
+    "sb3_ppo": {
+        "policy_kwargs": {"net_arch": [256, 256]},
+        "gamma": 0.998,
+        "n_steps": 2048,
+        "batch_size": 256,
+        "learning_rate": 3e-4,
+    },
+}
+
+
+class RenewStorms(gym.Wrapper):
+    """Renews one storm of the pool every ``every`` resets, round robin (between episodes:
+    no flight sees its storm change)."""
+
+    def __init__(self, env: UAVNavEnv, pool: StormPool, every: int) -> None:
+        super().__init__(env)
+        self.pool, self.every, self.resets = pool, every, 0
+
+    def reset(self, **kw: Any) -> Any:
+        self.resets += 1
+        if self.resets % self.every == 0:
+            self.pool.renew((self.resets // self.every) % self.pool.bank.worlds)
+        return self.env.reset(**kw)
+
+
+def train_sb3(name: str, env: gym.Env, seed: int, budget_s: float) -> tuple[Any, dict[str, Any]]:
+    from stable_baselines3 import DQN, PPO
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class WallClock(BaseCallback):
+        def __init__(self, seconds: float) -> None:
+            super().__init__()
+            self.seconds, self.t0 = seconds, time.perf_counter()
+
+        def _on_step(self) -> bool:
+            return time.perf_counter() - self.t0 < self.seconds
+
+    algo = DQN if name == "sb3_dqn" else PPO
+    model = algo("MultiInputPolicy", env, seed=seed, device="cpu", verbose=0, **SB3[name])
+    t0 = time.perf_counter()
+    model.learn(total_timesteps=10**9, callback=WallClock(budget_s), progress_bar=False)
+    return model, {"training_seconds": time.perf_counter() - t0, "steps": model.num_timesteps}
+
+
+def fly(predict: Any, env: UAVNavEnv, starts: np.ndarray) -> dict[str, np.ndarray]:
+    """Greedy flights of ``predict`` (a batch of Dict observations -> actions) from every
+    start at once, on the batched stepper (the scalar env's transitions)."""
+    n = len(starts)
+    off = np.zeros((n, 2), dtype=np.int64)
+    t = np.zeros(n, dtype=np.int64)
+    live, ret, arrived = np.ones(n, dtype=bool), np.zeros(n), np.zeros(n, dtype=bool)
+    paths: list[list[np.ndarray]] = [[s.copy()] for s in starts]
+    while live.any():
+        idx = np.flatnonzero(live)
+        pos = starts[idx] + env.cfg.step_m * off[idx]
+        a = np.asarray(predict(env.observe(pos, t[idx])), dtype=np.int64).reshape(-1)
+        r = env.stepper.step(starts[idx], off[idx], t[idx], a)
+        off[idx], t[idx] = r["offset"], r["t"]
+        ret[idx] += r["reward"]
+        for j, k in enumerate(idx):
+            paths[k].append(r["position"][j].copy())
+        arrived[idx[r["arrived"]]] = True
+        live[idx[r["terminated"] | r["truncated"]]] = False
+    return flights(env, ret, arrived, [np.array(p) for p in paths])
+
+
+def held_out(cfg: TrainConfig, predicts: dict[str, Any], storms: int) -> dict[str, Any]:
+    """Each predictor's mean figures over the held-out storms (20 fixed starts each)."""
+    rows: dict[str, list[dict[str, Any]]] = {k: [] for k in predicts}
+    base = dataclasses.replace(spec_of(cfg), storm_pool=0, random_goal=False)
+    for k in range(1_000_000, 1_000_000 + storms):
+        env = build_world(dataclasses.replace(base, storm_seed=k), cache=False).env()
+        starts = eval_starts(env, 20, cfg.eval_seed)
+        refs = reference_flights(env, starts, cfg.replan_every)
+        for name, predict in predicts.items():
+            m = summarise(fly(predict, env, starts), refs["optimal"])
+            for ref in ("straight_line", "frozen_plan", "replan"):
+                m.update(
+                    {f"{ref}_{key}": v for key, v in summarise(refs[ref], refs["optimal"]).items()}
+                )
+            m["optimal_outage_share"] = summarise(refs["optimal"], refs["optimal"])["outage_share"]
+            rows[name].append(m)
+    return {
+        name: {key: float(np.mean([r[key] for r in rs if r.get(key) is not None]))
+               for key in SUMMARY_KEYS if any(r.get(key) is not None for r in rs)}
+        for name, rs in rows.items()
+    }  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--budget-s", type=float, default=900.0)
+    ap.add_argument("--storms", type=int, default=10)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--skip-rainuav", type=Path, default=None, help="a trained run to compare")
+    ap.add_argument("--peers", nargs="+", choices=tuple(SB3), default=list(SB3))
+    ap.add_argument("--out", type=Path, required=True)
+    args = ap.parse_args(argv)
+    import torch
+    from rainuav.rl.storm_eval import evaluate_storms
+
+    torch.set_num_threads(1)
+    if args.skip_rainuav is None:
+        cfg = TrainConfig(
+            scenario="storm", observation="weather", random_goal=True, storm_pool=16,
+            seed=args.seed, out=str(args.out / "rainuav"), time_budget_s=args.budget_s,
+            validate_every=0, eval_starts=20, dqn=DQNConfig(episodes=100_000),
+        )  # fmt: skip
+        train(cfg, StormPool(cfg, cfg.seed).world(), progress=False)
+        run = Path(cfg.out)
+    else:
+        run, cfg = args.skip_rainuav, load_config(args.skip_rainuav / "config.toml")
+    ours = json.loads((run / "metrics.json").read_text())
+    budget = float(ours["training_seconds"])
+    seeds = list(range(1_000_000, 1_000_000 + args.storms))
+    report: dict[str, Any] = {
+        "budget_s": budget,
+        "storms": seeds,
+        "rainuav": evaluate_storms(run, seeds, starts=20, progress=False)[0]["mean"],
+    }
+    predicts = {}
+    for name in args.peers:
+        pool = StormPool(dataclasses.replace(cfg, storm_pool=16), args.seed)
+        env = RenewStorms(pool.world().env(), pool, cfg.storm_episodes)
+        model, info = train_sb3(name, env, args.seed, budget)
+        pool.close()
+        predicts[name] = lambda o, model=model: model.predict(o, deterministic=True)[0]
+        report[f"{name}_run"] = {**info, "config": SB3[name]}
+    report.update(held_out(cfg, predicts, args.storms))
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "peer_storms.json").write_text(json.dumps(report, indent=2) + "\n")
+    print(json.dumps(report, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
