@@ -232,7 +232,7 @@ def test_storm_pool_run_is_seeded_and_never_flies_reserved_storms(tmp_path) -> N
     from rainuav.rl.storm_eval import evaluate_storms
 
     result, first = evaluate_storms(tmp_path / "a", [1_000_000], starts=2, progress=False)
-    row = result["storms"][0]
+    row = result["worlds"][0]
     assert result["mean"]["held_out"] and row["storm_seed"] == 1_000_000
     assert row["eval_starts"] == 2 and 0.0 <= row["success_rate"] <= 1.0
     assert "frozen_plan_mean_excess_cost" in row and "replan_success_rate" in row

@@ -39,7 +39,7 @@ from rainuav import _cli
 from rainuav._checks import check_integer
 from rainuav._io import check_out_dir, write_atomic
 
-OTHER_WORLD = ("scenario", "rain_rate", "engine", "storm_seed")
+OTHER_WORLD = ("scenario", "rain_rate", "engine", "storm_seed", "freq_ghz")
 """The flags that fly the run in another world."""
 
 
@@ -67,6 +67,7 @@ def _world(args: argparse.Namespace) -> object:
     if args.scenario is not None:
         changes["scenario_file"] = ""  # another preset comes in its own weather
         changes.setdefault("rain_rate", None)
+    changes["storm_pool"] = 0  # one world: a run over the storm distribution flown in it
 
     def build(cfg: object) -> object:
         return build_world(dataclasses.replace(spec_of(cfg), **changes), progress=True)
@@ -85,9 +86,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--rain-rate", type=float, default=None, help="homogeneous rain, mm/h")
     ap.add_argument("--engine", default=None, choices=("hybrid", "ray", "pe"))
     ap.add_argument("--storm-seed", type=int, default=None, help="fly through this storm")
+    ap.add_argument("--freq-ghz", type=float, default=None, help="carrier frequency, GHz")
     ap.add_argument("--storm-seeds", default=None, help="fly through every storm A-B (inclusive)")
     ap.add_argument(
-        "--random-goals", action="store_true", help="with --storm-seeds: a destination per start"
+        "--random-goals",
+        action="store_true",
+        help="a destination per start (with --storm-seeds, or in the world the flags give)",
     )
     ap.add_argument("--starts", type=int, default=None, help="number of fixed starts")
     ap.add_argument("--seed", type=int, default=None, help="seed of the starts")
@@ -112,7 +116,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         check_integer("--starts", args.starts, 1, MAX_STARTS)
     if args.seed is not None:
         check_integer("--seed", args.seed, 0, MAX_SEED)
-    if args.storm_seeds is not None:
+    if args.storm_seeds is not None or args.random_goals:
         return _evaluate_storms(args)
     out = check_out_dir(_out_dir(args))  # before any work
     metrics, rolls, env = evaluate_saved_run(
@@ -135,31 +139,42 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def _evaluate_storms(args: argparse.Namespace) -> int:
+    """``--storm-seeds`` (every storm of the range) or ``--random-goals`` (in the one world
+    the flags give): :func:`rainuav.rl.storm_eval.evaluate_worlds`."""
     from rainuav.errors import InvalidInputError
     from rainuav.rl.plots import plot_storm_flights
-    from rainuav.rl.storm_eval import evaluate_storms, parse_seeds
+    from rainuav.rl.storm_eval import evaluate_worlds, parse_seeds
 
-    seeds = parse_seeds(args.storm_seeds)
-    others = [k for k in OTHER_WORLD if getattr(args, k) is not None] + ["online"] * args.online
-    if others or args.shield:
-        raise InvalidInputError(
-            "--storm-seeds: give no --scenario, --rain-rate, --engine, "
-            "--storm-seed, --online or --shield beside it"
-        )
+    if args.online or args.shield:
+        raise InvalidInputError("--storm-seeds and --random-goals fly the reported network alone")
+    given = {k: getattr(args, k) for k in OTHER_WORLD if getattr(args, k) is not None}
     goals = "_random_goals" if args.random_goals else ""
-    name = f"eval_storms_{seeds[0]}-{seeds[-1]}{goals}"
+    if args.storm_seeds is not None:
+        if given:
+            raise InvalidInputError(f"--storm-seeds: give no --{next(iter(given))} beside it")
+        seeds = parse_seeds(args.storm_seeds)
+        worlds = [{"storm_seed": k} for k in seeds]
+        name = f"eval_storms_{seeds[0]}-{seeds[-1]}{goals}"
+    else:
+        if not given:
+            raise InvalidInputError(
+                "--random-goals: name the world (--scenario, --rain-rate, --storm-seed, ...)"
+            )
+        worlds = [given]
+        name = "eval_" + "_".join(f"{k}{v}" for k, v in given.items()) + goals
     out = check_out_dir(args.out if args.out is not None else args.run_dir / name)
-    result, first = evaluate_storms(
+    result, first = evaluate_worlds(
         args.run_dir,
-        seeds,
+        worlds,
         starts=20 if args.starts is None else args.starts,
         seed=args.seed,
         random_goals=args.random_goals,
         device=args.device,
+        storms=args.storm_seeds is not None,
     )
     text = json.dumps(result, indent=2)
     write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))
-    if first is not None:
+    if first is not None and first[0].field.varies:
         plot_storm_flights(first[0], first[1], out / "evaluation_storm_flights.png")
     print(json.dumps(result["mean"], indent=2))
     print(f"wrote {out.resolve()}", file=sys.stderr)

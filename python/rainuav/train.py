@@ -89,7 +89,8 @@ def build_parser() -> argparse.ArgumentParser:
             kind = _storm_seed if f.name == "storm_seed" else flag_types.get(field_kind(f)[0], str)
             more = (
                 "; 'random': train one network over the storm distribution (--storm-pool "
-                f"{DEFAULT_POOL}, --observation weather, --random-goal true unless given)"
+                f"{DEFAULT_POOL}, --observation weather, --random-goal true, the storm "
+                "learner's [dqn] fields and a 55-minute budget unless given)"
                 if f.name == "storm_seed"
                 else ""
             )
@@ -105,7 +106,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 def config_from_args(args: argparse.Namespace) -> Any:
     """The run's TrainConfig: the ``--config`` file's fields, overridden by the flags given."""
-    from rainuav.rl.config import DQNConfig, TrainConfig, apply_preset, read_config
+    from rainuav.rl.config import (
+        STORM_BUDGET_S,
+        STORM_LEARNER,
+        DQNConfig,
+        TrainConfig,
+        apply_preset,
+        read_config,
+    )
 
     base: dict[str, Any] = {}
     dqn_kw: dict[str, Any] = {}
@@ -122,6 +130,9 @@ def config_from_args(args: argparse.Namespace) -> Any:
         base.setdefault("storm_pool", DEFAULT_POOL)
         base.setdefault("observation", "weather")
         base.setdefault("random_goal", True)
+        base.setdefault("time_budget_s", STORM_BUDGET_S)
+        for k, v in STORM_LEARNER.items():
+            dqn_kw.setdefault(k, v)
     cfg = TrainConfig(**base, dqn=DQNConfig(**dqn_kw))
     # A run's own config.toml (--resume) holds the preset's values already: not a clash.
     given = set(dqn_kw) if not (args.resume and args.config is None) else set()

@@ -20,6 +20,8 @@ from rainuav.world import WorldSpec, check_spec
 
 __all__ = [
     "PAPER_LEARNER",
+    "STORM_BUDGET_S",
+    "STORM_LEARNER",
     "DQNConfig",
     "TrainConfig",
     "apply_preset",
@@ -205,6 +207,21 @@ def check_config(cfg: TrainConfig) -> None:
             value = getattr(d, name) if hasattr(d, name) else getattr(cfg, name)
             raise InvalidInputError(f"{name} must be {allowed} (got {value!r})")
     check_spec(cfg)
+
+
+STORM_LEARNER: dict[str, Any] = {
+    "episodes": 9000,
+    "batch_size": 64,
+    "lr": 3e-4,
+    "target_sync_episodes": 25,
+}
+"""What ``--storm-seed random`` changes in [dqn] unless given: a larger minibatch, a lower
+learning rate and a slower target for the convolutional network over many storms (chosen on
+the validation storm 900 000 with training storms only: docs/learner.md, "One network for
+every storm"); with ``time_budget_s`` = :data:`STORM_BUDGET_S`."""
+STORM_BUDGET_S = 3300.0
+"""The wall-clock budget of ``--storm-seed random`` unless given: 55 minutes (the issue's
+ceiling is 60)."""
 
 
 PAPER_LEARNER: dict[str, Any] = {

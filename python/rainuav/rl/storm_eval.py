@@ -1,7 +1,8 @@
-"""One saved network flown through many storms it was not trained on (``python -m
-rainuav.evaluate RUN --storm-seeds A-B``): per storm the network alone, the exact space-time
-optimum, the frozen take-off plan, re-planning and the straight line from the same fixed
-starts, then the mean over the storms.
+"""One saved network flown through many worlds it was not trained on (``python -m
+rainuav.evaluate RUN --storm-seeds A-B``, or one other map with ``--random-goals``): per world
+the network alone, the exact optimum (in space-time where the weather moves), the frozen
+take-off plan, re-planning and the straight line from the same fixed starts, then the mean
+over the worlds.
 
 Destinations: the task's fixed one, or with ``random_goals`` one per start, drawn as training
 draws them (:func:`rainuav.nav.views.sample_goal`, the start within reach of it), each flight
@@ -26,7 +27,7 @@ from rainuav.rl.config import check_config, load_config
 from rainuav.rl.evaluation import eval_starts, evaluate, load_agent, reference_flights
 from rainuav.world import build_world, spec_of
 
-__all__ = ["MAX_STORMS", "SUMMARY_KEYS", "evaluate_storms", "parse_seeds"]
+__all__ = ["MAX_STORMS", "SUMMARY_KEYS", "evaluate_storms", "evaluate_worlds", "parse_seeds"]
 
 MAX_STORMS = 1000
 """The most storms one evaluation flies (each is mapped, about 2 s, and planned)."""
@@ -58,20 +59,28 @@ def _flights(agent: Any, env: UAVNavEnv, pts: np.ndarray, replan_every: int) -> 
     return evaluate(agent, env, pts, reference_flights(env, pts, replan_every))[0]
 
 
-def evaluate_storms(
+def evaluate_storms(run_dir: Path, seeds: list[int], **kw: Any) -> tuple[dict[str, Any], Any]:
+    """:func:`evaluate_worlds` through the storms ``seeds`` (the run's scenario must be the
+    storm's)."""
+    return evaluate_worlds(run_dir, [{"storm_seed": k} for k in seeds], storms=True, **kw)
+
+
+def evaluate_worlds(
     run_dir: Path,
-    seeds: list[int],
+    worlds: list[dict[str, Any]],
     *,
     starts: int = 20,
     seed: int | None = None,
     random_goals: bool = False,
     device: str = "cpu",
     progress: bool = True,
+    storms: bool = False,
 ) -> tuple[dict[str, Any], Any]:
-    """Flies the network run ``run_dir`` reports through the storms ``seeds`` from
-    ``starts`` fixed starts each (seeded by ``seed``, default the run's ``eval_seed``; the same
-    starts in every storm). Returns ``{"mean": ..., "storms": [...]}`` and, for figures, the
-    first storm's (env, flights)."""
+    """Flies the network run ``run_dir`` reports in each world (the run's spec with the
+    changes of ``worlds[i]``, e.g. ``{"storm_seed": K}`` or ``{"scenario": "uma",
+    "rain_rate": 0.0}``) from ``starts`` fixed starts (seeded by ``seed``, default the run's
+    ``eval_seed``; the same in every world). Returns ``{"mean": ..., "worlds": [...]}`` (rows
+    with their changes) and, for figures, the first world's (env, flights)."""
     check_integer("starts", starts, 1, 10_000)
     run = Path(run_dir)
     for name in ("config.toml", "checkpoint.pt"):
@@ -79,18 +88,20 @@ def evaluate_storms(
             raise InvalidInputError(f"{run}: missing {name}; is this a rainuav.train output?")
     cfg = load_config(run / "config.toml")
     check_config(cfg)
-    if cfg.scenario != "storm":
+    if storms and cfg.scenario != "storm":
         raise InvalidInputError(f"--storm-seeds flies storms: {run} was trained on {cfg.scenario}")
     state = checkpoint.load(run / "checkpoint.pt", ("agent", "returns", "train_seconds"))
     base = dataclasses.replace(spec_of(cfg), storm_pool=0, random_goal=False)
     rows, agent, first = [], None, None
-    it: Any = seeds
+    it: Any = worlds
     if progress:
         from tqdm.auto import tqdm
 
-        it = tqdm(seeds, desc="storms", unit="storm")
-    for k in it:
-        world = build_world(dataclasses.replace(base, storm_seed=k), cache=False)
+        it = tqdm(worlds, desc="worlds", unit="world")
+    for changes in it:
+        if "scenario" in changes:  # another preset comes in its own weather unless given
+            changes = {"scenario_file": "", "rain_rate": None, **changes}
+        world = build_world(dataclasses.replace(base, **changes), cache=not storms)
         env = world.env()
         if agent is None:
             agent, _, _ = load_agent(run / "checkpoint.pt", state, cfg, env, device, False)
@@ -111,12 +122,12 @@ def evaluate_storms(
                 e = dataclasses.replace(world, task=task).env()
                 per.append(_flights(agent, e, start[None], cfg.replan_every))
             m = _mean(per, worst=True)
-        m["storm_seed"] = k
+        m.update(changes)
         rows.append(m)
     summary = _mean(rows, worst=True)
-    summary.update(storms=len(rows), starts_per_storm=starts, random_goals=random_goals)
-    summary["held_out"] = all(k >= EVAL_SEEDS_FROM for k in seeds)
-    return {"mean": summary, "storms": rows}, first
+    summary.update(worlds=len(rows), starts_per_world=starts, random_goals=random_goals)
+    summary["held_out"] = storms and all(r["storm_seed"] >= EVAL_SEEDS_FROM for r in rows)
+    return {"mean": summary, "worlds": rows}, first
 
 
 def _mean(rows: list[dict[str, Any]], worst: bool) -> dict[str, Any]:
