@@ -54,8 +54,8 @@ PEERS = ("paper_preset", "sb3_dqn", "tianshou_dqn")
 
 
 def policy_flights(predict: Any, env: UAVNavEnv, starts: np.ndarray) -> dict[str, np.ndarray]:
-    """Greedy flights of ``predict`` ((N, 2) observations -> (N,) actions) from every start at
-    once, on the batched stepper (the scalar env's transitions)."""
+    """Greedy flights of ``predict`` (a batch of the env's observations -> (N,) actions) from
+    every start at once, on the batched stepper (the scalar env's transitions)."""
     n = len(starts)
     off = np.zeros((n, 2), dtype=np.int64)
     t = np.zeros(n, dtype=np.int64)
@@ -66,7 +66,7 @@ def policy_flights(predict: Any, env: UAVNavEnv, starts: np.ndarray) -> dict[str
     while live.any():
         idx = np.flatnonzero(live)
         pos = starts[idx] + env.cfg.step_m * off[idx]
-        a = np.asarray(predict(env.observe(pos)), dtype=np.int64).reshape(-1)
+        a = np.asarray(predict(env.observe(pos, t[idx])), dtype=np.int64).reshape(-1)
         r = env.stepper.step(starts[idx], off[idx], t[idx], a)
         off[idx], t[idx] = r["offset"], r["t"]
         ret[idx] += r["reward"]
@@ -77,9 +77,12 @@ def policy_flights(predict: Any, env: UAVNavEnv, starts: np.ndarray) -> dict[str
     return flights(env, ret, arrived, [np.array(p) for p in paths])
 
 
-def run_sb3(env: UAVNavEnv, seed: int, budget_s: float) -> tuple[Any, dict[str, Any]]:
-    """SB3 DQN trained on ``env`` for ``budget_s`` seconds of wall clock."""
-    from stable_baselines3 import DQN
+def run_sb3(
+    env: Any, seed: int, budget_s: float, config: dict[str, Any] | None = None, algo: str = "dqn"
+) -> tuple[Any, dict[str, Any]]:
+    """SB3's DQN (or ``algo="ppo"``: PPO) trained on ``env`` for ``budget_s`` seconds of wall
+    clock; ``config``: its policy and keywords (default :data:`SB3_CONFIG`)."""
+    from stable_baselines3 import DQN, PPO
     from stable_baselines3.common.callbacks import BaseCallback
 
     class WallClock(BaseCallback):
@@ -90,8 +93,9 @@ def run_sb3(env: UAVNavEnv, seed: int, budget_s: float) -> tuple[Any, dict[str, 
         def _on_step(self) -> bool:
             return time.perf_counter() - self.t0 < self.seconds
 
-    cfg = dict(SB3_CONFIG)
-    model = DQN(cfg.pop("policy"), env, seed=seed, device="cpu", verbose=0, **cfg)
+    cfg = dict(SB3_CONFIG if config is None else config)
+    kind = DQN if algo == "dqn" else PPO
+    model = kind(cfg.pop("policy"), env, seed=seed, device="cpu", verbose=0, **cfg)
     t0 = time.perf_counter()
     model.learn(total_timesteps=10**9, callback=WallClock(budget_s), progress_bar=False)
     return model, {"training_seconds": time.perf_counter() - t0, "steps": model.num_timesteps}

@@ -21,15 +21,15 @@ import argparse
 import dataclasses
 import json
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from peer import policy_flights, run_sb3
 from rainuav.nav.env import UAVNavEnv
 from rainuav.rl.config import DQNConfig, TrainConfig, load_config
-from rainuav.rl.evaluation import eval_starts, flights, reference_flights, summarise
+from rainuav.rl.evaluation import eval_starts, reference_flights, summarise
 from rainuav.rl.loop import train
 from rainuav.rl.storm_eval import SUMMARY_KEYS
 from rainuav.world import build_world, spec_of
@@ -74,47 +74,6 @@ class RenewStorms(gym.Wrapper):
         return self.env.reset(**kw)
 
 
-def train_sb3(name: str, env: gym.Env, seed: int, budget_s: float) -> tuple[Any, dict[str, Any]]:
-    from stable_baselines3 import DQN, PPO
-    from stable_baselines3.common.callbacks import BaseCallback
-
-    class WallClock(BaseCallback):
-        def __init__(self, seconds: float) -> None:
-            super().__init__()
-            self.seconds, self.t0 = seconds, time.perf_counter()
-
-        def _on_step(self) -> bool:
-            return time.perf_counter() - self.t0 < self.seconds
-
-    algo = DQN if name == "sb3_dqn" else PPO
-    model = algo("MultiInputPolicy", env, seed=seed, device="cpu", verbose=0, **SB3[name])
-    t0 = time.perf_counter()
-    model.learn(total_timesteps=10**9, callback=WallClock(budget_s), progress_bar=False)
-    return model, {"training_seconds": time.perf_counter() - t0, "steps": model.num_timesteps}
-
-
-def fly(predict: Any, env: UAVNavEnv, starts: np.ndarray) -> dict[str, np.ndarray]:
-    """Greedy flights of ``predict`` (a batch of Dict observations -> actions) from every
-    start at once, on the batched stepper (the scalar env's transitions)."""
-    n = len(starts)
-    off = np.zeros((n, 2), dtype=np.int64)
-    t = np.zeros(n, dtype=np.int64)
-    live, ret, arrived = np.ones(n, dtype=bool), np.zeros(n), np.zeros(n, dtype=bool)
-    paths: list[list[np.ndarray]] = [[s.copy()] for s in starts]
-    while live.any():
-        idx = np.flatnonzero(live)
-        pos = starts[idx] + env.cfg.step_m * off[idx]
-        a = np.asarray(predict(env.observe(pos, t[idx])), dtype=np.int64).reshape(-1)
-        r = env.stepper.step(starts[idx], off[idx], t[idx], a)
-        off[idx], t[idx] = r["offset"], r["t"]
-        ret[idx] += r["reward"]
-        for j, k in enumerate(idx):
-            paths[k].append(r["position"][j].copy())
-        arrived[idx[r["arrived"]]] = True
-        live[idx[r["terminated"] | r["truncated"]]] = False
-    return flights(env, ret, arrived, [np.array(p) for p in paths])
-
-
 def held_out(cfg: TrainConfig, predicts: dict[str, Any], storms: int) -> dict[str, Any]:
     """Each predictor's mean figures over the held-out storms (20 fixed starts each)."""
     rows: dict[str, list[dict[str, Any]]] = {k: [] for k in predicts}
@@ -124,7 +83,7 @@ def held_out(cfg: TrainConfig, predicts: dict[str, Any], storms: int) -> dict[st
         starts = eval_starts(env, 20, cfg.eval_seed)
         refs = reference_flights(env, starts, cfg.replan_every)
         for name, predict in predicts.items():
-            m = summarise(fly(predict, env, starts), refs["optimal"])
+            m = summarise(policy_flights(predict, env, starts), refs["optimal"])
             for ref in ("straight_line", "frozen_plan", "replan"):
                 m.update(
                     {f"{ref}_{key}": v for key, v in summarise(refs[ref], refs["optimal"]).items()}
@@ -173,7 +132,10 @@ def main(argv: list[str] | None = None) -> int:
     for name in args.peers:
         pool = StormPool(dataclasses.replace(cfg, storm_pool=16), args.seed)
         env = RenewStorms(pool.world().env(), pool, cfg.storm_episodes)
-        model, info = train_sb3(name, env, args.seed, budget)
+        algo = "dqn" if name == "sb3_dqn" else "ppo"
+        model, info = run_sb3(
+            env, args.seed, budget, {"policy": "MultiInputPolicy", **SB3[name]}, algo
+        )
         pool.close()
         predicts[name] = lambda o, model=model: model.predict(o, deterministic=True)[0]
         report[f"{name}_run"] = {**info, "config": SB3[name]}
