@@ -195,23 +195,47 @@ def test_bad_weather_options_are_refused() -> None:
         weather_env().reset(options={"goal_m": (5000.0, 0.0)})
 
 
+def pool_cfg(out: object, **kw: object) -> object:
+    """A tiny run over the storm distribution (2 storms renewed every 3 episodes)."""
+    from rainuav.rl.config import DQNConfig, TrainConfig
+
+    fields = {
+        "scenario": "storm", "observation": "weather", "random_goal": True, "storm_pool": 2,
+        "storm_episodes": 3, "max_steps": 40, "out": str(out), "eval_starts": 3,
+        "validate_every": 0, "stages": 1, "checkpoint_every": 1000,
+        "dqn": DQNConfig(episodes=16, lanes=4, learning_starts=50, replay_capacity=2000,
+                         hidden=16),
+    }  # fmt: skip
+    return TrainConfig(**{**fields, **kw})
+
+
+@pytest.mark.timeout(240)
+def test_storm_pool_run_resumes_exactly(tmp_path) -> None:
+    """Interrupted at a checkpoint with UAVs in flight and storms renewed, a run over the
+    storm distribution resumes into the same network and figures as the uninterrupted run
+    (the pool's storms, its seed stream and its episode counts are in the checkpoint)."""
+    from rainuav.rl.loop import train
+    from rainuav.world.pool import StormPool
+
+    cfg = pool_cfg(tmp_path / "full", checkpoint_every=6)
+    full = train(cfg, StormPool(cfg, cfg.seed).world(), progress=False)
+    cfg = pool_cfg(tmp_path / "part", checkpoint_every=6)
+    assert train(cfg, StormPool(cfg, cfg.seed).world(), progress=False, stop_after=6) == {}
+    resumed = train(cfg, StormPool(cfg, cfg.seed).world(), progress=False, resume=True)
+    for k in ("mean_return", "success_rate", "mean_steps", "storms_flown"):
+        assert resumed[k] == full[k], k
+
+
 @pytest.mark.timeout(240)
 def test_storm_pool_run_is_seeded_and_never_flies_reserved_storms(tmp_path) -> None:
     """Two runs over the storm distribution with the same seed give the same log and
     metrics (CPU); every storm the pool mapped is a training storm (below the validation
     seeds, so also below the evaluation seeds); its storms are renewed as asked."""
-    from rainuav.rl.config import DQNConfig, TrainConfig
     from rainuav.rl.loop import train
     from rainuav.world.pool import TRAINING_SEEDS, StormPool
 
     def run(out: str) -> tuple[str, dict, StormPool]:
-        cfg = TrainConfig(
-            scenario="storm", observation="weather", random_goal=True, storm_pool=2,
-            storm_episodes=3, max_steps=40, out=str(tmp_path / out), eval_starts=3,
-            validate_every=0, stages=1, checkpoint_every=1000,
-            dqn=DQNConfig(episodes=16, lanes=4, learning_starts=50, replay_capacity=2000,
-                          hidden=16),
-        )  # fmt: skip
+        cfg = pool_cfg(tmp_path / out)
         pool = StormPool(cfg, cfg.seed)
         metrics = train(cfg, pool.world(), progress=False)
         rows = (tmp_path / out / "log.csv").read_text().splitlines()
