@@ -25,6 +25,8 @@ LAYERS = {
     "base": 0,
     "medium": 1,
     "antenna": 1,
+    "geo": 1,
+    "missions": 2,
     "pwe": 2,
     "radio": 3,
     "nav": 3,
@@ -46,6 +48,8 @@ ENTRY = {
 FORBIDDEN = {
     "medium": {"torch", "gymnasium"},
     "antenna": {"torch", "gymnasium"},
+    "geo": {"torch", "gymnasium"},
+    "missions": {"torch", "gymnasium"},
     "pwe": {"torch", "gymnasium"},
     "radio": {"torch", "gymnasium"},
     "nav": {"torch"},

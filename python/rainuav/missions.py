@@ -1,0 +1,216 @@
+"""Flight plans out (issue #29): a lattice path as a few waypoints, and the files a ground
+station or a GIS loads.
+
+- :func:`corners`: the vertices of a lattice path where its direction changes (and its two
+  ends). Flying straight between them is the same path, move for move (:func:`expand`).
+- :func:`wpl_text`: QGroundControl's plain-text mission (``QGC WPL 110``, as MAVLink documents
+  it: tab-separated, ``INDEX CURRENT FRAME COMMAND P1 P2 P3 P4 LAT LON ALT AUTOCONTINUE``):
+  home, take-off, the waypoints at the flight altitude relative to home, landing.
+- :func:`plan_dict`: the same mission as a QGroundControl ``.plan`` (JSON, the fields QGC's
+  developer guide lists: ``fileType``, ``version``, ``groundStation``, ``mission`` with
+  ``items``, ``plannedHomePosition``, ``firmwareType``, ``vehicleType``, ``cruiseSpeed``,
+  ``hoverSpeed``, ``globalPlanAltitudeMode``; ``geoFence`` and ``rallyPoints`` empty).
+- :func:`geojson_dict`: the path as a GeoJSON ``LineString`` (RFC 7946: longitude, latitude,
+  altitude) with per-vertex properties, and the sites as points.
+- :func:`kml_text`: the same for Google Earth (altitude relative to the ground).
+
+Coordinates in: latitude and longitude in degrees (WGS 84), from :class:`rainuav.geo.Georef`.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Any
+from xml.sax.saxutils import escape
+
+import numpy as np
+
+from rainuav.errors import InvalidInputError
+
+__all__ = [
+    "MAV_CMD_NAV_LAND",
+    "MAV_CMD_NAV_TAKEOFF",
+    "MAV_CMD_NAV_WAYPOINT",
+    "corners",
+    "expand",
+    "geojson_dict",
+    "kml_text",
+    "mission_items",
+    "plan_dict",
+    "wpl_text",
+]
+
+MAV_CMD_NAV_WAYPOINT = 16
+MAV_CMD_NAV_LAND = 21
+MAV_CMD_NAV_TAKEOFF = 22
+MAV_FRAME_GLOBAL = 0
+MAV_FRAME_GLOBAL_RELATIVE_ALT = 3
+LATLON = ("lat", "lon")
+
+
+def corners(path: Any) -> np.ndarray:
+    """Indices of the vertices of ``path`` (T+1, 2) where the direction of the next move
+    differs from the last one's, with the first and the last vertex: the waypoints that fly
+    the same path."""
+    p = np.asarray(path, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 2 or len(p) < 1 or not np.all(np.isfinite(p)):
+        raise InvalidInputError(f"path must be a finite (T+1, 2) array (got {p.shape})")
+    if len(p) < 3:
+        return np.arange(len(p))
+    d = np.diff(p, axis=0)
+    unit = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
+    turn = np.flatnonzero(np.linalg.norm(unit[1:] - unit[:-1], axis=1) > 1e-9) + 1
+    return np.concatenate([[0], turn, [len(p) - 1]])
+
+
+def expand(points: Any, step_m: float) -> np.ndarray:
+    """The lattice path that flies straight between ``points`` (K, 2) in moves of
+    ``step_m`` (each leg a whole number of moves along one axis, as :func:`corners` leaves
+    them)."""
+    pts = np.asarray(points, dtype=np.float64)
+    out = [pts[0]]
+    for a, b in itertools.pairwise(pts):
+        n = round(float(np.abs(b - a).sum()) / step_m)
+        out += [a + (b - a) * k / n for k in range(1, n + 1)]
+    return np.array(out)
+
+
+def mission_items(
+    home: tuple[float, float], waypoints: Any, altitude_m: float
+) -> list[dict[str, Any]]:
+    """The mission: take-off at home to ``altitude_m``, the waypoints (K, 2) of (lat, lon)
+    at ``altitude_m`` above home, landing at the last one. Each item: ``command``,
+    ``frame``, ``params`` (7: param1-4, latitude, longitude, altitude)."""
+    if not (0.5 <= altitude_m <= 3000.0):
+        raise InvalidInputError(f"altitude_m must be in [0.5, 3000] m (got {altitude_m!r})")
+    wps = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
+    rel = MAV_FRAME_GLOBAL_RELATIVE_ALT
+    items = [
+        {"command": MAV_CMD_NAV_TAKEOFF, "frame": rel,
+         "params": [0.0, 0.0, 0.0, None, home[0], home[1], altitude_m]},
+    ]  # fmt: skip
+    for lat, lon in wps:
+        items.append(
+            {"command": MAV_CMD_NAV_WAYPOINT, "frame": rel,
+             "params": [0.0, 0.0, 0.0, None, float(lat), float(lon), altitude_m]}
+        )  # fmt: skip
+    lat, lon = wps[-1]
+    items.append(
+        {"command": MAV_CMD_NAV_LAND, "frame": rel,
+         "params": [0.0, 0.0, 0.0, None, float(lat), float(lon), 0.0]}
+    )  # fmt: skip
+    return items
+
+
+def wpl_text(home: tuple[float, float], waypoints: Any, altitude_m: float) -> str:
+    """The mission as ``QGC WPL 110`` text: item 0 the home position (frame global,
+    altitude 0), then :func:`mission_items` (yaw, param 4, written 0: keep the heading)."""
+    rows = [[0, 1, MAV_FRAME_GLOBAL, MAV_CMD_NAV_WAYPOINT, 0, 0, 0, 0, home[0], home[1], 0.0, 1]]
+    for k, it in enumerate(mission_items(home, waypoints, altitude_m), start=1):
+        p = [0.0 if v is None else v for v in it["params"]]
+        rows.append([k, 0, it["frame"], it["command"], *p, 1])
+    return "QGC WPL 110\n" + "".join("\t".join(_num(v) for v in r) + "\n" for r in rows)
+
+
+def _num(v: Any) -> str:
+    return str(v) if isinstance(v, int) else repr(float(v))
+
+
+def plan_dict(
+    home: tuple[float, float], waypoints: Any, altitude_m: float, speed_m_s: float
+) -> dict[str, Any]:
+    """The mission as a QGroundControl ``.plan`` (module docstring): a generic multirotor
+    (``firmwareType`` 0, ``vehicleType`` 2), altitudes relative to home
+    (``globalPlanAltitudeMode`` 1)."""
+    items = []
+    for k, it in enumerate(mission_items(home, waypoints, altitude_m), start=1):
+        items.append(
+            {
+                "AMSLAltAboveTerrain": None,
+                "Altitude": it["params"][6],
+                "AltitudeMode": 1,
+                "autoContinue": True,
+                "command": it["command"],
+                "doJumpId": k,
+                "frame": it["frame"],
+                "params": it["params"],
+                "type": "SimpleItem",
+            }
+        )
+    return {
+        "fileType": "Plan",
+        "version": 1,
+        "groundStation": "QGroundControl",
+        "geoFence": {"circles": [], "polygons": [], "version": 2},
+        "rallyPoints": {"points": [], "version": 2},
+        "mission": {
+            "version": 2,
+            "firmwareType": 0,
+            "vehicleType": 2,
+            "cruiseSpeed": speed_m_s,
+            "hoverSpeed": speed_m_s,
+            "globalPlanAltitudeMode": 1,
+            "plannedHomePosition": [home[0], home[1], 0.0],
+            "items": items,
+        },
+    }
+
+
+def geojson_dict(
+    latlon: Any,
+    altitude_m: float,
+    vertex_properties: dict[str, list[Any]],
+    sites: list[dict[str, Any]] | None = None,
+    properties: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """A GeoJSON ``FeatureCollection``: the path (N, 2) of (lat, lon) as a ``LineString`` at
+    ``altitude_m`` whose properties hold ``properties`` and, per vertex, the lists of
+    ``vertex_properties`` (each of N values); each site (``lat``, ``lon`` and its own fields)
+    as a ``Point``."""
+    ll = np.asarray(latlon, dtype=np.float64).reshape(-1, 2)
+    for name, values in vertex_properties.items():
+        if len(values) != len(ll):
+            raise InvalidInputError(f"{name}: {len(values)} values for {len(ll)} vertices")
+    line = {
+        "type": "Feature",
+        "geometry": {
+            "type": "LineString",
+            "coordinates": [[float(lo), float(la), float(altitude_m)] for la, lo in ll],
+        },
+        "properties": {"kind": "flight", **(properties or {}), **vertex_properties},
+    }
+    points = [
+        {
+            "type": "Feature",
+            "geometry": {"type": "Point", "coordinates": [float(s["lon"]), float(s["lat"])]},
+            "properties": {
+                "kind": "site",
+                **{k: v for k, v in s.items() if k not in ("lat", "lon")},
+            },
+        }
+        for s in sites or []
+    ]
+    return {"type": "FeatureCollection", "features": [line, *points]}
+
+
+def kml_text(
+    latlon: Any, altitude_m: float, name: str, sites: list[dict[str, Any]] | None = None
+) -> str:
+    """KML 2.2 for Google Earth: the path (N, 2) of (lat, lon) as a ``LineString`` at
+    ``altitude_m`` above the ground (``relativeToGround``), each site a ``Point``."""
+    ll = np.asarray(latlon, dtype=np.float64).reshape(-1, 2)
+    coords = " ".join(f"{lo!r},{la!r},{float(altitude_m)!r}" for la, lo in ll.tolist())
+    marks = "".join(
+        f"<Placemark><name>{escape(str(s.get('site_id', 'site')))}</name>"
+        f"<Point><coordinates>{float(s['lon'])!r},{float(s['lat'])!r},0</coordinates></Point>"
+        "</Placemark>"
+        for s in sites or []
+    )
+    return (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<kml xmlns="http://www.opengis.net/kml/2.2"><Document>'
+        f"<name>{escape(name)}</name>"
+        f"<Placemark><name>{escape(name)}</name><LineString><altitudeMode>relativeToGround"
+        f"</altitudeMode><coordinates>{coords}</coordinates></LineString></Placemark>"
+        f"{marks}</Document></kml>\n"
+    )

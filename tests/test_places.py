@@ -1,0 +1,137 @@
+"""Real places (issue #29, first part): the georeference against pyproj's geodesic, and the
+mission files through the parsers real clients use (pymavlink's waypoint loader, the
+``geojson`` package's validation, an XML parser for KML, QGroundControl's plan fields)."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+from rainuav.errors import InvalidInputError
+from rainuav.geo import Georef, geodesic_m
+from rainuav.missions import (
+    MAV_CMD_NAV_LAND,
+    MAV_CMD_NAV_TAKEOFF,
+    MAV_CMD_NAV_WAYPOINT,
+    corners,
+    expand,
+    geojson_dict,
+    kml_text,
+    plan_dict,
+    wpl_text,
+)
+
+ORIGINS = [(52.52, 13.405), (-33.87, 151.21), (78.2, 15.6), (0.0, 179.99), (45.0, -179.99)]
+
+
+@pytest.mark.parametrize(("lat", "lon"), ORIGINS)
+def test_round_trip_within_a_centimetre(lat: float, lon: float) -> None:
+    """lat/lon -> scenario metres -> lat/lon returns every point of a 10 km square within
+    1 cm (the issue's tolerance; PROJ's inverse is exact to well under a millimetre)."""
+    g = Georef(lat, lon)
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(-5000, 5000, 200), rng.uniform(-5000, 5000, 200)
+    la, lo = g.to_latlon(x, y)
+    x2, y2 = g.to_local(la, lo)
+    assert np.max(np.hypot(x2 - x, y2 - y)) < 0.01
+    la2, lo2 = g.to_latlon(x2, y2)
+    np.testing.assert_allclose(g.to_local(la2, lo2), (x, y), atol=0.01)
+
+
+@pytest.mark.parametrize(("lat", "lon"), ORIGINS)
+def test_distances_match_the_geodesic(lat: float, lon: float) -> None:
+    """Straight-line distances between sites in the scenario's metres equal the WGS 84
+    geodesic (pyproj's Geod, Karney) within 0.1% over a 10 km area (the projection's
+    scale error there is about 1e-6)."""
+    g = Georef(lat, lon)
+    rng = np.random.default_rng(1)
+    x, y = rng.uniform(-5000, 5000, (2, 100)), rng.uniform(-5000, 5000, (2, 100))
+    la, lo = g.to_latlon(x, y)
+    flat = np.hypot(x[0] - x[1], y[0] - y[1])
+    geo = geodesic_m(la[0], lo[0], la[1], lo[1])
+    np.testing.assert_allclose(flat, geo, rtol=1e-3)
+
+
+def test_bad_origins_are_refused() -> None:
+    with pytest.raises(InvalidInputError, match="lat_deg must be within"):
+        Georef(90.0, 0.0)
+    with pytest.raises(InvalidInputError, match="lon_deg must be a finite number"):
+        Georef(10.0, float("nan"))
+    with pytest.raises(InvalidInputError, match="latitude must be in"):
+        Georef(10.0, 10.0).to_local(95.0, 10.0)
+
+
+def lattice_path(rng: np.random.Generator, n: int = 200) -> np.ndarray:
+    """A random lattice path of 10 m moves with runs of repeated moves."""
+    moves = np.array([[10, 0], [0, 10], [-10, 0], [0, -10]], dtype=float)
+    a = rng.integers(0, 4, n // 5).repeat(5)
+    return np.vstack([[[123.4, 567.8]], np.array([123.4, 567.8]) + np.cumsum(moves[a], 0)])
+
+
+def test_corners_fly_the_same_path() -> None:
+    """Straight legs between the corners are the lattice path, vertex for vertex."""
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        path = lattice_path(rng)
+        idx = corners(path)
+        assert idx[0] == 0 and idx[-1] == len(path) - 1
+        np.testing.assert_allclose(expand(path[idx], 10.0), path, atol=1e-9)
+        assert len(idx) < len(path)
+
+
+def test_waypoints_load_in_pymavlink_within_a_decimetre(tmp_path) -> None:
+    """``mission.waypoints`` through pymavlink's ``MAVWPLoader``: home, take-off, each
+    waypoint within 0.1 m of the planned point (measured in the scenario's metres), landing."""
+    from pymavlink import mavwp
+
+    g = Georef(47.376, 8.548)
+    path = lattice_path(np.random.default_rng(3))
+    pts = path[corners(path)]
+    lat, lon = g.to_latlon(pts[:, 0], pts[:, 1])
+    home = (float(lat[0]), float(lon[0]))
+    f = tmp_path / "mission.waypoints"
+    f.write_text(wpl_text(home, np.stack([lat, lon], 1), 100.0))
+    loader = mavwp.MAVWPLoader()
+    n = loader.load(str(f))
+    assert n == len(pts) + 3  # home, take-off, waypoints, landing
+    items = [loader.wp(k) for k in range(n)]
+    assert [w.command for w in items[1:2]] == [MAV_CMD_NAV_TAKEOFF]
+    assert {w.command for w in items[2:-1]} == {MAV_CMD_NAV_WAYPOINT}
+    assert items[-1].command == MAV_CMD_NAV_LAND
+    got = np.array([[w.x, w.y] for w in items[2:-1]])
+    gx, gy = g.to_local(got[:, 0], got[:, 1])
+    assert np.max(np.hypot(gx - pts[:, 0], gy - pts[:, 1])) < 0.1
+    assert all(w.z == 100.0 for w in items[1:-1]) and all(w.frame == 3 for w in items[1:])
+
+
+def test_geojson_kml_and_plan_carry_the_path(tmp_path) -> None:
+    import geojson
+
+    g = Georef(-33.87, 151.21)
+    path = lattice_path(np.random.default_rng(4), 50)
+    lat, lon = g.to_latlon(path[:, 0], path[:, 1])
+    ll = np.stack([lat, lon], 1)
+    sites = [{"site_id": "S1", "lat": lat[0] + 0.001, "lon": lon[0], "height_m": 25.0}]
+    props = {"t_s": list(range(len(ll))), "sinr_db": [1.5] * len(ll)}
+    d = geojson_dict(ll, 100.0, props, sites, {"cost": 12.5})
+    obj = geojson.loads(json.dumps(d))
+    assert obj.is_valid, obj.errors()
+    line = obj["features"][0]["geometry"]["coordinates"]
+    np.testing.assert_allclose(np.array(line)[:, :2], np.stack([lon, lat], 1))
+    root = ET.fromstring(kml_text(ll, 100.0, "flight", sites).encode())
+    ns = {"k": "http://www.opengis.net/kml/2.2"}
+    coords = root.find(".//k:LineString/k:coordinates", ns).text.split()
+    kml_pts = np.array([[float(v) for v in c.split(",")] for c in coords])
+    np.testing.assert_allclose(kml_pts[:, :2], np.stack([lon, lat], 1))
+    assert np.all(kml_pts[:, 2] == 100.0)
+    plan = plan_dict((lat[0], lon[0]), ll[corners(path)], 100.0, 10.0)
+    assert plan["fileType"] == "Plan" and plan["groundStation"] == "QGroundControl"
+    m = plan["mission"]
+    for key in ("items", "plannedHomePosition", "firmwareType", "vehicleType", "cruiseSpeed",
+                "hoverSpeed", "globalPlanAltitudeMode", "version"):  # fmt: skip
+        assert key in m, key
+    for it in m["items"]:
+        assert it["type"] == "SimpleItem" and len(it["params"]) == 7
+    json.dumps(plan, allow_nan=False)  # plain JSON, as QGC reads it
