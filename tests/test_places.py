@@ -135,3 +135,80 @@ def test_geojson_kml_and_plan_carry_the_path(tmp_path) -> None:
     for it in m["items"]:
         assert it["type"] == "SimpleItem" and len(it["params"]) == 7
     json.dumps(plan, allow_nan=False)  # plain JSON, as QGC reads it
+
+
+SITES_CSV = """site_id,lat,lon,height_m,azimuth_deg,electrical_tilt_deg,tx_power_dbm,rows
+A,47.3760,8.5480,25,0,6,46,8
+A,47.3760,8.5480,25,120,6,46,8
+A,47.3760,8.5480,25,240,6,46,8
+B,47.3850,8.5600,30,90,4,43,
+"""
+
+
+def test_sites_from_csv_and_geojson(tmp_path) -> None:
+    """One row per sector: masts at their projected positions, compass azimuths (clockwise
+    from north) turned into rainuav's (counter-clockwise from east), downtilts into upward
+    tilts; the GeoJSON form of the same list gives the same sites."""
+    from rainuav.radio.sites import read_site_rows, sites_from_rows
+
+    g = Georef(47.376, 8.548)
+    f = tmp_path / "sites.csv"
+    f.write_text(SITES_CSV)
+    sites = sites_from_rows(read_site_rows(f), g)
+    assert [len(s.cells) for s in sites] == [3, 1]
+    assert abs(sites[0].x_m) < 1e-6 and abs(sites[0].y_m) < 1e-6
+    bx, by = g.to_local(47.385, 8.56)
+    assert (sites[1].x_m, sites[1].y_m) == pytest.approx((bx, by), abs=1e-6)
+    assert [c.azimuth_deg for c in sites[0].cells] == [90.0, 330.0, 210.0]
+    assert sites[1].cells[0].azimuth_deg == 0.0  # east
+    assert sites[0].cells[0].electrical_tilt_deg == -6.0 and sites[1].height_m == 30.0
+    feats = []
+    for line in SITES_CSV.splitlines()[1:]:
+        sid, lat, lon, h, az, tilt, p, rows = line.split(",")
+        props = {"site_id": sid, "height_m": float(h), "azimuth_deg": float(az),
+                 "electrical_tilt_deg": float(tilt), "tx_power_dbm": float(p)}  # fmt: skip
+        if rows:
+            props["rows"] = int(rows)
+        geom = {"type": "Point", "coordinates": [float(lon), float(lat)]}
+        feats.append({"type": "Feature", "geometry": geom, "properties": props})
+    gj = tmp_path / "sites.geojson"
+    gj.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+    assert sites_from_rows(read_site_rows(gj), g) == sites
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("", "no column site_id in the header"),
+        ("site_id,lat,lon,height_m,azimuth_deg,electrical_tilt_deg,tx_power_dbm\n",
+         "no sectors"),
+        (SITES_CSV.replace("47.3850", "north"), r"line 5: column lat must be a number"),
+        (SITES_CSV.replace(",43,", ",430,"), r"line 5: column tx_power_dbm must be a number in"),
+        (SITES_CSV.replace("B,47.3850", ",47.3850"), "line 5: column site_id is missing"),
+        (SITES_CSV.replace("A,47.3760,8.5480,25,240", "A,47.3760,8.5480,28,240"),
+         "site A: its sectors disagree"),
+        (SITES_CSV.replace(",8\n", ",8.5\n", 1), "line 2: column rows must be an integer"),
+    ],
+)  # fmt: skip
+def test_bad_sites_files_are_refused_naming_row_and_column(tmp_path, text: str, match: str) -> None:
+    from rainuav.radio.sites import read_site_rows, sites_from_rows
+
+    f = tmp_path / "sites.csv"
+    f.write_text(text)
+    with pytest.raises(InvalidInputError, match=match):
+        sites_from_rows(read_site_rows(f), Georef(47.376, 8.548))
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [("[1, 2]", "must be a GeoJSON FeatureCollection"), ("{", "not JSON"),
+     ('{"type": "FeatureCollection", "features": [{"geometry": null}]}',
+      "feature 0: geometry must be a Point")],
+)  # fmt: skip
+def test_bad_geojson_sites_are_refused(tmp_path, text: str, match: str) -> None:
+    from rainuav.radio.sites import read_site_rows
+
+    f = tmp_path / "sites.geojson"
+    f.write_text(text)
+    with pytest.raises(InvalidInputError, match=match):
+        read_site_rows(f)
