@@ -43,6 +43,7 @@ ENTRY = {
     "evaluate",
     "radiomap",
     "validate",
+    "fly",
 }
 # Third-party packages a group must not import.
 FORBIDDEN = {

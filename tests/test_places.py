@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -212,3 +213,74 @@ def test_bad_geojson_sites_are_refused(tmp_path, text: str, match: str) -> None:
     f.write_text(text)
     with pytest.raises(InvalidInputError, match=match):
         read_site_rows(f)
+
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "sites.csv"
+
+
+@pytest.mark.timeout(120)
+def test_fly_cli_writes_files_real_clients_load(tmp_path) -> None:
+    """``python -m rainuav.fly`` on the shipped example: the mission loads in pymavlink with
+    every waypoint within 0.1 m of the planned path's corners, the GeoJSON validates and
+    carries per-vertex time, SINR, serving cell and outage, the KML parses, and the summary
+    compares the flight with the straight line."""
+    import geojson
+    from pymavlink import mavwp
+    from rainuav.fly import main
+
+    out = tmp_path / "flight"
+    argv = ["--sites", str(EXAMPLE), "--start", "47.3660,8.5380", "--goal", "47.3800,8.5560",
+            "--rain-rate", "25", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    for name in ("flight.geojson", "flight.kml", "mission.plan", "mission.waypoints",
+                 "flight.png", "summary.json"):  # fmt: skip
+        assert (out / name).stat().st_size > 0, name
+    summary = json.loads((out / "summary.json").read_text())
+    g = Georef(summary["origin"]["lat"], summary["origin"]["lon"])
+    text = (out / "flight.geojson").read_text()
+    assert geojson.loads(text).is_valid
+    line = json.loads(text)["features"][0]  # full precision (geojson rounds to 6 digits)
+    coords = np.array(line["geometry"]["coordinates"])
+    x, y = g.to_local(coords[:, 1], coords[:, 0])
+    path = np.stack([x, y], 1)
+    assert len(path) == summary["moves"] + 1
+    for key in ("t_s", "sinr_db", "serving_cell", "outage"):
+        assert len(line["properties"][key]) == len(path), key
+    loader = mavwp.MAVWPLoader()
+    n = loader.load(str(out / "mission.waypoints"))
+    assert n == summary["waypoints"] + 3
+    wps = np.array([[loader.wp(k).x, loader.wp(k).y] for k in range(2, n - 1)])
+    wx, wy = g.to_local(wps[:, 0], wps[:, 1])
+    corner_pts = path[corners(path)]
+    assert np.max(np.hypot(wx - corner_pts[:, 0], wy - corner_pts[:, 1])) < 0.1
+    assert summary["cost"] <= summary["straight_line_cost"] + 1e-9
+    ET.fromstring((out / "flight.kml").read_bytes())
+    assert json.loads((out / "mission.plan").read_text())["fileType"] == "Plan"
+
+
+def test_fly_cli_refuses_bad_input_in_one_line(tmp_path, capsys) -> None:
+    from rainuav.fly import main
+
+    polar = tmp_path / "polar.csv"
+    text = EXAMPLE.read_text()
+    for lat in ("47.37000", "47.37900", "47.36400"):
+        text = text.replace(lat, "89.99000")
+    polar.write_text(text)
+    trip = ["--start", "47.3660,8.5380", "--goal", "47.3800,8.5560"]
+    cases = [
+        (["--sites", str(tmp_path / "none.csv"), *trip], "--sites: no file"),
+        (["--sites", str(polar), "--start", "89.99,8.54", "--goal", "89.995,8.55"],
+         "lat_deg must be within"),
+        (["--sites", str(EXAMPLE), "--altitude-m", "0", *trip], "--altitude-m"),
+        (["--sites", str(EXAMPLE), "--start", "47.36,north", "--goal", "47.38,8.55"], "LAT,LON"),
+    ]  # fmt: skip
+    for extra, match in cases:
+        argv = ["--out", str(tmp_path / "o"), *extra]
+        try:
+            code = main(argv)
+        except SystemExit as exit_:  # argparse's own refusal: usage line and error line
+            code = exit_.code
+        assert code == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert match in err[-1], err
+        assert len(err) == 1 or err[0].startswith("usage:"), err  # argparse: usage, then one

@@ -59,7 +59,7 @@ def corners(path: Any) -> np.ndarray:
         return np.arange(len(p))
     d = np.diff(p, axis=0)
     unit = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
-    turn = np.flatnonzero(np.linalg.norm(unit[1:] - unit[:-1], axis=1) > 1e-9) + 1
+    turn = np.flatnonzero(np.linalg.norm(unit[1:] - unit[:-1], axis=1) > 1e-6) + 1
     return np.concatenate([[0], turn, [len(p) - 1]])
 
 

@@ -1,0 +1,200 @@
+"""A real place as a world, and a flight through it written for an autopilot (issue #29;
+``python -m rainuav.fly``).
+
+:func:`place_scenario`: sites from a file (:mod:`rainuav.radio.sites`), a start and a
+destination in latitude and longitude, the flight altitude, the carrier and homogeneous rain
+become a scenario of the ``uma`` preset's radio settings (bandwidth, noise figure, ground,
+engine) over an area around the start, the destination and the sites with a margin, in metres
+of a :class:`rainuav.geo.Georef` centred on that box. :func:`fly_place` plans the exact
+optimum from the start (``rainuav.nav.planner``) and the straight line, and writes the flight
+(:mod:`rainuav.missions`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rainuav._io import write_atomic
+from rainuav.errors import InvalidInputError
+from rainuav.geo import Georef
+from rainuav.missions import corners, expand, geojson_dict, kml_text, plan_dict, wpl_text
+from rainuav.nav import planner
+from rainuav.nav.task import NavConfig
+from rainuav.radio import presets
+from rainuav.radio.radiomap import build_radio_map
+from rainuav.radio.scenario import Area, Scenario
+from rainuav.radio.sites import read_site_rows, sites_from_rows
+from rainuav.world import World, world_from
+
+__all__ = ["MARGIN_M", "Place", "fly_place", "place_scenario"]
+
+MARGIN_M = 300.0
+"""The area reaches this far beyond the start, the destination and the sites, m."""
+FLIGHT_FILES = ("flight.geojson", "flight.kml", "mission.plan", "mission.waypoints",
+                "flight.png", "summary.json")  # fmt: skip
+
+
+@dataclass
+class Place:
+    """A place's scenario, its georeference, the start and destination in its metres and the
+    sites as the file gave them."""
+
+    scenario: Scenario
+    georef: Georef
+    start_m: tuple[float, float]
+    goal_m: tuple[float, float]
+    sites: list[dict[str, Any]]
+
+
+def place_scenario(
+    sites_file: str | Path,
+    start: tuple[float, float],
+    goal: tuple[float, float],
+    *,
+    altitude_m: float = 100.0,
+    freq_ghz: float = 28.0,
+    rain_rate: float = 0.0,
+    resolution_m: float = 10.0,
+) -> Place:
+    """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees."""
+    rows = read_site_rows(sites_file)
+    freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
+    if freqs and freqs != {freq_ghz}:
+        raise InvalidInputError(f"--freq-ghz {freq_ghz:g} differs from the sites file's "
+                                f"freq_ghz {sorted(freqs)}")  # fmt: skip
+    lats = [start[0], goal[0], *(r["lat"] for r in rows)]
+    lons = [start[1], goal[1], *(r["lon"] for r in rows)]
+    if max(lons) - min(lons) > 180.0:
+        raise InvalidInputError("the start, destination and sites straddle the date line; "
+                                "give longitudes on one side of it")  # fmt: skip
+    geo = Georef((max(lats) + min(lats)) / 2.0, (max(lons) + min(lons)) / 2.0)
+    sites = sites_from_rows(rows, geo, f"sites file {sites_file}")
+    sx, sy = geo.to_local(*start, name="--start")
+    gx, gy = geo.to_local(*goal, name="--goal")
+    xs = [float(sx), float(gx), *(s.x_m for s in sites)]
+    ys = [float(sy), float(gy), *(s.y_m for s in sites)]
+
+    def edge(v: float, up: bool) -> float:
+        f = math.ceil if up else math.floor
+        return f(v / resolution_m) * resolution_m
+
+    area = Area(
+        x_min_m=edge(min(xs) - MARGIN_M, False), x_max_m=edge(max(xs) + MARGIN_M, True),
+        y_min_m=edge(min(ys) - MARGIN_M, False), y_max_m=edge(max(ys) + MARGIN_M, True),
+        altitude_m=altitude_m, resolution_m=resolution_m,
+    )  # fmt: skip
+    base = presets.uma(rain_rate, freq_ghz * 1e9)
+    scn = dataclasses.replace(base, name="place", area=area, sites=sites)
+    scn.check()
+    return Place(scn, geo, (float(sx), float(sy)), (float(gx), float(gy)), rows)
+
+
+def fly_place(
+    place: Place,
+    out: Path,
+    *,
+    speed_m_s: float = 10.0,
+    min_db: float | None = None,
+    progress: bool = False,
+) -> dict:
+    """Builds the place's map, plans the exact optimum and the straight line from the start,
+    writes :data:`FLIGHT_FILES` into ``out`` (each atomically) and returns the summary.
+    ``min_db``: the outage threshold of the SINR (default: the ``uma`` preset's, whose radio
+    settings the place takes)."""
+    rm = build_radio_map(place.scenario, progress=progress)
+    a = place.scenario.area
+    span = abs(place.goal_m[0] - place.start_m[0]) + abs(place.goal_m[1] - place.start_m[1])
+    steps = math.ceil(2.0 * span / 10.0) + 50  # room for a detour twice the direct route
+    threshold = presets.SINR_THRESHOLDS_DB["uma"] if min_db is None else min_db
+    task = NavConfig(
+        goal_m=place.goal_m, start_m=place.start_m, max_steps=steps, speed_m_s=speed_m_s,
+        min_db=threshold,
+    )  # fmt: skip
+    world: World = world_from(rm, task)
+    env = world.env()
+    best = planner.optimal(env, np.asarray(place.start_m))
+    straight = planner.straight_line(env, np.asarray(place.start_m))
+    if np.hypot(*(best.path_m[-1] - np.asarray(place.goal_m))) > task.tol_m:
+        raise InvalidInputError(f"no flight reaches the destination within {steps} moves")
+    path = best.path_m
+    merged = expand(path[corners(path)], task.step_m)
+    if merged.shape != path.shape or not np.allclose(merged, path, atol=1e-6):
+        raise AssertionError("the waypoints do not fly the planned path")  # never: tested
+    t_s = np.arange(len(path)) * task.move_s
+    sinr = env.field(path[:, 0], path[:, 1])
+    serving = env.field.serving_cell(path[:, 0], path[:, 1])
+    lat, lon = place.georef.to_latlon(path[:, 0], path[:, 1])
+    ll = np.stack([lat, lon], axis=1)
+    min_db = float(world.task.min_db)
+    cost = -(best.return_ - task.goal_reward)
+    cost_straight = -(straight.return_ - task.goal_reward)
+    summary = {
+        "cost": cost, "straight_line_cost": cost_straight,
+        "excess_of_straight_line": (cost_straight - cost) / cost,
+        "outage_share": float(np.mean(sinr[1:] < min_db)),
+        "straight_line_outage_share": float(np.mean(
+            env.field(straight.path_m[1:, 0], straight.path_m[1:, 1]) < min_db)),
+        "flight_time_s": float(t_s[-1]), "moves": len(path) - 1,
+        "waypoints": len(corners(path)), "min_db": min_db,
+        "origin": {"lat": place.georef.lat_deg, "lon": place.georef.lon_deg,
+                   "projection": place.georef.proj4},
+        "area_m": [a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m],
+    }  # fmt: skip
+    _write(place, out, ll, path, t_s, sinr, serving, min_db, summary, rm)
+    return summary
+
+
+def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.ndarray,
+           sinr: np.ndarray, serving: np.ndarray, min_db: float, summary: dict,
+           rm: Any) -> None:  # fmt: skip
+    out.mkdir(parents=True, exist_ok=True)
+    alt = place.scenario.area.altitude_m
+    wp = ll[corners(path)]
+    home = (float(ll[0, 0]), float(ll[0, 1]))
+    props = {
+        "t_s": t_s.tolist(), "sinr_db": np.round(sinr, 3).tolist(),
+        "serving_cell": [int(c) for c in serving], "outage": [bool(s < min_db) for s in sinr],
+    }  # fmt: skip
+    sites = [{k: r[k] for k in ("site_id", "lat", "lon", "height_m", "azimuth_deg")}
+             for r in place.sites]  # fmt: skip
+    texts = {
+        "flight.geojson": json.dumps(geojson_dict(ll, alt, props, sites, summary), indent=1),
+        "flight.kml": kml_text(ll, alt, "rainuav flight", sites),
+        "mission.plan": json.dumps(plan_dict(home, wp, alt, 10.0), indent=2),
+        "mission.waypoints": wpl_text(home, wp, alt),
+        "summary.json": json.dumps(summary, indent=2),
+    }
+    for name, text in texts.items():
+        write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
+    _plot(rm, path, place, out / "flight.png")
+
+
+def _plot(rm: Any, path: np.ndarray, place: Place, where: Path) -> None:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
+    ax = fig.subplots()
+    x0, x1, y0, y1 = rm.extent_m
+    lo = float(presets.SINR_THRESHOLDS_DB["uma"])
+    im = ax.imshow(rm.sinr_db, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn",
+                   vmin=lo - 15, vmax=lo + 15)  # fmt: skip
+    ax.plot(path[:, 0], path[:, 1], "k-", lw=1.5, label="planned flight")
+    wp = path[corners(path)]
+    ax.plot(wp[:, 0], wp[:, 1], "ko", ms=3, label="waypoints")
+    for s in place.scenario.sites:
+        ax.plot(s.x_m, s.y_m, "k^", ms=7)
+    ax.plot(*place.start_m, "bs", label="start")
+    ax.plot(*place.goal_m, "b*", ms=12, label="destination")
+    ax.set_xlabel("east of origin [m]")
+    ax.set_ylabel("north of origin [m]")
+    ax.set_title(f"origin {place.georef.lat_deg:.5f} N, {place.georef.lon_deg:.5f} E")
+    ax.legend(loc="upper left", fontsize="small")
+    fig.colorbar(im, ax=ax, label="SINR [dB]")
+    write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
