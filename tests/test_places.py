@@ -284,3 +284,107 @@ def test_fly_cli_refuses_bad_input_in_one_line(tmp_path, capsys) -> None:
         err = capsys.readouterr().err.strip().splitlines()
         assert match in err[-1], err
         assert len(err) == 1 or err[0].startswith("usage:"), err  # argparse: usage, then one
+
+
+def radar_file(path, da_name: str, values, coords: dict, units: str, crs_wkt: str | None = None):
+    """A CF NetCDF file of ``values`` (time, y, x) on ``coords`` (written by xarray)."""
+    import xarray as xr
+
+    dims = list(coords)
+    da = xr.DataArray(values, dims=dims, coords=coords, name=da_name, attrs={"units": units})
+    ds = da.to_dataset()
+    if crs_wkt is not None:
+        ds["crs"] = xr.DataArray(0, attrs={"crs_wkt": crs_wkt})
+        ds[da_name].attrs["grid_mapping"] = "crs"
+    ds.to_netcdf(path, engine="h5netcdf")
+    return path
+
+
+def blob(x: np.ndarray, y: np.ndarray, x0: float, y0: float, peak: float) -> np.ndarray:
+    gx, gy = np.meshgrid(x, y)
+    return peak * np.exp(-((gx - x0) ** 2 + (gy - y0) ** 2) / (2 * 150.0**2))
+
+
+def test_reflectivity_becomes_rain_by_marshall_palmer(tmp_path) -> None:
+    """A uniform 30 dBZ field is 5^(1/1.6) = 2.7344 mm/h everywhere (Z = 200 R^1.6); below
+    0 dBZ no rain."""
+    from rainuav.radio.radar import dbz_to_rate, read_radar_grid
+    from rainuav.radio.scenario import Area
+
+    assert dbz_to_rate(30.0) == pytest.approx(2.7344, rel=1e-4)
+    assert dbz_to_rate(-5.0) == 0.0
+    g = Georef(47.376, 8.548)
+    lat = np.linspace(47.36, 47.39, 40)
+    lon = np.linspace(8.53, 8.57, 50)
+    f = radar_file(tmp_path / "z.nc", "dbz", np.full((1, 40, 50), 30.0),
+                   {"time": [0.0], "lat": lat, "lon": lon}, "dBZ")  # fmt: skip
+    m = read_radar_grid(f, Area(-500, 500, -500, 500), g)
+    np.testing.assert_allclose(np.asarray(m.rate_map_mm_h), 2.7344, rtol=1e-4)
+
+
+def test_a_grid_moved_by_one_pixel_moves_the_rain_by_one_pixel(tmp_path) -> None:
+    """On the scenario's own projection (AEQD at the origin, 10 m pixels on the area's
+    sample grid) a storm shifted one pixel east in the file is the same rain one sample
+    east in the scenario (interior, 1e-9); on a lat/lon grid its centroid moves by the pixel's
+    ground width (within 1%)."""
+    from rainuav.radio.radar import read_radar_grid
+    from rainuav.radio.scenario import Area
+
+    g = Georef(47.376, 8.548)
+    area = Area(-500.0, 500.0, -500.0, 500.0, resolution_m=10.0)
+    x = np.arange(-800.0, 800.0, 10.0) + 5.0
+    y = np.arange(-700.0, 700.0, 10.0) + 5.0
+    wkt = __import__("pyproj").CRS.from_proj4(g.proj4).to_wkt()
+    runs = []
+    for k, x0 in enumerate((0.0, 10.0)):
+        vals = blob(x, y, x0, 50.0, 80.0)[None]
+        f = radar_file(tmp_path / f"p{k}.nc", "rain", vals, {"time": [0.0], "y": y, "x": x},
+                       "mm/h", wkt)  # fmt: skip
+        runs.append(np.asarray(read_radar_grid(f, area, g, max_cells=100).rate_map_mm_h))
+    np.testing.assert_allclose(runs[1][:, 1:], runs[0][:, :-1], atol=1e-9)
+    lat = np.arange(47.360, 47.392, 0.0005)
+    lon = np.arange(8.530, 8.566, 0.0005)
+    gx0, gy0 = g.to_local(*np.meshgrid(lat, lon, indexing="ij"))
+    cents = []
+    for k, shift in enumerate((0, 1)):
+        vals = np.roll(80.0 * np.exp(-(gx0**2 + (gy0 - 50) ** 2) / (2 * 80.0**2)), shift, axis=1)
+        f = radar_file(tmp_path / f"l{k}.nc", "rain", vals[None],
+                       {"time": [0.0], "lat": lat, "lon": lon}, "mm/h")  # fmt: skip
+        r = np.asarray(read_radar_grid(f, area, g, max_cells=100).rate_map_mm_h)
+        xs = area.x_min_m + (np.arange(r.shape[1]) + 0.5) * 10.0
+        cents.append((r.sum(axis=0) * xs).sum() / r.sum())
+    phi = np.radians(47.376)  # the parallel's radius on the WGS 84 ellipsoid, N cos(phi)
+    n = 6_378_137.0 / np.sqrt(1.0 - 0.00669437999014 * np.sin(phi) ** 2)
+    width = np.radians(0.0005) * n * np.cos(phi)
+    assert cents[1] - cents[0] == pytest.approx(width, rel=0.01)
+
+
+def test_bad_radar_grids_are_refused(tmp_path) -> None:
+    from rainuav.radio.radar import read_radar_grid
+    from rainuav.radio.scenario import Area
+
+    g = Georef(47.376, 8.548)
+    x = np.arange(-800.0, 800.0, 10.0)
+    coords = {"time": [0.0], "y": x, "x": x}
+    vals = np.ones((1, len(x), len(x)))
+    f = radar_file(tmp_path / "nocrs.nc", "rain", vals, coords, "mm/h")
+    with pytest.raises(InvalidInputError, match="no CRS"):
+        read_radar_grid(f, Area(-500, 500, -500, 500), g)
+    f = radar_file(tmp_path / "units.nc", "rain", vals, coords, "inch", "x")
+    with pytest.raises(InvalidInputError, match="units must be mm/h or dBZ"):
+        read_radar_grid(f, Area(-500, 500, -500, 500), g)
+
+
+@pytest.mark.timeout(120)
+def test_fly_through_the_shipped_radar_file(tmp_path) -> None:
+    """``--weather examples/radar.nc`` (dBZ on lat/lon, 13 scans): a weather that moves, the
+    plan in space-time, never worse than the straight line through the same storm."""
+    from rainuav.fly import main
+
+    out = tmp_path / "flight"
+    argv = ["--sites", str(EXAMPLE), "--start", "47.3660,8.5380", "--goal", "47.3700,8.5420",
+            "--weather", str(EXAMPLE.with_name("radar.nc")), "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["weather_moves"] is True
+    assert summary["cost"] <= summary["straight_line_cost"] + 1e-9

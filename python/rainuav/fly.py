@@ -7,9 +7,12 @@ Sites from a CSV or GeoJSON file (one row per sector: ``site_id, lat, lon, heigh
 azimuth_deg, electrical_tilt_deg, tx_power_dbm``, optional ``antenna, rows,
 mechanical_tilt_deg, freq_ghz``; azimuths clockwise from north, tilts positive down, as
 operators give them: :mod:`rainuav.radio.sites`), the start and destination as ``LAT,LON``
-(degrees, WGS 84), the flight altitude, the carrier and homogeneous rain. The area is the box
-around the start, the destination and the sites with a 300 m margin, in metres of an azimuthal
-equidistant projection centred on it (:mod:`rainuav.geo`). Plans the exact optimum
+(degrees, WGS 84), the flight altitude, the carrier and homogeneous rain (``--rain-rate``) or
+a georeferenced rain file (``--weather``: NetCDF in mm/h or dBZ, Marshall-Palmer; several
+instants give a weather that moves and the exact plan in space-time:
+:mod:`rainuav.radio.radar`). The area is the box around the start, the destination and the
+sites with a 300 m margin, in metres of an azimuthal equidistant projection centred on it
+(:mod:`rainuav.geo`). Plans the exact optimum
 (``rainuav.nav.planner``) and writes into ``--out``:
 
 - ``flight.geojson`` (the path, WGS 84, with per-vertex time, SINR, serving cell and outage;
@@ -56,6 +59,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--altitude-m", type=float, default=100.0, help="flight altitude above ground")
     ap.add_argument("--freq-ghz", type=float, default=28.0, help="carrier frequency, GHz")
     ap.add_argument("--rain-rate", type=float, default=0.0, help="homogeneous rain, mm/h")
+    ap.add_argument(
+        "--weather", type=Path, default=None,
+        help="a georeferenced rain file (NetCDF: mm/h or dBZ on lat/lon or x/y with a CRS)",
+    )  # fmt: skip
     ap.add_argument("--speed-m-s", type=float, default=10.0, help="ground speed, m/s")
     ap.add_argument("--min-db", type=float, default=None, help="SINR outage threshold, dB")
     ap.add_argument("--out", type=Path, required=True, help="output folder")
@@ -69,13 +76,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_number("--altitude-m", args.altitude_m, 0.5, 3000.0, " m")
         check_number("--freq-ghz", args.freq_ghz, 1.0, 100.0, " GHz")
         check_number("--rain-rate", args.rain_rate, 0.0, 500.0, " mm/h")
+        if args.weather is not None and args.rain_rate:
+            raise InvalidInputError("give --rain-rate or --weather, not both")
         check_number("--speed-m-s", args.speed_m_s, 0.1, 100.0, " m/s")
         out = check_out_dir(args.out, "out")
         if not args.sites.is_file():
             raise InvalidInputError(f"--sites: no file {args.sites}")
         place = place_scenario(
             args.sites, args.start, args.goal, altitude_m=args.altitude_m,
-            freq_ghz=args.freq_ghz, rain_rate=args.rain_rate,
+            freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
         )  # fmt: skip
         summary = fly_place(place, out, speed_m_s=args.speed_m_s, min_db=args.min_db)
         print(json.dumps(summary, indent=2))

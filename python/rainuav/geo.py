@@ -22,14 +22,15 @@ import numpy as np
 
 from rainuav.errors import InvalidInputError
 
-__all__ = ["MAX_ABS_LAT", "Georef", "geodesic_m"]
+__all__ = ["MAX_ABS_LAT", "Georef", "geodesic_m", "pyproj_module"]
 
 MAX_ABS_LAT = 85.0
 """Origins nearer the poles are refused: a drone's lattice of east and north moves has no
 meaning at a pole, and the projection's north turns fast near one."""
 
 
-def _pyproj() -> Any:
+def pyproj_module() -> Any:
+    """pyproj, or a one-line error saying how to install it."""
     try:
         import pyproj
     except ImportError as err:
@@ -84,7 +85,7 @@ class Georef:
     def _transformers(self) -> tuple[Any, Any]:
         cached = getattr(self, "_cache", None)
         if cached is None:
-            pyproj = _pyproj()
+            pyproj = pyproj_module()
             local = pyproj.CRS.from_proj4(self.proj4)
             fwd = pyproj.Transformer.from_crs("EPSG:4326", local, always_xy=True)
             inv = pyproj.Transformer.from_crs(local, "EPSG:4326", always_xy=True)
@@ -113,5 +114,5 @@ def geodesic_m(lat1: Any, lon1: Any, lat2: Any, lon2: Any) -> Any:
     algorithm), between the points (``lat1``, ``lon1``) and (``lat2``, ``lon2``), degrees."""
     la1, lo1 = _check_latlon("first point", lat1, lon1)
     la2, lo2 = _check_latlon("second point", lat2, lon2)
-    _, _, d = _pyproj().Geod(ellps="WGS84").inv(lo1, la1, lo2, la2)
+    _, _, d = pyproj_module().Geod(ellps="WGS84").inv(lo1, la1, lo2, la2)
     return d

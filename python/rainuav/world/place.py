@@ -28,13 +28,17 @@ from rainuav.missions import corners, expand, geojson_dict, kml_text, plan_dict,
 from rainuav.nav import planner
 from rainuav.nav.task import NavConfig
 from rainuav.radio import presets
+from rainuav.radio.radar import read_radar_grid
 from rainuav.radio.radiomap import build_radio_map
 from rainuav.radio.scenario import Area, Scenario
 from rainuav.radio.sites import read_site_rows, sites_from_rows
+from rainuav.radio.timemap import build_radio_map_series, series_times
 from rainuav.world import World, world_from
 
 __all__ = ["MARGIN_M", "Place", "fly_place", "place_scenario"]
 
+SLICE_S = 5.0
+"""Time between the maps of a weather file with several instants, s."""
 MARGIN_M = 300.0
 """The area reaches this far beyond the start, the destination and the sites, m."""
 FLIGHT_FILES = ("flight.geojson", "flight.kml", "mission.plan", "mission.waypoints",
@@ -61,9 +65,12 @@ def place_scenario(
     altitude_m: float = 100.0,
     freq_ghz: float = 28.0,
     rain_rate: float = 0.0,
+    weather: str | Path | None = None,
     resolution_m: float = 10.0,
 ) -> Place:
-    """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees."""
+    """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees.
+    ``weather``: a georeferenced rain file (:mod:`rainuav.radio.radar`, mm/h or dBZ, one
+    instant or several) in place of homogeneous rain."""
     rows = read_site_rows(sites_file)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
     if freqs and freqs != {freq_ghz}:
@@ -91,6 +98,9 @@ def place_scenario(
         altitude_m=altitude_m, resolution_m=resolution_m,
     )  # fmt: skip
     base = presets.uma(rain_rate, freq_ghz * 1e9)
+    if weather is not None:
+        medium = read_radar_grid(weather, area, geo, base=base.medium)
+        base = dataclasses.replace(base, medium=medium)
     scn = dataclasses.replace(base, name="place", area=area, sites=sites)
     scn.check()
     return Place(scn, geo, (float(sx), float(sy)), (float(gx), float(gy)), rows)
@@ -108,10 +118,17 @@ def fly_place(
     writes :data:`FLIGHT_FILES` into ``out`` (each atomically) and returns the summary.
     ``min_db``: the outage threshold of the SINR (default: the ``uma`` preset's, whose radio
     settings the place takes)."""
-    rm = build_radio_map(place.scenario, progress=progress)
     a = place.scenario.area
     span = abs(place.goal_m[0] - place.start_m[0]) + abs(place.goal_m[1] - place.start_m[1])
     steps = math.ceil(2.0 * span / 10.0) + 50  # room for a detour twice the direct route
+    scn = place.scenario
+    if scn.medium.moves:  # the weather of a file with several instants: maps every 5 s
+        horizon = math.ceil(steps * 10.0 / speed_m_s / SLICE_S) * SLICE_S
+        if scn.engine == "pe":
+            scn = dataclasses.replace(scn, engine="hybrid")
+        rm: Any = build_radio_map_series(scn, series_times(horizon, SLICE_S), progress=progress)
+    else:
+        rm = build_radio_map(scn, progress=progress)
     threshold = presets.SINR_THRESHOLDS_DB["uma"] if min_db is None else min_db
     task = NavConfig(
         goal_m=place.goal_m, start_m=place.start_m, max_steps=steps, speed_m_s=speed_m_s,
@@ -128,8 +145,8 @@ def fly_place(
     if merged.shape != path.shape or not np.allclose(merged, path, atol=1e-6):
         raise AssertionError("the waypoints do not fly the planned path")  # never: tested
     t_s = np.arange(len(path)) * task.move_s
-    sinr = env.field(path[:, 0], path[:, 1])
-    serving = env.field.serving_cell(path[:, 0], path[:, 1])
+    sinr = env.field(path[:, 0], path[:, 1], t_s)
+    serving = env.field.serving_cell(path[:, 0], path[:, 1], t_s)
     lat, lon = place.georef.to_latlon(path[:, 0], path[:, 1])
     ll = np.stack([lat, lon], axis=1)
     min_db = float(world.task.min_db)
@@ -139,8 +156,10 @@ def fly_place(
         "cost": cost, "straight_line_cost": cost_straight,
         "excess_of_straight_line": (cost_straight - cost) / cost,
         "outage_share": float(np.mean(sinr[1:] < min_db)),
-        "straight_line_outage_share": float(np.mean(
-            env.field(straight.path_m[1:, 0], straight.path_m[1:, 1]) < min_db)),
+        "straight_line_outage_share": float(np.mean(env.field(
+            straight.path_m[1:, 0], straight.path_m[1:, 1],
+            np.arange(1, len(straight.path_m)) * task.move_s) < min_db)),
+        "weather_moves": bool(scn.medium.moves),
         "flight_time_s": float(t_s[-1]), "moves": len(path) - 1,
         "waypoints": len(corners(path)), "min_db": min_db,
         "origin": {"lat": place.georef.lat_deg, "lon": place.georef.lon_deg,
@@ -181,9 +200,11 @@ def _plot(rm: Any, path: np.ndarray, place: Place, where: Path) -> None:
 
     fig = Figure(figsize=(6.4, 5.6), layout="constrained")
     ax = fig.subplots()
-    x0, x1, y0, y1 = rm.extent_m
+    a = place.scenario.area
+    x0, x1, y0, y1 = a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m
     lo = float(presets.SINR_THRESHOLDS_DB["uma"])
-    im = ax.imshow(rm.sinr_db, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn",
+    sinr = rm.sinr_db if rm.sinr_db.ndim == 2 else rm.sinr_db[0]  # a series: at take-off
+    im = ax.imshow(sinr, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn",
                    vmin=lo - 15, vmax=lo + 15)  # fmt: skip
     ax.plot(path[:, 0], path[:, 1], "k-", lw=1.5, label="planned flight")
     wp = path[corners(path)]
