@@ -388,3 +388,37 @@ def test_fly_through_the_shipped_radar_file(tmp_path) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["weather_moves"] is True
     assert summary["cost"] <= summary["straight_line_cost"] + 1e-9
+
+
+def test_a_scenario_carries_its_origin(tmp_path) -> None:
+    """``[origin]`` round-trips through TOML and gives the georeference; a scenario without
+    one keeps its old form (so its digest, and the map cache, are unchanged)."""
+    from rainuav.radio import presets
+    from rainuav.radio.scenario import Origin, Scenario
+
+    plain = presets.uma()
+    assert "origin" not in plain.to_dict()
+    geo = plain.replace(origin=Origin(47.376, 8.548))
+    back = Scenario.from_toml_string(geo.to_toml_string())
+    assert back == geo and back.georef == Georef(47.376, 8.548)
+    lat, lon = back.georef.to_latlon(0.0, 0.0)
+    assert (float(lat), float(lon)) == pytest.approx((47.376, 8.548), abs=1e-12)
+    with pytest.raises(InvalidInputError, match="lat_deg must be within"):
+        Scenario.from_toml_string(plain.replace(origin=Origin(89.5, 0.0)).to_toml_string())
+
+
+def test_fly_area_box(tmp_path, capsys) -> None:
+    """``--area S,W,N,E``: the map covers that box; a start outside it is one line."""
+    from rainuav.fly import main
+
+    box = "47.3600,8.5300,47.3850,8.5600"
+    argv = ["--sites", str(EXAMPLE), "--goal", "47.3700,8.5420", "--area", box]
+    assert main([*argv, "--start", "47.3660,8.5380", "--out", str(tmp_path / "a")]) == 0
+    s = json.loads((tmp_path / "a" / "summary.json").read_text())
+    g = Georef(s["origin"]["lat"], s["origin"]["lon"])
+    x, y = g.to_local([47.36, 47.385], [8.53, 8.56])
+    x0, x1, y0, y1 = s["area_m"]
+    assert x0 <= min(x) < x0 + 10 and x1 - 10 < max(x) <= x1
+    assert y0 <= min(y) < y0 + 10 and y1 - 10 < max(y) <= y1
+    assert main([*argv, "--start", "47.3500,8.5380", "--out", str(tmp_path / "b")]) == 2
+    assert "--start 47.35,8.538 lies outside the --area" in capsys.readouterr().err

@@ -56,6 +56,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--sites", type=Path, required=True, help="sites file (.csv or .geojson)")
     ap.add_argument("--start", type=_latlon, required=True, help="take-off point LAT,LON")
     ap.add_argument("--goal", type=_latlon, required=True, help="destination LAT,LON")
+    ap.add_argument(
+        "--area", default=None,
+        help="the area as S,W,N,E in degrees (default: around the start, goal and sites)",
+    )  # fmt: skip
     ap.add_argument("--altitude-m", type=float, default=100.0, help="flight altitude above ground")
     ap.add_argument("--freq-ghz", type=float, default=28.0, help="carrier frequency, GHz")
     ap.add_argument("--rain-rate", type=float, default=0.0, help="homogeneous rain, mm/h")
@@ -79,12 +83,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.weather is not None and args.rain_rate:
             raise InvalidInputError("give --rain-rate or --weather, not both")
         check_number("--speed-m-s", args.speed_m_s, 0.1, 100.0, " m/s")
+        box = None
+        if args.area is not None:
+            try:
+                box = tuple(float(v) for v in args.area.split(","))
+            except ValueError:
+                box = ()
+            if len(box) != 4:
+                raise InvalidInputError(f"--area must be S,W,N,E in degrees (got {args.area!r})")
         out = check_out_dir(args.out, "out")
         if not args.sites.is_file():
             raise InvalidInputError(f"--sites: no file {args.sites}")
         place = place_scenario(
             args.sites, args.start, args.goal, altitude_m=args.altitude_m,
             freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
+            box=box,
         )  # fmt: skip
         summary = fly_place(place, out, speed_m_s=args.speed_m_s, min_db=args.min_db)
         print(json.dumps(summary, indent=2))

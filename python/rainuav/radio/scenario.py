@@ -31,6 +31,7 @@ from rainuav._checks import check_choice as _choice
 from rainuav._checks import check_number as _num
 from rainuav._io import read_toml, write_atomic
 from rainuav.errors import InvalidInputError
+from rainuav.geo import Georef
 from rainuav.radio.cell import Cell, Pattern
 from rainuav.radio.stochastic import StochasticRain
 from rainuav.radio.weather import Medium, RainCell
@@ -48,6 +49,7 @@ __all__ = [
     "Building",
     "Cell",
     "Medium",
+    "Origin",
     "PESettings",
     "Pattern",
     "RainCell",
@@ -172,6 +174,16 @@ class PESettings:
 
 
 @dataclass
+class Origin:
+    """The latitude and longitude (degrees, WGS 84) of a scenario's (0, 0)."""
+
+    lat_deg: float = 0.0
+    """Degrees north (|lat| <= 85)."""
+    lon_deg: float = 0.0
+    """Degrees east (-180..180)."""
+
+
+@dataclass
 class Scenario:
     """A network, the weather and the airspace. ``Scenario.from_toml(path)`` / ``.to_toml``."""
 
@@ -206,6 +218,10 @@ class Scenario:
     each value covers its pixel of the area (nearest sample). Combined with ``buildings``."""
     pe: PESettings = field(default_factory=PESettings)
     """Gridding of the PE marches."""
+    origin: Origin | None = None
+    """Where (0, 0) lies on the Earth, if the scenario is georeferenced (``[origin]`` with
+    ``lat_deg``, ``lon_deg``: :class:`rainuav.geo.Georef`, an azimuthal equidistant projection
+    on WGS 84); every position then has a latitude and longitude too."""
 
     def __post_init__(self) -> None:
         self.check()
@@ -224,6 +240,8 @@ class Scenario:
         self.area.check()
         self.medium.check()
         self.pe.check()
+        if self.origin is not None:
+            self.georef  # noqa: B018 - checks the origin (one line naming the field)
         a = self.area
         if not self.sites:
             raise InvalidInputError("sites must hold at least one site")
@@ -328,6 +346,15 @@ class Scenario:
             raise InvalidInputError(f"scenario: not valid TOML ({err})") from err
         return cls.from_dict(data)
 
+    @property
+    def georef(self) -> Georef | None:
+        """The scenario's georeference, or None where it has no origin."""
+        if self.origin is None:
+            return None
+        if not isinstance(self.origin, Origin):
+            raise InvalidInputError("origin must be a table with lat_deg and lon_deg")
+        return Georef(self.origin.lat_deg, self.origin.lon_deg)
+
     def replace(self, **changes: Any) -> Scenario:
         """A copy with fields changed (validated)."""
         return dataclasses.replace(self, **changes)
@@ -335,6 +362,7 @@ class Scenario:
 
 _NESTED: dict[tuple[type, str], type] = {
     (Scenario, "area"): Area,
+    (Scenario, "origin"): Origin,
     (Scenario, "medium"): Medium,
     (Scenario, "pe"): PESettings,
     (Medium, "field"): StochasticRain,

@@ -30,7 +30,7 @@ from rainuav.nav.task import NavConfig
 from rainuav.radio import presets
 from rainuav.radio.radar import read_radar_grid
 from rainuav.radio.radiomap import build_radio_map
-from rainuav.radio.scenario import Area, Scenario
+from rainuav.radio.scenario import Area, Origin, Scenario
 from rainuav.radio.sites import read_site_rows, sites_from_rows
 from rainuav.radio.timemap import build_radio_map_series, series_times
 from rainuav.world import World, world_from
@@ -67,10 +67,13 @@ def place_scenario(
     rain_rate: float = 0.0,
     weather: str | Path | None = None,
     resolution_m: float = 10.0,
+    box: tuple[float, float, float, float] | None = None,
 ) -> Place:
     """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees.
     ``weather``: a georeferenced rain file (:mod:`rainuav.radio.radar`, mm/h or dBZ, one
-    instant or several) in place of homogeneous rain."""
+    instant or several) in place of homogeneous rain. ``box``: the area as (south latitude,
+    west longitude, north latitude, east longitude), degrees, in place of the box around the
+    start, the destination and the sites; the start and the destination must lie in it."""
     rows = read_site_rows(sites_file)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
     if freqs and freqs != {freq_ghz}:
@@ -78,6 +81,14 @@ def place_scenario(
                                 f"freq_ghz {sorted(freqs)}")  # fmt: skip
     lats = [start[0], goal[0], *(r["lat"] for r in rows)]
     lons = [start[1], goal[1], *(r["lon"] for r in rows)]
+    if box is not None:
+        s_, w_, n_, e_ = box
+        if not (-90 <= s_ < n_ <= 90 and -180 <= w_ < e_ <= 180):
+            raise InvalidInputError(f"--area must be S,W,N,E with S < N and W < E (got {box})")
+        for name, (la, lo) in (("--start", start), ("--goal", goal)):
+            if not (s_ <= la <= n_ and w_ <= lo <= e_):
+                raise InvalidInputError(f"{name} {la},{lo} lies outside the --area {box}")
+        lats, lons = [s_, n_], [w_, e_]
     if max(lons) - min(lons) > 180.0:
         raise InvalidInputError("the start, destination and sites straddle the date line; "
                                 "give longitudes on one side of it")  # fmt: skip
@@ -87,21 +98,27 @@ def place_scenario(
     gx, gy = geo.to_local(*goal, name="--goal")
     xs = [float(sx), float(gx), *(s.x_m for s in sites)]
     ys = [float(sy), float(gy), *(s.y_m for s in sites)]
+    margin = MARGIN_M
+    if box is not None:  # the box's corners, projected, and no margin
+        cx, cy = geo.to_local(np.array([box[0], box[0], box[2], box[2]]),
+                              np.array([box[1], box[3], box[1], box[3]]))  # fmt: skip
+        xs, ys, margin = [float(cx.min()), float(cx.max())], [float(cy.min()), float(cy.max())], 0.0
 
     def edge(v: float, up: bool) -> float:
         f = math.ceil if up else math.floor
         return f(v / resolution_m) * resolution_m
 
     area = Area(
-        x_min_m=edge(min(xs) - MARGIN_M, False), x_max_m=edge(max(xs) + MARGIN_M, True),
-        y_min_m=edge(min(ys) - MARGIN_M, False), y_max_m=edge(max(ys) + MARGIN_M, True),
+        x_min_m=edge(min(xs) - margin, False), x_max_m=edge(max(xs) + margin, True),
+        y_min_m=edge(min(ys) - margin, False), y_max_m=edge(max(ys) + margin, True),
         altitude_m=altitude_m, resolution_m=resolution_m,
     )  # fmt: skip
     base = presets.uma(rain_rate, freq_ghz * 1e9)
     if weather is not None:
         medium = read_radar_grid(weather, area, geo, base=base.medium)
         base = dataclasses.replace(base, medium=medium)
-    scn = dataclasses.replace(base, name="place", area=area, sites=sites)
+    origin = Origin(geo.lat_deg, geo.lon_deg)
+    scn = dataclasses.replace(base, name="place", area=area, sites=sites, origin=origin)
     scn.check()
     return Place(scn, geo, (float(sx), float(sy)), (float(gx), float(gy)), rows)
 
