@@ -223,6 +223,16 @@ def _plot(rm: Any, path: np.ndarray, place: Place, where: Path) -> None:
     sinr = rm.sinr_db if rm.sinr_db.ndim == 2 else rm.sinr_db[0]  # a series: at take-off
     im = ax.imshow(sinr, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn",
                    vmin=lo - 15, vmax=lo + 15)  # fmt: skip
+    from rainuav.radio.pe_engine import rain_rate_at
+
+    scn = place.scenario
+    if scn.medium.varies:  # the rain at take-off, outlined
+        xx, yy = np.meshgrid(np.linspace(x0, x1, 200), np.linspace(y0, y1, 200))
+        rate = rain_rate_at(dataclasses.replace(scn, medium=scn.medium.at(0.0)), xx, yy)
+        levels = [v for v in (5.0, 20.0, 50.0) if rate.min() < v < rate.max()]
+        if levels:
+            cs = ax.contour(xx, yy, rate, levels=levels, colors="navy", linewidths=1.0)
+            ax.clabel(cs, fmt="%g mm/h", fontsize=7)
     ax.plot(path[:, 0], path[:, 1], "k-", lw=1.5, label="planned flight")
     wp = path[corners(path)]
     ax.plot(wp[:, 0], wp[:, 1], "ko", ms=3, label="waypoints")
@@ -232,7 +242,8 @@ def _plot(rm: Any, path: np.ndarray, place: Place, where: Path) -> None:
     ax.plot(*place.goal_m, "b*", ms=12, label="destination")
     ax.set_xlabel("east of origin [m]")
     ax.set_ylabel("north of origin [m]")
-    ax.set_title(f"origin {place.georef.lat_deg:.5f} N, {place.georef.lon_deg:.5f} E")
+    ax.set_title(f"SINR and rain at take-off; origin {place.georef.lat_deg:.5f} N, "
+                 f"{place.georef.lon_deg:.5f} E", fontsize=10)  # fmt: skip
     ax.legend(loc="upper left", fontsize="small")
     fig.colorbar(im, ax=ax, label="SINR [dB]")
-    write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+    write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
