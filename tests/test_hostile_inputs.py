@@ -567,6 +567,43 @@ def test_ctrl_c_is_one_line_and_exit_130(tmp_path, monkeypatch, capsys) -> None:
     TALLY["accepted"] += 4  # a clean stop is the right answer to Ctrl-C
 
 
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+TRIP = ["--start", "47.3660,8.5380", "--goal", "47.3700,8.5420"]
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "needle"),
+    [
+        ("sites.csv", b"\x00\xff\xfe garbage \x89PNG", "sites file"),
+        ("sites.csv", b"site_id,lat,lon,height_m,azimuth_deg,electrical_tilt_deg,tx_power_dbm\n"
+                      b"A,nan,8.5,25,0,6,46\n", "column lat must be a number"),
+        ("sites.csv", b"site_id,lat,lon,height_m,azimuth_deg,electrical_tilt_deg,tx_power_dbm\n"
+                      b"A,47.37,8.54,1e308,0,6,46\n", "column height_m"),
+        ("sites.geojson", b"[" * 100_000, "not JSON"),
+        ("sites.geojson", b'{"type": "FeatureCollection", "features": 5}', "FeatureCollection"),
+    ],
+)  # fmt: skip
+def test_fly_refuses_hostile_sites_files(tmp_path, capsys, name, content, needle) -> None:
+    from rainuav import fly
+
+    f = tmp_path / name
+    f.write_bytes(content)
+    rc, err = run_cli(fly, ["--sites", f, *TRIP, "--out", tmp_path / "o"], capsys)
+    refused(f"fly {name}", rc, err, needle)
+    assert not (tmp_path / "o" / "mission.plan").exists()
+
+
+@pytest.mark.parametrize("content", [b"", b"CDF\x01 truncated", b"\x89HDF\r\n\x1a\n junk"])
+def test_fly_refuses_a_weather_file_that_is_not_netcdf(tmp_path, capsys, content) -> None:
+    from rainuav import fly
+
+    f = tmp_path / "radar.nc"
+    f.write_bytes(content)
+    argv = ["--sites", EXAMPLES / "sites.csv", *TRIP, "--weather", f, "--out", tmp_path / "o"]
+    rc, err = run_cli(fly, argv, capsys)
+    refused("fly --weather garbage", rc, err, "radar.nc")
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():

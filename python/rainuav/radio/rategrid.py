@@ -45,8 +45,9 @@ def _open(path: str | os.PathLike[str]) -> Any:
     try:
         return xr.open_dataset(path)  # lazily: nothing is read before the sizes are checked
     except Exception as err:  # xarray raises many kinds for a file it cannot read
+        why = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
         raise InvalidInputError(
-            f"rain-rate file {path}: not a readable NetCDF file ({err})"
+            f"rain-rate file {path}: not a readable NetCDF file ({why})"
         ) from err
 
 

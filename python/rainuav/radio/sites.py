@@ -123,6 +123,10 @@ def _geojson_rows(p: Path, text: str) -> list[SiteRow]:
         doc = json.loads(text)
     except json.JSONDecodeError as err:
         raise InvalidInputError(f"sites file {p}: not JSON ({err.msg}, line {err.lineno})") from err
+    except RecursionError as err:  # nested deeper than any sites file
+        raise InvalidInputError(
+            f"sites file {p}: not JSON a sites list can be (nested too deep)"
+        ) from err
     feats = doc.get("features") if isinstance(doc, dict) else None
     if not isinstance(feats, list) or doc.get("type") != "FeatureCollection":
         raise InvalidInputError(f"sites file {p}: must be a GeoJSON FeatureCollection")
