@@ -422,3 +422,38 @@ def test_fly_area_box(tmp_path, capsys) -> None:
     assert y0 <= min(y) < y0 + 10 and y1 - 10 < max(y) <= y1
     assert main([*argv, "--start", "47.3500,8.5380", "--out", str(tmp_path / "b")]) == 2
     assert "--start 47.35,8.538 lies outside the --area" in capsys.readouterr().err
+
+
+def test_a_flyer_flies_the_place_and_is_judged_against_the_optimum(tmp_path) -> None:
+    """``fly_place(flyer=...)`` writes the flyer's path; flying the exact plan itself costs
+    the optimum to 1e-9 (the cost is charged as the task charges it)."""
+    from rainuav.nav import planner
+    from rainuav.world.place import fly_place, place_scenario
+
+    place = place_scenario(EXAMPLE, (47.3660, 8.5380), (47.3700, 8.5420))
+
+    def exact(env):
+        return planner.optimal(env, np.asarray(env.cfg.start_m)).path_m, True
+
+    s = fly_place(place, tmp_path / "f", flyer=exact, flown_by="test flyer")
+    assert s["flown_by"] == "test flyer"
+    assert s["cost"] == pytest.approx(s["optimal_cost"], abs=1e-9)
+    assert abs(s["excess_over_optimum"]) < 1e-12
+    with pytest.raises(InvalidInputError, match="does not reach the destination"):
+        fly_place(place, tmp_path / "g", flyer=lambda env: (np.zeros((2, 2)), False))
+
+
+def test_fly_policy_must_read_the_weather(tmp_path, capsys) -> None:
+    import tomli_w
+    from rainuav.fly import main
+    from rainuav.rl.config import TrainConfig, to_dict
+
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "config.toml").write_text(tomli_w.dumps(to_dict(TrainConfig(out=str(run)))))
+    (run / "checkpoint.pt").write_bytes(b"")
+    argv = ["--sites", str(EXAMPLE), "--start", "47.3660,8.5380", "--goal", "47.3700,8.5420",
+            "--policy", str(run), "--out", str(tmp_path / "o")]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "fly a network that reads the weather" in err[0]

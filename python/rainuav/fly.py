@@ -69,6 +69,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     )  # fmt: skip
     ap.add_argument("--speed-m-s", type=float, default=10.0, help="ground speed, m/s")
     ap.add_argument("--min-db", type=float, default=None, help="SINR outage threshold, dB")
+    ap.add_argument(
+        "--policy", type=Path, default=None,
+        help="fly a trained network that reads the weather (a run of --observation weather)",
+    )  # fmt: skip
     ap.add_argument("--out", type=Path, required=True, help="output folder")
     args = ap.parse_args(argv)
 
@@ -99,12 +103,46 @@ def main(argv: Sequence[str] | None = None) -> int:
             freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
             box=box,
         )  # fmt: skip
-        summary = fly_place(place, out, speed_m_s=args.speed_m_s, min_db=args.min_db)
+        flyer, by = (None, "exact optimum") if args.policy is None else _policy(args.policy)
+        summary = fly_place(
+            place, out, speed_m_s=args.speed_m_s, min_db=args.min_db, flyer=flyer, flown_by=by
+        )
         print(json.dumps(summary, indent=2))
         print(f"wrote {out.resolve()}", file=sys.stderr)
         return 0
 
     return _cli.run(body)
+
+
+def _policy(run: Path) -> tuple[object, str]:
+    """A flyer for :func:`rainuav.world.place.fly_place`: the network the run ``run`` reports,
+    flown greedily from the place's start (read as data, refused in one line if it does not
+    read the weather)."""
+    from rainuav.rl import checkpoint
+    from rainuav.rl.collect import greedy_rollouts
+    from rainuav.rl.config import check_config, load_config
+    from rainuav.rl.evaluation import load_agent
+
+    if not (run / "config.toml").is_file() or not (run / "checkpoint.pt").is_file():
+        raise InvalidInputError(
+            f"--policy {run}: not a rainuav.train run (config.toml, checkpoint.pt)"
+        )
+    cfg = load_config(run / "config.toml")
+    check_config(cfg)
+    if cfg.observation != "weather":
+        raise InvalidInputError(
+            f"--policy {run}: its network sees only its own map (trained with observation = "
+            f"{cfg.observation!r}); fly a network that reads the weather (--observation weather)"
+        )
+    state = checkpoint.load(run / "checkpoint.pt", ("agent", "returns", "train_seconds"))
+
+    def fly(env: object) -> tuple[object, bool]:
+        agent, _, _ = load_agent(run / "checkpoint.pt", state, cfg, env, "cpu", False)
+        start = env.cfg.start_m  # type: ignore[attr-defined]
+        roll = greedy_rollouts(agent, env, [start])[0]  # type: ignore[arg-type]
+        return roll["path"], bool(roll["reached"])
+
+    return fly, f"network {run}"
 
 
 if __name__ == "__main__":
