@@ -88,7 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
             default = "unset" if f.default is None else f.default
             kind = _storm_seed if f.name == "storm_seed" else flag_types.get(field_kind(f)[0], str)
             more = (
-                "; 'random': train one network over the storm distribution (--storm-pool "
+                " Or 'random': one network over the storm distribution (--storm-pool "
                 f"{DEFAULT_POOL}, --observation weather, the storm learner's [dqn] fields and "
                 "a 55-minute budget unless given)"
                 if f.name == "storm_seed"
