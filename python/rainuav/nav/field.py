@@ -107,6 +107,7 @@ class SignalField:
             values_db, extent_m, name, serving_cell, "(H, W)"
         )
         self.name = name
+        self._points = _PointCache()
 
     def __call__(self, x: Any, y: Any, t_s: Any = None) -> Any:
         """The map at the points ``(x, y)`` (bilinear between pixel centres, edge values
@@ -126,8 +127,6 @@ class SignalField:
     def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
         """(N, M): the map at the fixed points (M, 2) for each of the N instants ``t_s``
         (the same row: one map); sampled once per set of points."""
-        if not hasattr(self, "_points"):
-            self._points = _PointCache()
         g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
         return np.broadcast_to(g, (np.size(t_s), len(g)))
 
@@ -162,6 +161,7 @@ class SignalSeries:
             )
         self.t_s = np.ascontiguousarray(t)
         self.name = name
+        self._points = _PointCache()
 
     def brackets(self, tau: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """For each instant of ``tau``: the slices around it and the later one's weight
@@ -206,8 +206,6 @@ class SignalSeries:
     def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
         """(N, M): the signal at the fixed points (M, 2) at each of the N instants ``t_s``,
         as :meth:`__call__` gives it; every slice is sampled once per set of points."""
-        if not hasattr(self, "_points"):
-            self._points = _PointCache()
         g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
         return _lerp(g, *self.brackets(np.atleast_1d(t_s)))
 
@@ -239,6 +237,7 @@ class SignalBank:
         self._times = SignalSeries(np.zeros((k, 1, 1)), t_s, extent_m, "t_s")
         self.t_s = self._times.t_s
         self.varies = k > 1
+        self._points = _PointCache()
 
     @property
     def worlds(self) -> int:
@@ -258,8 +257,6 @@ class SignalBank:
         """(N, M): world ``world[n]``'s signal at the fixed points (M, 2) at the instants
         ``t_s[n]``, as :meth:`__call__` gives it; every slice sampled once per set of
         points (until :meth:`put`)."""
-        if not hasattr(self, "_points"):
-            self._points = _PointCache()
         g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
         t = np.atleast_1d(t_s)
         w = np.broadcast_to(np.asarray(world, dtype=np.int64), t.shape)

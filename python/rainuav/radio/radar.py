@@ -23,7 +23,6 @@ Needs the ``weather`` and ``geo`` extras (xarray, h5netcdf, pyproj).
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from typing import Any
 
@@ -32,7 +31,7 @@ import numpy as np
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef, pyproj_module
-from rainuav.radio.rategrid import UNITS, _open, _seconds
+from rainuav.radio.rategrid import UNITS, _open, _seconds, rate_medium, sample_grid
 from rainuav.radio.scenario import Area
 from rainuav.radio.weather import MAX_RATE_MM_H, Medium
 
@@ -111,12 +110,7 @@ def read_radar_grid(
             raise InvalidInputError(f"rain file {path}: {names[0]} needs a time dimension")
         xd, yd, crs = _axes(path, ds, da)
         times = _seconds(path, da["time"].values)
-        step = max(area.x_max_m - area.x_min_m, area.y_max_m - area.y_min_m) / max_cells
-        nx = max(1, min(area.shape[1], round((area.x_max_m - area.x_min_m) / step)))
-        ny = max(1, min(area.shape[0], round((area.y_max_m - area.y_min_m) / step)))
-        xs = area.x_min_m + (np.arange(nx) + 0.5) * (area.x_max_m - area.x_min_m) / nx
-        ys = area.y_min_m + (np.arange(ny) + 0.5) * (area.y_max_m - area.y_min_m) / ny
-        gx, gy = np.meshgrid(xs, ys)
+        gx, gy = np.meshgrid(*sample_grid(area, max_cells))
         lat, lon = georef.to_latlon(gx, gy)
         to_file = pyproj_module().Transformer.from_crs("EPSG:4326", crs, always_xy=True)
         fx, fy = to_file.transform(lon, lat)
@@ -145,13 +139,4 @@ def read_radar_grid(
         raise InvalidInputError(
             f"rain file {path}: {names[0]} gives rain outside 0..{MAX_RATE_MM_H:g} mm/h"
         )
-    one = len(times) == 1
-    medium = dataclasses.replace(
-        base or Medium(),
-        kind="map",
-        cells=[],
-        rate_map_mm_h=(rates[0] if one else rates).tolist(),
-        rate_times_s=None if one else [float(v) for v in times],
-    )
-    medium.check()
-    return medium
+    return rate_medium(base, rates, times)

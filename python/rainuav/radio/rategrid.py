@@ -27,7 +27,7 @@ from rainuav.errors import InvalidInputError
 from rainuav.radio.scenario import Area
 from rainuav.radio.weather import MAX_RATE_MM_H, Medium
 
-__all__ = ["UNITS", "read_rate_grid"]
+__all__ = ["UNITS", "rate_medium", "read_rate_grid", "sample_grid"]
 
 UNITS = ("mm/h", "mm h-1", "mm hr-1", "mm/hr", "mm h**-1")
 """Spellings of millimetres per hour accepted in a file's ``units`` attribute."""
@@ -101,12 +101,7 @@ def _read(
             f"{units!r}; radar reflectivity in dBZ comes with issue #29)"
         )
     times = _seconds(path, da["time"].values)
-    x_c, y_c = area.centres()
-    step = max((area.x_max_m - area.x_min_m) / max_cells, (area.y_max_m - area.y_min_m) / max_cells)
-    nx = max(1, min(len(x_c), round((area.x_max_m - area.x_min_m) / step)))
-    ny = max(1, min(len(y_c), round((area.y_max_m - area.y_min_m) / step)))
-    xs = area.x_min_m + (np.arange(nx) + 0.5) * (area.x_max_m - area.x_min_m) / nx
-    ys = area.y_min_m + (np.arange(ny) + 0.5) * (area.y_max_m - area.y_min_m) / ny
+    xs, ys = sample_grid(area, max_cells)
     for name, want in (("x", xs), ("y", ys)):
         have = np.asarray(da[name].values, dtype=float)
         if not np.all(np.isfinite(have)) or have.min() > want[0] or have.max() < want[-1]:
@@ -129,7 +124,25 @@ def _read(
         raise InvalidInputError(
             f"rain-rate file {path}: {names[0]} must be finite, within 0..{MAX_RATE_MM_H:g} mm/h"
         )
-    one = len(times) == 1  # a single instant is a weather that stands still
+    return rate_medium(base, rates, times)
+
+
+def sample_grid(area: Area, max_cells: int) -> tuple[np.ndarray, np.ndarray]:
+    """The centres (x (nx,), y (ny,)) of the grid a rain file is sampled on over ``area``: at
+    most ``max_cells`` a side, square cells, never finer than the map's pixels."""
+    x_c, y_c = area.centres()
+    step = max((area.x_max_m - area.x_min_m) / max_cells, (area.y_max_m - area.y_min_m) / max_cells)
+    nx = max(1, min(len(x_c), round((area.x_max_m - area.x_min_m) / step)))
+    ny = max(1, min(len(y_c), round((area.y_max_m - area.y_min_m) / step)))
+    xs = area.x_min_m + (np.arange(nx) + 0.5) * (area.x_max_m - area.x_min_m) / nx
+    ys = area.y_min_m + (np.arange(ny) + 0.5) * (area.y_max_m - area.y_min_m) / ny
+    return xs, ys
+
+
+def rate_medium(base: Medium | None, rates: np.ndarray, times: np.ndarray) -> Medium:
+    """``base`` (default: today's rain model) with its rates replaced by ``rates`` (T, ny, nx)
+    over the area at the instants ``times`` (T,): a weather that stands still where T is 1."""
+    one = len(times) == 1
     medium = dataclasses.replace(
         base or Medium(),
         kind="map",
