@@ -8,8 +8,9 @@ azimuth_deg, electrical_tilt_deg, tx_power_dbm``, optional ``antenna, rows,
 mechanical_tilt_deg, freq_ghz``; azimuths clockwise from north, tilts positive down, as
 operators give them: :mod:`rainuav.radio.sites`), the start and destination as ``LAT,LON``
 (degrees, WGS 84), the flight altitude, the carrier and homogeneous rain (``--rain-rate``) or
-a georeferenced rain file (``--weather``: NetCDF in mm/h or dBZ, Marshall-Palmer; several
-instants give a weather that moves and the exact plan in space-time:
+a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with one band per instant or a
+folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several instants give a weather
+that moves and the exact plan in space-time:
 :mod:`rainuav.radio.radar`). The area is the box around the start, the destination and the
 sites with a 300 m margin, in metres of an azimuthal equidistant projection centred on it
 (:mod:`rainuav.geo`). Plans the exact optimum
@@ -65,7 +66,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--rain-rate", type=float, default=0.0, help="homogeneous rain, mm/h")
     ap.add_argument(
         "--weather", type=Path, default=None,
-        help="a georeferenced rain file (NetCDF: mm/h or dBZ on lat/lon or x/y with a CRS)",
+        help="a georeferenced rain file (NetCDF on lat/lon or x/y with a CRS, a GeoTIFF with "
+        "a band per instant, or a folder of GeoTIFF scans; mm/h or dBZ)",
     )  # fmt: skip
     ap.add_argument("--speed-m-s", type=float, default=10.0, help="ground speed, m/s")
     ap.add_argument("--min-db", type=float, default=None, help="SINR outage threshold, dB")

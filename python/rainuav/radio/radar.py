@@ -1,6 +1,8 @@
 """Rain from a georeferenced grid, as weather radars and nowcasts deliver it (issue #29): a
 NetCDF (CF) file of rain rate or reflectivity on (time, lat, lon) or on projected (time, y, x)
-with its CRS, reprojected onto a georeferenced scenario's area.
+with its CRS, or GeoTIFF (a file with one band per instant, or a folder of them: read by
+:mod:`rainuav.radio.geotiff` into the same form), reprojected onto a georeferenced scenario's
+area.
 
 - **Coordinates.** Either 1-D ``lat``/``lon`` (or ``latitude``/``longitude``) coordinates, in
   degrees (WGS 84), or 1-D ``x``/``y`` with the data variable's ``grid_mapping`` attribute
@@ -18,7 +20,7 @@ with its CRS, reprojected onto a georeferenced scenario's area.
   (pyproj), and the file is interpolated bilinearly there (xarray's ``interp``). The file must
   cover the area.
 
-Needs the ``weather`` and ``geo`` extras (xarray, h5netcdf, pyproj).
+Needs the ``weather`` and ``geo`` extras (xarray, h5netcdf, pyproj; rasterio for GeoTIFF).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import numpy as np
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef, pyproj_module
+from rainuav.radio.geotiff import is_geotiff, open_geotiff
 from rainuav.radio.rategrid import UNITS, _open, _seconds, rate_medium, sample_grid
 from rainuav.radio.scenario import Area
 from rainuav.radio.weather import MAX_RATE_MM_H, Medium
@@ -93,7 +96,7 @@ def read_radar_grid(
     """The weather of a georeferenced rain file (module docstring) over ``area`` of the
     scenario tied to the Earth by ``georef``: ``base`` (default: today's rain model) with its
     rates replaced by the file's, moving where the file has several instants."""
-    with _open(path) as ds:
+    with open_geotiff(path) if is_geotiff(path) else _open(path) as ds:
         names = [variable] if variable else [k for k, v in ds.data_vars.items() if v.ndim == 3]
         if len(names) != 1 or names[0] not in ds.data_vars:
             raise InvalidInputError(
