@@ -19,33 +19,42 @@ def bilinear(
 ) -> Any:
     """``values`` (H, W) sampled at the points ``(x, y)`` (any broadcastable shapes); with
     ``k``, ``values`` is (K, H, W) and each point reads its own slice ``k``."""
-    x0, x1, y0, y1 = extent
-    h, w = values.shape[-2:]
-    fx = np.clip((np.asarray(x, dtype=np.float64) - x0) / (x1 - x0) * w - 0.5, 0.0, w - 1.0)
-    fy = np.clip((np.asarray(y, dtype=np.float64) - y0) / (y1 - y0) * h - 0.5, 0.0, h - 1.0)
-    j0 = np.minimum(np.floor(fx), max(w - 2, 0)).astype(np.int64)
-    i0 = np.minimum(np.floor(fy), max(h - 2, 0)).astype(np.int64)
-    tx = fx - j0
-    ty = fy - i0
-    j1 = np.minimum(j0 + 1, w - 1)
-    i1 = np.minimum(i0 + 1, h - 1)
-    s = values if k is None else _Slice(values, np.asarray(k))
-    return (
-        s[i0, j0] * (1.0 - tx) * (1.0 - ty)
-        + s[i0, j1] * tx * (1.0 - ty)
-        + s[i1, j0] * (1.0 - tx) * ty
-        + s[i1, j1] * tx * ty
-    )
+    return _Weights(values.shape[-2:], extent, x, y).mix(values, k)
 
 
-class _Slice:
-    """``values[k, i, j]`` indexed as ``values[i, j]`` (each point its own slice), read as one
-    flat ``take`` (several times faster than three index arrays)."""
+def bilinear_pair(
+    values: np.ndarray, extent: tuple[float, float, float, float], x: Any, y: Any, k0: Any, k1: Any
+) -> tuple[Any, Any]:
+    """``bilinear(values, extent, x, y, k0)`` and ``(..., k1)``: two slices per point (the two
+    instants a signal in time mixes), the points' weights computed once."""
+    w = _Weights(values.shape[-2:], extent, x, y)
+    return w.mix(values, k0), w.mix(values, k1)
 
-    def __init__(self, values: np.ndarray, k: np.ndarray) -> None:
-        h, w = values.shape[-2:]
-        self.flat, self.w = values.reshape(-1), w
-        self.base = k * (h * w)
 
-    def __getitem__(self, ij: tuple[Any, Any]) -> Any:
-        return self.flat.take(self.base + ij[0] * self.w + ij[1])
+class _Weights:
+    """The four pixel centres around each point (flat indices within a slice) and the
+    bilinear weights, computed once for any number of slices."""
+
+    def __init__(self, shape: tuple[int, ...], extent: Any, x: Any, y: Any) -> None:
+        x0, x1, y0, y1 = extent
+        h, w = shape
+        fx = np.clip((np.asarray(x, dtype=np.float64) - x0) / (x1 - x0) * w - 0.5, 0.0, w - 1.0)
+        fy = np.clip((np.asarray(y, dtype=np.float64) - y0) / (y1 - y0) * h - 0.5, 0.0, h - 1.0)
+        j0 = np.minimum(np.floor(fx), max(w - 2, 0)).astype(np.int64)
+        i0 = np.minimum(np.floor(fy), max(h - 2, 0)).astype(np.int64)
+        self.tx, self.ty = fx - j0, fy - i0
+        self.sx, self.sy = 1.0 - self.tx, 1.0 - self.ty
+        j1 = np.minimum(j0 + 1, w - 1)
+        r0, r1 = i0 * w, np.minimum(i0 + 1, h - 1) * w
+        self.corners = (r0 + j0, r0 + j1, r1 + j0, r1 + j1)
+
+    def mix(self, values: np.ndarray, k: Any = None) -> Any:
+        """``values`` (H, W) at the points, or (K, H, W) each point reading slice ``k``."""
+        flat = values.reshape(-1)
+        if k is None:
+            c00, c01, c10, c11 = (flat.take(c) for c in self.corners)
+        else:
+            base = np.asarray(k) * (values.shape[-2] * values.shape[-1])
+            c00, c01, c10, c11 = (flat.take(base + c) for c in self.corners)
+        tx, ty, sx, sy = self.tx, self.ty, self.sx, self.sy
+        return c00 * sx * sy + c01 * tx * sy + c10 * sx * ty + c11 * tx * ty

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from rainuav._sampling import bilinear
+from rainuav._sampling import bilinear, bilinear_pair
 from rainuav.errors import InvalidInputError
 
 __all__ = ["SignalBank", "SignalField", "SignalSeries", "SirField"]
@@ -180,9 +180,9 @@ class SignalSeries:
         """The signal at the points ``(x, y)`` at the instants ``t_s`` (a number, or one per
         point)."""
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        k0, k1, f = self.brackets(np.broadcast_to(t_s, np.broadcast(x, y).shape))
-        v0 = bilinear(self.db, self.extent, x, y, k0)
-        v1 = bilinear(self.db, self.extent, x, y, k1)
+        shape = np.broadcast(x, y).shape
+        k0, k1, f = (np.broadcast_to(a, shape) for a in self.brackets(t_s))
+        v0, v1 = bilinear_pair(self.db, self.extent, x, y, k0, k1)
         out = np.where(k0 == k1, v0, (1.0 - f) * v0 + f * v1)
         return out[()] if out.ndim == 0 else out
 
@@ -269,10 +269,10 @@ class SignalBank:
         the instants ``t_s``, as that world's :class:`SignalSeries` gives it."""
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         shape = np.broadcast(x, y, np.asarray(t_s), np.asarray(world)).shape
-        k0, k1, f = self._times.brackets(np.broadcast_to(t_s, shape))
-        base = np.broadcast_to(np.asarray(world, dtype=np.int64), shape) * self.db.shape[1]
-        v0 = bilinear(self._series.db, self.extent, x, y, base + k0)
-        v1 = bilinear(self._series.db, self.extent, x, y, base + k1)
+        t = np.asarray(t_s, dtype=np.float64)
+        k0, k1, f = (np.broadcast_to(a, shape) for a in self._times.brackets(t))
+        base = np.asarray(world, dtype=np.int64) * self.db.shape[1]
+        v0, v1 = bilinear_pair(self._series.db, self.extent, x, y, base + k0, base + k1)
         out = np.where(k0 == k1, v0, (1.0 - f) * v0 + f * v1)
         return out[()] if out.ndim == 0 else out
 

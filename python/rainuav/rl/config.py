@@ -83,6 +83,13 @@ class DQNConfig:
     """Append t / max_steps to the observation and stop bootstrapping at the time limit."""
     goal_features: int = 4
     """Goal-relative inputs tanh(d / (step * 4^k)), k < goal_features, per axis (0: none)."""
+    conv: int = 16
+    """Channels of the first convolution of a weather-reading network (the second has twice
+    as many)."""
+    move_features: bool = False
+    """A weather-reading network also reads, for each move, the destination's geometry after
+    it (arrival, progress toward the destination), into its body and straight into the
+    advantage head (:class:`rainuav.rl.networks.WeatherQNet`)."""
     goal_starts: float = 0.25
     """Fraction of the training episodes that start near the destination (uniform in the
     square of half side ``GOAL_START_MOVES`` moves around it, outside the arrival disc); the
@@ -178,6 +185,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("fourier", d.fourier >= 0, ">= 0"),
         ("lanes", 1 <= d.lanes <= MAX_LANES, f"in 1..{MAX_LANES}"),
         ("goal_features", d.goal_features >= 0, ">= 0"),
+        ("conv", 1 <= d.conv <= 256, "in 1..256"),
         ("goal_starts", 0 <= d.goal_starts <= 1, "in [0, 1]"),
         ("shaping", 0 <= d.shaping < math.inf, ">= 0 and finite"),
         ("sir_weight", 0 <= d.sir_weight < math.inf, ">= 0 and finite"),
@@ -214,6 +222,8 @@ STORM_LEARNER: dict[str, Any] = {
     "batch_size": 64,
     "lr": 3e-4,
     "target_sync_episodes": 25,
+    "conv": 8,
+    "move_features": True,
 }
 """What ``--storm-seed random`` changes in [dqn] unless given: a larger minibatch, a lower
 learning rate and a slower target for the convolutional network over many storms (chosen on

@@ -20,7 +20,7 @@ from torch import nn
 
 from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig, random_streams
-from rainuav.rl.networks import PositionEncoder, WeatherEncoder
+from rainuav.rl.networks import MoveGeometry, PositionEncoder, WeatherEncoder
 
 Encoder = PositionEncoder | WeatherEncoder
 """How an env's observation becomes the network's input, and the network
@@ -163,7 +163,7 @@ def memory_needed(cfg: DQNConfig, view: WeatherView | None = None) -> dict[str, 
         d_in = obs_dim + n_smooth * 2 * cfg.fourier
         params = d_in * h + h + h * h + h + (h + 1) + 4 * (h + 1)
     else:
-        enc = WeatherEncoder(cfg, view, (1.0, 1.0))
+        enc = WeatherEncoder(cfg, view, (1.0, 1.0), MoveGeometry((1.0, 1.0), 1.0, 1.0))
         obs_dim = enc.dim
         params = sum(p.numel() for p in enc.make_net().parameters())
     return {

@@ -19,16 +19,26 @@ of the env's observations after ``t`` moves -> (N, dim) float32) and ``make_net(
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
 from torch import nn
 
+from rainuav.errors import InvalidInputError
+from rainuav.nav.task import MOVES
 from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig
 
-__all__ = ["DuelingQNet", "PositionEncoder", "WeatherEncoder", "WeatherQNet", "goal_features"]
+__all__ = [
+    "DuelingQNet",
+    "MoveGeometry",
+    "PositionEncoder",
+    "WeatherEncoder",
+    "WeatherQNet",
+    "goal_features",
+]
 
 
 def goal_features(rel: Any, scale: Any) -> Any:
@@ -123,13 +133,28 @@ class PositionEncoder:
 class WeatherQNet(DuelingQNet):
     """The dueling head on features of the weather: the flat observation (``WeatherView``
     order: position, goal, time, local window, whole-area grid) split into its parts; each
-    grid through two 3x3 convolutions (16 and 32 channels, the second with stride 2; the
-    area's first also strided), flattened; the position, destination and time with
-    ``fourier`` sine/cosine frequencies, and goal-relative features at ``len(goal_scale)``
-    scales; two hidden ReLU layers of ``hidden``."""
+    grid through two 3x3 convolutions (``conv`` and ``2 conv`` channels, the second with
+    stride 2; the area's first also strided), flattened; the position, destination and time
+    with ``fourier`` sine/cosine frequencies, and goal-relative features at
+    ``len(goal_scale)`` scales; two hidden ReLU layers of ``hidden``.
+
+    With ``moves`` (:class:`MoveGeometry`), for each of the four moves the destination as
+    it would be after it: whether the move arrives, and how much nearer it brings the UAV
+    (in moves, in [-1, 1]). They are functions of the position and the destination the
+    observation holds (nothing the env does not show), fed to the body and, through one
+    weight per feature shared by the moves, straight into the advantage: where destinations
+    are drawn per flight the arrival disc is met at any offset from the lattice, and a
+    network that must find the disc's edge from its other inputs circles it (docs/learner.md).
+    """
 
     def __init__(
-        self, view: WeatherView, hidden: int, fourier: int, goal_scale: np.ndarray
+        self,
+        view: WeatherView,
+        hidden: int,
+        fourier: int,
+        goal_scale: np.ndarray,
+        conv: int = 16,
+        moves: MoveGeometry | None = None,
     ) -> None:
         super().__init__(hidden, fourier, obs_dim=5, smooth_dim=5)
         self.window, self.area = view.window, view.area
@@ -137,21 +162,38 @@ class WeatherQNet(DuelingQNet):
 
         def stack(first_stride: int) -> nn.Sequential:
             return nn.Sequential(
-                nn.Conv2d(1, 16, 3, stride=first_stride, padding=1), nn.ReLU(),
-                nn.Conv2d(16, 32, 3, stride=2, padding=1), nn.ReLU(), nn.Flatten(),
+                nn.Conv2d(1, conv, 3, stride=first_stride, padding=1), nn.ReLU(),
+                nn.Conv2d(conv, 2 * conv, 3, stride=2, padding=1), nn.ReLU(), nn.Flatten(),
             )  # fmt: skip
 
         self.local, self.whole = stack(1), stack(2)
 
         def out(n: int, first: int) -> int:
             n = (n - 1) // first + 1
-            return 32 * ((n - 1) // 2 + 1) ** 2
+            return 2 * conv * ((n - 1) // 2 + 1) ** 2
 
+        self.moves = moves
+        d_moves = 0
+        if moves is not None:
+            self.register_buffer("span", torch.as_tensor(moves.span_m, dtype=torch.float32))
+            self.register_buffer("shifts", torch.as_tensor(moves.shifts_m, dtype=torch.float32))
+            self.move_gain = nn.Linear(MoveGeometry.per_move, 1, bias=False)
+            d_moves = MoveGeometry.per_move * len(moves.shifts_m)
         d_grid = out(self.window, 1) + out(self.area, 2)
-        d_vec = 5 + 5 * 2 * fourier + 2 * goal_scale.shape[1]
+        d_vec = 5 + 5 * 2 * fourier + 2 * goal_scale.shape[1] + d_moves
         self.body = nn.Sequential(
             nn.Linear(d_grid + d_vec, hidden), nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU()
         )
+
+    def move_features(self, vec: torch.Tensor) -> torch.Tensor:
+        """(B, 4, 2): per move, arrival (0/1) and progress toward the destination, moves."""
+        assert self.moves is not None
+        rel = (vec[:, 2:4] - vec[:, 0:2]) * self.span  # (B, 2) metres to the destination
+        after = torch.linalg.vector_norm(rel[:, None, :] - self.shifts, dim=-1)  # (B, 4)
+        now = torch.linalg.vector_norm(rel, dim=-1, keepdim=True)
+        arrive = (after <= self.moves.tol_m).to(vec.dtype)
+        progress = ((now - after) / self.moves.step_m).clamp(-1.0, 1.0)
+        return torch.stack([arrive, progress], dim=-1)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
         w2, a2 = self.window**2, self.area**2
@@ -159,16 +201,48 @@ class WeatherQNet(DuelingQNet):
         local = obs[:, 5 : 5 + w2].reshape(-1, 1, self.window, self.window)
         whole = obs[:, 5 + w2 : 5 + w2 + a2].reshape(-1, 1, self.area, self.area)
         rel = goal_features(vec[:, 2:4] - vec[:, 0:2], self.goal_scale)
-        x = torch.cat([self.features(vec), rel, self.local(local), self.whole(whole)], dim=1)
-        return self.head(self.body(x))
+        parts = [self.features(vec), rel, self.local(local), self.whole(whole)]
+        if self.moves is None:
+            return self.head(self.body(torch.cat(parts, dim=1)))
+        mf = self.move_features(vec)
+        q = self.head(self.body(torch.cat([*parts, mf.flatten(1)], dim=1)))
+        gain = self.move_gain(mf).squeeze(-1)  # (B, 4)
+        return q + gain - gain.mean(dim=-1, keepdim=True)  # the advantage's part only
+
+
+@dataclass(frozen=True)
+class MoveGeometry:
+    """What a network needs to read the destination move by move: the area's sides
+    ``span_m`` (the observation's positions are fractions of them), the move ``step_m`` and
+    the arrival radius ``tol_m``, m."""
+
+    span_m: tuple[float, float]
+    step_m: float
+    tol_m: float
+    per_move: ClassVar[int] = 2
+    """Features per move: arrival, progress."""
+
+    @property
+    def shifts_m(self) -> np.ndarray:
+        """(4, 2): each move's displacement, m, in the env's action order."""
+        return (self.step_m * MOVES).astype(np.float32)
 
 
 class WeatherEncoder:
     """The weather-reading learner's input: the env's ``Dict`` observation flattened
     (:meth:`WeatherView.flat`); the network splits it (:class:`WeatherQNet`)."""
 
-    def __init__(self, cfg: DQNConfig, view: WeatherView, step: tuple[float, float]) -> None:
+    def __init__(
+        self,
+        cfg: DQNConfig,
+        view: WeatherView,
+        step: tuple[float, float],
+        moves: MoveGeometry | None = None,
+    ) -> None:
         self.cfg, self.view = cfg, view
+        if cfg.move_features and moves is None:
+            raise InvalidInputError("move_features needs the env's geometry (MoveGeometry)")
+        self.moves = moves if cfg.move_features else None
         self.dim = sum(view.sizes.values())
         k = max(cfg.goal_features, 1)
         self.goal_scale = (np.asarray(step, np.float32)[:, None] * 4.0 ** np.arange(k)).astype(
@@ -179,4 +253,5 @@ class WeatherEncoder:
         return self.view.flat(env_obs)
 
     def make_net(self) -> nn.Module:
-        return WeatherQNet(self.view, self.cfg.hidden, self.cfg.fourier, self.goal_scale)
+        c = self.cfg
+        return WeatherQNet(self.view, c.hidden, c.fourier, self.goal_scale, c.conv, self.moves)

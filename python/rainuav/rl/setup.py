@@ -16,7 +16,7 @@ from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.dqn import Agent, Encoder, memory_needed
-from rainuav.rl.networks import PositionEncoder, WeatherEncoder
+from rainuav.rl.networks import MoveGeometry, PositionEncoder, WeatherEncoder
 
 __all__ = ["check_fits", "make_agent", "make_encoder", "pick_device", "torch_settings"]
 
@@ -48,7 +48,9 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Enc
     the weather-reading one where the env shows the weather, else the position one (with
     the env's fixed destination)."""
     if env.view is not None:
-        return WeatherEncoder(d, env.view, step)
+        x0, x1, y0, y1 = env.field.extent
+        geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
+        return WeatherEncoder(d, env.view, step, geometry)
     goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())
     dims = int(env.observation_space.shape[0])  # type: ignore[index]
     return PositionEncoder(d, env.cfg.max_steps, goal, step, dims)
