@@ -1,5 +1,7 @@
 """One decision for 64 UAVs by the weather-reading network, on the CPU (issue #28: at most
-1 ms), beside the single-map network doing the same decision in the same run.
+1 ms): the storm learner's network (``STORM_LEARNER``: 8/16 channels, move features), the
+first one (16/32 channels), and the single-map network doing the same decision in the same
+run.
 
     python benches/decision.py
 
@@ -19,7 +21,7 @@ import numpy as np
 import torch
 from rainuav.nav import UAVNavEnv
 from rainuav.nav.field import SignalSeries
-from rainuav.rl.config import DQNConfig
+from rainuav.rl.config import STORM_LEARNER, DQNConfig
 from rainuav.rl.dqn import Agent
 from rainuav.rl.setup import make_encoder
 
@@ -45,9 +47,14 @@ def main() -> None:
     pos = rng.uniform(0.0, 2000.0, (N, 2))
     t = rng.integers(0, 300, N)
     goals = rng.uniform(100.0, 1900.0, (N, 2))
-    for name, observation in (("weather network", "weather"), ("position network", "position")):
+    storm = {k: v for k, v in STORM_LEARNER.items() if k in ("conv", "move_features")}
+    learners = (
+        ("weather network (storm learner)", "weather", DQNConfig(**storm)),
+        ("weather network (16/32 channels, no move features)", "weather", DQNConfig()),
+        ("position network", "position", DQNConfig()),
+    )
+    for name, observation, d in learners:
         env = UAVNavEnv(field=field, goal_m=(1400.0, 1600.0), min_db=-2.0, observation=observation)
-        d = DQNConfig()
         agent = Agent(d, 0, torch.device("cpu"), make_encoder(d, env, (0.005, 0.005)))
         g = goals if observation == "weather" else None
         x = agent.observe(env.observe(pos, t, g), t)

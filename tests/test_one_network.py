@@ -351,3 +351,29 @@ def test_runs_without_move_features_keep_their_network() -> None:
     assert old.moves is None and old.local[0].out_channels == 16
     new = make_encoder(DQNConfig(move_features=True, conv=8), env, (0.01, 0.0125)).make_net()
     assert new.local[2].out_channels == 16 and new.move_gain.weight.shape == (1, 2)
+
+
+def test_storm_seed_random_sets_the_storm_learner() -> None:
+    """``--storm-seed random``: the pool, the weather observation, random destinations, the
+    storm learner's [dqn] fields and the budget, each unless given beside it."""
+    from rainuav.rl.config import STORM_BUDGET_S, STORM_LEARNER
+    from rainuav.train import build_parser, config_from_args
+
+    cfg = config_from_args(
+        build_parser().parse_args(["--scenario", "storm", "--storm-seed", "random"])
+    )
+    assert (cfg.storm_pool, cfg.observation, cfg.random_goal) == (16, "weather", True)
+    assert cfg.time_budget_s == STORM_BUDGET_S
+    assert all(getattr(cfg.dqn, k) == v for k, v in STORM_LEARNER.items())
+    argv = [
+        "--scenario",
+        "storm",
+        "--storm-seed",
+        "random",
+        "--random-goal",
+        "false",
+        "--conv",
+        "4",
+    ]
+    cfg = config_from_args(build_parser().parse_args(argv))
+    assert (cfg.random_goal, cfg.dqn.conv, cfg.dqn.move_features) == (False, 4, True)

@@ -89,8 +89,8 @@ def build_parser() -> argparse.ArgumentParser:
             kind = _storm_seed if f.name == "storm_seed" else flag_types.get(field_kind(f)[0], str)
             more = (
                 " Or 'random': one network over the storm distribution (--storm-pool "
-                f"{DEFAULT_POOL}, --observation weather, the storm learner's [dqn] fields and "
-                "a 55-minute budget unless given)"
+                f"{DEFAULT_POOL}, --observation weather, --random-goal true, the storm "
+                "learner's [dqn] fields and a 55-minute budget unless given)"
                 if f.name == "storm_seed"
                 else ""
             )
@@ -129,6 +129,7 @@ def config_from_args(args: argparse.Namespace) -> Any:
         base["storm_seed"] = 0
         base.setdefault("storm_pool", DEFAULT_POOL)
         base.setdefault("observation", "weather")
+        base.setdefault("random_goal", True)
         base.setdefault("time_budget_s", STORM_BUDGET_S)
         for k, v in STORM_LEARNER.items():
             dqn_kw.setdefault(k, v)

@@ -119,10 +119,10 @@ class WorldSpec:
     rainuav.nav.views)."""
     random_goal: bool = False
     """A destination drawn per episode (rainuav.nav.views.sample_goal; needs --observation
-    weather) in place of the fixed one."""
+    weather) in place of the fixed one (--storm-seed random sets it)."""
     storm_pool: int = 0
     """Train over the storm distribution: this many storms flown at once, each renewed with
-    a new training storm as training goes (--storm-seed random sets 8; needs --scenario storm
+    a new training storm as training goes (--storm-seed random sets 16; needs --scenario storm
     and --observation weather); 0: the one storm of storm_seed."""
 
 
