@@ -22,6 +22,7 @@ at most :data:`REACH` of the horizon away (lattice moves), so every flight can a
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -85,20 +86,13 @@ class WeatherView:
 
     def local_offsets(self) -> np.ndarray:
         """(window^2, 2) offsets of the local grid from the UAV, m: row i (south to north),
-        column j (west to east), row-major."""
-        h = self.window // 2
-        d = self.window_step_m * np.arange(-h, h + 1, dtype=np.float64)
-        gx, gy = np.meshgrid(d, d)
-        return np.stack([gx.ravel(), gy.ravel()], axis=1)
+        column j (west to east), row-major (read-only: computed once per view)."""
+        return _local_offsets(self.window, self.window_step_m)
 
     def area_points(self, extent: tuple[float, float, float, float]) -> np.ndarray:
-        """(area^2, 2) centres of the whole-area grid's cells, m, row-major (south to north)."""
-        x0, x1, y0, y1 = extent
-        n = self.area
-        gx, gy = np.meshgrid(
-            x0 + (np.arange(n) + 0.5) * (x1 - x0) / n, y0 + (np.arange(n) + 0.5) * (y1 - y0) / n
-        )
-        return np.stack([gx.ravel(), gy.ravel()], axis=1)
+        """(area^2, 2) centres of the whole-area grid's cells, m, row-major (south to north;
+        read-only: computed once per view and extent)."""
+        return _area_points(self.area, tuple(float(v) for v in extent))
 
     def observe(
         self,
@@ -118,11 +112,13 @@ class WeatherView:
         lo, span = np.array([x0, y0]), np.array([x1 - x0, y1 - y0])
         pos = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
         n = len(pos)
-        loc = pos[:, None, :] + self.local_offsets()[None]
+        off = self.local_offsets()
+        x, y = pos[:, 0:1] + off[:, 0], pos[:, 1:2] + off[:, 1]
         if area_db is None:
-            pts = np.broadcast_to(self.area_points(extent)[None], (n, self.area**2, 2))
-            loc = np.concatenate([loc, pts], axis=1)
-        db = np.asarray(sample(loc[..., 0], loc[..., 1]))
+            pts, a2 = self.area_points(extent), self.area**2
+            x = np.concatenate([x, np.broadcast_to(pts[:, 0], (n, a2))], axis=1)
+            y = np.concatenate([y, np.broadcast_to(pts[:, 1], (n, a2))], axis=1)
+        db = np.asarray(sample(x, y))
         if area_db is not None:
             db = np.concatenate([db, np.asarray(area_db).reshape(n, -1)], axis=1)
         s = np.tanh((db - min_db) / self.scale_db).astype(np.float32)
@@ -144,6 +140,27 @@ class WeatherView:
         return np.concatenate(
             [np.asarray(obs[k], dtype=np.float32).reshape(n, -1) for k in KEYS], axis=1
         )
+
+
+@functools.lru_cache(maxsize=8)
+def _local_offsets(window: int, step_m: float) -> np.ndarray:
+    h = window // 2
+    d = step_m * np.arange(-h, h + 1, dtype=np.float64)
+    gx, gy = np.meshgrid(d, d)
+    out = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    out.flags.writeable = False
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _area_points(n: int, extent: tuple[float, float, float, float]) -> np.ndarray:
+    x0, x1, y0, y1 = extent
+    gx, gy = np.meshgrid(
+        x0 + (np.arange(n) + 0.5) * (x1 - x0) / n, y0 + (np.arange(n) + 0.5) * (y1 - y0) / n
+    )
+    out = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    out.flags.writeable = False
+    return out
 
 
 def sample_goal(rng: np.random.Generator, extent: tuple[float, float, float, float]) -> np.ndarray:

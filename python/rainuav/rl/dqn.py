@@ -218,7 +218,7 @@ class Agent:
 
     def q_values(self, obs: np.ndarray) -> np.ndarray:
         """The online network's (N, 4) action values."""
-        with torch.no_grad():
+        with torch.inference_mode():
             x = torch.as_tensor(np.atleast_2d(obs), dtype=torch.float32, device=self.device)
             return self.online(x).cpu().numpy()
 
