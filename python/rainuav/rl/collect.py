@@ -12,6 +12,7 @@ import numpy as np
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.shield import shield_moves
 from rainuav.rl.dqn import Agent, NStepWindow, best_action
+from rainuav.rl.setup import torch_settings
 
 __all__ = ["Lanes", "greedy_rollouts"]
 
@@ -98,8 +99,15 @@ def greedy_rollouts(
     ``signal`` (T,) along the path, ``reached`` and ``overridden`` (moves where the shield
     replaced the network's choice). ``shield``: keep to the moves :func:`shield_moves`
     allows (default: ``agent.cfg.shield``). ``goals`` (N, 2): each flight's destination
-    (default: the task's)."""
-    shield = agent.cfg.shield if shield is None else shield
+    (default: the task's). Under training's torch settings (one CPU thread: the networks
+    are tiny, and two threads beside another job spin for the core, 15 ms a decision)."""
+    with torch_settings(agent.device):
+        return _rollouts(agent, env, starts, agent.cfg.shield if shield is None else shield, goals)
+
+
+def _rollouts(
+    agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool, goals: np.ndarray | None
+) -> list[dict[str, Any]]:
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     n = len(starts)
     goal = None if goals is None else np.asarray(goals, dtype=np.float64).reshape(n, 2)
