@@ -100,7 +100,7 @@ def greedy_rollouts(
     replaced the network's choice). ``shield``: keep to the moves :func:`shield_moves`
     allows (default: ``agent.cfg.shield``). ``goals`` (N, 2): each flight's destination
     (default: the task's). Under training's torch settings (one CPU thread: the networks
-    are tiny, and two threads beside another job spin for the core, 15 ms a decision)."""
+    are tiny, and two threads beside another job spin for the core: 60 ms a one-UAV decision)."""
     with torch_settings(agent.device):
         return _rollouts(agent, env, starts, agent.cfg.shield if shield is None else shield, goals)
 
