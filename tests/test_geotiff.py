@@ -193,3 +193,22 @@ def test_fly_takes_a_geotiff(tmp_path) -> None:
         assert main(argv) == 0
         costs.append(json.loads((out / "summary.json").read_text())["cost"])
     assert costs[0] == pytest.approx(costs[1], rel=1e-6)
+
+
+def test_fly_refuses_a_bad_geotiff_in_one_line(tmp_path, capsys) -> None:
+    """``fly --weather`` with a GeoTIFF that is not one, and with one without a CRS: exit 2
+    and one line naming the file."""
+    from rainuav.fly import main
+
+    garbage = tmp_path / "scan.tif"
+    garbage.write_bytes(b"II*\x00 not a tiff at all")
+    x, y, _ = local_grid()
+    nocrs = write_tif(tmp_path / "nocrs.tif", np.ones((1, len(y), len(x))),
+                      from_origin(-800.0, 700.0, 10.0, 10.0), None, times=TIMES[:1])  # fmt: skip
+    for path, match in ((garbage, "not a readable GeoTIFF"), (nocrs, "has no CRS")):
+        argv = ["--sites", str(EXAMPLES / "sites.csv"), "--start", "47.3660,8.5380",
+                "--goal", "47.3700,8.5420", "--weather", str(path),
+                "--out", str(tmp_path / "o")]  # fmt: skip
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and match in err[0] and str(path) in err[0], err
