@@ -261,6 +261,8 @@ def test_storm_pool_run_is_seeded_and_never_flies_reserved_storms(tmp_path) -> N
     assert row["eval_starts"] == 2 and 0.0 <= row["success_rate"] <= 1.0
     assert "frozen_plan_mean_excess_cost" in row and "replan_success_rate" in row
     assert first is not None
+    on, _ = evaluate_storms(tmp_path / "a", [1_000_000], starts=2, progress=False, online=True)
+    assert on["mean"]["online"] is True and result["mean"]["online"] is False
     assert evaluate_main([str(tmp_path / "a")]) == 2
 
 

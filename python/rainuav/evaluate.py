@@ -145,10 +145,10 @@ def _evaluate_storms(args: argparse.Namespace) -> int:
     from rainuav.rl.plots import plot_storm_flights
     from rainuav.rl.storm_eval import evaluate_worlds, parse_seeds
 
-    if args.online or args.shield:
-        raise InvalidInputError("--storm-seeds and --random-goals fly the reported network alone")
+    if args.shield:
+        raise InvalidInputError("--storm-seeds and --random-goals fly the network alone")
     given = {k: getattr(args, k) for k in OTHER_WORLD if getattr(args, k) is not None}
-    goals = "_random_goals" if args.random_goals else ""
+    goals = ("_random_goals" if args.random_goals else "") + ("_online" if args.online else "")
     if args.storm_seeds is not None:
         if given:
             raise InvalidInputError(f"--storm-seeds: give no --{next(iter(given))} beside it")
@@ -171,6 +171,7 @@ def _evaluate_storms(args: argparse.Namespace) -> int:
         random_goals=args.random_goals,
         device=args.device,
         storms=args.storm_seeds is not None,
+        online=args.online,
     )
     text = json.dumps(result, indent=2)
     write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))

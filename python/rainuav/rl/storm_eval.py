@@ -75,11 +75,13 @@ def evaluate_worlds(
     device: str = "cpu",
     progress: bool = True,
     storms: bool = False,
+    online: bool = False,
 ) -> tuple[dict[str, Any], Any]:
     """Flies the network run ``run_dir`` reports in each world (the run's spec with the
     changes of ``worlds[i]``, e.g. ``{"storm_seed": K}`` or ``{"scenario": "uma",
     "rain_rate": 0.0}``) from ``starts`` fixed starts (seeded by ``seed``, default the run's
-    ``eval_seed``; the same in every world). Returns ``{"mean": ..., "worlds": [...]}`` (rows
+    ``eval_seed``; the same in every world); ``online``: its last online network in place
+    of the one it reports. Returns ``{"mean": ..., "worlds": [...]}`` (rows
     with their changes) and, for figures, the first world's (env, flights)."""
     check_integer("starts", starts, 1, 10_000)
     run = Path(run_dir)
@@ -104,7 +106,7 @@ def evaluate_worlds(
         world = build_world(dataclasses.replace(base, **changes), cache=not storms)
         env = world.env()
         if agent is None:
-            agent, _, _ = load_agent(run / "checkpoint.pt", state, cfg, env, device, False)
+            agent, _, _ = load_agent(run / "checkpoint.pt", state, cfg, env, device, online)
         rng = np.random.default_rng(cfg.eval_seed if seed is None else seed)
         if not random_goals:
             pts = eval_starts(env, starts, cfg.eval_seed if seed is None else seed)
@@ -125,7 +127,9 @@ def evaluate_worlds(
         m.update(changes)
         rows.append(m)
     summary = _mean(rows, worst=True)
-    summary.update(worlds=len(rows), starts_per_world=starts, random_goals=random_goals)
+    summary.update(
+        worlds=len(rows), starts_per_world=starts, random_goals=random_goals, online=online
+    )
     summary["held_out"] = storms and all(r["storm_seed"] >= EVAL_SEEDS_FROM for r in rows)
     return {"mean": summary, "worlds": rows}, first
 
