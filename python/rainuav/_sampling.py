@@ -19,7 +19,7 @@ def bilinear(
 ) -> Any:
     """``values`` (H, W) sampled at the points ``(x, y)`` (any broadcastable shapes); with
     ``k``, ``values`` is (K, H, W) and each point reads its own slice ``k``."""
-    return _Weights(values.shape[-2:], extent, x, y).mix(values, k)
+    return _Weights(values.shape[-2:], extent, x, y).mix(values.reshape(-1), k)
 
 
 def bilinear_pair(
@@ -27,8 +27,8 @@ def bilinear_pair(
 ) -> tuple[Any, Any]:
     """``bilinear(values, extent, x, y, k0)`` and ``(..., k1)``: two slices per point (the two
     instants a signal in time mixes), the points' weights computed once."""
-    w = _Weights(values.shape[-2:], extent, x, y)
-    return w.mix(values, k0), w.mix(values, k1)
+    w, flat = _Weights(values.shape[-2:], extent, x, y), values.reshape(-1)
+    return w.mix(flat, k0), w.mix(flat, k1)
 
 
 class _Weights:
@@ -47,14 +47,15 @@ class _Weights:
         j1 = np.minimum(j0 + 1, w - 1)
         r0, r1 = i0 * w, np.minimum(i0 + 1, h - 1) * w
         self.corners = (r0 + j0, r0 + j1, r1 + j0, r1 + j1)
+        self.size = h * w
 
-    def mix(self, values: np.ndarray, k: Any = None) -> Any:
-        """``values`` (H, W) at the points, or (K, H, W) each point reading slice ``k``."""
-        flat = values.reshape(-1)
+    def mix(self, flat: np.ndarray, k: Any = None) -> Any:
+        """A map's values, flattened, at the points; or, flattened from (K, H, W), each point
+        reading slice ``k``."""
         if k is None:
             c00, c01, c10, c11 = (flat.take(c) for c in self.corners)
         else:
-            base = np.asarray(k) * (values.shape[-2] * values.shape[-1])
+            base = np.asarray(k) * self.size
             c00, c01, c10, c11 = (flat.take(base + c) for c in self.corners)
         tx, ty, sx, sy = self.tx, self.ty, self.sx, self.sy
         return c00 * sx * sy + c01 * tx * sy + c10 * sx * ty + c11 * tx * ty

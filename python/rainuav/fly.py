@@ -120,13 +120,10 @@ def _policy(run: Path) -> tuple[object, str]:
     """A flyer for :func:`rainuav.world.place.fly_place`: the network the run ``run`` reports,
     flown greedily from the place's start (read as data, refused in one line if it does not
     read the weather)."""
-    import torch
-
     from rainuav.rl import checkpoint
     from rainuav.rl.collect import greedy_rollouts
     from rainuav.rl.config import check_config, load_config
     from rainuav.rl.evaluation import load_agent
-    from rainuav.rl.setup import torch_settings
 
     if not (run / "config.toml").is_file() or not (run / "checkpoint.pt").is_file():
         raise InvalidInputError(
@@ -142,10 +139,9 @@ def _policy(run: Path) -> tuple[object, str]:
     state = checkpoint.load(run / "checkpoint.pt", ("agent", "returns", "train_seconds"))
 
     def fly(env: object) -> tuple[object, bool]:
-        with torch_settings(torch.device("cpu")):  # one thread, as training and evaluate
-            agent, _, _ = load_agent(run / "checkpoint.pt", state, cfg, env, "cpu", False)
-            start = env.cfg.start_m  # type: ignore[attr-defined]
-            roll = greedy_rollouts(agent, env, [start])[0]  # type: ignore[arg-type]
+        agent, _, _ = load_agent(run / "checkpoint.pt", state, cfg, env, "cpu", False)
+        start = env.cfg.start_m  # type: ignore[attr-defined]
+        roll = greedy_rollouts(agent, env, [start])[0]  # type: ignore[arg-type]
         return roll["path"], bool(roll["reached"])
 
     return fly, f"network {run}"

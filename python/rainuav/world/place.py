@@ -28,7 +28,7 @@ from rainuav.geo import Georef
 from rainuav.missions import corners, expand, geojson_dict, kml_text, plan_dict, wpl_text
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.task import NavConfig
+from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio import presets
 from rainuav.radio.radar import read_radar_grid
 from rainuav.radio.radiomap import build_radio_map
@@ -185,8 +185,7 @@ def fly_place(
     if flyer is None:
         cost = cost_best
     else:  # the flight's moves and shortfall, as the task charges them
-        b = -1.0 - task.mu * np.maximum(0.0, min_db - sinr[1:])
-        cost = float(-b.sum())
+        cost = float(-base_reward(sinr[1:], env.cfg).sum())
     cost_straight = -(straight.return_ - task.goal_reward)
     summary = {
         "flown_by": flown_by, "cost": cost, "optimal_cost": cost_best,
