@@ -133,6 +133,7 @@ def test_a_folder_of_scans_in_dbz_with_tiff_dates(tmp_path) -> None:
         ("nodata", "must be finite over the area"),
         ("empty", "holds no .tif"),
         ("mixed", "differ from"),
+        ("huge", "GB but this machine has"),
     ],
 )
 def test_bad_geotiffs_are_refused_in_one_line(tmp_path, kind: str, match: str) -> None:
@@ -160,6 +161,14 @@ def test_bad_geotiffs_are_refused_in_one_line(tmp_path, kind: str, match: str) -
     elif kind == "empty":
         path = tmp_path / "scans"
         path.mkdir()
+    elif kind == "huge":  # a header claiming 2 x 10^6 x 10^6 pixels: refused before reading
+        with rasterio.open(path, "w", driver="GTiff", height=1_000_000, width=1_000_000,
+                           count=2, dtype="float32", crs=wkt, transform=tr,
+                           tiled=True, sparse_ok=True) as dst:  # fmt: skip
+            dst.set_band_description(1, TIMES[0])
+            dst.set_band_description(2, TIMES[1])
+            dst.set_band_unit(1, "mm/h")
+            dst.set_band_unit(2, "mm/h")
     else:
         path = tmp_path / "scans"
         path.mkdir()

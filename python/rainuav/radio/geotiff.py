@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 
 __all__ = ["SUFFIXES", "is_geotiff", "open_geotiff"]
@@ -97,6 +98,9 @@ def _bands(path: Path) -> tuple[np.ndarray, list[np.datetime64], str, Any, Any]:
             units.add(src.units[b - 1] or tags.get("units") or file_tags.get("units") or "")
         if len(units) != 1:
             raise InvalidInputError(f"rain file {path}: its bands have different units {units}")
+        size = src.count * src.height * src.width
+        check_fits(f"rain file {path} ({src.count} bands of {src.height} x {src.width})",
+                   3 * 8 * size, "cut the file to the area and the flight's time")  # fmt: skip
         values = src.read(masked=True).astype(np.float64).filled(np.nan)
         return values, times, units.pop(), src.crs, t
 
