@@ -379,3 +379,63 @@ def test_storm_seed_random_sets_the_storm_learner() -> None:
     ]
     cfg = config_from_args(build_parser().parse_args(argv))
     assert (cfg.random_goal, cfg.dqn.conv, cfg.dqn.move_features) == (False, 4, True)
+
+
+def test_task_goals_mix_the_tasks_destination_into_training() -> None:
+    """With ``task_goals = 0.3`` a drawn-destination env's training flights go to the task's
+    own destination 30% of the time (4000 draws: within 3 standard errors), the rest to drawn
+    ones; with 0 the draws are exactly the env's own (the random stream untouched); an env
+    with the fixed destination is not affected."""
+    from rainuav.rl.config import DQNConfig
+    from rainuav.rl.learner import training_task
+
+    env = weather_env(random_goal=True)
+    task = np.asarray(env.cfg.goal_m)
+    rng = np.random.default_rng(3)
+    d = DQNConfig(task_goals=0.3, goal_starts=0.0)
+    own = [np.array_equal(training_task(env, d, rng)[1], task) for _ in range(4000)]
+    se = np.sqrt(0.3 * 0.7 / len(own))
+    assert abs(np.mean(own) - 0.3) < 3 * se
+    a, b = np.random.default_rng(5), np.random.default_rng(5)
+    plain = DQNConfig(task_goals=0.0, goal_starts=0.0)
+    for _ in range(50):
+        got, want = training_task(env, plain, a), env.draw_task(b)
+        np.testing.assert_array_equal(got[0], want[0])
+        np.testing.assert_array_equal(got[1], want[1])
+    fixed = weather_env()
+    goals = {tuple(training_task(fixed, d, rng)[1]) for _ in range(50)}
+    assert goals == {(700.0, 500.0)}
+    from rainuav.rl.config import TrainConfig, check_config
+
+    with pytest.raises(InvalidInputError, match="task_goals must be in"):
+        check_config(TrainConfig(dqn=DQNConfig(task_goals=1.5)))
+
+
+@pytest.mark.timeout(240)
+def test_calm_pool_storms_are_the_background_alone() -> None:
+    """``calm_share`` picks calm storms by their seed alone (20 000 seeds: the share within 3
+    standard errors; 0 never); a calm storm's maps do not change in time and equal the map
+    series of the same storm with its cells taken out by hand (the uniform background alone,
+    through the preset's homogeneous-rain path), to float32 rounding."""
+    from rainuav.radio import presets
+    from rainuav.radio.timemap import build_radio_map_series
+    from rainuav.world import series_instants
+    from rainuav.world.pool import StormPool, is_calm
+
+    flags = [is_calm(k, 0.15) for k in range(20_000)]
+    assert abs(np.mean(flags) - 0.15) < 3 * np.sqrt(0.15 * 0.85 / 20_000)
+    assert not any(is_calm(k, 0.0) for k in range(1000))
+    assert flags[:50] == [is_calm(k, 0.15) for k in range(50)]  # the seed alone decides
+    cfg = pool_cfg("unused", storm_pool=1, calm_share=1.0)
+    pool = StormPool(cfg, 0)
+    try:
+        (seed,) = pool.seeds
+        slices = pool.bank.db[0]
+        assert np.all(slices == slices[:1])
+        storm = presets.storm(seed=seed)
+        bg = storm.medium.rain_rate_mm_h
+        by_hand = presets.with_rain(presets.uma(0.0, 28e9), bg)
+        ref = build_radio_map_series(by_hand, series_instants(cfg), cache=False)
+        np.testing.assert_allclose(slices, ref.sinr_db, atol=1e-4)
+    finally:
+        pool.close()

@@ -28,6 +28,7 @@ __all__ = [
     "plan_optimal",
     "plan_optimal_in_time",
     "ray_power",
+    "sample_slices",
     "terminal_velocity_m_s",
     "water_permittivity",
 ]
@@ -190,6 +191,19 @@ def plan_optimal(
     out_of_bounds_penalty: float,
 ) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
     """Exact optimal plans from many starts: (return, actions, path) each."""
+
+def sample_slices(
+    slices: _F,
+    extent_m: tuple[float, float, float, float],
+    x: _F,
+    y: _F,
+    k0: _I,
+    k1: _I,
+    f: _F,
+) -> _F:
+    """The signal at many points, each between its own two slices of a stack (S, H, W):
+    bilinear in space, linear in time (``(1 - f) v0 + f v1``; ``v0`` where ``k0 == k1``).
+    The 1-D arrays are contiguous and of one length."""
 
 def plan_optimal_in_time(
     sinr_db: _F,

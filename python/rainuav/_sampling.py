@@ -22,13 +22,29 @@ def bilinear(
     return _Weights(values.shape[-2:], extent, x, y).mix(values.reshape(-1), k)
 
 
-def bilinear_pair(
-    values: np.ndarray, extent: tuple[float, float, float, float], x: Any, y: Any, k0: Any, k1: Any
-) -> tuple[Any, Any]:
-    """``bilinear(values, extent, x, y, k0)`` and ``(..., k1)``: two slices per point (the two
-    instants a signal in time mixes), the points' weights computed once."""
-    w, flat = _Weights(values.shape[-2:], extent, x, y), values.reshape(-1)
-    return w.mix(flat, k0), w.mix(flat, k1)
+def in_time(
+    values: np.ndarray,
+    extent: tuple[float, float, float, float],
+    x: Any,
+    y: Any,
+    k0: Any,
+    k1: Any,
+    f: Any,
+) -> np.ndarray:
+    """``values`` (S, H, W) float64 at the points ``(x, y)``, each point between its slices
+    ``k0`` and ``k1``: ``(1 - f) bilinear(.., k0) + f bilinear(.., k1)`` (the first alone
+    where ``k0 == k1``), every argument broadcast to one shape. One pass in the Rust core
+    (``rainuav._core.sample_slices``), operation for operation as :func:`bilinear`."""
+    from rainuav import _core
+
+    shape = np.broadcast_shapes(*(np.shape(a) for a in (x, y, k0, k1, f)))
+    flat = [
+        np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype), shape)).reshape(-1)
+        for a, dtype in ((x, np.float64), (y, np.float64), (k0, np.int64), (k1, np.int64),
+                         (f, np.float64))
+    ]  # fmt: skip
+    ext = tuple(float(e) for e in extent)
+    return _core.sample_slices(values, ext, *flat).reshape(shape)  # type: ignore[arg-type]
 
 
 class _Weights:

@@ -29,6 +29,7 @@ pub mod pwe;
 pub mod quadrature;
 pub mod rays;
 pub mod raytime;
+pub mod sampling;
 pub mod water;
 
 pub use error::{CoreError, Result};

@@ -144,7 +144,44 @@ fn plan_optimal_in_time<'py>(
 }
 
 /// Adds this layer's functions to the module.
+/// The signal at many points, each between its own two slices of a stack (S, H, W): bilinear
+/// in space, linear in time (`rainuav_core::sampling::sample_slices`). The 1-D arrays must be
+/// contiguous and of one length.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn sample_slices<'py>(
+    py: Python<'py>,
+    slices: PyReadonlyArray3<'py, f64>,
+    extent_m: [f64; 4],
+    x: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+    k0: PyReadonlyArray1<'py, i64>,
+    k1: PyReadonlyArray1<'py, i64>,
+    f: PyReadonlyArray1<'py, f64>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn flat<'a, T: numpy::Element>(
+        name: &'static str,
+        a: &'a PyReadonlyArray1<'_, T>,
+    ) -> PyResult<&'a [T]> {
+        a.as_slice().map_err(|_| {
+            to_py(CoreError::invalid(
+                name,
+                "must be contiguous",
+                "a strided view",
+            ))
+        })
+    }
+    let (xs, ys) = (flat("x", &x)?, flat("y", &y)?);
+    let (k0s, k1s, fs) = (flat("k0", &k0)?, flat("k1", &k1)?, flat("f", &f)?);
+    let view = slices.as_array();
+    let out = detached(py, || {
+        rainuav_core::sampling::sample_slices(&view, extent_m, xs, ys, k0s, k1s, fs)
+    })?;
+    Ok(Array1::from(out).into_pyarray(py))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(sample_slices, m)?)?;
     m.add_function(wrap_pyfunction!(plan_optimal, m)?)?;
     m.add_function(wrap_pyfunction!(plan_optimal_in_time, m)?)?;
     Ok(())

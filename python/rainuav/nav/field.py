@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from rainuav._sampling import bilinear, bilinear_pair
+from rainuav._sampling import bilinear, in_time
 from rainuav.errors import InvalidInputError
 
 __all__ = ["SignalBank", "SignalField", "SignalSeries", "SirField"]
@@ -182,8 +182,7 @@ class SignalSeries:
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         shape = np.broadcast(x, y).shape
         k0, k1, f = (np.broadcast_to(a, shape) for a in self.brackets(t_s))
-        v0, v1 = bilinear_pair(self.db, self.extent, x, y, k0, k1)
-        out = np.where(k0 == k1, v0, (1.0 - f) * v0 + f * v1)
+        out = in_time(self.db, self.extent, x, y, k0, k1, f)
         return out[()] if out.ndim == 0 else out
 
     def serving_cell(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
@@ -272,8 +271,7 @@ class SignalBank:
         t = np.asarray(t_s, dtype=np.float64)
         k0, k1, f = (np.broadcast_to(a, shape) for a in self._times.brackets(t))
         base = np.asarray(world, dtype=np.int64) * self.db.shape[1]
-        v0, v1 = bilinear_pair(self._series.db, self.extent, x, y, base + k0, base + k1)
-        out = np.where(k0 == k1, v0, (1.0 - f) * v0 + f * v1)
+        out = in_time(self._series.db, self.extent, x, y, base + k0, base + k1, f)
         return out[()] if out.ndim == 0 else out
 
     def member(self, world: int) -> SignalField | SignalSeries:

@@ -94,6 +94,10 @@ class DQNConfig:
     """Fraction of the training episodes that start near the destination (uniform in the
     square of half side ``GOAL_START_MOVES`` moves around it, outside the arrival disc); the
     rest, and every validation and evaluation flight, start uniform in the area."""
+    task_goals: float = 0.0
+    """Where the env draws a destination per episode, the fraction of the training episodes
+    flown to the task's own destination instead (a training mixture: validation and
+    evaluation flights keep the env's draws)."""
     shaping: float = 1.0
     """Weight of the potential-based shaping -(steps to the goal); 0: the plain rewards."""
     sir_weight: float = 1.25
@@ -187,6 +191,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("goal_features", d.goal_features >= 0, ">= 0"),
         ("conv", 1 <= d.conv <= 256, "in 1..256"),
         ("goal_starts", 0 <= d.goal_starts <= 1, "in [0, 1]"),
+        ("task_goals", 0 <= d.task_goals <= 1, "in [0, 1]"),
         ("shaping", 0 <= d.shaping < math.inf, ">= 0 and finite"),
         ("sir_weight", 0 <= d.sir_weight < math.inf, ">= 0 and finite"),
         ("train_every", d.train_every >= 1, ">= 1"),

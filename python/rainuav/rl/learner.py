@@ -36,10 +36,12 @@ def training_task(
     :func:`training_start` where the env observes the position (the draws of the single-map
     learner, unchanged); where it observes the weather, the env's draw
     (:meth:`~rainuav.nav.env.UAVNavEnv.draw_task`: a random destination where the env has
-    them), its start then moved near the destination with probability ``goal_starts``."""
+    them; the task's own one with probability ``task_goals``), its start then moved near the
+    destination with probability ``goal_starts``."""
     if env.view is None:
         return training_start(env, d, rng), np.asarray(env.cfg.goal_m, dtype=np.float64), 0
-    start, goal, world = env.draw_task(rng)
+    own = env.random_goal and d.task_goals > 0 and rng.random() < d.task_goals
+    start, goal, world = env.draw_task(rng, env.cfg.goal_m if own else None)
     if d.goal_starts and rng.random() < d.goal_starts:
         near = near_goal(env, goal, rng)
         start = start if near is None else near

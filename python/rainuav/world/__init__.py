@@ -124,6 +124,9 @@ class WorldSpec:
     """Train over the storm distribution: this many storms flown at once, each renewed with
     a new training storm as training goes (--storm-seed random sets 16; needs --scenario storm
     and --observation weather); 0: the one storm of storm_seed."""
+    calm_share: float = 0.0
+    """Of a storm pool's storms, the share flown calm: the storm's uniform background rain
+    alone, its cells left out (rainuav.world.pool.is_calm says which seeds)."""
 
 
 def spec_of(obj: Any) -> WorldSpec:
@@ -164,6 +167,7 @@ def check_spec(spec: Any) -> None:
         ("storm_pool", spec.storm_pool == 0 or (spec.scenario == "storm"
          and not spec.scenario_file and spec.observation == "weather"),
          "0 unless scenario = 'storm' and observation = 'weather'"),
+        ("calm_share", 0 <= spec.calm_share <= 1, "in [0, 1] (read by a storm pool alone)"),
         ("goal_reward", math.isfinite(spec.goal_reward), "finite"),
         ("out_of_bounds_penalty", math.isfinite(spec.out_of_bounds_penalty), "finite"),
         ("rain_rate", spec.rain_rate is None or 0 <= spec.rain_rate <= 500,

@@ -17,6 +17,7 @@ import numpy as np
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.field import SignalBank, SignalSeries
+from rainuav.radio.scenario import Scenario
 from rainuav.radio.timemap import build_radio_map_series
 from rainuav.world import (
     World,
@@ -28,7 +29,7 @@ from rainuav.world import (
     world_from,
 )
 
-__all__ = ["TRAINING_SEEDS", "VALIDATION_SEEDS", "StormPool"]
+__all__ = ["TRAINING_SEEDS", "VALIDATION_SEEDS", "StormPool", "calm", "is_calm"]
 
 
 TRAINING_SEEDS = (0, 900_000)
@@ -38,10 +39,31 @@ VALIDATION_SEEDS = (900_000, 1_000_000)
 The evaluation storms start at 1 000 000 (:data:`rainuav.radio.storms.EVAL_SEEDS_FROM`)."""
 
 
+CALM_STREAM = 0xCA1A
+"""The second key of the random stream that says whether a pool's storm is flown calm."""
+
+
+def is_calm(storm_seed: int, share: float) -> bool:
+    """Whether a storm pool with ``calm_share = share`` flies storm ``storm_seed`` calm: one
+    uniform draw of ``numpy.random.default_rng([storm_seed, CALM_STREAM])`` below ``share``
+    (a function of the seed, so a resumed pool rebuilds the same worlds)."""
+    if share <= 0:
+        return False
+    return bool(np.random.default_rng([storm_seed, CALM_STREAM]).random() < share)
+
+
+def calm(scn: Scenario) -> Scenario:
+    """The storm scenario ``scn`` with its cells left out: its uniform background rain
+    alone (U(0, 10) mm/h in the storm distribution), the same over the whole flight."""
+    medium = dataclasses.replace(scn.medium, kind="homogeneous", cells=[])
+    return dataclasses.replace(scn, medium=medium)
+
+
 class StormPool:
     """Storms of the distribution as a training run needs them: ``spec.storm_pool`` storms in
     one :class:`SignalBank` (world ``k``'s slot is renewed with :meth:`renew`), their seeds
-    drawn from ``numpy.random.default_rng(seed)`` in :data:`TRAINING_SEEDS`. The next storm
+    drawn from ``numpy.random.default_rng(seed)`` in :data:`TRAINING_SEEDS` (a share
+    ``spec.calm_share`` of them flown calm: :func:`is_calm`, :func:`calm`). The next storm
     is mapped in a background thread while training goes on (the engine releases the GIL);
     the maps are not cached on disk (each storm is flown once). ``map_seconds``: the time
     spent mapping storms, and ``wait_seconds``: the part training waited for."""
@@ -71,7 +93,10 @@ class StormPool:
     def _build(self, storm_seed: int) -> tuple[int, World]:
         t0 = time.perf_counter()
         spec = dataclasses.replace(spec_of(self.spec), storm_seed=storm_seed, storm_pool=0)
-        source = build_radio_map_series(make_scenario(spec), series_instants(spec), cache=False)
+        scn = make_scenario(spec)
+        if is_calm(storm_seed, self.spec.calm_share):
+            scn = calm(scn)
+        source = build_radio_map_series(scn, series_instants(spec), cache=False)
         world = world_from(source, task_of(spec))
         self.map_seconds += time.perf_counter() - t0
         self.flown.append(storm_seed)
