@@ -341,6 +341,39 @@ def test_move_features_tell_what_each_move_does() -> None:
     assert arrivals > 20  # the near starts do test the arrival disc
 
 
+def test_goal_maps_draw_the_destination_on_the_grids() -> None:
+    """``goal_maps``: the extra channels against the env's own grids (their points from
+    ``WeatherView.local_offsets`` and ``area_points``), for 50 random (position, destination)
+    pairs: each area cell's distance to the destination and to the UAV over the area's
+    diagonal, and each window point's approach to the destination over the window's
+    half-width (1e-5: float32 positions of a 1000 m area); the network takes them as extra
+    input channels; without the flag the network is unchanged."""
+    import torch
+    from rainuav.rl.config import DQNConfig
+    from rainuav.rl.setup import make_encoder
+
+    env = weather_env(random_goal=True)
+    enc = make_encoder(DQNConfig(goal_maps=True, conv=4, hidden=16), env, (0.01, 0.0125))
+    net = enc.make_net()
+    assert net.local[0].in_channels == 2 and net.whole[0].in_channels == 3
+    plain = make_encoder(DQNConfig(conv=4, hidden=16), env, (0.01, 0.0125)).make_net()
+    assert plain.goal_maps is None and plain.whole[0].in_channels == 1
+    rng = np.random.default_rng(4)
+    cells, off = env.view.area_points(EXTENT), env.view.local_offsets()
+    diag, reach = np.hypot(1000.0, 800.0), (env.view.window // 2) * env.view.window_step_m
+    for _ in range(50):
+        goal = sample_goal(rng, EXTENT)
+        start = sample_start_for(rng, EXTENT, goal, env.cfg)
+        obs, _ = env.reset(options={"start_m": start, "goal_m": goal})
+        x = torch.as_tensor(enc({k: v[None] for k, v in obs.items()}, 0))
+        near, area = (a[0].numpy() for a in net.goal_channels(x[:, :5]))
+        np.testing.assert_allclose(area[0].ravel(), np.hypot(*(cells - goal).T) / diag, atol=1e-5)
+        np.testing.assert_allclose(area[1].ravel(), np.hypot(*(cells - start).T) / diag, atol=1e-5)
+        approach = np.hypot(*(goal - start)) - np.hypot(*(goal - start - off).T)
+        np.testing.assert_allclose(near.ravel(), np.clip(approach / reach, -1, 1), atol=1e-5)
+        assert net(x).shape == (1, 4)
+
+
 def test_runs_without_move_features_keep_their_network() -> None:
     """A run saved before the move features (its config has neither ``conv`` nor
     ``move_features``) builds the network it was trained with: 16/32 channels, no move

@@ -90,6 +90,11 @@ class DQNConfig:
     """A weather-reading network also reads, for each move, the destination's geometry after
     it (arrival, progress toward the destination), into its body and straight into the
     advantage head (:class:`rainuav.rl.networks.WeatherQNet`)."""
+    goal_maps: bool = False
+    """A weather-reading network also sees the destination drawn on its grids: on the local
+    window how much nearer each point is to it, on the whole area each cell's distance to it
+    and to the UAV (extra input channels of the convolutions;
+    :meth:`rainuav.rl.networks.WeatherQNet.goal_channels`)."""
     goal_starts: float = 0.25
     """Fraction of the training episodes that start near the destination (uniform in the
     square of half side ``GOAL_START_MOVES`` moves around it, outside the arrival disc); the

@@ -155,18 +155,30 @@ class WeatherQNet(DuelingQNet):
         goal_scale: np.ndarray,
         conv: int = 16,
         moves: MoveGeometry | None = None,
+        goal_maps: MoveGeometry | None = None,
     ) -> None:
         super().__init__(hidden, fourier, obs_dim=5, smooth_dim=5)
         self.window, self.area = view.window, view.area
         self.register_buffer("goal_scale", torch.as_tensor(goal_scale, dtype=torch.float32))
 
-        def stack(first_stride: int) -> nn.Sequential:
+        def stack(first_stride: int, channels: int) -> nn.Sequential:
             return nn.Sequential(
-                nn.Conv2d(1, conv, 3, stride=first_stride, padding=1), nn.ReLU(),
+                nn.Conv2d(channels, conv, 3, stride=first_stride, padding=1), nn.ReLU(),
                 nn.Conv2d(conv, 2 * conv, 3, stride=2, padding=1), nn.ReLU(), nn.Flatten(),
             )  # fmt: skip
 
-        self.local, self.whole = stack(1), stack(2)
+        self.goal_maps = goal_maps
+        if goal_maps is not None:
+            n = view.area
+            c = (torch.arange(n, dtype=torch.float32) + 0.5) / n
+            gy, gx = torch.meshgrid(c, c, indexing="ij")  # the area grid's cells, row-major
+            self.register_buffer("cells", torch.stack([gx.ravel(), gy.ravel()], dim=-1))
+            off = torch.tensor(np.array(view.local_offsets()), dtype=torch.float32)
+            self.register_buffer("window_m", off)
+            self.register_buffer("map_span", torch.as_tensor(goal_maps.span_m, dtype=torch.float32))
+            self.reach_m = max(view.window // 2, 1) * view.window_step_m
+        extra = (1, 2) if goal_maps is not None else (0, 0)
+        self.local, self.whole = stack(1, 1 + extra[0]), stack(2, 1 + extra[1])
 
         def out(n: int, first: int) -> int:
             n = (n - 1) // first + 1
@@ -195,11 +207,31 @@ class WeatherQNet(DuelingQNet):
         progress = ((now - after) / self.moves.step_m).clamp(-1.0, 1.0)
         return torch.stack([arrive, progress], dim=-1)
 
+    def goal_channels(self, vec: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """The destination drawn on the grids: on the local window how much nearer each of
+        its points is to the destination than the UAV (in window half-widths, in [-1, 1]);
+        on the whole area each cell's distance to the destination and to the UAV (in area
+        diagonals). (B, 1, window, window) and (B, 2, area, area)."""
+        pos, goal = vec[:, 0:2], vec[:, 2:4]
+        rel = (goal - pos) * self.map_span  # (B, 2) metres to the destination
+        now = torch.linalg.vector_norm(rel, dim=-1, keepdim=True)
+        after = torch.linalg.vector_norm(rel[:, None, :] - self.window_m, dim=-1)
+        near = ((now - after) / self.reach_m).clamp(-1.0, 1.0)
+        diag = torch.linalg.vector_norm(self.map_span)
+        to_goal = torch.linalg.vector_norm((self.cells - goal[:, None]) * self.map_span, dim=-1)
+        to_uav = torch.linalg.vector_norm((self.cells - pos[:, None]) * self.map_span, dim=-1)
+        n, a = self.window, self.area
+        area = torch.stack([to_goal, to_uav], dim=1) / diag
+        return near.reshape(-1, 1, n, n), area.reshape(-1, 2, a, a)
+
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
         w2, a2 = self.window**2, self.area**2
         vec = obs[:, :5]
         local = obs[:, 5 : 5 + w2].reshape(-1, 1, self.window, self.window)
         whole = obs[:, 5 + w2 : 5 + w2 + a2].reshape(-1, 1, self.area, self.area)
+        if self.goal_maps is not None:
+            near, area = self.goal_channels(vec)
+            local, whole = torch.cat([local, near], dim=1), torch.cat([whole, area], dim=1)
         rel = goal_features(vec[:, 2:4] - vec[:, 0:2], self.goal_scale)
         parts = [self.features(vec), rel, self.local(local), self.whole(whole)]
         if self.moves is None:
@@ -243,6 +275,9 @@ class WeatherEncoder:
         if cfg.move_features and moves is None:
             raise InvalidInputError("move_features needs the env's geometry (MoveGeometry)")
         self.moves = moves if cfg.move_features else None
+        if cfg.goal_maps and moves is None:
+            raise InvalidInputError("goal_maps needs the env's geometry (MoveGeometry)")
+        self.goal_maps = moves if cfg.goal_maps else None
         self.dim = sum(view.sizes.values())
         k = max(cfg.goal_features, 1)
         self.goal_scale = (np.asarray(step, np.float32)[:, None] * 4.0 ** np.arange(k)).astype(
@@ -254,4 +289,6 @@ class WeatherEncoder:
 
     def make_net(self) -> nn.Module:
         c = self.cfg
-        return WeatherQNet(self.view, c.hidden, c.fourier, self.goal_scale, c.conv, self.moves)
+        return WeatherQNet(
+            self.view, c.hidden, c.fourier, self.goal_scale, c.conv, self.moves, self.goal_maps
+        )
