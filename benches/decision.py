@@ -47,7 +47,7 @@ def main() -> None:
     pos = rng.uniform(0.0, 2000.0, (N, 2))
     t = rng.integers(0, 300, N)
     goals = rng.uniform(100.0, 1900.0, (N, 2))
-    storm = {k: v for k, v in STORM_LEARNER.items() if k in ("conv", "move_features")}
+    storm = {k: v for k, v in STORM_LEARNER.items() if k in ("conv", "move_features", "goal_maps")}
     learners = (
         ("weather network (storm learner)", "weather", DQNConfig(**storm)),
         ("weather network (16/32 channels, no move features)", "weather", DQNConfig()),

@@ -212,16 +212,18 @@ class WeatherQNet(DuelingQNet):
         its points is to the destination than the UAV (in window half-widths, in [-1, 1]);
         on the whole area each cell's distance to the destination and to the UAV (in area
         diagonals). (B, 1, window, window) and (B, 2, area, area)."""
-        pos, goal = vec[:, 0:2], vec[:, 2:4]
-        rel = (goal - pos) * self.map_span  # (B, 2) metres to the destination
-        now = torch.linalg.vector_norm(rel, dim=-1, keepdim=True)
-        after = torch.linalg.vector_norm(rel[:, None, :] - self.window_m, dim=-1)
-        near = ((now - after) / self.reach_m).clamp(-1.0, 1.0)
-        diag = torch.linalg.vector_norm(self.map_span)
-        to_goal = torch.linalg.vector_norm((self.cells - goal[:, None]) * self.map_span, dim=-1)
-        to_uav = torch.linalg.vector_norm((self.cells - pos[:, None]) * self.map_span, dim=-1)
+        span = self.map_span
+        pos, goal = vec[:, 0:2] * span, vec[:, 2:4] * span  # (B, 2) m from the area's corner
+        rx, ry = (goal - pos).unbind(dim=1)  # to the destination, m
+        after = torch.hypot(rx[:, None] - self.window_m[:, 0], ry[:, None] - self.window_m[:, 1])
+        near = ((torch.hypot(rx, ry)[:, None] - after) / self.reach_m).clamp(-1.0, 1.0)
+        cx, cy = (self.cells * span).unbind(dim=1)  # (area^2,) cell centres, m
+
+        def distance(p: torch.Tensor) -> torch.Tensor:
+            return torch.hypot(cx - p[:, 0:1], cy - p[:, 1:2])
+
+        area = torch.stack([distance(goal), distance(pos)], dim=1) / torch.hypot(*span)
         n, a = self.window, self.area
-        area = torch.stack([to_goal, to_uav], dim=1) / diag
         return near.reshape(-1, 1, n, n), area.reshape(-1, 2, a, a)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
