@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from rainuav import _core
+
 
 def bilinear(
     values: np.ndarray, extent: tuple[float, float, float, float], x: Any, y: Any, k: Any = None
@@ -35,8 +37,6 @@ def in_time(
     ``k0`` and ``k1``: ``(1 - f) bilinear(.., k0) + f bilinear(.., k1)`` (the first alone
     where ``k0 == k1``), every argument broadcast to one shape. One pass in the Rust core
     (``rainuav._core.sample_slices``), operation for operation as :func:`bilinear`."""
-    from rainuav import _core
-
     shape = np.broadcast_shapes(*(np.shape(a) for a in (x, y, k0, k1, f)))
     flat = [
         np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype), shape)).reshape(-1)
