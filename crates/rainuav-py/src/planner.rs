@@ -1,4 +1,5 @@
-//! Bindings of the exact navigation planner (`rainuav.nav.planner` drives them).
+//! Bindings of the exact navigation planner (`rainuav.nav.planner` drives them) and of the
+//! sampler the environment reads its signal in time with (`rainuav._sampling.in_time`).
 
 use crate::{detached, to_py};
 use ndarray::Array1;
@@ -143,7 +144,6 @@ fn plan_optimal_in_time<'py>(
     Ok(plans_out(py, plans))
 }
 
-/// Adds this layer's functions to the module.
 /// The signal at many points, each between its own two slices of a stack (S, H, W): bilinear
 /// in space, linear in time (`rainuav_core::sampling::sample_slices`). The 1-D arrays must be
 /// contiguous and of one length.
@@ -180,6 +180,7 @@ fn sample_slices<'py>(
     Ok(Array1::from(out).into_pyarray(py))
 }
 
+/// Adds this layer's functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sample_slices, m)?)?;
     m.add_function(wrap_pyfunction!(plan_optimal, m)?)?;
