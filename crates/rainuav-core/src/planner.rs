@@ -8,7 +8,6 @@
 
 use crate::error::{CoreError, Result, check_range};
 use crate::memory::check_memory_for;
-use crate::sampling::Corners;
 use ndarray::ArrayView2;
 use std::str::FromStr;
 
@@ -85,14 +84,20 @@ pub(crate) const MOVES: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
 /// A map (H, W) over `extent` at (x, y): pixel-centred bilinear, edge values beyond the outermost
 /// centres, operation for operation as `rainuav._sampling.bilinear`.
 pub fn bilinear(s: &ArrayView2<'_, f64>, extent: [f64; 4], x: f64, y: f64) -> f64 {
+    let [x0, x1, y0, y1] = extent;
     let (h, w) = s.dim();
-    let p = Corners::new(extent, h, w, x, y);
-    p.blend([
-        s[(p.i0, p.j0)],
-        s[(p.i0, p.j1)],
-        s[(p.i1, p.j0)],
-        s[(p.i1, p.j1)],
-    ])
+    let fx = ((x - x0) / (x1 - x0) * w as f64 - 0.5).clamp(0.0, w as f64 - 1.0);
+    let fy = ((y - y0) / (y1 - y0) * h as f64 - 0.5).clamp(0.0, h as f64 - 1.0);
+    let j0 = fx.floor().min(w.saturating_sub(2) as f64) as usize;
+    let i0 = fy.floor().min(h.saturating_sub(2) as f64) as usize;
+    let tx = fx - j0 as f64;
+    let ty = fy - i0 as f64;
+    let j1 = (j0 + 1).min(w - 1);
+    let i1 = (i0 + 1).min(h - 1);
+    s[(i0, j0)] * (1.0 - tx) * (1.0 - ty)
+        + s[(i0, j1)] * tx * (1.0 - ty)
+        + s[(i1, j0)] * (1.0 - tx) * ty
+        + s[(i1, j1)] * tx * ty
 }
 
 impl NavTask<'_> {

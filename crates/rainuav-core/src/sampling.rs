@@ -66,58 +66,45 @@ pub fn sample_slices(
     Ok((0..n)
         .map(|i| {
             let p = Corners::new(extent, h, w, x[i], y[i]);
-            let v0 = p.mix(flat, k0[i] as usize * h * w, w);
+            let v0 = p.mix(flat, k0[i] as usize * h * w);
             if k0[i] == k1[i] {
                 return v0;
             }
-            let v1 = p.mix(flat, k1[i] as usize * h * w, w);
+            let v1 = p.mix(flat, k1[i] as usize * h * w);
             (1.0 - f[i]) * v0 + f[i] * v1
         })
         .collect())
 }
 
-/// The four pixel centres around a point and its bilinear weights (pixel-centred, edge values
-/// held beyond the outermost centres), computed once for any number of slices; the operations
-/// of `rainuav._sampling.bilinear` in its order. [`crate::planner::bilinear`] reads one slice
-/// through it, [`sample_slices`] two.
-pub(crate) struct Corners {
-    pub(crate) i0: usize,
-    pub(crate) i1: usize,
-    pub(crate) j0: usize,
-    pub(crate) j1: usize,
+/// The four pixel centres around a point (offsets within a slice) and its bilinear weights,
+/// computed once for both slices; the operations of [`bilinear`] in its order.
+struct Corners {
+    at: [usize; 4],
     tx: f64,
     ty: f64,
 }
 
 impl Corners {
-    pub(crate) fn new(extent: [f64; 4], h: usize, w: usize, x: f64, y: f64) -> Self {
+    fn new(extent: [f64; 4], h: usize, w: usize, x: f64, y: f64) -> Self {
         let [x0, x1, y0, y1] = extent;
         let fx = ((x - x0) / (x1 - x0) * w as f64 - 0.5).clamp(0.0, w as f64 - 1.0);
         let fy = ((y - y0) / (y1 - y0) * h as f64 - 0.5).clamp(0.0, h as f64 - 1.0);
         // fx, fy >= 0 after the clamp: truncation is the floor (without a libm call).
         let j0 = (fx as usize).min(w.saturating_sub(2));
         let i0 = (fy as usize).min(h.saturating_sub(2));
+        let (j1, i1) = ((j0 + 1).min(w - 1), (i0 + 1).min(h - 1));
         Corners {
-            i0,
-            i1: (i0 + 1).min(h - 1),
-            j0,
-            j1: (j0 + 1).min(w - 1),
+            at: [i0 * w + j0, i0 * w + j1, i1 * w + j0, i1 * w + j1],
             tx: fx - j0 as f64,
             ty: fy - i0 as f64,
         }
     }
 
-    /// The bilinear value of the corners' values `[(i0, j0), (i0, j1), (i1, j0), (i1, j1)]`.
-    pub(crate) fn blend(&self, [a, b, c, d]: [f64; 4]) -> f64 {
+    /// The bilinear value in the slice that starts at `base` of the flat stack.
+    fn mix(&self, flat: &[f64], base: usize) -> f64 {
         let (tx, ty) = (self.tx, self.ty);
+        let [a, b, c, d] = self.at.map(|o| flat[base + o]);
         a * (1.0 - tx) * (1.0 - ty) + b * tx * (1.0 - ty) + c * (1.0 - tx) * ty + d * tx * ty
-    }
-
-    /// The bilinear value in the slice (of width `w`) that starts at `base` of a flat stack.
-    fn mix(&self, flat: &[f64], base: usize, w: usize) -> f64 {
-        let at = |i: usize, j: usize| flat[base + i * w + j];
-        let (i0, i1, j0, j1) = (self.i0, self.i1, self.j0, self.j1);
-        self.blend([at(i0, j0), at(i0, j1), at(i1, j0), at(i1, j1)])
     }
 }
 
