@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -418,6 +419,24 @@ def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
     b = checkpoint.load(part_dir / "checkpoint.pt")["agent"]["online"]
     for k in a:
         assert torch.equal(a[k], b[k]), k
+
+
+def test_a_run_its_budget_stopped_resumes_with_a_larger_one(tmp_path: Path) -> None:
+    """A wall-clock budget spent at once stops the run at its first finished episodes; the
+    same run resumed with no budget ends exactly as the run never stopped (same figures,
+    same weights)."""
+    full = train(*in_world(small_cfg(tmp_path / "full", 120), synthetic_map()), progress=False)
+    part = dataclasses.replace(small_cfg(tmp_path / "part", 120), time_budget_s=1e-9)
+    stopped = train(*in_world(part, synthetic_map()), progress=False)
+    assert stopped["episodes"] < 120
+    more = dataclasses.replace(part, time_budget_s=0.0)
+    resumed = train(*saved_world(more), resume=True, progress=False)
+    assert resumed["episodes"] == full["episodes"] == 120
+    for k in ("mean_return", "success_rate", "mean_steps", "mean_gap_to_optimal"):
+        assert resumed[k] == full[k], k
+    a = checkpoint.load(tmp_path / "full" / "checkpoint.pt")["agent"]["online"]
+    b = checkpoint.load(tmp_path / "part" / "checkpoint.pt")["agent"]["online"]
+    assert all(torch.equal(a[k], b[k]) for k in a)
 
 
 def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path, capsys) -> None:

@@ -108,6 +108,7 @@ def config_from_args(args: argparse.Namespace) -> Any:
     """The run's TrainConfig: the ``--config`` file's fields, overridden by the flags given."""
     from rainuav.rl.config import (
         STORM_BUDGET_S,
+        STORM_CALM_SHARE,
         STORM_LEARNER,
         DQNConfig,
         TrainConfig,
@@ -131,6 +132,7 @@ def config_from_args(args: argparse.Namespace) -> Any:
         base.setdefault("observation", "weather")
         base.setdefault("random_goal", True)
         base.setdefault("time_budget_s", STORM_BUDGET_S)
+        base.setdefault("calm_share", STORM_CALM_SHARE)
         for k, v in STORM_LEARNER.items():
             dqn_kw.setdefault(k, v)
     cfg = TrainConfig(**base, dqn=DQNConfig(**dqn_kw))

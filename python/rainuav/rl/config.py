@@ -21,6 +21,7 @@ from rainuav.world import WorldSpec, check_spec
 __all__ = [
     "PAPER_LEARNER",
     "STORM_BUDGET_S",
+    "STORM_CALM_SHARE",
     "STORM_LEARNER",
     "DQNConfig",
     "TrainConfig",
@@ -234,11 +235,17 @@ STORM_LEARNER: dict[str, Any] = {
     "target_sync_episodes": 25,
     "conv": 8,
     "move_features": True,
+    "goal_maps": True,
 }
 """What ``--storm-seed random`` changes in [dqn] unless given: a larger minibatch, a lower
-learning rate and a slower target for the convolutional network over many storms (chosen on
-the validation storm 900 000 with training storms only: docs/learner.md, "One network for
-every storm"); with ``time_budget_s`` = :data:`STORM_BUDGET_S`."""
+learning rate and a slower target for the convolutional network over many storms, and the
+destination drawn on its grids (goal maps) (chosen on validation storms 900 000-900 009 and
+``uma`` at 5 mm/h, with training storms only: docs/learner.md, "One network for every
+storm"); with ``time_budget_s`` = :data:`STORM_BUDGET_S` and ``calm_share`` =
+:data:`STORM_CALM_SHARE`."""
+STORM_CALM_SHARE = 0.15
+"""The share of the pool's storms ``--storm-seed random`` flies calm unless given (selected on
+validation with the goal maps: docs/learner.md, "Goal maps with calm weather")."""
 STORM_BUDGET_S = 3300.0
 """The wall-clock budget of ``--storm-seed random`` unless given: 55 minutes (the issue's
 ceiling is 60)."""

@@ -56,10 +56,12 @@ from rainuav.world.pool import VALIDATION_SEEDS, StormPool
 
 __all__ = ["finish", "load_checkpoint", "run_loop", "save_checkpoint", "storm_slot", "train"]
 
-RESUME_MAY_DIFFER = ("device", "out")
-"""Fields a resumed run may change (the rest must equal the checkpoint's): the device, and the
+RESUME_MAY_DIFFER = ("device", "out", "time_budget_s")
+"""Fields a resumed run may change (the rest must equal the checkpoint's): the device, the
 folder's path (a run folder moved or copied elsewhere resumes where it now is; its results do
-not depend on where it lives)."""
+not depend on where it lives) and the wall-clock budget (a run its budget stopped, on a slower
+machine, continues with a larger one to the episodes it was given, as if it had never
+stopped)."""
 
 
 # -- setup ------------------------------------------------------------------------------------

@@ -177,6 +177,16 @@ class WeatherQNet(DuelingQNet):
             self.register_buffer("window_m", off)
             self.register_buffer("map_span", torch.as_tensor(goal_maps.span_m, dtype=torch.float32))
             self.reach_m = max(view.window // 2, 1) * view.window_step_m
+            # Constants of every decision, computed once (not saved: derived from the above).
+            cells_m = self.cells * self.map_span
+            for name, value in (
+                ("cells_x", cells_m[:, 0]),
+                ("cells_y", cells_m[:, 1]),
+                ("window_x", off[:, 0]),
+                ("window_y", off[:, 1]),
+                ("diagonal", torch.hypot(*self.map_span)),
+            ):
+                self.register_buffer(name, value.contiguous(), persistent=False)
         extra = (1, 2) if goal_maps is not None else (0, 0)
         self.local, self.whole = stack(1, 1 + extra[0]), stack(2, 1 + extra[1])
 
@@ -212,17 +222,13 @@ class WeatherQNet(DuelingQNet):
         its points is to the destination than the UAV (in window half-widths, in [-1, 1]);
         on the whole area each cell's distance to the destination and to the UAV (in area
         diagonals). (B, 1, window, window) and (B, 2, area, area)."""
-        span = self.map_span
-        pos, goal = vec[:, 0:2] * span, vec[:, 2:4] * span  # (B, 2) m from the area's corner
-        rx, ry = (goal - pos).unbind(dim=1)  # to the destination, m
-        after = torch.hypot(rx[:, None] - self.window_m[:, 0], ry[:, None] - self.window_m[:, 1])
-        near = ((torch.hypot(rx, ry)[:, None] - after) / self.reach_m).clamp(-1.0, 1.0)
-        cx, cy = (self.cells * span).unbind(dim=1)  # (area^2,) cell centres, m
-
-        def distance(p: torch.Tensor) -> torch.Tensor:
-            return torch.hypot(cx - p[:, 0:1], cy - p[:, 1:2])
-
-        area = torch.stack([distance(goal), distance(pos)], dim=1) / torch.hypot(*span)
+        ends = vec[:, 0:4].reshape(-1, 2, 2) * self.map_span  # (B, 2, 2): UAV, destination, m
+        to_goal = ends[:, 1] - ends[:, 0]
+        rx, ry = to_goal[:, 0:1], to_goal[:, 1:2]  # to the destination, m
+        after = torch.hypot(rx - self.window_x, ry - self.window_y)
+        near = ((torch.hypot(rx, ry) - after) / self.reach_m).clamp(-1.0, 1.0)
+        p = ends.flip(1)  # destination, UAV
+        area = torch.hypot(self.cells_x - p[..., 0:1], self.cells_y - p[..., 1:2]) / self.diagonal
         n, a = self.window, self.area
         return near.reshape(-1, 1, n, n), area.reshape(-1, 2, a, a)
 
