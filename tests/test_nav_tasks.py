@@ -255,6 +255,7 @@ def test_paper_preset_trains_and_records_its_choices(tmp_path: Path) -> None:
 
 def test_time_budget_ends_training_early(tmp_path: Path) -> None:
     from rainuav.rl.loop import train
+    from rainuav.train import budget_note
 
     cfg = TrainConfig(
         out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=60, eval_starts=5,
@@ -264,6 +265,10 @@ def test_time_budget_ends_training_early(tmp_path: Path) -> None:
     # The budget is spent at once: training ends with the first finished episodes.
     assert 1 <= m["episodes"] < 20, m["episodes"]
     assert (tmp_path / "checkpoint.pt").exists() and (tmp_path / "metrics.json").exists()
+    # The command says so, and how to go on (a run that ran its episodes says nothing).
+    note = budget_note(m["episodes"], 500, cfg.time_budget_s, tmp_path)
+    assert f"after {m['episodes']} of 500 episodes" in note and "--resume --config" in note
+    assert budget_note(500, 500, cfg.time_budget_s, tmp_path) == ""
 
 
 def test_evaluate_refuses_a_run_from_an_incompatible_version(

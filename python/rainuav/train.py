@@ -176,6 +176,18 @@ def summary(metrics: dict[str, Any], out: Path) -> str:
     return "\n".join(lines)
 
 
+def budget_note(done: int, planned: int, budget_s: float, out: Path) -> str:
+    """What to do when the wall-clock budget ended training before its episodes ("" when
+    they all ran): resuming with a larger budget ends as if the run had never stopped."""
+    if done >= planned or not budget_s:
+        return ""
+    return (
+        f"the {budget_s:.0f} s budget ended training after {done} of {planned} episodes; "
+        f"python -m rainuav.train --resume --config {out / 'config.toml'} --time-budget-s "
+        f"{2 * budget_s:.0f} continues it to {planned}"
+    )
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     out: list[Path] = []  # the run's folder, once its configuration is known
@@ -211,6 +223,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         world = world or build_world(cfg, progress=True)
         metrics = train(cfg, world, resume=args.resume, progress=True)
         print(summary(metrics, Path(cfg.out)))
+        note = budget_note(metrics["episodes"], cfg.dqn.episodes, cfg.time_budget_s, Path(cfg.out))
+        if note:
+            print(note)
         return 0
 
     return _cli.run(body, kept)
