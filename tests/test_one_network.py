@@ -210,40 +210,28 @@ def pool_cfg(out: object, **kw: object) -> object:
 
 
 @pytest.mark.timeout(240)
-def test_storm_pool_run_resumes_exactly(tmp_path) -> None:
-    """Interrupted at a checkpoint with UAVs in flight and storms renewed, a run over the
-    storm distribution resumes into the same network and figures as the uninterrupted run
-    (the pool's storms, its seed stream and its episode counts are in the checkpoint)."""
-    from rainuav.rl.loop import train
-    from rainuav.world.pool import StormPool
-
-    cfg = pool_cfg(tmp_path / "full", checkpoint_every=6)
-    full = train(cfg, StormPool(cfg, cfg.seed).world(), progress=False)
-    cfg = pool_cfg(tmp_path / "part", checkpoint_every=6)
-    assert train(cfg, StormPool(cfg, cfg.seed).world(), progress=False, stop_after=6) == {}
-    resumed = train(cfg, StormPool(cfg, cfg.seed).world(), progress=False, resume=True)
-    for k in ("mean_return", "success_rate", "mean_steps", "storms_flown"):
-        assert resumed[k] == full[k], k
-
-
-@pytest.mark.timeout(240)
-def test_storm_pool_run_is_seeded_and_never_flies_reserved_storms(tmp_path) -> None:
-    """Two runs over the storm distribution with the same seed give the same log and
-    metrics (CPU); every storm the pool mapped is a training storm (below the validation
-    seeds, so also below the evaluation seeds); its storms are renewed as asked."""
+def test_storm_pool_run_is_seeded_resumes_exactly_and_never_flies_reserved_storms(
+    tmp_path,
+) -> None:
+    """A second run over the storm distribution with the same seed, interrupted at a
+    checkpoint with UAVs in flight and storms renewed and then resumed, gives the first run's
+    log and metrics (CPU; the pool's storms, its seed stream and its episode counts are in the
+    checkpoint); every storm the pool mapped is a training storm (below the validation seeds,
+    so also below the evaluation seeds); its storms are renewed as asked."""
     from rainuav.rl.loop import train
     from rainuav.world.pool import TRAINING_SEEDS, StormPool
 
-    def run(out: str) -> tuple[str, dict, StormPool]:
-        cfg = pool_cfg(tmp_path / out)
-        pool = StormPool(cfg, cfg.seed)
-        metrics = train(cfg, pool.world(), progress=False)
+    def log(out: str) -> str:
         rows = (tmp_path / out / "log.csv").read_text().splitlines()
-        return "\n".join(",".join(r.split(",")[:-1]) for r in rows), metrics, pool
+        return "\n".join(",".join(r.split(",")[:-1]) for r in rows)  # without the seconds
 
-    log_a, m_a, pool = run("a")
-    log_b, m_b, _ = run("b")
-    assert log_a == log_b
+    cfg = pool_cfg(tmp_path / "a", checkpoint_every=6)
+    pool = StormPool(cfg, cfg.seed)
+    m_a = train(cfg, pool.world(), progress=False)
+    cfg = pool_cfg(tmp_path / "b", checkpoint_every=6)
+    assert train(cfg, StormPool(cfg, cfg.seed).world(), progress=False, stop_after=6) == {}
+    m_b = train(cfg, StormPool(cfg, cfg.seed).world(), progress=False, resume=True)
+    assert log("a") == log("b")
     keep = [k for k in m_a if "seconds" not in k]
     assert json.dumps({k: m_a[k] for k in keep}) == json.dumps({k: m_b[k] for k in keep})
     # 16 episodes over 2 storms renewed every 3: at least 4 renewals, all training seeds.
