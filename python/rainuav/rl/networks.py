@@ -172,6 +172,8 @@ class WeatherQNet(DuelingQNet):
             n = view.area
             c = (torch.arange(n, dtype=torch.float32) + 0.5) / n
             gy, gx = torch.meshgrid(c, c, indexing="ij")  # the area grid's cells, row-major
+            # cells, window_m, map_span: the saved geometry (in every goal-maps checkpoint, so
+            # kept for loading); forward reads the constants derived from them below.
             self.register_buffer("cells", torch.stack([gx.ravel(), gy.ravel()], dim=-1))
             off = torch.tensor(np.array(view.local_offsets()), dtype=torch.float32)
             self.register_buffer("window_m", off)
