@@ -14,6 +14,7 @@ the network and both, for each learner.
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Callable
 
@@ -41,7 +42,7 @@ def median_ms(fn: Callable[[], object], reps: int = 200) -> float:
 
 
 def main() -> None:
-    torch.set_num_threads(1)
+    torch.set_num_threads(int(sys.argv[1]) if len(sys.argv) > 1 else 1)
     rng = np.random.default_rng(0)
     field = SignalSeries(rng.normal(5.0, 8.0, (61, 200, 200)), np.arange(61) * 5.0, EXT)
     pos = rng.uniform(0.0, 2000.0, (N, 2))

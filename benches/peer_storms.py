@@ -9,7 +9,9 @@ The env: ``UAVNavEnv(observation="weather")`` (the task's fixed destination) ove
 training storms (:class:`rainuav.world.pool.StormPool`, the pool ``python -m rainuav.train
 --storm-seed random`` trains on), one drawn per episode, a storm renewed every 32 episodes.
 rainuav's learner trains first with ``time_budget_s`` = the budget (``--skip-rainuav RUN``: take
-a run already trained, e.g. the README's, and its training time as the budget). Each peer is
+a run already trained, e.g. the README's, and its training time as the budget;
+``--peers-only``: the peers alone, for ``--budget-s``, each peer in its own process with
+``--peers NAME`` to run them one after the other on a quiet machine). Each peer is
 then flown greedily from the same 20 fixed starts to the fixed destination in the storms
 1 000 000 .. 1 000 000 + ``--storms`` - 1 (never trained on), against each storm's exact
 space-time optimum. Writes ``peer_storms.json``.
@@ -103,6 +105,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--storms", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--skip-rainuav", type=Path, default=None, help="a trained run to compare")
+    ap.add_argument(
+        "--peers-only",
+        action="store_true",
+        help="train and fly only the peers, for --budget-s (rainuav's run measured elsewhere)",
+    )
     ap.add_argument("--peers", nargs="+", choices=tuple(SB3), default=list(SB3))
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args(argv)
@@ -110,27 +117,26 @@ def main(argv: list[str] | None = None) -> int:
     from rainuav.rl.storm_eval import evaluate_storms
 
     torch.set_num_threads(1)
-    if args.skip_rainuav is None:
-        # The storm learner (what --storm-seed random trains), its episodes scaled to the
-        # budget at the 4.0 episodes/s of the README's run (9000 in 2256 s), the budget a cap.
-        episodes = max(100, int(args.budget_s * 9000 / 2256))
-        cfg = TrainConfig(
-            scenario="storm", observation="weather", storm_pool=16, seed=args.seed,
-            out=str(args.out / "rainuav"), time_budget_s=args.budget_s, validate_every=0,
-            eval_starts=20, dqn=DQNConfig(**{**STORM_LEARNER, "episodes": episodes}),
-        )  # fmt: skip
-        train(cfg, StormPool(cfg, cfg.seed).world(), progress=False)
-        run = Path(cfg.out)
-    else:
-        run, cfg = args.skip_rainuav, load_config(args.skip_rainuav / "config.toml")
-    ours = json.loads((run / "metrics.json").read_text())
-    budget = float(ours["training_seconds"])
+    # The storm learner (what --storm-seed random trains), its episodes scaled to the budget
+    # at the 4.0 episodes/s of the README's run (9000 in 2256 s), the budget a cap.
+    episodes = max(100, int(args.budget_s * 9000 / 2256))
+    cfg = TrainConfig(
+        scenario="storm", observation="weather", storm_pool=16, seed=args.seed,
+        out=str(args.out / "rainuav"), time_budget_s=args.budget_s, validate_every=0,
+        eval_starts=20, dqn=DQNConfig(**{**STORM_LEARNER, "episodes": episodes}),
+    )  # fmt: skip
     seeds = list(range(1_000_000, 1_000_000 + args.storms))
-    report: dict[str, Any] = {
-        "budget_s": budget,
-        "storms": seeds,
-        "rainuav": evaluate_storms(run, seeds, starts=20, progress=False)[0]["mean"],
-    }
+    report: dict[str, Any] = {"budget_s": args.budget_s, "storms": seeds}
+    if not args.peers_only:
+        if args.skip_rainuav is None:
+            train(cfg, StormPool(cfg, cfg.seed).world(), progress=False)
+            run = Path(cfg.out)
+        else:
+            run, cfg = args.skip_rainuav, load_config(args.skip_rainuav / "config.toml")
+        ours = json.loads((run / "metrics.json").read_text())
+        report["budget_s"] = float(ours["training_seconds"])
+        report["rainuav"] = evaluate_storms(run, seeds, starts=20, progress=False)[0]["mean"]
+    budget = float(report["budget_s"])
     predicts = {}
     for name in args.peers:
         pool = StormPool(dataclasses.replace(cfg, storm_pool=16), args.seed)

@@ -59,6 +59,15 @@ def test_fields_read_through_it_as_before() -> None:
         np.testing.assert_array_equal(series(x, y, tau), want)
         rows = world[:, 0] == w
         np.testing.assert_array_equal(bank(x, y, tau, world)[rows], want[rows])
+        # One instant for every point (the slice pair crosses once).
+        k0, k1, f = (np.broadcast_to(a, x.shape) for a in series.brackets(7.5))
+        np.testing.assert_array_equal(series(x, y, 7.5), numpy_in_time(db[w], ext, x, y, k0, k1, f))
+        # Fixed points (a whole-area grid, every slice sampled once, then mixed per row)
+        # read as the points themselves.
+        pts = np.stack([x[0], y[0]], axis=-1)
+        at = series.at_points(pts, tau[:, 0])
+        np.testing.assert_array_equal(at, series(pts[:, 0], pts[:, 1], tau))
+        np.testing.assert_array_equal(bank.at_points(pts, tau[:, 0], world[:, 0])[rows], at[rows])
 
 
 def test_bad_slices_are_refused_in_one_line() -> None:

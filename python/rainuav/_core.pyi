@@ -201,9 +201,10 @@ def sample_slices(
     k1: _I,
     f: _F,
 ) -> _F:
-    """The signal at many points, each between its own two slices of a stack (S, H, W):
-    bilinear in space, linear in time (``(1 - f) v0 + f v1``; ``v0`` where ``k0 == k1``).
-    The 1-D arrays are contiguous and of one length."""
+    """The signal at many points, each between two slices of a stack (S, H, W): bilinear in
+    space, linear in time (``(1 - f) v0 + f v1``; ``v0`` where ``k0 == k1``). The 1-D arrays
+    are contiguous; ``x`` and ``y`` of one length N, ``k0``, ``k1`` and ``f`` one value per row
+    of consecutive points: N of them, or a divisor R of N (point n reads row n // (N / R))."""
 
 def plan_optimal_in_time(
     sinr_db: _F,

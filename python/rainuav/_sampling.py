@@ -9,6 +9,7 @@ flies through all use it, so what the engine writes is what the environment read
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -36,15 +37,29 @@ def in_time(
     """``values`` (S, H, W) float64 at the points ``(x, y)``, each point between its slices
     ``k0`` and ``k1``: ``(1 - f) bilinear(.., k0) + f bilinear(.., k1)`` (the first alone
     where ``k0 == k1``), every argument broadcast to one shape. One pass in the Rust core
-    (``rainuav._core.sample_slices``), operation for operation as :func:`bilinear`."""
+    (``rainuav._core.sample_slices``), operation for operation as :func:`bilinear`. Where
+    ``k0``, ``k1`` and ``f`` do not vary along the last axis (one instant per UAV for the
+    points of its window, shape (N, 1)) they cross once per row, not once per point."""
     shape = np.broadcast_shapes(*(np.shape(a) for a in (x, y, k0, k1, f)))
-    flat = [
-        np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype), shape)).reshape(-1)
-        for a, dtype in ((x, np.float64), (y, np.float64), (k0, np.int64), (k1, np.int64),
-                         (f, np.float64))
-    ]  # fmt: skip
+    if math.prod(shape) == 0:
+        return np.zeros(shape)
+    kshape = np.broadcast_shapes(*(np.shape(a) for a in (k0, k1, f)))
+    if len(kshape) == len(shape) > 0 and kshape[-1] == 1:
+        rows = (*shape[:-1], 1)  # one instant per row
+    elif math.prod(kshape) == 1:
+        rows = (1,)  # one instant for every point
+    else:
+        rows = shape
+
+    def flat(a: Any, dtype: type, to: tuple[int, ...]) -> np.ndarray:
+        a = np.asarray(a, dtype)
+        a = a.reshape(-1) if to == (1,) else np.broadcast_to(a, to)
+        return np.ascontiguousarray(a).reshape(-1)
+
     ext = tuple(float(e) for e in extent)
-    return _core.sample_slices(values, ext, *flat).reshape(shape)  # type: ignore[arg-type]
+    xy = (flat(x, np.float64, shape), flat(y, np.float64, shape))
+    ks = (flat(k0, np.int64, rows), flat(k1, np.int64, rows), flat(f, np.float64, rows))
+    return _core.sample_slices(values, ext, *xy, *ks).reshape(shape)  # type: ignore[arg-type]
 
 
 class _Weights:

@@ -144,9 +144,10 @@ fn plan_optimal_in_time<'py>(
     Ok(plans_out(py, plans))
 }
 
-/// The signal at many points, each between its own two slices of a stack (S, H, W): bilinear
-/// in space, linear in time (`rainuav_core::sampling::sample_slices`). The 1-D arrays must be
-/// contiguous and of one length.
+/// The signal at many points, each between two slices of a stack (S, H, W): bilinear in
+/// space, linear in time (`rainuav_core::sampling::sample_slices`). The 1-D arrays must be
+/// contiguous; `x` and `y` of one length, `k0`, `k1` and `f` one value per row of consecutive
+/// points (as many as the points, or a divisor of their number).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
 fn sample_slices<'py>(

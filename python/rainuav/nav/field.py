@@ -66,9 +66,12 @@ def _pixel(shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any) ->
 
 def _lerp(g: np.ndarray, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> np.ndarray:
     """Rows ``g[k0]`` and ``g[k1]`` mixed by ``f`` per row, as the fields mix slices."""
-    v0, v1 = g[k0], g[k1]
-    f = f[:, None]
-    return np.where((k0 == k1)[:, None], v0, (1.0 - f) * v0 + f * v1)
+    out = g[k0]  # a copy; the rows between two slices are mixed in place
+    mix = k0 != k1
+    if mix.any():
+        fm = f[mix][:, None]
+        out[mix] = (1.0 - fm) * out[mix] + fm * g[k1[mix]]
+    return out
 
 
 class _PointCache:
@@ -180,9 +183,7 @@ class SignalSeries:
         """The signal at the points ``(x, y)`` at the instants ``t_s`` (a number, or one per
         point)."""
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        shape = np.broadcast(x, y).shape
-        k0, k1, f = (np.broadcast_to(a, shape) for a in self.brackets(t_s))
-        out = in_time(self.db, self.extent, x, y, k0, k1, f)
+        out = in_time(self.db, self.extent, x, y, *self.brackets(t_s))
         return out[()] if out.ndim == 0 else out
 
     def serving_cell(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
@@ -267,9 +268,7 @@ class SignalBank:
         """The signal of world ``world`` (one per point, or one) at the points ``(x, y)`` at
         the instants ``t_s``, as that world's :class:`SignalSeries` gives it."""
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        shape = np.broadcast(x, y, np.asarray(t_s), np.asarray(world)).shape
-        t = np.asarray(t_s, dtype=np.float64)
-        k0, k1, f = (np.broadcast_to(a, shape) for a in self._times.brackets(t))
+        k0, k1, f = self._times.brackets(np.asarray(t_s, dtype=np.float64))
         base = np.asarray(world, dtype=np.int64) * self.db.shape[1]
         out = in_time(self._series.db, self.extent, x, y, base + k0, base + k1, f)
         return out[()] if out.ndim == 0 else out

@@ -25,6 +25,7 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 from torch import nn
+from torch.nn import functional as F
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.task import MOVES
@@ -235,6 +236,9 @@ class WeatherQNet(DuelingQNet):
         return near.reshape(-1, 1, n, n), area.reshape(-1, 2, a, a)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        # The layers are called as functions (ReLU in place, one concatenation): the same
+        # operations as the modules' calls, bit for bit, with less overhead per call; a
+        # decision is a few dozen small operations (benches/decision.py).
         w2, a2 = self.window**2, self.area**2
         vec = obs[:, :5]
         local = obs[:, 5 : 5 + w2].reshape(-1, 1, self.window, self.window)
@@ -242,14 +246,34 @@ class WeatherQNet(DuelingQNet):
         if self.goal_maps is not None:
             near, area = self.goal_channels(vec)
             local, whole = torch.cat([local, near], dim=1), torch.cat([whole, area], dim=1)
-        rel = goal_features(vec[:, 2:4] - vec[:, 0:2], self.goal_scale)
-        parts = [self.features(vec), rel, self.local(local), self.whole(whole)]
-        if self.moves is None:
-            return self.head(self.body(torch.cat(parts, dim=1)))
-        mf = self.move_features(vec)
-        q = self.head(self.body(torch.cat([*parts, mf.flatten(1)], dim=1)))
-        gain = self.move_gain(mf).squeeze(-1)  # (B, 4)
+        ang = vec[:, :, None] * self.freqs  # the sine/cosine features (DuelingQNet.features)
+        parts = [
+            vec,
+            torch.sin(ang).flatten(-2),
+            torch.cos(ang).flatten(-2),
+            goal_features(vec[:, 2:4] - vec[:, 0:2], self.goal_scale),
+            _conv_stack(self.local, local),
+            _conv_stack(self.whole, whole),
+        ]
+        mf = None if self.moves is None else self.move_features(vec)
+        if mf is not None:
+            parts.append(mf.flatten(1))
+        l1, _, l2, _ = self.body
+        h = F.linear(
+            F.linear(torch.cat(parts, dim=1), l1.weight, l1.bias).relu_(), l2.weight, l2.bias
+        )
+        q = self.head(h.relu_())
+        if mf is None:
+            return q
+        gain = F.linear(mf, self.move_gain.weight).squeeze(-1)  # (B, 4)
         return q + gain - gain.mean(dim=-1, keepdim=True)  # the advantage's part only
+
+
+def _conv_stack(stack: nn.Module, x: torch.Tensor) -> torch.Tensor:
+    """A grid's two convolutions and ReLUs (the ``stack`` of :class:`WeatherQNet`), flattened."""
+    c1, _, c2, _, _ = stack
+    x = F.conv2d(x, c1.weight, c1.bias, c1.stride, c1.padding).relu_()
+    return F.conv2d(x, c2.weight, c2.bias, c2.stride, c2.padding).relu_().flatten(1)
 
 
 @dataclass(frozen=True)
