@@ -5,7 +5,9 @@
 #   make wheel-check  install that wheel into a fresh venv away from the source and run it
 #   make fmt    format Rust and Python in place
 PYTHON ?= python
-PYTEST_ARGS ?=
+# The suite on both cores of the 2-core machine, one file per worker (a file's tests share
+# their session's map cache); PYTEST_ARGS= runs it in one process.
+PYTEST_ARGS ?= -n 2 --dist loadfile
 
 .PHONY: test build lint test-rust test-python bench fmt validate wheel wheel-check
 

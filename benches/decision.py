@@ -3,18 +3,20 @@
 first one (16/32 channels), and the single-map network doing the same decision in the same
 run.
 
-    python benches/decision.py
+    python benches/decision.py [--threads 2]
 
 A decision: the observation of every UAV (``env.observe``: the SINR window and whole-area grid
-sampled from a 61-slice storm) encoded, and the network's greedy actions (one torch thread, as
-training and evaluation run). The weights are the initial ones: the time does not depend on
-them. Prints the median of 200 timed decisions (after 20 warm-up ones) for the observation,
-the network and both, for each learner.
+sampled from a 61-slice storm) encoded, and the network's greedy actions (one torch thread by
+default, as training and evaluation run; ``--threads 2``: both cores of the 2-core machine).
+The UAVs are at 64 different instants of the storm (as a training batch flies them), and, for
+the decision, also at one instant (a fleet's step: every UAV reads the same two slices). The
+weights are the initial ones: the time does not depend on them. Prints the median of 200 timed
+decisions (after 20 warm-up ones) for the observation, the network and both, for each learner.
 """
 
 from __future__ import annotations
 
-import sys
+import argparse
 import time
 from collections.abc import Callable
 
@@ -42,12 +44,15 @@ def median_ms(fn: Callable[[], object], reps: int = 200) -> float:
 
 
 def main() -> None:
-    torch.set_num_threads(int(sys.argv[1]) if len(sys.argv) > 1 else 1)
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    torch.set_num_threads(ap.parse_args().threads)
     rng = np.random.default_rng(0)
     field = SignalSeries(rng.normal(5.0, 8.0, (61, 200, 200)), np.arange(61) * 5.0, EXT)
     pos = rng.uniform(0.0, 2000.0, (N, 2))
     t = rng.integers(0, 300, N)
     goals = rng.uniform(100.0, 1900.0, (N, 2))
+    t1 = np.full(N, 150)  # a fleet's step: every UAV at one instant
     storm = {k: v for k, v in STORM_LEARNER.items() if k in ("conv", "move_features", "goal_maps")}
     learners = (
         ("weather network (storm learner)", "weather", DQNConfig(**storm)),
@@ -64,10 +69,16 @@ def main() -> None:
         both_ms = median_ms(
             lambda agent=agent, env=env, g=g: agent.greedy(agent.observe(env.observe(pos, t, g), t))
         )
+        fleet_ms = median_ms(
+            lambda agent=agent, env=env, g=g: agent.greedy(
+                agent.observe(env.observe(pos, t1, g), t1)
+            )
+        )
         params = sum(p.numel() for p in agent.online.parameters())
         print(
             f"{name} ({params:,} weights, input {x.shape[1]}): {N} UAVs: observation "
-            f"{obs_ms:.3f} ms, network {net_ms:.3f} ms, decision {both_ms:.3f} ms"
+            f"{obs_ms:.3f} ms, network {net_ms:.3f} ms, decision {both_ms:.3f} ms "
+            f"(one instant: {fleet_ms:.3f} ms)"
         )
 
 
