@@ -200,8 +200,7 @@ mod tests {
     #[test]
     fn one_slice_pair_per_row_is_the_per_point_call_bit_for_bit() {
         // Rows of m points sharing their instant (one UAV's window) against the same
-        // instant repeated per point; below and above the parallel split (the split must not
-        // change a bit).
+        // instant repeated per point: a few short rows, and 40 UAVs' 11 x 11 windows.
         let s = Array3::from_shape_fn((4, 9, 11), |(k, i, j)| ((k * 17 + i * 5 + j) as f64).cos());
         let e = [0.0, 11.0, 0.0, 9.0];
         for (rows, m) in [(3usize, 5usize), (40, 121)] {
