@@ -246,11 +246,8 @@ class WeatherQNet(DuelingQNet):
         if self.goal_maps is not None:
             near, area = self.goal_channels(vec)
             local, whole = torch.cat([local, near], dim=1), torch.cat([whole, area], dim=1)
-        ang = vec[:, :, None] * self.freqs  # the sine/cosine features (DuelingQNet.features)
         parts = [
-            vec,
-            torch.sin(ang).flatten(-2),
-            torch.cos(ang).flatten(-2),
+            self.features(vec),
             goal_features(vec[:, 2:4] - vec[:, 0:2], self.goal_scale),
             _conv_stack(self.local, local),
             _conv_stack(self.whole, whole),
