@@ -236,7 +236,7 @@ class WeatherQNet(DuelingQNet):
         return near.reshape(-1, 1, n, n), area.reshape(-1, 2, a, a)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        # The layers are called as functions (ReLU in place, one concatenation): the same
+        # The layers are called as functions (ReLU in place): the same
         # operations as the modules' calls, bit for bit, with less overhead per call; a
         # decision is a few dozen small operations (benches/decision.py).
         w2, a2 = self.window**2, self.area**2
