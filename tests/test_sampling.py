@@ -70,6 +70,23 @@ def test_fields_read_through_it_as_before() -> None:
         np.testing.assert_array_equal(bank.at_points(pts, tau[:, 0], world[:, 0])[rows], at[rows])
 
 
+def test_brackets_kept_for_the_same_instants_are_the_computed_ones() -> None:
+    """A series keeps its last instants' brackets (an observation asks for them twice: (N, 1)
+    for the window, (N,) for the grid): asked again in either shape, or after other instants,
+    they equal a fresh series' brackets, and nobody can write into the kept arrays."""
+    t = np.array([0.0, 5.0, 10.0, 20.0])
+    series = SignalSeries(np.zeros((4, 2, 2)), t, (0.0, 1.0, 0.0, 1.0))
+    rng = np.random.default_rng(3)
+    a, b = rng.uniform(-5.0, 25.0, (2, 40))
+    for tau in (a[:, None], a, b, a, a[:7], 5.0):
+        got = series.brackets(tau)
+        want = SignalSeries(np.zeros((4, 2, 2)), t, (0.0, 1.0, 0.0, 1.0)).brackets(tau)
+        for g, w in zip(got, want, strict=True):
+            assert g.shape == np.shape(tau)
+            np.testing.assert_array_equal(g, w)
+            assert not g.flags.writeable
+
+
 def test_bad_slices_are_refused_in_one_line() -> None:
     v = np.zeros((2, 3, 3))
     ext = (0.0, 1.0, 0.0, 1.0)

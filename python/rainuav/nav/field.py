@@ -165,18 +165,28 @@ class SignalSeries:
         self.t_s = np.ascontiguousarray(t)
         self.name = name
         self._points = _PointCache()
+        self._last_brackets: tuple[Any, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
 
     def brackets(self, tau: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """For each instant of ``tau``: the slices around it and the later one's weight
         ``(k0, k1, f)``; ``k0 == k1`` at a slice's own instant and beyond the first or the
-        last (``Timeline::bracket``)."""
-        t, tau = self.t_s, np.asarray(tau, dtype=np.float64)
+        last (``Timeline::bracket``). Read-only arrays; the last instants' brackets are kept
+        and given again (an observation asks for the same instants twice)."""
+        tau = np.asarray(tau, dtype=np.float64)
+        key = tau.tobytes()  # the instants, whatever their shape
+        if self._last_brackets is not None and self._last_brackets[0] == key:
+            k0, k1, f = self._last_brackets[1]
+            return k0.reshape(tau.shape), k1.reshape(tau.shape), f.reshape(tau.shape)
+        t = self.t_s
         k = np.searchsorted(t, tau, side="left")
         hit = (k < len(t)) & (t[np.minimum(k, len(t) - 1)] == tau)
         k1 = np.where(hit, k, np.clip(k, 0, len(t) - 1))
         k0 = np.where(hit | (k == 0), k1, np.where(k == len(t), len(t) - 1, k - 1))
         lo, hi = t[k0], t[k1]
         f = np.where(k0 == k1, 0.0, (tau - lo) / np.where(hi > lo, hi - lo, 1.0))
+        for a in (k0, k1, f):
+            a.setflags(write=False)  # shared with the next caller of the same instants
+        self._last_brackets = (key, (k0, k1, f))
         return k0, k1, f
 
     def __call__(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
