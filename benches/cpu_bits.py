@@ -16,29 +16,16 @@ from __future__ import annotations
 import hashlib
 import os
 
-import numpy as np
 import torch
-from rainuav.nav import UAVNavEnv
-from rainuav.nav.field import SignalSeries
-from rainuav.rl.config import STORM_LEARNER, DQNConfig
-from rainuav.rl.dqn import Agent
-from rainuav.rl.setup import make_encoder
+from decision import make_agent, storm_and_fleet, storm_network
 
 N = 128
 
 
 def fingerprint() -> str:
     torch.set_num_threads(1)
-    rng = np.random.default_rng(0)
-    field = SignalSeries(
-        rng.normal(5.0, 8.0, (61, 200, 200)), np.arange(61) * 5.0, (0.0, 2000.0, 0.0, 2000.0)
-    )
-    env = UAVNavEnv(field=field, goal_m=(1400.0, 1600.0), min_db=-2.0, observation="weather")
-    keys = ("conv", "move_features", "goal_maps")
-    d = DQNConfig(**{k: v for k, v in STORM_LEARNER.items() if k in keys})
-    agent = Agent(d, 0, torch.device("cpu"), make_encoder(d, env, (0.005, 0.005)))
-    pos, t = rng.uniform(0.0, 2000.0, (N, 2)), rng.integers(0, 300, N)
-    goals = rng.uniform(100.0, 1900.0, (N, 2))
+    field, pos, t, goals = storm_and_fleet(N)  # the decision bench's storm and draws
+    env, agent = make_agent(storm_network(), "weather", field)
     x = torch.as_tensor(agent.observe(env.observe(pos, t, goals), t))
     q = agent.online(x)
     q.square().sum().backward()

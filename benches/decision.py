@@ -43,25 +43,41 @@ def median_ms(fn: Callable[[], object], reps: int = 200) -> float:
     return 1e3 * float(np.median(times))
 
 
+def storm_and_fleet(n: int = N) -> tuple[SignalSeries, np.ndarray, np.ndarray, np.ndarray]:
+    """The bench's storm (61 random slices of 200 x 200 pixels over 2 km, 5 s apart) and ``n``
+    UAVs in it: positions, instants (moves) and destinations, all drawn from seed 0."""
+    rng = np.random.default_rng(0)
+    field = SignalSeries(rng.normal(5.0, 8.0, (61, 200, 200)), np.arange(61) * 5.0, EXT)
+    pos = rng.uniform(0.0, 2000.0, (n, 2))
+    t = rng.integers(0, 300, n)
+    return field, pos, t, rng.uniform(100.0, 1900.0, (n, 2))
+
+
+def storm_network() -> DQNConfig:
+    """The storm learner's network (``STORM_LEARNER``'s architecture, default training)."""
+    keys = ("conv", "move_features", "goal_maps")
+    return DQNConfig(**{k: v for k, v in STORM_LEARNER.items() if k in keys})
+
+
+def make_agent(d: DQNConfig, observation: str, field: SignalSeries) -> tuple[UAVNavEnv, Agent]:
+    """The env on ``field`` with the task's destination and the learner's agent (seed 0)."""
+    env = UAVNavEnv(field=field, goal_m=(1400.0, 1600.0), min_db=-2.0, observation=observation)
+    return env, Agent(d, 0, torch.device("cpu"), make_encoder(d, env, (0.005, 0.005)))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
     torch.set_num_threads(ap.parse_args().threads)
-    rng = np.random.default_rng(0)
-    field = SignalSeries(rng.normal(5.0, 8.0, (61, 200, 200)), np.arange(61) * 5.0, EXT)
-    pos = rng.uniform(0.0, 2000.0, (N, 2))
-    t = rng.integers(0, 300, N)
-    goals = rng.uniform(100.0, 1900.0, (N, 2))
+    field, pos, t, goals = storm_and_fleet()
     t1 = np.full(N, 150)  # a fleet's step: every UAV at one instant
-    storm = {k: v for k, v in STORM_LEARNER.items() if k in ("conv", "move_features", "goal_maps")}
     learners = (
-        ("weather network (storm learner)", "weather", DQNConfig(**storm)),
+        ("weather network (storm learner)", "weather", storm_network()),
         ("weather network (16/32 channels, no move features)", "weather", DQNConfig()),
         ("position network", "position", DQNConfig()),
     )
     for name, observation, d in learners:
-        env = UAVNavEnv(field=field, goal_m=(1400.0, 1600.0), min_db=-2.0, observation=observation)
-        agent = Agent(d, 0, torch.device("cpu"), make_encoder(d, env, (0.005, 0.005)))
+        env, agent = make_agent(d, observation, field)
         g = goals if observation == "weather" else None
         x = agent.observe(env.observe(pos, t, g), t)
         obs_ms = median_ms(lambda env=env, g=g: env.observe(pos, t, g))
