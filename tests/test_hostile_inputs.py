@@ -604,6 +604,188 @@ def test_fly_refuses_a_weather_file_that_is_not_netcdf(tmp_path, capsys, content
     refused("fly --weather garbage", rc, err, "radar.nc")
 
 
+# -- 6. First contact: real coordinates and real folders ------------------------------------
+def _sites_at(tmp_path: Path, lat0: float, lon0: float) -> Path:
+    """The shipped example's sectors moved to (lat0, lon0): same layout, another hemisphere."""
+    rows = list(csv.DictReader((EXAMPLES / "sites.csv").read_text().splitlines()))
+    for r in rows:
+        r["lat"] = f"{float(r['lat']) - 47.37 + lat0:.6f}"
+        r["lon"] = f"{float(r['lon']) - 8.54 + lon0:.6f}"
+    f = tmp_path / "sites_moved.csv"
+    with f.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    return f
+
+
+def test_fly_takes_southern_and_western_coordinates_as_typed(tmp_path, capsys) -> None:
+    # Sydney: a minus sign first, typed as a separate value and with "=".
+    from rainuav import fly
+
+    sites = _sites_at(tmp_path, -33.8688, 151.2093)
+    out = tmp_path / "sydney"
+    argv = ["--sites", sites, "--start", "-33.8728,151.2073", "--goal=-33.8608,151.2233",
+            "--out", out]  # fmt: skip
+    rc, err = run_cli(fly, argv, capsys)
+    assert rc == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert -33.88 < summary["origin"]["lat"] < -33.85  # the southern hemisphere, not 33.8 N
+    line = json.loads((out / "flight.geojson").read_text())["features"][0]
+    lon, lat = np.array(line["geometry"]["coordinates"])[0, :2]
+    assert abs(lat - -33.8728) < 1e-4 and abs(lon - 151.2073) < 1e-4  # starts where asked
+    accepted("fly --start -33.87,151.21 (Sydney)")
+    # West of Greenwich and south of the equator, with --area: parsed, then refused in the
+    # user's terms (no sites there), not by argparse.
+    argv = ["--sites", EXAMPLES / "sites.csv", "--start", "-34.61,-58.39", "--goal",
+            "-34.605,-58.38", "--area", "-34.62,-58.40,-34.60,-58.37",
+            "--out", tmp_path / "o"]  # fmt: skip
+    rc, err = run_cli(fly, argv, capsys)
+    refused("fly Buenos Aires --area", rc, err, "site ZH-001", "34.62", "lies outside the --area")
+    assert "--start=-33.87,151.21" in _help(fly, capsys)  # the help says how to type it
+
+
+def _help(mod: Any, capsys: pytest.CaptureFixture) -> str:
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        mod.main(["--help"])
+    return " ".join(capsys.readouterr().out.split())
+
+
+@pytest.mark.parametrize(
+    ("argv", "needles"),
+    [
+        (["--start", "-33.8688,151.2093", "--goal", "-47.366,-171.462"], ("km apart", "10 km")),
+        (["--start", "47.3660,8.5380", "--goal", "47.3700,8.5420", "--area", "-80,-179,80,179"],
+         ("--area spans", "km east-west", "10 km x 10 km")),
+        (["--start", "47.37,8.54", "--goal", "49.37,8.54"], ("222.4 km apart", "legs")),
+        (["--start", "47.3660,8.5380", "--goal", "47.3660,8.5380"],
+         ("0.0 m apart", "arrival tolerance", "no flight to plan")),
+        (["--start", "47.3660,8.5380", "--goal", "47.36603,8.53803"],
+         ("4.0 m apart", "arrival tolerance")),
+    ],
+)  # fmt: skip
+def test_fly_refuses_far_and_empty_flights_in_the_users_terms(tmp_path, capsys, argv, needles):
+    from rainuav import fly
+
+    out = tmp_path / "o"
+    rc, err = run_cli(fly, ["--sites", EXAMPLES / "sites.csv", *argv, "--out", out], capsys)
+    refused(f"fly {' '.join(argv)}", rc, err, *needles)
+    for word in ("pixels", "budget_gpoints", "x_min_m", "resolution_m"):
+        assert word not in err, (word, err)  # the program's terms, not the user's
+    assert not out.exists()
+
+
+def test_fly_refuses_sites_on_another_continent_naming_the_site(tmp_path, capsys) -> None:
+    from rainuav import fly
+
+    sites = _sites_at(tmp_path, -33.8688, 151.2093)  # Sydney's sites, a flight in Zurich
+    rc, err = run_cli(fly, ["--sites", sites, *TRIP, "--out", tmp_path / "o"], capsys)
+    refused("fly sites elsewhere", rc, err, "site ZH-00", "lies 167", "km from the route", "10 km")
+    assert "x_min_m" not in err
+
+
+OUT_CLIS = ["radiomap", "train", "evaluate", "validate", "study", "fly"]
+
+
+@pytest.mark.parametrize("cli", OUT_CLIS)
+@pytest.mark.parametrize("where", ["/proc/x", "/proc/x/y", "/sys/rainuav"])
+def test_out_that_cannot_be_made_is_refused_before_any_work(run_copy, tmp_path, capsys, cli, where):
+    from rainuav import fly
+
+    spec = tmp_path / "s.toml"
+    spec.write_text(
+        'name = "s"\ncompute = ["map"]\n[base]\nscenario = "paper"\n[axes]\nmu = [0.1]\n'
+    )
+    argv = {
+        "radiomap": (radiomap, ["--scenario", "paper", "--out", where]),
+        "train": (train, ["--out", where, "--episodes", "1"]),
+        "evaluate": (evaluate, [run_copy, "--out", where]),
+        "validate": (validate, ["rain", "--out", where]),
+        "study": (study, [spec, "--out", where, "--workers", "1"]),
+        "fly": (fly, ["--sites", EXAMPLES / "sites.csv", *TRIP, "--out", where]),
+    }[cli]
+    rc, err = run_cli(*argv, capsys)
+    refused(f"{cli} --out {where}", rc, err, where, "cannot be")
+
+
+# A killed run's folder must not look finished: each tool writes one file last (its
+# completion file), after removing an earlier run's copy of it.
+COMPLETION_FILES = {"fly": "summary.json", "radiomap": "radiomap.npz",
+                    "evaluate": "evaluation.json", "study": "results.csv"}  # fmt: skip
+
+
+def _record_writes(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """The names of the files written through rainuav._io (every file the tools write), in
+    the order they land."""
+    import rainuav._io as io_mod
+
+    landed: list[str] = []
+    real = io_mod.os.replace
+
+    def replace(src: Any, dst: Any) -> None:
+        real(src, dst)
+        landed.append(Path(dst).name)
+
+    monkeypatch.setattr(io_mod.os, "replace", replace)
+    return landed
+
+
+def _tool_argv(cli: str, run_copy: Path, tmp_path: Path, out: Path) -> tuple[Any, list[Any]]:
+    from rainuav import fly
+
+    spec = tmp_path / "s.toml"
+    spec.write_text('name = "s"\ncompute = ["map"]\n[base]\nscenario = "paper"\n'
+                    'engine = "ray"\n[axes]\nmu = [0.1]\n')  # fmt: skip
+    scn = tmp_path / "tiny.toml"
+    tiny_scenario().to_toml(scn)
+    return {
+        "fly": (fly, ["--sites", EXAMPLES / "sites.csv", *TRIP, "--out", out]),
+        "radiomap": (radiomap, ["--config", scn, "--out", out]),
+        "evaluate": (evaluate, [run_copy, "--out", out, "--starts", "5"]),
+        "study": (study, [spec, "--out", out, "--workers", "1"]),
+    }[cli]
+
+
+@pytest.mark.parametrize("cli", sorted(COMPLETION_FILES))
+def test_the_completion_file_is_written_last(run_copy, tmp_path, capsys, monkeypatch, cli):
+    landed = _record_writes(monkeypatch)
+    out = tmp_path / "out"
+    rc, err = run_cli(*_tool_argv(cli, run_copy, tmp_path, out), capsys)
+    assert rc == 0, err
+    assert len(set(landed)) >= 2 and landed[-1] == COMPLETION_FILES[cli], (cli, landed)
+    accepted(f"{cli}: {COMPLETION_FILES[cli]} last")
+
+
+@pytest.mark.parametrize("cli", sorted(COMPLETION_FILES))
+def test_a_run_killed_before_its_last_file_does_not_look_finished(
+    run_copy, tmp_path, capsys, monkeypatch, cli
+):
+    # An earlier finished run in the same folder, then a run killed with SIGKILL in its last
+    # second: as its completion file is about to land, every other file written.
+    out = tmp_path / "out"
+    assert run_cli(*_tool_argv(cli, run_copy, tmp_path, out), capsys)[0] == 0
+    assert (out / COMPLETION_FILES[cli]).exists()
+    code = f"""
+import os, sys
+import rainuav._io as io_mod
+real = io_mod.os.replace
+def replace(src, dst):
+    if os.path.basename(dst) == {COMPLETION_FILES[cli]!r}:
+        os.kill(os.getpid(), 9)
+    real(src, dst)
+io_mod.os.replace = replace
+from rainuav import {cli}
+sys.exit({cli}.main(sys.argv[1:]))
+"""
+    _, argv = _tool_argv(cli, run_copy, tmp_path, out)
+    proc = subprocess.run([sys.executable, "-c", code, *map(str, argv)], capture_output=True,
+                          text=True, timeout=240)  # fmt: skip
+    assert proc.returncode == -9, proc.stderr
+    assert not (out / COMPLETION_FILES[cli]).exists(), cli
+    accepted(f"{cli} killed: no {COMPLETION_FILES[cli]}")
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():

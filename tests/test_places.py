@@ -457,3 +457,27 @@ def test_fly_policy_must_read_the_weather(tmp_path, capsys) -> None:
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "fly a network that reads the weather" in err[0]
+
+
+def test_the_largest_place_fits_the_pe_march_from_a_corner(tmp_path) -> None:
+    """``MAX_SIDE_M`` is the largest area ``fly`` maps: sectors in one corner of a place that
+    large, pointing along its edges and across its diagonal with no tilt (the longest
+    marches), all fit the ``uma`` settings' PE budget, so no place ``fly`` accepts ends in the
+    engine's budget error."""
+    from rainuav.radio.grid import march_grid
+    from rainuav.world.place import MARGIN_M, MAX_SIDE_M, place_scenario
+
+    g = Georef(47.0, 8.0)
+    leg = MAX_SIDE_M - 2 * MARGIN_M - 20.0  # the pixel rounding of the edges
+    lat1, lon1 = g.to_latlon(leg, leg)
+    rows = ["site_id,lat,lon,height_m,azimuth_deg,electrical_tilt_deg,tx_power_dbm"]
+    rows += [f"C,47.0,8.0,25,{az},0,46" for az in (0, 45, 90)]
+    (tmp_path / "corner.csv").write_text("\n".join(rows) + "\n")
+    place = place_scenario(tmp_path / "corner.csv", (47.0, 8.0), (float(lat1), float(lon1)))
+    a = place.scenario.area
+    assert max(a.x_max_m - a.x_min_m, a.y_max_m - a.y_min_m) <= MAX_SIDE_M
+    assert min(a.x_max_m - a.x_min_m, a.y_max_m - a.y_min_m) > MAX_SIDE_M - 100.0
+    (site,) = place.scenario.sites
+    grids = [march_grid(place.scenario, site, c) for c in site.cells]
+    budget = place.scenario.pe.budget_gpoints
+    assert all(gr is not None and gr.gpoints <= budget for gr in grids)

@@ -4,14 +4,39 @@ and renamed), and warnings are one line each."""
 
 from __future__ import annotations
 
+import re
 import sys
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from rainuav.errors import CacheWarning, InvalidInputError
 
-__all__ = ["run"]
+__all__ = ["attach_negative_values", "run"]
+
+_NUMBERS = re.compile(r"^-(\d|\.\d)[\d.eE+\-]*(,\s*[+\-]?(\d|\.\d)[\d.eE+\-]*)*$")
+"""A value that starts with a minus sign and is a number or a comma-separated list of them
+("-33.8688,151.2093", "-80,-179,80,179", "-1e3")."""
+
+
+def attach_negative_values(argv: Sequence[str] | None, flags: Sequence[str]) -> list[str]:
+    """``argv`` (default ``sys.argv[1:]``) with every ``FLAG VALUE`` pair whose flag is one of
+    ``flags`` and whose value is a negative number or list of numbers joined into
+    ``FLAG=VALUE``. argparse reads a token that starts with ``-`` as an option, so
+    ``--start -33.87,151.21`` (a southern latitude) would otherwise end in "expected one
+    argument"; joined, it reads as typed."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    out: list[str] = []
+    i = 0
+    while i < len(args):
+        a = str(args[i])
+        if a in flags and i + 1 < len(args) and _NUMBERS.match(str(args[i + 1])):
+            out.append(f"{a}={args[i + 1]}")
+            i += 2
+        else:
+            out.append(a)
+            i += 1
+    return out
 
 
 def _one_line(message: Any, category: type[Warning], *_: Any, **__: Any) -> None:

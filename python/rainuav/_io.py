@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import os
 import secrets
+import tempfile
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -71,7 +72,11 @@ def read_toml(path: str | os.PathLike[str], what: str = "file") -> dict[str, Any
 def check_out_dir(path: str | os.PathLike[str], flag: str = "--out") -> Path:
     """Checks, before any work, that the output folder ``path`` exists as a writable folder
     or can be made (its nearest existing parent is a writable folder); else raises
-    :class:`InvalidInputError` naming ``flag`` and the path. Creates nothing."""
+    :class:`InvalidInputError` naming ``flag`` and the path. Creates nothing that stays.
+
+    Permission bits do not settle it (root passes every ``os.access`` test, and ``/proc`` or
+    a read-only mount refuse new folders whatever the bits say), so the check makes an empty
+    folder in the nearest existing parent and removes it again."""
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise InvalidInputError(f"{flag} {p}: exists and is not a folder")
@@ -82,7 +87,23 @@ def check_out_dir(path: str | os.PathLike[str], flag: str = "--out") -> Path:
         raise InvalidInputError(f"{flag} {p}: cannot be created ({probe} is not a folder)")
     if not os.access(probe, os.W_OK | os.X_OK):
         raise InvalidInputError(f"{flag} {p}: not writable ({probe})")
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".rainuav-probe-", dir=probe))
+    except OSError as err:
+        why = err.strerror or type(err).__name__
+        raise InvalidInputError(f"{flag} {p}: cannot be written ({probe}: {why})") from None
     return p
+
+
+def begin_folder(folder: str | os.PathLike[str], last: str) -> Path:
+    """Makes ``folder`` and removes its completion file ``last`` (left by an earlier run into
+    the same folder) before a job writes its files: the job writes ``last`` after every other
+    file, so a folder holding ``last`` is complete and one without it was stopped part way
+    (a kill -9 included). Returns the folder."""
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / last).unlink(missing_ok=True)
+    return out
 
 
 class FolderLock:

@@ -24,7 +24,8 @@ the weather at take-off and re-planning are reported beside it. Writes
 ``evaluation.json`` and ``evaluation_trajectories.png`` (the network's flights and the exact
 optimum's from the same starts) into ``--out`` (default: the run's folder for its own map,
 ``RUN_DIR/eval_<scenario>_<rain>mmh`` for another; with ``--online``, ``RUN_DIR/eval_online``
-and ``..._online``). The run's own files are never touched.
+and ``..._online``). The run's own files are never touched. ``evaluation.json`` is written
+last: a folder holding it is complete.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from pathlib import Path
 
 from rainuav import _cli
 from rainuav._checks import check_integer
-from rainuav._io import check_out_dir, write_atomic
+from rainuav._io import begin_folder, check_out_dir, write_atomic
 
 OTHER_WORLD = ("scenario", "rain_rate", "engine", "storm_seed", "freq_ghz")
 """The flags that fly the run in another world."""
@@ -129,10 +130,11 @@ def _evaluate(args: argparse.Namespace) -> int:
         online=args.online,
     )
     text = json.dumps(metrics, indent=2)
-    write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))
+    begin_folder(out, "evaluation.json")
     plot_policy(env, metrics, rolls[:40], out / "evaluation_trajectories.png")
     if env.field.varies:
         plot_storm_flights(env, rolls[:6], out / "evaluation_storm_flights.png")
+    write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))  # last
     print(text)
     print(f"wrote {out.resolve()}", file=sys.stderr)
     return 0
@@ -174,9 +176,10 @@ def _evaluate_storms(args: argparse.Namespace) -> int:
         online=args.online,
     )
     text = json.dumps(result, indent=2)
-    write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))
+    begin_folder(out, "evaluation.json")
     if first is not None and first[0].field.varies:
         plot_storm_flights(first[0], first[1], out / "evaluation_storm_flights.png")
+    write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))  # last
     print(json.dumps(result["mean"], indent=2))
     print(f"wrote {out.resolve()}", file=sys.stderr)
     return 0

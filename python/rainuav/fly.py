@@ -7,12 +7,12 @@ Sites from a CSV or GeoJSON file (one row per sector: ``site_id, lat, lon, heigh
 azimuth_deg, electrical_tilt_deg, tx_power_dbm``, optional ``antenna, rows,
 mechanical_tilt_deg, freq_ghz``; azimuths clockwise from north, tilts positive down, as
 operators give them: :mod:`rainuav.radio.sites`), the start and destination as ``LAT,LON``
-(degrees, WGS 84), the flight altitude, the carrier and homogeneous rain (``--rain-rate``) or
+(degrees, WGS 84; south and west negative), the flight altitude, the carrier and homogeneous rain (``--rain-rate``) or
 a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with one band per instant or a
 folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several instants give a weather
 that moves and the exact plan in space-time:
 :mod:`rainuav.radio.radar`). The area is the box around the start, the destination and the
-sites with a 300 m margin, in metres of an azimuthal equidistant projection centred on it
+sites with a 300 m margin (at most 10 km x 10 km), in metres of an azimuthal equidistant projection centred on it
 (:mod:`rainuav.geo`). Plans the exact optimum
 (``rainuav.nav.planner``) and writes into ``--out``:
 
@@ -22,6 +22,9 @@ sites with a 300 m margin, in metres of an azimuthal equidistant projection cent
   path's corners at the flight altitude relative to home, landing;
 - ``flight.png`` (the path over the SINR map with the sites) and ``summary.json`` (cost,
   outage share and flight time, against the straight line).
+
+``summary.json`` is written last: a folder without it holds a flight that was stopped part
+way (an earlier run's ``summary.json`` is removed before the new files are written).
 
 A planning aid, not an airworthiness tool: check the airspace, the terrain and obstacles
 above the flight altitude (the map assumes flat open ground), and the link budget's
@@ -39,6 +42,9 @@ from pathlib import Path
 from rainuav import _cli
 from rainuav.errors import InvalidInputError
 
+LATLON_FLAGS = ("--start", "--goal", "--area")
+"""The flags whose values may begin with a minus sign (southern and western degrees)."""
+
 
 def _latlon(text: str) -> tuple[float, float]:
     try:
@@ -55,11 +61,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("--sites", type=Path, required=True, help="sites file (.csv or .geojson)")
-    ap.add_argument("--start", type=_latlon, required=True, help="take-off point LAT,LON")
-    ap.add_argument("--goal", type=_latlon, required=True, help="destination LAT,LON")
+    ap.add_argument(
+        "--start", type=_latlon, required=True,
+        help="take-off point LAT,LON in degrees, south and west negative (--start -33.87,151.21 "
+        "and --start=-33.87,151.21 both work)",
+    )  # fmt: skip
+    ap.add_argument("--goal", type=_latlon, required=True, help="destination LAT,LON, as --start")
     ap.add_argument(
         "--area", default=None,
-        help="the area as S,W,N,E in degrees (default: around the start, goal and sites)",
+        help="the area as S,W,N,E in degrees, south and west negative (default: around the "
+        "start, goal and sites)",
     )  # fmt: skip
     ap.add_argument("--altitude-m", type=float, default=100.0, help="flight altitude above ground")
     ap.add_argument("--freq-ghz", type=float, default=28.0, help="carrier frequency, GHz")
@@ -76,7 +87,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="fly a trained network that reads the weather (a run of --observation weather)",
     )  # fmt: skip
     ap.add_argument("--out", type=Path, required=True, help="output folder")
-    args = ap.parse_args(argv)
+    args = ap.parse_args(_cli.attach_negative_values(argv, LATLON_FLAGS))
 
     def body() -> int:
         from rainuav._checks import check_number
@@ -97,7 +108,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 box = ()
             if len(box) != 4:
                 raise InvalidInputError(f"--area must be S,W,N,E in degrees (got {args.area!r})")
-        out = check_out_dir(args.out, "out")
+        out = check_out_dir(args.out, "--out")
         if not args.sites.is_file():
             raise InvalidInputError(f"--sites: no file {args.sites}")
         place = place_scenario(

@@ -22,7 +22,7 @@ import numpy as np
 
 from rainuav.errors import InvalidInputError
 
-__all__ = ["MAX_ABS_LAT", "Georef", "geodesic_m", "pyproj_module"]
+__all__ = ["MAX_ABS_LAT", "Georef", "check_latlon", "geodesic_m", "latlon_text", "pyproj_module"]
 
 MAX_ABS_LAT = 85.0
 """Origins nearer the poles are refused: a drone's lattice of east and north moves has no
@@ -40,7 +40,16 @@ def pyproj_module() -> Any:
     return pyproj
 
 
-def _check_latlon(name: str, lat: Any, lon: Any) -> tuple[np.ndarray, np.ndarray]:
+def latlon_text(lat: float, lon: float, digits: int = 5) -> str:
+    """A latitude and longitude as people read them: ``33.86880 S, 151.20930 E``."""
+    ns = "N" if lat >= 0 else "S"
+    ew = "E" if lon >= 0 else "W"
+    return f"{abs(lat):.{digits}f} {ns}, {abs(lon):.{digits}f} {ew}"
+
+
+def check_latlon(name: str, lat: Any, lon: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``lat`` and ``lon`` as float arrays, or an error naming ``name`` unless every value is
+    finite, |lat| <= 90 and |lon| <= 180 degrees."""
     la = np.asarray(lat, dtype=np.float64)
     lo = np.asarray(lon, dtype=np.float64)
     if not (np.all(np.isfinite(la)) and np.all(np.isfinite(lo))):
@@ -95,7 +104,7 @@ class Georef:
 
     def to_local(self, lat: Any, lon: Any, name: str = "position") -> tuple[Any, Any]:
         """Metres east and north of the origin of the points (``lat``, ``lon``), degrees."""
-        la, lo = _check_latlon(name, lat, lon)
+        la, lo = check_latlon(name, lat, lon)
         x, y = self._transformers()[0].transform(lo, la)
         return x, y
 
@@ -112,7 +121,7 @@ class Georef:
 def geodesic_m(lat1: Any, lon1: Any, lat2: Any, lon2: Any) -> Any:
     """The geodesic distance on the WGS 84 ellipsoid, m (pyproj's ``Geod``: Karney's
     algorithm), between the points (``lat1``, ``lon1``) and (``lat2``, ``lon2``), degrees."""
-    la1, lo1 = _check_latlon("first point", lat1, lon1)
-    la2, lo2 = _check_latlon("second point", lat2, lon2)
+    la1, lo1 = check_latlon("first point", lat1, lon1)
+    la2, lo2 = check_latlon("second point", lat2, lon2)
     _, _, d = pyproj_module().Geod(ellps="WGS84").inv(lo1, la1, lo2, la2)
     return d

@@ -6,7 +6,9 @@
     python -m rainuav.radiomap --scenario storm --storm-seed 3 --duration-s 300 --slice-s 5
     python -m rainuav.radiomap --clear-cache
 
-The library lives in :mod:`rainuav.radio`.
+Writes the PNGs first and ``radiomap.npz`` (``radiomap_series.npz`` for maps in time) last:
+a folder holding it is complete (an earlier run's copy is removed before the new files are
+written). The library lives in :mod:`rainuav.radio`.
 """
 
 from __future__ import annotations
@@ -92,7 +94,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _build(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from rainuav._io import check_out_dir
+    from rainuav._io import begin_folder, check_out_dir
     from rainuav.radio import Scenario, build_radio_map, presets
     from rainuav.radio.plot import save_map_png
 
@@ -122,9 +124,10 @@ def _build(args: argparse.Namespace) -> int:
     if args.duration_s is not None or args.slice_s is not None:
         return _build_series(args, scn)
     rm = build_radio_map(scn, cache=not args.no_cache, progress=True)
-    npz = rm.save(args.out / "radiomap.npz")
+    begin_folder(args.out, "radiomap.npz")
     kinds = ("sinr", "sir", "serving", "rss")
     pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in kinds]
+    npz = rm.save(args.out / "radiomap.npz")  # last: the folder is complete
     split = ", ".join(f"{k} {v:.1f} s" for k, v in rm.timings.items()) or "from the cache"
     sinr = rm.sinr_db
     print(
@@ -140,6 +143,7 @@ def _build(args: argparse.Namespace) -> int:
 def _build_series(args: argparse.Namespace, scn: Any) -> int:
     import numpy as np
 
+    from rainuav._io import begin_folder
     from rainuav.radio.plot import save_series_gif
     from rainuav.radio.timemap import build_radio_map_series, series_times
 
@@ -154,11 +158,12 @@ def _build_series(args: argparse.Namespace, scn: Any) -> int:
         )
     times = series_times(args.duration_s, 5.0 if args.slice_s is None else args.slice_s)
     series = build_radio_map_series(scn, times, cache=not args.no_cache, progress=True)
-    npz = series.save(args.out / "radiomap_series.npz")
     from rainuav.radio.presets import SINR_THRESHOLDS_DB
 
     threshold = SINR_THRESHOLDS_DB.get(scn.name)
+    begin_folder(args.out, "radiomap_series.npz")
     gif = save_series_gif(series, args.out / "storm.gif", min_db=threshold, progress=True)
+    npz = series.save(args.out / "radiomap_series.npz")  # last: the folder is complete
     split = ", ".join(f"{k} {v:.1f} s" for k, v in series.timings.items()) or "from the cache"
     line = (
         f"{scn.name} ({scn.engine}, {scn.freq_hz / 1e9:g} GHz): {len(times)} slices "

@@ -5,8 +5,8 @@ Every case runs in its own folder ``DIR/cases/<case>`` (``result.json`` written 
 rerun skips finished cases, so an interrupted study resumes. ``--workers`` cases run at once
 in spawned processes (default: the cores, at most the cases); ``--ray ADDRESS`` runs each
 case as a task on a Ray cluster instead (``pip install 'rainuav[ray]'``). ``--quick`` applies the
-study's ``[quick]`` changes (short trainings, the ray engine). Writes ``results.csv`` and
-``report.md`` in ``DIR``. The study file is checked before any work starts: an unknown field,
+study's ``[quick]`` changes (short trainings, the ray engine). Writes ``report.md`` and then,
+last, ``results.csv`` in ``DIR``: a study folder holding ``results.csv`` is complete. The study file is checked before any work starts: an unknown field,
 an empty axis or a value out of range is refused with the field named (exit 2).
 """
 

@@ -10,7 +10,8 @@ skips it; anything else in a folder without it is redone. Cases run in spawned w
 processes (``workers``); maps are built once per distinct scenario through the map cache
 (:mod:`rainuav.radio.cache`), before the cases, so parallel cases never build the same map
 twice. ``results.csv`` and ``report.md`` are written from the finished cases in case order,
-so they do not depend on the number of workers.
+so they do not depend on the number of workers; ``results.csv`` is the study folder's last
+file (removed when a run starts), so a folder holding it is complete.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from rainuav._io import write_atomic
+from rainuav._io import begin_folder, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.studies.figures import plot_maps
 from rainuav.studies.policies import TRANSFER_COLUMNS, plot_learned, read_result, transfer
@@ -206,6 +207,7 @@ def run_study(
     local processes, or as Ray tasks with ``ray_address``) and writes ``results.csv`` and
     ``report.md``; returns the rows in case order."""
     cases = study.cases()
+    begin_folder(out, "results.csv")  # written again, last, once every case is done
     todo = [c for c in cases if not (out / "cases" / c.id / "result.json").exists()]
     bar = None
     if progress:
@@ -269,7 +271,6 @@ def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
     w.writerow(COLUMNS)
     for r in rows:
         w.writerow([_fmt(r.get(c)) for c in COLUMNS])
-    write_atomic(out / "results.csv", lambda t: t.write_text(buf.getvalue()))
     shown = [c for c in COLUMNS if any(r.get(c) not in (None, "") for r in rows)]
     lines = [f"# Study `{study.name}`", "", f"{len(rows)} cases ({study.sweep}).", ""]
     lines += ["| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
@@ -337,3 +338,5 @@ def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
         lines += [f"![{p.parent.name}](cases/{p.parent.name}/optimal.png)" for p in figs]
     text = "\n".join(lines) + "\n"
     write_atomic(out / "report.md", lambda t: t.write_text(text))
+    # Last: a study folder holding results.csv is complete.
+    write_atomic(out / "results.csv", lambda t: t.write_text(buf.getvalue()))

@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from rainuav._io import write_atomic
+from rainuav._io import begin_folder, write_atomic
 from rainuav.errors import InvalidInputError
-from rainuav.geo import Georef
+from rainuav.geo import Georef, latlon_text
 from rainuav.missions import corners, expand, geojson_dict, kml_text, plan_dict, wpl_text
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
@@ -37,14 +37,23 @@ from rainuav.radio.sites import read_site_rows, sites_from_rows
 from rainuav.radio.timemap import build_radio_map_series, series_times
 from rainuav.world import World, world_from
 
-__all__ = ["MARGIN_M", "Place", "fly_place", "place_scenario"]
+__all__ = ["MARGIN_M", "MAX_SIDE_M", "Place", "fly_place", "place_scenario"]
 
 SLICE_S = 5.0
 """Time between the maps of a weather file with several instants, s."""
 MARGIN_M = 300.0
 """The area reaches this far beyond the start, the destination and the sites, m."""
+MAX_SIDE_M = 10_000.0
+"""The widest and tallest area a place maps, m: at 10 m it is 1e6 pixels (about 35 s and 3.5 GB
+on a 2-core machine with the 9 sectors of the example), and the hybrid engine's PE march
+of the ``uma`` settings carries every sector over it, from any site in it (tested with a
+site in a corner pointing across the diagonal)."""
+ARRIVAL_TOL_M = NavConfig.tol_m
+"""A destination this close to the take-off point is reached before any move, m."""
 FLIGHT_FILES = ("flight.geojson", "flight.kml", "mission.plan", "mission.waypoints",
                 "flight.png", "summary.json")  # fmt: skip
+"""The files of a flight, in the order they are written: ``summary.json`` last, so a folder
+holding it is complete."""
 
 
 @dataclass
@@ -77,6 +86,7 @@ def place_scenario(
     west longitude, north latitude, east longitude), degrees, in place of the box around the
     start, the destination and the sites; the start and the destination must lie in it."""
     rows = read_site_rows(sites_file)
+    _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
     if freqs and freqs != {freq_ghz}:
         raise InvalidInputError(f"--freq-ghz {freq_ghz:g} differs from the sites file's "
@@ -90,7 +100,19 @@ def place_scenario(
         for name, (la, lo) in (("--start", start), ("--goal", goal)):
             if not (s_ <= la <= n_ and w_ <= lo <= e_):
                 raise InvalidInputError(f"{name} {la},{lo} lies outside the --area {box}")
+        for r in rows:
+            if not (s_ <= r["lat"] <= n_ and w_ <= r["lon"] <= e_):
+                raise InvalidInputError(
+                    f"sites file {sites_file}: site {r['site_id']} at "
+                    f"{latlon_text(r['lat'], r['lon'])} lies outside the --area {box} (every "
+                    "site must lie in the area)"
+                )
         lats, lons = [s_, n_], [w_, e_]
+        # Its size on the sphere, before any projection (a box round the globe has no plane).
+        w = math.radians(e_ - w_) * 6371e3 * math.cos(math.radians(min(abs(s_), abs(n_))))
+        if s_ < 0 < n_:
+            w = math.radians(e_ - w_) * 6371e3
+        _check_size(w, math.radians(n_ - s_) * 6371e3, "--area spans")
     if max(lons) - min(lons) > 180.0:
         raise InvalidInputError("the start, destination and sites straddle the date line; "
                                 "give longitudes on one side of it")  # fmt: skip
@@ -105,6 +127,11 @@ def place_scenario(
         cx, cy = geo.to_local(np.array([box[0], box[0], box[2], box[2]]),
                               np.array([box[1], box[3], box[1], box[3]]))  # fmt: skip
         xs, ys, margin = [float(cx.min()), float(cx.max())], [float(cy.min()), float(cy.max())], 0.0
+
+    if box is None:
+        _check_reach(sites_file, rows, geo, (float(sx), float(sy)), (float(gx), float(gy)))
+    else:
+        _check_size(max(xs) - min(xs), max(ys) - min(ys), "--area spans")
 
     def edge(v: float, up: bool) -> float:
         f = math.ceil if up else math.floor
@@ -123,6 +150,70 @@ def place_scenario(
     scn = dataclasses.replace(base, name="place", area=area, sites=sites, origin=origin)
     scn.check()
     return Place(scn, geo, (float(sx), float(sy)), (float(gx), float(gy)), rows)
+
+
+def _check_leg(start: tuple[float, float], goal: tuple[float, float]) -> None:
+    """Refuses a destination within the arrival tolerance of the take-off point (no flight
+    to plan: a take-off and a landing on the spot are the autopilot's, not a plan), and one
+    too far for any area fly maps (before anything is projected: a leg across the date line
+    or half the globe is refused for its length)."""
+    from rainuav.geo import check_latlon, geodesic_m
+
+    check_latlon("--start", *start)
+    check_latlon("--goal", *goal)
+    d = float(geodesic_m(*start, *goal))
+    if d <= ARRIVAL_TOL_M:
+        raise InvalidInputError(
+            f"--start and --goal are {d:.1f} m apart, within the arrival tolerance of "
+            f"{ARRIVAL_TOL_M:g} m: there is no flight to plan (give a destination farther away)"
+        )
+    if d > math.sqrt(2.0) * (MAX_SIDE_M - 2 * MARGIN_M):  # cannot fit, however it turns
+        raise InvalidInputError(
+            f"--start and --goal are {d / 1e3:.1f} km apart; fly maps at most "
+            f"{MAX_SIDE_M / 1e3:g} km x {MAX_SIDE_M / 1e3:g} km (the start, the destination and "
+            f"the sites with a {MARGIN_M:g} m margin): plan the flight in legs"
+        )
+
+
+def _check_size(w: float, h: float, what: str, hint: str = "give a smaller box") -> None:
+    """Refuses an area ``w`` x ``h`` m wider or taller than :data:`MAX_SIDE_M`."""
+    if max(w, h) > MAX_SIDE_M:
+        raise InvalidInputError(
+            f"{what} {w / 1e3:.1f} km east-west and {h / 1e3:.1f} km north-south; fly maps at "
+            f"most {MAX_SIDE_M / 1e3:g} km x {MAX_SIDE_M / 1e3:g} km: {hint}"
+        )
+
+
+def _check_reach(
+    sites_file: str | Path,
+    rows: list[dict[str, Any]],
+    geo: Georef,
+    start_m: tuple[float, float],
+    goal_m: tuple[float, float],
+) -> None:
+    """Refuses, in the user's terms, an area around the start, the destination and the sites
+    (with :data:`MARGIN_M`) wider or taller than :data:`MAX_SIDE_M`: naming the distance
+    between the start and the destination, or the site farthest from the route."""
+    (x0, x1), (y0, y1) = sorted((start_m[0], goal_m[0])), sorted((start_m[1], goal_m[1]))
+    leg_w, leg_h = x1 - x0 + 2 * MARGIN_M, y1 - y0 + 2 * MARGIN_M
+    if max(leg_w, leg_h) > MAX_SIDE_M:
+        d = math.hypot(goal_m[0] - start_m[0], goal_m[1] - start_m[1])
+        _check_size(leg_w, leg_h, f"--start and --goal are {d / 1e3:.1f} km apart: the route "
+                    f"with its {MARGIN_M:g} m margin spans", "plan the flight in legs")  # fmt: skip
+    rx, ry = geo.to_local(np.array([r["lat"] for r in rows]), np.array([r["lon"] for r in rows]))
+    w = max(x1, float(rx.max())) - min(x0, float(rx.min())) + 2 * MARGIN_M
+    h = max(y1, float(ry.max())) - min(y0, float(ry.min())) + 2 * MARGIN_M
+    if max(w, h) <= MAX_SIDE_M:
+        return
+    off = np.hypot(np.maximum.reduce([x0 - rx, rx - x1, 0 * rx]),
+                   np.maximum.reduce([y0 - ry, ry - y1, 0 * ry]))  # fmt: skip
+    far = int(np.argmax(off))
+    raise InvalidInputError(
+        f"sites file {sites_file}: site {rows[far]['site_id']} lies {off[far] / 1e3:.1f} km "
+        f"from the route from --start to --goal; fly maps at most {MAX_SIDE_M / 1e3:g} km x "
+        f"{MAX_SIDE_M / 1e3:g} km around the route and the sites (with a {MARGIN_M:g} m "
+        "margin): leave out the sites that far away"
+    )
 
 
 def fly_place(
@@ -210,7 +301,7 @@ def fly_place(
 def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.ndarray,
            sinr: np.ndarray, serving: np.ndarray, min_db: float, summary: dict,
            rm: Any) -> None:  # fmt: skip
-    out.mkdir(parents=True, exist_ok=True)
+    begin_folder(out, "summary.json")
     alt = place.scenario.area.altitude_m
     wp = ll[corners(path)]
     home = (float(ll[0, 0]), float(ll[0, 1]))
@@ -225,11 +316,12 @@ def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.nd
         "flight.kml": kml_text(ll, alt, "rainuav flight", sites),
         "mission.plan": json.dumps(plan_dict(home, wp, alt, 10.0), indent=2),
         "mission.waypoints": wpl_text(home, wp, alt),
-        "summary.json": json.dumps(summary, indent=2),
     }
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
     _plot(rm, path, place, out / "flight.png")
+    done = json.dumps(summary, indent=2) + "\n"  # last: the folder is complete
+    write_atomic(out / "summary.json", lambda tmp: tmp.write_text(done))
 
 
 def _plot(rm: Any, path: np.ndarray, place: Place, where: Path) -> None:
@@ -262,8 +354,8 @@ def _plot(rm: Any, path: np.ndarray, place: Place, where: Path) -> None:
     ax.plot(*place.goal_m, "b*", ms=12, label="destination")
     ax.set_xlabel("east of origin [m]")
     ax.set_ylabel("north of origin [m]")
-    ax.set_title(f"SINR and rain at take-off; origin {place.georef.lat_deg:.5f} N, "
-                 f"{place.georef.lon_deg:.5f} E", fontsize=10)  # fmt: skip
+    origin = latlon_text(place.georef.lat_deg, place.georef.lon_deg)
+    ax.set_title(f"SINR and rain at take-off; origin {origin}", fontsize=10)
     ax.legend(loc="upper left", fontsize="small")
     fig.colorbar(im, ax=ax, label="SINR [dB]")
     write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
