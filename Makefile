@@ -4,12 +4,14 @@
 #   make wheel  one abi3 wheel (CPython 3.10+) in target/wheels
 #   make wheel-check  install that wheel into a fresh venv away from the source and run it
 #   make fmt    format Rust and Python in place
+#   make docs   the documentation site into site/ (warnings are errors; the docs extra)
+#   make figures  regenerate the documentation's figures from the package
 PYTHON ?= python
 # The suite on both cores of the 2-core machine, one file per worker (a file's tests share
 # their session's map cache); PYTEST_ARGS= runs it in one process.
 PYTEST_ARGS ?= -n 2 --dist loadfile
 
-.PHONY: test build lint test-rust test-python bench fmt validate wheel wheel-check
+.PHONY: test build lint test-rust test-python bench fmt validate wheel wheel-check docs figures
 
 test: build lint test-rust test-python
 
@@ -48,3 +50,9 @@ fmt:
 
 validate: build
 	$(PYTHON) -m rainuav.validate rain --out validation
+
+docs:
+	NO_MKDOCS_2_WARNING=1 $(PYTHON) -m mkdocs build --strict --site-dir site
+
+figures: build
+	$(PYTHON) docs/figures.py

@@ -14,7 +14,7 @@ layer called up. Round trips between ``rl`` and ``nav`` are the calls up from ``
     python benches/config_path.py            # a tiny run of the uma preset (ray engine)
 
 Prints the count, the round trips and the layer sequence (consecutive calls in one group
-merged). ``tests/test_layout.py`` asserts the count stays under 10 (issue #27).
+merged). ``tests/test_layout.py`` asserts the count stays under 10.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""One decision for 64 UAVs by the weather-reading network, on the CPU (issue #28: at most
-1 ms): the storm learner's network (``STORM_LEARNER``: 8/16 channels, move features), the
+"""One decision for 64 UAVs by the weather-reading network, on the CPU (the aim: at
+most 1 ms): the storm learner's network (``STORM_LEARNER``: 8/16 channels, move features), the
 first one (16/32 channels), and the single-map network doing the same decision in the same
 run.
 

@@ -1,5 +1,5 @@
 """A trained storm network flown by ``python -m rainuav.fly --policy`` on the shipped example
-place (issue #29), against the exact plan the command makes by default: arrival share and
+place, against the exact plan the command makes by default: arrival share and
 excess cost over it, for seeded (start, destination) pairs the network has never seen.
 
     python benches/fly_policy.py RUN [--pairs 20] [--seed 0]

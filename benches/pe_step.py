@@ -1,6 +1,6 @@
 """Milliseconds per step of a march at the `paper` preset's largest grid (2500 x 1296, pec-h,
 wide-angle, 20 steps, best of 3), for A/B comparisons of two builds of the extension module
-in one session: ``python benches/pe_step.py`` under each (BENCHMARKS.md, "PE step"). Two
+in one run of the machine: ``python benches/pe_step.py`` under each (BENCHMARKS.md, "PE step"). Two
 lines: the general step (the lateral window every step) and the uniform-medium path with the
 lateral window every 7 steps, as the radio-map engine runs that grid."""
 

@@ -1,4 +1,4 @@
-"""Peers over the storm distribution (issue #28): Stable-Baselines3's DQN and PPO with
+"""Peers over the storm distribution: Stable-Baselines3's DQN and PPO with
 ``MultiInputPolicy`` on the same env as rainuav's network that reads the weather, each for the
 same wall-clock budget, all measured the same way on held-out storms.
 

@@ -1,4 +1,4 @@
-"""The per-storm learner as a yardstick for the network that flies every storm (issue #28):
+"""The per-storm learner as a yardstick for the network that flies every storm:
 today's learner (the position and the flight time as input) trained on one held-out storm
 alone and flown on that very storm, from the same 20 fixed starts as the generalist's
 evaluation (``python -m rainuav.evaluate RUN --storm-seeds A-B``, the run's ``eval_seed``).

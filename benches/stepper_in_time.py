@@ -1,5 +1,5 @@
-"""The batched stepper and the vector env on maps in time against one map, same work, same run
-(issue #27: "at today's speed per step").
+"""The batched stepper and the vector env on maps in time against one map, same work, same run:
+does a weather that moves keep the speed of a step?
 
     python benches/stepper_in_time.py
 

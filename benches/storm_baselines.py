@@ -1,5 +1,5 @@
 """What a static plan costs once the storm moves: the exact space-time optimum against the
-baselines a user would try, by storm speed (issue #27).
+baselines a user would try, by storm speed.
 
 For each storm seed and storm speed (every cell's velocity scaled alike, ``storm_speed_m_s``;
 0: cells stay put and only grow or decay), the ``storm`` world (``uma`` at 28 GHz, ray engine,

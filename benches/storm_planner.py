@@ -1,4 +1,4 @@
-"""The exact planner on a map and on maps in time, same starts, same run (issue #27).
+"""The exact planner on a map and on maps in time, same starts, same run.
 
     python benches/storm_planner.py
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The storm learner trained on the GPU and on the CPU of one machine, same seed, same episodes,
-# side by side, then both networks flown through the same validation storms (#28's GPU check).
+# side by side, then both networks flown through the same validation storms (the GPU check).
 #
 #   bash benches/train_device.sh OUT [EPISODES] [STORMS]
 #

@@ -1,5 +1,5 @@
-"""The worst flights of a network that flies any storm, for looking at (issue #28: "what the
-network gets wrong"): in the storm of the evaluation where its mean excess cost was highest
+"""The worst flights of a network that flies any storm, for looking at what the
+network gets wrong: in the storm of the evaluation where its mean excess cost was highest
 (``evaluation.json`` of ``python -m rainuav.evaluate RUN --storm-seeds A-B``), the 3 starts of
 the 20 where it paid most over the optimum (or did not arrive), drawn over the SINR at three
 instants beside the frozen take-off plan's and the optimum's flights.

@@ -7,13 +7,13 @@ Sites from a CSV or GeoJSON file (one row per sector: ``site_id, lat, lon, heigh
 azimuth_deg, electrical_tilt_deg, tx_power_dbm``, optional ``antenna, rows,
 mechanical_tilt_deg, freq_ghz``; azimuths clockwise from north, tilts positive down, as
 operators give them: :mod:`rainuav.radio.sites`), the start and destination as ``LAT,LON``
-(degrees, WGS 84; south and west negative), the flight altitude, the carrier and homogeneous rain (``--rain-rate``) or
-a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with one band per instant or a
-folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several instants give a weather
-that moves and the exact plan in space-time:
+(degrees, WGS 84; south and west negative), the flight altitude, the carrier and homogeneous
+rain (``--rain-rate``) or a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with
+one band per instant or a folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several
+instants give a weather that moves and the exact plan in space-time:
 :mod:`rainuav.radio.radar`). The area is the box around the start, the destination and the
-sites with a 300 m margin (at most 10 km x 10 km), in metres of an azimuthal equidistant projection centred on it
-(:mod:`rainuav.geo`). Plans the exact optimum
+sites with a 300 m margin (at most 10 km x 10 km), in metres of an azimuthal equidistant
+projection centred on it (:mod:`rainuav.geo`). Plans the exact optimum
 (``rainuav.nav.planner``) and writes into ``--out``:
 
 - ``flight.geojson`` (the path, WGS 84, with per-vertex time, SINR, serving cell and outage;

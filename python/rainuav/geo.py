@@ -1,4 +1,4 @@
-"""Where a scenario lies on the Earth: its georeference (issue #29).
+"""Where a scenario lies on the Earth: its georeference.
 
 A scenario's positions are metres east (``x``) and north (``y``) of an origin. A
 :class:`Georef` ties that origin to a latitude and longitude (WGS 84) through an azimuthal

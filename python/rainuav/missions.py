@@ -1,4 +1,4 @@
-"""Flight plans out (issue #29): a lattice path as a few waypoints, and the files a ground
+"""Flight plans out: a lattice path as a few waypoints, and the files a ground
 station or a GIS loads.
 
 - :func:`corners`: the vertices of a lattice path where its direction changes (and its two

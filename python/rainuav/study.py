@@ -6,8 +6,9 @@ rerun skips finished cases, so an interrupted study resumes. ``--workers`` cases
 in spawned processes (default: the cores, at most the cases); ``--ray ADDRESS`` runs each
 case as a task on a Ray cluster instead (``pip install 'rainuav[ray]'``). ``--quick`` applies the
 study's ``[quick]`` changes (short trainings, the ray engine). Writes ``report.md`` and then,
-last, ``results.csv`` in ``DIR``: a study folder holding ``results.csv`` is complete. The study file is checked before any work starts: an unknown field,
-an empty axis or a value out of range is refused with the field named (exit 2).
+last, ``results.csv`` in ``DIR``: a study folder holding ``results.csv`` is complete. The
+study file is checked before any work starts: an unknown field, an empty axis or a value out
+of range is refused with the field named (exit 2).
 """
 
 from __future__ import annotations

@@ -45,7 +45,7 @@ class Pattern:
     elevation_deg: list[float]
     """Elevation angles relative to the tilt, increasing."""
     gain_db: list[list[float]]
-    """gain_db[i][j] at (azimuth_deg[i], elevation_deg[j]), 0 at boresight."""
+    """``gain_db[i][j]`` at (``azimuth_deg[i]``, ``elevation_deg[j]``), 0 at boresight."""
 
 
 @dataclass

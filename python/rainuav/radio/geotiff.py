@@ -1,4 +1,4 @@
-"""Rain from GeoTIFF files, as many radar archives and GIS exports deliver it (issue #29),
+"""Rain from GeoTIFF files, as many radar archives and GIS exports deliver it,
 read with rasterio (GDAL) into the same CF form as a NetCDF rain file, so one reader
 (:func:`rainuav.radio.radar.read_radar_grid`) reprojects both.
 

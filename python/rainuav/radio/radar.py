@@ -1,4 +1,4 @@
-"""Rain from a georeferenced grid, as weather radars and nowcasts deliver it (issue #29): a
+"""Rain from a georeferenced grid, as weather radars and nowcasts deliver it: a
 NetCDF (CF) file of rain rate or reflectivity on (time, lat, lon) or on projected (time, y, x)
 with its CRS, or GeoTIFF (a file with one band per instant, or a folder of them: read by
 :mod:`rainuav.radio.geotiff` into the same form), reprojected onto a georeferenced scenario's

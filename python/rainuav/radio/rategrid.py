@@ -1,7 +1,8 @@
 """Rain from a file: a NetCDF dataset of rain rates on (time, y, x) in the scenario's metres, read
 with xarray into a moving weather (:class:`rainuav.radio.weather.Medium` of kind ``'map'`` with
 one map per instant; ``medium.at(t)`` interpolates linearly in time, exact at the file's own
-instants). Georeferenced grids (latitude/longitude, a CRS, dBZ) come with issue #29.
+instants). Georeferenced grids (latitude/longitude, a CRS, dBZ) are read by
+:mod:`rainuav.radio.radar`.
 
 The file holds one data variable with dimensions ``(time, y, x)`` (or the one named by
 ``variable``) in ``mm/h`` (``units`` attribute: ``mm/h``, ``mm h-1``, ``mm hr-1`` or
@@ -98,7 +99,7 @@ def _read(
     if units not in UNITS:
         raise InvalidInputError(
             f"rain-rate file {path}: {names[0]}.units must be mm/h (one of {UNITS}; got "
-            f"{units!r}; radar reflectivity in dBZ comes with issue #29)"
+            f"{units!r}; radar reflectivity in dBZ is read by python -m rainuav.fly --weather)"
         )
     times = _seconds(path, da["time"].values)
     xs, ys = sample_grid(area, max_cells)

@@ -1,4 +1,4 @@
-"""Base stations from a file, in latitude and longitude (issue #29): one row per sector, as an
+"""Base stations from a file, in latitude and longitude: one row per sector, as an
 operator's site list has them, into the scenario's :class:`~rainuav.radio.scenario.Site`\\ s.
 
 CSV (a header row, then one sector per row) or GeoJSON (a ``FeatureCollection`` of ``Point``

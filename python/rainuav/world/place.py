@@ -1,5 +1,5 @@
-"""A real place as a world, and a flight through it written for an autopilot (issue #29;
-``python -m rainuav.fly``).
+"""A real place as a world, and a flight through it written for an autopilot
+(``python -m rainuav.fly``).
 
 :func:`place_scenario`: sites from a file (:mod:`rainuav.radio.sites`), a start and a
 destination in latitude and longitude, the flight altitude, the carrier and homogeneous rain
@@ -348,8 +348,8 @@ def _plot(rm: Any, path: np.ndarray, place: Place, where: Path) -> None:
     ax.plot(path[:, 0], path[:, 1], "k-", lw=1.5, label="planned flight")
     wp = path[corners(path)]
     ax.plot(wp[:, 0], wp[:, 1], "ko", ms=3, label="waypoints")
-    for s in place.scenario.sites:
-        ax.plot(s.x_m, s.y_m, "k^", ms=7)
+    for k, s in enumerate(place.scenario.sites):
+        ax.plot(s.x_m, s.y_m, "k^", ms=7, label="sites" if k == 0 else None)
     ax.plot(*place.start_m, "bs", label="start")
     ax.plot(*place.goal_m, "b*", ms=12, label="destination")
     ax.set_xlabel("east of origin [m]")
