@@ -652,7 +652,7 @@ def test_optimal_flights_never_revisit_a_position() -> None:
 
 def test_resume_refuses_a_different_config(tmp_path: Path) -> None:
     # --resume with other settings than the checkpoint's would silently mix two runs; it is
-    # refused and the differing fields are named (issue #12, defect 5).
+    # refused and the differing fields are named.
     from rainuav import InvalidInputError
 
     def cfg40() -> TrainConfig:
@@ -673,7 +673,7 @@ def test_resume_refuses_a_different_config(tmp_path: Path) -> None:
 
 def test_train_leaves_no_process_wide_state(tmp_path: Path) -> None:
     # train() used to leave torch on one thread and switch matplotlib's backend for the whole
-    # process (issue #12, defect 5).
+    # process.
     import matplotlib
 
     threads = torch.get_num_threads()
@@ -692,7 +692,7 @@ def test_train_leaves_no_process_wide_state(tmp_path: Path) -> None:
 def test_agent_and_start_streams_are_independent(tmp_path: Path) -> None:
     # The agent's generator and the start sampler come from one seed but draw independent
     # streams (SeedSequence.spawn), so lane 0's first start and first exploration decision
-    # are not the same uniform (issue #12, defect 6).
+    # are not the same uniform.
     from rainuav.rl.config import random_streams
 
     for seed in range(20):
@@ -718,7 +718,7 @@ def test_agent_and_start_streams_are_independent(tmp_path: Path) -> None:
 
 def test_scenario_file_weather_is_used_as_written(tmp_path: Path) -> None:
     # A scenario file's rain cells survive unless a rain-rate flag says otherwise: no
-    # sentinel default replaces them (issue #12, defect 1).
+    # sentinel default replaces them.
     from rainuav.radio.scenario import Area, Cell, Medium, RainCell, Scenario, Site
     from rainuav.world import make_scenario
 

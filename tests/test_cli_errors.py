@@ -1,5 +1,5 @@
 """Every CLI answers a missing or malformed file with one line naming the file and the
-problem, and exit code 2; never a traceback (issue #12, defect 4)."""
+problem, and exit code 2; never a traceback."""
 
 from __future__ import annotations
 

@@ -230,7 +230,7 @@ def test_shielded_flights_always_arrive_in_time() -> None:
 def test_planner_refuses_plans_beyond_memory() -> None:
     # A 40 km x 40 km area at 10 m steps with a 10 000-move horizon: each plan would keep
     # 16 million lattice points x 10 kB of policy (~160 GB). The planner checks before it
-    # allocates and names the size (issue #12, defect 3); before, the allocation aborted the
+    # allocates and names the size; before, the allocation aborted the
     # Python process.
     env = UAVNavEnv(
         sir_db=np.zeros((4, 4)),

@@ -1,4 +1,4 @@
-"""Rain from GeoTIFF (issue #29): files written by rasterio (GDAL), as radar archives and GIS
+"""Rain from GeoTIFF: files written by rasterio (GDAL), as radar archives and GIS
 tools write them, read into the same rain as the same grid in CF NetCDF; a grid moved by one
 pixel moves the rain by one pixel; what the reader cannot place in time or space is refused
 in one line."""

@@ -1,4 +1,4 @@
-"""The corpus of bad and hostile inputs (issue #25): what users hand each other (run folders,
+"""The corpus of bad and hostile inputs: what users hand each other (run folders,
 study folders, cached maps, scenario files) and what they type (CLI flags, env calls), each
 with the answer it must get.
 

@@ -1,4 +1,4 @@
-"""One network for every storm (issue #28): the weather observation against the map it claims
+"""One network for every storm: the weather observation against the map it claims
 to show, the destination distribution, a bank of worlds against its members, per-UAV
 destinations in the batched stepper against the scalar env, the storm pool's seeds, and a
 seeded run over the storm distribution reproduced."""

@@ -1,4 +1,4 @@
-"""Real places (issue #29, first part): the georeference against pyproj's geodesic, and the
+"""Real places: the georeference against pyproj's geodesic, and the
 mission files through the parsers real clients use (pymavlink's waypoint loader, the
 ``geojson`` package's validation, an XML parser for KML, QGroundControl's plan fields)."""
 

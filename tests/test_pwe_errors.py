@@ -87,8 +87,7 @@ def test_gaussian_beam_bad_input() -> None:
 def test_ctrl_c_stops_a_long_march_within_a_second() -> None:
     # The child is started with SIGINT ignored, as a job started in the background by a
     # non-interactive shell is (it inherits SIG_IGN); it must install Python's handler itself
-    # to be interruptible, and the test kills it rather than wait forever (issue #12,
-    # defect 7).
+    # to be interruptible, and the test kills it rather than wait forever.
     script = (
         "import signal, sys\n"
         "signal.signal(signal.SIGINT, signal.default_int_handler)\n"

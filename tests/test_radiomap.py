@@ -336,7 +336,7 @@ def test_rate_map_equals_homogeneous_rain() -> None:
 
 def test_with_rain_changes_only_the_rain() -> None:
     # --rain-rate replaces the scenario's rain field, never its rain model, drop sizes,
-    # shape, temperature or wind (issue #12, defect 1).
+    # shape, temperature or wind.
     weather = Medium(
         kind="cells",
         rain_rate_mm_h=2.0,
@@ -384,7 +384,7 @@ def test_the_scenarios_wind_model_reaches_the_rain_medium(tmp_path: Path) -> Non
 
 
 def test_cache_key_changes_with_the_engine(monkeypatch) -> None:
-    # A map cached by other engine code is not reused (issue #12, defect 2): the key hashes
+    # A map cached by other engine code is not reused: the key hashes
     # the engine's fingerprint (version, Python engine sources, compiled core).
     scn = beam_line(length=200.0, res=10.0)
     first = build_radio_map(scn, cache=True)

@@ -1,4 +1,4 @@
-"""Rain from a NetCDF file as weather in time (issue #26, section 1): read with xarray, exact at
+"""Rain from a NetCDF file as weather in time: read with xarray, exact at
 the file's own instants, linear between them, every slice of a map series the static map of its
 instant, and a bad file refused in one line naming what is wrong."""
 

@@ -1,4 +1,4 @@
-"""Stochastic rain fields (issue #26, section 1): the noise's spectrum slope, the wet fraction and
+"""Stochastic rain fields: the noise's spectrum slope, the wet fraction and
 the mean rate asked for (within sampling error, stated), an exact shift with the storm velocity,
 a continuous evolution, slices of a series against static builds, and bad input."""
 

@@ -1,4 +1,4 @@
-"""Flights through weather that moves (issue #27): time in the task, the exact space-time
+"""Flights through weather that moves: time in the task, the exact space-time
 optimum against an independent brute force, the environment's return along the planner's
 path, the baselines, the world built from a spec, and static maps unchanged."""
 

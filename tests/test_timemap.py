@@ -1,4 +1,4 @@
-"""Radio maps in time (issue #26, section 2, the ray engine): every slice against a static
+"""Radio maps in time, ray engine: every slice against a static
 build of the frozen weather at its instant, the rain path integral against brute-force
 quadrature, still weather, interpolation between slices and bad input."""
 

@@ -1,4 +1,4 @@
-"""Weather in time (issue #26, section 1): moving, growing and decaying rain cells, the frozen
+"""Weather in time: moving, growing and decaying rain cells, the frozen
 weather at any instant, and the ``storm`` preset's documented distribution."""
 
 from __future__ import annotations
