@@ -109,9 +109,8 @@ def place_scenario(
                 )
         lats, lons = [s_, n_], [w_, e_]
         # Its size on the sphere, before any projection (a box round the globe has no plane).
-        w = math.radians(e_ - w_) * 6371e3 * math.cos(math.radians(min(abs(s_), abs(n_))))
-        if s_ < 0 < n_:
-            w = math.radians(e_ - w_) * 6371e3
+        widest = 0.0 if s_ < 0 < n_ else min(abs(s_), abs(n_))  # the latitude nearest the equator
+        w = math.radians(e_ - w_) * 6371e3 * math.cos(math.radians(widest))
         _check_size(w, math.radians(n_ - s_) * 6371e3, "--area spans")
     if max(lons) - min(lons) > 180.0:
         raise InvalidInputError("the start, destination and sites straddle the date line; "
@@ -205,8 +204,9 @@ def _check_reach(
     h = max(y1, float(ry.max())) - min(y0, float(ry.min())) + 2 * MARGIN_M
     if max(w, h) <= MAX_SIDE_M:
         return
-    off = np.hypot(np.maximum.reduce([x0 - rx, rx - x1, 0 * rx]),
-                   np.maximum.reduce([y0 - ry, ry - y1, 0 * ry]))  # fmt: skip
+    # Each site's distance from the route's box (0 inside it).
+    off = np.hypot(np.maximum(np.maximum(x0 - rx, rx - x1), 0.0),
+                   np.maximum(np.maximum(y0 - ry, ry - y1), 0.0))  # fmt: skip
     far = int(np.argmax(off))
     raise InvalidInputError(
         f"sites file {sites_file}: site {rows[far]['site_id']} lies {off[far] / 1e3:.1f} km "
