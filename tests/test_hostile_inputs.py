@@ -758,6 +758,16 @@ def test_the_completion_file_is_written_last(run_copy, tmp_path, capsys, monkeyp
 
 
 @pytest.mark.parametrize("cli", sorted(COMPLETION_FILES))
+def test_a_folder_where_the_completion_file_is_a_folder_is_refused(run_copy, tmp_path, capsys, cli):
+    out = tmp_path / "out"
+    (out / COMPLETION_FILES[cli] / "inside").mkdir(parents=True)
+    rc, err = run_cli(*_tool_argv(cli, run_copy, tmp_path, out), capsys)
+    refused(f"{cli} {COMPLETION_FILES[cli]} is a folder", rc, err, COMPLETION_FILES[cli],
+            "cannot be replaced")  # fmt: skip
+    assert (out / COMPLETION_FILES[cli] / "inside").is_dir()  # nothing of the user's lost
+
+
+@pytest.mark.parametrize("cli", sorted(COMPLETION_FILES))
 def test_a_run_killed_before_its_last_file_does_not_look_finished(
     run_copy, tmp_path, capsys, monkeypatch, cli
 ):

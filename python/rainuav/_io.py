@@ -102,7 +102,13 @@ def begin_folder(folder: str | os.PathLike[str], last: str) -> Path:
     (a kill -9 included). Returns the folder."""
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
-    (out / last).unlink(missing_ok=True)
+    try:
+        (out / last).unlink(missing_ok=True)
+    except OSError as err:  # a folder of that name, or a file that cannot be removed
+        raise InvalidInputError(
+            f"{out / last}: cannot be replaced ({err.strerror or type(err).__name__}); "
+            "remove it or use another --out"
+        ) from None
     return out
 
 
