@@ -28,6 +28,7 @@ LAYERS = {
     "geo": 1,
     "missions": 2,
     "pwe": 2,
+    "ground": 2,
     "radio": 3,
     "nav": 3,
     "world": 4,
@@ -52,6 +53,7 @@ FORBIDDEN = {
     "geo": {"torch", "gymnasium"},
     "missions": {"torch", "gymnasium"},
     "pwe": {"torch", "gymnasium"},
+    "ground": {"torch", "gymnasium"},
     "radio": {"torch", "gymnasium"},
     "nav": {"torch"},
     "world": {"torch"},
@@ -72,7 +74,7 @@ def group(name: str) -> str:
     if len(parts) == 1:
         return "entry"  # the package's own __init__
     head = parts[1]
-    if head in ("radio", "nav", "rl", "world"):
+    if head in ("radio", "nav", "rl", "world", "ground"):
         return head
     if head in BASE:
         return "base"

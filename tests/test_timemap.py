@@ -56,11 +56,12 @@ def _rain_loss_db(scn, site, gamma_raster, origin_step) -> np.ndarray:
     from rainuav import _core
 
     x, y = scn.area.centres()
-    terms = np.zeros((1, y.size, x.size, 3))
+    terms = np.zeros((1, y.size, x.size, 5))
     terms[..., 0] = 1.0
+    terms[0, ..., 3] = _direct_length(scn, site, x[None, :], y[:, None])[1]
     slicer = _core.RaySlicer(
         terms, np.array([[site.x_m, site.y_m, site.height_m]]), np.zeros(1, np.int64), x, y,
-        altitude_m=scn.area.altitude_m, node_spacing_m=origin_step[1],
+        node_spacing_m=origin_step[1],
     )  # fmt: skip
     p = slicer.power(gamma_db_per_m=0.0, gamma_raster=gamma_raster, gamma_origin_step=origin_step)
     return -10.0 * np.log10(p[0])

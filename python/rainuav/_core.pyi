@@ -27,6 +27,7 @@ __all__ = [
     "mie_forward",
     "plan_optimal",
     "plan_optimal_in_time",
+    "ray_departures",
     "ray_power",
     "sample_slices",
     "terminal_velocity_m_s",
@@ -246,10 +247,33 @@ def ray_power(
     buildings: _F,
     heights: _F | None,
     heights_origin_step: tuple[float, float, float, float],
+    terrain: _F | None = None,
+    terrain_origin_step: tuple[float, float, float, float] = (0.0, 1.0, 0.0, 1.0),
+    altitude_msl: bool = False,
     terms_only: bool = False,
 ) -> _F:
     """Received power (mW) of every transmitter at every pixel, (M, H, W); with
-    ``terms_only``, its clear-air parts [direct, reflect, cross], (M, H, W, 3)."""
+    ``terms_only``, its clear-air parts and its rays' lengths [direct, reflect, cross, d1, d2],
+    (M, H, W, 5). ``terrain``: heights above sea level at nodes (the ground under everything);
+    ``altitude_msl``: the flight altitude above sea level instead of above the terrain."""
+
+def ray_departures(
+    sites: _F,
+    x_m: _F,
+    y_m: _F,
+    *,
+    altitude_m: float,
+    freq_hz: float,
+    ground: str,
+    buildings: _F,
+    heights: _F | None,
+    heights_origin_step: tuple[float, float, float, float],
+    terrain: _F | None = None,
+    terrain_origin_step: tuple[float, float, float, float] = (0.0, 1.0, 0.0, 1.0),
+    altitude_msl: bool = False,
+) -> _F:
+    """Departure elevations (degrees) toward which each site's gains are taken, (S, H, W, 2):
+    the direct ray's (the diffracting edge, else the pixel) and the reflected ray's."""
 
 @final
 class RaySlicer:
@@ -263,7 +287,6 @@ class RaySlicer:
         x_m: _F,
         y_m: _F,
         *,
-        altitude_m: float,
         node_spacing_m: float,
     ) -> RaySlicer: ...
     def power(

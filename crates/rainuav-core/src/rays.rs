@@ -16,11 +16,18 @@
 //! uniform (`gamma d` exactly) or a raster of nodes, bilinear, held beyond the outermost nodes,
 //! integrated by the trapezoid rule at the node spacing.
 //!
-//! **Buildings.** Boxes standing on the ground, and optionally a raster of obstacle heights.
-//! A ray that passes below an edge gets the ITU-R P.526 single knife-edge loss
-//! `J(nu) = 6.9 + 20 log10(sqrt((nu - 0.1)^2 + 1) + nu - 0.1)` dB (`nu > -0.78`, else 0) of
-//! its dominant edge (the largest `nu`), `nu = h sqrt(2 / lambda (1 / d_a + 1 / d_b))`: a
-//! finite loss, never a blocked ray.
+//! **Ground and obstacles** (PHYSICS.md section 12). Optionally a terrain (a raster of heights
+//! above sea level at nodes, bilinear between them) under everything, and obstacles standing
+//! on it: boxes and a raster of obstacle heights over cells. A site's antenna stands
+//! `height` above the terrain at the site; the receiver flies `altitude_m` above the terrain
+//! under it, or above sea level ([`RayScene::altitude_msl`]). Over flat open ground (no
+//! terrain, no obstacles) the rays are the closed forms of section 8. Otherwise each
+//! site-pixel path reads its profile from the surface ([`RayScene::profile`]): the direct ray
+//! gets the Bullington loss of the whole profile ([`crate::diffraction`]) and its antenna gain
+//! is taken toward the diffracting edge ([`RayScene::departures`]); the ground-reflected ray
+//! bounces off the local ground line of the path's vertical plane (the terrain's slope along
+//! the path at the specular point, the image construction iterated) and exists only where its
+//! specular point is bare ground seen by both ends.
 
 use ndarray::{Array3, Array4, ArrayView2, ArrayView3, Axis};
 use num_complex::Complex64;
@@ -60,7 +67,7 @@ pub struct Raster<'a> {
 
 impl Raster<'_> {
     /// Bilinear between nodes, held beyond the outermost.
-    pub(crate) fn bilinear(&self, x: f64, y: f64) -> f64 {
+    pub fn bilinear(&self, x: f64, y: f64) -> f64 {
         let [x0, dx, y0, dy] = self.origin_step;
         let (rows, cols) = self.values.dim();
         let fx = ((x - x0) / dx).clamp(0.0, (cols - 1) as f64);
@@ -143,12 +150,40 @@ pub struct RayScene<'a> {
     pub buildings: &'a [Building],
     /// Further obstacle heights (m, 0: none) over cells of a raster ([`Raster::cell`]).
     pub heights: Option<Raster<'a>>,
+    /// The terrain: heights above sea level (m) at nodes, bilinear between them
+    /// ([`Raster::bilinear`]); None: a flat ground at 0.
+    pub terrain: Option<Raster<'a>>,
+    /// Whether `altitude_m` is above sea level (true) or above the terrain under the receiver
+    /// (false: terrain-following, the default).
+    pub altitude_msl: bool,
+}
+
+/// The geometry of one site-pixel path: everything of its rays but the antenna gains, the
+/// transmit power and the rain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathGeometry {
+    /// Length of the direct ray, m.
+    pub d1: f64,
+    /// Length of the ground-reflected ray, m.
+    pub d2: f64,
+    /// Diffraction loss of the direct ray (Bullington over the profile), dB.
+    pub loss_db: f64,
+    /// Departure elevation (rad) toward which the direct ray's antenna gain is taken: the
+    /// diffracting edge where the profile costs a loss, else the receiver.
+    pub el_direct: f64,
+    /// Departure elevation (rad) toward the specular point.
+    pub el_reflect: f64,
+    /// Grazing angle (rad) on the local ground line at the specular point.
+    pub psi: f64,
+    /// Whether the reflected ray exists (a ground, its specular point bare and seen by both
+    /// ends).
+    pub reflect: bool,
 }
 
 /// One transmitter: position (east, north, height) in metres and power in mW.
 #[derive(Debug, Clone, Copy)]
 pub struct RayTransmitter {
-    /// `[x, y, z]`, metres (z above the ground, > 0).
+    /// `[x, y, z]`, metres (z above the terrain at `(x, y)`, > 0).
     pub position_m: [f64; 3],
     /// Radiated power, mW.
     pub power_mw: f64,
@@ -195,14 +230,7 @@ impl PixelTerms {
     }
 }
 
-/// ITU-R P.526 single knife-edge loss in dB (0 for `nu <= -0.78`).
-pub fn knife_edge_loss_db(nu: f64) -> f64 {
-    if nu <= -0.78 {
-        return 0.0;
-    }
-    let v = nu - 0.1;
-    6.9 + 20.0 * ((v * v + 1.0).sqrt() + v).log10()
-}
+pub use crate::diffraction::knife_edge_loss_db;
 
 /// Fresnel reflection coefficient of the ground at grazing angle `psi` (radians).
 pub fn reflection_coefficient(ground: RayGround, pol: RayPolarization, psi: f64) -> Complex64 {
@@ -290,6 +318,24 @@ impl RayScene<'_> {
         if let Some(h) = &self.heights {
             check_raster("height raster", h.values, h.origin_step)?;
         }
+        if let Some(t) = &self.terrain {
+            let os = t.origin_step;
+            let ok = t.values.nrows() >= 1
+                && t.values.ncols() >= 1
+                && t.values
+                    .iter()
+                    .all(|v| v.is_finite() && (-500.0..=9000.0).contains(v))
+                && os.iter().all(|x| x.is_finite())
+                && os[1] > 0.0
+                && os[3] > 0.0;
+            if !ok {
+                return Err(CoreError::invalid(
+                    "terrain",
+                    "must be a non-empty table of heights in -500..9000 m with spacings > 0",
+                    "a bad value",
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -302,95 +348,215 @@ impl RayScene<'_> {
         }
     }
 
-    /// The largest Fresnel-Kirchhoff parameter `nu` of any obstacle edge over the straight
-    /// segment `p -> q` (3-D), where `da`/`db` are measured from the ray's ends `total`
-    /// metres apart, the segment starting `offset` metres along it. `-inf` if nothing is near.
-    fn worst_nu(&self, p: [f64; 3], q: [f64; 3], offset: f64, total: f64) -> f64 {
-        let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
-        let len = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt();
-        let nu_at = |t: f64, h_obs: f64| -> f64 {
-            let z = p[2] + t * (q[2] - p[2]);
-            let da = (offset + t * len).max(1e-3);
-            let db = (total - offset - t * len).max(1e-3);
-            (h_obs - z) * (2.0 / lambda * (1.0 / da + 1.0 / db)).sqrt()
-        };
-        let mut worst = f64::NEG_INFINITY;
-        let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+    /// Whether the rays travel over flat open ground (no terrain, no obstacles): the closed
+    /// forms of PHYSICS.md section 8.
+    pub fn flat_open(&self) -> bool {
+        self.terrain.is_none() && self.buildings.is_empty() && self.heights.is_none()
+    }
+
+    /// The terrain's height above sea level at `(x, y)`, m (0 without a terrain).
+    pub fn terrain_at(&self, x: f64, y: f64) -> f64 {
+        self.terrain.as_ref().map_or(0.0, |t| t.bilinear(x, y))
+    }
+
+    /// The tallest obstacle standing on the terrain at `(x, y)`, m (0: none).
+    pub fn obstacle_at(&self, x: f64, y: f64) -> f64 {
+        let mut h = self.heights.as_ref().map_or(0.0, |r| r.cell(x, y));
         for b in self.buildings {
-            // Slab intersection of the horizontal segment with the box's footprint.
+            if x >= b[0] && x <= b[1] && y >= b[2] && y <= b[3] {
+                h = h.max(b[4]);
+            }
+        }
+        h
+    }
+
+    /// The receiver's height above sea level over `q`, m.
+    pub fn receiver_height(&self, q: [f64; 2]) -> f64 {
+        if self.altitude_msl {
+            self.altitude_m
+        } else {
+            self.terrain_at(q[0], q[1]) + self.altitude_m
+        }
+    }
+
+    /// The profile of the surface (terrain + obstacles, m above sea level) along the ground
+    /// line `a -> b`, as `(distance from a, height)` strictly between the ends, in order of
+    /// distance: the terrain and the obstacle raster every half of their finest spacing, and
+    /// each box where the line enters and leaves it (a box's roof is flat, so its faces are
+    /// where the extremes of the construction lie). Written into `out` (cleared first).
+    pub fn profile(&self, a: [f64; 2], b: [f64; 2], out: &mut Vec<(f64, f64)>) {
+        out.clear();
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let rho = dx.hypot(dy);
+        if rho < 1e-9 {
+            return;
+        }
+        let at = |t: f64| {
+            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+            (t * rho, self.terrain_at(x, y) + self.obstacle_at(x, y))
+        };
+        let spacing = [self.terrain.as_ref(), self.heights.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(|r| r.spacing())
+            .fold(f64::INFINITY, f64::min);
+        if spacing.is_finite() {
+            let n = ((rho / (0.5 * spacing)).ceil() as usize).max(1);
+            out.extend((1..n).map(|k| at(k as f64 / n as f64)));
+        }
+        let before = out.len();
+        for bx in self.buildings {
             let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
             let mut hit = true;
-            for (o, d, lo, hi) in [(p[0], dx, b[0], b[1]), (p[1], dy, b[2], b[3])] {
+            for (o, d, lo, hi) in [(a[0], dx, bx[0], bx[1]), (a[1], dy, bx[2], bx[3])] {
                 if d.abs() < 1e-12 {
-                    if o < lo || o > hi {
-                        hit = false;
-                    }
+                    hit &= o >= lo && o <= hi;
                 } else {
-                    let (a, c) = ((lo - o) / d, (hi - o) / d);
-                    t0 = t0.max(a.min(c));
-                    t1 = t1.min(a.max(c));
+                    let (u, v) = ((lo - o) / d, (hi - o) / d);
+                    t0 = t0.max(u.min(v));
+                    t1 = t1.min(u.max(v));
                 }
             }
             if !hit || t0 > t1 {
                 continue;
             }
-            for k in 0..=4 {
-                let t = t0 + (t1 - t0) * k as f64 / 4.0;
-                worst = worst.max(nu_at(t, b[4]));
-            }
-        }
-        if let Some(h) = &self.heights {
-            let step = 0.5 * h.spacing();
-            let rho = dx.hypot(dy);
-            let n = ((rho / step).ceil() as usize).max(1);
-            for k in 0..=n {
-                let t = k as f64 / n as f64;
-                let v = h.cell(p[0] + t * dx, p[1] + t * dy);
-                if v > 0.0 {
-                    worst = worst.max(nu_at(t, v));
+            // Just inside each face, so the point reads the box.
+            let eps = 1e-9_f64.max(1e-6 / rho);
+            for t in [t0 + eps, t1 - eps] {
+                if t > 0.0 && t < 1.0 {
+                    out.push(at(t.clamp(t0, t1)));
                 }
             }
         }
-        worst
+        if out.len() > before && before > 0 {
+            out.sort_by(|p, q| p.0.total_cmp(&q.0));
+        }
     }
 
-    fn diffraction_db(&self, path: &[[f64; 3]]) -> f64 {
-        if self.buildings.is_empty() && self.heights.is_none() {
-            return 0.0;
+    /// Whether the straight leg from `(s0, z0)` to `(s1, z1)` (distance along the ground
+    /// line, height above sea level) passes above every profile point between them but those
+    /// within `skip` m of `s_skip` (the specular point, which the leg touches).
+    fn leg_clear(
+        prof: &[(f64, f64)],
+        (s0, z0): (f64, f64),
+        (s1, z1): (f64, f64),
+        s_skip: f64,
+        skip: f64,
+    ) -> bool {
+        prof.iter()
+            .filter(|&&(s, _)| s > s0 && s < s1 && (s - s_skip).abs() > skip)
+            .all(|&(s, h)| h < z0 + (z1 - z0) * (s - s0) / (s1 - s0))
+    }
+
+    /// The geometry of the rays from the transmitter at `tx` (`[x, y, height above the
+    /// terrain]`) to the pixel centre `q`; `prof` is scratch space for the profile.
+    pub fn path(&self, tx: [f64; 3], q: [f64; 2], prof: &mut Vec<(f64, f64)>) -> PathGeometry {
+        let [xs, ys, hs] = tx;
+        let (ex, ey) = (q[0] - xs, q[1] - ys);
+        let rho = ex.hypot(ey);
+        if self.flat_open() {
+            let hq = self.altitude_m;
+            let (d1, d2) = ray_lengths(rho, hs, hq);
+            return PathGeometry {
+                d1,
+                d2,
+                loss_db: 0.0,
+                el_direct: (hq - hs).atan2(rho),
+                el_reflect: -(hq + hs).atan2(rho),
+                psi: ((hs + hq) / rho.max(1e-9)).atan(),
+                reflect: self.ground != RayGround::None,
+            };
         }
-        let seg = |a: &[f64; 3], b: &[f64; 3]| {
-            ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
+        let zt_s = self.terrain_at(xs, ys);
+        let zs = zt_s + hs;
+        let zq = self.receiver_height(q);
+        let d1 = (rho * rho + (zq - zs).powi(2)).sqrt().max(1e-3);
+        self.profile([xs, ys], q, prof);
+        let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
+        let bull = crate::diffraction::bullington(prof, rho, zs, zq, lambda);
+        let el_direct = match bull.edge {
+            Some((de, he)) => (he - zs).atan2(de),
+            None => (zq - zs).atan2(rho),
         };
-        let total: f64 = path.windows(2).map(|w| seg(&w[0], &w[1])).sum();
-        let mut offset = 0.0;
-        let mut worst = f64::NEG_INFINITY;
-        for w in path.windows(2) {
-            worst = worst.max(self.worst_nu(w[0], w[1], offset, total));
-            offset += seg(&w[0], &w[1]);
+        let mut g = PathGeometry {
+            d1,
+            d2: d1,
+            loss_db: bull.loss_db,
+            el_direct,
+            el_reflect: el_direct,
+            psi: 0.0,
+            reflect: false,
+        };
+        if self.ground == RayGround::None || rho < 1e-6 {
+            return g;
         }
-        knife_edge_loss_db(worst)
+        // The specular point on the local ground line of the path's vertical plane (distance
+        // s along the ground from the site, height z): start from the flat-ground point of
+        // the heights above the terrain at both ends, then reflect the site in the line
+        // through the terrain at the point with its slope along the path, and move the point
+        // to where the image's line to the receiver crosses it; four rounds.
+        let (ux, uy) = (ex / rho, ey / rho);
+        let ground_at = |s: f64| {
+            let (x, y) = (xs + ux * s, ys + uy * s);
+            self.terrain_at(x, y)
+        };
+        let h = self.terrain.as_ref().map_or(1.0, |t| 0.5 * t.spacing());
+        let (hs_g, hq_g) = (hs, zq - self.terrain_at(q[0], q[1]));
+        if hq_g <= 0.0 {
+            return g;
+        }
+        let mut sb = rho * hs_g / (hs_g + hq_g);
+        let (mut image, mut line) = ((0.0, 0.0), (0.0, 0.0, 0.0, 1.0));
+        for _ in 0..4 {
+            let zb = ground_at(sb);
+            let slope = (ground_at(sb + h) - ground_at(sb - h)) / (2.0 * h);
+            let norm = (1.0 + slope * slope).sqrt();
+            let (nx, nz) = (-slope / norm, 1.0 / norm);
+            let dist_t = nx * (0.0 - sb) + nz * (zs - zb);
+            let dist_r = nx * (rho - sb) + nz * (zq - zb);
+            if dist_t <= 0.0 || dist_r <= 0.0 {
+                return g;
+            }
+            image = (-2.0 * dist_t * nx, zs - 2.0 * dist_t * nz);
+            let t = dist_t / (dist_t + dist_r);
+            let s_new = image.0 + t * (rho - image.0);
+            line = (dist_t, dist_r, zb, slope);
+            if !(s_new > 0.0 && s_new < rho) {
+                return g;
+            }
+            sb = s_new;
+        }
+        let (dist_t, dist_r, _, _) = line;
+        let zb = ground_at(sb);
+        let d2 = ((rho - image.0).powi(2) + (zq - image.1).powi(2)).sqrt();
+        let bare = self.obstacle_at(xs + ux * sb, ys + uy * sb) <= 0.0;
+        let seen = Self::leg_clear(prof, (0.0, zs), (sb, zb), sb, h)
+            && Self::leg_clear(prof, (sb, zb), (rho, zq), sb, h);
+        g.d2 = d2;
+        g.el_reflect = (zb - zs).atan2(sb);
+        g.psi = ((dist_t + dist_r) / d2).clamp(-1.0, 1.0).asin();
+        g.reflect = bare && seen;
+        g
     }
 
-    /// The clear-air parts of the mean received power over one pixel ([`PixelTerms`]):
-    /// antenna gains, spreading, ground reflection, the pixel mean of the fringes and the
-    /// knife-edge losses; everything but the rain.
-    pub fn pixel_terms(
+    /// The clear-air parts of the mean received power over one pixel ([`PixelTerms`]) from
+    /// its path's geometry: antenna gains (linear, toward [`PathGeometry::el_direct`] and
+    /// [`PathGeometry::el_reflect`]), spreading, ground reflection, the pixel mean of the
+    /// fringes and the diffraction loss; everything but the rain.
+    pub fn terms_of(
         &self,
+        geom: &PathGeometry,
         tx: &RayTransmitter,
         q: [f64; 2],
         g_direct: f64,
         g_reflect: f64,
     ) -> PixelTerms {
-        let [xs, ys, hs] = tx.position_m;
-        let hq = self.altitude_m;
+        let (ex, ey) = (q[0] - tx.position_m[0], q[1] - tx.position_m[1]);
+        let (d1, d2) = (geom.d1, geom.d2);
         let k0 = crate::wavenumber(self.freq_hz);
-        let (ex, ey) = (q[0] - xs, q[1] - ys);
-        let rho = ex.hypot(ey);
-        let (d1, d2) = ray_lengths(rho, hs, hq);
         let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
         let scale = tx.power_mw * (lambda / (4.0 * std::f64::consts::PI)).powi(2);
-        let a1_db = self.diffraction_db(&[[xs, ys, hs], [q[0], q[1], hq]]);
-        let amp1 = g_direct.max(0.0).sqrt() * db_to_amplitude(a1_db) / d1;
+        let amp1 = g_direct.max(0.0).sqrt() * db_to_amplitude(geom.loss_db) / d1;
         let mut t = PixelTerms {
             direct: scale * amp1 * amp1,
             reflect: 0.0,
@@ -398,17 +564,14 @@ impl RayScene<'_> {
             d1,
             d2,
         };
-        if self.ground != RayGround::None {
-            let psi = ((hs + hq) / rho.max(1e-9)).atan();
-            let gamma_g = reflection_coefficient(self.ground, self.polarization, psi);
-            let tr = hs / (hs + hq);
-            let bounce = [xs + tr * ex, ys + tr * ey, 0.0];
-            let a2_db = self.diffraction_db(&[[xs, ys, hs], bounce, [q[0], q[1], hq]]);
-            let amp2 = g_reflect.max(0.0).sqrt() * db_to_amplitude(a2_db) / d2;
+        if geom.reflect {
+            let gamma_g = reflection_coefficient(self.ground, self.polarization, geom.psi);
+            let amp2 = g_reflect.max(0.0).sqrt() / d2;
             let r = gamma_g * amp2;
             t.reflect = scale * r.norm_sqr();
             // Cross term 2 Re(E1 conj(E2)) with E_i = a_i exp(-j k0 d_i), averaged over the
-            // pixel: the phase k0 (d2 - d1) has gradient k0 (x - xs)(1/d2 - 1/d1) along x.
+            // pixel: the phase k0 (d2 - d1) has gradient k0 (x - xs)(1/d2 - 1/d1) along x
+            // (exact over a plane; over terrain, the same with the path's lengths).
             let phase = Complex64::from_polar(1.0, -k0 * (d1 - d2));
             let cross = 2.0 * (amp1 * (phase * r.conj())).re;
             let w = k0 * (1.0 / d2 - 1.0 / d1);
@@ -416,6 +579,77 @@ impl RayScene<'_> {
             t.cross = scale * cross * avg;
         }
         t
+    }
+
+    /// The clear-air parts of the mean received power over one pixel ([`PixelTerms`]):
+    /// [`RayScene::path`] then [`RayScene::terms_of`].
+    pub fn pixel_terms(
+        &self,
+        tx: &RayTransmitter,
+        q: [f64; 2],
+        g_direct: f64,
+        g_reflect: f64,
+    ) -> PixelTerms {
+        let geom = self.path(tx.position_m, q, &mut Vec::new());
+        self.terms_of(&geom, tx, q, g_direct, g_reflect)
+    }
+
+    /// The geometry of every pixel's path from the site `tx`, row-major `(H W)`, rows in
+    /// parallel.
+    pub fn geometries(&self, tx: [f64; 3]) -> Vec<PathGeometry> {
+        let w = self.x_m.len();
+        (0..self.y_m.len())
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let mut prof = Vec::new();
+                (0..w)
+                    .map(|j| self.path(tx, [self.x_m[j], self.y_m[i]], &mut prof))
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    /// The departure elevations (degrees) toward which each site's antenna gains are taken,
+    /// `(S, H, W, 2)`: the direct ray's (the diffracting edge where the profile costs a loss,
+    /// else the pixel) and the reflected ray's (the specular point). `sites` are
+    /// `[x, y, height above the terrain]`.
+    pub fn departures(&self, sites: &[[f64; 3]]) -> Result<Array4<f64>> {
+        self.check()?;
+        let (h, w) = (self.y_m.len(), self.x_m.len());
+        crate::memory::check_memory(sites.len() * h * w * 2 * 8)?;
+        let mut out = Array4::<f64>::zeros((sites.len(), h, w, 2));
+        for (k, &site) in sites.iter().enumerate() {
+            let geo = self.geometries(site);
+            for (p, g) in geo.iter().enumerate() {
+                out[[k, p / w, p % w, 0]] = g.el_direct.to_degrees();
+                out[[k, p / w, p % w, 1]] = g.el_reflect.to_degrees();
+            }
+        }
+        Ok(out)
+    }
+
+    /// The geometries of each distinct transmitter position, and for each transmitter the
+    /// index of its position's: a site's cells share their paths.
+    fn shared_geometries(
+        &self,
+        txs: &[RayTransmitter],
+    ) -> Result<(Vec<Vec<PathGeometry>>, Vec<usize>)> {
+        let mut places: Vec<[f64; 3]> = Vec::new();
+        let index: Vec<usize> = txs
+            .iter()
+            .map(|t| {
+                places
+                    .iter()
+                    .position(|p| *p == t.position_m)
+                    .unwrap_or_else(|| {
+                        places.push(t.position_m);
+                        places.len() - 1
+                    })
+            })
+            .collect();
+        let plane = self.x_m.len() * self.y_m.len();
+        crate::memory::check_memory(places.len() * plane * size_of::<PathGeometry>())?;
+        Ok((places.iter().map(|&p| self.geometries(p)).collect(), index))
     }
 
     /// Checks the transmitters and their gains `(M, H, W)` against the map; the shape.
@@ -471,24 +705,33 @@ impl RayScene<'_> {
         let shape = self.check_rays(txs, &g_direct, &g_reflect)?;
         let mut out = Array3::<f64>::zeros(shape);
         crate::memory::check_memory(out.len() * 8)?;
+        let (geo, index) = self.shared_geometries(txs)?;
+        let w = shape.2;
         out.axis_iter_mut(Axis(0))
             .into_par_iter()
             .enumerate()
             .for_each(|(m, mut plane)| {
                 let [xs, ys, _] = txs[m].position_m;
+                let geo = &geo[index[m]];
                 for ((i, j), p) in plane.indexed_iter_mut() {
                     let q = [self.x_m[j], self.y_m[i]];
-                    let t = self.pixel_terms(&txs[m], q, g_direct[[m, i, j]], g_reflect[[m, i, j]]);
+                    let t = self.terms_of(
+                        &geo[i * w + j],
+                        &txs[m],
+                        q,
+                        g_direct[[m, i, j]],
+                        g_reflect[[m, i, j]],
+                    );
                     *p = t.power(self.mean_gamma([xs, ys], q));
                 }
             });
         Ok(out)
     }
 
-    /// The clear-air parts of every transmitter's power at every pixel, `(M, H, W, 3)`:
-    /// `[direct, reflect, cross]` of [`PixelTerms`] (the rain of the scene is not used). With
-    /// the rain's mean attenuation along each path they give [`RayScene::power`]'s power
-    /// ([`crate::raytime`]: weather in time, the rays traced once).
+    /// The clear-air parts of every transmitter's power at every pixel and its rays'
+    /// lengths, `(M, H, W, 5)`: `[direct, reflect, cross, d1, d2]` of [`PixelTerms`] (the rain
+    /// of the scene is not used). With the rain's mean attenuation along each path they give
+    /// [`RayScene::power`]'s power ([`crate::raytime`]: weather in time, the rays traced once).
     pub fn terms(
         &self,
         txs: &[RayTransmitter],
@@ -496,20 +739,29 @@ impl RayScene<'_> {
         g_reflect: ArrayView3<'_, f64>,
     ) -> Result<Array4<f64>> {
         let (m, h, w) = self.check_rays(txs, &g_direct, &g_reflect)?;
-        let mut out = Array4::<f64>::zeros((m, h, w, 3));
+        let mut out = Array4::<f64>::zeros((m, h, w, 5));
         crate::memory::check_memory(out.len() * 8)?;
+        let (geo, index) = self.shared_geometries(txs)?;
         out.axis_iter_mut(Axis(0))
             .into_par_iter()
             .enumerate()
             .for_each(|(m, mut plane)| {
+                let geo = &geo[index[m]];
                 for i in 0..h {
                     for j in 0..w {
                         let q = [self.x_m[j], self.y_m[i]];
-                        let t =
-                            self.pixel_terms(&txs[m], q, g_direct[[m, i, j]], g_reflect[[m, i, j]]);
+                        let t = self.terms_of(
+                            &geo[i * w + j],
+                            &txs[m],
+                            q,
+                            g_direct[[m, i, j]],
+                            g_reflect[[m, i, j]],
+                        );
                         plane[[i, j, 0]] = t.direct;
                         plane[[i, j, 1]] = t.reflect;
                         plane[[i, j, 2]] = t.cross;
+                        plane[[i, j, 3]] = t.d1;
+                        plane[[i, j, 4]] = t.d2;
                     }
                 }
             });
@@ -552,6 +804,8 @@ mod tests {
             rain: RainField::Uniform(0.0),
             buildings: &[],
             heights: None,
+            terrain: None,
+            altitude_msl: false,
         }
     }
 
@@ -632,35 +886,68 @@ mod tests {
     }
 
     #[test]
-    fn knife_edge_values() {
-        // P.526 Figure 9 / eq. (31): J(0) = 6.0 dB, J(1) ~ 13.9 dB, J(-0.78) = 0.
-        assert!((knife_edge_loss_db(0.0) - 6.0).abs() < 0.05);
-        assert!((knife_edge_loss_db(1.0) - 13.9).abs() < 0.1);
-        assert_eq!(knife_edge_loss_db(-0.8), 0.0);
-    }
-
-    #[test]
-    fn a_building_on_the_path_costs_its_knife_edge_loss() {
-        // Transmitter at 25 m, receiver at 100 m, 1000 m away; a 200 m tall wall at 500 m.
+    fn a_building_on_the_path_costs_its_bullington_loss() {
+        // Transmitter at 25 m, receiver at 100 m, 1000 m away; a 200 m tall wall, 10 m thick,
+        // at 500 m. By hand (PHYSICS.md section 12): both faces are profile points; beyond
+        // line of sight the steepest line from the transmitter meets the near face (495 m) and
+        // the one from the receiver the far face (505 m); they cross at the Bullington point.
         let (x, y) = ([1000.0], [0.0]);
         let mut s = scene(&x, &y, RayGround::None);
         let clear = one(&s, TX);
         let wall = [[495.0, 505.0, -50.0, 50.0, 200.0]];
         s.buildings = &wall;
         let loss = 10.0 * (clear / one(&s, TX)).log10();
-        assert!(loss.is_finite() && loss > 20.0, "loss {loss}");
         let lam = crate::SPEED_OF_LIGHT_M_S / 4.9e9;
-        // Independent: the ray climbs toward the receiver, so the wall's face nearer the
-        // transmitter (x = 495) has the larger clearance and is the dominant edge.
-        let d = (1000.0_f64.powi(2) + 75.0_f64.powi(2)).sqrt();
-        let t = 495.0 / 1000.0;
-        let h = 200.0 - (25.0 + 75.0 * t);
-        let nu = h * (2.0 / lam * (1.0 / (t * d) + 1.0 / ((1.0 - t) * d))).sqrt();
-        assert!(
-            (loss - knife_edge_loss_db(nu)).abs() < 0.05,
-            "{loss} vs {}",
-            knife_edge_loss_db(nu)
-        );
+        let (d, hts, hrs) = (1000.0_f64, 25.0, 100.0);
+        let g = |di: f64| 200.0 + di * (d - di) / (2.0 * 8.5e6);
+        let s_tim = (g(495.0) - hts) / 495.0;
+        let s_rim = (g(505.0) - hrs) / (d - 505.0);
+        let dbp = (hrs - hts + s_rim * d) / (s_tim + s_rim);
+        let hbp = hts + s_tim * dbp;
+        let nu =
+            (hbp - (hts * (d - dbp) + hrs * dbp) / d) * (2.0 * d / (lam * dbp * (d - dbp))).sqrt();
+        let j = knife_edge_loss_db(nu);
+        let want = j + (1.0 - (-j / 6.0).exp()) * (10.0 + 0.02 * d / 1000.0);
+        assert!((loss - want).abs() < 1e-6, "{loss} vs {want}");
+    }
+
+    #[test]
+    fn a_flat_terrain_at_any_height_is_the_flat_ground() {
+        // Terrain at 437 m everywhere: every height is measured from it, so the rays are
+        // those of the flat ground at 0 to rounding (the general path against the closed form).
+        let x: Vec<f64> = (0..9).map(|k| 120.0 * k as f64 + 5.0).collect();
+        let y = [-300.0, 10.0, 700.0];
+        let flat = scene(&x, &y, RayGround::Dielectric(Complex64::new(15.0, -1.0)));
+        let dem = Array2::from_elem((4, 4), 437.0);
+        let mut hilly = flat.clone();
+        hilly.terrain = Some(Raster {
+            values: dem.view(),
+            origin_step: [-2000.0, 1500.0, -2000.0, 1500.0],
+        });
+        let g = Array3::<f64>::ones((1, 3, 9));
+        let a = flat.power(&[TX], g.view(), g.view()).unwrap();
+        let b = hilly.power(&[TX], g.view(), g.view()).unwrap();
+        for (p, q) in a.iter().zip(b.iter()) {
+            assert!((p / q - 1.0).abs() < 1e-9, "{p} vs {q}");
+        }
+    }
+
+    #[test]
+    fn a_ridge_hides_the_reflection_and_costs_the_direct_ray() {
+        // A ridge 150 m high between the site and the pixel: the direct ray diffracts, the
+        // reflection's legs cannot see its specular point.
+        let (x, y) = ([1000.0], [0.0]);
+        let mut s = scene(&x, &y, RayGround::Pec);
+        let dem = Array2::from_shape_fn((3, 21), |(_, j)| if j == 10 { 150.0 } else { 0.0 });
+        s.terrain = Some(Raster {
+            values: dem.view(),
+            origin_step: [0.0, 50.0, -50.0, 50.0],
+        });
+        let geo = s.path(TX.position_m, [1000.0, 0.0], &mut Vec::new());
+        assert!(!geo.reflect);
+        assert!(geo.loss_db > 10.0, "{}", geo.loss_db);
+        // The gain is taken toward the ridge's Bullington point: upward, not along the line.
+        assert!(geo.el_direct > (75.0_f64).atan2(1000.0));
     }
 
     #[test]

@@ -21,7 +21,7 @@ use ndarray::{Array2, Array3, ArrayView3, ArrayView4, ArrayViewMut3, Axis};
 use rayon::prelude::*;
 
 use crate::error::{CoreError, Result};
-use crate::rays::{PixelTerms, RainField, Raster, RayScene, line_gamma, ray_lengths};
+use crate::rays::{PixelTerms, RainField, Raster, RayScene, line_gamma};
 
 use std::f64::consts::TAU;
 
@@ -133,15 +133,15 @@ pub struct RaySlicer {
 }
 
 impl RaySlicer {
-    /// From the terms `(M, H, W, 3)`, the sites (`[x, y, height]`, m), each cell's site, the
-    /// pixel centres, the receiver height and the rain nodes' spacing `ds` (m).
+    /// From the terms and lengths `(M, H, W, 5)` ([`RayScene::terms`]), the sites (`[x, y,
+    /// height]`, m), each cell's site, the pixel centres and the rain nodes' spacing `ds` (m).
+    /// A site's rays' lengths are those of its first cell (its cells share their paths).
     pub fn new(
         terms: ArrayView4<'_, f64>,
         sites: &[[f64; 3]],
         site_of: &[usize],
         x_m: &[f64],
         y_m: &[f64],
-        altitude_m: f64,
         ds: f64,
     ) -> Result<Self> {
         let (h, w, m) = (y_m.len(), x_m.len(), site_of.len());
@@ -152,20 +152,13 @@ impl RaySlicer {
                 "bad",
             ));
         }
-        crate::error::check_range(
-            "altitude_m",
-            altitude_m,
-            1e-3,
-            1e5,
-            "must be in 0.001..1e5 m",
-        )?;
         crate::error::check_range("ds", ds, 1e-3, 1e5, "must be in 0.001..1e5 m")?;
-        if terms.dim() != (m, h, w, 3) {
+        if terms.dim() != (m, h, w, 5) {
             return Err(CoreError::invalid(
                 "terms",
                 format!(
-                    "must have shape {:?} (cells, rows, columns, 3)",
-                    (m, h, w, 3)
+                    "must have shape {:?} (cells, rows, columns, 5)",
+                    (m, h, w, 5)
                 ),
                 format!("{:?}", terms.dim()),
             ));
@@ -195,19 +188,24 @@ impl RaySlicer {
             .iter()
             .map(|&[x, y, _]| Fan::new([x, y], x_m, y_m, ds))
             .collect();
-        let lengths = sites
-            .iter()
-            .map(|&[xs, ys, hs]| {
-                (0..h * w)
-                    .map(|p| {
-                        let (ex, ey) = (x_m[p % w] - xs, y_m[p / w] - ys);
-                        ray_lengths((ex * ex + ey * ey).sqrt(), hs, altitude_m)
-                    })
-                    .collect()
+        let lengths = (0..sites.len())
+            .map(|k| match site_of.iter().position(|&s| s == k) {
+                Some(c) => (0..h * w)
+                    .map(|p| (terms[[c, p / w, p % w, 3]], terms[[c, p / w, p % w, 4]]))
+                    .collect(),
+                None => Vec::new(),
             })
             .collect();
+        let terms: Vec<f64> = terms
+            .as_standard_layout()
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|(k, _)| k % 5 < 3)
+            .map(|(_, v)| v)
+            .collect();
         Ok(RaySlicer {
-            terms: terms.as_standard_layout().iter().copied().collect(),
+            terms,
             site_of: site_of.to_vec(),
             fans,
             lengths,
@@ -279,7 +277,7 @@ impl RaySlicer {
 }
 
 /// The power (mW) of every cell at every pixel, `(M, H, W)`, from the clear-air `terms`
-/// (`(M, H, W, 3)`, [`RayScene::terms`]) and the rain of `scene` at one instant (a
+/// (`(M, H, W, 5)`, [`RayScene::terms`]) and the rain of `scene` at one instant (a
 /// [`RaySlicer`] built and used once).
 pub fn slice_power(
     scene: &RayScene<'_>,
@@ -292,16 +290,7 @@ pub fn slice_power(
         RainField::Raster(r) => r.spacing(),
         RainField::Uniform(_) => 1.0,
     };
-    RaySlicer::new(
-        terms,
-        sites,
-        site_of,
-        scene.x_m,
-        scene.y_m,
-        scene.altitude_m,
-        ds,
-    )?
-    .power(scene.rain)
+    RaySlicer::new(terms, sites, site_of, scene.x_m, scene.y_m, ds)?.power(scene.rain)
 }
 
 /// The same means as [`polar_mean_gamma`] by a line from `from` to every pixel (the static
@@ -407,6 +396,8 @@ mod tests {
             }),
             buildings: &[[600.0, 700.0, 500.0, 560.0, 60.0]],
             heights: None,
+            terrain: None,
+            altitude_msl: false,
         };
         let sites = [[300.0, 400.0, 25.0], [1300.0, 900.0, 30.0]];
         let site_of = [0, 0, 1];
@@ -439,7 +430,7 @@ mod tests {
         // Bad input is an error, never a panic.
         assert!(slice_power(&scene, terms.view(), &sites, &[0, 0, 2]).is_err());
         assert!(slice_power(&scene, terms.view(), &sites, &[0, 0]).is_err());
-        let slicer = RaySlicer::new(terms.view(), &sites, &site_of, &x, &y, 100.0, 20.0).unwrap();
+        let slicer = RaySlicer::new(terms.view(), &sites, &site_of, &x, &y, 20.0).unwrap();
         assert!(
             slicer.power(scene.rain).is_err(),
             "nodes 10 m apart, slicer's 20 m"
@@ -447,7 +438,7 @@ mod tests {
         assert!(slicer.power(RainField::Uniform(f64::NAN)).is_err());
         let mut bad = terms.clone();
         bad[[0, 0, 0, 0]] = f64::NAN;
-        assert!(RaySlicer::new(bad.view(), &sites, &site_of, &x, &y, 100.0, 10.0).is_err());
+        assert!(RaySlicer::new(bad.view(), &sites, &site_of, &x, &y, 10.0).is_err());
     }
 
     #[test]

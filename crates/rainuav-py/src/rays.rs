@@ -91,10 +91,16 @@ fn rain_field(raster: Option<&Array2<f64>>, uniform: f64, origin_step: [f64; 4])
 
 /// Received power (mW) of every transmitter at every pixel, (M, H, W): direct and
 /// ground-reflected rays with rain and knife-edge losses, averaged over each pixel.
+///
+/// With `terms_only`, the clear-air parts and the rays' lengths instead, (M, H, W, 5):
+/// `[direct, reflect, cross, d1, d2]`. `terrain` (heights above sea level at nodes,
+/// `terrain_origin_step`) puts everything on the ground; `altitude_msl` measures the flight
+/// altitude above sea level instead of above the terrain.
 #[pyfunction]
 #[pyo3(signature = (tx_m, tx_power_mw, g_direct, g_reflect, x_m, y_m, *, altitude_m, pixel_m,
     freq_hz, ground, eps_ground, polarization, gamma_db_per_m, gamma_raster, gamma_origin_step,
-    buildings, heights, heights_origin_step, terms_only=false))]
+    buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=[0.0, 1.0, 0.0, 1.0],
+    altitude_msl=false, terms_only=false))]
 #[allow(clippy::too_many_arguments)]
 fn ray_power<'py>(
     py: Python<'py>,
@@ -116,6 +122,9 @@ fn ray_power<'py>(
     buildings: PyReadonlyArray2<'py, f64>,
     heights: Option<PyReadonlyArray2<'py, f64>>,
     heights_origin_step: [f64; 4],
+    terrain: Option<PyReadonlyArray2<'py, f64>>,
+    terrain_origin_step: [f64; 4],
+    altitude_msl: bool,
     terms_only: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let ground = parse_ground(ground, eps_ground)?;
@@ -126,6 +135,7 @@ fn ray_power<'py>(
     let y = y_m.as_array().to_vec();
     let gr: Option<Array2<f64>> = gamma_raster.map(|g| g.as_array().to_owned());
     let hr: Option<Array2<f64>> = heights.map(|h| h.as_array().to_owned());
+    let tr = terrain.as_ref().map(|t| t.as_array());
     let gd = g_direct.as_array();
     let gf = g_reflect.as_array();
     let scene = RayScene {
@@ -142,6 +152,11 @@ fn ray_power<'py>(
             values: v.view(),
             origin_step: heights_origin_step,
         }),
+        terrain: tr.map(|values| Raster {
+            values,
+            origin_step: terrain_origin_step,
+        }),
+        altitude_msl,
     };
     if terms_only {
         let out = detached(py, || scene.terms(&txs, gd, gf))?;
@@ -153,8 +168,70 @@ fn ray_power<'py>(
     Ok(arr.into_any())
 }
 
+/// The departure elevations (degrees) toward which each site's antenna gains are taken,
+/// (S, H, W, 2): the direct ray's (toward the diffracting edge where the path's profile costs
+/// a loss, else the pixel) and the reflected ray's (toward the specular point). `sites` (S, 3):
+/// x, y, height above the terrain.
+#[pyfunction]
+#[pyo3(signature = (sites, x_m, y_m, *, altitude_m, freq_hz, ground, buildings, heights,
+    heights_origin_step, terrain=None, terrain_origin_step=[0.0, 1.0, 0.0, 1.0], altitude_msl=false))]
+#[allow(clippy::too_many_arguments)]
+fn ray_departures<'py>(
+    py: Python<'py>,
+    sites: PyReadonlyArray2<'py, f64>,
+    x_m: PyReadonlyArray1<'py, f64>,
+    y_m: PyReadonlyArray1<'py, f64>,
+    altitude_m: f64,
+    freq_hz: f64,
+    ground: &str,
+    buildings: PyReadonlyArray2<'py, f64>,
+    heights: Option<PyReadonlyArray2<'py, f64>>,
+    heights_origin_step: [f64; 4],
+    terrain: Option<PyReadonlyArray2<'py, f64>>,
+    terrain_origin_step: [f64; 4],
+    altitude_msl: bool,
+) -> PyResult<Bound<'py, PyArray4<f64>>> {
+    let s = sites.as_array();
+    if s.ncols() != 3 {
+        return Err(to_py(CoreError::invalid(
+            "sites",
+            "must have shape (S, 3): x, y, height",
+            format!("{:?}", s.dim()),
+        )));
+    }
+    let sites: Vec<[f64; 3]> = s.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+    let ground = parse_ground(ground, (1.0, 0.0))?;
+    let boxes = parse_buildings(&buildings)?;
+    let x = x_m.as_array().to_vec();
+    let y = y_m.as_array().to_vec();
+    let hr = heights.as_ref().map(|h| h.as_array());
+    let tr = terrain.as_ref().map(|t| t.as_array());
+    let scene = RayScene {
+        x_m: &x,
+        y_m: &y,
+        altitude_m,
+        pixel_m: [0.0, 0.0],
+        freq_hz,
+        ground,
+        polarization: RayPolarization::H,
+        rain: RainField::Uniform(0.0),
+        buildings: &boxes,
+        heights: hr.map(|values| Raster {
+            values,
+            origin_step: heights_origin_step,
+        }),
+        terrain: tr.map(|values| Raster {
+            values,
+            origin_step: terrain_origin_step,
+        }),
+        altitude_msl,
+    };
+    let out = detached(py, || scene.departures(&sites))?;
+    Ok(out.into_pyarray(py))
+}
+
 /// Every cell's rays over a map traced once (the clear-air `terms` (M, H, W, 3) from
-/// `ray_power(..., terms_only=True)`, `sites` (S, 3): x, y, height, `site_of` (M,): each
+/// `ray_power(..., terms_only=True)`, (M, H, W, 5)), `sites` (S, 3): x, y, height, `site_of` (M,): each
 /// cell's site), and the power at any instant from its rain (`power`): weather in time.
 #[pyclass(frozen, module = "rainuav._core")]
 struct RaySlicer {
@@ -164,7 +241,7 @@ struct RaySlicer {
 #[pymethods]
 impl RaySlicer {
     #[new]
-    #[pyo3(signature = (terms, sites, site_of, x_m, y_m, *, altitude_m, node_spacing_m))]
+    #[pyo3(signature = (terms, sites, site_of, x_m, y_m, *, node_spacing_m))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -173,7 +250,6 @@ impl RaySlicer {
         site_of: PyReadonlyArray1<'_, i64>,
         x_m: PyReadonlyArray1<'_, f64>,
         y_m: PyReadonlyArray1<'_, f64>,
-        altitude_m: f64,
         node_spacing_m: f64,
     ) -> PyResult<Self> {
         let s = sites.as_array();
@@ -194,15 +270,7 @@ impl RaySlicer {
         let y = y_m.as_array().to_vec();
         let t = terms.as_array();
         let inner = detached(py, || {
-            rainuav_core::raytime::RaySlicer::new(
-                t,
-                &sites,
-                &site_of,
-                &x,
-                &y,
-                altitude_m,
-                node_spacing_m,
-            )
+            rainuav_core::raytime::RaySlicer::new(t, &sites, &site_of, &x, &y, node_spacing_m)
         })?;
         Ok(RaySlicer { inner })
     }
@@ -245,6 +313,7 @@ impl RaySlicer {
 /// Adds this layer's functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ray_power, m)?)?;
+    m.add_function(wrap_pyfunction!(ray_departures, m)?)?;
     m.add_class::<RaySlicer>()?;
     Ok(())
 }

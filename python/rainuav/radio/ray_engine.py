@@ -6,8 +6,12 @@ the cell's antenna gain in its own departure direction (:mod:`rainuav.radio.cell
 free-space spreading; the ground is PEC, absent, or an ITU-R P.527 soil (Fresnel
 coefficients for the scenario's polarisation); rain attenuation is integrated along each ray
 through the scenario's rain field (homogeneous: ``gamma d``; rain cells and rate maps: a
-raster of ``gamma`` nodes integrated along the ray); buildings and the height map add the
-P.526 knife-edge loss of the dominant edge. Each pixel holds the mean power over its area
+raster of ``gamma`` nodes integrated along the ray). Over terrain (:mod:`rainuav.radio.terrain`)
+and obstacles (buildings, the height map, standing on the terrain), each site-pixel path reads
+its profile: the direct ray gets the Bullington loss of the whole profile (ITU-R P.526-15
+section 4.5.1) with the antenna gain toward the diffracting edge, and the ground reflection
+bounces off the local ground line only where both ends see its specular point
+(:func:`departures`; PHYSICS.md section 12). Each pixel holds the mean power over its area
 (ground-reflection fringes finer than a pixel are averaged, not aliased).
 
 With ``weights``, :func:`ray_power` also returns the power of the part of each pattern the
@@ -28,9 +32,11 @@ from rainuav.radio.cell import Cell, gain_linear
 from rainuav.radio.grid import C0_M_S
 from rainuav.radio.pe_engine import rain_rate_at
 from rainuav.radio.scenario import Scenario, Site
+from rainuav.radio.terrain import core_args
 
 __all__ = [
     "SOILS",
+    "departures",
     "gamma_field",
     "gamma_table",
     "ground_permittivity",
@@ -131,6 +137,36 @@ def _directions(
     return az, np.degrees(np.arctan2(h_q - h_s, rho)), np.degrees(-np.arctan2(h_q + h_s, rho))
 
 
+def _flat_open(scn: Scenario) -> bool:
+    return scn.terrain is None and not scn.buildings and scn.height_map_m is None
+
+
+def departures(
+    scn: Scenario, sites: Sequence[Site], x_m: np.ndarray, y_m: np.ndarray
+) -> np.ndarray:
+    """The departure elevations (degrees) toward which each site's antenna gains are taken,
+    (S, H, W, 2): the direct ray's (the diffracting edge where the profile costs a loss, else
+    the pixel) and the reflected ray's (the specular point). Over flat open ground these are
+    the closed forms of :func:`_directions`."""
+    a = scn.area
+    heights, h_os = _heights(scn)
+    boxes = np.array(
+        [[b.x0_m, b.x1_m, b.y0_m, b.y1_m, b.height_m] for b in scn.buildings], dtype=float
+    ).reshape(-1, 5)
+    return _core.ray_departures(
+        np.array([[s.x_m, s.y_m, s.height_m] for s in sites], dtype=float).reshape(-1, 3),
+        np.ascontiguousarray(x_m, dtype=float),
+        np.ascontiguousarray(y_m, dtype=float),
+        altitude_m=a.altitude_m,
+        freq_hz=scn.freq_hz,
+        ground="none" if scn.ground == "none" else "pec",
+        buildings=boxes,
+        heights=heights,
+        heights_origin_step=h_os,
+        **core_args(scn),
+    )
+
+
 def _weight_at(weight: Weight, cell: Cell, az: np.ndarray, el: np.ndarray) -> np.ndarray:
     e = np.radians(el)
     a = np.radians(az - cell.azimuth_deg)
@@ -186,6 +222,7 @@ def _medium_args(scn: Scenario) -> dict[str, Any]:
         "buildings": boxes,
         "heights": heights,
         "heights_origin_step": h_os,
+        **core_args(scn),
     }
 
 
@@ -196,8 +233,17 @@ def ray_gains(
     the reflected ray, two (M, H, W) arrays: the part of a ray map that no weather changes."""
     shape = (len(jobs), y_m.size, x_m.size)
     gd, gr = np.empty(shape), np.empty(shape)
+    sites: dict[int, int] = {}
+    for site, _ in jobs:
+        sites.setdefault(id(site), len(sites))
+    elevations = None
+    if not _flat_open(scn):
+        unique = list({id(s): s for s, _ in jobs}.values())
+        elevations = departures(scn, unique, x_m, y_m)
     for m, (site, cell) in enumerate(jobs):
         az, el_d, el_r = _directions(scn, site, x_m, y_m)
+        if elevations is not None:
+            el_d, el_r = elevations[sites[id(site)], ..., 0], elevations[sites[id(site)], ..., 1]
         gd[m], gr[m] = gain_linear(cell, az, el_d), gain_linear(cell, az, el_r)
     return gd, gr
 
@@ -210,8 +256,9 @@ def ray_terms(
     weights: Sequence[Weight | None] | None = None,
 ) -> np.ndarray:
     """Everything of a ray map that no weather changes: each cell's clear-air power at every
-    pixel split into direct, reflected and interference parts, (M, H, W, 3) (antenna gains,
-    spreading, ground, pixel means, knife edges); with ``weights`` (as :func:`ray_power`
+    pixel split into direct, reflected and interference parts, and its rays' lengths,
+    (M, H, W, 5): ``[direct, reflect, cross, d1, d2]`` (antenna gains,
+    spreading, ground, pixel means, diffraction); with ``weights`` (as :func:`ray_power`
     takes them), the parts of the whole pattern less those of the weighted part (what the
     rays keep where the PE carries the rest). :func:`ray_slicer` adds the rain."""
     gd, gr = ray_gains(scn, jobs, x_m, y_m)
@@ -220,7 +267,9 @@ def ray_terms(
     if weights is None:
         return full
     wd, wr = _weights_at(scn, jobs, x_m, y_m, weights)
-    return full - _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, terms_only=True)
+    out = full.copy()
+    out[..., :3] -= _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, terms_only=True)[..., :3]
+    return out
 
 
 def _weights_at(
@@ -261,7 +310,6 @@ def ray_slicer(
         np.asarray(site_of, dtype=np.int64),
         np.ascontiguousarray(x_m, dtype=float),
         np.ascontiguousarray(y_m, dtype=float),
-        altitude_m=scn.area.altitude_m,
         node_spacing_m=_node_spacing(scn),
     )
 

@@ -32,6 +32,7 @@ from rainuav._checks import check_number as _num
 from rainuav._io import read_toml, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef
+from rainuav.radio.area import DEFAULT_MIN_CLEARANCE_M, Area, TerrainFile
 from rainuav.radio.cell import Cell, Pattern
 from rainuav.radio.stochastic import StochasticRain
 from rainuav.radio.weather import Medium, RainCell
@@ -45,6 +46,7 @@ GROUNDS = ("pec", "none", "very-dry", "medium-dry", "wet")
 """Grounds: perfectly conducting, none (free space), or ITU-R P.527 dielectric soils."""
 
 __all__ = [
+    "DEFAULT_MIN_CLEARANCE_M",
     "Area",
     "Building",
     "Cell",
@@ -55,61 +57,8 @@ __all__ = [
     "RainCell",
     "Scenario",
     "Site",
+    "TerrainFile",
 ]
-
-
-@dataclass
-class Area:
-    """The airspace: a rectangle at one flight altitude, mapped at one resolution."""
-
-    x_min_m: float = 0.0
-    """West edge, m."""
-    x_max_m: float = 2000.0
-    """East edge, m."""
-    y_min_m: float = 0.0
-    """South edge, m."""
-    y_max_m: float = 2000.0
-    """North edge, m."""
-    altitude_m: float = 100.0
-    """Flight altitude above the ground, m (0.5-3000)."""
-    resolution_m: float = 10.0
-    """Map pixel size, m (0.5-500)."""
-
-    def check(self, where: str = "area") -> None:
-        for k in ("x_min_m", "x_max_m", "y_min_m", "y_max_m"):
-            _num(f"{where}.{k}", getattr(self, k), -1e6, 1e6, " m")
-        if not self.x_max_m > self.x_min_m:
-            raise InvalidInputError(
-                f"{where}.x_max_m must be > x_min_m ({self.x_max_m} <= {self.x_min_m})"
-            )
-        if not self.y_max_m > self.y_min_m:
-            raise InvalidInputError(
-                f"{where}.y_max_m must be > y_min_m ({self.y_max_m} <= {self.y_min_m})"
-            )
-        _num(f"{where}.altitude_m", self.altitude_m, 0.5, 3000.0, " m above the ground")
-        _num(f"{where}.resolution_m", self.resolution_m, 0.5, 500.0, " m")
-        pixels = ((self.x_max_m - self.x_min_m) / self.resolution_m) * (
-            (self.y_max_m - self.y_min_m) / self.resolution_m
-        )
-        if pixels > 4e7:
-            raise InvalidInputError(
-                f"{where}: the map would have {pixels:.3g} pixels "
-                "(at most 4e7); use a coarser resolution_m"
-            )
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        """(H, W) pixels of the map."""
-        w = max(1, round((self.x_max_m - self.x_min_m) / self.resolution_m))
-        h = max(1, round((self.y_max_m - self.y_min_m) / self.resolution_m))
-        return h, w
-
-    def centres(self) -> tuple[np.ndarray, np.ndarray]:
-        """The pixel centres: east coordinates (W,) and north coordinates (H,), m."""
-        h, w = self.shape
-        x = self.x_min_m + (np.arange(w) + 0.5) * (self.x_max_m - self.x_min_m) / w
-        y = self.y_min_m + (np.arange(h) + 0.5) * (self.y_max_m - self.y_min_m) / h
-        return x, y
 
 
 @dataclass
@@ -222,6 +171,11 @@ class Scenario:
     """Where (0, 0) lies on the Earth, if the scenario is georeferenced (``[origin]`` with
     ``lat_deg``, ``lon_deg``: :class:`rainuav.geo.Georef`, an azimuthal equidistant projection
     on WGS 84); every position then has a latitude and longitude too."""
+    terrain: TerrainFile | None = None
+    """The terrain (``[terrain] file = "dem.tif"``; needs ``origin``): heights are then above
+    it (a site's antenna over the terrain at the site; the UAV over the terrain under it, or
+    above sea level: ``area.altitude_reference``), and buildings and ``height_map_m`` stand on
+    it (PHYSICS.md section 12). None: a flat ground at 0."""
 
     def __post_init__(self) -> None:
         self.check()
@@ -242,6 +196,18 @@ class Scenario:
         self.pe.check()
         if self.origin is not None:
             self.georef  # noqa: B018 - checks the origin (one line naming the field)
+        if self.terrain is not None:
+            if not isinstance(self.terrain, TerrainFile) or not isinstance(self.terrain.file, str):
+                raise InvalidInputError("terrain must be a table with file = 'DEM.tif'")
+            if self.origin is None:
+                raise InvalidInputError(
+                    "terrain needs [origin] (lat_deg, lon_deg): where the area lies on the Earth"
+                )
+            if self.engine != "ray":
+                raise InvalidInputError(
+                    f"engine {self.engine!r} does not march over terrain yet; with [terrain] "
+                    "use engine = 'ray'"
+                )
         a = self.area
         if not self.sites:
             raise InvalidInputError("sites must hold at least one site")
@@ -314,7 +280,18 @@ class Scenario:
         """A hash of every field (two scenarios with the same digest describe the same
         network, weather and airspace). The radio-map cache keys on it together with the
         engine's fingerprint (:func:`rainuav.radio.cache.engine_fingerprint`)."""
-        text = json.dumps(self.to_dict(), sort_keys=True)
+        d = self.to_dict()
+        if self.terrain is not None:
+            # The map follows the DEM's contents, not its name.
+            from rainuav.ground import file_digest
+
+            try:
+                d["terrain"] = {"sha256": file_digest(self.terrain.file)}
+            except OSError as err:
+                raise InvalidInputError(
+                    f"terrain file {self.terrain.file}: cannot be read ({err.strerror})"
+                ) from err
+        text = json.dumps(d, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:32]
 
     # -- TOML -------------------------------------------------------------------------------
@@ -335,7 +312,11 @@ class Scenario:
     def from_toml(cls, path: str | Path) -> Scenario:
         """Reads and validates a TOML scenario (a missing, unreadable or malformed file is an
         InvalidInputError naming it)."""
-        return cls.from_dict(read_toml(path, "scenario file"))
+        d = read_toml(path, "scenario file")
+        t = d.get("terrain")
+        if isinstance(t, dict) and isinstance(t.get("file"), str):
+            d["terrain"] = {**t, "file": str(Path(path).parent / Path(t["file"]).expanduser())}
+        return cls.from_dict(d)
 
     @classmethod
     def from_toml_string(cls, text: str) -> Scenario:
@@ -363,6 +344,7 @@ class Scenario:
 _NESTED: dict[tuple[type, str], type] = {
     (Scenario, "area"): Area,
     (Scenario, "origin"): Origin,
+    (Scenario, "terrain"): TerrainFile,
     (Scenario, "medium"): Medium,
     (Scenario, "pe"): PESettings,
     (Medium, "field"): StochasticRain,

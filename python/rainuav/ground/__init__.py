@@ -1,0 +1,13 @@
+"""The ground under the radio maps (``shared/PHYSICS.md`` section 12): the terrain read from a
+digital elevation model (:mod:`rainuav.ground.dem`), on which obstacles stand. Below the radio
+layer: the engines read heights and profiles from it, never the other way round."""
+
+from rainuav.ground.dem import (
+    HEIGHT_RANGE_M,
+    Terrain,
+    file_digest,
+    read_dem,
+    terrain_nodes,
+)
+
+__all__ = ["HEIGHT_RANGE_M", "Terrain", "file_digest", "read_dem", "terrain_nodes"]

@@ -1,0 +1,108 @@
+"""The airspace of a scenario (:class:`Area`) and the terrain under it (:class:`TerrainFile`),
+as dataclasses validated by :class:`rainuav.radio.scenario.Scenario`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rainuav._checks import check_choice as _choice
+from rainuav._checks import check_number as _num
+from rainuav.errors import InvalidInputError
+
+__all__ = ["DEFAULT_MIN_CLEARANCE_M", "Area", "TerrainFile"]
+
+DEFAULT_MIN_CLEARANCE_M = 10.0
+"""The least height kept above terrain and obstacles, m (``area.min_clearance_m``)."""
+
+
+@dataclass
+class Area:
+    """The airspace: a rectangle at one flight altitude, mapped at one resolution."""
+
+    x_min_m: float = 0.0
+    """West edge, m."""
+    x_max_m: float = 2000.0
+    """East edge, m."""
+    y_min_m: float = 0.0
+    """South edge, m."""
+    y_max_m: float = 2000.0
+    """North edge, m."""
+    altitude_m: float = 100.0
+    """Flight altitude above the ground, m (0.5-3000)."""
+    resolution_m: float = 10.0
+    """Map pixel size, m (0.5-500)."""
+    altitude_reference: str | None = None
+    """What ``altitude_m`` is measured from: ``"ground"`` (the terrain under the UAV:
+    terrain-following, the default) or ``"msl"`` (mean sea level; -500..9000 m)."""
+    min_clearance_m: float | None = None
+    """The least height (m) the UAV keeps above terrain and obstacles (default 10): a pixel
+    whose highest point plus this reaches the flight height is not flyable."""
+
+    def check(self, where: str = "area") -> None:
+        for k in ("x_min_m", "x_max_m", "y_min_m", "y_max_m"):
+            _num(f"{where}.{k}", getattr(self, k), -1e6, 1e6, " m")
+        if not self.x_max_m > self.x_min_m:
+            raise InvalidInputError(
+                f"{where}.x_max_m must be > x_min_m ({self.x_max_m} <= {self.x_min_m})"
+            )
+        if not self.y_max_m > self.y_min_m:
+            raise InvalidInputError(
+                f"{where}.y_max_m must be > y_min_m ({self.y_max_m} <= {self.y_min_m})"
+            )
+        if self.altitude_reference is not None:
+            _choice(f"{where}.altitude_reference", self.altitude_reference, ("ground", "msl"))
+        if self.msl:
+            _num(f"{where}.altitude_m", self.altitude_m, -500.0, 9000.0, " m above sea level")
+        else:
+            _num(f"{where}.altitude_m", self.altitude_m, 0.5, 3000.0, " m above the ground")
+        if self.min_clearance_m is not None:
+            _num(f"{where}.min_clearance_m", self.min_clearance_m, 0.0, 1000.0, " m")
+        _num(f"{where}.resolution_m", self.resolution_m, 0.5, 500.0, " m")
+        pixels = ((self.x_max_m - self.x_min_m) / self.resolution_m) * (
+            (self.y_max_m - self.y_min_m) / self.resolution_m
+        )
+        if pixels > 4e7:
+            raise InvalidInputError(
+                f"{where}: the map would have {pixels:.3g} pixels "
+                "(at most 4e7); use a coarser resolution_m"
+            )
+
+    @property
+    def msl(self) -> bool:
+        """Whether the flight altitude is above mean sea level (else above the ground)."""
+        return self.altitude_reference == "msl"
+
+    @property
+    def clearance_m(self) -> float:
+        """The minimum clearance over terrain and obstacles, m (:attr:`min_clearance_m`)."""
+        return DEFAULT_MIN_CLEARANCE_M if self.min_clearance_m is None else self.min_clearance_m
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(x_min, x_max, y_min, y_max), m."""
+        return (self.x_min_m, self.x_max_m, self.y_min_m, self.y_max_m)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(H, W) pixels of the map."""
+        w = max(1, round((self.x_max_m - self.x_min_m) / self.resolution_m))
+        h = max(1, round((self.y_max_m - self.y_min_m) / self.resolution_m))
+        return h, w
+
+    def centres(self) -> tuple[np.ndarray, np.ndarray]:
+        """The pixel centres: east coordinates (W,) and north coordinates (H,), m."""
+        h, w = self.shape
+        x = self.x_min_m + (np.arange(w) + 0.5) * (self.x_max_m - self.x_min_m) / w
+        y = self.y_min_m + (np.arange(h) + 0.5) * (self.y_max_m - self.y_min_m) / h
+        return x, y
+
+
+@dataclass
+class TerrainFile:
+    """The terrain under the area: a digital elevation model (:mod:`rainuav.ground.dem`)."""
+
+    file: str
+    """A GeoTIFF of heights above sea level in any CRS (SRTM, Copernicus GLO-30); in a TOML
+    file, relative to the TOML's folder."""

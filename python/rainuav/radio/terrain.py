@@ -1,0 +1,118 @@
+"""A scenario's ground as the radio layer uses it (PHYSICS.md section 12): its terrain on the
+area's nodes (:mod:`rainuav.ground`), the heights the ray engine takes, the flight height over
+every pixel and the pixels that are not flyable.
+
+- A site's antenna stands ``height_m`` above the terrain at the site; the UAV flies
+  ``area.altitude_m`` above the terrain under it (``area.altitude_reference = "ground"``, the
+  default) or above mean sea level (``"msl"``).
+- A pixel is **not flyable** where the highest point of terrain and obstacles within it, plus
+  ``area.min_clearance_m`` (default 10 m), reaches the flight height over the pixel's centre.
+  Obstacles (boxes, ``height_map_m``) count wherever they touch the pixel.
+- Without a terrain the ground is flat at 0: a flat DEM at any height gives the same map.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from rainuav.ground import Terrain, file_digest, read_dem
+from rainuav.radio.scenario import Scenario
+
+__all__ = ["core_args", "flight_heights", "not_flyable", "obstacle_pixel_max", "scenario_terrain"]
+
+
+@lru_cache(maxsize=8)
+def _read(
+    path: str,
+    digest: str,
+    origin: tuple[float, float],
+    bounds: tuple[float, float, float, float],
+    shape: tuple[int, int],
+) -> Terrain:
+    from rainuav.geo import Georef
+
+    del digest  # in the key only: a changed file is read again
+    return read_dem(path, Georef(*origin), bounds, shape)
+
+
+def scenario_terrain(scn: Scenario) -> Terrain | None:
+    """The terrain of ``scn`` on its area's nodes (read once per file contents and area), or
+    None for a flat ground at 0."""
+    if scn.terrain is None or scn.origin is None:
+        return None
+    a = scn.area
+    return _read(
+        str(scn.terrain.file),
+        file_digest(scn.terrain.file),
+        (scn.origin.lat_deg, scn.origin.lon_deg),
+        a.bounds,
+        a.shape,
+    )
+
+
+def core_args(scn: Scenario) -> dict[str, Any]:
+    """The terrain and the altitude reference as the core's ray functions take them."""
+    t = scenario_terrain(scn)
+    if t is None:
+        return {"terrain": None, "altitude_msl": scn.area.msl}
+    return {
+        "terrain": t.heights_m,
+        "terrain_origin_step": t.origin_step,
+        "altitude_msl": scn.area.msl,
+    }
+
+
+def flight_heights(scn: Scenario) -> np.ndarray:
+    """The UAV's height above sea level over every pixel centre, (H, W), m."""
+    a = scn.area
+    if a.msl:
+        return np.full(a.shape, float(a.altitude_m))
+    t = scenario_terrain(scn)
+    if t is None:
+        return np.full(a.shape, float(a.altitude_m))
+    x, y = a.centres()
+    return t.at(x[None, :], y[:, None]) + a.altitude_m
+
+
+def obstacle_pixel_max(scn: Scenario) -> np.ndarray:
+    """The tallest obstacle (boxes and ``height_map_m``, m above the terrain) touching each
+    pixel, (H, W)."""
+    a = scn.area
+    h, w = a.shape
+    out = np.zeros((h, w))
+    px = (a.x_max_m - a.x_min_m) / w
+    py = (a.y_max_m - a.y_min_m) / h
+    for b in scn.buildings:
+        j0 = max(0, int(np.floor((b.x0_m - a.x_min_m) / px)))
+        j1 = min(w - 1, int(np.ceil((b.x1_m - a.x_min_m) / px)) - 1)
+        i0 = max(0, int(np.floor((b.y0_m - a.y_min_m) / py)))
+        i1 = min(h - 1, int(np.ceil((b.y1_m - a.y_min_m) / py)) - 1)
+        if j0 <= j1 and i0 <= i1:
+            block = out[i0 : i1 + 1, j0 : j1 + 1]
+            np.maximum(block, b.height_m, out=block)
+    if scn.height_map_m is not None:
+        hm = np.asarray(scn.height_map_m, dtype=float)
+        rows, cols = hm.shape
+        # Every height-map cell that overlaps the pixel (cells and pixels both tile the area).
+        ii = np.arange(h)
+        jj = np.arange(w)
+        r0 = np.floor(ii * rows / h).astype(int)
+        r1 = np.minimum(np.ceil((ii + 1) * rows / h).astype(int), rows)
+        c0 = np.floor(jj * cols / w).astype(int)
+        c1 = np.minimum(np.ceil((jj + 1) * cols / w).astype(int), cols)
+        for i in range(h):
+            for j in range(w):
+                out[i, j] = max(out[i, j], hm[r0[i] : r1[i], c0[j] : c1[j]].max())
+    return out
+
+
+def not_flyable(scn: Scenario) -> np.ndarray:
+    """The pixels the UAV may not enter, (H, W) bool (module docstring)."""
+    a = scn.area
+    t = scenario_terrain(scn)
+    ground = np.zeros(a.shape) if t is None else t.pixel_max(a.shape)
+    top = ground + obstacle_pixel_max(scn)
+    return top + a.clearance_m >= flight_heights(scn)
