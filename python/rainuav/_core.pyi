@@ -27,6 +27,8 @@ __all__ = [
     "mie_forward",
     "plan_optimal",
     "plan_optimal_in_time",
+    "bullington_loss",
+    "knife_edge_loss_db",
     "ray_departures",
     "ray_power",
     "sample_slices",
@@ -256,6 +258,20 @@ def ray_power(
     ``terms_only``, its clear-air parts and its rays' lengths [direct, reflect, cross, d1, d2],
     (M, H, W, 5). ``terrain``: heights above sea level at nodes (the ground under everything);
     ``altitude_msl``: the flight altitude above sea level instead of above the terrain."""
+
+def knife_edge_loss_db(nu: _F) -> _F:
+    """ITU-R P.526's knife-edge loss J(nu), dB, of each ``nu``."""
+
+def bullington_loss(
+    d_m: _F,
+    h_m: _F,
+    *,
+    d_total_m: float,
+    h_ts_m: float,
+    h_rs_m: float,
+    wavelength_m: float,
+) -> tuple[float, float, float, float]:
+    """The Bullington loss of a profile: (loss_db, knife_edge_db, edge_d_m, edge_h_m)."""
 
 def ray_departures(
     sites: _F,
