@@ -29,7 +29,11 @@ lint:
 test-rust:
 	cargo test --workspace
 
+# pycraf (ITU-R P.452, a reference the terrain tests check against) goes in without its
+# declared dependencies: they pull in pytest plugins that break pytest's command line; what it
+# needs at run time (astropy, pyproj, scipy, rasterio) is in the test extra.
 test-python: build
+	$(PYTHON) -m pip install -q --no-deps 'pycraf>=2.1,<3'
 	$(PYTHON) -m pytest $(PYTEST_ARGS)
 
 bench: build

@@ -373,3 +373,26 @@ def test_terrain_needs_an_origin_and_the_ray_engine(dems: dict[str, Path]) -> No
         scenario(dems["flat_0"]).replace(origin=None)
     with pytest.raises(InvalidInputError, match="engine 'hybrid' does not march over terrain"):
         scenario(dems["flat_0"]).replace(engine="hybrid")
+
+
+def test_radiomap_cli_over_a_dem(tmp_path: Path, dems: dict[str, Path], capsys) -> None:
+    # The command line: a good DEM maps (radiomap.npz written last); a bad one is one line on
+    # stderr and exit 2, nothing written.
+    from rainuav import radiomap
+
+    toml = tmp_path / "place.toml"
+    scenario(None).to_toml(toml)
+    out = tmp_path / "maps"
+    rc = radiomap.main(
+        ["--config", str(toml), "--terrain", str(dems["flat_437"]), "--out", str(out), "--no-cache"]
+    )
+    assert rc == 0 and (out / "radiomap.npz").is_file()
+    bad = _bad_dems(tmp_path / "bad" if (tmp_path / "bad").mkdir() is None else tmp_path)
+    out2 = tmp_path / "maps2"
+    capsys.readouterr()
+    rc = radiomap.main(
+        ["--config", str(toml), "--terrain", str(bad["feet"][0]), "--out", str(out2)]
+    )
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and len(err.splitlines()) == 1 and "feet.tif" in err, err
+    assert not (out2 / "radiomap.npz").exists()

@@ -3,6 +3,7 @@
     python -m rainuav.radiomap --scenario paper --rain-rate 25 --out maps/
     python -m rainuav.radiomap --scenario uma --freq-ghz 28 --rain-rate 50 --engine hybrid
     python -m rainuav.radiomap --config my_scenario.toml --out maps/
+    python -m rainuav.radiomap --config my_place.toml --terrain dem.tif --out maps/
     python -m rainuav.radiomap --scenario storm --storm-seed 3 --duration-s 300 --slice-s 5
     python -m rainuav.radiomap --clear-cache
 
@@ -74,6 +75,20 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument(
         "--slice-s", type=float, default=None, help="with --duration-s: the step, s (default 5)"
     )
+    ap.add_argument(
+        "--terrain",
+        type=Path,
+        default=None,
+        help="a DEM GeoTIFF (any CRS; heights in metres above sea level) under the area: the "
+        "scenario needs an [origin] (a --config TOML); the ray engine maps over it",
+    )
+    ap.add_argument(
+        "--altitude-reference",
+        choices=("ground", "msl"),
+        default=None,
+        help="the flight altitude above the terrain under the UAV (ground, the default) or "
+        "above mean sea level (msl)",
+    )
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
     ap.add_argument("--clear-cache", action="store_true", help="delete every cached map and exit")
@@ -119,8 +134,20 @@ def _build(args: argparse.Namespace) -> int:
         scn = presets.with_rain(scn, args.rain_rate)
     if args.freq_ghz is not None:
         scn = scn.replace(freq_hz=args.freq_ghz * 1e9)
-    if args.engine is not None:
+    if args.terrain is not None:
+        from rainuav.radio.scenario import TerrainFile
+
+        if not args.terrain.is_file():
+            raise InvalidInputError(f"--terrain {args.terrain}: no such file")
+        engine = args.engine or "ray"
+        scn = scn.replace(terrain=TerrainFile(str(args.terrain.resolve())), engine=engine)
+    elif args.engine is not None:
         scn = scn.replace(engine=args.engine)
+    if args.altitude_reference is not None:
+        import dataclasses
+
+        area = dataclasses.replace(scn.area, altitude_reference=args.altitude_reference)
+        scn = scn.replace(area=area)
     if args.duration_s is not None or args.slice_s is not None:
         return _build_series(args, scn)
     rm = build_radio_map(scn, cache=not args.no_cache, progress=True)

@@ -99,7 +99,7 @@ fn rain_field(raster: Option<&Array2<f64>>, uniform: f64, origin_step: [f64; 4])
 #[pyfunction]
 #[pyo3(signature = (tx_m, tx_power_mw, g_direct, g_reflect, x_m, y_m, *, altitude_m, pixel_m,
     freq_hz, ground, eps_ground, polarization, gamma_db_per_m, gamma_raster, gamma_origin_step,
-    buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=[0.0, 1.0, 0.0, 1.0],
+    buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=None,
     altitude_msl=false, terms_only=false))]
 #[allow(clippy::too_many_arguments)]
 fn ray_power<'py>(
@@ -123,7 +123,7 @@ fn ray_power<'py>(
     heights: Option<PyReadonlyArray2<'py, f64>>,
     heights_origin_step: [f64; 4],
     terrain: Option<PyReadonlyArray2<'py, f64>>,
-    terrain_origin_step: [f64; 4],
+    terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
     terms_only: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -154,7 +154,7 @@ fn ray_power<'py>(
         }),
         terrain: tr.map(|values| Raster {
             values,
-            origin_step: terrain_origin_step,
+            origin_step: terrain_origin_step.unwrap_or([0.0, 1.0, 0.0, 1.0]),
         }),
         altitude_msl,
     };
@@ -174,7 +174,7 @@ fn ray_power<'py>(
 /// x, y, height above the terrain.
 #[pyfunction]
 #[pyo3(signature = (sites, x_m, y_m, *, altitude_m, freq_hz, ground, buildings, heights,
-    heights_origin_step, terrain=None, terrain_origin_step=[0.0, 1.0, 0.0, 1.0], altitude_msl=false))]
+    heights_origin_step, terrain=None, terrain_origin_step=None, altitude_msl=false))]
 #[allow(clippy::too_many_arguments)]
 fn ray_departures<'py>(
     py: Python<'py>,
@@ -188,7 +188,7 @@ fn ray_departures<'py>(
     heights: Option<PyReadonlyArray2<'py, f64>>,
     heights_origin_step: [f64; 4],
     terrain: Option<PyReadonlyArray2<'py, f64>>,
-    terrain_origin_step: [f64; 4],
+    terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
 ) -> PyResult<Bound<'py, PyArray4<f64>>> {
     let s = sites.as_array();
@@ -222,7 +222,7 @@ fn ray_departures<'py>(
         }),
         terrain: tr.map(|values| Raster {
             values,
-            origin_step: terrain_origin_step,
+            origin_step: terrain_origin_step.unwrap_or([0.0, 1.0, 0.0, 1.0]),
         }),
         altitude_msl,
     };
