@@ -796,6 +796,22 @@ sys.exit({cli}.main(sys.argv[1:]))
     accepted(f"{cli} killed: no {COMPLETION_FILES[cli]}")
 
 
+def test_bad_dems_are_refused_by_radiomap_in_one_line(tmp_path, capsys) -> None:
+    # Each bad DEM of the terrain tests through `radiomap --terrain`: exit 2, one line naming
+    # the file and what is wrong, no radiomap.npz.
+    import test_terrain
+    from rainuav import radiomap
+
+    toml = tmp_path / "place.toml"
+    test_terrain.scenario(None).to_toml(toml)
+    for what, (path, words) in test_terrain._bad_dems(tmp_path).items():
+        out = tmp_path / f"out_{what.replace(' ', '_')}"
+        argv = ["--config", str(toml), "--terrain", str(path), "--out", str(out), "--no-cache"]
+        rc, err = run_cli(radiomap, argv, capsys)
+        refused(f"radiomap --terrain ({what})", rc, err, path.name, words)
+        assert not (out / "radiomap.npz").exists()
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():
