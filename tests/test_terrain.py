@@ -396,3 +396,28 @@ def test_radiomap_cli_over_a_dem(tmp_path: Path, dems: dict[str, Path], capsys) 
     err = capsys.readouterr().err.strip()
     assert rc == 2 and len(err.splitlines()) == 1 and "feet.tif" in err, err
     assert not (out2 / "radiomap.npz").exists()
+
+
+def test_obstacles_count_wherever_they_touch_a_pixel() -> None:
+    # The height map's cells against each pixel by brute force (every cell overlapping the
+    # pixel's square), on grids finer and coarser than the map; boxes over the pixels they
+    # touch.
+    from rainuav.radio.presets import uma
+    from rainuav.radio.scenario import Building
+    from rainuav.radio.terrain import obstacle_pixel_max
+
+    rng = np.random.default_rng(0)
+    for rows, cols in [(7, 13), (450, 333), (3, 1)]:
+        hm = rng.uniform(0, 50, (rows, cols))
+        scn = uma(height_map_m=hm.tolist())
+        h, w = scn.area.shape
+        want = np.zeros((h, w))
+        for i in range(h):
+            for j in range(w):
+                r0, r1 = int(np.floor(i * rows / h)), min(int(np.ceil((i + 1) * rows / h)), rows)
+                c0, c1 = int(np.floor(j * cols / w)), min(int(np.ceil((j + 1) * cols / w)), cols)
+                want[i, j] = hm[r0:r1, c0:c1].max()
+        assert np.array_equal(obstacle_pixel_max(scn), want)
+    box = uma(buildings=[Building(995.0, 1011.0, 500.0, 510.0, 70.0)])
+    got = obstacle_pixel_max(box)
+    assert set(zip(*np.nonzero(got), strict=True)) == {(50, 99), (50, 100), (50, 101)}

@@ -96,16 +96,18 @@ def obstacle_pixel_max(scn: Scenario) -> np.ndarray:
     if scn.height_map_m is not None:
         hm = np.asarray(scn.height_map_m, dtype=float)
         rows, cols = hm.shape
-        # Every height-map cell that overlaps the pixel (cells and pixels both tile the area).
-        ii = np.arange(h)
-        jj = np.arange(w)
-        r0 = np.floor(ii * rows / h).astype(int)
-        r1 = np.minimum(np.ceil((ii + 1) * rows / h).astype(int), rows)
-        c0 = np.floor(jj * cols / w).astype(int)
-        c1 = np.minimum(np.ceil((jj + 1) * cols / w).astype(int), cols)
-        for i in range(h):
-            for j in range(w):
-                out[i, j] = max(out[i, j], hm[r0[i] : r1[i], c0[j] : c1[j]].max())
+
+        # Every height-map cell that overlaps the pixel (cells and pixels both tile the area):
+        # pixel i touches rows r0[i] .. r1[i] - 1, and r1[i] - 1 <= r0[i + 1].
+        def touched_max(v: np.ndarray, n: int, cells: int, axis: int) -> np.ndarray:
+            k = np.arange(n)
+            r0 = np.floor(k * cells / n).astype(int)
+            r1 = np.minimum(np.ceil((k + 1) * cells / n).astype(int), cells)
+            head = np.maximum.reduceat(v, r0, axis=axis)
+            return np.maximum(head, np.take(v, r1 - 1, axis=axis))
+
+        cell_max = touched_max(touched_max(hm, h, rows, 0), w, cols, 1)
+        out = np.maximum(out, cell_max)
     return out
 
 
