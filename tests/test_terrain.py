@@ -421,3 +421,60 @@ def test_obstacles_count_wherever_they_touch_a_pixel() -> None:
     box = uma(buildings=[Building(995.0, 1011.0, 500.0, 510.0, 70.0)])
     got = obstacle_pixel_max(box)
     assert set(zip(*np.nonzero(got), strict=True)) == {(50, 99), (50, 100), (50, 101)}
+
+
+# -- flights that keep out of what they may not enter ------------------------------------------
+
+
+def _walled_map(tmp_path: Path):
+    """A 100 m wall (a height map) across x = 700..720 m but for the top 100 m, under a UAV at
+    60 m with 10 m clearance: the wall's pixels are not flyable."""
+    hm = np.zeros((40, 60))
+    hm[:35, 35] = 100.0
+    scn = scenario(None).replace(height_map_m=hm.tolist())
+    rm = build_radio_map(scn, cache=False)
+    return scn, rm
+
+
+def test_flights_never_enter_what_is_not_flyable(tmp_path: Path) -> None:
+    # The map carries the wall as not flyable (and keeps it through save and load); the
+    # environment ends a move into it as a move out of the area (the out-of-bounds penalty);
+    # the exact planner goes round through the gap; the straight line hits the wall and is
+    # reported as not arriving; the planner's return is the environment's along its path.
+    from rainuav.nav.env import UAVNavEnv
+    from rainuav.nav.planner import optimal, straight_line
+    from rainuav.radio.mapdata import RadioMap
+
+    _, rm = _walled_map(tmp_path)
+    assert rm.not_flyable is not None
+    assert rm.not_flyable[:35, 35].all() and rm.not_flyable.sum() == 35
+    back = RadioMap.load(rm.save(tmp_path / "walled.npz"))
+    assert np.array_equal(back.not_flyable, rm.not_flyable)
+    env = UAVNavEnv(rm, goal_m=(1100.0, 400.0), min_db=-5.0)
+    start = np.array([105.0, 405.0])
+    plan = optimal(env, start)
+    assert plan.return_ > 0  # arrived
+    assert not env.field.not_flyable[
+        np.clip((plan.path_m[:, 1] // 20).astype(int), 0, 39),
+        np.clip((plan.path_m[:, 0] // 20).astype(int), 0, 59),
+    ].any()
+    assert plan.path_m[:, 1].max() > 700.0  # through the gap
+    # The environment pays the same along the plan.
+    env.reset(options={"start_m": start})
+    ret = 0.0
+    for a in plan.actions:
+        _, r, term, _, _ = env.step(int(a))
+        ret += r
+    assert term and abs(ret - plan.return_) < 1e-9
+    line = straight_line(env, start)
+    assert line.return_ < -env.cfg.out_of_bounds_penalty / 2  # it flew into the wall
+    env.reset(options={"start_m": (695.0, 405.0)})
+    _, r, term, _, info = env.step(0)  # +x: into the wall
+    assert term and not info["arrived"] and r < -env.cfg.out_of_bounds_penalty / 2
+    with pytest.raises(InvalidInputError, match="may not fly"):
+        env.reset(options={"start_m": (710.0, 405.0)})
+    with pytest.raises(InvalidInputError, match="may not fly"):
+        UAVNavEnv(rm, goal_m=(710.0, 400.0))
+    # Sampled starts avoid the wall.
+    starts = [env.sample_start(np.random.default_rng(k)) for k in range(300)]
+    assert not any(700.0 <= s[0] < 720.0 and s[1] < 700.0 for s in starts)

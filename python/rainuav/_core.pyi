@@ -192,6 +192,7 @@ def plan_optimal(
     sir_min_db: float,
     goal_reward: float,
     out_of_bounds_penalty: float,
+    blocked: npt.NDArray[np.uint8] | None = None,
 ) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
     """Exact optimal plans from many starts: (return, actions, path) each."""
 
@@ -226,6 +227,7 @@ def plan_optimal_in_time(
     sir_min_db: float,
     goal_reward: float,
     out_of_bounds_penalty: float,
+    blocked: npt.NDArray[np.uint8] | None = None,
 ) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
     """Exact space-time plans from many starts, the signal (K, H, W) at the instants t_s."""
 

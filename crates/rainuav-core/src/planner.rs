@@ -66,6 +66,9 @@ pub struct NavTask<'a> {
     pub goal_reward: f64,
     /// Charged on leaving.
     pub out_of_bounds_penalty: f64,
+    /// Pixels a UAV may not enter (non-zero), (H', W') over `extent` (terrain or obstacles
+    /// within the clearance of the flight height): a move into one is a move out of the area.
+    pub blocked: Option<ArrayView2<'a, u8>>,
 }
 
 /// An optimal plan.
@@ -147,6 +150,15 @@ impl NavTask<'_> {
             1e9,
             "must be finite and > 0",
         )?;
+        if let Some(b) = &self.blocked
+            && (b.nrows() == 0 || b.ncols() == 0)
+        {
+            return Err(CoreError::invalid(
+                "blocked",
+                "must not be empty",
+                format!("{:?}", b.dim()),
+            ));
+        }
         if self.max_steps == 0 || self.max_steps > 100_000 {
             return Err(CoreError::invalid(
                 "max_steps",
@@ -160,6 +172,23 @@ impl NavTask<'_> {
     /// SIR at (x, y): bilinear, edge-clamped, exactly as `rainuav.env.SirField`.
     pub fn sir_at(&self, x: f64, y: f64) -> f64 {
         bilinear(&self.sir_db, self.extent, x, y)
+    }
+
+    /// Whether the pixel holding `(x, y)` (a point inside the area) may not be entered
+    /// (`rainuav.nav.field`'s pixel lookup: the cell `floor((x - x0) / (x1 - x0) W)`, clamped).
+    pub fn blocked_at(&self, x: f64, y: f64) -> bool {
+        let Some(b) = &self.blocked else {
+            return false;
+        };
+        let [x0, x1, y0, y1] = self.extent;
+        let (h, w) = b.dim();
+        let j = ((x - x0) / (x1 - x0) * w as f64)
+            .floor()
+            .clamp(0.0, (w - 1) as f64) as usize;
+        let i = ((y - y0) / (y1 - y0) * h as f64)
+            .floor()
+            .clamp(0.0, (h - 1) as f64) as usize;
+        b[(i, j)] != 0
     }
 
     /// b(q') from the SIR there.
@@ -197,7 +226,7 @@ impl NavTask<'_> {
         let (ni, nj) = (i + MOVES[a].0, j + MOVES[a].1);
         let qx = start[0] + self.step_m * ni as f64;
         let qy = start[1] + self.step_m * nj as f64;
-        let out = qx < x0 || qx > x1 || qy < y0 || qy > y1;
+        let out = qx < x0 || qx > x1 || qy < y0 || qy > y1 || self.blocked_at(qx, qy);
         let (cx, cy) = (qx.clamp(x0, x1), qy.clamp(y0, y1));
         let b = self.base_reward(signal(cx, cy));
         if out {
@@ -424,7 +453,34 @@ mod tests {
             sir_min_db: 10.0,
             goal_reward: 100.0,
             out_of_bounds_penalty: 1000.0,
+            blocked: None,
         }
+    }
+
+    #[test]
+    fn never_enters_a_blocked_pixel_and_goes_round_a_wall() {
+        // A wall of not-flyable pixels across column 2 (x 20..30) but for the top row: the
+        // shortest way from (5, 5) to (35, 5) is 3 moves east through the wall; the plan goes
+        // up to the gap, across and back down, never through.
+        let s = Array2::from_elem((4, 4), 20.0);
+        let mut wall = Array2::<u8>::zeros((4, 4));
+        for i in 0..3 {
+            wall[(i, 2)] = 1;
+        }
+        let mut t = task(&s, 30);
+        t.extent = [0.0, 40.0, 0.0, 40.0];
+        t.goal = [35.0, 5.0];
+        t.blocked = Some(wall.view());
+        let plan = t.optimal([5.0, 5.0]).unwrap();
+        assert!(plan.return_ > 0.0, "arrives: {}", plan.return_);
+        for p in &plan.path {
+            assert!(!t.blocked_at(p[0], p[1]), "entered {p:?}");
+        }
+        // Up three rows to the gap, across, down three rows: 3 + 3 + 3 = 9 moves.
+        assert_eq!(plan.actions.len(), 9);
+        // Without the wall, three moves east.
+        t.blocked = None;
+        assert_eq!(t.optimal([5.0, 5.0]).unwrap().actions.len(), 3);
     }
 
     /// Brute force over every action sequence of length <= 7 on a tiny map.

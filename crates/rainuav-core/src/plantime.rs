@@ -327,6 +327,7 @@ mod tests {
             sir_min_db: 10.0,
             goal_reward: 100.0,
             out_of_bounds_penalty: 1000.0,
+            blocked: None,
         }
     }
 

@@ -17,7 +17,7 @@ type PlanOut<'py> = (f64, Bound<'py, PyArray1<u8>>, Bound<'py, PyArray2<f64>>);
 /// Exact optimal plans from many starts: a list of (return, actions (T,) u8, path (T+1, 2)).
 #[pyfunction]
 #[pyo3(signature = (sir_db, extent_m, goal_m, starts_m, *, step_m, tol_m, max_steps, mu, reward,
-    sir_min_db, goal_reward, out_of_bounds_penalty))]
+    sir_min_db, goal_reward, out_of_bounds_penalty, blocked=None))]
 #[allow(clippy::too_many_arguments)]
 fn plan_optimal<'py>(
     py: Python<'py>,
@@ -33,6 +33,7 @@ fn plan_optimal<'py>(
     sir_min_db: f64,
     goal_reward: f64,
     out_of_bounds_penalty: f64,
+    blocked: Option<PyReadonlyArray2<'py, u8>>,
 ) -> PyResult<Vec<PlanOut<'py>>> {
     let task = NavTask {
         sir_db: sir_db.as_array(),
@@ -46,6 +47,7 @@ fn plan_optimal<'py>(
         sir_min_db,
         goal_reward,
         out_of_bounds_penalty,
+        blocked: blocked.as_ref().map(|b| b.as_array()),
     };
     let pts = start_points(&starts_m)?;
     let plans = detached(py, || task.optimal_many(&pts))?;
@@ -85,7 +87,7 @@ fn plans_out(py: Python<'_>, plans: Vec<Plan>) -> Vec<PlanOut<'_>> {
 /// signal between slices is linear in time (`rainuav_core::plantime`).
 #[pyfunction]
 #[pyo3(signature = (sinr_db, t_s, extent_m, goal_m, starts_m, *, t0_s, dt_s, step_m, tol_m,
-    max_steps, mu, reward, sir_min_db, goal_reward, out_of_bounds_penalty))]
+    max_steps, mu, reward, sir_min_db, goal_reward, out_of_bounds_penalty, blocked=None))]
 #[allow(clippy::too_many_arguments)]
 fn plan_optimal_in_time<'py>(
     py: Python<'py>,
@@ -104,6 +106,7 @@ fn plan_optimal_in_time<'py>(
     sir_min_db: f64,
     goal_reward: f64,
     out_of_bounds_penalty: f64,
+    blocked: Option<PyReadonlyArray2<'py, u8>>,
 ) -> PyResult<Vec<PlanOut<'py>>> {
     let slices = sinr_db.as_array();
     if slices.shape()[0] == 0 {
@@ -132,6 +135,7 @@ fn plan_optimal_in_time<'py>(
         sir_min_db,
         goal_reward,
         out_of_bounds_penalty,
+        blocked: blocked.as_ref().map(|b| b.as_array()),
     };
     let tl = Timeline {
         slices,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rainuav.nav.field import SignalField
+from rainuav.nav.field import SignalField, blocked_at
 from rainuav.nav.task import MOVES, NavConfig, base_reward
 
 __all__ = ["BatchStepper"]
@@ -33,7 +33,8 @@ class BatchStepper:
         world: np.ndarray | None = None,
     ) -> dict[str, np.ndarray]:
         """One move for every UAV. Returns new ``offset``, ``t``, ``position`` (after clamping),
-        ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area),
+        ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area or
+        entered a pixel that is not flyable),
         ``arrived`` (reached the goal) and ``t_s`` (the instant the move ends, s). ``goal``
         (N, 2): each UAV's destination (default: the task's); ``world`` (N,): each UAV's world
         where the field is a :class:`rainuav.nav.field.SignalBank`."""
@@ -44,6 +45,8 @@ class BatchStepper:
         q = start + cfg.step_m * new_off
         out = (q[:, 0] < x0) | (q[:, 0] > x1) | (q[:, 1] < y0) | (q[:, 1] > y1)
         qc = np.stack([np.clip(q[:, 0], x0, x1), np.clip(q[:, 1], y0, y1)], axis=1)
+        # A move into a pixel that may not be entered is a move out of the area.
+        out |= blocked_at(self.field, qc[:, 0], qc[:, 1])
         t_new = t + 1
         t_s = self.time_s(t_new)
         if world is None:

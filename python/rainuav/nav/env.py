@@ -37,7 +37,7 @@ import numpy.typing as npt
 from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
-from rainuav.nav.field import SignalBank, SignalField, SignalSeries
+from rainuav.nav.field import SignalBank, SignalField, SignalSeries, blocked_at
 from rainuav.nav.task import SIGNALS, LoiteringWarning, NavConfig, check_config
 from rainuav.nav.views import WeatherView, sample_goal, sample_start_for
 
@@ -70,7 +70,8 @@ def signal_field(
                 f"signal={signal!r}: radio_map has no {signal}_db (rebuild it with this version)"
             )
         serving = getattr(radio_map, "serving_cell", None)
-        return SignalField(values, radio_map.extent_m, f"{signal}_db", serving)
+        mask = getattr(radio_map, "not_flyable", None)
+        return SignalField(values, radio_map.extent_m, f"{signal}_db", serving, mask)
     if len(raw) != 1:
         raise InvalidInputError("give radio_map, or exactly one of sinr_db and sir_db")
     kind, values = next(iter(raw.items()))
@@ -166,6 +167,11 @@ class UAVNavEnv(gym.Env):
             min_db = default(kind) if callable(default) else DEFAULT_MIN_DB
         self.cfg = dataclasses.replace(cfg, signal=kind, min_db=min_db)
         check_config(self.cfg, self.field.extent)
+        if blocked_at(self.field, *self.cfg.goal_m):
+            raise InvalidInputError(
+                f"goal_m {tuple(self.cfg.goal_m)} lies where the UAV may not fly (terrain or "
+                "obstacles within the clearance of the flight height)"
+            )
         if self.cfg.reward == "linear":
             warnings.warn(
                 "reward='linear' (-1 + mu * 10^(S/10)) is positive near a base station: the "
@@ -250,10 +256,14 @@ class UAVNavEnv(gym.Env):
         the task's)."""
         x0, x1, y0, y1 = self.field.extent
         g = np.asarray(self.cfg.goal_m if goal is None else goal)
-        while True:
+        for _ in range(100_000):
             p = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1)])
-            if np.hypot(*(p - g)) > self.cfg.tol_m:
+            if np.hypot(*(p - g)) > self.cfg.tol_m and not blocked_at(self.field, *p):
                 return p
+        raise InvalidInputError(
+            f"no flyable start farther than tol_m = {self.cfg.tol_m} m from the destination "
+            f"in the area {self.field.extent}"
+        )
 
     def draw_task(
         self, rng: np.random.Generator, goal: Any = None
@@ -266,7 +276,7 @@ class UAVNavEnv(gym.Env):
         if goal is None and not self.random_goal:
             return self.sample_start(rng), np.asarray(self.cfg.goal_m, dtype=np.float64), world
         g = sample_goal(rng, self.field.extent) if goal is None else np.asarray(goal, float)
-        return sample_start_for(rng, self.field.extent, g, self.cfg), g, world
+        return sample_start_for(rng, self.field.extent, g, self.cfg, self.field), g, world
 
     def signal(self, x: Any, y: Any, t_s: Any, world: Any = 0) -> Any:
         """The signal at ``(x, y)`` at ``t_s`` (in a bank, of world ``world``)."""
@@ -317,6 +327,11 @@ class UAVNavEnv(gym.Env):
         if p.shape != (2,) or not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
             raise InvalidInputError(
                 f"{name} must be (x, y) inside the area {self.field.extent} (got {value!r})"
+            )
+        if blocked_at(self.field, *p):
+            raise InvalidInputError(
+                f"{name} ({p[0]:g}, {p[1]:g}) lies where the UAV may not fly (terrain or "
+                "obstacles within the clearance of the flight height)"
             )
         return p
 

@@ -18,7 +18,7 @@ import numpy.typing as npt
 from rainuav._sampling import bilinear, in_time
 from rainuav.errors import InvalidInputError
 
-__all__ = ["SignalBank", "SignalField", "SignalSeries", "SirField"]
+__all__ = ["SignalBank", "SignalField", "SignalSeries", "SirField", "blocked_at"]
 
 
 def _checked(
@@ -64,6 +64,29 @@ def _pixel(shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any) ->
     return i.astype(np.int64), j.astype(np.int64)
 
 
+def _checked_mask(mask: Any, shape: tuple[int, int]) -> np.ndarray | None:
+    """``mask`` as a read-only (H, W) bool array of the map's pixels, or None."""
+    if mask is None:
+        return None
+    m = np.asarray(mask)
+    if m.shape != shape or m.dtype.kind not in "bui":
+        raise InvalidInputError(
+            f"not_flyable must be a (H, W) = {shape} bool array (got {m.shape})"
+        )
+    m = np.ascontiguousarray(m.astype(bool))
+    m.flags.writeable = False
+    return m
+
+
+def blocked_at(field: Any, x: Any, y: Any) -> np.ndarray:
+    """Whether the pixel holding each point ``(x, y)`` may not be entered (the field's
+    ``not_flyable`` mask; False everywhere without one)."""
+    mask = getattr(field, "not_flyable", None)
+    if mask is None:
+        return np.zeros(np.broadcast(np.asarray(x), np.asarray(y)).shape, dtype=bool)
+    return mask[_pixel(mask.shape, field.extent, x, y)]
+
+
 def _lerp(g: np.ndarray, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> np.ndarray:
     """Rows ``g[k0]`` and ``g[k1]`` mixed by ``f`` per row, as the fields mix slices."""
     out = g[k0]  # a copy; the rows between two slices are mixed in place
@@ -94,7 +117,8 @@ class SignalField:
     """A SINR (or SIR) map in dB over ``extent_m = (x_min, x_max, y_min, y_max)``, sampled
     bilinearly between pixel centres (:func:`rainuav._sampling.bilinear`). ``name`` is the
     array's name in error messages; ``serving_cell`` (H, W), optional, is looked up at the
-    nearest pixel."""
+    nearest pixel; ``not_flyable`` (H, W), optional, marks the pixels a UAV may not enter
+    (:func:`blocked_at`)."""
 
     varies = False
     """One map: the signal does not change in time."""
@@ -105,10 +129,12 @@ class SignalField:
         extent_m: tuple[float, float, float, float],
         name: str = "sinr_db",
         serving_cell: npt.ArrayLike | None = None,
+        not_flyable: npt.ArrayLike | None = None,
     ):
         self.db, self.extent, self.serving = _checked(
             values_db, extent_m, name, serving_cell, "(H, W)"
         )
+        self.not_flyable = _checked_mask(not_flyable, self.db.shape)
         self.name = name
         self._points = _PointCache()
 
@@ -152,10 +178,12 @@ class SignalSeries:
         extent_m: tuple[float, float, float, float],
         name: str = "sinr_db",
         serving_cell: npt.ArrayLike | None = None,
+        not_flyable: npt.ArrayLike | None = None,
     ):
         self.db, self.extent, self.serving = _checked(
             values_db, extent_m, name, serving_cell, "(K, H, W)"
         )
+        self.not_flyable = _checked_mask(not_flyable, self.db.shape[1:])
         t = np.asarray(t_s, dtype=np.float64)
         k = self.db.shape[0]
         if t.shape != (k,) or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
@@ -211,7 +239,7 @@ class SignalSeries:
         (what a tool that ignores the storm's motion plans on)."""
         k0, k1, f = (int(a) if a.dtype.kind == "i" else float(a) for a in self.brackets(t_s))
         v = self.db[k0] if k0 == k1 else (1.0 - f) * self.db[k0] + f * self.db[k1]
-        return SignalField(v, self.extent, self.name)
+        return SignalField(v, self.extent, self.name, not_flyable=self.not_flyable)
 
     def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
         """(N, M): the signal at the fixed points (M, 2) at each of the N instants ``t_s``,
@@ -229,6 +257,9 @@ class SignalBank:
 
     varies = True
     """The worlds' signals may change in time (a bank of still maps says False)."""
+
+    not_flyable = None
+    """Storm banks fly over flat open ground: no pixel is closed."""
 
     def __init__(
         self,

@@ -65,6 +65,9 @@ def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
         "goal_reward": float(cfg.goal_reward),
         "out_of_bounds_penalty": float(cfg.out_of_bounds_penalty),
     }
+    mask = getattr(field, "not_flyable", None)
+    if mask is not None:
+        task["blocked"] = np.ascontiguousarray(mask, dtype=np.uint8)
     goal = (float(cfg.goal_m[0]), float(cfg.goal_m[1]))
     if isinstance(field, SignalField):
         raw = _core.plan_optimal(field.db, field.extent, goal, starts, **task)

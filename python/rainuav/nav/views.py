@@ -31,6 +31,7 @@ import gymnasium as gym
 import numpy as np
 
 from rainuav.errors import InvalidInputError
+from rainuav.nav.field import blocked_at
 from rainuav.nav.task import NavConfig
 
 __all__ = ["GOAL_MARGIN_M", "REACH", "WeatherView", "sample_goal", "sample_start_for"]
@@ -177,16 +178,20 @@ def sample_start_for(
     extent: tuple[float, float, float, float],
     goal: np.ndarray,
     cfg: NavConfig,
+    field: Any = None,
 ) -> np.ndarray:
     """A start uniform in the area, farther than ``tol_m`` from ``goal`` and at most
-    :data:`REACH` of ``max_steps`` moves from it (Manhattan distance); refused where 1000
-    draws found none (an area the arrival disc covers)."""
+    :data:`REACH` of ``max_steps`` moves from it (Manhattan distance), never in a pixel of
+    ``field``'s not-flyable mask; refused where 1000 draws found none (an area the arrival
+    disc covers)."""
     x0, x1, y0, y1 = extent
     reach = REACH * cfg.max_steps * cfg.step_m
     for _ in range(1000):
         p = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1)])
         d = np.abs(p - goal).sum()
         if np.hypot(*(p - goal)) > cfg.tol_m and d <= reach:
+            if field is not None and blocked_at(field, *p):
+                continue
             return p
     raise InvalidInputError(
         f"no start farther than tol_m = {cfg.tol_m} m and within {reach:g} m of the "

@@ -74,6 +74,9 @@ class RadioMap:
     """Wall time of the build (0 when loaded from the cache)."""
     timings: dict[str, float] = dataclasses.field(default_factory=dict)
     """Seconds per phase of the build: source, screens, march, resample (empty if cached)."""
+    not_flyable: npt.NDArray[np.bool_] | None = None
+    """(H, W) the pixels a UAV may not enter: terrain or obstacles within the clearance of the
+    flight height (:func:`rainuav.radio.terrain.not_flyable`); None over flat open ground."""
 
     _ARRAYS = (
         "x_m",
@@ -106,6 +109,8 @@ class RadioMap:
         arrays = {k: getattr(self, k) for k in self._ARRAYS}
         arrays["extent_m"] = np.asarray(self.extent_m, dtype=np.float64)
         arrays["altitude_m"] = np.float64(self.altitude_m)
+        if self.not_flyable is not None:
+            arrays["not_flyable"] = np.asarray(self.not_flyable, dtype=bool)
         return write_npz(path, arrays, self.scenario, FORMAT_VERSION)
 
     @classmethod
@@ -116,6 +121,11 @@ class RadioMap:
         if data["extent_m"].shape != (4,):
             raise InvalidInputError(f"{path}: not a rainuav radio map (bad metadata)")
         check_map_arrays(path, data, scn)
+        mask = data.get("not_flyable")
+        if mask is not None and (mask.shape != scn.area.shape or mask.dtype != bool):
+            raise InvalidInputError(
+                f"{path}: not_flyable must be a bool array of shape {scn.area.shape}"
+            )
         ext = tuple(float(v) for v in data["extent_m"])
         return cls(
             x_m=data["x_m"],
@@ -130,6 +140,7 @@ class RadioMap:
             cell_site=data["cell_site"],
             pe_share=data["pe_share"],
             pe_cone_deg=data["pe_cone_deg"],
+            not_flyable=mask,
         )
 
     def plot(self, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:

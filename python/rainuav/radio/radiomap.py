@@ -47,6 +47,16 @@ def _cached(scn: Scenario) -> RadioMap | None:
     return rm
 
 
+def _not_flyable(scn: Scenario) -> np.ndarray | None:
+    """The map's not-flyable pixels where anything stands on the ground (None over flat open
+    ground, where every pixel is flyable)."""
+    if scn.terrain is None and not scn.buildings and scn.height_map_m is None:
+        return None
+    from rainuav.radio.terrain import not_flyable
+
+    return not_flyable(scn)
+
+
 @overload
 def build_radio_map(
     scn: Scenario, *, cache: bool = ..., progress: bool = ..., times_s: None = ...
@@ -130,6 +140,7 @@ def build_radio_map(
         pe_cone_deg=cones,
         build_seconds=time.perf_counter() - t0,
         timings=timings,
+        not_flyable=_not_flyable(scn),
     )
     if cache:
         store(rm, map_path(scn.digest()))
