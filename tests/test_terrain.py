@@ -4,6 +4,7 @@ independent references, maps over a DEM in two CRSs, shifts, and bad DEMs refuse
 
 from __future__ import annotations
 
+import json
 import warnings
 from pathlib import Path
 
@@ -478,3 +479,101 @@ def test_flights_never_enter_what_is_not_flyable(tmp_path: Path) -> None:
     # Sampled starts avoid the wall.
     starts = [env.sample_start(np.random.default_rng(k)) for k in range(300)]
     assert not any(700.0 <= s[0] < 720.0 and s[1] < 700.0 for s in starts)
+
+
+# -- fly over terrain ----------------------------------------------------------------------------
+
+EXAMPLE_SITES = Path(__file__).resolve().parents[1] / "examples" / "sites.csv"
+HILL = (47.3730, 8.5470)
+
+
+def _ground(lat: np.ndarray, lon: np.ndarray, ridge: bool) -> np.ndarray:
+    """A 400 m plain with a 150 m hill at HILL (radius 200 m), or a ridge through HILL running
+    north-west to south-east (across every route from the south-west to the north-east)."""
+    dy = (lat - HILL[0]) * 111_200.0
+    dx = (lon - HILL[1]) * 111_200.0 * np.cos(np.radians(HILL[0]))
+    r2 = ((dx + dy) / np.sqrt(2.0)) ** 2 if ridge else dx**2 + dy**2
+    return 400.0 + 150.0 * np.exp(-r2 / 200.0**2)
+
+
+def _zurich_hill_dem(path: Path, ridge: bool = False) -> Path:
+    """A DEM in SRTM's form (EPSG:4326, int16 metres, 1e-4 degree cells) round the example
+    sites: :func:`_ground`."""
+    cell = 1e-4
+    lat1, lon0 = 47.40, 8.50
+    lats = lat1 - (np.arange(600) + 0.5) * cell
+    lons = lon0 + (np.arange(900) + 0.5) * cell
+    la, lo = np.meshgrid(lats, lons, indexing="ij")
+    z = _ground(la, lo, ridge)
+    return write_dem(path, np.round(z), from_origin(lon0, lat1, cell, cell), "EPSG:4326",
+                     dtype="int16", nodata=-32768)  # fmt: skip
+
+
+def test_fly_over_terrain_writes_heights_above_sea_level(tmp_path: Path) -> None:
+    # Terrain-following at 100 m over the hill: the mission (read back through pymavlink)
+    # flies MAV_FRAME_GLOBAL heights, each waypoint the terrain under it plus 100 m (0.5 m:
+    # the file's int16 heights, bilinear), and the straight climb or descent between two
+    # waypoints keeps at least the 10 m clearance over the highest point of every pixel on the
+    # way.
+    from pymavlink import mavwp
+    from rainuav.fly import main
+    from rainuav.geo import Georef
+    from rainuav.missions import MAV_FRAME_GLOBAL
+
+    dem = _zurich_hill_dem(tmp_path / "ridge.tif", ridge=True)
+    out = tmp_path / "flight"
+    argv = ["--sites", str(EXAMPLE_SITES), "--start", "47.3660,8.5380", "--goal",
+            "47.3800,8.5560", "--terrain", str(dem), "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    g = Georef(summary["origin"]["lat"], summary["origin"]["lon"])
+    loader = mavwp.MAVWPLoader()
+    n = loader.load(str(out / "mission.waypoints"))
+    assert n == summary["waypoints"] + 3
+    items = [loader.wp(k) for k in range(1, n - 1)]  # take-off and the waypoints
+    assert all(it.frame == MAV_FRAME_GLOBAL for it in items)
+    wx, wy = g.to_local(np.array([it.x for it in items[1:]]), np.array([it.y for it in items[1:]]))
+    lat, lon = np.array([it.x for it in items[1:]]), np.array([it.y for it in items[1:]])
+    ground = _ground(lat, lon, ridge=True)
+    alts = np.array([it.z for it in items[1:]])
+    assert np.max(np.abs(alts - (ground + 100.0))) < 0.5 + 1.0  # int16 rounding, bilinear
+    assert alts.max() - alts.min() > 50.0  # it climbs over the hill
+    plan = json.loads((out / "mission.plan").read_text())["mission"]
+    assert plan["globalPlanAltitudeMode"] == 2
+    # Between waypoints, along the flown lattice path: the linear height against the
+    # terrain (clearance 10 m; 1 m for the int16 file's resolution).
+    line = json.loads((out / "flight.geojson").read_text())["features"][0]
+    coords = np.array(line["geometry"]["coordinates"])
+    under = _ground(coords[:, 1], coords[:, 0], ridge=True)
+    px, py = g.to_local(coords[:, 1], coords[:, 0])
+    s_path = np.concatenate([[0], np.cumsum(np.hypot(np.diff(px), np.diff(py)))])
+    s_wp = np.array(
+        [s_path[np.argmin(np.hypot(px - x, py - y))] for x, y in zip(wx, wy, strict=True)]
+    )
+    flown = np.interp(s_path, s_wp, alts)
+    assert np.min(flown - under) >= 10.0 - 1.0
+
+
+def test_fly_refuses_a_start_where_it_may_not_fly(tmp_path: Path, capsys) -> None:
+    # 480 m above sea level: the hill's top (550 m) is not flyable; a start on it is refused
+    # in one line, exit 2, nothing written; a flight round it is planned.
+    from rainuav.fly import main
+
+    dem = _zurich_hill_dem(tmp_path / "hill.tif")
+    base = ["--sites", str(EXAMPLE_SITES), "--terrain", str(dem), "--altitude-reference",
+            "msl", "--altitude-m", "480"]  # fmt: skip
+    out = tmp_path / "on_hill"
+    capsys.readouterr()
+    rc = main([*base, "--start", f"{HILL[0]},{HILL[1]}", "--goal", "47.3800,8.5560",
+               "--out", str(out)])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "may not fly" in err[0] and "--start" in err[0], err
+    assert not (out / "summary.json").exists()
+    out = tmp_path / "round"
+    assert main([*base, "--start", "47.3660,8.5380", "--goal", "47.3800,8.5560",
+                 "--out", str(out)]) == 0  # fmt: skip
+    coords = np.array(
+        json.loads((out / "flight.geojson").read_text())["features"][0]["geometry"]["coordinates"]
+    )
+    ground = _ground(coords[:, 1], coords[:, 0], ridge=False)
+    assert np.all(ground + 10.0 < 480.0 + 1.0)  # never over ground within the clearance

@@ -2,6 +2,8 @@
 
     python -m rainuav.fly --sites examples/sites.csv --start 47.3700,8.5400 \\
         --goal 47.3830,8.5570 --rain-rate 25 --out runs/flight
+    python -m rainuav.fly --sites examples/sites.csv --start 47.3700,8.5400 \\
+        --goal 47.3830,8.5570 --terrain dem.tif --out runs/flight
 
 Sites from a CSV or GeoJSON file (one row per sector: ``site_id, lat, lon, height_m,
 azimuth_deg, electrical_tilt_deg, tx_power_dbm``, optional ``antenna, rows,
@@ -19,16 +21,26 @@ projection centred on it (:mod:`rainuav.geo`). Plans the exact optimum
 - ``flight.geojson`` (the path, WGS 84, with per-vertex time, SINR, serving cell and outage;
   the sites as points), ``flight.kml`` (Google Earth, altitude above the ground);
 - ``mission.plan`` (QGroundControl) and ``mission.waypoints`` (QGC WPL 110): take-off, the
-  path's corners at the flight altitude relative to home, landing;
+  path's corners at the flight altitude relative to home, landing; over ``--terrain``, the
+  waypoints above mean sea level (MAVLink's global frame), enough of them that no straight
+  climb or descent between two passes closer to the ground than the clearance
+  (:func:`rainuav.missions.terrain_waypoints`);
 - ``flight.png`` (the path over the SINR map with the sites) and ``summary.json`` (cost,
   outage share and flight time, against the straight line).
 
 ``summary.json`` is written last: a folder without it holds a flight that was stopped part
 way (an earlier run's ``summary.json`` is removed before the new files are written).
 
-A planning aid, not an airworthiness tool: check the airspace, the terrain and obstacles
-above the flight altitude (the map assumes flat open ground), and the link budget's
-assumptions before flying. Needs the ``geo`` extra (``pip install 'rainuav[geo]'``).
+``--terrain DEM.tif`` puts the place on its ground (a GeoTIFF in any CRS, heights in metres
+above sea level, as SRTM or Copernicus GLO-30 deliver it: :mod:`rainuav.ground.dem`): the
+map is made by the ray engine over it, the altitude is above the terrain under the UAV
+(``--altitude-reference ground``, the default) or above sea level (``msl``), and the flight
+keeps out of the pixels where terrain comes within 10 m of it; a start or destination there
+is refused.
+
+A planning aid, not an airworthiness tool: check the airspace, obstacles the map does not
+know (without ``--terrain`` it assumes flat open ground; a DEM leaves out vegetation and
+clutter), and the link budget's assumptions before flying. Needs the ``geo`` extra (``pip install 'rainuav[geo]'``).
 """
 
 from __future__ import annotations
@@ -86,6 +98,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--policy", type=Path, default=None,
         help="fly a trained network that reads the weather (a run of --observation weather)",
     )  # fmt: skip
+    ap.add_argument(
+        "--terrain", type=Path, default=None,
+        help="a DEM GeoTIFF under the place (any CRS, heights in metres above sea level, as "
+        "SRTM or Copernicus GLO-30): maps and flights over the ground, by the ray engine",
+    )  # fmt: skip
+    ap.add_argument(
+        "--altitude-reference", choices=("ground", "msl"), default=None,
+        help="--altitude-m above the terrain under the UAV (ground, the default) or above "
+        "mean sea level (msl)",
+    )  # fmt: skip
     ap.add_argument("--out", type=Path, required=True, help="output folder")
     args = ap.parse_args(_cli.attach_negative_values(argv, LATLON_FLAGS))
 
@@ -94,7 +116,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         from rainuav._io import check_out_dir
         from rainuav.world.place import fly_place, place_scenario
 
-        check_number("--altitude-m", args.altitude_m, 0.5, 3000.0, " m")
+        if args.altitude_reference == "msl":
+            check_number("--altitude-m", args.altitude_m, -500.0, 9000.0, " m above sea level")
+        else:
+            check_number("--altitude-m", args.altitude_m, 0.5, 3000.0, " m")
         check_number("--freq-ghz", args.freq_ghz, 1.0, 100.0, " GHz")
         check_number("--rain-rate", args.rain_rate, 0.0, 500.0, " mm/h")
         if args.weather is not None and args.rain_rate:
@@ -114,7 +139,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         place = place_scenario(
             args.sites, args.start, args.goal, altitude_m=args.altitude_m,
             freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
-            box=box,
+            box=box, terrain=args.terrain, altitude_reference=args.altitude_reference,
         )  # fmt: skip
         flyer, by = (None, "exact optimum") if args.policy is None else _policy(args.policy)
         summary = fly_place(

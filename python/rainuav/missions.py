@@ -13,6 +13,13 @@ station or a GIS loads.
 - :func:`geojson_dict`: the path as a GeoJSON ``LineString`` (RFC 7946: longitude, latitude,
   altitude) with per-vertex properties, and the sites as points.
 - :func:`kml_text`: the same for Google Earth (altitude relative to the ground).
+- Over terrain (:func:`terrain_waypoints`): the waypoints carry altitudes above mean sea level
+  (MAVLink's ``MAV_FRAME_GLOBAL``, QGroundControl's absolute altitude mode), the terrain under
+  each plus the flight altitude, and there are enough of them that the straight climb or
+  descent the autopilot flies between two never passes closer to the terrain and obstacles
+  under the path than the clearance. Above sea level rather than MAVLink's terrain frame:
+  the autopilot then flies the heights the map was made for, not those of its own terrain
+  database.
 
 Coordinates in: latitude and longitude in degrees (WGS 84), from :class:`rainuav.geo.Georef`.
 """
@@ -37,6 +44,7 @@ __all__ = [
     "kml_text",
     "mission_items",
     "plan_dict",
+    "terrain_waypoints",
     "wpl_text",
 ]
 
@@ -75,24 +83,67 @@ def expand(points: Any, step_m: float) -> np.ndarray:
     return np.array(out)
 
 
+def terrain_waypoints(
+    path: Any, height_amsl_m: Any, top_amsl_m: Any, clearance_m: float
+) -> np.ndarray:
+    """Indices of the waypoints that fly ``path`` (T+1, 2) over terrain: its corners
+    (:func:`corners`), and within each straight leg as few more as keep the straight line
+    between two waypoints' heights (``height_amsl_m`` (T+1,), the flight height over each
+    vertex) at least ``clearance_m`` above ``top_amsl_m`` (T+1,), the highest terrain or
+    obstacle under each vertex (greedy: each waypoint as far along the leg as the check
+    allows)."""
+    z = np.asarray(height_amsl_m, dtype=np.float64)
+    top = np.asarray(top_amsl_m, dtype=np.float64)
+    turns = corners(path)
+    if z.shape != (len(np.asarray(path)),) or top.shape != z.shape:
+        raise InvalidInputError("height_amsl_m and top_amsl_m need one value per path vertex")
+    keep = [int(turns[0])]
+    for a0, b0 in itertools.pairwise(turns):
+        a = int(a0)
+        while a < b0:
+            b = int(b0)
+            while b > a + 1:
+                k = np.arange(a + 1, b)
+                line = z[a] + (z[b] - z[a]) * (k - a) / (b - a)
+                if np.all(line - top[k] >= clearance_m):
+                    break
+                b -= 1
+            keep.append(b)
+            a = b
+    return np.array(keep)
+
+
 def mission_items(
-    home: tuple[float, float], waypoints: Any, altitude_m: float
+    home: tuple[float, float],
+    waypoints: Any,
+    altitude_m: float,
+    altitudes_amsl_m: Any = None,
 ) -> list[dict[str, Any]]:
     """The mission: take-off at home to ``altitude_m``, the waypoints (K, 2) of (lat, lon)
-    at ``altitude_m`` above home, landing at the last one. Each item: ``command``,
-    ``frame``, ``params`` (7: param1-4, latitude, longitude, altitude)."""
-    if not (0.5 <= altitude_m <= 3000.0):
-        raise InvalidInputError(f"altitude_m must be in [0.5, 3000] m (got {altitude_m!r})")
+    at ``altitude_m`` above home, landing at the last one; with ``altitudes_amsl_m`` (K,),
+    take-off and waypoints above mean sea level instead (``MAV_FRAME_GLOBAL``: take-off to
+    the first waypoint's height). Each item: ``command``, ``frame``, ``params`` (7:
+    param1-4, latitude, longitude, altitude)."""
     wps = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
+    if altitudes_amsl_m is None:
+        if not (0.5 <= altitude_m <= 3000.0):
+            raise InvalidInputError(f"altitude_m must be in [0.5, 3000] m (got {altitude_m!r})")
+        frame, alts = MAV_FRAME_GLOBAL_RELATIVE_ALT, np.full(len(wps), float(altitude_m))
+        climb = float(altitude_m)
+    else:
+        alts = np.asarray(altitudes_amsl_m, dtype=np.float64).reshape(-1)
+        if alts.shape != (len(wps),) or not np.all(np.isfinite(alts)):
+            raise InvalidInputError("altitudes_amsl_m must hold one finite height per waypoint")
+        frame, climb = MAV_FRAME_GLOBAL, float(alts[0])
     rel = MAV_FRAME_GLOBAL_RELATIVE_ALT
     items = [
-        {"command": MAV_CMD_NAV_TAKEOFF, "frame": rel,
-         "params": [0.0, 0.0, 0.0, None, home[0], home[1], altitude_m]},
+        {"command": MAV_CMD_NAV_TAKEOFF, "frame": frame,
+         "params": [0.0, 0.0, 0.0, None, home[0], home[1], climb]},
     ]  # fmt: skip
-    for lat, lon in wps:
+    for (lat, lon), alt in zip(wps, alts, strict=True):
         items.append(
-            {"command": MAV_CMD_NAV_WAYPOINT, "frame": rel,
-             "params": [0.0, 0.0, 0.0, None, float(lat), float(lon), altitude_m]}
+            {"command": MAV_CMD_NAV_WAYPOINT, "frame": frame,
+             "params": [0.0, 0.0, 0.0, None, float(lat), float(lon), float(alt)]}
         )  # fmt: skip
     lat, lon = wps[-1]
     items.append(
@@ -102,11 +153,20 @@ def mission_items(
     return items
 
 
-def wpl_text(home: tuple[float, float], waypoints: Any, altitude_m: float) -> str:
-    """The mission as ``QGC WPL 110`` text: item 0 the home position (frame global,
-    altitude 0), then :func:`mission_items` (yaw, param 4, written 0: keep the heading)."""
-    rows = [[0, 1, MAV_FRAME_GLOBAL, MAV_CMD_NAV_WAYPOINT, 0, 0, 0, 0, home[0], home[1], 0.0, 1]]
-    for k, it in enumerate(mission_items(home, waypoints, altitude_m), start=1):
+def wpl_text(
+    home: tuple[float, float],
+    waypoints: Any,
+    altitude_m: float,
+    altitudes_amsl_m: Any = None,
+    home_amsl_m: float = 0.0,
+) -> str:
+    """The mission as ``QGC WPL 110`` text: item 0 the home position (frame global, at
+    ``home_amsl_m``), then :func:`mission_items` (yaw, param 4, written 0: keep the
+    heading)."""
+    rows = [[0, 1, MAV_FRAME_GLOBAL, MAV_CMD_NAV_WAYPOINT, 0, 0, 0, 0, home[0], home[1],
+             float(home_amsl_m), 1]]  # fmt: skip
+    items = mission_items(home, waypoints, altitude_m, altitudes_amsl_m)
+    for k, it in enumerate(items, start=1):
         p = [0.0 if v is None else v for v in it["params"]]
         rows.append([k, 0, it["frame"], it["command"], *p, 1])
     return "QGC WPL 110\n" + "".join("\t".join(_num(v) for v in r) + "\n" for r in rows)
@@ -117,18 +177,24 @@ def _num(v: Any) -> str:
 
 
 def plan_dict(
-    home: tuple[float, float], waypoints: Any, altitude_m: float, speed_m_s: float
+    home: tuple[float, float],
+    waypoints: Any,
+    altitude_m: float,
+    speed_m_s: float,
+    altitudes_amsl_m: Any = None,
+    home_amsl_m: float = 0.0,
 ) -> dict[str, Any]:
     """The mission as a QGroundControl ``.plan`` (module docstring): a generic multirotor
     (``firmwareType`` 0, ``vehicleType`` 2), altitudes relative to home
-    (``globalPlanAltitudeMode`` 1)."""
+    (``globalPlanAltitudeMode`` 1), or above mean sea level with ``altitudes_amsl_m`` (2)."""
+    mode = 1 if altitudes_amsl_m is None else 2
     items = []
-    for k, it in enumerate(mission_items(home, waypoints, altitude_m), start=1):
+    for k, it in enumerate(mission_items(home, waypoints, altitude_m, altitudes_amsl_m), 1):
         items.append(
             {
                 "AMSLAltAboveTerrain": None,
                 "Altitude": it["params"][6],
-                "AltitudeMode": 1,
+                "AltitudeMode": mode if it["command"] != MAV_CMD_NAV_LAND else 1,
                 "autoContinue": True,
                 "command": it["command"],
                 "doJumpId": k,
@@ -149,8 +215,8 @@ def plan_dict(
             "vehicleType": 2,
             "cruiseSpeed": speed_m_s,
             "hoverSpeed": speed_m_s,
-            "globalPlanAltitudeMode": 1,
-            "plannedHomePosition": [home[0], home[1], 0.0],
+            "globalPlanAltitudeMode": mode,
+            "plannedHomePosition": [home[0], home[1], float(home_amsl_m)],
             "items": items,
         },
     }

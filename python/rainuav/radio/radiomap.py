@@ -24,6 +24,7 @@ from rainuav.radio.mapdata import FORMAT_VERSION, RadioMap, store
 from rainuav.radio.ray_engine import SOILS
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.sinr import RSS_FLOOR_DBM, sir_from_power
+from rainuav.radio.terrain import map_mask
 
 if TYPE_CHECKING:
     from rainuav.radio.timemap import RadioMapSeries
@@ -45,16 +46,6 @@ def _cached(scn: Scenario) -> RadioMap | None:
     if rm.scenario.digest() != scn.digest():
         return None
     return rm
-
-
-def _not_flyable(scn: Scenario) -> np.ndarray | None:
-    """The map's not-flyable pixels where anything stands on the ground (None over flat open
-    ground, where every pixel is flyable)."""
-    if scn.terrain is None and not scn.buildings and scn.height_map_m is None:
-        return None
-    from rainuav.radio.terrain import not_flyable
-
-    return not_flyable(scn)
 
 
 @overload
@@ -140,7 +131,7 @@ def build_radio_map(
         pe_cone_deg=cones,
         build_seconds=time.perf_counter() - t0,
         timings=timings,
-        not_flyable=_not_flyable(scn),
+        not_flyable=map_mask(scn),
     )
     if cache:
         store(rm, map_path(scn.digest()))

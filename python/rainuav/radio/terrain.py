@@ -21,7 +21,14 @@ import numpy as np
 from rainuav.ground import Terrain, file_digest, read_dem
 from rainuav.radio.scenario import Scenario
 
-__all__ = ["core_args", "flight_heights", "not_flyable", "obstacle_pixel_max", "scenario_terrain"]
+__all__ = [
+    "core_args",
+    "flight_heights",
+    "map_mask",
+    "not_flyable",
+    "obstacle_pixel_max",
+    "scenario_terrain",
+]
 
 
 @lru_cache(maxsize=8)
@@ -118,3 +125,12 @@ def not_flyable(scn: Scenario) -> np.ndarray:
     ground = np.zeros(a.shape) if t is None else t.pixel_max(a.shape)
     top = ground + obstacle_pixel_max(scn)
     return top + a.clearance_m >= flight_heights(scn)
+
+
+def map_mask(scn: Scenario) -> np.ndarray | None:
+    """The not-flyable pixels a map of ``scn`` carries: :func:`not_flyable` where anything
+    stands on the ground (terrain, buildings, a height map), None over flat open ground (where
+    every pixel is flyable)."""
+    if scn.terrain is None and not scn.buildings and scn.height_map_m is None:
+        return None
+    return not_flyable(scn)

@@ -35,6 +35,7 @@ from rainuav.radio.mapdata import RadioMap
 from rainuav.radio.radiomap import build_radio_map
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.storms import check_storm_seed
+from rainuav.radio.terrain import map_mask
 from rainuav.radio.timemap import RadioMapSeries, build_radio_map_series, series_times
 
 __all__ = [
@@ -261,11 +262,13 @@ def world_from(source: Any, task: NavConfig) -> World:
             _extent(source.scenario),
             f"{signal}_db",
             source.serving_cell,
+            map_mask(source.scenario),
         )
     elif isinstance(source, RadioMap):
         field = SignalField(
-            getattr(source, f"{signal}_db"), source.extent_m, f"{signal}_db", source.serving_cell
-        )
+            getattr(source, f"{signal}_db"), source.extent_m, f"{signal}_db",
+            source.serving_cell, source.not_flyable,
+        )  # fmt: skip
     else:
         raise InvalidInputError(
             f"a world needs a RadioMap or RadioMapSeries (got {type(source).__name__})"

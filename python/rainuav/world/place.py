@@ -25,15 +25,25 @@ import numpy as np
 from rainuav._io import begin_folder, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef, latlon_text
-from rainuav.missions import corners, expand, geojson_dict, kml_text, plan_dict, wpl_text
+from rainuav.missions import (
+    corners,
+    expand,
+    geojson_dict,
+    kml_text,
+    plan_dict,
+    terrain_waypoints,
+    wpl_text,
+)
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.field import SignalField, blocked_at
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio import presets
 from rainuav.radio.radar import read_radar_grid
 from rainuav.radio.radiomap import build_radio_map
-from rainuav.radio.scenario import Area, Origin, Scenario
+from rainuav.radio.scenario import Area, Origin, Scenario, TerrainFile
 from rainuav.radio.sites import read_site_rows, sites_from_rows
+from rainuav.radio.terrain import map_mask, obstacle_pixel_max, scenario_terrain
 from rainuav.radio.timemap import build_radio_map_series, series_times
 from rainuav.world import World, world_from
 
@@ -79,12 +89,17 @@ def place_scenario(
     weather: str | Path | None = None,
     resolution_m: float = 10.0,
     box: tuple[float, float, float, float] | None = None,
+    terrain: str | Path | None = None,
+    altitude_reference: str | None = None,
 ) -> Place:
     """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees.
     ``weather``: a georeferenced rain file (:mod:`rainuav.radio.radar`, mm/h or dBZ, one
     instant or several) in place of homogeneous rain. ``box``: the area as (south latitude,
     west longitude, north latitude, east longitude), degrees, in place of the box around the
-    start, the destination and the sites; the start and the destination must lie in it."""
+    start, the destination and the sites; the start and the destination must lie in it.
+    ``terrain``: a DEM GeoTIFF under the place (:mod:`rainuav.ground.dem`; the ray engine maps
+    over it), with the flight altitude above the terrain (``altitude_reference="ground"``, the
+    default) or above sea level (``"msl"``)."""
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
@@ -139,7 +154,7 @@ def place_scenario(
     area = Area(
         x_min_m=edge(min(xs) - margin, False), x_max_m=edge(max(xs) + margin, True),
         y_min_m=edge(min(ys) - margin, False), y_max_m=edge(max(ys) + margin, True),
-        altitude_m=altitude_m, resolution_m=resolution_m,
+        altitude_m=altitude_m, resolution_m=resolution_m, altitude_reference=altitude_reference,
     )  # fmt: skip
     base = presets.uma(rain_rate, freq_ghz * 1e9)
     if weather is not None:
@@ -147,6 +162,11 @@ def place_scenario(
         base = dataclasses.replace(base, medium=medium)
     origin = Origin(geo.lat_deg, geo.lon_deg)
     scn = dataclasses.replace(base, name="place", area=area, sites=sites, origin=origin)
+    if terrain is not None:
+        if not Path(terrain).is_file():
+            raise InvalidInputError(f"--terrain: no file {terrain}")
+        dem = TerrainFile(str(Path(terrain).resolve()))
+        scn = dataclasses.replace(scn, terrain=dem, engine="ray")
     scn.check()
     return Place(scn, geo, (float(sx), float(sy)), (float(gx), float(gy)), rows)
 
@@ -244,6 +264,18 @@ def fly_place(
         rm: Any = build_radio_map_series(scn, series_times(horizon, SLICE_S), progress=progress)
     else:
         rm = build_radio_map(scn, progress=progress)
+    mask = map_mask(scn)
+    if mask is not None:
+        for name, (x, y) in (("--start", place.start_m), ("--goal", place.goal_m)):
+            if blocked_at(
+                SignalField(np.zeros(mask.shape), scn.area.bounds, not_flyable=mask), x, y
+            ):
+                lat, lon = place.georef.to_latlon(x, y)
+                raise InvalidInputError(
+                    f"{name} {latlon_text(float(lat), float(lon))} lies where the UAV may not "
+                    f"fly: terrain or obstacles within {scn.area.clearance_m:g} m of the flight "
+                    "height (fly higher with --altitude-m, or move the point)"
+                )
     threshold = presets.SINR_THRESHOLDS_DB["uma"] if min_db is None else min_db
     task = NavConfig(
         goal_m=place.goal_m, start_m=place.start_m, max_steps=steps, speed_m_s=speed_m_s,
@@ -289,7 +321,7 @@ def fly_place(
             np.arange(1, len(straight.path_m)) * task.move_s) < min_db)),
         "weather_moves": bool(scn.medium.moves),
         "flight_time_s": float(t_s[-1]), "moves": len(path) - 1,
-        "waypoints": len(corners(path)), "min_db": min_db,
+        "waypoints": len(mission_heights(scn, path)[0]), "min_db": min_db,
         "origin": {"lat": place.georef.lat_deg, "lon": place.georef.lon_deg,
                    "projection": place.georef.proj4},
         "area_m": [a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m],
@@ -298,12 +330,32 @@ def fly_place(
     return summary
 
 
+def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, float]:
+    """The mission's waypoints along ``path`` (indices), their heights above mean sea level
+    (None over flat open ground: the flight altitude relative to home) and home's height:
+    over terrain, :func:`rainuav.missions.terrain_waypoints` with the flight height and the
+    highest terrain or obstacle of the pixel under each vertex."""
+    t = scenario_terrain(scn)
+    if t is None:
+        return corners(path), None, 0.0
+    a = scn.area
+    x, y = path[:, 0], path[:, 1]
+    z = np.full(len(path), float(a.altitude_m)) if a.msl else t.at(x, y) + a.altitude_m
+    h, w = a.shape
+    j = np.clip(np.floor((x - a.x_min_m) / (a.x_max_m - a.x_min_m) * w), 0, w - 1).astype(int)
+    i = np.clip(np.floor((y - a.y_min_m) / (a.y_max_m - a.y_min_m) * h), 0, h - 1).astype(int)
+    top = (t.pixel_max(a.shape) + obstacle_pixel_max(scn))[i, j]
+    picks = terrain_waypoints(path, z, top, a.clearance_m)
+    return picks, z[picks], float(t.at(x[0], y[0]))
+
+
 def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.ndarray,
            sinr: np.ndarray, serving: np.ndarray, min_db: float, summary: dict,
            rm: Any) -> None:  # fmt: skip
     begin_folder(out, "summary.json")
     alt = place.scenario.area.altitude_m
-    wp = ll[corners(path)]
+    picks, heights, home_amsl = mission_heights(place.scenario, path)
+    wp = ll[picks]
     home = (float(ll[0, 0]), float(ll[0, 1]))
     props = {
         "t_s": t_s.tolist(), "sinr_db": np.round(sinr, 3).tolist(),
@@ -314,8 +366,8 @@ def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.nd
     texts = {
         "flight.geojson": json.dumps(geojson_dict(ll, alt, props, sites, summary), indent=1),
         "flight.kml": kml_text(ll, alt, "rainuav flight", sites),
-        "mission.plan": json.dumps(plan_dict(home, wp, alt, 10.0), indent=2),
-        "mission.waypoints": wpl_text(home, wp, alt),
+        "mission.plan": json.dumps(plan_dict(home, wp, alt, 10.0, heights, home_amsl), indent=2),
+        "mission.waypoints": wpl_text(home, wp, alt, heights, home_amsl),
     }
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
