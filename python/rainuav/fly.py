@@ -40,7 +40,8 @@ is refused.
 
 A planning aid, not an airworthiness tool: check the airspace, obstacles the map does not
 know (without ``--terrain`` it assumes flat open ground; a DEM leaves out vegetation and
-clutter), and the link budget's assumptions before flying. Needs the ``geo`` extra (``pip install 'rainuav[geo]'``).
+clutter), and the link budget's assumptions before flying. Needs the ``geo`` extra
+(``pip install 'rainuav[geo]'``).
 """
 
 from __future__ import annotations
