@@ -577,3 +577,59 @@ def test_fly_refuses_a_start_where_it_may_not_fly(tmp_path: Path, capsys) -> Non
     )
     ground = _ground(coords[:, 1], coords[:, 0], ridge=False)
     assert np.all(ground + 10.0 < 480.0 + 1.0)  # never over ground within the clearance
+
+
+# -- maps out as GeoTIFF ---------------------------------------------------------------------------
+
+
+def test_maps_out_as_geotiff_read_back_at_the_right_place(tmp_path: Path) -> None:
+    # A georeferenced map written by `radiomap` (the walled height map, so some pixels are not
+    # flyable): rasterio reads every band back at the place each pixel stands (a pixel's
+    # centre transformed to lon/lat and into the file's CRS lands in the same pixel) and value
+    # (float32 of the map's), and `rio info` (rasterio's command line over GDAL, as QGIS reads
+    # the file) shows the CRS, the band names and the nodata value.
+    import subprocess
+    import sys
+
+    from rainuav import radiomap
+    from rainuav.geo import Georef
+    from rainuav.radio.maptiff import NODATA
+
+    hm = np.zeros((40, 60))
+    hm[:35, 35] = 100.0
+    scn = scenario(None).replace(height_map_m=hm.tolist())
+    toml = tmp_path / "walled.toml"
+    scn.to_toml(toml)
+    out = tmp_path / "maps"
+    assert radiomap.main(["--config", str(toml), "--out", str(out), "--no-cache"]) == 0
+    rm = build_radio_map(scn, cache=False)
+    tif = out / "radiomap.tif"
+    with rasterio.open(tif) as src:
+        assert src.descriptions == ("sinr_db", "rss_serving_dbm", "serving_cell", "not_flyable")
+        assert src.nodata == NODATA and src.count == 4 and (src.height, src.width) == (40, 60)
+        bands = src.read()
+        # Three pixels by their centres' latitude and longitude.
+        g = Georef(ORIGIN.lat_deg, ORIGIN.lon_deg)
+        x, y = scn.area.centres()
+        import pyproj
+
+        to_file = pyproj.Transformer.from_crs("EPSG:4326", src.crs, always_xy=True)
+        for i, j in [(0, 0), (20, 35), (39, 59)]:
+            lat, lon = g.to_latlon(x[j], y[i])
+            fx, fy = to_file.transform(lon, lat)
+            r, c = src.index(fx, fy)
+            assert np.float32(rm.sinr_db[i, j]) == bands[0, r, c]
+            assert bands[3, r, c] == float(rm.not_flyable[i, j])
+            k = rm.serving_cell[i, j]
+            assert bands[2, r, c] == (k if k >= 0 else NODATA)
+            assert np.float32(rm.rss_dbm[k, i, j]) == bands[1, r, c]
+        assert bands[3].sum() == rm.not_flyable.sum() == 35
+    # `rio info` as its console script runs it (rasterio.rio.main:main_group).
+    rio = "import sys; from rasterio.rio.main import main_group; sys.exit(main_group())"
+    info = subprocess.run([sys.executable, "-c", rio, "info", str(tif)],
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    meta = json.loads(info.stdout)
+    assert meta["descriptions"] == ["sinr_db", "rss_serving_dbm", "serving_cell", "not_flyable"]
+    assert meta["nodata"] == NODATA
+    assert 'PROJECTION["Azimuthal_Equidistant"]' in meta["crs"]
+    assert 'PARAMETER["latitude_of_center",47.3]' in meta["crs"]

@@ -7,7 +7,9 @@
     python -m rainuav.radiomap --scenario storm --storm-seed 3 --duration-s 300 --slice-s 5
     python -m rainuav.radiomap --clear-cache
 
-Writes the PNGs first and ``radiomap.npz`` (``radiomap_series.npz`` for maps in time) last:
+Writes the PNGs first (and, for a georeferenced scenario, ``radiomap.tif``: SINR, the serving
+cell's power, the serving cell and the not-flyable pixels for a GIS,
+:mod:`rainuav.radio.maptiff`) and ``radiomap.npz`` (``radiomap_series.npz`` for maps in time) last:
 a folder holding it is complete (an earlier run's copy is removed before the new files are
 written). The library lives in :mod:`rainuav.radio`.
 """
@@ -154,6 +156,10 @@ def _build(args: argparse.Namespace) -> int:
     begin_folder(args.out, "radiomap.npz")
     kinds = ("sinr", "sir", "serving", "rss")
     pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in kinds]
+    if scn.origin is not None:  # georeferenced: the map for a GIS too
+        from rainuav.radio.maptiff import write_map_geotiff
+
+        pngs.append(write_map_geotiff(rm, args.out / "radiomap.tif"))
     npz = rm.save(args.out / "radiomap.npz")  # last: the folder is complete
     split = ", ".join(f"{k} {v:.1f} s" for k, v in rm.timings.items()) or "from the cache"
     sinr = rm.sinr_db

@@ -39,6 +39,7 @@ from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField, blocked_at
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio import presets
+from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.radar import read_radar_grid
 from rainuav.radio.radiomap import build_radio_map
 from rainuav.radio.scenario import Area, Origin, Scenario, TerrainFile
@@ -61,7 +62,7 @@ site in a corner pointing across the diagonal)."""
 ARRIVAL_TOL_M = NavConfig.tol_m
 """A destination this close to the take-off point is reached before any move, m."""
 FLIGHT_FILES = ("flight.geojson", "flight.kml", "mission.plan", "mission.waypoints",
-                "flight.png", "summary.json")  # fmt: skip
+                "flight.png", "sinr.tif", "summary.json")  # fmt: skip
 """The files of a flight, in the order they are written: ``summary.json`` last, so a folder
 holding it is complete."""
 
@@ -372,6 +373,8 @@ def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.nd
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
     _plot(rm, path, place, out / "flight.png")
+    # The map at take-off for a GIS (SINR, serving power and cell, not flyable).
+    write_map_geotiff(rm, out / "sinr.tif", None if rm.sinr_db.ndim == 2 else 0)
     done = json.dumps(summary, indent=2) + "\n"  # last: the folder is complete
     write_atomic(out / "summary.json", lambda tmp: tmp.write_text(done))
 
