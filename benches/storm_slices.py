@@ -1,17 +1,22 @@
 """Radio maps in time, timed (BENCHMARKS.md, "Radio maps in time"):
 
-    python benches/storm_slices.py [--seed 0] [--slices 61]
+    python benches/storm_slices.py [--seed 0] [--slices 61] [--terrain]
 
 The `storm` preset (ray engine, 10 m pixels, 21 cells) at 61 instants 0-300 s: the static part
 (the rays traced once), the time per slice, and in the same run a static ray-engine build of the
 frozen weather at three of the instants (the reference a slice replaces), with their ratio and
-the largest difference between a slice and its static build.
+the largest difference between a slice and its static build. ``--terrain`` puts the storm over
+the hilly DEM of ``benches/terrain_map.py`` (every path's own profile: Bullington diffraction,
+the reflection's visibility; the rain along the same rays).
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 from rainuav.radio import build_radio_map, presets
@@ -22,8 +27,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--slices", type=int, default=61)
+    ap.add_argument("--terrain", action="store_true", help="over a hilly DEM")
     args = ap.parse_args()
     scn = presets.storm(seed=args.seed, engine="ray")
+    if args.terrain:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from rainuav.radio.scenario import Origin, TerrainFile
+        from terrain_map import ORIGIN, write_dem
+
+        dem = write_dem(Path(tempfile.mkdtemp()) / "hills.tif")
+        scn = scn.replace(origin=Origin(*ORIGIN), terrain=TerrainFile(str(dem)))
     times = np.linspace(0.0, 300.0, args.slices)
     t0 = time.perf_counter()
     series = build_radio_map_series(scn, times, cache=False)
@@ -37,7 +50,8 @@ def main() -> None:
         worst = max(worst, float(np.abs(series.sinr_db[k] - ref.sinr_db).max()))
     mb = (series.rss_dbm.nbytes + series.sinr_db.nbytes * 2 + series.serving_cell.nbytes) / 1e6
     print(
-        f"storm seed {args.seed}, {len(times)} slices, {series.rss_dbm.shape[1]} cells x "
+        f"storm seed {args.seed}{' over the DEM' if args.terrain else ''}, {len(times)} slices, "
+        f"{series.rss_dbm.shape[1]} cells x "
         f"{series.sinr_db.shape[1]} x {series.sinr_db.shape[2]} pixels: total {total:.1f} s, "
         f"static part {series.timings['static']:.2f} s, then {series.timings['slices']:.2f} s: "
         f"{1e3 * per_slice:.0f} ms a slice; "
