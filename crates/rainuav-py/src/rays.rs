@@ -3,6 +3,7 @@
 
 use crate::{detached, to_py};
 use ndarray::Array2;
+use ndarray::ArrayView2;
 use num_complex::Complex64;
 use numpy::{
     IntoPyArray, PyArray3, PyArray4, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
@@ -78,6 +79,31 @@ fn parse_buildings(buildings: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<Buildi
         .collect())
 }
 
+/// The (S, 3) sites: x, y, height.
+fn parse_sites(sites: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; 3]>> {
+    let s = sites.as_array();
+    if s.ncols() != 3 {
+        return Err(to_py(CoreError::invalid(
+            "sites",
+            "must have shape (S, 3): x, y, height",
+            format!("{:?}", s.dim()),
+        )));
+    }
+    Ok(s.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect())
+}
+
+/// A table and its `(x0, dx, y0, dy)` as the core's raster (the unit grid where no origin and
+/// step are given).
+fn raster<'a>(
+    values: Option<ArrayView2<'a, f64>>,
+    origin_step: Option<[f64; 4]>,
+) -> Option<Raster<'a>> {
+    values.map(|values| Raster {
+        values,
+        origin_step: origin_step.unwrap_or([0.0, 1.0, 0.0, 1.0]),
+    })
+}
+
 /// The rain as the core takes it: a raster of nodes, or uniform.
 fn rain_field(raster: Option<&Array2<f64>>, uniform: f64, origin_step: [f64; 4]) -> RainField<'_> {
     match raster {
@@ -148,14 +174,8 @@ fn ray_power<'py>(
         polarization,
         rain: rain_field(gr.as_ref(), gamma_db_per_m, gamma_origin_step),
         buildings: &boxes,
-        heights: hr.as_ref().map(|v| Raster {
-            values: v.view(),
-            origin_step: heights_origin_step,
-        }),
-        terrain: tr.map(|values| Raster {
-            values,
-            origin_step: terrain_origin_step.unwrap_or([0.0, 1.0, 0.0, 1.0]),
-        }),
+        heights: raster(hr.as_ref().map(|v| v.view()), Some(heights_origin_step)),
+        terrain: raster(tr, terrain_origin_step),
         altitude_msl,
     };
     if terms_only {
@@ -191,15 +211,7 @@ fn ray_departures<'py>(
     terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
 ) -> PyResult<Bound<'py, PyArray4<f64>>> {
-    let s = sites.as_array();
-    if s.ncols() != 3 {
-        return Err(to_py(CoreError::invalid(
-            "sites",
-            "must have shape (S, 3): x, y, height",
-            format!("{:?}", s.dim()),
-        )));
-    }
-    let sites: Vec<[f64; 3]> = s.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+    let sites = parse_sites(&sites)?;
     let ground = parse_ground(ground, (1.0, 0.0))?;
     let boxes = parse_buildings(&buildings)?;
     let x = x_m.as_array().to_vec();
@@ -216,22 +228,17 @@ fn ray_departures<'py>(
         polarization: RayPolarization::H,
         rain: RainField::Uniform(0.0),
         buildings: &boxes,
-        heights: hr.map(|values| Raster {
-            values,
-            origin_step: heights_origin_step,
-        }),
-        terrain: tr.map(|values| Raster {
-            values,
-            origin_step: terrain_origin_step.unwrap_or([0.0, 1.0, 0.0, 1.0]),
-        }),
+        heights: raster(hr, Some(heights_origin_step)),
+        terrain: raster(tr, terrain_origin_step),
         altitude_msl,
     };
     let out = detached(py, || scene.departures(&sites))?;
     Ok(out.into_pyarray(py))
 }
 
-/// Every cell's rays over a map traced once (the clear-air `terms` (M, H, W, 3) from
-/// `ray_power(..., terms_only=True)`, (M, H, W, 5)), `sites` (S, 3): x, y, height, `site_of` (M,): each
+/// Every cell's rays over a map traced once (the clear-air terms and the rays' lengths
+/// (M, H, W, 5) from `ray_power(..., terms_only=True)`), `sites` (S, 3): x, y, height,
+/// `site_of` (M,): each
 /// cell's site), and the power at any instant from its rain (`power`): weather in time.
 #[pyclass(frozen, module = "rainuav._core")]
 struct RaySlicer {
@@ -252,15 +259,7 @@ impl RaySlicer {
         y_m: PyReadonlyArray1<'_, f64>,
         node_spacing_m: f64,
     ) -> PyResult<Self> {
-        let s = sites.as_array();
-        if s.ncols() != 3 {
-            return Err(to_py(CoreError::invalid(
-                "sites",
-                "must have shape (S, 3): x, y, height",
-                format!("{:?}", s.dim()),
-            )));
-        }
-        let sites: Vec<[f64; 3]> = s.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+        let sites = parse_sites(&sites)?;
         let site_of: Vec<usize> = site_of
             .as_array()
             .iter()
