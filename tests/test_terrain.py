@@ -655,3 +655,44 @@ def test_storms_over_terrain_every_slice_is_its_static_map(dems: dict[str, Path]
         d = np.abs(series.rss_dbm[k].astype(float) - ref.rss_dbm)[live]
         assert d.max() < 0.05, (t, d.max())
     assert not np.array_equal(series.rss_dbm[0], series.rss_dbm[-1])  # the rain moved
+
+
+def test_real_heights_itu_r_p1511_over_zurich(tmp_path: Path) -> None:
+    # Real terrain: ITU-R P.1511-2's topographic heights (above mean sea level, 1/12 degree
+    # grid; the itur package ships them), the window round Zurich written as a GeoTIFF in
+    # EPSG:4326 with the grid's own cell centres. The heights our reader puts on the area's
+    # nodes (pyproj to lat/lon, rasterio's window, bilinear between cell centres) against
+    # scipy's linear interpolation on the P.1511 grid itself at the same latitudes and
+    # longitudes: within 0.01 m (rounding; the same rule read two independent ways). Then a
+    # map over it: terrain 400-1000 m, every pixel received.
+    import os
+
+    import itur
+    from rainuav.geo import Georef
+    from rainuav.ground import read_dem
+    from scipy.interpolate import RegularGridInterpolator
+
+    data = Path(os.path.dirname(itur.__file__)) / "data" / "1511"
+    lat = np.load(data / "v2_lat.npz")["arr_0"][:, 0]  # 90.125 down to -90.125
+    lon = np.load(data / "v2_lon.npz")["arr_0"][0]  # -180.125 up to 180.125
+    topo = np.load(data / "v2_topo.npz")["arr_0"]
+    rows = np.flatnonzero((lat > 46.9) & (lat < 47.7))
+    cols = np.flatnonzero((lon > 8.1) & (lon < 8.9))
+    window = topo[np.ix_(rows, cols)]
+    step = 1.0 / 12.0
+    tif = write_dem(tmp_path / "p1511_zurich.tif", window,
+                    from_origin(lon[cols[0]] - step / 2, lat[rows[0]] + step / 2, step, step),
+                    "EPSG:4326")  # fmt: skip
+    scn = scenario(None)
+    g = Georef(ORIGIN.lat_deg, ORIGIN.lon_deg)
+    t = read_dem(tif, g, scn.area.bounds, scn.area.shape)
+    xs = t.x0_m + t.dx_m * np.arange(t.heights_m.shape[1])
+    ys = t.y0_m + t.dy_m * np.arange(t.heights_m.shape[0])
+    gx, gy = np.meshgrid(xs, ys)
+    la, lo = g.to_latlon(gx, gy)
+    ref = RegularGridInterpolator((lat[rows][::-1], lon[cols]), window[::-1], method="linear")
+    want = ref(np.stack([la.ravel(), lo.ravel()], axis=1)).reshape(la.shape)
+    assert np.max(np.abs(t.heights_m - want)) < 0.01
+    assert 400.0 < t.heights_m.min() and t.heights_m.max() < 1000.0
+    rm = build_radio_map(scenario(tif), cache=False)
+    assert np.all(rm.rss_dbm > -200.0)
