@@ -61,6 +61,7 @@ def main() -> None:
                    "examples/radar.nc", "--out", str(flight)])  # fmt: skip
         stamp(flight / "flight.png", FIGURES / "fly_example.png", cmd.replace(str(flight), "OUT"))
     run(["docs/tutorials/radiomap_in_rain.py"])  # stamps its own figure
+    run(["docs/terrain_example.py"])  # stamps its own figure
     if args.storm_run is None:
         print("not regenerated (give --storm-run RUN): storm_network_1000000.png, "
               "storm_network_worst_1000000.png")  # fmt: skip
