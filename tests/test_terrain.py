@@ -577,6 +577,9 @@ def test_fly_refuses_a_start_where_it_may_not_fly(tmp_path: Path, capsys) -> Non
     )
     ground = _ground(coords[:, 1], coords[:, 0], ridge=False)
     assert np.all(ground + 10.0 < 480.0 + 1.0)  # never over ground within the clearance
+    summary = json.loads((out / "summary.json").read_text())
+    # The straight line runs into the hill: reported as not arriving, with no cost.
+    assert summary["straight_line_arrives"] is False and summary["straight_line_cost"] is None
 
 
 # -- maps out as GeoTIFF ---------------------------------------------------------------------------

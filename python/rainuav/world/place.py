@@ -310,12 +310,18 @@ def fly_place(
         cost = cost_best
     else:  # the flight's moves and shortfall, as the task charges them
         cost = float(-base_reward(sinr[1:], env.cfg).sum())
-    cost_straight = -(straight.return_ - task.goal_reward)
+    # A straight line that leaves the area or flies into ground it may not enter does not
+    # arrive: it has no cost to compare, and the summary says so.
+    straight_arrives = bool(
+        np.hypot(*(straight.path_m[-1] - np.asarray(place.goal_m))) <= task.tol_m
+    )
+    cost_straight = -(straight.return_ - task.goal_reward) if straight_arrives else None
     summary = {
         "flown_by": flown_by, "cost": cost, "optimal_cost": cost_best,
         "excess_over_optimum": (cost - cost_best) / cost_best,
+        "straight_line_arrives": straight_arrives,
         "straight_line_cost": cost_straight,
-        "excess_of_straight_line": (cost_straight - cost) / cost,
+        "excess_of_straight_line": None if cost_straight is None else (cost_straight - cost) / cost,
         "outage_share": float(np.mean(sinr[1:] < min_db)),
         "straight_line_outage_share": float(np.mean(env.field(
             straight.path_m[1:, 0], straight.path_m[1:, 1],
