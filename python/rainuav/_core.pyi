@@ -154,6 +154,7 @@ class PeMarcher:
         rows_out: _C64 | None = None,
         record_column: int | None = None,
         column_out: _C64 | None = None,
+        row_offsets: npt.NDArray[np.int64] | None = None,
     ) -> None:
         """Advances ``steps`` steps without the GIL; per-step inputs cover these steps."""
     def finish(self) -> _C64:

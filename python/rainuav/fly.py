@@ -33,10 +33,10 @@ way (an earlier run's ``summary.json`` is removed before the new files are writt
 
 ``--terrain DEM.tif`` puts the place on its ground (a GeoTIFF in any CRS, heights in metres
 above sea level, as SRTM or Copernicus GLO-30 deliver it: :mod:`rainuav.ground.dem`): the
-map is made by the ray engine over it, the altitude is above the terrain under the UAV
-(``--altitude-reference ground``, the default) or above sea level (``msl``), and the flight
-keeps out of the pixels where terrain comes within 10 m of it; a start or destination there
-is refused.
+map is made over it (the march over the ground, the rays over each path's profile), the
+altitude is above the terrain under the UAV (``--altitude-reference ground``, the default)
+or above sea level (``msl``), and the flight keeps out of the pixels where terrain comes
+within 10 m of it; a start or destination there is refused.
 
 A planning aid, not an airworthiness tool: check the airspace, obstacles the map does not
 know (without ``--terrain`` it assumes flat open ground; a DEM leaves out vegetation and
@@ -102,7 +102,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument(
         "--terrain", type=Path, default=None,
         help="a DEM GeoTIFF under the place (any CRS, heights in metres above sea level, as "
-        "SRTM or Copernicus GLO-30): maps and flights over the ground, by the ray engine",
+        "SRTM or Copernicus GLO-30): maps and flights over the ground",
     )  # fmt: skip
     ap.add_argument(
         "--altitude-reference", choices=("ground", "msl"), default=None,

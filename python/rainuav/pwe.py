@@ -134,6 +134,7 @@ def march(
     progress: bool | Callable[[int, int], None] = False,
     n_cross_range: npt.ArrayLike | None = None,
     x_absorber_every: int = 1,
+    record_offsets: npt.ArrayLike | None = None,
 ) -> Marched:
     """Marches the aperture field ``u0`` (nx, ny) over ``steps`` range steps of ``dz_m``.
 
@@ -166,6 +167,9 @@ def march(
             2500 x 1296 grid, BENCHMARKS.md). The strips' absorption is sampled that much
             more coarsely in range: keep the distance the widest angle crosses between
             windows well inside a strip (the radio-map engine allows an eighth).
+        record_offsets: optionally (steps, nx) integers: after step ``s`` column ``ix``
+            records the rows ``record_rows + record_offsets[s, ix]`` (a receiver surface that
+            follows the ground); the shifted rows must stay within the grid.
 
     Returns:
         :class:`Marched` with ``field`` (nx, ny), ``rows`` (len(record_rows), steps, nx) and
@@ -185,6 +189,17 @@ def march(
         raise InvalidInputError(f"record_rows must be within 0..{ny - 1} (got {record_rows!r})")
     if record_column is not None and not (0 <= int(record_column) < nx):
         raise InvalidInputError(f"record_column must be within 0..{nx - 1} (got {record_column})")
+    offsets = None
+    if record_offsets is not None:
+        offsets = np.ascontiguousarray(np.asarray(record_offsets), dtype=np.int64)
+        if offsets.shape != (steps, nx):
+            raise InvalidInputError(
+                f"record_offsets must have shape ({steps}, {nx}) (got {offsets.shape})"
+            )
+        if rows_idx.size and (
+            rows_idx.min() + offsets.min() < 0 or rows_idx.max() + offsets.max() >= ny
+        ):
+            raise InvalidInputError(f"record_offsets move the recorded rows out of 0..{ny - 1}")
 
     n_callable = callable(n)
     n_val = None if n_callable else _index(n)
@@ -277,6 +292,8 @@ def march(
             else:
                 for key, v in obs_kw.items():
                     kw[key] = v[done : done + k] if key.endswith("_steps") else v
+            if offsets is not None:
+                kw["row_offsets"] = offsets[done : done + k]
             t0 = time.perf_counter()
             marcher.advance(
                 k,

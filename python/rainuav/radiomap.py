@@ -82,7 +82,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=Path,
         default=None,
         help="a DEM GeoTIFF (any CRS; heights in metres above sea level) under the area: the "
-        "scenario needs an [origin] (a --config TOML); the ray engine maps over it",
+        "scenario needs an [origin] (a --config TOML)",
     )
     ap.add_argument(
         "--altitude-reference",
@@ -141,9 +141,8 @@ def _build(args: argparse.Namespace) -> int:
 
         if not args.terrain.is_file():
             raise InvalidInputError(f"--terrain {args.terrain}: no such file")
-        engine = args.engine or "ray"
-        scn = scn.replace(terrain=TerrainFile(str(args.terrain.resolve())), engine=engine)
-    elif args.engine is not None:
+        scn = scn.replace(terrain=TerrainFile(str(args.terrain.resolve())))
+    if args.engine is not None:
         scn = scn.replace(engine=args.engine)
     if args.altitude_reference is not None:
         import dataclasses

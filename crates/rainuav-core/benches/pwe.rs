@@ -48,6 +48,7 @@ fn bench_step(c: &mut Criterion) {
                 let id = BenchmarkId::new(format!("{prop:?}/{ground:?}"), format!("{nx}x{ny}"));
                 let mut rec = Recording {
                     record_rows: &[],
+                    row_offsets: None,
                     rows: None,
                     column: None,
                 };
@@ -69,6 +70,7 @@ fn bench_step(c: &mut Criterion) {
             let mut m = marcher(1024, 512, Propagator::Wide, Ground::PecH);
             let mut rec = Recording {
                 record_rows: &[],
+                row_offsets: None,
                 rows: None,
                 column: None,
             };

@@ -83,6 +83,7 @@ fn march(spec: MarchSpec, u0: &Array2<Complex32>, steps: usize, n: Complex64) ->
     let medium = move |_: usize| StepMedium::Uniform(n);
     let mut rec = Recording {
         record_rows: &[],
+        row_offsets: None,
         rows: None,
         column: None,
     };
@@ -200,6 +201,7 @@ fn recorded_rows_match_field() {
     {
         let mut rec = Recording {
             record_rows: &rows,
+            row_offsets: None,
             rows: Some(out.view_mut()),
             column: Some((10, col.view_mut())),
         };

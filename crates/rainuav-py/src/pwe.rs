@@ -82,7 +82,7 @@ impl PeMarcher {
     /// Advances `steps` steps without the GIL. Per-step inputs cover exactly these steps.
     #[pyo3(signature = (steps, *, n_uniform=None, n_fixed=false, n_steps=None, n_cross_range=None, mask_fixed=None,
         mask_steps=None, heights_fixed=None, heights_steps=None, record_rows, rows_out=None,
-        record_column=None, column_out=None))]
+        record_column=None, column_out=None, row_offsets=None))]
     #[allow(clippy::too_many_arguments)]
     fn advance(
         &mut self,
@@ -100,6 +100,7 @@ impl PeMarcher {
         rows_out: Option<PyReadwriteArray3<'_, C32>>,
         record_column: Option<usize>,
         column_out: Option<PyReadwriteArray2<'_, C32>>,
+        row_offsets: Option<PyReadonlyArray2<'_, i64>>,
     ) -> PyResult<()> {
         let m = self.marcher()?;
         let start = m.steps_done();
@@ -114,6 +115,10 @@ impl PeMarcher {
             ("n_cross_range", n_cross.map(|a| a.dim().0)),
             ("obstacles", mask_steps.map(|a| a.dim().0)),
             ("obstacles", heights_steps.map(|a| a.dim().0)),
+            (
+                "row_offsets",
+                row_offsets.as_ref().map(|a| a.as_array().dim().0),
+            ),
         ] {
             if let Some(len) = len
                 && len != steps
@@ -130,6 +135,7 @@ impl PeMarcher {
         let mut column_out = column_out;
         let mut recording = Recording {
             record_rows: &rows,
+            row_offsets: row_offsets.as_ref().map(|a| (start, a.as_array())),
             rows: rows_out.as_mut().map(|a| a.as_array_mut()),
             column: match (record_column, column_out.as_mut()) {
                 (Some(c), Some(out)) => Some((c, out.as_array_mut())),

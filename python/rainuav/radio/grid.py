@@ -8,7 +8,10 @@ the edge (:func:`cone_weight`); the rays carry the rest in the hybrid engine.
 
 The domain spans the beam's spread over the longest range that reaches the area (or
 the area's own cross-range extent, if smaller), plus the absorbing taper; in height, the
-ground (or a margin below) up to ``max(altitude, site) + top_margin_m``, plus the taper.
+ground (or a margin below) up to ``max(altitude, site) + top_margin_m``, plus the taper. Over
+terrain (:mod:`rainuav.radio.terrain`) heights count from the lowest ground of the area: the
+grid's PEC floor lies there, the terrain above it is a staircase of obstacles, and the top
+clears the highest flight height over the area.
 Sizes are rounded up to products of 2, 3 and 5 for the FFTs. Energy that leaves through the
 top never returns over flat ground, so the top only needs to clear the flight altitude.
 """
@@ -25,6 +28,7 @@ import numpy as np
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cell import Cell, pattern_by_key
 from rainuav.radio.scenario import Scenario, Site
+from rainuav.radio.terrain import flight_heights, floor_m, site_height_above_floor
 
 __all__ = ["C0_M_S", "CONE_FULL", "MarchGrid", "cone_weight", "march_grid"]
 
@@ -155,12 +159,17 @@ def _grid(scn: Scenario, site: Site, cell: Cell, sh: float, sv: float) -> MarchG
     ab = scn.pe.absorber
     nx = _good_size(math.ceil(2 * x_half / (1 - 2 * ab) / dx))
     margin = scn.pe.top_margin_m or max(50.0, a.altitude_m / 2)
-    top = max(a.altitude_m, site.height_m) + margin
+    # Heights above the lowest ground of the area (0 over flat ground): the site's antenna
+    # and the highest flight height over the area.
+    floor = floor_m(scn)
+    site_h = site_height_above_floor(scn, site.x_m, site.y_m, site.height_m)
+    fly_top = float(flight_heights(scn).max()) - floor
+    top = max(fly_top, site_h) + margin
     if scn.ground != "none":
         ny = _good_size(math.ceil(top / (1 - ab) / dy))
         y0 = 0.0
     else:
-        bottom = min(a.altitude_m, site.height_m) - margin
+        bottom = min(a.altitude_m, site_h) - margin
         ny = _good_size(math.ceil((top - bottom) / (1 - 2 * ab) / dy))
         y0 = (top + bottom) / 2 - (ny // 2) * dy
     fy = (a.altitude_m - y0) / dy
@@ -175,6 +184,7 @@ def _grid(scn: Scenario, site: Site, cell: Cell, sh: float, sv: float) -> MarchG
         + 2 * steps * nx * 8  # the two recorded rows
         + (steps * nx * 16 if scn.medium.varies else 0)
         + (steps * nx * 8 if scn.buildings or scn.height_map_m is not None else 0)
+        + (steps * nx * 24 if scn.terrain is not None else 0)  # ground, rows and weights
     )
     return MarchGrid(
         nx=nx,

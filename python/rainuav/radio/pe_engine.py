@@ -14,6 +14,12 @@ after every step, and is resampled onto the map grid:
 - **Weather**: homogeneous rain is one complex index; rain cells and rate maps become
   cross-range index profiles per step (``n`` tabulated against rain rate once per frequency
   and interpolated); buildings become obstacle heights per step.
+- **Terrain** (:mod:`rainuav.radio.terrain`): the grid's floor is the area's lowest ground (a
+  PEC plane, by images); the terrain above it zeroes the field below its surface at every step
+  (staircase masking: exact for horizontal polarisation, whose field vanishes on a conductor;
+  for vertical polarisation the surface should be an impedance boundary, which the mask
+  approximates), obstacles stand on it, and each column records the two rows around the
+  UAV's own height over the ground there.
 - **Reach**: pixels behind a cell, beyond its march, or in its absorbing taper get no signal
   from it.
 """
@@ -32,6 +38,12 @@ from rainuav.radio.cell import Cell, gain_linear
 from rainuav.radio.grid import C0_M_S, MarchGrid, cone_weight
 from rainuav.radio.scenario import Scenario, Site
 from rainuav.radio.stochastic import field_rates
+from rainuav.radio.terrain import (
+    flight_heights_at,
+    floor_m,
+    site_height_above_floor,
+    surface_at,
+)
 
 __all__ = ["march_cell", "rain_rate_at", "resample"]
 
@@ -44,7 +56,7 @@ def _aperture(scn: Scenario, site: Site, cell: Cell, grid: MarchGrid) -> tuple[n
     along range): a plane-wave spectrum ``U`` radiates ``k0^2 s_z^2 |U|^2 / (2 pi r)^2`` in
     its direction, so this radiates ``G w`` up to one constant, and
     ``integral |U|^2 dk = k0^2 integral G w / s_z dOmega`` fixes the constant."""
-    h = site.height_m - grid.y0_m
+    h = site_height_above_floor(scn, site.x_m, site.y_m, site.height_m) - grid.y0_m
     k0 = 2 * math.pi * scn.freq_hz / C0_M_S
     kx = 2 * math.pi * np.fft.fftfreq(grid.nx, grid.dx_m)
     ky = 2 * math.pi * np.fft.fftfreq(grid.ny, grid.dy_m)
@@ -121,10 +133,17 @@ def _medium_kwargs(scn: Scenario, site: Site, grid: MarchGrid) -> dict[str, Any]
 
 
 def _obstacles(scn: Scenario, site: Site, grid: MarchGrid) -> np.ndarray | None:
-    if not scn.buildings and scn.height_map_m is None:
+    """The heights (steps, nx) under which each step zeroes the field: obstacles, and over
+    terrain the ground above the grid's floor (a staircase; -1: nothing)."""
+    if not scn.buildings and scn.height_map_m is None and scn.terrain is None:
         return None
     gx, gy = _step_points(site, grid)
     h = np.full(gx.shape, -1.0)
+    base = np.zeros(gx.shape)
+    if scn.terrain is not None:
+        base = surface_at(scn, gx, gy) - floor_m(scn)
+        # Ground within half a row of the floor is the floor itself (the PEC plane).
+        h = np.where(base >= 0.5 * grid.dy_m, base - grid.y0_m, h)
     if scn.height_map_m is not None:
         a = scn.area
         hm = np.asarray(scn.height_map_m, dtype=float)
@@ -133,11 +152,20 @@ def _obstacles(scn: Scenario, site: Site, grid: MarchGrid) -> np.ndarray | None:
         i = np.floor((gy - a.y_min_m) / (a.y_max_m - a.y_min_m) * rows).astype(int)
         inside = (i >= 0) & (i < rows) & (j >= 0) & (j < cols)
         val = hm[np.clip(i, 0, rows - 1), np.clip(j, 0, cols - 1)]
-        h = np.where(inside & (val > 0), val - grid.y0_m, h)
+        h = np.where(inside & (val > 0), np.maximum(h, base + val - grid.y0_m), h)
     for b in scn.buildings:
         inside = (gx >= b.x0_m) & (gx <= b.x1_m) & (gy >= b.y0_m) & (gy <= b.y1_m)
-        h = np.where(inside, np.maximum(h, b.height_m - grid.y0_m), h)
-    return h
+        h = np.where(inside, np.maximum(h, base + b.height_m - grid.y0_m), h)
+    return None if h.max() < 0 else h
+
+
+def _receiver_rows(scn: Scenario, site: Site, grid: MarchGrid) -> tuple[np.ndarray, np.ndarray]:
+    """Over terrain: per (step, ix) the row below the UAV's height and the fraction to the
+    next (the receiver surface follows the ground, or sits at a height above sea level)."""
+    gx, gy = _step_points(site, grid)
+    fy = (flight_heights_at(scn, gx, gy) - floor_m(scn) - grid.y0_m) / grid.dy_m
+    row = np.clip(np.floor(fy), 0, grid.ny - 2)
+    return row.astype(np.int64), np.clip(fy - row, 0.0, 1.0)
 
 
 def march_cell(
@@ -156,6 +184,14 @@ def march_cell(
     ground = None if scn.ground == "none" else f"pec-{scn.polarization}"
     t1 = time.perf_counter()
     screens = {**_medium_kwargs(scn, site, grid), "obstacles": _obstacles(scn, site, grid)}
+    rows, frac = [grid.alt_row, grid.alt_row + 1], grid.alt_frac
+    if scn.terrain is not None:
+        offsets, frac_rows = _receiver_rows(scn, site, grid)
+        if np.all(offsets == offsets.flat[0]) and np.ptp(frac_rows) < 1e-9:
+            # A flat receiver surface: the two rows of every column, as over flat ground.
+            rows, frac = [int(offsets.flat[0]), int(offsets.flat[0]) + 1], float(frac_rows.flat[0])
+        else:
+            screens["record_offsets"], rows, frac = offsets, [0, 1], frac_rows
     t2 = time.perf_counter()
     out = pwe.march(
         u0,
@@ -168,7 +204,7 @@ def march_cell(
         ground=ground,
         absorber=scn.pe.absorber,
         x_absorber_every=grid.x_absorber_every,
-        record_rows=[grid.alt_row, grid.alt_row + 1],
+        record_rows=rows,
         **screens,
     )
     t3 = time.perf_counter()
@@ -178,7 +214,6 @@ def march_cell(
     # Interpolate power, not the complex field, between the two rows around the altitude:
     # near the cone's edge the phase turns by up to pi per row, and a complex average would
     # cancel (it cost 1.6 dB at 4 degrees of elevation in an 8 degree cone).
-    frac = grid.alt_frac
     u2 = (1 - frac) * np.abs(out.rows[0].astype(np.complex128)) ** 2 + frac * np.abs(
         out.rows[1].astype(np.complex128)
     ) ** 2

@@ -41,6 +41,7 @@ __all__ = [
     "gamma_table",
     "ground_permittivity",
     "rain_args",
+    "ray_directions",
     "ray_gains",
     "ray_power",
     "ray_slicer",
@@ -226,24 +227,45 @@ def _medium_args(scn: Scenario) -> dict[str, Any]:
     }
 
 
-def ray_gains(
+Directions = list[tuple[np.ndarray, np.ndarray, np.ndarray]]
+"""Per (site, cell): the azimuth and the departure elevations of the direct and the reflected
+ray toward every pixel, degrees."""
+
+
+def ray_directions(
     scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The linear antenna gain of every (site, cell) toward every pixel along the direct and
-    the reflected ray, two (M, H, W) arrays: the part of a ray map that no weather changes."""
-    shape = (len(jobs), y_m.size, x_m.size)
-    gd, gr = np.empty(shape), np.empty(shape)
-    sites: dict[int, int] = {}
-    for site, _ in jobs:
-        sites.setdefault(id(site), len(sites))
-    elevations = None
+) -> Directions:
+    """Each (site, cell)'s azimuth and departure elevations toward every pixel (H, W): the
+    closed forms over flat open ground, else :func:`departures` (toward the diffracting edge
+    and the specular point), traced once per site."""
+    elevations, index = None, {}
     if not _flat_open(scn):
         unique = list({id(s): s for s, _ in jobs}.values())
+        index = {id(s): k for k, s in enumerate(unique)}
         elevations = departures(scn, unique, x_m, y_m)
-    for m, (site, cell) in enumerate(jobs):
+    out = []
+    for site, _ in jobs:
         az, el_d, el_r = _directions(scn, site, x_m, y_m)
         if elevations is not None:
-            el_d, el_r = elevations[sites[id(site)], ..., 0], elevations[sites[id(site)], ..., 1]
+            el_d, el_r = elevations[index[id(site)], ..., 0], elevations[index[id(site)], ..., 1]
+        out.append((az, el_d, el_r))
+    return out
+
+
+def ray_gains(
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    directions: Directions | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The linear antenna gain of every (site, cell) toward every pixel along the direct and
+    the reflected ray, two (M, H, W) arrays: the part of a ray map that no weather changes
+    (``directions``: :func:`ray_directions`, computed here if not given)."""
+    dirs = ray_directions(scn, jobs, x_m, y_m) if directions is None else directions
+    shape = (len(jobs), y_m.size, x_m.size)
+    gd, gr = np.empty(shape), np.empty(shape)
+    for m, ((_, cell), (az, el_d, el_r)) in enumerate(zip(jobs, dirs, strict=True)):
         gd[m], gr[m] = gain_linear(cell, az, el_d), gain_linear(cell, az, el_r)
     return gd, gr
 
@@ -261,30 +283,29 @@ def ray_terms(
     spreading, ground, pixel means, diffraction); with ``weights`` (as :func:`ray_power`
     takes them), the parts of the whole pattern less those of the weighted part (what the
     rays keep where the PE carries the rest). :func:`ray_slicer` adds the rain."""
-    gd, gr = ray_gains(scn, jobs, x_m, y_m)
+    dirs = ray_directions(scn, jobs, x_m, y_m)
+    gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)
     full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, terms_only=True)
     if weights is None:
         return full
-    wd, wr = _weights_at(scn, jobs, x_m, y_m, weights)
+    wd, wr = _weights_at(jobs, dirs, weights)
     out = full.copy()
     out[..., :3] -= _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, terms_only=True)[..., :3]
     return out
 
 
 def _weights_at(
-    scn: Scenario,
     jobs: Sequence[tuple[Site, Cell]],
-    x_m: np.ndarray,
-    y_m: np.ndarray,
+    directions: Directions,
     weights: Sequence[Weight | None],
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Each cell's weight (M, H, W) along the direct and the reflected ray (0: none)."""
-    shape = (len(jobs), y_m.size, x_m.size)
+    """Each cell's weight (M, H, W) along the direct and the reflected ray's departure
+    directions (0: none)."""
+    shape = (len(jobs), *directions[0][0].shape) if jobs else (0, 0, 0)
     wd, wr = np.zeros(shape), np.zeros(shape)
-    for m, (site, cell) in enumerate(jobs):
+    for m, ((_, cell), (az, el_d, el_r)) in enumerate(zip(jobs, directions, strict=True)):
         if weights[m] is not None:
-            az, el_d, el_r = _directions(scn, site, x_m, y_m)
             wd[m] = _weight_at(weights[m], cell, az, el_d)
             wr[m] = _weight_at(weights[m], cell, az, el_r)
     return wd, wr
@@ -332,10 +353,11 @@ def ray_power(
     (M, H, W), each the mean over its pixel; and, if ``weights`` are given, the power of the
     part of each pattern they select (``weights[m]`` scales cell m's pattern; None: nothing).
     Directions, gains, the rain field and the obstacles are prepared once for both."""
-    gd, gr = ray_gains(scn, jobs, x_m, y_m)
+    dirs = ray_directions(scn, jobs, x_m, y_m)
+    gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)
     full = _trace(scn, jobs, x_m, y_m, (gd, gr), args)
     if weights is None:
         return full, None
-    wd, wr = _weights_at(scn, jobs, x_m, y_m, weights)
+    wd, wr = _weights_at(jobs, dirs, weights)
     return full, _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args)

@@ -203,10 +203,10 @@ class Scenario:
                 raise InvalidInputError(
                     "terrain needs [origin] (lat_deg, lon_deg): where the area lies on the Earth"
                 )
-            if self.engine != "ray":
+            if self.engine != "ray" and self.ground == "none":
                 raise InvalidInputError(
-                    f"engine {self.engine!r} does not march over terrain yet; with [terrain] "
-                    "use engine = 'ray'"
+                    f"engine {self.engine!r} over terrain needs a ground (the march's floor): "
+                    "ground = 'pec', or engine = 'ray'"
                 )
         a = self.area
         if not self.sites:

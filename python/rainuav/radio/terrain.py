@@ -24,10 +24,14 @@ from rainuav.radio.scenario import Scenario
 __all__ = [
     "core_args",
     "flight_heights",
+    "flight_heights_at",
+    "floor_m",
     "map_mask",
     "not_flyable",
     "obstacle_pixel_max",
     "scenario_terrain",
+    "site_height_above_floor",
+    "surface_at",
 ]
 
 
@@ -134,3 +138,32 @@ def map_mask(scn: Scenario) -> np.ndarray | None:
     if scn.terrain is None and not scn.buildings and scn.height_map_m is None:
         return None
     return not_flyable(scn)
+
+
+def floor_m(scn: Scenario) -> float:
+    """The lowest terrain over the area's nodes, m above sea level (0 without a terrain): the
+    parabolic equation's grids start there."""
+    t = scenario_terrain(scn)
+    return 0.0 if t is None else float(t.heights_m.min())
+
+
+def site_height_above_floor(scn: Scenario, x_m: float, y_m: float, height_m: float) -> float:
+    """A site's antenna height above :func:`floor_m`, m."""
+    t = scenario_terrain(scn)
+    if t is None:
+        return float(height_m)
+    return float(t.at(x_m, y_m)) + height_m - floor_m(scn)
+
+
+def surface_at(scn: Scenario, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The terrain's height above sea level at the points ``(x, y)`` (0 without a terrain)."""
+    t = scenario_terrain(scn)
+    return np.zeros(np.shape(x)) if t is None else t.at(x, y)
+
+
+def flight_heights_at(scn: Scenario, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The UAV's height above sea level over the points ``(x, y)``, m."""
+    a = scn.area
+    if a.msl or scn.terrain is None:
+        return np.full(np.shape(x), float(a.altitude_m))
+    return surface_at(scn, x, y) + a.altitude_m

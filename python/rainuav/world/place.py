@@ -98,9 +98,9 @@ def place_scenario(
     instant or several) in place of homogeneous rain. ``box``: the area as (south latitude,
     west longitude, north latitude, east longitude), degrees, in place of the box around the
     start, the destination and the sites; the start and the destination must lie in it.
-    ``terrain``: a DEM GeoTIFF under the place (:mod:`rainuav.ground.dem`; the ray engine maps
-    over it), with the flight altitude above the terrain (``altitude_reference="ground"``, the
-    default) or above sea level (``"msl"``)."""
+    ``terrain``: a DEM GeoTIFF under the place (:mod:`rainuav.ground.dem`), with the flight
+    altitude above the terrain (``altitude_reference="ground"``, the default) or above sea
+    level (``"msl"``)."""
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
@@ -167,7 +167,7 @@ def place_scenario(
         if not Path(terrain).is_file():
             raise InvalidInputError(f"--terrain: no file {terrain}")
         dem = TerrainFile(str(Path(terrain).resolve()))
-        scn = dataclasses.replace(scn, terrain=dem, engine="ray")
+        scn = dataclasses.replace(scn, terrain=dem)
     scn.check()
     return Place(scn, geo, (float(sx), float(sy)), (float(gx), float(gy)), rows)
 

@@ -385,8 +385,9 @@ impl Marcher {
         recording: &mut Recording<'_>,
     ) -> Result<()> {
         self.check_recording(steps, recording)?;
-        let mut uniform_path =
-            self.spec.x_absorber_every >= self.fast_from && recording.column.is_none();
+        let mut uniform_path = self.spec.x_absorber_every >= self.fast_from
+            && recording.column.is_none()
+            && recording.row_offsets.is_none();
         for global in self.steps_done..self.steps_done + steps {
             let med = medium(global);
             self.check_medium(&med)?;
@@ -419,7 +420,11 @@ impl Marcher {
             let mut rec = std::mem::take(&mut self.rec_buf);
             rec.resize(self.spec.nx * rec_rows.len().max(1), C32::default());
             let last = k + 1 == steps;
-            self.row_pass(&med, &obs, (rec_rows, &mut rec), !last);
+            let offsets = recording
+                .row_offsets
+                .as_ref()
+                .map(|(first, o)| o.index_axis(ndarray::Axis(0), global - first));
+            self.row_pass(&med, &obs, (rec_rows, offsets, &mut rec), !last);
             self.domain = if last { Domain::Real } else { Domain::YSpectra };
             if let Some(rows) = recording.rows.as_mut() {
                 let nr = rec_rows.len();
@@ -625,6 +630,33 @@ impl Marcher {
                 format!("must be within 0..{ny}"),
                 bad,
             ));
+        }
+        if let Some((first, o)) = &rec.row_offsets {
+            let (s, x) = o.dim();
+            if *first > self.steps_done || first + s < end || x != nx {
+                return Err(CoreError::invalid(
+                    "row_offsets",
+                    format!(
+                        "must cover steps {}..{end} with {nx} columns",
+                        self.steps_done
+                    ),
+                    format!("{:?} from step {first}", o.dim()),
+                ));
+            }
+            let (lo, hi) = rec
+                .record_rows
+                .iter()
+                .fold((usize::MAX, 0), |(a, b), &r| (a.min(r), b.max(r)));
+            let bad = o
+                .iter()
+                .any(|&v| (lo as i64 + v) < 0 || (hi as i64 + v) >= ny as i64);
+            if !rec.record_rows.is_empty() && bad {
+                return Err(CoreError::invalid(
+                    "row_offsets",
+                    format!("must keep the recorded rows within 0..{ny}"),
+                    "a row outside the grid",
+                ));
+            }
         }
         if let Some(rows) = &rec.rows {
             let (r, s, x) = rows.dim();
@@ -845,7 +877,7 @@ impl Marcher {
         &mut self,
         medium: &StepMedium<'_>,
         obstacle: &StepObstacle<'_>,
-        record: (&[usize], &mut [C32]),
+        record: (&[usize], Option<ndarray::ArrayView1<'_, i64>>, &mut [C32]),
         forward_again: bool,
     ) {
         let (nx, ny) = (self.spec.nx, self.spec.ny);
@@ -864,7 +896,7 @@ impl Marcher {
         let fwd = self.row_fwd.clone();
         let dst = self.dst.as_ref();
         let scratch_len = self.row_scratch_len();
-        let (rec_rows, rec) = record;
+        let (rec_rows, offsets, rec) = record;
         let nr = rec_rows.len().max(1);
         debug_assert_eq!(rec.len(), nx * nr);
         let pool = &self.pool;
@@ -914,8 +946,10 @@ impl Marcher {
                         }
                     }
                 }
+                let shift = offsets.map_or(0, |o| o[ix]);
                 for (r, &iy) in rec_rows.iter().enumerate() {
-                    rec_row[r] = row[iy];
+                    let at = (iy as i64 + shift).clamp(0, ny as i64 - 1) as usize;
+                    rec_row[r] = row[at];
                 }
                 if forward_again {
                     forward_row(ground, (&*fwd, dst), row, nq, ext, scratch);
@@ -1196,6 +1230,7 @@ mod tests {
         for &(steps, blocked) in plan {
             let mut rec = Recording {
                 record_rows: &rows,
+                row_offsets: None,
                 rows: Some(out.view_mut()),
                 column: None,
             };

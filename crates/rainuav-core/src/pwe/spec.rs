@@ -197,11 +197,15 @@ pub enum StepObstacle<'a> {
 }
 
 /// Where the caller wants recordings written. `rows[r, step, ix]` receives
-/// `u[ix, record_rows[r]]` after global step `step`; `column[step, iy]` receives
-/// `u[record_column, iy]`.
+/// `u[ix, record_rows[r]]` after global step `step` (with `row_offsets = (first, o)`,
+/// `u[ix, record_rows[r] + o[step - first, ix]]`: a receiver surface that follows the
+/// ground); `column[step, iy]` receives `u[record_column, iy]`.
 pub struct Recording<'a> {
     /// Which rows (iy) to record.
     pub record_rows: &'a [usize],
+    /// A shift of the recorded rows per step and column: `(first, offsets)` with `offsets`
+    /// (steps, nx) for the global steps `first..`; the shifted rows must stay within the grid.
+    pub row_offsets: Option<(usize, ArrayView2<'a, i64>)>,
     /// Output (len(record_rows), total steps, nx).
     pub rows: Option<ArrayViewMut3<'a, C32>>,
     /// Which column (ix) to record and the output (total steps, ny).
