@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from rainuav import medium, pwe
+from rainuav.errors import InvalidInputError
 from scipy.special import fresnel
 
 F_HZ = 4.9e9
@@ -280,3 +281,21 @@ def test_cross_range_index_matches_full_array() -> None:
     np.testing.assert_allclose(a, b, rtol=0, atol=1e-6)
     with pytest.raises(ValueError, match="n_cross_range"):
         pwe.march(u0, n_cross_range=prof[:, :3], **kw)
+
+
+def test_recording_rows_that_follow_the_ground() -> None:
+    # Row offsets per step and column: all zero records what the plain rows record; all +5
+    # records what the rows 5 higher record (the same field, bit for bit); offsets that take
+    # a row off the grid are refused in one line.
+    nx, ny = 64, 128
+    x = (np.arange(nx) - nx / 2)[:, None]
+    y = np.arange(ny)[None, :]
+    u0 = np.exp(-(x**2) / 50 - (y - 40) ** 2 / 50).astype(np.complex64)
+    kw = {"dx_m": 0.1, "dy_m": 0.1, "dz_m": 1.0, "steps": 20, "freq_hz": 4.9e9,
+          "ground": "pec-h", "absorber": 0.1, "obstacles": np.full(nx, -1.0)}  # fmt: skip
+    plain = pwe.march(u0, record_rows=[40, 45], **kw)
+    zero = pwe.march(u0, record_rows=[40, 45], record_offsets=np.zeros((20, nx), int), **kw)
+    up = pwe.march(u0, record_rows=[35, 40], record_offsets=np.full((20, nx), 5), **kw)
+    assert np.array_equal(plain.rows, zero.rows) and np.array_equal(plain.rows, up.rows)
+    with pytest.raises(InvalidInputError, match="record_offsets"):
+        pwe.march(u0, record_rows=[40], record_offsets=np.full((20, nx), 100), **kw)
