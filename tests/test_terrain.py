@@ -379,7 +379,7 @@ def test_terrain_needs_an_origin_and_a_floor_for_the_march(dems: dict[str, Path]
 # -- the parabolic equation over terrain --------------------------------------------------------
 
 
-def _beam_scenario(dem: Path, engine: str) -> Scenario:
+def _beam_scenario(dem: Path | None, engine: str) -> Scenario:
     """One narrow beam (6 degrees, 3 degrees up) east from x = 200 m over the test area at 30 m
     above the ground: its 40 dB cone fits the march's budget, so the PE carries the whole
     pattern over most of the pixels in front of it."""
@@ -403,11 +403,14 @@ def low_ridge(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_the_march_over_a_flat_dem_is_the_flat_march(dems: dict[str, Path]) -> None:
     # The hybrid engine over a flat DEM at 437 m: the march's floor is the DEM, nothing stands
     # on it, the receiver rows are the flat ones: the same map as without a DEM (1e-3 dB; the
-    # terrain's heights pass through float32 GeoTIFF values; measured 0.0002 dB).
-    flat = build_radio_map(scenario(None).replace(engine="hybrid"), cache=False)
-    dem = build_radio_map(scenario(dems["flat_437"]).replace(engine="hybrid"), cache=False)
+    # terrain's heights pass through float32 GeoTIFF values; measured 0.0006 dB).
+    flat = build_radio_map(_beam_scenario(None, "hybrid"), cache=False)
+    dem = build_radio_map(_beam_scenario(dems["flat_437"], "hybrid"), cache=False)
     assert flat.pe_share.max() > 0.5  # the PE carries part of the map
-    assert np.max(np.abs(dem.rss_dbm - flat.rss_dbm)) < 1e-3
+    # Within 80 dB of the strongest pixel (far below it, behind the beam, a two-ray null
+    # turns rounding in the gains' directions into dB).
+    live = flat.rss_dbm > flat.rss_dbm.max() - 80.0
+    assert np.max(np.abs(dem.rss_dbm - flat.rss_dbm)[live]) < 1e-3
 
 
 def test_the_march_over_a_smooth_ridge_against_the_rays(low_ridge: Path) -> None:
