@@ -417,6 +417,6 @@ def _plot(rm: Any, path: np.ndarray, place: Place, where: Path) -> None:
     ax.set_ylabel("north of origin [m]")
     origin = latlon_text(place.georef.lat_deg, place.georef.lon_deg)
     ax.set_title(f"SINR and rain at take-off; origin {origin}", fontsize=10)
-    ax.legend(loc="upper left", fontsize="small")
+    ax.legend(loc="best", fontsize="small", framealpha=0.8)  # away from the flight
     fig.colorbar(im, ax=ax, label="SINR [dB]")
     write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
