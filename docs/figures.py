@@ -64,13 +64,17 @@ def main() -> None:
     run(["docs/terrain_example.py"])  # stamps its own figure
     if args.storm_run is None:
         print("not regenerated (give --storm-run RUN): storm_network_1000000.png, "
-              "storm_network_worst_1000000.png")  # fmt: skip
+              "storm_network_worst.png")  # fmt: skip
         return
     ev = args.storm_run / "eval_storms_1000000-1000049"
     stamp(ev / "evaluation_storm_flights.png", FIGURES / "storm_network_1000000.png",
-          f"python -m rainuav.evaluate {args.storm_run} --storm-seeds 1000000-1000049")  # fmt: skip
+          "python -m rainuav.evaluate RUN --storm-seeds 1000000-1000049")  # fmt: skip
     cmd = run(["benches/worst_flights.py", str(args.storm_run), str(ev)])
-    stamp(ev / "worst_flights.png", FIGURES / "storm_network_worst_1000000.png", cmd)
+    # The run's folder is the user's own: the stamp names it RUN.
+    cmd = cmd.replace(str(ev), "RUN/eval_storms_1000000-1000049").replace(
+        str(args.storm_run), "RUN"
+    )
+    stamp(ev / "worst_flights.png", FIGURES / "storm_network_worst.png", cmd)
 
 
 if __name__ == "__main__":

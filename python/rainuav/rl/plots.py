@@ -147,8 +147,8 @@ def plot_stages(env: UAVNavEnv, stages: list[tuple[int, list]], path: Path) -> N
             ax.plot(r["path"][0, 0], r["path"][0, 1], "rx")
         ax.plot(*env.cfg.goal_m, "b^")
         ax.set_title(f"after {ep} episodes")
-        ax.set_xticks([])
-        ax.set_yticks([])
+        ax.set_xlabel("east [m]")
+    axs[0][0].set_ylabel("north [m]")
     write_atomic(path, lambda t: fig.savefig(t, dpi=100, format="png"))
 
 
@@ -187,10 +187,10 @@ def plot_storm_flights(env: UAVNavEnv, rolls: list, path: Path, panels: int = 3)
                 ax.plot(now[:, 0], now[:, 1], style, color=colours[name], lw=1.2,
                         label=name if i == 0 else None)  # fmt: skip
                 ax.plot(*now[-1], "o", color=colours[name], ms=3)
-        ax.plot(*env.cfg.goal_m, "b^")
+        ax.plot(*env.cfg.goal_m, "b^", label="destination" if m == moves[0] else None)
         ax.set_title(f"t = {t_s:.0f} s")
-        ax.set_xticks([])
-        ax.set_yticks([])
+        ax.set_xlabel("east [m]")
+    axs[0].set_ylabel("north [m]")
     axs[0].legend(loc="lower right", fontsize="x-small")
     fig.colorbar(im, ax=list(axs), label=f"{env.cfg.signal.upper()} [dB]", shrink=0.8)
     write_atomic(path, lambda t: fig.savefig(t, dpi=100, format="png"))
