@@ -20,6 +20,7 @@ Needs the ``geo`` extra (pyproj, rasterio).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 import os
@@ -84,7 +85,16 @@ def open_raster(path: str | os.PathLike[str], what: str) -> Any:
 
 
 def file_digest(path: str | os.PathLike[str]) -> str:
-    """The SHA-256 of a file's contents (hex): the radio-map cache keys on it."""
+    """The SHA-256 of a file's contents (hex): the radio-map cache keys on it. Hashed once per
+    version of the file (its path, size and modification time), however often a map build
+    asks."""
+    st = os.stat(path)
+    return _digest(os.path.realpath(path), st.st_size, st.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=32)
+def _digest(path: str, size: int, mtime_ns: int) -> str:
+    del size, mtime_ns  # in the key only: a changed file is hashed again
     h = hashlib.sha256()
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):

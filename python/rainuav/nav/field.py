@@ -18,7 +18,7 @@ import numpy.typing as npt
 from rainuav._sampling import bilinear, in_time
 from rainuav.errors import InvalidInputError
 
-__all__ = ["SignalBank", "SignalField", "SignalSeries", "SirField", "blocked_at"]
+__all__ = ["SignalBank", "SignalField", "SignalSeries", "SirField", "blocked_at", "pixel_index"]
 
 
 def _checked(
@@ -55,7 +55,9 @@ def _checked(
     return np.ascontiguousarray(v), extent, serving
 
 
-def _pixel(shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any) -> tuple[Any, Any]:
+def pixel_index(
+    shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any
+) -> tuple[Any, Any]:
     """The (row, column) of the pixel holding each point ``(x, y)`` (clamped to the map)."""
     x0, x1, y0, y1 = extent
     h, w = shape[-2:]
@@ -84,7 +86,7 @@ def blocked_at(field: Any, x: Any, y: Any) -> np.ndarray:
     mask = getattr(field, "not_flyable", None)
     if mask is None:
         return np.zeros(np.broadcast(np.asarray(x), np.asarray(y)).shape, dtype=bool)
-    return mask[_pixel(mask.shape, field.extent, x, y)]
+    return mask[pixel_index(mask.shape, field.extent, x, y)]
 
 
 def _lerp(g: np.ndarray, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -147,7 +149,7 @@ class SignalField:
         """The serving cell at the pixel holding ``(x, y)`` (-1 where the map names none)."""
         if self.serving is None:
             return np.full(np.broadcast(np.asarray(x), np.asarray(y)).shape, -1, dtype=np.int64)
-        return self.serving[_pixel(self.db.shape, self.extent, x, y)]
+        return self.serving[pixel_index(self.db.shape, self.extent, x, y)]
 
     def frozen(self, t_s: float = 0.0) -> SignalField:
         """The map at ``t_s``: this one."""
@@ -231,7 +233,7 @@ class SignalSeries:
         if self.serving is None:
             return np.full(shape, -1, dtype=np.int64)
         k = np.searchsorted(self.t_s, np.broadcast_to(t_s, shape), side="right") - 1
-        i, j = _pixel(self.db.shape, self.extent, x, y)
+        i, j = pixel_index(self.db.shape, self.extent, x, y)
         return self.serving[np.maximum(k, 0), i, j]
 
     def frozen(self, t_s: float = 0.0) -> SignalField:

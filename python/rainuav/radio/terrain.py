@@ -78,14 +78,9 @@ def core_args(scn: Scenario) -> dict[str, Any]:
 
 def flight_heights(scn: Scenario) -> np.ndarray:
     """The UAV's height above sea level over every pixel centre, (H, W), m."""
-    a = scn.area
-    if a.msl:
-        return np.full(a.shape, float(a.altitude_m))
-    t = scenario_terrain(scn)
-    if t is None:
-        return np.full(a.shape, float(a.altitude_m))
-    x, y = a.centres()
-    return t.at(x[None, :], y[:, None]) + a.altitude_m
+    x, y = scn.area.centres()
+    gx, gy = np.meshgrid(x, y)
+    return flight_heights_at(scn, gx, gy)
 
 
 def obstacle_pixel_max(scn: Scenario) -> np.ndarray:

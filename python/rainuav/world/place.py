@@ -36,7 +36,7 @@ from rainuav.missions import (
 )
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import SignalField, blocked_at
+from rainuav.nav.field import blocked_at, pixel_index
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio import presets
 from rainuav.radio.maptiff import write_map_geotiff
@@ -44,7 +44,7 @@ from rainuav.radio.radar import read_radar_grid
 from rainuav.radio.radiomap import build_radio_map
 from rainuav.radio.scenario import Area, Origin, Scenario, TerrainFile
 from rainuav.radio.sites import read_site_rows, sites_from_rows
-from rainuav.radio.terrain import map_mask, obstacle_pixel_max, scenario_terrain
+from rainuav.radio.terrain import flight_heights_at, obstacle_pixel_max, scenario_terrain
 from rainuav.radio.timemap import build_radio_map_series, series_times
 from rainuav.world import World, world_from
 
@@ -265,24 +265,20 @@ def fly_place(
         rm: Any = build_radio_map_series(scn, series_times(horizon, SLICE_S), progress=progress)
     else:
         rm = build_radio_map(scn, progress=progress)
-    mask = map_mask(scn)
-    if mask is not None:
-        for name, (x, y) in (("--start", place.start_m), ("--goal", place.goal_m)):
-            if blocked_at(
-                SignalField(np.zeros(mask.shape), scn.area.bounds, not_flyable=mask), x, y
-            ):
-                lat, lon = place.georef.to_latlon(x, y)
-                raise InvalidInputError(
-                    f"{name} {latlon_text(float(lat), float(lon))} lies where the UAV may not "
-                    f"fly: terrain or obstacles within {scn.area.clearance_m:g} m of the flight "
-                    "height (fly higher with --altitude-m, or move the point)"
-                )
     threshold = presets.SINR_THRESHOLDS_DB["uma"] if min_db is None else min_db
     task = NavConfig(
         goal_m=place.goal_m, start_m=place.start_m, max_steps=steps, speed_m_s=speed_m_s,
         min_db=threshold,
     )  # fmt: skip
     world: World = world_from(rm, task)
+    for name, (x, y) in (("--start", place.start_m), ("--goal", place.goal_m)):
+        if blocked_at(world.field, x, y):
+            lat, lon = place.georef.to_latlon(x, y)
+            raise InvalidInputError(
+                f"{name} {latlon_text(float(lat), float(lon))} lies where the UAV may not "
+                f"fly: terrain or obstacles within {scn.area.clearance_m:g} m of the flight "
+                "height (fly higher with --altitude-m, or move the point)"
+            )
     env = world.env()
     best = planner.optimal(env, np.asarray(place.start_m))
     straight = planner.straight_line(env, np.asarray(place.start_m))
@@ -347,11 +343,8 @@ def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, f
         return corners(path), None, 0.0
     a = scn.area
     x, y = path[:, 0], path[:, 1]
-    z = np.full(len(path), float(a.altitude_m)) if a.msl else t.at(x, y) + a.altitude_m
-    h, w = a.shape
-    j = np.clip(np.floor((x - a.x_min_m) / (a.x_max_m - a.x_min_m) * w), 0, w - 1).astype(int)
-    i = np.clip(np.floor((y - a.y_min_m) / (a.y_max_m - a.y_min_m) * h), 0, h - 1).astype(int)
-    top = (t.pixel_max(a.shape) + obstacle_pixel_max(scn))[i, j]
+    z = flight_heights_at(scn, x, y)
+    top = (t.pixel_max(a.shape) + obstacle_pixel_max(scn))[pixel_index(a.shape, a.bounds, x, y)]
     picks = terrain_waypoints(path, z, top, a.clearance_m)
     return picks, z[picks], float(t.at(x[0], y[0]))
 
