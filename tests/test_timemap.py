@@ -56,7 +56,7 @@ def _rain_loss_db(scn, site, gamma_raster, origin_step) -> np.ndarray:
     from rainuav import _core
 
     x, y = scn.area.centres()
-    terms = np.zeros((1, y.size, x.size, 5))
+    terms = np.zeros((1, y.size, x.size, 7))
     terms[..., 0] = 1.0
     terms[0, ..., 3] = _direct_length(scn, site, x[None, :], y[:, None])[1]
     slicer = _core.RaySlicer(

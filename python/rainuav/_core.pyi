@@ -13,6 +13,7 @@ __all__ = [
     "DropSizeDistribution",
     "MediumConfig",
     "PeMarcher",
+    "Prisms",
     "RainMediumKernel",
     "RaySlicer",
     "__version__",
@@ -31,6 +32,7 @@ __all__ = [
     "plan_optimal_in_time",
     "ray_departures",
     "ray_power",
+    "ray_walls",
     "sample_slices",
     "terminal_velocity_m_s",
     "water_permittivity",
@@ -256,11 +258,46 @@ def ray_power(
     terrain_origin_step: tuple[float, float, float, float] | None = None,
     altitude_msl: bool = False,
     terms_only: bool = False,
+    prisms: Prisms | None = None,
+    walls: _F | None = None,
 ) -> _F:
     """Received power (mW) of every transmitter at every pixel, (M, H, W); with
-    ``terms_only``, its clear-air parts and its rays' lengths [direct, reflect, cross, d1, d2],
-    (M, H, W, 5). ``terrain``: heights above sea level at nodes (the ground under everything);
-    ``altitude_msl``: the flight altitude above sea level instead of above the terrain."""
+    ``terms_only``, its clear-air parts and its rays' lengths [direct, reflect, cross, d1, d2,
+    wall, d3], (M, H, W, 7). ``terrain``: heights above sea level at nodes (the ground under
+    everything); ``altitude_msl``: the flight altitude above sea level instead of above the
+    terrain; ``prisms``: buildings besides the boxes; ``walls`` (M, H, W, 2): each cell's wall
+    rays per pixel (clear-air power mW, mean length m)."""
+
+@final
+class Prisms:
+    """Buildings as prisms on the terrain: footprint rings and roof heights, with a bucket
+    grid, built once and passed to the ray functions."""
+
+    def __new__(cls, xy: _F, ring_starts: _I, prism_rings: _I, tops: _F) -> Prisms: ...
+    def __len__(self) -> int: ...
+    def height_at(self, x: _F, y: _F) -> _F:
+        """The tallest roof (m above the terrain) over each point; 0 where none."""
+
+def ray_walls(
+    sites: _F,
+    x_m: _F,
+    y_m: _F,
+    walls: _F,
+    wall_eps: _F,
+    *,
+    altitude_m: float,
+    freq_hz: float,
+    polarization: str,
+    buildings: _F,
+    heights: _F | None,
+    heights_origin_step: tuple[float, float, float, float],
+    terrain: _F | None = None,
+    terrain_origin_step: tuple[float, float, float, float] | None = None,
+    altitude_msl: bool = False,
+    prisms: Prisms | None = None,
+) -> tuple[_I, _I, _F, _F, _F, _F]:
+    """Every ray the walls (K, 6: ax, ay, bx, by, base, top) reflect from each site to each
+    pixel: (site, pixel, az_deg, el_deg, factor per mW for isotropic antennas, length_m)."""
 
 def knife_edge_loss_db(nu: _F) -> _F:
     """ITU-R P.526's knife-edge loss J(nu), dB, of each ``nu``."""
@@ -290,6 +327,7 @@ def ray_departures(
     terrain: _F | None = None,
     terrain_origin_step: tuple[float, float, float, float] | None = None,
     altitude_msl: bool = False,
+    prisms: Prisms | None = None,
 ) -> _F:
     """Departure elevations (degrees) toward which each site's gains are taken, (S, H, W, 2):
     the direct ray's (the diffracting edge, else the pixel) and the reflected ray's."""

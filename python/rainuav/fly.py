@@ -38,9 +38,15 @@ altitude is above the terrain under the UAV (``--altitude-reference ground``, th
 or above sea level (``msl``), and the flight keeps out of the pixels where terrain comes
 within 10 m of it; a start or destination there is refused.
 
+``--footprints FILE.geojson`` adds buildings (OpenStreetMap's footprints and height tags:
+:mod:`rainuav.ground.footprints`) standing on that ground: their roofs diffract, their walls
+reflect, and the flight keeps out of every pixel a building overlaps that reaches within
+10 m of it.
+
 A planning aid, not an airworthiness tool: check the airspace, obstacles the map does not
 know (without ``--terrain`` it assumes flat open ground; a DEM leaves out vegetation and
-clutter), and the link budget's assumptions before flying. Needs the ``geo`` extra
+clutter, footprints leave out masts, cranes and trees), and the link budget's assumptions
+before flying. Needs the ``geo`` extra
 (``pip install 'rainuav[geo]'``).
 """
 
@@ -105,6 +111,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         "SRTM or Copernicus GLO-30): maps and flights over the ground",
     )  # fmt: skip
     ap.add_argument(
+        "--footprints", type=Path, default=None,
+        help="building footprints in GeoJSON (longitude/latitude, OpenStreetMap height tags): "
+        "buildings that block, diffract and reflect, and that the flight keeps clear of",
+    )  # fmt: skip
+    ap.add_argument(
         "--altitude-reference", choices=("ground", "msl"), default=None,
         help="--altitude-m above the terrain under the UAV (ground, the default) or above "
         "mean sea level (msl)",
@@ -141,6 +152,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.sites, args.start, args.goal, altitude_m=args.altitude_m,
             freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
             box=box, terrain=args.terrain, altitude_reference=args.altitude_reference,
+            footprints=args.footprints,
         )  # fmt: skip
         flyer, by = (None, "exact optimum") if args.policy is None else _policy(args.policy)
         summary = fly_place(

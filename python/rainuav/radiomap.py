@@ -4,6 +4,7 @@
     python -m rainuav.radiomap --scenario uma --freq-ghz 28 --rain-rate 50 --engine hybrid
     python -m rainuav.radiomap --config my_scenario.toml --out maps/
     python -m rainuav.radiomap --config my_place.toml --terrain dem.tif --out maps/
+    python -m rainuav.radiomap --config my_place.toml --footprints city.geojson --out maps/
     python -m rainuav.radiomap --scenario storm --storm-seed 3 --duration-s 300 --slice-s 5
     python -m rainuav.radiomap --clear-cache
 
@@ -85,6 +86,13 @@ def build_parser() -> argparse.ArgumentParser:
         "scenario needs an [origin] (a --config TOML)",
     )
     ap.add_argument(
+        "--footprints",
+        type=Path,
+        default=None,
+        help="building footprints in GeoJSON (longitude/latitude; OpenStreetMap height tags): "
+        "the scenario needs an [origin] (a --config TOML)",
+    )
+    ap.add_argument(
         "--altitude-reference",
         choices=("ground", "msl"),
         default=None,
@@ -142,6 +150,12 @@ def _build(args: argparse.Namespace) -> int:
         if not args.terrain.is_file():
             raise InvalidInputError(f"--terrain {args.terrain}: no such file")
         scn = scn.replace(terrain=TerrainFile(str(args.terrain.resolve())))
+    if args.footprints is not None:
+        from rainuav.radio.scenario import FootprintsFile
+
+        if not args.footprints.is_file():
+            raise InvalidInputError(f"--footprints {args.footprints}: no such file")
+        scn = scn.replace(footprints=FootprintsFile(str(args.footprints.resolve())))
     if args.engine is not None:
         scn = scn.replace(engine=args.engine)
     if args.altitude_reference is not None:

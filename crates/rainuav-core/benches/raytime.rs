@@ -43,7 +43,7 @@ fn bench(c: &mut Criterion) {
         ground: RayGround::None,
         polarization: RayPolarization::H,
         rain: RainField::Raster(r),
-        buildings: &[],
+        prisms: None,
         heights: None,
         terrain: None,
         altitude_msl: false,
@@ -55,7 +55,7 @@ fn bench(c: &mut Criterion) {
         })
         .collect();
     let site_of: Vec<usize> = (0..21).map(|c| c / 3).collect();
-    let terms = Array4::<f64>::from_elem((21, 200, 200, 5), 1e-9);
+    let terms = Array4::<f64>::from_elem((21, 200, 200, 7), 1e-9);
     let mut g = c.benchmark_group("rain_slice");
     g.sample_size(10);
     g.bench_function("21_cells_7_sites_200x200", |b| {

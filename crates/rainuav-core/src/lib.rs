@@ -23,6 +23,7 @@ pub mod error;
 pub mod medium;
 pub mod memory;
 pub mod mie;
+pub mod obstacles;
 pub mod p838;
 pub mod planner;
 pub mod plantime;
@@ -31,6 +32,7 @@ pub mod quadrature;
 pub mod rays;
 pub mod raytime;
 pub mod sampling;
+pub mod walls;
 pub mod water;
 
 pub use error::{CoreError, Result};

@@ -29,7 +29,7 @@
 //! the path at the specular point, the image construction iterated) and exists only where its
 //! specular point is bare ground seen by both ends.
 
-use ndarray::{Array3, Array4, ArrayView2, ArrayView3, Axis};
+use ndarray::{Array3, Array4, ArrayView2, ArrayView3, ArrayView4, Axis};
 use num_complex::Complex64;
 use rayon::prelude::*;
 
@@ -124,8 +124,7 @@ pub(crate) fn line_gamma(r: &Raster<'_>, a: [f64; 2], b: [f64; 2]) -> f64 {
     sum / n as f64
 }
 
-/// A box-shaped building: `[x0, x1, y0, y1, height]`, metres.
-pub type Building = [f64; 5];
+pub use crate::obstacles::{Building, Prisms};
 
 /// The map, the medium and the ground the rays travel over.
 #[derive(Debug, Clone)]
@@ -146,8 +145,8 @@ pub struct RayScene<'a> {
     pub polarization: RayPolarization,
     /// The rain.
     pub rain: RainField<'a>,
-    /// Buildings (boxes).
-    pub buildings: &'a [Building],
+    /// Buildings: prisms standing on the terrain (boxes are [`Prisms::from_boxes`]).
+    pub prisms: Option<&'a Prisms>,
     /// Further obstacle heights (m, 0: none) over cells of a raster ([`Raster::cell`]).
     pub heights: Option<Raster<'a>>,
     /// The terrain: heights above sea level (m) at nodes, bilinear between them
@@ -213,6 +212,11 @@ pub struct PixelTerms {
     pub d1: f64,
     /// Length of the reflected ray, m.
     pub d2: f64,
+    /// Power of the rays reflected by walls in clear air (their sum, incoherent), mW
+    /// ([`crate::walls`]; 0: none).
+    pub wall: f64,
+    /// The wall rays' mean length, weighted by their power, m.
+    pub d3: f64,
 }
 
 impl PixelTerms {
@@ -221,6 +225,17 @@ impl PixelTerms {
         let a1 = db_to_amplitude(gamma * self.d1);
         let a2 = db_to_amplitude(gamma * self.d2);
         Self::combine(self.direct, self.reflect, self.cross, a1, a2)
+            + Self::wall_power(self.wall, self.d3, gamma)
+    }
+
+    /// The wall rays' power `wall` (mW in clear air) through rain of mean specific
+    /// attenuation `gamma` (dB/m) along their mean length `d3` (m).
+    pub fn wall_power(wall: f64, d3: f64, gamma: f64) -> f64 {
+        if wall == 0.0 {
+            0.0
+        } else {
+            wall * db_to_amplitude(gamma * d3).powi(2)
+        }
     }
 
     /// `direct a1^2 + reflect a2^2 + cross a1 a2` (never below 0): the power of the terms
@@ -306,15 +321,6 @@ impl RayScene<'_> {
                 e,
             ));
         }
-        for b in self.buildings {
-            if !(b.iter().all(|v| v.is_finite()) && b[1] > b[0] && b[3] > b[2] && b[4] >= 0.0) {
-                return Err(CoreError::invalid(
-                    "buildings",
-                    "must be finite boxes [x0 < x1, y0 < y1, height >= 0]",
-                    format!("{b:?}"),
-                ));
-            }
-        }
         if let Some(h) = &self.heights {
             check_raster("height raster", h.values, h.origin_step)?;
         }
@@ -351,7 +357,7 @@ impl RayScene<'_> {
     /// Whether the rays travel over flat open ground (no terrain, no obstacles): the closed
     /// forms of PHYSICS.md section 8.
     pub fn flat_open(&self) -> bool {
-        self.terrain.is_none() && self.buildings.is_empty() && self.heights.is_none()
+        self.terrain.is_none() && self.prisms.is_none_or(|p| p.is_empty()) && self.heights.is_none()
     }
 
     /// The terrain's height above sea level at `(x, y)`, m (0 without a terrain).
@@ -361,13 +367,8 @@ impl RayScene<'_> {
 
     /// The tallest obstacle standing on the terrain at `(x, y)`, m (0: none).
     pub fn obstacle_at(&self, x: f64, y: f64) -> f64 {
-        let mut h = self.heights.as_ref().map_or(0.0, |r| r.cell(x, y));
-        for b in self.buildings {
-            if x >= b[0] && x <= b[1] && y >= b[2] && y <= b[3] {
-                h = h.max(b[4]);
-            }
-        }
-        h
+        let h = self.heights.as_ref().map_or(0.0, |r| r.cell(x, y));
+        h.max(self.prisms.map_or(0.0, |p| p.height_at(x, y)))
     }
 
     /// The receiver's height above sea level over `q`, m.
@@ -382,8 +383,7 @@ impl RayScene<'_> {
     /// The profile of the surface (terrain + obstacles, m above sea level) along the ground
     /// line `a -> b`, as `(distance from a, height)` strictly between the ends, in order of
     /// distance: the terrain and the obstacle raster every half of their finest spacing, and
-    /// each box where the line enters and leaves it (a box's roof is flat, so its faces are
-    /// where the extremes of the construction lie). Written into `out` (cleared first).
+    /// each building where the line enters and leaves its footprint. Written into `out` (cleared first).
     pub fn profile(&self, a: [f64; 2], b: [f64; 2], out: &mut Vec<(f64, f64)>) {
         out.clear();
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -405,30 +405,26 @@ impl RayScene<'_> {
             out.extend((1..n).map(|k| at(k as f64 / n as f64)));
         }
         let before = out.len();
-        for bx in self.buildings {
-            let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
-            let mut hit = true;
-            for (o, d, lo, hi) in [(a[0], dx, bx[0], bx[1]), (a[1], dy, bx[2], bx[3])] {
-                if d.abs() < 1e-12 {
-                    hit &= o >= lo && o <= hi;
-                } else {
-                    let (u, v) = ((lo - o) / d, (hi - o) / d);
-                    t0 = t0.max(u.min(v));
-                    t1 = t1.min(u.max(v));
-                }
-            }
-            if !hit || t0 > t1 {
-                continue;
-            }
-            // Just inside each face, so the point reads the box.
+        if let Some(prisms) = self.prisms {
+            // Each face a building's footprint crosses, read just inside it (a roof is flat, so
+            // its faces are where the extremes of the construction lie).
             let eps = 1e-9_f64.max(1e-6 / rho);
-            for t in [t0 + eps, t1 - eps] {
-                if t > 0.0 && t < 1.0 {
-                    out.push(at(t.clamp(t0, t1)));
+            let (mut near, mut ts) = (Vec::new(), Vec::new());
+            prisms.near_segment(a, b, &mut near);
+            for &k in &near {
+                ts.clear();
+                prisms.crossings(k as usize, a, b, &mut ts);
+                for &t0 in &ts {
+                    for t in [t0 - eps, t0 + eps] {
+                        let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+                        if t > 0.0 && t < 1.0 && prisms.contains(k as usize, x, y) {
+                            out.push(at(t));
+                        }
+                    }
                 }
             }
         }
-        if out.len() > before && before > 0 {
+        if out.len() > before {
             out.sort_by(|p, q| p.0.total_cmp(&q.0));
         }
     }
@@ -563,6 +559,8 @@ impl RayScene<'_> {
             cross: 0.0,
             d1,
             d2,
+            wall: 0.0,
+            d3: 0.0,
         };
         if geom.reflect {
             let gamma_g = reflection_coefficient(self.ground, self.polarization, geom.psi);
@@ -658,9 +656,27 @@ impl RayScene<'_> {
         txs: &[RayTransmitter],
         g_direct: &ArrayView3<'_, f64>,
         g_reflect: &ArrayView3<'_, f64>,
+        walls: Option<&ArrayView4<'_, f64>>,
     ) -> Result<(usize, usize, usize)> {
         self.check()?;
         let shape = (txs.len(), self.y_m.len(), self.x_m.len());
+        if let Some(wr) = walls {
+            let want = (shape.0, shape.1, shape.2, 2);
+            if wr.dim() != want {
+                return Err(CoreError::invalid(
+                    "walls",
+                    format!("must have shape {want:?} (cells, rows, columns, 2)"),
+                    format!("{:?}", wr.dim()),
+                ));
+            }
+            if !wr.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                return Err(CoreError::invalid(
+                    "walls",
+                    "must be finite and >= 0",
+                    "a bad value",
+                ));
+            }
+        }
         for (name, g) in [("g_direct", g_direct), ("g_reflect", g_reflect)] {
             if g.dim() != shape {
                 return Err(CoreError::invalid(
@@ -702,7 +718,21 @@ impl RayScene<'_> {
         g_direct: ArrayView3<'_, f64>,
         g_reflect: ArrayView3<'_, f64>,
     ) -> Result<Array3<f64>> {
-        let shape = self.check_rays(txs, &g_direct, &g_reflect)?;
+        self.power_with(txs, g_direct, g_reflect, None)
+    }
+
+    /// [`RayScene::power`] with the rays reflected by walls: `walls` `(M, H, W, 2)`, each
+    /// transmitter's wall rays at each pixel as their clear-air power (mW, gains included)
+    /// and power-weighted mean length (m) ([`crate::walls`]); the rain of the pixel's line
+    /// attenuates them along that length.
+    pub fn power_with(
+        &self,
+        txs: &[RayTransmitter],
+        g_direct: ArrayView3<'_, f64>,
+        g_reflect: ArrayView3<'_, f64>,
+        walls: Option<ArrayView4<'_, f64>>,
+    ) -> Result<Array3<f64>> {
+        let shape = self.check_rays(txs, &g_direct, &g_reflect, walls.as_ref())?;
         let mut out = Array3::<f64>::zeros(shape);
         crate::memory::check_memory(out.len() * 8)?;
         let (geo, index) = self.shared_geometries(txs)?;
@@ -715,13 +745,16 @@ impl RayScene<'_> {
                 let geo = &geo[index[m]];
                 for ((i, j), p) in plane.indexed_iter_mut() {
                     let q = [self.x_m[j], self.y_m[i]];
-                    let t = self.terms_of(
+                    let mut t = self.terms_of(
                         &geo[i * w + j],
                         &txs[m],
                         q,
                         g_direct[[m, i, j]],
                         g_reflect[[m, i, j]],
                     );
+                    if let Some(wr) = &walls {
+                        (t.wall, t.d3) = (wr[[m, i, j, 0]], wr[[m, i, j, 1]]);
+                    }
                     *p = t.power(self.mean_gamma([xs, ys], q));
                 }
             });
@@ -729,17 +762,20 @@ impl RayScene<'_> {
     }
 
     /// The clear-air parts of every transmitter's power at every pixel and its rays'
-    /// lengths, `(M, H, W, 5)`: `[direct, reflect, cross, d1, d2]` of [`PixelTerms`] (the rain
-    /// of the scene is not used). With the rain's mean attenuation along each path they give
-    /// [`RayScene::power`]'s power ([`crate::raytime`]: weather in time, the rays traced once).
+    /// lengths, `(M, H, W, 7)`: `[direct, reflect, cross, d1, d2, wall, d3]` of
+    /// [`PixelTerms`] (the rain of the scene is not used; `walls` as
+    /// [`RayScene::power_with`] takes them, else 0). With the rain's mean attenuation along
+    /// each path they give [`RayScene::power_with`]'s power ([`crate::raytime`]: weather in
+    /// time, the rays traced once).
     pub fn terms(
         &self,
         txs: &[RayTransmitter],
         g_direct: ArrayView3<'_, f64>,
         g_reflect: ArrayView3<'_, f64>,
+        walls: Option<ArrayView4<'_, f64>>,
     ) -> Result<Array4<f64>> {
-        let (m, h, w) = self.check_rays(txs, &g_direct, &g_reflect)?;
-        let mut out = Array4::<f64>::zeros((m, h, w, 5));
+        let (m, h, w) = self.check_rays(txs, &g_direct, &g_reflect, walls.as_ref())?;
+        let mut out = Array4::<f64>::zeros((m, h, w, TERMS));
         crate::memory::check_memory(out.len() * 8)?;
         let (geo, index) = self.shared_geometries(txs)?;
         out.axis_iter_mut(Axis(0))
@@ -762,12 +798,19 @@ impl RayScene<'_> {
                         plane[[i, j, 2]] = t.cross;
                         plane[[i, j, 3]] = t.d1;
                         plane[[i, j, 4]] = t.d2;
+                        if let Some(wr) = &walls {
+                            plane[[i, j, 5]] = wr[[m, i, j, 0]];
+                            plane[[i, j, 6]] = wr[[m, i, j, 1]];
+                        }
                     }
                 }
             });
         Ok(out)
     }
 }
+
+/// How many values [`RayScene::terms`] gives a cell-pixel.
+pub const TERMS: usize = 7;
 
 pub(crate) fn check_raster(name: &'static str, v: ArrayView2<'_, f64>, os: [f64; 4]) -> Result<()> {
     if v.nrows() < 1 || v.ncols() < 1 || !v.iter().all(|x| x.is_finite() && *x >= 0.0) {
@@ -802,7 +845,7 @@ mod tests {
             ground,
             polarization: RayPolarization::H,
             rain: RainField::Uniform(0.0),
-            buildings: &[],
+            prisms: None,
             heights: None,
             terrain: None,
             altitude_msl: false,
@@ -894,8 +937,8 @@ mod tests {
         let (x, y) = ([1000.0], [0.0]);
         let mut s = scene(&x, &y, RayGround::None);
         let clear = one(&s, TX);
-        let wall = [[495.0, 505.0, -50.0, 50.0, 200.0]];
-        s.buildings = &wall;
+        let wall = Prisms::from_boxes(&[[495.0, 505.0, -50.0, 50.0, 200.0]]).unwrap();
+        s.prisms = Some(&wall);
         let loss = 10.0 * (clear / one(&s, TX)).log10();
         let lam = crate::SPEED_OF_LIGHT_M_S / 4.9e9;
         let (d, hts, hrs) = (1000.0_f64, 25.0, 100.0);

@@ -21,7 +21,11 @@ use ndarray::{Array2, Array3, ArrayView3, ArrayView4, ArrayViewMut3, Axis};
 use rayon::prelude::*;
 
 use crate::error::{CoreError, Result};
-use crate::rays::{PixelTerms, RainField, Raster, RayScene, line_gamma};
+use crate::rays::{PixelTerms, RainField, Raster, RayScene, TERMS, line_gamma};
+
+/// The terms a slicer keeps per cell-pixel: direct, reflect, cross, wall, d3 (the lengths d1,
+/// d2 are kept per site).
+const KEPT: usize = 5;
 
 use std::f64::consts::TAU;
 
@@ -133,7 +137,7 @@ pub struct RaySlicer {
 }
 
 impl RaySlicer {
-    /// From the terms and lengths `(M, H, W, 5)` ([`RayScene::terms`]), the sites (`[x, y,
+    /// From the terms and lengths `(M, H, W, 7)` ([`RayScene::terms`]), the sites (`[x, y,
     /// height]`, m), each cell's site, the pixel centres and the rain nodes' spacing `ds` (m).
     /// A site's rays' lengths are those of its first cell (its cells share their paths).
     pub fn new(
@@ -153,12 +157,12 @@ impl RaySlicer {
             ));
         }
         crate::error::check_range("ds", ds, 1e-3, 1e5, "must be in 0.001..1e5 m")?;
-        if terms.dim() != (m, h, w, 5) {
+        if terms.dim() != (m, h, w, TERMS) {
             return Err(CoreError::invalid(
                 "terms",
                 format!(
-                    "must have shape {:?} (cells, rows, columns, 5)",
-                    (m, h, w, 5)
+                    "must have shape {:?} (cells, rows, columns, {TERMS})",
+                    (m, h, w, TERMS)
                 ),
                 format!("{:?}", terms.dim()),
             ));
@@ -183,7 +187,7 @@ impl RaySlicer {
                 format!("{sites:?}"),
             ));
         }
-        crate::memory::check_memory((3 * m + 6 * sites.len()) * h * w * 8)?;
+        crate::memory::check_memory((KEPT * m + 6 * sites.len()) * h * w * 8)?;
         let fans = sites
             .iter()
             .map(|&[x, y, _]| Fan::new([x, y], x_m, y_m, ds))
@@ -201,7 +205,7 @@ impl RaySlicer {
             .iter()
             .copied()
             .enumerate()
-            .filter(|(k, _)| k % 5 < 3)
+            .filter(|(k, _)| !matches!(k % TERMS, 3 | 4))
             .map(|(_, v)| v)
             .collect();
         Ok(RaySlicer {
@@ -236,8 +240,8 @@ impl RaySlicer {
                 }
             }
         }
-        crate::memory::check_memory((2 * self.fans.len() + m) * plane_len * 8)?;
-        // Per site and pixel: the amplitude factors a1, a2 of the two rays.
+        crate::memory::check_memory((3 * self.fans.len() + m) * plane_len * 8)?;
+        // Per site and pixel: the amplitude factors a1, a2 of the two rays, and gamma.
         let to_amplitude = -std::f64::consts::LN_10 / 20.0;
         let att: Vec<Vec<f64>> = self
             .fans
@@ -252,7 +256,11 @@ impl RaySlicer {
                     .iter()
                     .zip(lengths)
                     .flat_map(|(g, (d1, d2))| {
-                        [(to_amplitude * g * d1).exp(), (to_amplitude * g * d2).exp()]
+                        [
+                            (to_amplitude * g * d1).exp(),
+                            (to_amplitude * g * d2).exp(),
+                            *g,
+                        ]
                     })
                     .collect()
             })
@@ -263,13 +271,14 @@ impl RaySlicer {
             .par_chunks_mut(plane_len)
             .enumerate()
             .for_each(|(c, plane)| {
-                let t = &self.terms[3 * c * plane_len..3 * (c + 1) * plane_len];
+                let t = &self.terms[KEPT * c * plane_len..KEPT * (c + 1) * plane_len];
                 let a = &att[self.site_of[c]];
                 for (p, (t, a)) in plane
                     .iter_mut()
-                    .zip(t.chunks_exact(3).zip(a.chunks_exact(2)))
+                    .zip(t.chunks_exact(KEPT).zip(a.chunks_exact(3)))
                 {
-                    *p = PixelTerms::combine(t[0], t[1], t[2], a[0], a[1]);
+                    *p = PixelTerms::combine(t[0], t[1], t[2], a[0], a[1])
+                        + PixelTerms::wall_power(t[3], t[4], a[2]);
                 }
             });
         Ok(out)
@@ -277,7 +286,7 @@ impl RaySlicer {
 }
 
 /// The power (mW) of every cell at every pixel, `(M, H, W)`, from the clear-air `terms`
-/// (`(M, H, W, 5)`, [`RayScene::terms`]) and the rain of `scene` at one instant (a
+/// (`(M, H, W, 7)`, [`RayScene::terms`]) and the rain of `scene` at one instant (a
 /// [`RaySlicer`] built and used once).
 pub fn slice_power(
     scene: &RayScene<'_>,
@@ -382,6 +391,7 @@ mod tests {
     fn a_slice_is_the_static_power_of_its_rain() {
         let v = field();
         let (x, y) = (grid(40, 40.0), grid(30, 40.0));
+        let block = crate::rays::Prisms::from_boxes(&[[600.0, 700.0, 500.0, 560.0, 60.0]]).unwrap();
         let scene = RayScene {
             x_m: &x,
             y_m: &y,
@@ -394,7 +404,7 @@ mod tests {
                 values: v.view(),
                 origin_step: [0.0, 10.0, 0.0, 10.0],
             }),
-            buildings: &[[600.0, 700.0, 500.0, 560.0, 60.0]],
+            prisms: Some(&block),
             heights: None,
             terrain: None,
             altitude_msl: false,
@@ -410,8 +420,20 @@ mod tests {
             .collect();
         let gd = Array3::from_shape_fn((3, 30, 40), |(m, i, j)| 1.0 + ((m + i + j) % 5) as f64);
         let gr = gd.mapv(|g| 0.5 * g);
-        let want = scene.power(&txs, gd.view(), gr.view()).unwrap();
-        let terms = scene.terms(&txs, gd.view(), gr.view()).unwrap();
+        // Wall rays: some pixels with, some without.
+        let walls = ndarray::Array4::from_shape_fn((3, 30, 40, 2), |(m, i, j, k)| {
+            match ((i + j + m) % 3, k) {
+                (0, _) => 0.0,
+                (_, 0) => 1e-9 * (1 + i) as f64,
+                _ => 900.0 + (j * 7) as f64,
+            }
+        });
+        let want = scene
+            .power_with(&txs, gd.view(), gr.view(), Some(walls.view()))
+            .unwrap();
+        let terms = scene
+            .terms(&txs, gd.view(), gr.view(), Some(walls.view()))
+            .unwrap();
         let got = slice_power(&scene, terms.view(), &sites, &site_of).unwrap();
         for (g, w) in got.iter().zip(want.iter()) {
             // 0.01 dB, the rain integral's tolerance; the rest is the same arithmetic.
@@ -422,7 +444,9 @@ mod tests {
             rain: RainField::Uniform(0.004),
             ..scene.clone()
         };
-        let want = uniform.power(&txs, gd.view(), gr.view()).unwrap();
+        let want = uniform
+            .power_with(&txs, gd.view(), gr.view(), Some(walls.view()))
+            .unwrap();
         let got = slice_power(&uniform, terms.view(), &sites, &site_of).unwrap();
         for (g, w) in got.iter().zip(want.iter()) {
             assert!((g - w).abs() <= 1e-12 * w.abs().max(1e-300), "{g} vs {w}");

@@ -12,8 +12,93 @@ use numpy::{
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
 use rainuav_core::rays::{
-    Building, RainField, Raster, RayGround, RayPolarization, RayScene, RayTransmitter,
+    Building, Prisms as CorePrisms, RainField, Raster, RayGround, RayPolarization, RayScene,
+    RayTransmitter,
 };
+use rainuav_core::walls::Wall;
+
+/// Buildings as prisms standing on the terrain: footprint rings (`xy` (N, 2) every vertex,
+/// rings not closed; `ring_starts` (R + 1) offsets into `xy`; `prism_rings` (P + 1) offsets
+/// into the rings, each prism's outer ring then its holes) and `tops` (P) roof heights above
+/// the terrain, m. Built once (with its bucket grid) and passed to the ray functions.
+#[pyclass(frozen, module = "rainuav._core")]
+pub(crate) struct Prisms {
+    inner: CorePrisms,
+}
+
+#[pymethods]
+impl Prisms {
+    #[new]
+    fn new(
+        xy: PyReadonlyArray2<'_, f64>,
+        ring_starts: PyReadonlyArray1<'_, i64>,
+        prism_rings: PyReadonlyArray1<'_, i64>,
+        tops: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Self> {
+        let v = xy.as_array();
+        if v.ncols() != 2 && v.nrows() > 0 {
+            return Err(to_py(CoreError::invalid(
+                "xy",
+                "must have shape (N, 2)",
+                format!("{:?}", v.dim()),
+            )));
+        }
+        let offsets = |a: &PyReadonlyArray1<'_, i64>| -> Vec<usize> {
+            a.as_array()
+                .iter()
+                .map(|&k| usize::try_from(k).unwrap_or(usize::MAX))
+                .collect()
+        };
+        let pts: Vec<[f64; 2]> = v.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+        let tops = tops.as_array().to_vec();
+        let inner = CorePrisms::new(pts, &offsets(&ring_starts), &offsets(&prism_rings), &tops)
+            .map_err(to_py)?;
+        Ok(Prisms { inner })
+    }
+
+    /// How many prisms.
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+
+    /// The tallest roof (m above the terrain) over each point `(x, y)`; 0 where none.
+    fn height_at<'py>(
+        &self,
+        py: Python<'py>,
+        x: PyReadonlyArray1<'py, f64>,
+        y: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+        let (x, y) = (x.as_array(), y.as_array());
+        if x.len() != y.len() {
+            return Err(to_py(CoreError::invalid(
+                "y",
+                "must have the length of x",
+                y.len(),
+            )));
+        }
+        let out: Vec<f64> = x
+            .iter()
+            .zip(y.iter())
+            .map(|(&a, &b)| self.inner.height_at(a, b))
+            .collect();
+        Ok(out.into_pyarray(py))
+    }
+}
+
+/// The boxes and the prisms of a call as one set of prisms.
+fn obstacles(
+    boxes: &PyReadonlyArray2<'_, f64>,
+    prisms: Option<&Bound<'_, Prisms>>,
+) -> PyResult<Option<CorePrisms>> {
+    let boxes = parse_buildings(boxes)?;
+    let from_boxes = CorePrisms::from_boxes(&boxes).map_err(to_py)?;
+    let all = match prisms {
+        Some(p) if from_boxes.is_empty() => p.get().inner.clone(),
+        Some(p) => from_boxes.join(&p.get().inner).map_err(to_py)?,
+        None => from_boxes,
+    };
+    Ok((!all.is_empty()).then_some(all))
+}
 
 fn parse_ground(ground: &str, eps: (f64, f64)) -> PyResult<RayGround> {
     match ground {
@@ -118,15 +203,17 @@ fn rain_field(raster: Option<&Array2<f64>>, uniform: f64, origin_step: [f64; 4])
 /// Received power (mW) of every transmitter at every pixel, (M, H, W): direct and
 /// ground-reflected rays with rain and knife-edge losses, averaged over each pixel.
 ///
-/// With `terms_only`, the clear-air parts and the rays' lengths instead, (M, H, W, 5):
-/// `[direct, reflect, cross, d1, d2]`. `terrain` (heights above sea level at nodes,
+/// With `terms_only`, the clear-air parts and the rays' lengths instead, (M, H, W, 7):
+/// `[direct, reflect, cross, d1, d2, wall, d3]`. `terrain` (heights above sea level at nodes,
 /// `terrain_origin_step`) puts everything on the ground; `altitude_msl` measures the flight
-/// altitude above sea level instead of above the terrain.
+/// altitude above sea level instead of above the terrain. `prisms` (:class:`Prisms`) are
+/// buildings besides the `buildings` boxes; `walls` (M, H, W, 2) each cell's wall rays at each
+/// pixel (clear-air power in mW and mean length in m, from `ray_walls` and the gains).
 #[pyfunction]
 #[pyo3(signature = (tx_m, tx_power_mw, g_direct, g_reflect, x_m, y_m, *, altitude_m, pixel_m,
     freq_hz, ground, eps_ground, polarization, gamma_db_per_m, gamma_raster, gamma_origin_step,
     buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=None,
-    altitude_msl=false, terms_only=false))]
+    altitude_msl=false, terms_only=false, prisms=None, walls=None))]
 #[allow(clippy::too_many_arguments)]
 fn ray_power<'py>(
     py: Python<'py>,
@@ -152,11 +239,14 @@ fn ray_power<'py>(
     terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
     terms_only: bool,
+    prisms: Option<Bound<'py, Prisms>>,
+    walls: Option<PyReadonlyArray4<'py, f64>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let ground = parse_ground(ground, eps_ground)?;
     let polarization = parse_polarization(polarization)?;
     let txs = parse_transmitters(&tx_m, &tx_power_mw)?;
-    let boxes = parse_buildings(&buildings)?;
+    let obst = obstacles(&buildings, prisms.as_ref())?;
+    let wr = walls.as_ref().map(|w| w.as_array());
     let x = x_m.as_array().to_vec();
     let y = y_m.as_array().to_vec();
     let gr: Option<Array2<f64>> = gamma_raster.map(|g| g.as_array().to_owned());
@@ -173,17 +263,17 @@ fn ray_power<'py>(
         ground,
         polarization,
         rain: rain_field(gr.as_ref(), gamma_db_per_m, gamma_origin_step),
-        buildings: &boxes,
+        prisms: obst.as_ref(),
         heights: raster(hr.as_ref().map(|v| v.view()), Some(heights_origin_step)),
         terrain: raster(tr, terrain_origin_step),
         altitude_msl,
     };
     if terms_only {
-        let out = detached(py, || scene.terms(&txs, gd, gf))?;
+        let out = detached(py, || scene.terms(&txs, gd, gf, wr))?;
         let arr: Bound<'py, PyArray4<f64>> = out.into_pyarray(py);
         return Ok(arr.into_any());
     }
-    let out = detached(py, || scene.power(&txs, gd, gf))?;
+    let out = detached(py, || scene.power_with(&txs, gd, gf, wr))?;
     let arr: Bound<'py, PyArray3<f64>> = out.into_pyarray(py);
     Ok(arr.into_any())
 }
@@ -194,7 +284,8 @@ fn ray_power<'py>(
 /// x, y, height above the terrain.
 #[pyfunction]
 #[pyo3(signature = (sites, x_m, y_m, *, altitude_m, freq_hz, ground, buildings, heights,
-    heights_origin_step, terrain=None, terrain_origin_step=None, altitude_msl=false))]
+    heights_origin_step, terrain=None, terrain_origin_step=None, altitude_msl=false,
+    prisms=None))]
 #[allow(clippy::too_many_arguments)]
 fn ray_departures<'py>(
     py: Python<'py>,
@@ -210,10 +301,11 @@ fn ray_departures<'py>(
     terrain: Option<PyReadonlyArray2<'py, f64>>,
     terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
+    prisms: Option<Bound<'py, Prisms>>,
 ) -> PyResult<Bound<'py, PyArray4<f64>>> {
     let sites = parse_sites(&sites)?;
     let ground = parse_ground(ground, (1.0, 0.0))?;
-    let boxes = parse_buildings(&buildings)?;
+    let obst = obstacles(&buildings, prisms.as_ref())?;
     let x = x_m.as_array().to_vec();
     let y = y_m.as_array().to_vec();
     let hr = heights.as_ref().map(|h| h.as_array());
@@ -227,7 +319,7 @@ fn ray_departures<'py>(
         ground,
         polarization: RayPolarization::H,
         rain: RainField::Uniform(0.0),
-        buildings: &boxes,
+        prisms: obst.as_ref(),
         heights: raster(hr, Some(heights_origin_step)),
         terrain: raster(tr, terrain_origin_step),
         altitude_msl,
@@ -236,8 +328,111 @@ fn ray_departures<'py>(
     Ok(out.into_pyarray(py))
 }
 
+/// Every ray that `walls` reflect from each site to the map's pixels (image method, first
+/// order): `walls` (K, 6) `[ax, ay, bx, by, base, top]` (outward normal on the right of
+/// `a -> b`; base and top above the terrain), `wall_eps` (K, 2) each wall's complex
+/// permittivity (real, imaginary <= 0), `sites` (S, 3) x, y, height above the terrain.
+/// Returns `(site, pixel, az_deg, el_deg, factor, length_m)`, one entry a ray: its site, its
+/// pixel (row-major), its departure direction toward the specular point, its power per mW
+/// for isotropic antennas and its length.
+#[pyfunction]
+#[pyo3(signature = (sites, x_m, y_m, walls, wall_eps, *, altitude_m, freq_hz, polarization,
+    buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=None,
+    altitude_msl=false, prisms=None))]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn ray_walls<'py>(
+    py: Python<'py>,
+    sites: PyReadonlyArray2<'py, f64>,
+    x_m: PyReadonlyArray1<'py, f64>,
+    y_m: PyReadonlyArray1<'py, f64>,
+    walls: PyReadonlyArray2<'py, f64>,
+    wall_eps: PyReadonlyArray2<'py, f64>,
+    altitude_m: f64,
+    freq_hz: f64,
+    polarization: &str,
+    buildings: PyReadonlyArray2<'py, f64>,
+    heights: Option<PyReadonlyArray2<'py, f64>>,
+    heights_origin_step: [f64; 4],
+    terrain: Option<PyReadonlyArray2<'py, f64>>,
+    terrain_origin_step: Option<[f64; 4]>,
+    altitude_msl: bool,
+    prisms: Option<Bound<'py, Prisms>>,
+) -> PyResult<(
+    Bound<'py, numpy::PyArray1<i64>>,
+    Bound<'py, numpy::PyArray1<i64>>,
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray1<f64>>,
+)> {
+    let sites = parse_sites(&sites)?;
+    let polarization = parse_polarization(polarization)?;
+    let obst = obstacles(&buildings, prisms.as_ref())?;
+    let (w, e) = (walls.as_array(), wall_eps.as_array());
+    if (w.ncols() != 6 && w.nrows() > 0)
+        || (e.ncols() != 2 && e.nrows() > 0)
+        || w.nrows() != e.nrows()
+    {
+        return Err(to_py(CoreError::invalid(
+            "walls",
+            "must have shape (K, 6) with wall_eps (K, 2)",
+            format!("{:?}, {:?}", w.dim(), e.dim()),
+        )));
+    }
+    let walls: Vec<Wall> = w
+        .rows()
+        .into_iter()
+        .zip(e.rows())
+        .map(|(r, q)| Wall {
+            a: [r[0], r[1]],
+            b: [r[2], r[3]],
+            base: r[4],
+            top: r[5],
+            eps: Complex64::new(q[0], q[1]),
+        })
+        .collect();
+    let x = x_m.as_array().to_vec();
+    let y = y_m.as_array().to_vec();
+    let hr = heights.as_ref().map(|h| h.as_array());
+    let tr = terrain.as_ref().map(|t| t.as_array());
+    let scene = RayScene {
+        x_m: &x,
+        y_m: &y,
+        altitude_m,
+        pixel_m: [0.0, 0.0],
+        freq_hz,
+        ground: RayGround::None,
+        polarization,
+        rain: RainField::Uniform(0.0),
+        prisms: obst.as_ref(),
+        heights: raster(hr, Some(heights_origin_step)),
+        terrain: raster(tr, terrain_origin_step),
+        altitude_msl,
+    };
+    let rays = detached(py, || {
+        let mut all = Vec::new();
+        for (k, &site) in sites.iter().enumerate() {
+            all.extend(scene.wall_rays(site, &walls)?.into_iter().map(|r| (k, r)));
+        }
+        Ok(all)
+    })?;
+    let site: Vec<i64> = rays.iter().map(|(k, _)| *k as i64).collect();
+    let pixel: Vec<i64> = rays.iter().map(|(_, r)| r.pixel as i64).collect();
+    let col = |f: fn(&rainuav_core::walls::WallRay) -> f64| -> Vec<f64> {
+        rays.iter().map(|(_, r)| f(r)).collect()
+    };
+    Ok((
+        site.into_pyarray(py),
+        pixel.into_pyarray(py),
+        col(|r| r.az_deg).into_pyarray(py),
+        col(|r| r.el_deg).into_pyarray(py),
+        col(|r| r.factor).into_pyarray(py),
+        col(|r| r.length_m).into_pyarray(py),
+    ))
+}
+
 /// Every cell's rays over a map traced once (the clear-air terms and the rays' lengths
-/// (M, H, W, 5) from `ray_power(..., terms_only=True)`), `sites` (S, 3): x, y, height,
+/// (M, H, W, 7) from `ray_power(..., terms_only=True)`), `sites` (S, 3): x, y, height,
 /// `site_of` (M,): each
 /// cell's site), and the power at any instant from its rain (`power`): weather in time.
 #[pyclass(frozen, module = "rainuav._core")]
@@ -366,6 +561,8 @@ fn bullington_loss(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ray_power, m)?)?;
     m.add_function(wrap_pyfunction!(ray_departures, m)?)?;
+    m.add_function(wrap_pyfunction!(ray_walls, m)?)?;
+    m.add_class::<Prisms>()?;
     m.add_function(wrap_pyfunction!(knife_edge_loss_db, m)?)?;
     m.add_function(wrap_pyfunction!(bullington_loss, m)?)?;
     m.add_class::<RaySlicer>()?;

@@ -106,3 +106,14 @@ class TerrainFile:
     file: str
     """A GeoTIFF of heights above sea level in any CRS (SRTM, Copernicus GLO-30); in a TOML
     file, relative to the TOML's folder."""
+
+
+@dataclass
+class FootprintsFile:
+    """Buildings from a footprint file (:mod:`rainuav.ground.footprints`)."""
+
+    file: str
+    """A GeoJSON file of Polygon and MultiPolygon features in longitude/latitude, with
+    OpenStreetMap's height tags; in a TOML file, relative to the TOML's folder."""
+    material: str = "concrete"
+    """The walls' ITU-R P.2040 material where a feature's ``building:material`` names none."""

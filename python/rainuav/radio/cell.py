@@ -20,6 +20,7 @@ Antennas (``Cell.antenna``; :mod:`rainuav.antenna` holds the patterns):
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -30,7 +31,20 @@ from rainuav._checks import check_choice as _choice
 from rainuav._checks import check_number as _num
 from rainuav.errors import InvalidInputError
 
-__all__ = ["ANTENNAS", "Cell", "Pattern", "cell_pattern", "gain_linear", "pattern_by_key"]
+__all__ = [
+    "ANTENNAS",
+    "Cell",
+    "Pattern",
+    "Weight",
+    "cell_pattern",
+    "gain_linear",
+    "pattern_by_key",
+    "weight_at",
+]
+
+#: A weight on a pattern: direction cosines (cross-range, height, range) in the cell's frame
+#: -> factor in 0..1.
+Weight = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 ANTENNAS = ("gaussian", "tr38901", "array", "table")
 """The antenna kinds a cell can name."""
@@ -162,3 +176,11 @@ def gain_linear(cell: Cell, azimuth_deg: Any, elevation_deg: Any) -> np.ndarray:
     el = np.clip(np.asarray(elevation_deg, dtype=float) - cell.tilt_deg, -90.0, 90.0)
     az = np.asarray(azimuth_deg, dtype=float) - cell.azimuth_deg
     return np.asarray(10.0 ** (cell_pattern(cell).gain_dbi(az, el) / 10.0))
+
+
+def weight_at(weight: Weight, cell: Cell, az: np.ndarray, el: np.ndarray) -> np.ndarray:
+    """``weight`` in the directions of global azimuth ``az`` and elevation ``el`` (degrees)
+    from ``cell``."""
+    e = np.radians(el)
+    a = np.radians(az - cell.azimuth_deg)
+    return weight(np.cos(e) * np.sin(a), np.sin(e), np.cos(e) * np.cos(a))

@@ -183,7 +183,7 @@ def _grid(scn: Scenario, site: Site, cell: Cell, sh: float, sv: float) -> MarchG
         + (8 * (nx // 2 + 1) * (ny + 1) if every > 1 else 0)  # the uniform path's table
         + 2 * steps * nx * 8  # the two recorded rows
         + (steps * nx * 16 if scn.medium.varies else 0)
-        + (steps * nx * 8 if scn.buildings or scn.height_map_m is not None else 0)
+        + (steps * nx * 8 if scn.buildings or scn.footprints or scn.height_map_m is not None else 0)
         + (steps * nx * 24 if scn.terrain is not None else 0)  # ground, rows and weights
     )
     return MarchGrid(

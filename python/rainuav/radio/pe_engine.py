@@ -34,6 +34,7 @@ import numpy as np
 
 from rainuav import _core, pwe
 from rainuav._sampling import bilinear
+from rainuav.radio.buildings import scenario_buildings
 from rainuav.radio.cell import Cell, gain_linear
 from rainuav.radio.grid import C0_M_S, MarchGrid, cone_weight
 from rainuav.radio.scenario import Scenario, Site
@@ -135,7 +136,12 @@ def _medium_kwargs(scn: Scenario, site: Site, grid: MarchGrid) -> dict[str, Any]
 def _obstacles(scn: Scenario, site: Site, grid: MarchGrid) -> np.ndarray | None:
     """The heights (steps, nx) under which each step zeroes the field: obstacles, and over
     terrain the ground above the grid's floor (a staircase; -1: nothing)."""
-    if not scn.buildings and scn.height_map_m is None and scn.terrain is None:
+    if (
+        not scn.buildings
+        and scn.footprints is None
+        and scn.height_map_m is None
+        and scn.terrain is None
+    ):
         return None
     gx, gy = _step_points(site, grid)
     h = np.full(gx.shape, -1.0)
@@ -153,9 +159,13 @@ def _obstacles(scn: Scenario, site: Site, grid: MarchGrid) -> np.ndarray | None:
         inside = (i >= 0) & (i < rows) & (j >= 0) & (j < cols)
         val = hm[np.clip(i, 0, rows - 1), np.clip(j, 0, cols - 1)]
         h = np.where(inside & (val > 0), np.maximum(h, base + val - grid.y0_m), h)
-    for b in scn.buildings:
-        inside = (gx >= b.x0_m) & (gx <= b.x1_m) & (gy >= b.y0_m) & (gy <= b.y1_m)
-        h = np.where(inside, np.maximum(h, base + b.height_m - grid.y0_m), h)
+    bld = scenario_buildings(scn)
+    if bld is not None:
+        top = bld.prisms.height_at(
+            np.ascontiguousarray(gx, dtype=float).ravel(),
+            np.ascontiguousarray(gy, dtype=float).ravel(),
+        ).reshape(gx.shape)
+        h = np.where(top > 0, np.maximum(h, base + top - grid.y0_m), h)
     return None if h.max() < 0 else h
 
 

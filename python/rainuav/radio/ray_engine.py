@@ -22,13 +22,14 @@ weights select: what the PE would carry in the hybrid engine
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from rainuav import _core
-from rainuav.radio.cell import Cell, gain_linear
+from rainuav.radio.buildings import obstacle_args, trace_walls, wall_terms
+from rainuav.radio.cell import Cell, Weight, gain_linear, weight_at
 from rainuav.radio.grid import C0_M_S
 from rainuav.radio.pe_engine import rain_rate_at
 from rainuav.radio.scenario import Scenario, Site
@@ -55,10 +56,6 @@ SOILS: dict[str, tuple[float, float, float, float]] = {
 }
 """ITU-R P.527 soils as the curve fits of ITU-R P.2040 Table 3: ``eps_r = a f^b``,
 ``sigma = c f^d`` S/m with f in GHz (fitted over 1-10 GHz; held as they are above)."""
-
-#: A weight on a pattern: direction cosines (cross-range, height, range) in the cell's frame
-#: -> factor in 0..1.
-Weight = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
 def ground_permittivity(kind: str, freq_hz: float) -> complex:
@@ -111,20 +108,6 @@ def gamma_field(
     return 0.0, np.ascontiguousarray(gamma), (a.x_min_m, step, a.y_min_m, step)
 
 
-def _heights(scn: Scenario) -> tuple[np.ndarray | None, tuple[float, float, float, float]]:
-    if scn.height_map_m is None:
-        return None, (0.0, 1.0, 0.0, 1.0)
-    hm = np.ascontiguousarray(np.asarray(scn.height_map_m, dtype=float))
-    a = scn.area
-    rows, cols = hm.shape
-    return hm, (
-        a.x_min_m,
-        (a.x_max_m - a.x_min_m) / cols,
-        a.y_min_m,
-        (a.y_max_m - a.y_min_m) / rows,
-    )
-
-
 def _directions(
     scn: Scenario, site: Site, x_m: np.ndarray, y_m: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -139,7 +122,12 @@ def _directions(
 
 
 def _flat_open(scn: Scenario) -> bool:
-    return scn.terrain is None and not scn.buildings and scn.height_map_m is None
+    return (
+        scn.terrain is None
+        and not scn.buildings
+        and scn.footprints is None
+        and scn.height_map_m is None
+    )
 
 
 def departures(
@@ -150,10 +138,6 @@ def departures(
     the pixel) and the reflected ray's (the specular point). Over flat open ground these are
     the closed forms of :func:`_directions`."""
     a = scn.area
-    heights, h_os = _heights(scn)
-    boxes = np.array(
-        [[b.x0_m, b.x1_m, b.y0_m, b.y1_m, b.height_m] for b in scn.buildings], dtype=float
-    ).reshape(-1, 5)
     return _core.ray_departures(
         np.array([[s.x_m, s.y_m, s.height_m] for s in sites], dtype=float).reshape(-1, 3),
         np.ascontiguousarray(x_m, dtype=float),
@@ -161,17 +145,9 @@ def departures(
         altitude_m=a.altitude_m,
         freq_hz=scn.freq_hz,
         ground="none" if scn.ground == "none" else "pec",
-        buildings=boxes,
-        heights=heights,
-        heights_origin_step=h_os,
+        **obstacle_args(scn),
         **core_args(scn),
     )
-
-
-def _weight_at(weight: Weight, cell: Cell, az: np.ndarray, el: np.ndarray) -> np.ndarray:
-    e = np.radians(el)
-    a = np.radians(az - cell.azimuth_deg)
-    return weight(np.cos(e) * np.sin(a), np.sin(e), np.cos(e) * np.cos(a))
 
 
 def _trace(
@@ -182,6 +158,7 @@ def _trace(
     gains: tuple[np.ndarray, np.ndarray],
     medium_args: dict[str, Any],
     terms_only: bool = False,
+    walls: np.ndarray | None = None,
 ) -> np.ndarray:
     a = scn.area
     tx = np.array([[s.x_m, s.y_m, s.height_m] for s, _ in jobs], dtype=float).reshape(-1, 3)
@@ -199,6 +176,7 @@ def _trace(
         freq_hz=scn.freq_hz,
         polarization=scn.polarization,
         terms_only=terms_only,
+        walls=walls,
         **medium_args,
     )
 
@@ -206,23 +184,17 @@ def _trace(
 def _medium_args(scn: Scenario) -> dict[str, Any]:
     """The ground, rain and obstacles of ``scn`` as the core takes them."""
     g_uniform, g_raster, g_os = gamma_field(scn)
-    heights, h_os = _heights(scn)
     if scn.ground in SOILS:
         ground, eps = "dielectric", ground_permittivity(scn.ground, scn.freq_hz)
     else:
         ground, eps = scn.ground, 1.0 + 0j
-    boxes = np.array(
-        [[b.x0_m, b.x1_m, b.y0_m, b.y1_m, b.height_m] for b in scn.buildings], dtype=float
-    ).reshape(-1, 5)
     return {
         "ground": ground,
         "eps_ground": (eps.real, eps.imag),
         "gamma_db_per_m": g_uniform,
         "gamma_raster": g_raster,
         "gamma_origin_step": g_os,
-        "buildings": boxes,
-        "heights": heights,
-        "heights_origin_step": h_os,
+        **obstacle_args(scn),
         **core_args(scn),
     }
 
@@ -279,19 +251,30 @@ def ray_terms(
 ) -> np.ndarray:
     """Everything of a ray map that no weather changes: each cell's clear-air power at every
     pixel split into direct, reflected and interference parts, and its rays' lengths,
-    (M, H, W, 5): ``[direct, reflect, cross, d1, d2]`` (antenna gains,
-    spreading, ground, pixel means, diffraction); with ``weights`` (as :func:`ray_power`
-    takes them), the parts of the whole pattern less those of the weighted part (what the
-    rays keep where the PE carries the rest). :func:`ray_slicer` adds the rain."""
+    (M, H, W, 7): ``[direct, reflect, cross, d1, d2, wall, d3]`` (antenna gains,
+    spreading, ground, pixel means, diffraction, the walls' rays: :func:`wall_terms`); with
+    ``weights`` (as :func:`ray_power` takes them), the parts of the whole pattern less those
+    of the weighted part (what the rays keep where the PE carries the rest).
+    :func:`ray_slicer` adds the rain."""
     dirs = ray_directions(scn, jobs, x_m, y_m)
     gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)
-    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, terms_only=True)
+    rays = trace_walls(scn, jobs, x_m, y_m)
+    walls = wall_terms(scn, jobs, x_m, y_m, rays=rays)
+    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, terms_only=True, walls=walls)
     if weights is None:
         return full
     wd, wr = _weights_at(jobs, dirs, weights)
     out = full.copy()
     out[..., :3] -= _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, terms_only=True)[..., :3]
+    if walls is not None:
+        inside = wall_terms(scn, jobs, x_m, y_m, weights, rays=rays)
+        assert inside is not None
+        kept = walls[..., 0] - inside[..., 0]
+        # The kept rays' mean length: the power-weighted lengths less the weighted part's.
+        dl = walls[..., 0] * walls[..., 1] - inside[..., 0] * inside[..., 1]
+        out[..., 5] = np.maximum(kept, 0.0)
+        out[..., 6] = np.divide(dl, kept, out=np.zeros_like(kept), where=kept > 0)
     return out
 
 
@@ -306,8 +289,8 @@ def _weights_at(
     wd, wr = np.zeros(shape), np.zeros(shape)
     for m, ((_, cell), (az, el_d, el_r)) in enumerate(zip(jobs, directions, strict=True)):
         if weights[m] is not None:
-            wd[m] = _weight_at(weights[m], cell, az, el_d)
-            wr[m] = _weight_at(weights[m], cell, az, el_r)
+            wd[m] = weight_at(weights[m], cell, az, el_d)
+            wr[m] = weight_at(weights[m], cell, az, el_r)
     return wd, wr
 
 
@@ -356,8 +339,11 @@ def ray_power(
     dirs = ray_directions(scn, jobs, x_m, y_m)
     gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)
-    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args)
+    rays = trace_walls(scn, jobs, x_m, y_m)
+    walls = wall_terms(scn, jobs, x_m, y_m, rays=rays)
+    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, walls=walls)
     if weights is None:
         return full, None
     wd, wr = _weights_at(jobs, dirs, weights)
-    return full, _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args)
+    inside = None if walls is None else wall_terms(scn, jobs, x_m, y_m, weights, rays=rays)
+    return full, _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, walls=inside)

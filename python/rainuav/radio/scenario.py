@@ -32,7 +32,7 @@ from rainuav._checks import check_number as _num
 from rainuav._io import read_toml, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef
-from rainuav.radio.area import DEFAULT_MIN_CLEARANCE_M, Area, TerrainFile
+from rainuav.radio.area import DEFAULT_MIN_CLEARANCE_M, Area, FootprintsFile, TerrainFile
 from rainuav.radio.cell import Cell, Pattern
 from rainuav.radio.stochastic import StochasticRain
 from rainuav.radio.weather import Medium, RainCell
@@ -50,6 +50,7 @@ __all__ = [
     "Area",
     "Building",
     "Cell",
+    "FootprintsFile",
     "Medium",
     "Origin",
     "PESettings",
@@ -176,6 +177,10 @@ class Scenario:
     it (a site's antenna over the terrain at the site; the UAV over the terrain under it, or
     above sea level: ``area.altitude_reference``), and buildings and ``height_map_m`` stand on
     it (PHYSICS.md section 12). None: a flat ground at 0."""
+    footprints: FootprintsFile | None = None
+    """Buildings from a footprint file (``[footprints] file = "buildings.geojson"``; needs
+    ``origin``): prisms standing on the terrain beside ``buildings``; they diffract, block and
+    reflect (PHYSICS.md section 12)."""
 
     def __post_init__(self) -> None:
         self.check()
@@ -208,6 +213,18 @@ class Scenario:
                     f"engine {self.engine!r} over terrain needs a ground (the march's floor): "
                     "ground = 'pec', or engine = 'ray'"
                 )
+        if self.footprints is not None:
+            if not isinstance(self.footprints, FootprintsFile) or not isinstance(
+                self.footprints.file, str
+            ):
+                raise InvalidInputError("footprints must be a table with file = 'FILE.geojson'")
+            if self.origin is None:
+                raise InvalidInputError(
+                    "footprints need [origin] (lat_deg, lon_deg): where the area lies on the Earth"
+                )
+            from rainuav.ground.footprints import MATERIALS
+
+            _choice("footprints.material", self.footprints.material, tuple(sorted(MATERIALS)))
         a = self.area
         if not self.sites:
             raise InvalidInputError("sites must hold at least one site")
@@ -291,6 +308,18 @@ class Scenario:
                 raise InvalidInputError(
                     f"terrain file {self.terrain.file}: cannot be read ({err.strerror})"
                 ) from err
+        if self.footprints is not None:
+            from rainuav.ground import file_digest
+
+            try:
+                d["footprints"] = {
+                    "sha256": file_digest(self.footprints.file),
+                    "material": self.footprints.material,
+                }
+            except OSError as err:
+                raise InvalidInputError(
+                    f"footprints file {self.footprints.file}: cannot be read ({err.strerror})"
+                ) from err
         text = json.dumps(d, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:32]
 
@@ -313,9 +342,10 @@ class Scenario:
         """Reads and validates a TOML scenario (a missing, unreadable or malformed file is an
         InvalidInputError naming it)."""
         d = read_toml(path, "scenario file")
-        t = d.get("terrain")
-        if isinstance(t, dict) and isinstance(t.get("file"), str):
-            d["terrain"] = {**t, "file": str(Path(path).parent / Path(t["file"]).expanduser())}
+        for key in ("terrain", "footprints"):
+            t = d.get(key)
+            if isinstance(t, dict) and isinstance(t.get("file"), str):
+                d[key] = {**t, "file": str(Path(path).parent / Path(t["file"]).expanduser())}
         return cls.from_dict(d)
 
     @classmethod
@@ -345,6 +375,7 @@ _NESTED: dict[tuple[type, str], type] = {
     (Scenario, "area"): Area,
     (Scenario, "origin"): Origin,
     (Scenario, "terrain"): TerrainFile,
+    (Scenario, "footprints"): FootprintsFile,
     (Scenario, "medium"): Medium,
     (Scenario, "pe"): PESettings,
     (Medium, "field"): StochasticRain,

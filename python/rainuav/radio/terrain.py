@@ -7,7 +7,8 @@ every pixel and the pixels that are not flyable.
   default) or above mean sea level (``"msl"``).
 - A pixel is **not flyable** where the highest point of terrain and obstacles within it, plus
   ``area.min_clearance_m`` (default 10 m), reaches the flight height over the pixel's centre.
-  Obstacles (boxes, ``height_map_m``) count wherever they touch the pixel.
+  Obstacles (buildings, ``height_map_m``) count wherever they overlap the pixel: footprints
+  and boxes intersected with it as polygons (:mod:`rainuav.radio.buildings`).
 - Without a terrain the ground is flat at 0: a flat DEM at any height gives the same map.
 """
 
@@ -84,21 +85,13 @@ def flight_heights(scn: Scenario) -> np.ndarray:
 
 
 def obstacle_pixel_max(scn: Scenario) -> np.ndarray:
-    """The tallest obstacle (boxes and ``height_map_m``, m above the terrain) touching each
-    pixel, (H, W)."""
+    """The tallest obstacle (buildings: boxes and footprints, intersected with each pixel as
+    polygons; and ``height_map_m``; m above the terrain) touching each pixel, (H, W)."""
+    from rainuav.radio.buildings import pixels_touched_max
+
     a = scn.area
     h, w = a.shape
-    out = np.zeros((h, w))
-    px = (a.x_max_m - a.x_min_m) / w
-    py = (a.y_max_m - a.y_min_m) / h
-    for b in scn.buildings:
-        j0 = max(0, int(np.floor((b.x0_m - a.x_min_m) / px)))
-        j1 = min(w - 1, int(np.ceil((b.x1_m - a.x_min_m) / px)) - 1)
-        i0 = max(0, int(np.floor((b.y0_m - a.y_min_m) / py)))
-        i1 = min(h - 1, int(np.ceil((b.y1_m - a.y_min_m) / py)) - 1)
-        if j0 <= j1 and i0 <= i1:
-            block = out[i0 : i1 + 1, j0 : j1 + 1]
-            np.maximum(block, b.height_m, out=block)
+    out = pixels_touched_max(scn)
     if scn.height_map_m is not None:
         hm = np.asarray(scn.height_map_m, dtype=float)
         rows, cols = hm.shape
@@ -130,7 +123,12 @@ def map_mask(scn: Scenario) -> np.ndarray | None:
     """The not-flyable pixels a map of ``scn`` carries: :func:`not_flyable` where anything
     stands on the ground (terrain, buildings, a height map), None over flat open ground (where
     every pixel is flyable)."""
-    if scn.terrain is None and not scn.buildings and scn.height_map_m is None:
+    if (
+        scn.terrain is None
+        and not scn.buildings
+        and scn.footprints is None
+        and scn.height_map_m is None
+    ):
         return None
     return not_flyable(scn)
 

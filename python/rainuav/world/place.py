@@ -42,7 +42,7 @@ from rainuav.radio import presets
 from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.radar import read_radar_grid
 from rainuav.radio.radiomap import build_radio_map
-from rainuav.radio.scenario import Area, Origin, Scenario, TerrainFile
+from rainuav.radio.scenario import Area, FootprintsFile, Origin, Scenario, TerrainFile
 from rainuav.radio.sites import read_site_rows, sites_from_rows
 from rainuav.radio.terrain import flight_heights_at, obstacle_pixel_max, scenario_terrain
 from rainuav.radio.timemap import build_radio_map_series, series_times
@@ -92,6 +92,7 @@ def place_scenario(
     box: tuple[float, float, float, float] | None = None,
     terrain: str | Path | None = None,
     altitude_reference: str | None = None,
+    footprints: str | Path | None = None,
 ) -> Place:
     """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees.
     ``weather``: a georeferenced rain file (:mod:`rainuav.radio.radar`, mm/h or dBZ, one
@@ -100,7 +101,8 @@ def place_scenario(
     start, the destination and the sites; the start and the destination must lie in it.
     ``terrain``: a DEM GeoTIFF under the place (:mod:`rainuav.ground.dem`), with the flight
     altitude above the terrain (``altitude_reference="ground"``, the default) or above sea
-    level (``"msl"``)."""
+    level (``"msl"``). ``footprints``: building footprints in GeoJSON
+    (:mod:`rainuav.ground.footprints`) standing on it."""
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
@@ -168,6 +170,10 @@ def place_scenario(
             raise InvalidInputError(f"--terrain: no file {terrain}")
         dem = TerrainFile(str(Path(terrain).resolve()))
         scn = dataclasses.replace(scn, terrain=dem)
+    if footprints is not None:
+        if not Path(footprints).is_file():
+            raise InvalidInputError(f"--footprints: no file {footprints}")
+        scn = dataclasses.replace(scn, footprints=FootprintsFile(str(Path(footprints).resolve())))
     scn.check()
     return Place(scn, geo, (float(sx), float(sy)), (float(gx), float(gy)), rows)
 

@@ -1,0 +1,438 @@
+//! Buildings as prisms (PHYSICS.md section 12): footprint polygons (rings of vertices, holes
+//! included, even-odd rule) extruded from the terrain to a flat roof `top` metres above it.
+//! Boxes are the four-cornered case ([`Prisms::from_boxes`]).
+//!
+//! A bucket grid over the footprints' bounding boxes finds the prisms near a point or along
+//! a segment, so a path's profile reads only the buildings it can cross.
+
+use crate::error::{CoreError, Result};
+
+/// A box-shaped building: `[x0, x1, y0, y1, height]`, metres.
+pub type Building = [f64; 5];
+
+/// One prism: its rings (a range of [`Prisms`]'s rings), roof height above the terrain and
+/// bounding box `[x0, x1, y0, y1]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prism {
+    /// First and one-past-last ring.
+    pub rings: [usize; 2],
+    /// Roof height above the terrain, m.
+    pub top: f64,
+    /// `[x0, x1, y0, y1]`, m.
+    pub bbox: [f64; 4],
+}
+
+/// Buildings as prisms, with a bucket grid over them.
+#[derive(Debug, Clone, Default)]
+pub struct Prisms {
+    xy: Vec<[f64; 2]>,
+    rings: Vec<[usize; 2]>,
+    items: Vec<Prism>,
+    grid: Buckets,
+}
+
+/// A regular grid of buckets, each listing the prisms whose bounding box overlaps it
+/// (compressed rows: `ids[starts[c]..starts[c + 1]]`).
+#[derive(Debug, Clone, Default)]
+struct Buckets {
+    origin: [f64; 2],
+    size: f64,
+    nx: usize,
+    ny: usize,
+    starts: Vec<usize>,
+    ids: Vec<u32>,
+}
+
+impl Buckets {
+    fn build(items: &[Prism]) -> Result<Self> {
+        if items.is_empty() {
+            return Ok(Self::default());
+        }
+        let mut b = [
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for p in items {
+            b = [
+                b[0].min(p.bbox[0]),
+                b[1].max(p.bbox[1]),
+                b[2].min(p.bbox[2]),
+                b[3].max(p.bbox[3]),
+            ];
+        }
+        let (w, h) = ((b[1] - b[0]).max(1.0), (b[3] - b[2]).max(1.0));
+        // About two buckets a prism, at most 2^20.
+        let cells = (2 * items.len()).clamp(1, 1 << 20) as f64;
+        let size = (w * h / cells).sqrt().max(1.0);
+        let nx = ((w / size).ceil() as usize).max(1);
+        let ny = ((h / size).ceil() as usize).max(1);
+        let mut g = Buckets {
+            origin: [b[0], b[2]],
+            size,
+            nx,
+            ny,
+            starts: vec![0; nx * ny + 1],
+            ids: Vec::new(),
+        };
+        let mut counts = vec![0usize; nx * ny];
+        for p in items {
+            let (c0, c1, r0, r1) = g.range(p.bbox);
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    counts[r * nx + c] += 1;
+                }
+            }
+        }
+        let total: usize = counts.iter().sum();
+        crate::memory::check_memory_for("footprints", "use fewer or smaller buildings", total * 4)?;
+        for c in 0..nx * ny {
+            g.starts[c + 1] = g.starts[c] + counts[c];
+        }
+        let mut fill = g.starts.clone();
+        g.ids = vec![0; total];
+        for (k, p) in items.iter().enumerate() {
+            let (c0, c1, r0, r1) = g.range(p.bbox);
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    g.ids[fill[r * nx + c]] = k as u32;
+                    fill[r * nx + c] += 1;
+                }
+            }
+        }
+        Ok(g)
+    }
+
+    fn col(&self, x: f64) -> usize {
+        (((x - self.origin[0]) / self.size).floor().max(0.0) as usize).min(self.nx - 1)
+    }
+
+    fn row(&self, y: f64) -> usize {
+        (((y - self.origin[1]) / self.size).floor().max(0.0) as usize).min(self.ny - 1)
+    }
+
+    /// The buckets (columns `c0..=c1`, rows `r0..=r1`) a box overlaps, clamped to the grid.
+    fn range(&self, bbox: [f64; 4]) -> (usize, usize, usize, usize) {
+        (
+            self.col(bbox[0]),
+            self.col(bbox[1]),
+            self.row(bbox[2]),
+            self.row(bbox[3]),
+        )
+    }
+
+    fn bucket(&self, r: usize, c: usize) -> &[u32] {
+        let k = r * self.nx + c;
+        &self.ids[self.starts[k]..self.starts[k + 1]]
+    }
+}
+
+impl Prisms {
+    /// Prisms from rings of vertices: `xy` every vertex (rings not closed: the last vertex
+    /// joins the first), `ring_starts` (R + 1 offsets into `xy`), `prism_rings` (P + 1
+    /// offsets into the rings: each prism's outer ring and holes) and `tops` (P roof heights
+    /// above the terrain, m).
+    pub fn new(
+        xy: Vec<[f64; 2]>,
+        ring_starts: &[usize],
+        prism_rings: &[usize],
+        tops: &[f64],
+    ) -> Result<Self> {
+        let bad = |why: &str| CoreError::invalid("footprints", why.to_string(), "a bad value");
+        if !xy.iter().flatten().all(|v| v.is_finite() && v.abs() < 1e7) {
+            return Err(bad("vertices must be finite, within 1e7 m"));
+        }
+        let monotone = |o: &[usize], end: usize| {
+            !o.is_empty()
+                && o[0] == 0
+                && o.windows(2).all(|w| w[0] <= w[1])
+                && o[o.len() - 1] == end
+        };
+        if !monotone(ring_starts, xy.len()) || ring_starts.windows(2).any(|w| w[1] - w[0] < 3) {
+            return Err(bad(
+                "ring_starts must run from 0 to the vertex count, 3 or more a ring",
+            ));
+        }
+        let n_rings = ring_starts.len() - 1;
+        if !monotone(prism_rings, n_rings)
+            || prism_rings.windows(2).any(|w| w[1] == w[0])
+            || tops.len() + 1 != prism_rings.len()
+        {
+            return Err(bad(
+                "prism_rings must run from 0 to the ring count, one a height",
+            ));
+        }
+        if !tops
+            .iter()
+            .all(|t| t.is_finite() && (0.0..=1000.0).contains(t))
+        {
+            return Err(bad("heights must be in 0..1000 m"));
+        }
+        let rings: Vec<[usize; 2]> = ring_starts.windows(2).map(|w| [w[0], w[1]]).collect();
+        let items: Vec<Prism> = prism_rings
+            .windows(2)
+            .zip(tops)
+            .map(|(w, &top)| {
+                let mut bbox = [
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                ];
+                for r in &rings[w[0]..w[1]] {
+                    for p in &xy[r[0]..r[1]] {
+                        bbox = [
+                            bbox[0].min(p[0]),
+                            bbox[1].max(p[0]),
+                            bbox[2].min(p[1]),
+                            bbox[3].max(p[1]),
+                        ];
+                    }
+                }
+                Prism {
+                    rings: [w[0], w[1]],
+                    top,
+                    bbox,
+                }
+            })
+            .collect();
+        let grid = Buckets::build(&items)?;
+        Ok(Prisms {
+            xy,
+            rings,
+            items,
+            grid,
+        })
+    }
+
+    /// Boxes `[x0, x1, y0, y1, height]` as prisms (corners counter-clockwise).
+    pub fn from_boxes(boxes: &[Building]) -> Result<Self> {
+        for b in boxes {
+            if !(b.iter().all(|v| v.is_finite()) && b[1] > b[0] && b[3] > b[2] && b[4] >= 0.0) {
+                return Err(CoreError::invalid(
+                    "buildings",
+                    "must be finite boxes [x0 < x1, y0 < y1, height >= 0]",
+                    format!("{b:?}"),
+                ));
+            }
+        }
+        let xy = boxes
+            .iter()
+            .flat_map(|b| [[b[0], b[2]], [b[1], b[2]], [b[1], b[3]], [b[0], b[3]]])
+            .collect();
+        let offsets: Vec<usize> = (0..=boxes.len()).map(|k| 4 * k).collect();
+        let rings: Vec<usize> = (0..=boxes.len()).collect();
+        let tops: Vec<f64> = boxes.iter().map(|b| b[4]).collect();
+        Self::new(xy, &offsets, &rings, &tops)
+    }
+
+    /// These prisms and `other`'s together.
+    pub fn join(self, other: &Prisms) -> Result<Self> {
+        let mut xy = self.xy;
+        let mut starts: Vec<usize> = self.rings.iter().map(|r| r[0]).collect();
+        let mut prism_rings: Vec<usize> = self.items.iter().map(|p| p.rings[0]).collect();
+        let mut tops: Vec<f64> = self.items.iter().map(|p| p.top).collect();
+        let (nv, nr) = (xy.len(), starts.len());
+        xy.extend_from_slice(&other.xy);
+        starts.extend(other.rings.iter().map(|r| r[0] + nv));
+        starts.push(xy.len());
+        prism_rings.extend(other.items.iter().map(|p| p.rings[0] + nr));
+        prism_rings.push(starts.len() - 1);
+        tops.extend(other.items.iter().map(|p| p.top));
+        Self::new(xy, &starts, &prism_rings, &tops)
+    }
+
+    /// How many prisms.
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+
+    /// The prisms.
+    pub fn items(&self) -> &[Prism] {
+        &self.items
+    }
+
+    fn edges(&self, k: usize) -> impl Iterator<Item = ([f64; 2], [f64; 2])> + '_ {
+        let p = self.items[k];
+        self.rings[p.rings[0]..p.rings[1]]
+            .iter()
+            .flat_map(move |r| {
+                let ring = &self.xy[r[0]..r[1]];
+                (0..ring.len()).map(move |i| (ring[i], ring[(i + 1) % ring.len()]))
+            })
+    }
+
+    /// Whether prism `k`'s footprint holds `(x, y)` (even-odd over its rings).
+    pub fn contains(&self, k: usize, x: f64, y: f64) -> bool {
+        let b = self.items[k].bbox;
+        if x < b[0] || x > b[1] || y < b[2] || y > b[3] {
+            return false;
+        }
+        let mut inside = false;
+        for (p, q) in self.edges(k) {
+            if (p[1] > y) != (q[1] > y) && x < p[0] + (y - p[1]) / (q[1] - p[1]) * (q[0] - p[0]) {
+                inside = !inside;
+            }
+        }
+        inside
+    }
+
+    /// The tallest roof (m above the terrain) whose footprint holds `(x, y)`; 0: none.
+    pub fn height_at(&self, x: f64, y: f64) -> f64 {
+        if self.items.is_empty() {
+            return 0.0;
+        }
+        let g = &self.grid;
+        g.bucket(g.row(y), g.col(x))
+            .iter()
+            .filter(|&&k| self.contains(k as usize, x, y))
+            .map(|&k| self.items[k as usize].top)
+            .fold(0.0, f64::max)
+    }
+
+    /// The prisms whose bounding box the segment `a -> b` meets, each once, in index order.
+    pub fn near_segment(&self, a: [f64; 2], b: [f64; 2], out: &mut Vec<u32>) {
+        out.clear();
+        if self.items.is_empty() {
+            return;
+        }
+        let g = &self.grid;
+        let (r0, r1) = (g.row(a[1].min(b[1])), g.row(a[1].max(b[1])));
+        for r in r0..=r1 {
+            // The part of the segment within the bucket row's band of y.
+            let (y0, y1) = (
+                g.origin[1] + r as f64 * g.size,
+                g.origin[1] + (r + 1) as f64 * g.size,
+            );
+            let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+            let dy = b[1] - a[1];
+            if dy.abs() > 1e-12 {
+                let (u, v) = ((y0 - a[1]) / dy, (y1 - a[1]) / dy);
+                if r > r0 {
+                    t0 = t0.max(u.min(v));
+                }
+                if r < r1 {
+                    t1 = t1.min(u.max(v));
+                }
+            }
+            let (xa, xb) = (a[0] + t0 * (b[0] - a[0]), a[0] + t1 * (b[0] - a[0]));
+            let (c0, c1) = (g.col(xa.min(xb)), g.col(xa.max(xb)));
+            for c in c0..=c1 {
+                out.extend_from_slice(g.bucket(r, c));
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        let (lo, hi) = (
+            [a[0].min(b[0]), a[1].min(b[1])],
+            [a[0].max(b[0]), a[1].max(b[1])],
+        );
+        out.retain(|&k| {
+            let bb = self.items[k as usize].bbox;
+            bb[0] <= hi[0] && bb[1] >= lo[0] && bb[2] <= hi[1] && bb[3] >= lo[1]
+        });
+    }
+
+    /// The parameters `t` in 0..=1 where the segment `a -> b` crosses prism `k`'s edges,
+    /// appended to `out` unsorted.
+    pub fn crossings(&self, k: usize, a: [f64; 2], b: [f64; 2], out: &mut Vec<f64>) {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        for (p, q) in self.edges(k) {
+            let e = [q[0] - p[0], q[1] - p[1]];
+            let den = d[0] * e[1] - d[1] * e[0];
+            if den.abs() < 1e-12 {
+                continue;
+            }
+            let w = [p[0] - a[0], p[1] - a[1]];
+            let t = (w[0] * e[1] - w[1] * e[0]) / den;
+            let s = (w[0] * d[1] - w[1] * d[0]) / den;
+            if (0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&s) {
+                out.push(t);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_square_with_a_hole_holds_its_ring_and_not_its_courtyard() {
+        // Outer 0..30 square, hole 10..20: even-odd.
+        let xy = vec![
+            [0.0, 0.0],
+            [30.0, 0.0],
+            [30.0, 30.0],
+            [0.0, 30.0],
+            [10.0, 10.0],
+            [10.0, 20.0],
+            [20.0, 20.0],
+            [20.0, 10.0],
+        ];
+        let p = Prisms::new(xy, &[0, 4, 8], &[0, 2], &[12.0]).unwrap();
+        assert_eq!(p.height_at(5.0, 5.0), 12.0);
+        assert_eq!(p.height_at(15.0, 15.0), 0.0);
+        assert_eq!(p.height_at(35.0, 5.0), 0.0);
+        let mut t = Vec::new();
+        p.crossings(0, [-10.0, 15.0], [40.0, 15.0], &mut t);
+        t.sort_by(f64::total_cmp);
+        let want = [0.2, 0.4, 0.6, 0.8];
+        assert!(
+            t.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12),
+            "{t:?}"
+        );
+    }
+
+    #[test]
+    fn the_bucket_grid_finds_what_a_scan_finds() {
+        // A 20 x 20 block of boxes; every segment's candidates hold every box it crosses.
+        let boxes: Vec<Building> = (0..400)
+            .map(|k| {
+                let (i, j) = ((k / 20) as f64, (k % 20) as f64);
+                [
+                    j * 50.0,
+                    j * 50.0 + 20.0,
+                    i * 50.0,
+                    i * 50.0 + 30.0,
+                    10.0 + k as f64 / 10.0,
+                ]
+            })
+            .collect();
+        let p = Prisms::from_boxes(&boxes).unwrap();
+        let mut near = Vec::new();
+        let mut t = Vec::new();
+        for (a, b) in [
+            ([-5.0, -5.0], [990.0, 700.0]),
+            ([500.0, 3.0], [501.0, 999.0]),
+            ([999.0, 15.0], [0.0, 15.0]),
+        ] {
+            p.near_segment(a, b, &mut near);
+            for k in 0..p.len() {
+                t.clear();
+                p.crossings(k, a, b, &mut t);
+                if !t.is_empty() {
+                    assert!(near.contains(&(k as u32)), "box {k} missed on {a:?}->{b:?}");
+                }
+            }
+        }
+        assert_eq!(
+            p.height_at(25.0 + 50.0 * 3.0 - 20.0, 10.0 + 50.0 * 2.0),
+            10.0 + 4.3
+        );
+    }
+
+    #[test]
+    fn bad_rings_are_errors() {
+        let xy = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]];
+        assert!(Prisms::new(xy.clone(), &[0, 2], &[0, 1], &[1.0]).is_err());
+        assert!(Prisms::new(xy.clone(), &[0, 3], &[0, 1], &[-1.0]).is_err());
+        assert!(Prisms::new(xy, &[0, 3], &[0, 1], &[1.0, 2.0]).is_err());
+    }
+}
