@@ -21,7 +21,7 @@ from rainuav.ground.footprints import (
     read_footprints,
 )
 from rainuav.radio import presets
-from rainuav.radio.buildings import scenario_buildings, trace_walls
+from rainuav.radio.buildings import scenario_buildings
 from rainuav.radio.ray_engine import ray_power, ray_terms
 from rainuav.radio.scenario import (
     Area,
@@ -34,6 +34,7 @@ from rainuav.radio.scenario import (
     Site,
 )
 from rainuav.radio.terrain import not_flyable
+from rainuav.radio.wall_rays import trace_walls
 
 pytest.importorskip("shapely")
 

@@ -260,13 +260,16 @@ def ray_power(
     terms_only: bool = False,
     prisms: Prisms | None = None,
     walls: _F | None = None,
+    geometry: _F | None = None,
+    geometry_sites: _F | None = None,
 ) -> _F:
     """Received power (mW) of every transmitter at every pixel, (M, H, W); with
     ``terms_only``, its clear-air parts and its rays' lengths [direct, reflect, cross, d1, d2,
     wall, d3], (M, H, W, 7). ``terrain``: heights above sea level at nodes (the ground under
     everything); ``altitude_msl``: the flight altitude above sea level instead of above the
     terrain; ``prisms``: buildings besides the boxes; ``walls`` (M, H, W, 2): each cell's wall
-    rays per pixel (clear-air power mW, mean length m)."""
+    rays per pixel (clear-air power mW, mean length m); ``geometry`` (S, H, W, 7) with
+    ``geometry_sites`` (S, 3): paths traced by ``ray_departures(..., full=True)``."""
 
 @final
 class Prisms:
@@ -328,9 +331,12 @@ def ray_departures(
     terrain_origin_step: tuple[float, float, float, float] | None = None,
     altitude_msl: bool = False,
     prisms: Prisms | None = None,
+    full: bool = False,
 ) -> _F:
     """Departure elevations (degrees) toward which each site's gains are taken, (S, H, W, 2):
-    the direct ray's (the diffracting edge, else the pixel) and the reflected ray's."""
+    the direct ray's (the diffracting edge, else the pixel) and the reflected ray's; with
+    ``full``, each path's geometry (S, H, W, 7): d1, d2, loss_db, el_direct, el_reflect (rad),
+    psi, reflect."""
 
 @final
 class RaySlicer:

@@ -179,6 +179,44 @@ pub struct PathGeometry {
     pub reflect: bool,
 }
 
+impl PathGeometry {
+    /// The geometry as a row: `[d1, d2, loss_db, el_direct, el_reflect, psi, reflect (0/1)]`.
+    pub fn to_row(&self) -> [f64; 7] {
+        [
+            self.d1,
+            self.d2,
+            self.loss_db,
+            self.el_direct,
+            self.el_reflect,
+            self.psi,
+            f64::from(u8::from(self.reflect)),
+        ]
+    }
+
+    /// The geometry of a row of [`PathGeometry::to_row`].
+    pub fn from_row(r: &[f64]) -> Self {
+        PathGeometry {
+            d1: r[0],
+            d2: r[1],
+            loss_db: r[2],
+            el_direct: r[3],
+            el_reflect: r[4],
+            psi: r[5],
+            reflect: r[6] > 0.5,
+        }
+    }
+}
+
+/// Paths already traced ([`RayScene::geometry_table`]): the sites `[x, y, height]` and their
+/// table `(S, H, W, 7)`; a transmitter at one of these sites reads its paths from the table.
+#[derive(Debug, Clone, Copy)]
+pub struct KnownPaths<'a> {
+    /// The sites.
+    pub sites: &'a [[f64; 3]],
+    /// Their paths, rows of [`PathGeometry::to_row`].
+    pub table: ArrayView4<'a, f64>,
+}
+
 /// One transmitter: position (east, north, height) in metres and power in mW.
 #[derive(Debug, Clone, Copy)]
 pub struct RayTransmitter {
@@ -429,6 +467,64 @@ impl RayScene<'_> {
         }
     }
 
+    /// Whether the straight line from `(a, za)` to `(b, zb)` (ground points, heights above
+    /// sea level) passes above every point of the surface's profile between them
+    /// ([`RayScene::profile`]), stopping at the first point in the way: the buildings first
+    /// (each face the line's ground track crosses), then the terrain and the obstacle raster
+    /// every half of their finest spacing. `near` is scratch space.
+    pub fn clear_above(
+        &self,
+        a: [f64; 2],
+        za: f64,
+        b: [f64; 2],
+        zb: f64,
+        near: &mut Vec<u32>,
+    ) -> bool {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let rho = dx.hypot(dy);
+        if rho < 1e-9 {
+            return true;
+        }
+        let line = |t: f64| za + (zb - za) * t;
+        let surface = |t: f64| {
+            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+            self.terrain_at(x, y) + self.heights.as_ref().map_or(0.0, |r| r.cell(x, y))
+        };
+        if let Some(prisms) = self.prisms {
+            let eps = 1e-9_f64.max(1e-6 / rho);
+            prisms.near_segment(a, b, near);
+            let mut ts = Vec::new();
+            for &k in near.iter() {
+                ts.clear();
+                prisms.crossings(k as usize, a, b, &mut ts);
+                for &t0 in &ts {
+                    for t in [t0 - eps, t0 + eps] {
+                        if t > 0.0 && t < 1.0 {
+                            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+                            let top = self.terrain_at(x, y) + prisms.items()[k as usize].top;
+                            if prisms.contains(k as usize, x, y) && top >= line(t) {
+                                return false;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let spacing = [self.terrain.as_ref(), self.heights.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(|r| r.spacing())
+            .fold(f64::INFINITY, f64::min);
+        if spacing.is_finite() {
+            let n = ((rho / (0.5 * spacing)).ceil() as usize).max(1);
+            return (1..n).all(|k| {
+                let t = k as f64 / n as f64;
+                surface(t) < line(t)
+            });
+        }
+        true
+    }
+
     /// Whether the straight leg from `(s0, z0)` to `(s1, z1)` (distance along the ground
     /// line, height above sea level) passes above every profile point between them but those
     /// within `skip` m of `s_skip` (the specular point, which the leg touches).
@@ -626,11 +722,31 @@ impl RayScene<'_> {
         Ok(out)
     }
 
-    /// The geometries of each distinct transmitter position, and for each transmitter the
-    /// index of its position's: a site's cells share their paths.
+    /// The geometry of every pixel's path from each site, `(S, H, W, 7)`: rows of
+    /// [`PathGeometry::to_row`] (what [`RayScene::power_with`] takes as [`KnownPaths`], so a
+    /// caller that needs the departures too traces each path once).
+    pub fn geometry_table(&self, sites: &[[f64; 3]]) -> Result<Array4<f64>> {
+        self.check()?;
+        let (h, w) = (self.y_m.len(), self.x_m.len());
+        crate::memory::check_memory(sites.len() * h * w * 7 * 8)?;
+        let mut out = Array4::<f64>::zeros((sites.len(), h, w, 7));
+        for (k, &site) in sites.iter().enumerate() {
+            for (p, g) in self.geometries(site).iter().enumerate() {
+                for (c, v) in g.to_row().into_iter().enumerate() {
+                    out[[k, p / w, p % w, c]] = v;
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The geometries of each distinct transmitter position (read from `known` where it
+    /// holds the position, else traced), and for each transmitter the index of its
+    /// position's: a site's cells share their paths.
     fn shared_geometries(
         &self,
         txs: &[RayTransmitter],
+        known: Option<KnownPaths<'_>>,
     ) -> Result<(Vec<Vec<PathGeometry>>, Vec<usize>)> {
         let mut places: Vec<[f64; 3]> = Vec::new();
         let index: Vec<usize> = txs
@@ -647,7 +763,32 @@ impl RayScene<'_> {
             .collect();
         let plane = self.x_m.len() * self.y_m.len();
         crate::memory::check_memory(places.len() * plane * size_of::<PathGeometry>())?;
-        Ok((places.iter().map(|&p| self.geometries(p)).collect(), index))
+        let (h, w) = (self.y_m.len(), self.x_m.len());
+        if let Some(k) = &known
+            && (k.table.dim() != (k.sites.len(), h, w, 7) || !k.table.iter().all(|v| v.is_finite()))
+        {
+            return Err(CoreError::invalid(
+                "geometry",
+                format!("must be finite with shape ({}, {h}, {w}, 7)", k.sites.len()),
+                format!("{:?}", k.table.dim()),
+            ));
+        }
+        let traced = places
+            .iter()
+            .map(|&p| {
+                match known.and_then(|k| k.sites.iter().position(|s| *s == p).map(|i| (k, i))) {
+                    Some((k, i)) => (0..plane)
+                        .map(|q| {
+                            let row: Vec<f64> =
+                                (0..7).map(|c| k.table[[i, q / w, q % w, c]]).collect();
+                            PathGeometry::from_row(&row)
+                        })
+                        .collect(),
+                    None => self.geometries(p),
+                }
+            })
+            .collect();
+        Ok((traced, index))
     }
 
     /// Checks the transmitters and their gains `(M, H, W)` against the map; the shape.
@@ -718,24 +859,25 @@ impl RayScene<'_> {
         g_direct: ArrayView3<'_, f64>,
         g_reflect: ArrayView3<'_, f64>,
     ) -> Result<Array3<f64>> {
-        self.power_with(txs, g_direct, g_reflect, None)
+        self.power_with(txs, g_direct, g_reflect, None, None)
     }
 
     /// [`RayScene::power`] with the rays reflected by walls: `walls` `(M, H, W, 2)`, each
     /// transmitter's wall rays at each pixel as their clear-air power (mW, gains included)
     /// and power-weighted mean length (m) ([`crate::walls`]); the rain of the pixel's line
-    /// attenuates them along that length.
+    /// attenuates them along that length. `known`: paths already traced.
     pub fn power_with(
         &self,
         txs: &[RayTransmitter],
         g_direct: ArrayView3<'_, f64>,
         g_reflect: ArrayView3<'_, f64>,
         walls: Option<ArrayView4<'_, f64>>,
+        known: Option<KnownPaths<'_>>,
     ) -> Result<Array3<f64>> {
         let shape = self.check_rays(txs, &g_direct, &g_reflect, walls.as_ref())?;
         let mut out = Array3::<f64>::zeros(shape);
         crate::memory::check_memory(out.len() * 8)?;
-        let (geo, index) = self.shared_geometries(txs)?;
+        let (geo, index) = self.shared_geometries(txs, known)?;
         let w = shape.2;
         out.axis_iter_mut(Axis(0))
             .into_par_iter()
@@ -773,11 +915,12 @@ impl RayScene<'_> {
         g_direct: ArrayView3<'_, f64>,
         g_reflect: ArrayView3<'_, f64>,
         walls: Option<ArrayView4<'_, f64>>,
+        known: Option<KnownPaths<'_>>,
     ) -> Result<Array4<f64>> {
         let (m, h, w) = self.check_rays(txs, &g_direct, &g_reflect, walls.as_ref())?;
         let mut out = Array4::<f64>::zeros((m, h, w, TERMS));
         crate::memory::check_memory(out.len() * 8)?;
-        let (geo, index) = self.shared_geometries(txs)?;
+        let (geo, index) = self.shared_geometries(txs, known)?;
         out.axis_iter_mut(Axis(0))
             .into_par_iter()
             .enumerate()

@@ -429,10 +429,17 @@ mod tests {
             }
         });
         let want = scene
-            .power_with(&txs, gd.view(), gr.view(), Some(walls.view()))
+            .power_with(&txs, gd.view(), gr.view(), Some(walls.view()), None)
             .unwrap();
+        // The terms from paths traced beforehand (as the Python layer does, once for the
+        // departures and the powers): the same paths.
+        let table = scene.geometry_table(&sites).unwrap();
+        let known = crate::rays::KnownPaths {
+            sites: &sites,
+            table: table.view(),
+        };
         let terms = scene
-            .terms(&txs, gd.view(), gr.view(), Some(walls.view()))
+            .terms(&txs, gd.view(), gr.view(), Some(walls.view()), Some(known))
             .unwrap();
         let got = slice_power(&scene, terms.view(), &sites, &site_of).unwrap();
         for (g, w) in got.iter().zip(want.iter()) {
@@ -445,7 +452,7 @@ mod tests {
             ..scene.clone()
         };
         let want = uniform
-            .power_with(&txs, gd.view(), gr.view(), Some(walls.view()))
+            .power_with(&txs, gd.view(), gr.view(), Some(walls.view()), None)
             .unwrap();
         let got = slice_power(&uniform, terms.view(), &sites, &site_of).unwrap();
         for (g, w) in got.iter().zip(want.iter()) {

@@ -167,10 +167,10 @@ impl RayScene<'_> {
             .zip(plan.par_iter())
             .filter(|(_, lit)| **lit)
             .flat_map_iter(|(w, _)| {
-                let mut prof = Vec::new();
+                let mut near = Vec::new();
                 self.wall_rows(site, w, sorted)
                     .flat_map(|(i, j0, j1)| (j0..j1).map(move |j| (i, j)))
-                    .filter_map(|(i, j)| self.wall_ray(site, zs, w, i, j, &mut prof))
+                    .filter_map(|(i, j)| self.wall_ray(site, zs, w, i, j, &mut near))
                     .collect::<Vec<_>>()
             })
             .collect())
@@ -245,7 +245,7 @@ impl RayScene<'_> {
         w: &Wall,
         i: usize,
         j: usize,
-        prof: &mut Vec<(f64, f64)>,
+        near: &mut Vec<u32>,
     ) -> Option<WallRay> {
         let (n, len) = normal(w)?;
         let q = [self.x_m[j], self.y_m[i]];
@@ -270,8 +270,8 @@ impl RayScene<'_> {
         }
         let rho = (q[0] - img[0]).hypot(q[1] - img[1]);
         let (rho1, rho2) = (u * rho, (1.0 - u) * rho);
-        if !(self.leg_seen(prof, [site[0], site[1]], zs, p, zp, rho1)
-            && self.leg_seen(prof, q, zq, p, zp, rho2))
+        if !(self.leg_seen(near, [site[0], site[1]], zs, p, zp, rho1)
+            && self.leg_seen(near, q, zq, p, zp, rho2))
         {
             return None;
         }
@@ -291,10 +291,11 @@ impl RayScene<'_> {
     }
 
     /// Whether the straight leg from `(from, z_from)` to the specular point `(p, zp)`, `rho`
-    /// apart horizontally, clears the profile (stopping [`LEG_GAP_M`] short of the wall).
+    /// apart horizontally, clears the profile (stopping [`LEG_GAP_M`] short of the wall):
+    /// [`RayScene::clear_above`] on the leg.
     fn leg_seen(
         &self,
-        prof: &mut Vec<(f64, f64)>,
+        near: &mut Vec<u32>,
         from: [f64; 2],
         z_from: f64,
         p: [f64; 2],
@@ -309,11 +310,7 @@ impl RayScene<'_> {
             from[0] + f * (p[0] - from[0]),
             from[1] + f * (p[1] - from[1]),
         ];
-        self.profile(from, end, prof);
-        let span = f * rho;
-        let z_end = z_from + (zp - z_from) * f;
-        prof.iter()
-            .all(|&(s, h)| h < z_from + (z_end - z_from) * s / span)
+        self.clear_above(from, z_from, end, z_from + (zp - z_from) * f, near)
     }
 }
 

@@ -12,8 +12,8 @@ use numpy::{
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
 use rainuav_core::rays::{
-    Building, Prisms as CorePrisms, RainField, Raster, RayGround, RayPolarization, RayScene,
-    RayTransmitter,
+    Building, KnownPaths, Prisms as CorePrisms, RainField, Raster, RayGround, RayPolarization,
+    RayScene, RayTransmitter,
 };
 use rainuav_core::walls::Wall;
 
@@ -213,7 +213,8 @@ fn rain_field(raster: Option<&Array2<f64>>, uniform: f64, origin_step: [f64; 4])
 #[pyo3(signature = (tx_m, tx_power_mw, g_direct, g_reflect, x_m, y_m, *, altitude_m, pixel_m,
     freq_hz, ground, eps_ground, polarization, gamma_db_per_m, gamma_raster, gamma_origin_step,
     buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=None,
-    altitude_msl=false, terms_only=false, prisms=None, walls=None))]
+    altitude_msl=false, terms_only=false, prisms=None, walls=None, geometry=None,
+    geometry_sites=None))]
 #[allow(clippy::too_many_arguments)]
 fn ray_power<'py>(
     py: Python<'py>,
@@ -241,7 +242,24 @@ fn ray_power<'py>(
     terms_only: bool,
     prisms: Option<Bound<'py, Prisms>>,
     walls: Option<PyReadonlyArray4<'py, f64>>,
+    geometry: Option<PyReadonlyArray4<'py, f64>>,
+    geometry_sites: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let known_sites = geometry_sites.as_ref().map(parse_sites).transpose()?;
+    let known = match (&geometry, &known_sites) {
+        (Some(t), Some(s)) => Some(KnownPaths {
+            sites: s,
+            table: t.as_array(),
+        }),
+        (None, None) => None,
+        _ => {
+            return Err(to_py(CoreError::invalid(
+                "geometry",
+                "needs geometry_sites (and the other way round)",
+                "one of them",
+            )));
+        }
+    };
     let ground = parse_ground(ground, eps_ground)?;
     let polarization = parse_polarization(polarization)?;
     let txs = parse_transmitters(&tx_m, &tx_power_mw)?;
@@ -269,11 +287,11 @@ fn ray_power<'py>(
         altitude_msl,
     };
     if terms_only {
-        let out = detached(py, || scene.terms(&txs, gd, gf, wr))?;
+        let out = detached(py, || scene.terms(&txs, gd, gf, wr, known))?;
         let arr: Bound<'py, PyArray4<f64>> = out.into_pyarray(py);
         return Ok(arr.into_any());
     }
-    let out = detached(py, || scene.power_with(&txs, gd, gf, wr))?;
+    let out = detached(py, || scene.power_with(&txs, gd, gf, wr, known))?;
     let arr: Bound<'py, PyArray3<f64>> = out.into_pyarray(py);
     Ok(arr.into_any())
 }
@@ -281,11 +299,14 @@ fn ray_power<'py>(
 /// The departure elevations (degrees) toward which each site's antenna gains are taken,
 /// (S, H, W, 2): the direct ray's (toward the diffracting edge where the path's profile costs
 /// a loss, else the pixel) and the reflected ray's (toward the specular point). `sites` (S, 3):
-/// x, y, height above the terrain.
+/// x, y, height above the terrain. With `full`, every path's whole geometry instead,
+/// (S, H, W, 7): `[d1, d2, loss_db, el_direct, el_reflect, psi, reflect]` (elevations in
+/// radians), which `ray_power` takes back as `geometry` (with `geometry_sites`) so each path
+/// is traced once.
 #[pyfunction]
 #[pyo3(signature = (sites, x_m, y_m, *, altitude_m, freq_hz, ground, buildings, heights,
     heights_origin_step, terrain=None, terrain_origin_step=None, altitude_msl=false,
-    prisms=None))]
+    prisms=None, full=false))]
 #[allow(clippy::too_many_arguments)]
 fn ray_departures<'py>(
     py: Python<'py>,
@@ -302,6 +323,7 @@ fn ray_departures<'py>(
     terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
     prisms: Option<Bound<'py, Prisms>>,
+    full: bool,
 ) -> PyResult<Bound<'py, PyArray4<f64>>> {
     let sites = parse_sites(&sites)?;
     let ground = parse_ground(ground, (1.0, 0.0))?;
@@ -324,7 +346,11 @@ fn ray_departures<'py>(
         terrain: raster(tr, terrain_origin_step),
         altitude_msl,
     };
-    let out = detached(py, || scene.departures(&sites))?;
+    let out = if full {
+        detached(py, || scene.geometry_table(&sites))?
+    } else {
+        detached(py, || scene.departures(&sites))?
+    };
     Ok(out.into_pyarray(py))
 }
 

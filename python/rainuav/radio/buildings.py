@@ -20,10 +20,8 @@ and the pixels they touch.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
 
 import numpy as np
 
@@ -31,20 +29,9 @@ from rainuav import _core
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.ground.footprints import Footprint, material_permittivity, read_footprints
-from rainuav.radio.cell import Cell, Weight, gain_linear, weight_at
-from rainuav.radio.scenario import Scenario, Site
-from rainuav.radio.terrain import core_args
+from rainuav.radio.scenario import Scenario
 
-__all__ = [
-    "Buildings",
-    "WallRays",
-    "obstacle_args",
-    "pixels_touched_max",
-    "scenario_buildings",
-    "trace_walls",
-    "wall_args",
-    "wall_terms",
-]
+__all__ = ["Buildings", "pixels_touched_max", "scenario_buildings", "wall_args"]
 
 
 @dataclass(frozen=True)
@@ -66,26 +53,34 @@ class Buildings:
 
 def _merge(items: list[Footprint]) -> list[Footprint]:
     """Footprints with the same heights and material that touch, merged (snapped to 1 mm
-    and simplified within 1 micrometre, so collinear vertices go)."""
+    and simplified within 1 micrometre, so collinear vertices go): each connected group of
+    touching footprints is one union; the result is in an order of its own (by position),
+    whatever the order of ``items``."""
     import shapely
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
 
-    groups: dict[tuple[Any, ...], list[Any]] = {}
-    for f in items:
-        groups.setdefault((f.height_m, f.min_height_m, f.wall_top_m, f.material), []).append(
-            f.polygon
-        )
+    if not items:
+        return []
+    polys = shapely.set_precision(np.asarray([f.polygon for f in items], dtype=object), 1e-3)
+    keys = [(f.height_m, f.min_height_m, f.wall_top_m, f.material) for f in items]
+    a, b = shapely.STRtree(polys).query(polys, predicate="intersects")
+    same = np.fromiter((keys[i] == keys[j] for i, j in zip(a, b, strict=True)), bool, a.size)
+    graph = coo_matrix((np.ones(same.sum()), (a[same], b[same])), shape=(len(items),) * 2)
+    _, label = connected_components(graph, directed=False)
+    order = np.argsort(label, kind="stable")
+    starts = np.flatnonzero(np.r_[True, np.diff(label[order]) != 0])
     out = []
-    for h, lo, eaves, material in sorted(groups, key=str):
-        polys = shapely.set_precision(np.asarray(groups[(h, lo, eaves, material)]), 1e-3)
-        merged = shapely.union_all(polys)
-        parts = [p for p in shapely.get_parts(merged) if isinstance(p, shapely.Polygon)]
-        parts = sorted(parts, key=lambda p: (p.bounds, p.area))
-        for p in parts:
-            p = shapely.simplify(shapely.geometry.polygon.orient(p, 1.0), 1e-6)
+    for group in np.split(order, starts[1:]):
+        merged = polys[group[0]] if group.size == 1 else shapely.union_all(polys[group])
+        for p in shapely.get_parts(merged):
+            # Simplified, and free of the snapping grid (later operations in full precision).
+            p = shapely.set_precision(shapely.simplify(p, 1e-6), 0.0)
             if isinstance(p, shapely.Polygon) and p.area > 0:
-                out.append(
-                    Footprint(shapely.geometry.polygon.orient(p, 1.0), h, lo, eaves, material)
-                )
+                f = items[group[0]]
+                p = shapely.geometry.polygon.orient(p, 1.0)
+                out.append(Footprint(p, f.height_m, f.min_height_m, f.wall_top_m, f.material))
+    out.sort(key=lambda f: (f.polygon.bounds, f.polygon.area, f.height_m))
     return out
 
 
@@ -110,48 +105,72 @@ def _prisms(items: list[Footprint]) -> _core.Prisms:
 
 
 def _walls(items: list[Footprint]) -> tuple[np.ndarray, tuple[str, ...]]:
-    """Every exposed wall (module docstring)."""
+    """Every exposed wall (module docstring), as ``[ax, ay, bx, by, base, top]`` rows: each
+    footprint edge, split where neighbours stand against it (there its bottom rises to the
+    tallest neighbour's roof; a piece is gone where that reaches the eaves)."""
     import shapely
 
+    if not items:
+        return np.zeros((0, 6)), ()
     polys = np.asarray([f.polygon for f in items], dtype=object)
-    tree = shapely.STRtree(polys)
-    rows: list[list[float]] = []
-    materials: list[str] = []
+    # Every edge: (E, 2, 2) ends, its building.
+    ends, owner = [], []
     for k, f in enumerate(items):
-        ends = []
-        for ring in [f.polygon.exterior, *f.polygon.interiors]:
-            c = np.asarray(ring.coords)[:, :2]
-            ends.extend(itertools.pairwise(c))
-        near = [j for j in tree.query(f.polygon, predicate="intersects") if j != k]
-        # Each piece of each edge with its bottom: raised to a neighbour's roof where the
-        # neighbour stands against it, gone where the neighbour reaches the eaves.
-        pieces = [(a, b, f.min_height_m) for a, b in ends]
-        for j in near:
-            nbr = items[j]
-            block = nbr.polygon.buffer(1e-3)
-            split = []
-            for a, b, base in pieces:
-                seg = shapely.LineString([a, b])
-                for part, bottom in (
-                    (shapely.intersection(seg, block), max(base, nbr.height_m)),
-                    (shapely.difference(seg, block), base),
-                ):
-                    if bottom >= f.eaves_m:
-                        continue
-                    for line in shapely.get_parts(part):
-                        if not isinstance(line, shapely.LineString):
-                            continue
-                        c = np.asarray(line.coords)
-                        if len(c) >= 2 and np.hypot(*(c[-1] - c[0])) > 1e-3:
-                            # In the edge's own direction (its outward normal).
-                            same = np.dot(c[-1] - c[0], np.asarray(b) - np.asarray(a)) > 0
-                            p, q = (c[0], c[-1]) if same else (c[-1], c[0])
-                            split.append((p, q, bottom))
-            pieces = split
-        for a, b, base in pieces:
-            rows.append([a[0], a[1], b[0], b[1], base, f.eaves_m])
-            materials.append(f.material)
-    return np.asarray(rows, dtype=float).reshape(-1, 6), tuple(materials)
+        for r in (f.polygon.exterior, *f.polygon.interiors):
+            c = np.asarray(r.coords)[:, :2]
+            ends.append(np.stack([c[:-1], c[1:]], axis=1))
+            owner.append(np.full(len(c) - 1, k))
+    e_all, own = np.concatenate(ends), np.concatenate(owner)
+    base = np.array([f.min_height_m for f in items])[own]
+    eaves = np.array([f.eaves_m for f in items])[own]
+    # Each edge against each neighbouring footprint: the stretch of the edge it covers.
+    a, b = shapely.STRtree(polys).query(polys, predicate="intersects")
+    a, b = a[a != b], b[a != b]
+    first = np.searchsorted(own, np.arange(len(items)))
+    count = np.bincount(own, minlength=len(items))
+    edge_of = np.concatenate([np.arange(first[k], first[k] + count[k]) for k in a] or [[]])
+    edge_of = edge_of.astype(int)
+    nbr = np.repeat(b, count[a])
+    blocks = shapely.buffer(polys, 1e-3)
+    parts, idx = shapely.get_parts(
+        shapely.intersection(shapely.linestrings(e_all[edge_of]), blocks[nbr]), return_index=True
+    )
+    keep = (shapely.get_type_id(parts) == 1) & (shapely.length(parts) > 1e-3)
+    parts, idx = parts[keep], idx[keep]
+    d = e_all[:, 1] - e_all[:, 0]
+    length2 = np.einsum("ij,ij->i", d, d)
+    covers: dict[int, list[tuple[float, float, float]]] = {}
+    for p0, p1, e, top in zip(
+        shapely.get_coordinates(shapely.get_point(parts, 0)),
+        shapely.get_coordinates(shapely.get_point(parts, -1)),
+        edge_of[idx],
+        np.array([f.height_m for f in items])[nbr[idx]],
+        strict=True,
+    ):
+        s0, s1 = (np.array([p0, p1]) - e_all[e, 0]) @ d[e] / length2[e]
+        covers.setdefault(int(e), []).append((min(s0, s1), max(s0, s1), float(top)))
+    rows = [np.column_stack([e_all.reshape(-1, 4), base, eaves])]
+    extra: list[str] = []
+    drop = np.zeros(len(e_all), bool)
+    for e, spans in covers.items():
+        drop[e] = True
+        cuts = np.unique(np.clip([0.0, 1.0, *(v for s in spans for v in s[:2])], 0.0, 1.0))
+        pieces: list[list[float]] = []
+        for lo, hi in itertools.pairwise(cuts):
+            mid = 0.5 * (lo + hi)
+            bottom = max([base[e], *(t for s0, s1, t in spans if s0 <= mid <= s1)])
+            if bottom >= eaves[e] or hi - lo < 1e-9:
+                continue
+            if pieces and pieces[-1][1] == lo and pieces[-1][2] == bottom:
+                pieces[-1][1] = hi
+            else:
+                pieces.append([lo, hi, bottom])
+        for lo, hi, bottom in pieces:
+            pa, pb = e_all[e, 0] + lo * d[e], e_all[e, 0] + hi * d[e]
+            rows.append(np.array([[*pa, *pb, bottom, eaves[e]]]))
+            extra.append(items[own[e]].material)
+    out = np.concatenate([rows[0][~drop], *rows[1:]])
+    return out, (*(items[k].material for k in own[~drop]), *extra)
 
 
 @lru_cache(maxsize=8)
@@ -210,121 +229,30 @@ def wall_args(scn: Scenario) -> tuple[np.ndarray, np.ndarray]:
 def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> np.ndarray:
     """The tallest building (m above the terrain) whose footprint overlaps each pixel of the
     area (an overlap of positive area: footprints intersected with pixels as polygons),
-    (H, W)."""
+    (H, W). Each footprint, shrunk by a micrometre so that a pixel it only touches along an
+    edge or at a corner is not counted, is burnt into every pixel it touches
+    (``rasterio.features.rasterize``, ``all_touched``), the tallest last."""
     import shapely
+    from rasterio.features import rasterize
+    from rasterio.transform import Affine
 
     a = scn.area
     h, w = a.shape if shape is None else shape
-    out = np.zeros((h, w))
     b = scenario_buildings(scn)
     if b is None:
-        return out
+        return np.zeros((h, w))
     check_fits("the buildings' pixel heights", 16.0 * h * w, "use a coarser map")
     px = (a.x_max_m - a.x_min_m) / w
     py = (a.y_max_m - a.y_min_m) / h
-    for f in b.footprints:
-        x0, y0, x1, y1 = f.polygon.bounds
-        j0, j1 = max(0, int((x0 - a.x_min_m) // px)), min(w - 1, int((x1 - a.x_min_m) // px))
-        i0, i1 = max(0, int((y0 - a.y_min_m) // py)), min(h - 1, int((y1 - a.y_min_m) // py))
-        if j0 > j1 or i0 > i1:
-            continue
-        jj, ii = np.meshgrid(np.arange(j0, j1 + 1), np.arange(i0, i1 + 1))
-        cells = shapely.box(
-            a.x_min_m + jj * px, a.y_min_m + ii * py, a.x_min_m + (jj + 1) * px,
-            a.y_min_m + (ii + 1) * py,
-        )  # fmt: skip
-        hit = shapely.intersects(cells, f.polygon) & ~shapely.touches(cells, f.polygon)
-        block = out[i0 : i1 + 1, j0 : j1 + 1]
-        np.maximum(block, np.where(hit, f.height_m, 0.0), out=block)
-    return out
-
-
-def _heights(scn: Scenario) -> tuple[np.ndarray | None, tuple[float, float, float, float]]:
-    if scn.height_map_m is None:
-        return None, (0.0, 1.0, 0.0, 1.0)
-    hm = np.ascontiguousarray(np.asarray(scn.height_map_m, dtype=float))
-    a = scn.area
-    rows, cols = hm.shape
-    return hm, (
-        a.x_min_m,
-        (a.x_max_m - a.x_min_m) / cols,
-        a.y_min_m,
-        (a.y_max_m - a.y_min_m) / rows,
+    polys = np.asarray([f.polygon for f in b.footprints], dtype=object)
+    tops = np.array([f.height_m for f in b.footprints])
+    order = np.argsort(tops, kind="stable")
+    shrunk = shapely.buffer(polys[order], -1e-6, join_style="mitre")
+    shapes = [(g, t) for g, t in zip(shrunk, tops[order], strict=True) if not g.is_empty]
+    if not shapes:
+        return np.zeros((h, w))
+    # Rows south to north: a transform with a positive north step.
+    transform = Affine(px, 0.0, a.x_min_m, 0.0, py, a.y_min_m)
+    return rasterize(
+        shapes, out_shape=(h, w), transform=transform, all_touched=True, fill=0.0, dtype="float64"
     )
-
-
-def obstacle_args(scn: Scenario) -> dict[str, Any]:
-    """The buildings (boxes and footprints, :mod:`rainuav.radio.buildings`) and the height
-    map of ``scn`` as the core's ray functions take them."""
-    b = scenario_buildings(scn)
-    heights, h_os = _heights(scn)
-    return {
-        "buildings": np.zeros((0, 5)),
-        "prisms": None if b is None else b.prisms,
-        "heights": heights,
-        "heights_origin_step": h_os,
-    }
-
-
-WallRays = tuple[np.ndarray, ...]
-"""Per wall ray (:func:`rainuav._core.ray_walls`): its site (index into the distinct sites),
-pixel, departure azimuth and elevation (degrees), power per mW for isotropic antennas, and
-length (m)."""
-
-
-def trace_walls(
-    scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
-) -> tuple[WallRays, dict[int, int]] | None:
-    """Every ray the walls of ``scn`` reflect from each distinct site of ``jobs`` to each
-    pixel, and each site's index; None without walls."""
-    walls, eps = wall_args(scn)
-    if walls.shape[0] == 0:
-        return None
-    unique = list({id(s): s for s, _ in jobs}.values())
-    index = {id(s): k for k, s in enumerate(unique)}
-    rays = _core.ray_walls(
-        np.array([[s.x_m, s.y_m, s.height_m] for s in unique], dtype=float).reshape(-1, 3),
-        np.ascontiguousarray(x_m, dtype=float),
-        np.ascontiguousarray(y_m, dtype=float),
-        walls,
-        eps,
-        altitude_m=scn.area.altitude_m,
-        freq_hz=scn.freq_hz,
-        polarization=scn.polarization,
-        **obstacle_args(scn),
-        **core_args(scn),
-    )
-    return rays, index
-
-
-def wall_terms(
-    scn: Scenario,
-    jobs: Sequence[tuple[Site, Cell]],
-    x_m: np.ndarray,
-    y_m: np.ndarray,
-    weights: Sequence[Weight | None] | None = None,
-    rays: tuple[WallRays, dict[int, int]] | None = None,
-) -> np.ndarray | None:
-    """Each cell's rays reflected by walls at every pixel (PHYSICS.md section 12), (M, H, W,
-    2): their clear-air power (mW, each with the cell's gain toward its specular point; added
-    incoherently) and their power-weighted mean length (m); with ``weights``, the part of
-    each pattern they select. None where ``scn`` has no walls (``rays``: from
-    :func:`_wall_rays`, traced here if not given)."""
-    traced = trace_walls(scn, jobs, x_m, y_m) if rays is None else rays
-    if traced is None:
-        return None
-    (site_k, pixel, az, el, factor, length), index = traced
-    plane = y_m.size * x_m.size
-    out = np.zeros((len(jobs), plane, 2))
-    for m, (site, cell) in enumerate(jobs):
-        sel = site_k == index[id(site)]
-        g = gain_linear(cell, az[sel], el[sel])
-        if weights is not None:
-            w = weights[m]
-            g = g * (0.0 if w is None else weight_at(w, cell, az[sel], el[sel]))
-        p = 10 ** (cell.tx_power_dbm / 10) * g * factor[sel]
-        total = np.bincount(pixel[sel], p, minlength=plane)
-        dl = np.bincount(pixel[sel], p * length[sel], minlength=plane)
-        out[m, :, 0] = total
-        out[m, :, 1] = np.divide(dl, total, out=np.zeros(plane), where=total > 0)
-    return out.reshape(len(jobs), y_m.size, x_m.size, 2)

@@ -28,12 +28,12 @@ from typing import Any
 import numpy as np
 
 from rainuav import _core
-from rainuav.radio.buildings import obstacle_args, trace_walls, wall_terms
 from rainuav.radio.cell import Cell, Weight, gain_linear, weight_at
 from rainuav.radio.grid import C0_M_S
 from rainuav.radio.pe_engine import rain_rate_at
 from rainuav.radio.scenario import Scenario, Site
 from rainuav.radio.terrain import core_args
+from rainuav.radio.wall_rays import obstacle_args, trace_walls, wall_terms
 
 __all__ = [
     "SOILS",
@@ -137,17 +137,30 @@ def departures(
     (S, H, W, 2): the direct ray's (the diffracting edge where the profile costs a loss, else
     the pixel) and the reflected ray's (the specular point). Over flat open ground these are
     the closed forms of :func:`_directions`."""
+    return np.degrees(_path_table(scn, sites, x_m, y_m)[1][..., 3:5])
+
+
+Paths = tuple[np.ndarray, np.ndarray]
+"""Every path of some sites traced once: the sites (S, 3: x, y, height) and the geometry of
+each path (S, H, W, 7: ``[d1, d2, loss_db, el_direct, el_reflect, psi, reflect]``, elevations
+in radians), as :func:`rainuav._core.ray_power` takes them back."""
+
+
+def _path_table(scn: Scenario, sites: Sequence[Site], x_m: np.ndarray, y_m: np.ndarray) -> Paths:
     a = scn.area
-    return _core.ray_departures(
-        np.array([[s.x_m, s.y_m, s.height_m] for s in sites], dtype=float).reshape(-1, 3),
+    xyz = np.array([[s.x_m, s.y_m, s.height_m] for s in sites], dtype=float).reshape(-1, 3)
+    table = _core.ray_departures(
+        xyz,
         np.ascontiguousarray(x_m, dtype=float),
         np.ascontiguousarray(y_m, dtype=float),
         altitude_m=a.altitude_m,
         freq_hz=scn.freq_hz,
         ground="none" if scn.ground == "none" else "pec",
+        full=True,
         **obstacle_args(scn),
         **core_args(scn),
     )
+    return xyz, table
 
 
 def _trace(
@@ -159,6 +172,7 @@ def _trace(
     medium_args: dict[str, Any],
     terms_only: bool = False,
     walls: np.ndarray | None = None,
+    paths: Paths | None = None,
 ) -> np.ndarray:
     a = scn.area
     tx = np.array([[s.x_m, s.y_m, s.height_m] for s, _ in jobs], dtype=float).reshape(-1, 3)
@@ -177,6 +191,8 @@ def _trace(
         polarization=scn.polarization,
         terms_only=terms_only,
         walls=walls,
+        geometry=None if paths is None else paths[1],
+        geometry_sites=None if paths is None else paths[0],
         **medium_args,
     )
 
@@ -210,18 +226,27 @@ def ray_directions(
     """Each (site, cell)'s azimuth and departure elevations toward every pixel (H, W): the
     closed forms over flat open ground, else :func:`departures` (toward the diffracting edge
     and the specular point), traced once per site."""
-    elevations, index = None, {}
+    return _paths(scn, jobs, x_m, y_m)[0]
+
+
+def _paths(
+    scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
+) -> tuple[Directions, Paths | None]:
+    """:func:`ray_directions`, and the paths traced for them (None over flat open ground,
+    where the core's closed forms need no tracing)."""
+    paths, index = None, {}
     if not _flat_open(scn):
         unique = list({id(s): s for s, _ in jobs}.values())
         index = {id(s): k for k, s in enumerate(unique)}
-        elevations = departures(scn, unique, x_m, y_m)
+        paths = _path_table(scn, unique, x_m, y_m)
     out = []
     for site, _ in jobs:
         az, el_d, el_r = _directions(scn, site, x_m, y_m)
-        if elevations is not None:
-            el_d, el_r = elevations[index[id(site)], ..., 0], elevations[index[id(site)], ..., 1]
+        if paths is not None:
+            k = index[id(site)]
+            el_d, el_r = np.degrees(paths[1][k, ..., 3]), np.degrees(paths[1][k, ..., 4])
         out.append((az, el_d, el_r))
-    return out
+    return out, paths
 
 
 def ray_gains(
@@ -256,17 +281,19 @@ def ray_terms(
     ``weights`` (as :func:`ray_power` takes them), the parts of the whole pattern less those
     of the weighted part (what the rays keep where the PE carries the rest).
     :func:`ray_slicer` adds the rain."""
-    dirs = ray_directions(scn, jobs, x_m, y_m)
+    dirs, paths = _paths(scn, jobs, x_m, y_m)
     gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)
     rays = trace_walls(scn, jobs, x_m, y_m)
     walls = wall_terms(scn, jobs, x_m, y_m, rays=rays)
-    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, terms_only=True, walls=walls)
+    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, True, walls, paths)
     if weights is None:
         return full
     wd, wr = _weights_at(jobs, dirs, weights)
     out = full.copy()
-    out[..., :3] -= _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, terms_only=True)[..., :3]
+    out[..., :3] -= _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, True, None, paths)[
+        ..., :3
+    ]
     if walls is not None:
         inside = wall_terms(scn, jobs, x_m, y_m, weights, rays=rays)
         assert inside is not None
@@ -336,14 +363,14 @@ def ray_power(
     (M, H, W), each the mean over its pixel; and, if ``weights`` are given, the power of the
     part of each pattern they select (``weights[m]`` scales cell m's pattern; None: nothing).
     Directions, gains, the rain field and the obstacles are prepared once for both."""
-    dirs = ray_directions(scn, jobs, x_m, y_m)
+    dirs, paths = _paths(scn, jobs, x_m, y_m)
     gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)
     rays = trace_walls(scn, jobs, x_m, y_m)
     walls = wall_terms(scn, jobs, x_m, y_m, rays=rays)
-    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, walls=walls)
+    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, walls=walls, paths=paths)
     if weights is None:
         return full, None
     wd, wr = _weights_at(jobs, dirs, weights)
     inside = None if walls is None else wall_terms(scn, jobs, x_m, y_m, weights, rays=rays)
-    return full, _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, walls=inside)
+    return full, _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, walls=inside, paths=paths)
