@@ -62,6 +62,7 @@ def main() -> None:
         stamp(flight / "flight.png", FIGURES / "fly_example.png", cmd.replace(str(flight), "OUT"))
     run(["docs/tutorials/radiomap_in_rain.py"])  # stamps its own figure
     run(["docs/terrain_example.py"])  # stamps its own figure
+    run(["docs/buildings_example.py"])  # stamps its own figure
     if args.storm_run is None:
         print("not regenerated (give --storm-run RUN): storm_network_1000000.png, "
               "storm_network_worst.png")  # fmt: skip

@@ -454,3 +454,49 @@ def test_too_many_features_are_refused_before_building_them(tmp_path: Path) -> N
     path.write_text('{"type":"FeatureCollection","features":[' + ",".join([one] * 1_000_001) + "]}")
     with pytest.raises(InvalidInputError, match="1000001 features"):
         read_footprints(path, GEO, (0.0, 800.0, 0.0, 800.0))
+
+
+# -- fly among the shipped buildings -------------------------------------------------------------
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_fly_among_buildings_keeps_clear_and_refuses_a_start_in_a_tower(
+    tmp_path: Path, capsys
+) -> None:
+    # `fly --footprints` over the shipped district at 100 m: the summary names what was read,
+    # no vertex of the flight lies over a building that reaches within the 10 m clearance of
+    # the flight (each vertex a pixel centre; the footprints as shapely polygons), and a start
+    # inside the tallest tower is refused in one line, nothing written.
+    import shapely
+    from rainuav.fly import main
+    from rainuav.ground.footprints import read_footprints
+
+    base = ["--sites", str(EXAMPLES / "sites.csv"), "--footprints",
+            str(EXAMPLES / "buildings.geojson")]  # fmt: skip
+    out = tmp_path / "flight"
+    capsys.readouterr()
+    rc = main([*base, "--start", "47.3660,8.5380", "--goal", "47.3800,8.5560", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 0 and "footprints" in err and "buildings from" in err, err
+    summary = json.loads((out / "summary.json").read_text())
+    g = Georef(summary["origin"]["lat"], summary["origin"]["lon"])
+    fp = read_footprints(EXAMPLES / "buildings.geojson", g, (-5e3, 5e3, -5e3, 5e3))
+    tall = [b.polygon for b in fp.buildings if b.height_m + 10.0 >= 100.0]
+    assert tall, "the district has towers above the flight"
+    line = json.loads((out / "flight.geojson").read_text())["features"][0]
+    coords = np.array(line["geometry"]["coordinates"])
+    px, py = g.to_local(coords[:, 1], coords[:, 0])
+    pts = shapely.points(px, py)
+    assert not any(shapely.intersects(pts, t).any() for t in tall)
+    # The tallest tower's centre as the start: refused, nothing written.
+    top = max(fp.buildings, key=lambda b: b.height_m)
+    c = top.polygon.centroid
+    lat, lon = g.to_latlon(c.x, c.y)
+    out2 = tmp_path / "in_tower"
+    capsys.readouterr()
+    rc = main([*base, "--start", f"{lat:.6f},{lon:.6f}", "--goal", "47.3800,8.5560",
+               "--out", str(out2)])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and "--start" in err[-1] and "may not fly" in err[-1], err
+    assert not (out2 / "summary.json").exists()

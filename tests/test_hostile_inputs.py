@@ -812,6 +812,28 @@ def test_bad_dems_are_refused_by_radiomap_in_one_line(tmp_path, capsys) -> None:
         assert not (out / "radiomap.npz").exists()
 
 
+def test_bad_footprint_files_are_refused_by_radiomap_in_one_line(tmp_path, capsys) -> None:
+    # Each bad footprint file of the building tests through `radiomap --footprints`: exit 2,
+    # one line naming the file and what is wrong (and the feature where one is at fault), no
+    # radiomap.npz; a missing file too.
+    import test_buildings
+    from rainuav import radiomap
+
+    toml = tmp_path / "place.toml"
+    test_buildings.scenario(None, [Site(100.0, 400.0, 30.0, [test_buildings.iso_cell()])]).to_toml(
+        toml
+    )
+    test_buildings._write_raw(tmp_path)
+    bad = test_buildings.bad_footprint_files(tmp_path)
+    bad["missing"] = (tmp_path / "missing.geojson", "no such file")
+    for what, (path, word) in bad.items():
+        out = tmp_path / f"out_{what}"
+        argv = ["--config", str(toml), "--footprints", str(path), "--out", str(out), "--no-cache"]
+        rc, err = run_cli(radiomap, argv, capsys)
+        refused(f"radiomap --footprints ({what})", rc, err, path.name, word)
+        assert not (out / "radiomap.npz").exists()
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():

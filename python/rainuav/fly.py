@@ -154,6 +154,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             box=box, terrain=args.terrain, altitude_reference=args.altitude_reference,
             footprints=args.footprints,
         )  # fmt: skip
+        if args.footprints is not None:
+            from rainuav.radio.buildings import scenario_buildings
+
+            print(scenario_buildings(place.scenario).summary, file=sys.stderr)  # type: ignore[union-attr]
         flyer, by = (None, "exact optimum") if args.policy is None else _policy(args.policy)
         summary = fly_place(
             place, out, speed_m_s=args.speed_m_s, min_db=args.min_db, flyer=flyer, flown_by=by

@@ -163,6 +163,11 @@ def _build(args: argparse.Namespace) -> int:
 
         area = dataclasses.replace(scn.area, altitude_reference=args.altitude_reference)
         scn = scn.replace(area=area)
+    if scn.footprints is not None:
+        from rainuav.radio.buildings import scenario_buildings
+
+        # Read (or refused) before anything is built; what was left out, said.
+        print(scenario_buildings(scn).summary, file=sys.stderr)  # type: ignore[union-attr]
     if args.duration_s is not None or args.slice_s is not None:
         return _build_series(args, scn)
     rm = build_radio_map(scn, cache=not args.no_cache, progress=True)
