@@ -7,7 +7,8 @@
    pixels of the area at 10 m (774 400 pixels) intersected as polygons.
 2. **A ray map among 500 buildings**: the ``uma`` network (21 cells on 7 sites) over its 4 km2
    area at 10 m (200 x 200 pixels), ray engine, over the hilly DEM of
-   ``benches/terrain_map.py``, with about 500 footprints: first-order wall reflections and
+   ``benches/terrain_map.py``, with 500 footprints (blocks of 80 m): first-order wall
+   reflections and
    every path's profile through the buildings; against the same map over the DEM without
    buildings, and the share of the time the walls' rays take.
 
@@ -87,7 +88,9 @@ def main() -> None:
     cx, cy = 0.5 * (a.x_min_m + a.x_max_m), 0.5 * (a.y_min_m + a.y_max_m)
     lat, lon = geo.to_latlon(cx, cy)
     avoid = [(s.x_m - cx, s.y_m - cy) for s in base.sites]
-    fc = district(float(lat), float(lon), 0.5 * (a.x_max_m - a.x_min_m), seed=5, avoid_m=avoid)
+    fc = district(float(lat), float(lon), 0.5 * (a.x_max_m - a.x_min_m), 5, avoid, block_m=80.0)
+    assert len(fc["features"]) >= 500
+    fc["features"] = fc["features"][:500]
     city = tmp / "city.geojson"
     city.write_text(json.dumps(fc))
     with_b = base.replace(footprints=FootprintsFile(str(city)))

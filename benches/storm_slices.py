@@ -7,7 +7,7 @@ The `storm` preset (ray engine, 10 m pixels, 21 cells) at 61 instants 0-300 s: t
 frozen weather at three of the instants (the reference a slice replaces), with their ratio and
 the largest difference between a slice and its static build. ``--terrain`` puts the storm over
 the hilly DEM of ``benches/terrain_map.py`` (every path's own profile: Bullington diffraction,
-the reflection's visibility; the rain along the same rays). ``--footprints`` adds about 500
+the reflection's visibility; the rain along the same rays). ``--footprints`` adds 500
 buildings (the district of ``examples/make_footprints.py``, as ``benches/building_map.py``):
 roofs in every profile and the walls' first-order reflections, their rain along each wall
 ray's length.
@@ -55,7 +55,8 @@ def main() -> None:
         cx, cy = 0.5 * (a.x_min_m + a.x_max_m), 0.5 * (a.y_min_m + a.y_max_m)
         lat, lon = Georef(*ORIGIN).to_latlon(cx, cy)
         avoid = [(s.x_m - cx, s.y_m - cy) for s in scn.sites]
-        fc = district(float(lat), float(lon), 0.5 * (a.x_max_m - a.x_min_m), 5, avoid)
+        fc = district(float(lat), float(lon), 0.5 * (a.x_max_m - a.x_min_m), 5, avoid, 80.0)
+        fc["features"] = fc["features"][:500]
         city = Path(tempfile.mkdtemp()) / "city.geojson"
         city.write_text(json.dumps(fc))
         scn = scn.replace(origin=Origin(*ORIGIN), footprints=FootprintsFile(str(city)))

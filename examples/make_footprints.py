@@ -75,15 +75,21 @@ def _block(rng: np.random.Generator, x0: float, y0: float, size: float) -> list[
 
 
 def district(
-    lat: float, lon: float, half_size_m: float, seed: int, avoid_m: list[tuple[float, float]] = ()
+    lat: float,
+    lon: float,
+    half_size_m: float,
+    seed: int,
+    avoid_m: list[tuple[float, float]] = (),
+    block_m: float = 100.0,
 ) -> dict:
-    """A FeatureCollection of blocks 100 m square (20 m streets) over a square ``half_size_m``
-    round (lat, lon); no building within 60 m of a point of ``avoid_m`` (local metres)."""
+    """A FeatureCollection of blocks ``block_m`` square (20 m streets) over a square
+    ``half_size_m`` round (lat, lon); no building within 60 m of a point of ``avoid_m``
+    (local metres)."""
     from rainuav.geo import Georef
 
     geo = Georef(lat, lon)
     rng = np.random.default_rng(seed)
-    size, street = 100.0, 20.0
+    size, street = block_m, 20.0
     n = int(2 * half_size_m // (size + street))
     feats = []
     for i in range(n):

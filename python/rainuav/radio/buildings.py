@@ -209,10 +209,21 @@ def scenario_buildings(scn: Scenario) -> Buildings | None:
         return None
     import json
 
+    from rainuav.ground import file_digest
+
     d = scn.to_dict()
     keep = {k: d[k] for k in ("area", "sites", "buildings", "origin", "footprints") if k in d}
-    text = json.dumps({**keep, "sites": d["sites"]}, sort_keys=True)
-    return _build(scn.digest() if scn.footprints is not None else text, text)
+    text = json.dumps(keep, sort_keys=True)
+    # The key: what the buildings depend on, and the footprint file's contents.
+    key = text
+    if scn.footprints is not None:
+        try:
+            key = f"{text}|{file_digest(scn.footprints.file)}"
+        except OSError as err:
+            raise InvalidInputError(
+                f"footprints file {scn.footprints.file}: cannot be read ({err.strerror})"
+            ) from err
+    return _build(key, text)
 
 
 def wall_args(scn: Scenario) -> tuple[np.ndarray, np.ndarray]:
