@@ -131,8 +131,8 @@ def test_one_wall_against_the_closed_form_image_method(tmp_path: Path) -> None:
     # both 30 m up (horizontal rays: the field is perpendicular to the plane of incidence).
     # Where the direct ray is hidden (20 dB or more below the wall's ray) the map is the
     # reflected power: P = Pt (lambda / (4 pi d))^2 |Gamma_perp|^2 with d from the site's
-    # image, Gamma from P.2040's concrete written out here. Tolerance 0.1 dB (the issue's):
-    # what the hidden direct ray adds at most (20 dB down: 0.04 dB).
+    # image, Gamma from P.2040's concrete written out here. Tolerance 0.1 dB: what the
+    # hidden direct ray adds is at most 0.04 dB (20 dB down); measured 5e-6 dB.
     ang = math.atan2(300.0, 250.0)  # the slab across the line site -> (450, 700)
     u = (-math.sin(ang), math.cos(ang))
     c = (400.0, 620.0)
@@ -173,7 +173,8 @@ def test_a_thick_building_against_an_independent_delta_bullington(tmp_path: Path
     # Behind it, the map's loss over free space against P.452's delta-Bullington (pycraf: an
     # independent implementation with its spherical-Earth term) and against P.526's
     # Bullington written out from the text on the profile sampled every metre. Tolerance
-    # 1 dB (the issue's): the sampled profile's faces lie within a metre of the footprint's.
+    # 1 dB: the sampled profile's faces lie within a metre of the footprint's; measured
+    # 1e-7 dB (the spherical-Earth term is 0 here).
     from test_terrain import _bullington_by_hand, _pycraf
 
     path = write(tmp_path / "thick.geojson", [feature(rect(400, 300, 460, 500), height=80)])
