@@ -30,6 +30,7 @@ __all__ = [
     "mie_forward",
     "plan_optimal",
     "plan_optimal_in_time",
+    "plan_optimal_levels",
     "ray_departures",
     "ray_power",
     "ray_walls",
@@ -233,6 +234,27 @@ def plan_optimal_in_time(
     blocked: npt.NDArray[np.uint8] | None = None,
 ) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
     """Exact space-time plans from many starts, the signal (K, H, W) at the instants t_s."""
+
+def plan_optimal_levels(
+    sinr_db: _F,
+    extent_m: tuple[float, float, float, float],
+    goal_m: tuple[float, float],
+    starts: _F,
+    *,
+    step_m: float,
+    tol_m: float,
+    max_steps: int,
+    mu: float,
+    reward: str,
+    sir_min_db: float,
+    goal_reward: float,
+    out_of_bounds_penalty: float,
+    climb: list[float],
+    descend: list[float],
+    blocked: npt.NDArray[np.uint8] | None = None,
+) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
+    """Exact plans among levels (L, H, W): six moves, starts (N, 3) x, y, level; each a
+    (return, actions, path (T+1, 3): x, y, level)."""
 
 def ray_power(
     tx_m: _F,

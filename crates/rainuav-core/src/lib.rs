@@ -25,6 +25,7 @@ pub mod memory;
 pub mod mie;
 pub mod obstacles;
 pub mod p838;
+pub mod planlevels;
 pub mod planner;
 pub mod plantime;
 pub mod pwe;

@@ -8,6 +8,7 @@ use numpy::{
 };
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
+use rainuav_core::planlevels::LevelTask;
 use rainuav_core::planner::{NavTask, Plan};
 use rainuav_core::plantime::Timeline;
 
@@ -185,8 +186,105 @@ fn sample_slices<'py>(
     Ok(Array1::from(out).into_pyarray(py))
 }
 
+/// Exact plans with altitude as a decision (`rainuav_core::planlevels`): the signal of each
+/// level `sinr_db` (L, H, W), lowest first, and optionally each level's not-flyable pixels
+/// `blocked` (L, H', W'); `starts` (N, 3): x, y and the start level. Six moves (the plane's
+/// four, a climb, a descent); `climb[k]` and `descend[k]` (L - 1 each) are how many
+/// horizontal moves' time the climb from level k to k + 1 and the descent back last. A list of (return, actions (T,) u8, path (T+1, 3): x, y, level).
+#[pyfunction]
+#[pyo3(signature = (sinr_db, extent_m, goal_m, starts, *, step_m, tol_m, max_steps, mu, reward,
+    sir_min_db, goal_reward, out_of_bounds_penalty, climb, descend, blocked=None))]
+#[allow(clippy::too_many_arguments)]
+fn plan_optimal_levels<'py>(
+    py: Python<'py>,
+    sinr_db: PyReadonlyArray3<'py, f64>,
+    extent_m: [f64; 4],
+    goal_m: [f64; 2],
+    starts: PyReadonlyArray2<'py, f64>,
+    step_m: f64,
+    tol_m: f64,
+    max_steps: usize,
+    mu: f64,
+    reward: &str,
+    sir_min_db: f64,
+    goal_reward: f64,
+    out_of_bounds_penalty: f64,
+    climb: Vec<f64>,
+    descend: Vec<f64>,
+    blocked: Option<PyReadonlyArray3<'py, u8>>,
+) -> PyResult<Vec<PlanOut<'py>>> {
+    let maps = sinr_db.as_array();
+    let masks = blocked.as_ref().map(|b| b.as_array());
+    let nl = maps.shape()[0];
+    if let Some(b) = &masks
+        && b.shape()[0] != nl
+    {
+        return Err(to_py(CoreError::invalid(
+            "blocked",
+            format!("must hold one mask a level ({nl})"),
+            b.shape()[0],
+        )));
+    }
+    let kind = reward.parse().map_err(to_py)?;
+    let levels = (0..nl)
+        .map(|l| NavTask {
+            sir_db: maps.index_axis(ndarray::Axis(0), l),
+            extent: extent_m,
+            goal: goal_m,
+            step_m,
+            tol_m,
+            max_steps,
+            mu,
+            reward: kind,
+            sir_min_db,
+            goal_reward,
+            out_of_bounds_penalty,
+            blocked: masks.as_ref().map(|b| b.index_axis(ndarray::Axis(0), l)),
+        })
+        .collect();
+    let task = LevelTask {
+        levels,
+        climb,
+        descend,
+    };
+    let st = starts.as_array();
+    if st.ncols() != 3 {
+        return Err(to_py(CoreError::invalid(
+            "starts",
+            "must have shape (N, 3): x, y, level",
+            format!("{:?}", st.dim()),
+        )));
+    }
+    let mut pts = Vec::with_capacity(st.nrows());
+    for r in st.rows() {
+        let l = r[2];
+        if !(l.is_finite() && l >= 0.0 && l.fract() == 0.0 && (l as usize) < nl.max(1)) {
+            return Err(to_py(CoreError::invalid(
+                "starts",
+                format!("levels must be whole numbers in 0..{nl}"),
+                l,
+            )));
+        }
+        pts.push(([r[0], r[1]], l as usize));
+    }
+    let plans = detached(py, || task.optimal_many(&pts))?;
+    Ok(plans
+        .into_iter()
+        .map(|p| {
+            let n = p.path.len();
+            let path = ndarray::Array2::from_shape_fn((n, 3), |(i, k)| p.path[i][k]);
+            (
+                p.return_,
+                Array1::from(p.actions).into_pyarray(py),
+                path.into_pyarray(py),
+            )
+        })
+        .collect())
+}
+
 /// Adds this layer's functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(plan_optimal_levels, m)?)?;
     m.add_function(wrap_pyfunction!(sample_slices, m)?)?;
     m.add_function(wrap_pyfunction!(plan_optimal, m)?)?;
     m.add_function(wrap_pyfunction!(plan_optimal_in_time, m)?)?;
