@@ -47,6 +47,9 @@ pub struct LevelTask<'a> {
 /// The number of moves.
 pub const LEVEL_MOVES: usize = 6;
 
+/// A start level meaning "the best level" ([`LevelTask::optimal`]).
+pub const ANY_LEVEL: usize = usize::MAX;
+
 impl LevelTask<'_> {
     fn validate(&self) -> Result<()> {
         let Some(first) = self.levels.first() else {
@@ -155,12 +158,14 @@ impl LevelTask<'_> {
         Ok(n.saturating_mul(per.saturating_add(self.levels[0].max_steps)))
     }
 
-    /// The exact optimum from `start` on level `level`.
+    /// The exact optimum from `start` on level `level`; [`ANY_LEVEL`]: on the level (of those
+    /// where the start may be flown) whose optimum is best, the take-off's climb left to
+    /// the autopilot.
     pub fn optimal(&self, start: [f64; 2], level: usize) -> Result<LevelPlan> {
         self.validate()?;
         let t0 = &self.levels[0];
         t0.check_start(start)?;
-        if level >= self.levels.len() {
+        if level != ANY_LEVEL && level >= self.levels.len() {
             return Err(CoreError::invalid(
                 "start level",
                 format!("must be one of the {} levels", self.levels.len()),
@@ -237,6 +242,26 @@ impl LevelTask<'_> {
             }
             std::mem::swap(&mut v, &mut v_next);
         }
+        // The start level: the given one, or the best of those the start may be flown at
+        // (`v_next` holds the values with the whole horizon left).
+        let level = if level == ANY_LEVEL {
+            (0..nl)
+                .filter(|&l| !self.levels[l].blocked_at(start[0], start[1]))
+                .max_by(|&a, &b| {
+                    v_next[idx(a, 0, 0)]
+                        .total_cmp(&v_next[idx(b, 0, 0)])
+                        .then(b.cmp(&a))
+                })
+                .ok_or_else(|| {
+                    CoreError::invalid(
+                        "start_m",
+                        "is not flyable at any level",
+                        format!("{start:?}"),
+                    )
+                })?
+        } else {
+            level
+        };
         // Replay, summing each move's reward as the environment does.
         let (mut l, mut i, mut j) = (level, 0i64, 0i64);
         let mut plan = LevelPlan {
@@ -351,6 +376,28 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn any_level_is_the_best_start_level() {
+        let maps: Vec<Array2<f64>> = (0..3)
+            .map(|k| {
+                Array2::from_shape_fn((3, 4), |(i, j)| ((i * 3 + j * 5 + 7 * k) % 11) as f64 * 2.0)
+            })
+            .collect();
+        let levels: Vec<NavTask<'_>> = maps.iter().map(|m| level(m, 6)).collect();
+        let task = LevelTask {
+            levels,
+            climb: vec![2.0, 2.0],
+            descend: vec![3.0, 3.0],
+        };
+        for start in [[0.0, 0.0], [17.0, 12.0]] {
+            let best = (0..3)
+                .map(|l| task.optimal(start, l).unwrap().return_)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let any = task.optimal(start, ANY_LEVEL).unwrap();
+            assert!((any.return_ - best).abs() < 1e-9);
         }
     }
 

@@ -188,7 +188,7 @@ fn sample_slices<'py>(
 
 /// Exact plans with altitude as a decision (`rainuav_core::planlevels`): the signal of each
 /// level `sinr_db` (L, H, W), lowest first, and optionally each level's not-flyable pixels
-/// `blocked` (L, H', W'); `starts` (N, 3): x, y and the start level. Six moves (the plane's
+/// `blocked` (L, H', W'); `starts` (N, 3): x, y and the start level (-1: the best). Six moves (the plane's
 /// four, a climb, a descent); `climb[k]` and `descend[k]` (L - 1 each) are how many
 /// horizontal moves' time the climb from level k to k + 1 and the descent back last. A list of (return, actions (T,) u8, path (T+1, 3): x, y, level).
 #[pyfunction]
@@ -258,10 +258,14 @@ fn plan_optimal_levels<'py>(
     let mut pts = Vec::with_capacity(st.nrows());
     for r in st.rows() {
         let l = r[2];
+        if l == -1.0 {
+            pts.push(([r[0], r[1]], rainuav_core::planlevels::ANY_LEVEL));
+            continue;
+        }
         if !(l.is_finite() && l >= 0.0 && l.fract() == 0.0 && (l as usize) < nl.max(1)) {
             return Err(to_py(CoreError::invalid(
                 "starts",
-                format!("levels must be whole numbers in 0..{nl}"),
+                format!("levels must be whole numbers in 0..{nl}, or -1 (the best)"),
                 l,
             )));
         }

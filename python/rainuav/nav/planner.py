@@ -104,3 +104,94 @@ def straight_line(env: UAVNavEnv, start_m: npt.ArrayLike) -> Plan:
         if r["terminated"][0] or r["truncated"][0]:
             break
     return Plan(ret, np.array(path), np.array(actions, dtype=np.int64))
+
+
+@dataclass(frozen=True)
+class LevelPlan:
+    """A trajectory among flight levels and its undiscounted return."""
+
+    return_: float
+    """Sum of the rewards."""
+    path_m: npt.NDArray[np.float64]
+    """(T + 1, 2) positions, from the start."""
+    levels: npt.NDArray[np.int64]
+    """(T + 1,) the level of each position."""
+    actions: npt.NDArray[np.int64]
+    """(T,) actions: 0-3 the plane's moves, 4 climb, 5 descend."""
+
+
+CLIMB_M_S = 5.0
+"""Default climb speed, m/s."""
+DESCEND_M_S = 3.0
+"""Default descent speed, m/s."""
+
+
+def level_durations(
+    altitudes_m: npt.ArrayLike,
+    cfg: NavConfig,
+    climb_m_s: float = CLIMB_M_S,
+    descend_m_s: float = DESCEND_M_S,
+) -> tuple[list[float], list[float]]:
+    """How long each climb and each descent between neighbouring levels lasts, in units of
+    one horizontal move (``cfg.move_s``): the gap over the climb or descent speed."""
+    gaps = np.diff(np.asarray(altitudes_m, dtype=np.float64))
+    for name, v in (("climb_m_s", climb_m_s), ("descend_m_s", descend_m_s)):
+        if not (np.isfinite(v) and 0.1 <= v <= 100.0):
+            raise InvalidInputError(f"{name} must be in 0.1..100 m/s (got {v!r})")
+    move = cfg.move_s
+    return [float(g / climb_m_s / move) for g in gaps], [
+        float(g / descend_m_s / move) for g in gaps
+    ]
+
+
+def optimal_levels(
+    signal_db: npt.ArrayLike,
+    altitudes_m: npt.ArrayLike,
+    extent_m: tuple[float, float, float, float],
+    cfg: NavConfig,
+    starts_m: npt.ArrayLike,
+    start_levels: npt.ArrayLike,
+    *,
+    not_flyable: npt.ArrayLike | None = None,
+    climb_m_s: float = CLIMB_M_S,
+    descend_m_s: float = DESCEND_M_S,
+) -> list[LevelPlan]:
+    """Exact optimal plans with altitude as a decision (``rainuav_core::planlevels``): the
+    signal of each level (L, H, W) at ``altitudes_m`` (L,), the task ``cfg`` (``min_db``
+    resolved), starts (N, 2) at ``start_levels`` (N,; -1: the level whose optimum is best,
+    the take-off's climb left to the autopilot). Six moves: the plane's four, and a
+    climb or descent of one level, whose reward is its duration in horizontal moves
+    (:func:`level_durations`) times the base reward where it lands. A flight arrives at the
+    destination's horizontal position at any level; leaving the band or entering a
+    not-flyable cell ends it as leaving the area does."""
+    sig = np.ascontiguousarray(np.asarray(signal_db, dtype=np.float64))
+    alts = np.asarray(altitudes_m, dtype=np.float64).reshape(-1)
+    if sig.ndim != 3 or sig.shape[0] != alts.size or not np.all(np.isfinite(sig)):
+        raise InvalidInputError(
+            f"signal_db must be finite with shape (L, H, W), L = {alts.size} levels "
+            f"(got {sig.shape})"
+        )
+    if cfg.min_db is None:
+        raise InvalidInputError("cfg.min_db must be resolved (a threshold in dB)")
+    starts = np.asarray(starts_m, dtype=np.float64).reshape(-1, 2)
+    lv = np.asarray(start_levels, dtype=np.float64).reshape(-1)
+    if lv.size != starts.shape[0]:
+        raise InvalidInputError("start_levels must hold one level a start")
+    climb, descend = level_durations(alts, cfg, climb_m_s, descend_m_s)
+    blocked = None
+    if not_flyable is not None:
+        blocked = np.ascontiguousarray(np.asarray(not_flyable, dtype=np.uint8))
+    raw = _core.plan_optimal_levels(
+        sig, tuple(float(v) for v in extent_m), (float(cfg.goal_m[0]), float(cfg.goal_m[1])),  # type: ignore[arg-type]
+        np.ascontiguousarray(np.column_stack([starts, lv])), step_m=float(cfg.step_m),
+        tol_m=float(cfg.tol_m), max_steps=int(cfg.max_steps), mu=float(cfg.mu),
+        reward=cfg.reward, sir_min_db=float(cfg.min_db), goal_reward=float(cfg.goal_reward),
+        out_of_bounds_penalty=float(cfg.out_of_bounds_penalty), climb=climb, descend=descend,
+        blocked=blocked,
+    )  # fmt: skip
+    out = []
+    for r, a, p in raw:
+        path = np.asarray(p)
+        levels = path[:, 2].astype(np.int64)
+        out.append(LevelPlan(float(r), path[:, :2], levels, np.asarray(a, dtype=np.int64)))
+    return out

@@ -3,6 +3,7 @@ as dataclasses validated by :class:`rainuav.radio.scenario.Scenario`."""
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +40,10 @@ class Area:
     min_clearance_m: float | None = None
     """The least height (m) the UAV keeps above terrain and obstacles (default 10): a pixel
     whose highest point plus this reaches the flight height is not flyable."""
+    altitudes_m: list[float] | None = None
+    """The flight altitudes a UAV may choose among (m, increasing, in the altitude reference
+    of ``altitude_reference``), e.g. 30 to 120 every 15; None: ``altitude_m`` alone
+    (:func:`rainuav.radio.levels.build_radio_levels` maps each)."""
 
     def check(self, where: str = "area") -> None:
         for k in ("x_min_m", "x_max_m", "y_min_m", "y_max_m"):
@@ -59,6 +64,25 @@ class Area:
             _num(f"{where}.altitude_m", self.altitude_m, 0.5, 3000.0, " m above the ground")
         if self.min_clearance_m is not None:
             _num(f"{where}.min_clearance_m", self.min_clearance_m, 0.0, 1000.0, " m")
+        if self.altitudes_m is not None:
+            levels = self.altitudes_m
+            if not isinstance(levels, list | tuple) or len(levels) == 0:
+                raise InvalidInputError(
+                    f"{where}.altitudes_m must be a non-empty list of flight altitudes (m)"
+                )
+            lo, hi, unit = (-500.0, 9000.0, " m above sea level") if self.msl else (
+                0.5, 3000.0, " m above the ground"
+            )  # fmt: skip
+            for k, a in enumerate(levels):
+                _num(f"{where}.altitudes_m[{k}]", a, lo, hi, unit)
+            if any(b <= a for a, b in itertools.pairwise(levels)):
+                raise InvalidInputError(
+                    f"{where}.altitudes_m must increase strictly (got {list(levels)})"
+                )
+            if len(levels) > 64:
+                raise InvalidInputError(
+                    f"{where}.altitudes_m holds {len(levels)} levels (at most 64)"
+                )
         _num(f"{where}.resolution_m", self.resolution_m, 0.5, 500.0, " m")
         pixels = ((self.x_max_m - self.x_min_m) / self.resolution_m) * (
             (self.y_max_m - self.y_min_m) / self.resolution_m
@@ -68,6 +92,11 @@ class Area:
                 f"{where}: the map would have {pixels:.3g} pixels "
                 "(at most 4e7); use a coarser resolution_m"
             )
+
+    @property
+    def levels(self) -> list[float]:
+        """The flight altitudes, m: :attr:`altitudes_m`, else :attr:`altitude_m` alone."""
+        return [float(a) for a in self.altitudes_m] if self.altitudes_m else [self.altitude_m]
 
     @property
     def msl(self) -> bool:

@@ -1,0 +1,79 @@
+"""Radio maps at several flight altitudes (``area.altitudes_m``): one map per level, stacked
+on an altitude axis, so a flight can choose its height (:func:`rainuav.nav.planner.optimal_levels`).
+
+Each level is the scenario's map at that altitude, built by its engine (and cached as any
+map): the ray engine traces every level; the hybrid and PE engines march once per level
+(reading every level from one march is left for later). Memory is checked for the whole
+stack before the first level is built.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from rainuav._checks import check_fits
+from rainuav.radio.mapdata import RadioMap
+from rainuav.radio.scenario import Scenario
+
+__all__ = ["RadioLevels", "build_radio_levels", "level_scenario"]
+
+
+@dataclass(frozen=True)
+class RadioLevels:
+    """A scenario's maps at each flight altitude, lowest first."""
+
+    altitudes_m: np.ndarray
+    """The levels (L,), m, in the area's altitude reference."""
+    maps: tuple[RadioMap, ...]
+    """One map a level."""
+
+    @property
+    def sinr_db(self) -> np.ndarray:
+        """SINR (L, H, W), dB."""
+        return np.stack([m.sinr_db for m in self.maps])
+
+    @property
+    def not_flyable(self) -> np.ndarray:
+        """The pixels a UAV may not enter at each level (L, H, W), bool (all flyable where a
+        map carries no mask)."""
+        return np.stack(
+            [
+                np.zeros(m.sinr_db.shape, bool) if m.not_flyable is None else m.not_flyable
+                for m in self.maps
+            ]
+        )
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """(x_min, x_max, y_min, y_max), m."""
+        return self.maps[0].extent_m
+
+
+def level_scenario(scn: Scenario, altitude_m: float) -> Scenario:
+    """``scn`` flying at ``altitude_m`` alone."""
+    area = dataclasses.replace(scn.area, altitude_m=float(altitude_m), altitudes_m=None)
+    return scn.replace(area=area)
+
+
+def build_radio_levels(scn: Scenario, *, cache: bool = True, progress: bool = False) -> RadioLevels:
+    """The maps of ``scn`` at each of ``area.levels`` (module docstring)."""
+    from rainuav.radio.radiomap import build_radio_map
+
+    levels = scn.area.levels
+    h, w = scn.area.shape
+    cells = sum(len(s.cells) for s in scn.sites)
+    # Each map: rss (M, H, W) float32, SINR, SIR, serving, mask.
+    check_fits(
+        f"area.altitudes_m ({len(levels)} levels of {cells} cells x {h} x {w} pixels)",
+        len(levels) * (cells + 4) * h * w * 4.0,
+        "use fewer levels or a coarser resolution_m",
+    )
+    maps = []
+    for k, a in enumerate(levels):
+        if progress:
+            print(f"level {k + 1}/{len(levels)}: {a:g} m", flush=True)
+        maps.append(build_radio_map(level_scenario(scn, a), cache=cache))
+    return RadioLevels(np.asarray(levels, dtype=float), tuple(maps))

@@ -1,0 +1,110 @@
+"""Altitude as a decision: maps at several flight altitudes and the exact planner among them
+(rainuav_core::planlevels), against the planner in the plane and against a brute force."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from rainuav.errors import InvalidInputError
+from rainuav.nav import planner
+from rainuav.nav.field import SignalField
+from rainuav.nav.task import NavConfig
+from rainuav.radio.levels import build_radio_levels
+from rainuav.radio.presets import uma
+from rainuav.radio.scenario import Area
+
+EXTENT = (0.0, 60.0, 0.0, 40.0)
+
+
+def cfg(**kw) -> NavConfig:
+    base = {"goal_m": (55.0, 35.0), "max_steps": 12, "min_db": 0.0, "goal_reward": 100.0,
+            "out_of_bounds_penalty": 500.0, "tol_m": 1.0}  # fmt: skip
+    return NavConfig(**{**base, **kw})
+
+
+def maps(levels: int, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return rng.uniform(-8.0, 6.0, size=(levels, 4, 6))
+
+
+def test_one_level_is_the_plane() -> None:
+    # The same return and actions as the planner in the plane, from several starts.
+    sig = maps(1)
+    c = cfg()
+    starts = np.array([[5.0, 5.0], [25.0, 15.0], [45.0, 5.0]])
+    flat = planner.plan_on(SignalField(sig[0], EXTENT), c, starts)
+    lv = planner.optimal_levels(sig, [100.0], EXTENT, c, starts, np.zeros(3))
+    for a, b in zip(flat, lv, strict=True):
+        assert a.return_ == pytest.approx(b.return_, abs=1e-9)
+        assert np.array_equal(a.actions, b.actions) and np.all(b.levels == 0)
+
+
+def test_against_a_brute_force_over_every_move_sequence() -> None:
+    # Three levels 15 m apart (climb 5 m/s: 3 moves' time; descent 3 m/s: 5), a horizon of 5
+    # moves: the best of the 6^5 sequences, replayed move by move with the rule written here
+    # (duration x base reward; leaving the area or the band ends the flight with the
+    # penalty; arrival at any level), equals the planner's return. Tolerance 1e-9.
+    from rainuav._sampling import bilinear
+
+    sig = maps(3, seed=4)
+    c = cfg(max_steps=5, goal_m=(35.0, 25.0), mu=0.4)
+    alts = [30.0, 45.0, 60.0]
+    climb, descend = planner.level_durations(alts, c)
+    assert climb == pytest.approx([3.0, 3.0]) and descend == pytest.approx([5.0, 5.0])
+
+    def base(level: int, x: float, y: float) -> float:
+        s = float(bilinear(sig[level], EXTENT, np.array([x]), np.array([y]))[0])
+        return -1.0 - c.mu * max(0.0, c.min_db - s)
+
+    def rollout(start, level, seq) -> float:
+        x, y, lv, ret = start[0], start[1], level, 0.0
+        for a in seq:
+            if a < 4:
+                dx, dy = [(10, 0), (0, 10), (-10, 0), (0, -10)][a]
+                nx, ny = x + dx, y + dy
+                out = not (EXTENT[0] <= nx <= EXTENT[1] and EXTENT[2] <= ny <= EXTENT[3])
+                cx, cy = np.clip(nx, *EXTENT[:2]), np.clip(ny, *EXTENT[2:])
+                r = base(lv, cx, cy)
+                if out:
+                    return ret + r - c.out_of_bounds_penalty
+                x, y = nx, ny
+                if np.hypot(x - c.goal_m[0], y - c.goal_m[1]) <= c.tol_m:
+                    return ret + r + c.goal_reward
+                ret += r
+            else:
+                to = lv + 1 if a == 4 else lv - 1
+                dur = climb[min(lv, 1)] if a == 4 else descend[max(lv - 1, 0)]
+                if not 0 <= to < 3:
+                    return ret + dur * base(lv, x, y) - c.out_of_bounds_penalty
+                ret += dur * base(to, x, y)
+                lv = to
+        return ret
+
+    for start, level in (((5.0, 5.0), 0), ((15.0, 25.0), 1), ((35.0, 5.0), 2)):
+        want = max(rollout(start, level, s) for s in itertools.product(range(6), repeat=5))
+        got = planner.optimal_levels(sig, alts, EXTENT, c, [start], [level])[0]
+        assert got.return_ == pytest.approx(want, abs=1e-9), (start, level)
+
+
+def test_bad_altitude_sets_are_refused_in_one_line() -> None:
+    for bad, word in (([], "non-empty"), ([60.0, 30.0], "increase"), ([0.1], "altitudes_m[0]"),
+                      ([30.0, 4000.0], "altitudes_m[1]")):  # fmt: skip
+        with pytest.raises(InvalidInputError, match=word.replace("[", r"\[").replace("]", r"\]")):
+            Area(altitudes_m=bad).check()
+
+
+def test_maps_at_several_heights_are_each_level_s_map() -> None:
+    # The stack holds, at each level, the map of the scenario flying at that altitude.
+    from rainuav.radio.levels import level_scenario
+    from rainuav.radio.radiomap import build_radio_map
+
+    area = Area(resolution_m=50.0, altitudes_m=[40.0, 100.0])
+    scn = uma(engine="ray").replace(area=area)
+    stack = build_radio_levels(scn, cache=False)
+    assert stack.sinr_db.shape == (2, 40, 40)
+    for k, a in enumerate(stack.altitudes_m):
+        one = build_radio_map(level_scenario(scn, a), cache=False)
+        assert np.array_equal(one.sinr_db, stack.sinr_db[k])
+    assert not np.allclose(stack.sinr_db[0], stack.sinr_db[1])
