@@ -108,3 +108,41 @@ def test_maps_at_several_heights_are_each_level_s_map() -> None:
         one = build_radio_map(level_scenario(scn, a), cache=False)
         assert np.array_equal(one.sinr_db, stack.sinr_db[k])
     assert not np.allclose(stack.sinr_db[0], stack.sinr_db[1])
+
+
+def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) -> None:
+    # A 40 m wall across the whole place between the start and the destination: at 30 m it
+    # is not flyable (its 10 m clearance), at 60 m it is. `fly --altitudes 30:60:30` starts
+    # at 30 m, climbs to cross, and every file carries the heights: pymavlink reads the
+    # waypoints at the path's levels (relative to home), the GeoJSON's vertices too, and the
+    # plan costs no more than the flight held at its start level (which cannot cross).
+    import json
+    from pathlib import Path
+
+    from pymavlink import mavwp
+    from rainuav.fly import main
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    wall = [[8.40, 47.3729], [8.70, 47.3729], [8.70, 47.3731], [8.40, 47.3731], [8.40, 47.3729]]
+    fc = {"type": "FeatureCollection", "features": [{"type": "Feature", "properties":
+          {"height": 40}, "geometry": {"type": "Polygon", "coordinates": [wall]}}]}  # fmt: skip
+    (tmp_path / "wall.geojson").write_text(json.dumps(fc))
+    out = tmp_path / "flight"
+    argv = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380", "--goal",
+            "47.3800,8.5560", "--footprints", str(tmp_path / "wall.geojson"), "--altitudes",
+            "30:60:30", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["start_altitude_m"] == 30.0 and s["climbs"] >= 1
+    line = json.loads((out / "flight.geojson").read_text())["features"][0]
+    z = np.array(line["geometry"]["coordinates"])[:, 2]
+    assert set(np.unique(z)) == {30.0, 60.0}
+    loader = mavwp.MAVWPLoader()
+    n = loader.load(str(out / "mission.waypoints"))
+    alts = [loader.wp(k).z for k in range(2, n - 1)]  # the waypoints after the take-off
+    assert set(alts) == {30.0, 60.0} and len(alts) == s["waypoints"]
+    # Held at 30 m the flight cannot cross: the best single level is 60 m. The band's plan
+    # costs at most a climb at the start (30 m at 5 m/s: 6 moves' time, each at most
+    # 1 + mu x 38 dB of shortfall, SINR being clipped at -40 dB) plus the 60 m plan.
+    assert s["best_single_altitude_m"] == 60.0
+    assert s["cost"] <= s["best_single_altitude_cost"] + 6 * (1 + 10 / 43 * 38)

@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -116,6 +117,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "buildings that block, diffract and reflect, and that the flight keeps clear of",
     )  # fmt: skip
     ap.add_argument(
+        "--altitudes", default=None, metavar="LOW:HIGH:STEP",
+        help="fly a band of heights, m above the ground (e.g. 30:120:15): the flight chooses "
+        "its height, climbing at 5 m/s and descending at 3 m/s; --altitude-m is then the "
+        "single height it is compared with",
+    )  # fmt: skip
+    ap.add_argument(
         "--altitude-reference", choices=("ground", "msl"), default=None,
         help="--altitude-m above the terrain under the UAV (ground, the default) or above "
         "mean sea level (msl)",
@@ -145,6 +152,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 box = ()
             if len(box) != 4:
                 raise InvalidInputError(f"--area must be S,W,N,E in degrees (got {args.area!r})")
+        altitudes = None if args.altitudes is None else _band(args.altitudes)
         out = check_out_dir(args.out, "--out")
         if not args.sites.is_file():
             raise InvalidInputError(f"--sites: no file {args.sites}")
@@ -152,7 +160,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.sites, args.start, args.goal, altitude_m=args.altitude_m,
             freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
             box=box, terrain=args.terrain, altitude_reference=args.altitude_reference,
-            footprints=args.footprints,
+            footprints=args.footprints, altitudes=altitudes,
         )  # fmt: skip
         if args.footprints is not None:
             from rainuav.radio.buildings import scenario_buildings
@@ -198,6 +206,22 @@ def _policy(run: Path) -> tuple[object, str]:
         return roll["path"], bool(roll["reached"])
 
     return fly, f"network {run}"
+
+
+def _band(text: str) -> list[float]:
+    """``LOW:HIGH:STEP`` (m) as the levels LOW, LOW + STEP, ... up to HIGH."""
+    try:
+        lo, hi, step = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise InvalidInputError(
+            f"--altitudes must be LOW:HIGH:STEP in metres, e.g. 30:120:15 (got {text!r})"
+        ) from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and step > 0 and hi >= lo):
+        raise InvalidInputError(f"--altitudes must have LOW <= HIGH and STEP > 0 (got {text!r})")
+    n = math.floor((hi - lo) / step + 1e-9) + 1
+    if n > 64:
+        raise InvalidInputError(f"--altitudes gives {n} levels (at most 64)")
+    return [lo + k * step for k in range(n)]
 
 
 if __name__ == "__main__":

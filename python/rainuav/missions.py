@@ -57,12 +57,12 @@ LATLON = ("lat", "lon")
 
 
 def corners(path: Any) -> np.ndarray:
-    """Indices of the vertices of ``path`` (T+1, 2) where the direction of the next move
-    differs from the last one's, with the first and the last vertex: the waypoints that fly
-    the same path."""
+    """Indices of the vertices of ``path`` (T+1, 2), or (T+1, 3) with a height, where the
+    direction of the next move differs from the last one's, with the first and the last
+    vertex: the waypoints that fly the same path (a change of height is a corner too)."""
     p = np.asarray(path, dtype=np.float64)
-    if p.ndim != 2 or p.shape[1] != 2 or len(p) < 1 or not np.all(np.isfinite(p)):
-        raise InvalidInputError(f"path must be a finite (T+1, 2) array (got {p.shape})")
+    if p.ndim != 2 or p.shape[1] not in (2, 3) or len(p) < 1 or not np.all(np.isfinite(p)):
+        raise InvalidInputError(f"path must be a finite (T+1, 2) or (T+1, 3) array (got {p.shape})")
     if len(p) < 3:
         return np.arange(len(p))
     d = np.diff(p, axis=0)
@@ -116,20 +116,27 @@ def terrain_waypoints(
 def mission_items(
     home: tuple[float, float],
     waypoints: Any,
-    altitude_m: float,
+    altitude_m: Any,
     altitudes_amsl_m: Any = None,
 ) -> list[dict[str, Any]]:
     """The mission: take-off at home to ``altitude_m``, the waypoints (K, 2) of (lat, lon)
-    at ``altitude_m`` above home, landing at the last one; with ``altitudes_amsl_m`` (K,),
-    take-off and waypoints above mean sea level instead (``MAV_FRAME_GLOBAL``: take-off to
-    the first waypoint's height). Each item: ``command``, ``frame``, ``params`` (7:
-    param1-4, latitude, longitude, altitude)."""
+    at ``altitude_m`` above home (one height, or one a waypoint (K,): a flight that
+    changes height), landing at the last one; with ``altitudes_amsl_m`` (K,), take-off and
+    waypoints above mean sea level instead (``MAV_FRAME_GLOBAL``: take-off to the first
+    waypoint's height). Each item: ``command``, ``frame``, ``params`` (7: param1-4,
+    latitude, longitude, altitude)."""
     wps = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
     if altitudes_amsl_m is None:
-        if not (0.5 <= altitude_m <= 3000.0):
-            raise InvalidInputError(f"altitude_m must be in [0.5, 3000] m (got {altitude_m!r})")
-        frame, alts = MAV_FRAME_GLOBAL_RELATIVE_ALT, np.full(len(wps), float(altitude_m))
-        climb = float(altitude_m)
+        rel_alts = np.asarray(altitude_m, dtype=np.float64).reshape(-1)
+        if rel_alts.size == 1:
+            rel_alts = np.full(len(wps), float(rel_alts[0]))
+        if rel_alts.shape != (len(wps),) or not np.all((rel_alts >= 0.5) & (rel_alts <= 3000.0)):
+            raise InvalidInputError(
+                f"altitude_m must be in [0.5, 3000] m, one value or one a waypoint "
+                f"(got {altitude_m!r})"
+            )
+        frame, alts = MAV_FRAME_GLOBAL_RELATIVE_ALT, rel_alts
+        climb = float(rel_alts[0])
     else:
         alts = np.asarray(altitudes_amsl_m, dtype=np.float64).reshape(-1)
         if alts.shape != (len(wps),) or not np.all(np.isfinite(alts)):
@@ -156,7 +163,7 @@ def mission_items(
 def wpl_text(
     home: tuple[float, float],
     waypoints: Any,
-    altitude_m: float,
+    altitude_m: Any,
     altitudes_amsl_m: Any = None,
     home_amsl_m: float = 0.0,
 ) -> str:
@@ -179,7 +186,7 @@ def _num(v: Any) -> str:
 def plan_dict(
     home: tuple[float, float],
     waypoints: Any,
-    altitude_m: float,
+    altitude_m: Any,
     speed_m_s: float,
     altitudes_amsl_m: Any = None,
     home_amsl_m: float = 0.0,
@@ -224,24 +231,28 @@ def plan_dict(
 
 def geojson_dict(
     latlon: Any,
-    altitude_m: float,
+    altitude_m: Any,
     vertex_properties: dict[str, list[Any]],
     sites: list[dict[str, Any]] | None = None,
     properties: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """A GeoJSON ``FeatureCollection``: the path (N, 2) of (lat, lon) as a ``LineString`` at
-    ``altitude_m`` whose properties hold ``properties`` and, per vertex, the lists of
+    ``altitude_m`` (one height, or one a vertex) whose properties hold ``properties`` and,
+    per vertex, the lists of
     ``vertex_properties`` (each of N values); each site (``lat``, ``lon`` and its own fields)
     as a ``Point``."""
     ll = np.asarray(latlon, dtype=np.float64).reshape(-1, 2)
     for name, values in vertex_properties.items():
         if len(values) != len(ll):
             raise InvalidInputError(f"{name}: {len(values)} values for {len(ll)} vertices")
+    z = np.broadcast_to(np.asarray(altitude_m, dtype=np.float64), (len(ll),))
     line = {
         "type": "Feature",
         "geometry": {
             "type": "LineString",
-            "coordinates": [[float(lo), float(la), float(altitude_m)] for la, lo in ll],
+            "coordinates": [
+                [float(lo), float(la), float(h)] for (la, lo), h in zip(ll, z, strict=True)
+            ],
         },
         "properties": {"kind": "flight", **(properties or {}), **vertex_properties},
     }
@@ -260,12 +271,16 @@ def geojson_dict(
 
 
 def kml_text(
-    latlon: Any, altitude_m: float, name: str, sites: list[dict[str, Any]] | None = None
+    latlon: Any, altitude_m: Any, name: str, sites: list[dict[str, Any]] | None = None
 ) -> str:
     """KML 2.2 for Google Earth: the path (N, 2) of (lat, lon) as a ``LineString`` at
-    ``altitude_m`` above the ground (``relativeToGround``), each site a ``Point``."""
+    ``altitude_m`` (one height, or one a vertex) above the ground (``relativeToGround``),
+    each site a ``Point``."""
     ll = np.asarray(latlon, dtype=np.float64).reshape(-1, 2)
-    coords = " ".join(f"{lo!r},{la!r},{float(altitude_m)!r}" for la, lo in ll.tolist())
+    z = np.broadcast_to(np.asarray(altitude_m, dtype=np.float64), (len(ll),)).tolist()
+    coords = " ".join(
+        f"{lo!r},{la!r},{float(h)!r}" for (la, lo), h in zip(ll.tolist(), z, strict=True)
+    )
     marks = "".join(
         f"<Placemark><name>{escape(str(s.get('site_id', 'site')))}</name>"
         f"<Point><coordinates>{float(s['lon'])!r},{float(s['lat'])!r},0</coordinates></Point>"

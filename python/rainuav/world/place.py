@@ -93,6 +93,7 @@ def place_scenario(
     terrain: str | Path | None = None,
     altitude_reference: str | None = None,
     footprints: str | Path | None = None,
+    altitudes: list[float] | None = None,
 ) -> Place:
     """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees.
     ``weather``: a georeferenced rain file (:mod:`rainuav.radio.radar`, mm/h or dBZ, one
@@ -102,7 +103,8 @@ def place_scenario(
     ``terrain``: a DEM GeoTIFF under the place (:mod:`rainuav.ground.dem`), with the flight
     altitude above the terrain (``altitude_reference="ground"``, the default) or above sea
     level (``"msl"``). ``footprints``: building footprints in GeoJSON
-    (:mod:`rainuav.ground.footprints`) standing on it."""
+    (:mod:`rainuav.ground.footprints`) standing on it. ``altitudes``: the flight levels a
+    flight chooses among (``area.altitudes_m``)."""
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
@@ -158,6 +160,7 @@ def place_scenario(
         x_min_m=edge(min(xs) - margin, False), x_max_m=edge(max(xs) + margin, True),
         y_min_m=edge(min(ys) - margin, False), y_max_m=edge(max(ys) + margin, True),
         altitude_m=altitude_m, resolution_m=resolution_m, altitude_reference=altitude_reference,
+        altitudes_m=None if altitudes is None else [float(v) for v in altitudes],
     )  # fmt: skip
     base = presets.uma(rain_rate, freq_ghz * 1e9)
     if weather is not None:
@@ -261,6 +264,12 @@ def fly_place(
     the exact optimum (which stays the yardstick: ``excess_over_optimum``); ``flown_by``
     names it in the summary."""
     a = place.scenario.area
+    if a.altitudes_m:  # altitude as a decision
+        if flyer is not None:
+            raise InvalidInputError("--policy flies one altitude: not with --altitudes")
+        from rainuav.world.flylevels import fly_levels
+
+        return fly_levels(place, out, speed_m_s=speed_m_s, min_db=min_db, progress=progress)
     span = abs(place.goal_m[0] - place.start_m[0]) + abs(place.goal_m[1] - place.start_m[1])
     steps = math.ceil(2.0 * span / 10.0) + 50  # room for a detour twice the direct route
     scn = place.scenario

@@ -1,0 +1,147 @@
+"""``fly`` with altitude as a decision (``--altitudes``): the place mapped at each flight
+level (:mod:`rainuav.radio.levels`), the exact plan among them
+(:func:`rainuav.nav.planner.optimal_levels`: climbs and descents weighted by their duration)
+from the lowest level flyable at the start, and the flight's files with a height on every
+waypoint (relative to home).
+
+Beside the plan, the summary holds the baselines: the exact plan held at the level nearest
+``--altitude-m`` (the paper's single altitude) and the best single level for this flight
+(the exact plan at each level, chosen with hindsight), each with its cost and outage share.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from rainuav._io import begin_folder, write_atomic
+from rainuav._sampling import bilinear
+from rainuav.errors import InvalidInputError
+from rainuav.geo import latlon_text
+from rainuav.missions import corners, expand, geojson_dict, kml_text, plan_dict, wpl_text
+from rainuav.nav import planner
+from rainuav.nav.field import SignalField, pixel_index
+from rainuav.nav.task import NavConfig
+from rainuav.radio import presets
+from rainuav.radio.levels import build_radio_levels
+from rainuav.radio.maptiff import write_map_geotiff
+
+__all__ = ["fly_levels"]
+
+
+def fly_levels(
+    place, out: Path, *, speed_m_s: float = 10.0, min_db: float | None = None,
+    progress: bool = False,
+) -> dict:  # fmt: skip
+    """Plans and writes the flight among ``place``'s levels (module docstring); returns the
+    summary."""
+    from rainuav.world.place import _plot  # the same figure as one altitude's
+
+    scn = place.scenario
+    if scn.medium.moves:
+        raise InvalidInputError(
+            "--altitudes: weather that moves is flown at one altitude (give --altitude-m)"
+        )
+    if scn.terrain is not None:
+        raise InvalidInputError(
+            "--altitudes over --terrain: not yet (heights above sea level per level); give "
+            "--altitude-m"
+        )
+    alts = np.asarray(scn.area.levels, dtype=float)
+    stack = build_radio_levels(scn, progress=progress)
+    sinr, blocked, extent = stack.sinr_db, stack.not_flyable, stack.extent
+    span = abs(place.goal_m[0] - place.start_m[0]) + abs(place.goal_m[1] - place.start_m[1])
+    steps = math.ceil(2.0 * span / 10.0) + 50 + 4 * len(alts)
+    threshold = presets.SINR_THRESHOLDS_DB["uma"] if min_db is None else min_db
+    task = NavConfig(goal_m=place.goal_m, start_m=place.start_m, max_steps=steps,
+                     speed_m_s=speed_m_s, min_db=threshold)  # fmt: skip
+    shape, bounds = sinr.shape[1:], scn.area.bounds
+
+    def flyable(x: float, y: float) -> np.ndarray:
+        i, j = pixel_index(shape, bounds, np.array([x]), np.array([y]))
+        return ~blocked[:, i[0], j[0]]
+
+    for name, (x, y) in (("--start", place.start_m), ("--goal", place.goal_m)):
+        if not flyable(x, y).any():
+            lat, lon = place.georef.to_latlon(x, y)
+            raise InvalidInputError(
+                f"{name} {latlon_text(float(lat), float(lon))} lies where the UAV may not fly "
+                f"at any of --altitudes: obstacles within {scn.area.clearance_m:g} m"
+            )
+    start_level = int(np.flatnonzero(flyable(*place.start_m))[0])
+    plan = planner.optimal_levels(sinr, alts, extent, task, [place.start_m], [start_level],
+                                  not_flyable=blocked)[0]  # fmt: skip
+    if np.hypot(*(plan.path_m[-1] - np.asarray(place.goal_m))) > task.tol_m:
+        raise InvalidInputError(f"no flight reaches the destination within {steps} moves")
+    climb, descend = planner.level_durations(alts, task)
+    path, lv = plan.path_m, plan.levels
+    dur = np.ones(len(plan.actions))
+    up, down = plan.actions == 4, plan.actions == 5
+    dur[up] = np.asarray(climb)[lv[:-1][up]] if up.any() else dur[up]
+    dur[down] = np.asarray(descend)[lv[1:][down]] if down.any() else dur[down]
+    t_s = np.concatenate([[0.0], np.cumsum(dur) * task.move_s])
+    sig = np.array([bilinear(sinr[k], extent, path[i : i + 1, 0], path[i : i + 1, 1])[0]
+                    for i, k in enumerate(lv)])  # fmt: skip
+    serving = np.array([stack.maps[k].serving_cell[pixel_index(shape, bounds, path[i:i + 1, 0],
+                        path[i:i + 1, 1])][0] for i, k in enumerate(lv)])  # fmt: skip
+    cost = -(plan.return_ - task.goal_reward)
+    # The baselines: each level alone, exactly.
+    per_level = []
+    for k in range(len(alts)):
+        field = SignalField(sinr[k], extent, not_flyable=blocked[k])
+        p = planner.plan_on(field, task, np.asarray(place.start_m)[None])[0]
+        arrives = bool(np.hypot(*(p.path_m[-1] - np.asarray(place.goal_m))) <= task.tol_m)
+        s = bilinear(sinr[k], extent, p.path_m[1:, 0], p.path_m[1:, 1])
+        per_level.append((-(p.return_ - task.goal_reward) if arrives else None,
+                          float(np.mean(s < threshold)) if arrives else None))  # fmt: skip
+    fixed = int(np.argmin(np.abs(alts - scn.area.altitude_m)))
+    arriving = [k for k, (c, _) in enumerate(per_level) if c is not None]
+    best_single = min(arriving, key=lambda k: per_level[k][0]) if arriving else None
+    # Waypoints: the corners of the path in three dimensions (a change of height is one).
+    xyz = np.column_stack([path, lv * task.step_m])
+    picks = corners(xyz)
+    if not np.allclose(expand(xyz[picks], task.step_m), xyz, atol=1e-6):
+        raise AssertionError("the waypoints do not fly the planned path")  # never: tested
+    lat, lon = place.georef.to_latlon(path[:, 0], path[:, 1])
+    ll = np.stack([lat, lon], axis=1)
+    z = alts[lv]
+    summary = {
+        "flown_by": "exact optimum among levels", "cost": cost, "optimal_cost": cost,
+        "excess_over_optimum": 0.0, "outage_share": float(np.mean(sig[1:] < threshold)),
+        "altitudes_m": alts.tolist(), "start_altitude_m": float(alts[start_level]),
+        "climbs": int(up.sum()), "descents": int(down.sum()),
+        "fixed_altitude_m": float(alts[fixed]), "fixed_altitude_cost": per_level[fixed][0],
+        "fixed_altitude_outage_share": per_level[fixed][1],
+        "best_single_altitude_m": None if best_single is None else float(alts[best_single]),
+        "best_single_altitude_cost": None if best_single is None else per_level[best_single][0],
+        "flight_time_s": float(t_s[-1]), "moves": len(plan.actions), "waypoints": len(picks),
+        "min_db": float(threshold),
+        "origin": {"lat": place.georef.lat_deg, "lon": place.georef.lon_deg,
+                   "projection": place.georef.proj4},
+        "area_m": list(scn.area.bounds),
+    }  # fmt: skip
+    begin_folder(out, "summary.json")
+    home = (float(ll[0, 0]), float(ll[0, 1]))
+    props = {
+        "t_s": t_s.tolist(), "sinr_db": np.round(sig, 3).tolist(),
+        "serving_cell": [int(c) for c in serving], "outage": [bool(s < threshold) for s in sig],
+        "altitude_m": z.tolist(),
+    }  # fmt: skip
+    sites = [{k: r[k] for k in ("site_id", "lat", "lon", "height_m", "azimuth_deg")}
+             for r in place.sites]  # fmt: skip
+    texts = {
+        "flight.geojson": json.dumps(geojson_dict(ll, z, props, sites, summary), indent=1),
+        "flight.kml": kml_text(ll, z, "rainuav flight", sites),
+        "mission.plan": json.dumps(plan_dict(home, ll[picks], z[picks], speed_m_s), indent=2),
+        "mission.waypoints": wpl_text(home, ll[picks], z[picks]),
+    }
+    for name, text in texts.items():
+        write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
+    _plot(stack.maps[start_level], path, place, out / "flight.png")
+    write_map_geotiff(stack.maps[start_level], out / "sinr.tif")
+    done = json.dumps(summary, indent=2) + "\n"
+    write_atomic(out / "summary.json", lambda tmp: tmp.write_text(done))
+    return summary
