@@ -146,3 +146,26 @@ def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) ->
     # 1 + mu x 38 dB of shortfall, SINR being clipped at -40 dB) plus the 60 m plan.
     assert s["best_single_altitude_m"] == 60.0
     assert s["cost"] <= s["best_single_altitude_cost"] + 6 * (1 + 10 / 43 * 38)
+
+
+def test_the_altitude_study_and_its_figures() -> None:
+    # The built-in study: 2 networks x 2 frequencies x 4 rain rates, six levels, `--quick`
+    # with 10 starts. One case's figures on a coarse map: the plan among levels costs no more
+    # than the best fixed level where every flight arrives at both, and the plan held at
+    # 100 m costs at least as much.
+    from rainuav.nav.task import NavConfig
+    from rainuav.studies.altitude import ALTITUDE_COLUMNS, altitude_row
+    from rainuav.studies.spec import load_study
+
+    study = load_study("altitude")
+    assert len(study.cases()) == 16 and study.compute == ["altitudes"]
+    assert study.with_quick().eval_starts == 10
+    scn = uma(engine="ray").replace(
+        area=Area(resolution_m=40.0, altitudes_m=[25.0, 50.0, 100.0, 150.0])
+    )
+    rng = np.random.default_rng(1)
+    starts = rng.uniform(0.0, 2000.0, size=(4, 2))
+    row = altitude_row(scn, NavConfig(min_db=-2.0, step_m=40.0, tol_m=40.0), starts)
+    assert set(row) == set(ALTITUDE_COLUMNS)
+    assert row["levels_optimal_mean_cost"] <= row["best_fixed_mean_cost"] + 1e-9
+    assert row["fixed_100m_excess_cost"] >= -1e-9 and row["best_single_excess_cost"] >= -1e-9

@@ -28,6 +28,7 @@ import numpy as np
 
 from rainuav._io import begin_folder, write_atomic
 from rainuav.errors import InvalidInputError
+from rainuav.studies.altitude import ALTITUDE_COLUMNS
 from rainuav.studies.figures import plot_maps
 from rainuav.studies.policies import TRANSFER_COLUMNS, plot_learned, read_result, transfer
 from rainuav.studies.spec import Case, Study, case_scenario, train_config
@@ -44,6 +45,7 @@ COLUMNS = (
     "replan_outage_share",
     "success_rate", "mean_excess_cost", "worst_excess_cost", "mean_signal_db", "outage_share",
     *TRANSFER_COLUMNS,
+    *ALTITUDE_COLUMNS,
 )  # fmt: skip
 """The columns of ``results.csv``: same study, same seeds, same file (wall times stay in each
 case's ``result.json``)."""
@@ -101,6 +103,11 @@ def run_case(
         row["straight_line_mean_excess_cost"] = line["mean_excess_cost"]
         paths = refs["optimal"]["paths"][:20]  # planned above, not again
         plot_trajectories(env, [], out / "optimal.png", f"{case.id}: exact optimum", paths)
+    if "altitudes" in compute:
+        from rainuav.studies.altitude import altitude_row
+
+        starts = starts_of(env, eval_starts, cfg.eval_seed)
+        row.update(altitude_row(scn, env.cfg, starts))
     if "learned" in compute:
         m = train(cfg, world, progress=False)
         for k in ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_signal_db"):
@@ -276,7 +283,8 @@ def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
     lines += ["| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
     lines += ["| " + " | ".join(_fmt(r.get(c)) for c in shown) + " |" for r in rows]
     base = [r for r in rows if r["axis"] == "base"]
-    figures = [c for c in shown if c in COLUMNS[10:] and c not in TRANSFER_COLUMNS]
+    text = ("outage_by_altitude", "cost_by_altitude")  # several numbers in one cell
+    figures = [c for c in shown if c in COLUMNS[10:] and c not in (*TRANSFER_COLUMNS, *text)]
     if base:
         lines += ["", "## Change against the base case, seed by seed (mean, min..max)", ""]
         lines += [

@@ -45,10 +45,10 @@ from rainuav.world import make_scenario
 
 __all__ = ["BUILT_IN", "COMPUTE", "SCENARIO_FIELDS", "Case", "Study", "load_study"]
 
-COMPUTE = ("map", "optimal", "learned")
-SCENARIO_FIELDS = ("freq_ghz", "wind_m_s", "wind_model", "engine")
+COMPUTE = ("map", "optimal", "learned", "altitudes")
+SCENARIO_FIELDS = ("freq_ghz", "wind_m_s", "wind_model", "engine", "altitudes_m")
 """Fields of a case that change the scenario rather than the run."""
-BUILT_IN = ("paper", "mmwave", "storms")
+BUILT_IN = ("paper", "mmwave", "storms", "altitude")
 MAX_CASES = 10_000
 """The most cases a study may have (axes x seeds): every case is at least a map and a plan."""
 _TOP = {"name", "sweep", "seeds", "compute", "eval_starts", "base", "axes", "quick"}
@@ -144,6 +144,10 @@ def case_scenario(fields: dict[str, Any], cfg: TrainConfig) -> Scenario:
         scn = dataclasses.replace(scn, freq_hz=float(fields["freq_ghz"]) * 1e9)
     if fields.get("engine") is not None:
         scn = dataclasses.replace(scn, engine=fields["engine"])
+    if fields.get("altitudes_m") is not None:
+        area = dataclasses.replace(scn.area, altitudes_m=list(fields["altitudes_m"]))
+        area.check("altitudes_m")
+        scn = dataclasses.replace(scn, area=area)
     if fields.get("wind_m_s") is not None:
         medium = dataclasses.replace(scn.medium, wind_speed_m_s=float(fields["wind_m_s"]))
         scn = dataclasses.replace(scn, medium=medium)
@@ -199,6 +203,9 @@ def parse_study(data: dict[str, Any], where: str) -> Study:
             raise InvalidInputError(f"{where}: [{name}] must be a table")
     _check_fields(f"{where} [base]", base)
     _check_fields(f"{where} [quick]", quick)
+    # A list value (altitudes_m) is one value of its field: a tuple, so cases compare.
+    base = {k: tuple(v) if isinstance(v, list) else v for k, v in base.items()}
+    quick = {k: tuple(v) if isinstance(v, list) else v for k, v in quick.items()}
     for k, v in axes.items():
         if not isinstance(v, list) or not v:
             raise InvalidInputError(f"{where} [axes]: {k} must be a non-empty list of values")
