@@ -169,3 +169,21 @@ def test_the_altitude_study_and_its_figures() -> None:
     assert set(row) == set(ALTITUDE_COLUMNS)
     assert row["levels_optimal_mean_cost"] <= row["best_fixed_mean_cost"] + 1e-9
     assert row["fixed_100m_excess_cost"] >= -1e-9 and row["best_single_excess_cost"] >= -1e-9
+
+
+def test_bad_altitude_bands_are_refused_in_one_line(tmp_path, capsys) -> None:
+    from pathlib import Path
+
+    from rainuav.fly import main
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    base = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380", "--goal",
+            "47.3800,8.5560"]  # fmt: skip
+    for band, word in (("60:30:15", "LOW <= HIGH"), ("30:120", "LOW:HIGH:STEP"),
+                       ("0.1:10:5", "altitudes_m[0]"), ("30:3000:10", "at most 64")):  # fmt: skip
+        out = tmp_path / band.replace(":", "_")
+        capsys.readouterr()
+        rc = main([*base, "--altitudes", band, "--out", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and word in err[0], (band, err)
+        assert not (out / "summary.json").exists()
