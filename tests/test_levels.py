@@ -166,9 +166,19 @@ def test_the_altitude_study_and_its_figures() -> None:
     rng = np.random.default_rng(1)
     starts = rng.uniform(0.0, 2000.0, size=(4, 2))
     row = altitude_row(scn, NavConfig(min_db=-2.0, step_m=40.0, tol_m=40.0), starts)
-    assert set(row) == set(ALTITUDE_COLUMNS)
+    assert set(row) == set(ALTITUDE_COLUMNS) and row["straight_line_100m_arrives"] is None
     assert row["levels_optimal_mean_cost"] <= row["best_fixed_mean_cost"] + 1e-9
     assert row["fixed_100m_excess_cost"] >= -1e-9 and row["best_single_excess_cost"] >= -1e-9
+    # With the case's environment at 100 m, the straight line there beside them.
+    from rainuav.radio.levels import level_scenario
+    from rainuav.radio.radiomap import build_radio_map
+    from rainuav.world import world_from
+
+    cfg = NavConfig(min_db=-2.0, step_m=40.0, tol_m=40.0)
+    env = world_from(build_radio_map(level_scenario(scn, 100.0)), cfg).env()
+    row = altitude_row(scn, cfg, starts, env)
+    assert row["straight_line_100m_arrives"] == 1.0
+    assert row["straight_line_100m_excess_cost"] >= row["fixed_100m_excess_cost"] - 1e-9
 
 
 def test_bad_altitude_bands_are_refused_in_one_line(tmp_path, capsys) -> None:

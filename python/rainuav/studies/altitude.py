@@ -31,6 +31,7 @@ ALTITUDE_COLUMNS = (
     "outage_by_altitude", "cost_by_altitude", "best_fixed_altitude_m",
     "best_fixed_mean_cost", "levels_optimal_mean_cost", "levels_outage_share",
     "fixed_100m_excess_cost", "best_fixed_excess_cost", "best_single_excess_cost",
+    "straight_line_100m_excess_cost", "straight_line_100m_arrives",
 )  # fmt: skip
 """The columns this adds to a study's ``results.csv``."""
 
@@ -41,8 +42,11 @@ def _outage(sinr: np.ndarray, extent: Any, path: np.ndarray, lv: np.ndarray, thr
     return float(np.mean(np.asarray(s) < thr)) if s else 0.0
 
 
-def altitude_row(scn: Scenario, cfg: NavConfig, starts: np.ndarray) -> dict[str, Any]:
-    """The case's altitude figures (module docstring) from ``starts`` (N, 2)."""
+def altitude_row(
+    scn: Scenario, cfg: NavConfig, starts: np.ndarray, env_100m: Any = None
+) -> dict[str, Any]:
+    """The case's altitude figures (module docstring) from ``starts`` (N, 2); with
+    ``env_100m`` (the case's environment at 100 m), the straight line there too."""
     stack = build_radio_levels(scn)
     sinr, blocked, ext = stack.sinr_db, stack.not_flyable, stack.extent
     alts = stack.altitudes_m
@@ -80,7 +84,14 @@ def altitude_row(scn: Scenario, cfg: NavConfig, starts: np.ndarray) -> dict[str,
         return float(np.mean((c[both] - c_free[both]) / c_free[both])) if both.any() else np.nan
 
     near_100 = int(np.argmin(np.abs(alts - 100.0)))
+    line_excess, line_arrives = None, None
+    if env_100m is not None:
+        lines = [planner.straight_line(env_100m, p) for p in starts]
+        c_line = np.array([cost(p.return_, p.path_m) for p in lines])
+        line_excess, line_arrives = excess(c_line), float(np.mean(np.isfinite(c_line)))
     return {
+        "straight_line_100m_excess_cost": line_excess,
+        "straight_line_100m_arrives": line_arrives,
         "outage_by_altitude": " ".join(
             f"{a:g}:{np.mean(s < thr):.3f}" for a, s in zip(alts, sinr, strict=True)
         ),

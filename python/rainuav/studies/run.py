@@ -107,7 +107,8 @@ def run_case(
         from rainuav.studies.altitude import altitude_row
 
         starts = starts_of(env, eval_starts, cfg.eval_seed)
-        row.update(altitude_row(scn, env.cfg, starts))
+        at_100 = env if scn.area.altitude_m == 100.0 else None
+        row.update(altitude_row(scn, env.cfg, starts, at_100))
     if "learned" in compute:
         m = train(cfg, world, progress=False)
         for k in ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_signal_db"):
