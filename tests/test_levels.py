@@ -130,7 +130,7 @@ def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) ->
     out = tmp_path / "flight"
     argv = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380", "--goal",
             "47.3800,8.5560", "--footprints", str(tmp_path / "wall.geojson"), "--altitudes",
-            "30:60:30", "--out", str(out)]  # fmt: skip
+            "30:60:30", "--engine", "ray", "--out", str(out)]  # fmt: skip
     assert main(argv) == 0
     s = json.loads((out / "summary.json").read_text())
     assert s["start_altitude_m"] == 30.0 and s["climbs"] >= 1
@@ -146,6 +146,11 @@ def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) ->
     # 1 + mu x 38 dB of shortfall, SINR being clipped at -40 dB) plus the 60 m plan.
     assert s["best_single_altitude_m"] == 60.0
     assert s["cost"] <= s["best_single_altitude_cost"] + 6 * (1 + 10 / 43 * 38)
+    # Started at 60 m (`--start LAT,LON,60`, the same maps): no climb is needed.
+    out2 = tmp_path / "from_60"
+    assert main([*argv[:2], "--start", "47.3660,8.5380,60", *argv[4:-1], str(out2)]) == 0
+    s2 = json.loads((out2 / "summary.json").read_text())
+    assert s2["start_altitude_m"] == 60.0 and s2["climbs"] == 0
 
 
 def test_the_altitude_study_and_its_figures() -> None:
@@ -188,7 +193,7 @@ def test_bad_altitude_bands_are_refused_in_one_line(tmp_path, capsys) -> None:
 
     examples = Path(__file__).resolve().parents[1] / "examples"
     base = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380", "--goal",
-            "47.3800,8.5560"]  # fmt: skip
+            "47.3800,8.5560", "--engine", "ray"]  # fmt: skip
     for band, word in (("60:30:15", "LOW <= HIGH"), ("30:120", "LOW:HIGH:STEP"),
                        ("0.1:10:5", "altitudes_m[0]"), ("30:3000:10", "at most 64")):  # fmt: skip
         out = tmp_path / band.replace(":", "_")
@@ -197,3 +202,26 @@ def test_bad_altitude_bands_are_refused_in_one_line(tmp_path, capsys) -> None:
         err = capsys.readouterr().err.strip().splitlines()
         assert rc == 2 and len(err) == 1 and word in err[0], (band, err)
         assert not (out / "summary.json").exists()
+
+
+def test_one_level_band_flies_todays_plan_and_a_start_altitude_is_a_level(tmp_path, capsys) -> None:
+    # `--altitudes 100:100:1` is today's flight at 100 m: the same cost and moves (the same
+    # map, from the cache). A start altitude must be one of the levels (one line, exit 2).
+    import json
+    from pathlib import Path
+
+    from rainuav.fly import main
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    base = ["--sites", str(examples / "sites.csv"), "--goal", "47.3800,8.5560", "--engine", "ray"]
+    assert main([*base, "--start", "47.3660,8.5380", "--out", str(tmp_path / "a")]) == 0
+    assert main([*base, "--start", "47.3660,8.5380", "--altitudes", "100:100:1",
+                 "--out", str(tmp_path / "b")]) == 0  # fmt: skip
+    a = json.loads((tmp_path / "a" / "summary.json").read_text())
+    b = json.loads((tmp_path / "b" / "summary.json").read_text())
+    assert b["cost"] == pytest.approx(a["cost"], abs=1e-9) and b["moves"] == a["moves"]
+    capsys.readouterr()
+    rc = main([*base, "--start", "47.3660,8.5380,45", "--altitudes", "30:60:30",
+               "--out", str(tmp_path / "c")])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "one of --altitudes" in err[0], err

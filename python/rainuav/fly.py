@@ -74,6 +74,19 @@ def _latlon(text: str) -> tuple[float, float]:
     return lat, lon
 
 
+def _start(text: str) -> tuple[float, ...]:
+    """``LAT,LON`` or ``LAT,LON,ALTITUDE`` (the altitude: one of ``--altitudes``)."""
+    try:
+        vals = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        vals = ()
+    if len(vals) not in (2, 3):
+        raise argparse.ArgumentTypeError(
+            f"expected LAT,LON in degrees, or LAT,LON,ALTITUDE with --altitudes (got {text!r})"
+        )
+    return vals
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.fly",
@@ -82,9 +95,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     ap.add_argument("--sites", type=Path, required=True, help="sites file (.csv or .geojson)")
     ap.add_argument(
-        "--start", type=_latlon, required=True,
+        "--start", type=_start, required=True,
         help="take-off point LAT,LON in degrees, south and west negative (--start -33.87,151.21 "
-        "and --start=-33.87,151.21 both work)",
+        "and --start=-33.87,151.21 both work); with --altitudes, LAT,LON,ALTITUDE starts at "
+        "that level (default: the lowest the start may be flown at)",
     )  # fmt: skip
     ap.add_argument("--goal", type=_latlon, required=True, help="destination LAT,LON, as --start")
     ap.add_argument(
@@ -115,6 +129,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--footprints", type=Path, default=None,
         help="building footprints in GeoJSON (longitude/latitude, OpenStreetMap height tags): "
         "buildings that block, diffract and reflect, and that the flight keeps clear of",
+    )  # fmt: skip
+    ap.add_argument(
+        "--engine", choices=("hybrid", "ray", "pe"), default=None,
+        help="the radio map's engine (default: hybrid, the PE inside each cell's cone and "
+        "rays outside; ray: rays alone, seconds instead of minutes)",
     )  # fmt: skip
     ap.add_argument(
         "--altitudes", default=None, metavar="LOW:HIGH:STEP",
@@ -153,14 +172,24 @@ def main(argv: Sequence[str] | None = None) -> int:
             if len(box) != 4:
                 raise InvalidInputError(f"--area must be S,W,N,E in degrees (got {args.area!r})")
         altitudes = None if args.altitudes is None else _band(args.altitudes)
+        start_alt = args.start[2] if len(args.start) == 3 else None
+        if start_alt is not None and altitudes is None:
+            raise InvalidInputError(
+                "--start LAT,LON,ALTITUDE needs --altitudes (a band to start in)"
+            )
+        if start_alt is not None and not any(abs(start_alt - a) < 1e-6 for a in altitudes):
+            raise InvalidInputError(
+                f"--start altitude {start_alt:g} m must be one of --altitudes "
+                f"{[round(a, 3) for a in altitudes]}"
+            )
         out = check_out_dir(args.out, "--out")
         if not args.sites.is_file():
             raise InvalidInputError(f"--sites: no file {args.sites}")
         place = place_scenario(
-            args.sites, args.start, args.goal, altitude_m=args.altitude_m,
+            args.sites, args.start[:2], args.goal, altitude_m=args.altitude_m,
             freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
             box=box, terrain=args.terrain, altitude_reference=args.altitude_reference,
-            footprints=args.footprints, altitudes=altitudes,
+            footprints=args.footprints, altitudes=altitudes, engine=args.engine,
         )  # fmt: skip
         if args.footprints is not None:
             from rainuav.radio.buildings import scenario_buildings
@@ -168,7 +197,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(scenario_buildings(place.scenario).summary, file=sys.stderr)  # type: ignore[union-attr]
         flyer, by = (None, "exact optimum") if args.policy is None else _policy(args.policy)
         summary = fly_place(
-            place, out, speed_m_s=args.speed_m_s, min_db=args.min_db, flyer=flyer, flown_by=by
+            place,
+            out,
+            speed_m_s=args.speed_m_s,
+            min_db=args.min_db,
+            flyer=flyer,
+            flown_by=by,
+            start_altitude_m=start_alt,
         )
         print(json.dumps(summary, indent=2))
         print(f"wrote {out.resolve()}", file=sys.stderr)

@@ -34,9 +34,10 @@ __all__ = ["fly_levels"]
 
 def fly_levels(
     place, out: Path, *, speed_m_s: float = 10.0, min_db: float | None = None,
-    progress: bool = False,
+    progress: bool = False, start_altitude_m: float | None = None,
 ) -> dict:  # fmt: skip
-    """Plans and writes the flight among ``place``'s levels (module docstring); returns the
+    """Plans and writes the flight among ``place``'s levels (module docstring), from the level
+    ``start_altitude_m`` (default: the lowest the start may be flown at); returns the
     summary."""
     from rainuav.world.place import _plot  # the same figure as one altitude's
 
@@ -72,6 +73,14 @@ def fly_levels(
                 f"at any of --altitudes: obstacles within {scn.area.clearance_m:g} m"
             )
     start_level = int(np.flatnonzero(flyable(*place.start_m))[0])
+    if start_altitude_m is not None:
+        start_level = int(np.argmin(np.abs(alts - start_altitude_m)))
+        if not flyable(*place.start_m)[start_level]:
+            raise InvalidInputError(
+                f"--start altitude {start_altitude_m:g} m: the UAV may not fly there (obstacles "
+                f"within {scn.area.clearance_m:g} m); the lowest level it may start at is "
+                f"{alts[np.flatnonzero(flyable(*place.start_m))[0]]:g} m"
+            )
     plan = planner.optimal_levels(sinr, alts, extent, task, [place.start_m], [start_level],
                                   not_flyable=blocked)[0]  # fmt: skip
     if np.hypot(*(plan.path_m[-1] - np.asarray(place.goal_m))) > task.tol_m:

@@ -94,6 +94,7 @@ def place_scenario(
     altitude_reference: str | None = None,
     footprints: str | Path | None = None,
     altitudes: list[float] | None = None,
+    engine: str | None = None,
 ) -> Place:
     """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees.
     ``weather``: a georeferenced rain file (:mod:`rainuav.radio.radar`, mm/h or dBZ, one
@@ -104,7 +105,8 @@ def place_scenario(
     altitude above the terrain (``altitude_reference="ground"``, the default) or above sea
     level (``"msl"``). ``footprints``: building footprints in GeoJSON
     (:mod:`rainuav.ground.footprints`) standing on it. ``altitudes``: the flight levels a
-    flight chooses among (``area.altitudes_m``)."""
+    flight chooses among (``area.altitudes_m``). ``engine``: the maps' engine (default the
+    preset's, hybrid)."""
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
@@ -168,6 +170,8 @@ def place_scenario(
         base = dataclasses.replace(base, medium=medium)
     origin = Origin(geo.lat_deg, geo.lon_deg)
     scn = dataclasses.replace(base, name="place", area=area, sites=sites, origin=origin)
+    if engine is not None:
+        scn = dataclasses.replace(scn, engine=engine)
     if terrain is not None:
         if not Path(terrain).is_file():
             raise InvalidInputError(f"--terrain: no file {terrain}")
@@ -255,6 +259,7 @@ def fly_place(
     progress: bool = False,
     flyer: Callable[[UAVNavEnv], tuple[np.ndarray, bool]] | None = None,
     flown_by: str = "exact optimum",
+    start_altitude_m: float | None = None,
 ) -> dict:
     """Builds the place's map, plans the exact optimum and the straight line from the start,
     writes :data:`FLIGHT_FILES` into ``out`` (each atomically) and returns the summary.
@@ -262,14 +267,16 @@ def fly_place(
     settings the place takes). ``flyer``: flies the place's env (with the weather
     observation) from its start and returns the path and whether it arrived, in place of
     the exact optimum (which stays the yardstick: ``excess_over_optimum``); ``flown_by``
-    names it in the summary."""
+    names it in the summary. ``start_altitude_m``: with ``area.altitudes_m``, the level to
+    start at (:func:`rainuav.world.flylevels.fly_levels`)."""
     a = place.scenario.area
     if a.altitudes_m:  # altitude as a decision
         if flyer is not None:
             raise InvalidInputError("--policy flies one altitude: not with --altitudes")
         from rainuav.world.flylevels import fly_levels
 
-        return fly_levels(place, out, speed_m_s=speed_m_s, min_db=min_db, progress=progress)
+        return fly_levels(place, out, speed_m_s=speed_m_s, min_db=min_db, progress=progress,
+                          start_altitude_m=start_altitude_m)  # fmt: skip
     span = abs(place.goal_m[0] - place.start_m[0]) + abs(place.goal_m[1] - place.start_m[1])
     steps = math.ceil(2.0 * span / 10.0) + 50  # room for a detour twice the direct route
     scn = place.scenario
