@@ -28,6 +28,7 @@ from rainuav.nav.task import NavConfig
 from rainuav.radio import presets
 from rainuav.radio.levels import build_radio_levels
 from rainuav.radio.maptiff import write_map_geotiff
+from rainuav.world.flightplot import plot_flight
 
 __all__ = ["fly_levels"]
 
@@ -39,8 +40,6 @@ def fly_levels(
     """Plans and writes the flight among ``place``'s levels (module docstring), from the level
     ``start_altitude_m`` (default: the lowest the start may be flown at); returns the
     summary."""
-    from rainuav.world.place import _plot  # the same figure as one altitude's
-
     scn = place.scenario
     if scn.medium.moves:
         raise InvalidInputError(
@@ -149,7 +148,7 @@ def fly_levels(
     }
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
-    _plot(stack.maps[start_level], path, place, out / "flight.png")
+    plot_flight(stack.maps[start_level], path, place, out / "flight.png")
     write_map_geotiff(stack.maps[start_level], out / "sinr.tif")
     done = json.dumps(summary, indent=2) + "\n"
     write_atomic(out / "summary.json", lambda tmp: tmp.write_text(done))

@@ -47,6 +47,7 @@ from rainuav.radio.sites import read_site_rows, sites_from_rows
 from rainuav.radio.terrain import flight_heights_at, obstacle_pixel_max, scenario_terrain
 from rainuav.radio.timemap import build_radio_map_series, series_times
 from rainuav.world import World, world_from
+from rainuav.world.flightplot import plot_flight
 
 __all__ = ["MARGIN_M", "MAX_SIDE_M", "Place", "fly_place", "place_scenario"]
 
@@ -393,45 +394,8 @@ def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.nd
     }
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
-    _plot(rm, path, place, out / "flight.png")
+    plot_flight(rm, path, place, out / "flight.png")
     # The map at take-off for a GIS (SINR, serving power and cell, not flyable).
     write_map_geotiff(rm, out / "sinr.tif", None if rm.sinr_db.ndim == 2 else 0)
     done = json.dumps(summary, indent=2) + "\n"  # last: the folder is complete
     write_atomic(out / "summary.json", lambda tmp: tmp.write_text(done))
-
-
-def _plot(rm: Any, path: np.ndarray, place: Place, where: Path) -> None:
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
-    ax = fig.subplots()
-    a = place.scenario.area
-    x0, x1, y0, y1 = a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m
-    lo = float(presets.SINR_THRESHOLDS_DB["uma"])
-    sinr = rm.sinr_db if rm.sinr_db.ndim == 2 else rm.sinr_db[0]  # a series: at take-off
-    im = ax.imshow(sinr, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn",
-                   vmin=lo - 15, vmax=lo + 15)  # fmt: skip
-    from rainuav.radio.pe_engine import rain_rate_at
-
-    scn = place.scenario
-    if scn.medium.varies:  # the rain at take-off, outlined
-        xx, yy = np.meshgrid(np.linspace(x0, x1, 200), np.linspace(y0, y1, 200))
-        rate = rain_rate_at(dataclasses.replace(scn, medium=scn.medium.at(0.0)), xx, yy)
-        levels = [v for v in (5.0, 20.0, 50.0) if rate.min() < v < rate.max()]
-        if levels:
-            cs = ax.contour(xx, yy, rate, levels=levels, colors="navy", linewidths=1.0)
-            ax.clabel(cs, fmt="%g mm/h", fontsize=7)
-    ax.plot(path[:, 0], path[:, 1], "k-", lw=1.5, label="planned flight")
-    wp = path[corners(path)]
-    ax.plot(wp[:, 0], wp[:, 1], "ko", ms=3, label="waypoints")
-    for k, s in enumerate(place.scenario.sites):
-        ax.plot(s.x_m, s.y_m, "k^", ms=7, label="sites" if k == 0 else None)
-    ax.plot(*place.start_m, "bs", label="start")
-    ax.plot(*place.goal_m, "b*", ms=12, label="destination")
-    ax.set_xlabel("east of origin [m]")
-    ax.set_ylabel("north of origin [m]")
-    origin = latlon_text(place.georef.lat_deg, place.georef.lon_deg)
-    ax.set_title(f"SINR and rain at take-off; origin {origin}", fontsize=10)
-    ax.legend(loc="best", fontsize="small", framealpha=0.8)  # away from the flight
-    fig.colorbar(im, ax=ax, label="SINR [dB]")
-    write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))

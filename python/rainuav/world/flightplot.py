@@ -1,0 +1,56 @@
+"""The flight's figure (``flight.png``) that ``fly`` writes, at one altitude or among
+levels."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rainuav._io import write_atomic
+from rainuav.geo import latlon_text
+from rainuav.missions import corners
+from rainuav.radio import presets
+
+__all__ = ["plot_flight"]
+
+
+def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path) -> None:
+    """``flight.png``: the path over the SINR at take-off (a series: its first instant), the
+    rain at take-off outlined, the waypoints, the sites, the start and the destination."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
+    ax = fig.subplots()
+    a = place.scenario.area
+    x0, x1, y0, y1 = a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m
+    lo = float(presets.SINR_THRESHOLDS_DB["uma"])
+    sinr = rm.sinr_db if rm.sinr_db.ndim == 2 else rm.sinr_db[0]  # a series: at take-off
+    im = ax.imshow(sinr, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn",
+                   vmin=lo - 15, vmax=lo + 15)  # fmt: skip
+    from rainuav.radio.pe_engine import rain_rate_at
+
+    scn = place.scenario
+    if scn.medium.varies:  # the rain at take-off, outlined
+        xx, yy = np.meshgrid(np.linspace(x0, x1, 200), np.linspace(y0, y1, 200))
+        rate = rain_rate_at(dataclasses.replace(scn, medium=scn.medium.at(0.0)), xx, yy)
+        levels = [v for v in (5.0, 20.0, 50.0) if rate.min() < v < rate.max()]
+        if levels:
+            cs = ax.contour(xx, yy, rate, levels=levels, colors="navy", linewidths=1.0)
+            ax.clabel(cs, fmt="%g mm/h", fontsize=7)
+    ax.plot(path[:, 0], path[:, 1], "k-", lw=1.5, label="planned flight")
+    wp = path[corners(path)]
+    ax.plot(wp[:, 0], wp[:, 1], "ko", ms=3, label="waypoints")
+    for k, s in enumerate(place.scenario.sites):
+        ax.plot(s.x_m, s.y_m, "k^", ms=7, label="sites" if k == 0 else None)
+    ax.plot(*place.start_m, "bs", label="start")
+    ax.plot(*place.goal_m, "b*", ms=12, label="destination")
+    ax.set_xlabel("east of origin [m]")
+    ax.set_ylabel("north of origin [m]")
+    origin = latlon_text(place.georef.lat_deg, place.georef.lon_deg)
+    ax.set_title(f"SINR and rain at take-off; origin {origin}", fontsize=10)
+    ax.legend(loc="best", fontsize="small", framealpha=0.8)  # away from the flight
+    fig.colorbar(im, ax=ax, label="SINR [dB]")
+    write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
