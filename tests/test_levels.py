@@ -225,3 +225,30 @@ def test_one_level_band_flies_todays_plan_and_a_start_altitude_is_a_level(tmp_pa
                "--out", str(tmp_path / "c")])  # fmt: skip
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "one of --altitudes" in err[0], err
+
+
+def test_fly_a_band_of_heights_over_terrain_writes_heights_above_sea_level(tmp_path) -> None:
+    # Over the ridge DEM of the terrain tests, `--altitudes 60:120:60` above the ground: the
+    # mission's waypoints (pymavlink) are MAV_FRAME_GLOBAL heights, each the terrain under it
+    # plus one of the levels (1.5 m: the file's int16 heights, bilinear).
+    import json
+
+    from pymavlink import mavwp
+    from rainuav.fly import main
+    from rainuav.missions import MAV_FRAME_GLOBAL
+    from test_terrain import EXAMPLE_SITES, _ground, _zurich_hill_dem
+
+    dem = _zurich_hill_dem(tmp_path / "ridge.tif", ridge=True)
+    out = tmp_path / "flight"
+    argv = ["--sites", str(EXAMPLE_SITES), "--start", "47.3660,8.5380", "--goal",
+            "47.3800,8.5560", "--terrain", str(dem), "--altitudes", "60:120:60",
+            "--engine", "ray", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    s = json.loads((out / "summary.json").read_text())
+    loader = mavwp.MAVWPLoader()
+    n = loader.load(str(out / "mission.waypoints"))
+    items = [loader.wp(k) for k in range(2, n - 1)]
+    assert len(items) == s["waypoints"] and all(it.frame == MAV_FRAME_GLOBAL for it in items)
+    lat, lon = np.array([it.x for it in items]), np.array([it.y for it in items])
+    above = np.array([it.z for it in items]) - _ground(lat, lon, ridge=True)
+    assert np.all(np.min(np.abs(above[:, None] - np.array([60.0, 120.0])), axis=1) < 1.5)

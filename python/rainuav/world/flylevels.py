@@ -2,7 +2,8 @@
 level (:mod:`rainuav.radio.levels`), the exact plan among them
 (:func:`rainuav.nav.planner.optimal_levels`: climbs and descents weighted by their duration)
 from the lowest level flyable at the start, and the flight's files with a height on every
-waypoint (relative to home).
+waypoint (relative to home; over a DEM, above sea level, with as many waypoints as keep every
+straight leg, climb or descent the clearance above the ground).
 
 Beside the plan, the summary holds the baselines: the exact plan held at the level nearest
 ``--altitude-m`` (the paper's single altitude) and the best single level for this flight
@@ -21,13 +22,22 @@ from rainuav._io import begin_folder, write_atomic
 from rainuav._sampling import bilinear
 from rainuav.errors import InvalidInputError
 from rainuav.geo import latlon_text
-from rainuav.missions import corners, expand, geojson_dict, kml_text, plan_dict, wpl_text
+from rainuav.missions import (
+    corners,
+    expand,
+    geojson_dict,
+    kml_text,
+    plan_dict,
+    terrain_waypoints,
+    wpl_text,
+)
 from rainuav.nav import planner
 from rainuav.nav.field import SignalField, pixel_index
 from rainuav.nav.task import NavConfig
 from rainuav.radio import presets
 from rainuav.radio.levels import build_radio_levels
 from rainuav.radio.maptiff import write_map_geotiff
+from rainuav.radio.terrain import obstacle_pixel_max, scenario_terrain
 from rainuav.world.flightplot import plot_flight
 
 __all__ = ["fly_levels"]
@@ -45,10 +55,9 @@ def fly_levels(
         raise InvalidInputError(
             "--altitudes: weather that moves is flown at one altitude (give --altitude-m)"
         )
-    if scn.terrain is not None:
+    if scn.area.msl and scn.terrain is not None:
         raise InvalidInputError(
-            "--altitudes over --terrain: not yet (heights above sea level per level); give "
-            "--altitude-m"
+            "--altitudes over --terrain are above the ground: not with --altitude-reference msl"
         )
     alts = np.asarray(scn.area.levels, dtype=float)
     stack = build_radio_levels(scn, progress=progress)
@@ -116,6 +125,16 @@ def fly_levels(
     lat, lon = place.georef.to_latlon(path[:, 0], path[:, 1])
     ll = np.stack([lat, lon], axis=1)
     z = alts[lv]
+    # Over terrain: heights above sea level, with as many waypoints as keep each straight
+    # climb, descent or leg at least the clearance above the ground and the obstacles.
+    heights, home_amsl = None, 0.0
+    t = scenario_terrain(scn)
+    if t is not None:
+        ground = t.at(path[:, 0], path[:, 1])
+        under = pixel_index(shape, bounds, path[:, 0], path[:, 1])
+        top = (t.pixel_max(shape) + obstacle_pixel_max(scn))[under]
+        picks = terrain_waypoints(xyz, ground + z, top, scn.area.clearance_m)
+        heights, home_amsl = (ground + z)[picks], float(ground[0])
     summary = {
         "flown_by": "exact optimum among levels", "cost": cost, "optimal_cost": cost,
         "excess_over_optimum": 0.0, "outage_share": float(np.mean(sig[1:] < threshold)),
@@ -143,8 +162,10 @@ def fly_levels(
     texts = {
         "flight.geojson": json.dumps(geojson_dict(ll, z, props, sites, summary), indent=1),
         "flight.kml": kml_text(ll, z, "rainuav flight", sites),
-        "mission.plan": json.dumps(plan_dict(home, ll[picks], z[picks], speed_m_s), indent=2),
-        "mission.waypoints": wpl_text(home, ll[picks], z[picks]),
+        "mission.plan": json.dumps(
+            plan_dict(home, ll[picks], z[picks], speed_m_s, heights, home_amsl), indent=2
+        ),
+        "mission.waypoints": wpl_text(home, ll[picks], z[picks], heights, home_amsl),
     }
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
