@@ -252,3 +252,18 @@ def test_fly_a_band_of_heights_over_terrain_writes_heights_above_sea_level(tmp_p
     lat, lon = np.array([it.x for it in items]), np.array([it.y for it in items])
     above = np.array([it.z for it in items]) - _ground(lat, lon, ridge=True)
     assert np.all(np.min(np.abs(above[:, None] - np.array([60.0, 120.0])), axis=1) < 1.5)
+
+
+def test_maps_in_time_at_several_heights() -> None:
+    # (time, altitude, H, W): each level's slice is that level's own series.
+    from rainuav.radio.levels import build_radio_level_series, level_scenario
+    from rainuav.radio.presets import storm
+    from rainuav.radio.timemap import build_radio_map_series
+
+    scn = storm(seed=0, engine="ray")
+    scn = scn.replace(area=Area(resolution_m=50.0, altitudes_m=[50.0, 100.0]))
+    alts, t, sinr = build_radio_level_series(scn, [0.0, 60.0, 120.0], cache=False)
+    assert sinr.shape == (3, 2, 40, 40) and list(alts) == [50.0, 100.0]
+    one = build_radio_map_series(level_scenario(scn, 50.0), t, cache=False)
+    assert np.array_equal(sinr[:, 0], one.sinr_db.astype(np.float32))
+    assert not np.array_equal(sinr[1, 0], sinr[1, 1])

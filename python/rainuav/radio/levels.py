@@ -4,7 +4,8 @@ on an altitude axis, so a flight can choose its height (:func:`rainuav.nav.plann
 Each level is the scenario's map at that altitude, built by its engine (and cached as any
 map): the ray engine traces every level; the hybrid and PE engines march once per level
 (reading every level from one march is left for later). Memory is checked for the whole
-stack before the first level is built.
+stack before the first level is built. Weather that moves: :func:`build_radio_level_series`,
+the maps in time of every level, (time, altitude, H, W).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from rainuav._checks import check_fits
 from rainuav.radio.mapdata import RadioMap
 from rainuav.radio.scenario import Scenario
 
-__all__ = ["RadioLevels", "build_radio_levels", "level_scenario"]
+__all__ = ["RadioLevels", "build_radio_level_series", "build_radio_levels", "level_scenario"]
 
 
 @dataclass(frozen=True)
@@ -77,3 +78,32 @@ def build_radio_levels(scn: Scenario, *, cache: bool = True, progress: bool = Fa
             print(f"level {k + 1}/{len(levels)}: {a:g} m", flush=True)
         maps.append(build_radio_map(level_scenario(scn, a), cache=cache))
     return RadioLevels(np.asarray(levels, dtype=float), tuple(maps))
+
+
+def build_radio_level_series(
+    scn: Scenario, times_s: object, *, cache: bool = True, progress: bool = False
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The maps in time of ``scn`` at each of ``area.levels``
+    (:func:`rainuav.radio.timemap.build_radio_map_series` per level): ``(altitudes (L,),
+    instants (T,), SINR (T, L, H, W) float32)``, memory checked for the whole stack first."""
+    from rainuav._checks import as_real_array
+    from rainuav.radio.timemap import build_radio_map_series
+
+    levels = scn.area.levels
+    t = as_real_array("times_s", times_s).reshape(-1)
+    h, w = scn.area.shape
+    cells = sum(len(s.cells) for s in scn.sites)
+    # Per level a series (its rss (T, M, H, W) float32 and SINR, SIR, serving), and the stack.
+    check_fits(
+        f"area.altitudes_m ({len(levels)} levels x {t.size} instants of {cells} cells x "
+        f"{h} x {w} pixels)",
+        (len(levels) + 1) * t.size * (cells + 4) * h * w * 4.0,
+        "use fewer levels or instants, or a coarser resolution_m",
+    )
+    out = np.empty((t.size, len(levels), h, w), dtype=np.float32)
+    for k, a in enumerate(levels):
+        if progress:
+            print(f"level {k + 1}/{len(levels)}: {a:g} m", flush=True)
+        series = build_radio_map_series(level_scenario(scn, a), t, cache=cache)
+        out[:, k] = series.sinr_db
+    return np.asarray(levels, dtype=float), t, out
