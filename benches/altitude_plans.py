@@ -28,12 +28,11 @@ def main() -> None:
     ap.add_argument("--freq-ghz", type=float, default=28.0)
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
-    from rainuav._sampling import bilinear
     from rainuav.nav import planner
     from rainuav.nav.field import SignalField
     from rainuav.nav.task import NavConfig
     from rainuav.radio import presets
-    from rainuav.radio.levels import build_radio_levels
+    from rainuav.radio.levels import build_radio_levels, sample_levels
     from rainuav.radio.scenario import Area
 
     levels = [25.0, 50.0, 75.0, 100.0, 125.0, 150.0]
@@ -58,9 +57,8 @@ def main() -> None:
     starts = np.asarray(starts)
 
     def outage(path: np.ndarray, lv: np.ndarray) -> float:
-        s = [bilinear(sinr[k], stack.extent, path[i:i + 1, 0], path[i:i + 1, 1])[0]
-             for i, k in enumerate(lv)][1:]  # fmt: skip
-        return float(np.mean(np.asarray(s) < thr)) if s else 0.0
+        s = sample_levels(sinr, stack.extent, path[1:, 0], path[1:, 1], lv[1:])
+        return float(np.mean(s < thr)) if len(s) else 0.0
 
     def cost(r: float, arrived: bool) -> float:
         return cfg.goal_reward - r if arrived else np.nan

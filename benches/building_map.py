@@ -71,7 +71,7 @@ def main() -> None:
     )
 
     def load() -> np.ndarray:
-        bld._build.cache_clear()
+        bld._BUILT.clear()
         return not_flyable(scn_big)
 
     t_load, mask = best_of(args.repeats, load)

@@ -779,9 +779,10 @@ impl RayScene<'_> {
                 match known.and_then(|k| k.sites.iter().position(|s| *s == p).map(|i| (k, i))) {
                     Some((k, i)) => (0..plane)
                         .map(|q| {
-                            let row: Vec<f64> =
-                                (0..7).map(|c| k.table[[i, q / w, q % w, c]]).collect();
-                            PathGeometry::from_row(&row)
+                            let row = k.table.slice(ndarray::s![i, q / w, q % w, ..]);
+                            PathGeometry::from_row(&[
+                                row[0], row[1], row[2], row[3], row[4], row[5], row[6],
+                            ])
                         })
                         .collect(),
                     None => self.geometries(p),

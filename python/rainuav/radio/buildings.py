@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
@@ -173,15 +172,13 @@ def _walls(items: list[Footprint]) -> tuple[np.ndarray, tuple[str, ...]]:
     return out, (*(items[k].material for k in own[~drop]), *extra)
 
 
-@lru_cache(maxsize=8)
-def _build(key: str, scn_json: str) -> Buildings:
-    del key
-    scn = Scenario.from_dict(__import__("json").loads(scn_json))
-    items: list[Footprint] = []
+def _build(scn: Scenario) -> Buildings:
+    """The buildings of ``scn``, read and merged, their walls found."""
     import shapely
 
-    for b in scn.buildings:
-        items.append(Footprint(shapely.box(b.x0_m, b.y0_m, b.x1_m, b.y1_m), b.height_m))
+    items = [
+        Footprint(shapely.box(b.x0_m, b.y0_m, b.x1_m, b.y1_m), b.height_m) for b in scn.buildings
+    ]
     summary = ""
     if scn.footprints is not None and scn.georef is not None:
         fp = read_footprints(
@@ -202,6 +199,10 @@ def _build(key: str, scn_json: str) -> Buildings:
     return Buildings(tuple(merged), _prisms(merged), walls, materials, summary)
 
 
+_BUILT: dict[str, Buildings] = {}
+"""The last few scenarios' buildings, by what they depend on (:func:`scenario_buildings`)."""
+
+
 def scenario_buildings(scn: Scenario) -> Buildings | None:
     """The buildings of ``scn`` (boxes and footprints; read once per file contents, area and
     sites), or None where it has neither."""
@@ -213,17 +214,20 @@ def scenario_buildings(scn: Scenario) -> Buildings | None:
 
     d = scn.to_dict()
     keep = {k: d[k] for k in ("area", "sites", "buildings", "origin", "footprints") if k in d}
-    text = json.dumps(keep, sort_keys=True)
     # The key: what the buildings depend on, and the footprint file's contents.
-    key = text
+    key = json.dumps(keep, sort_keys=True)
     if scn.footprints is not None:
         try:
-            key = f"{text}|{file_digest(scn.footprints.file)}"
+            key = f"{key}|{file_digest(scn.footprints.file)}"
         except OSError as err:
             raise InvalidInputError(
                 f"footprints file {scn.footprints.file}: cannot be read ({err.strerror})"
             ) from err
-    return _build(key, text)
+    if key not in _BUILT:
+        while len(_BUILT) >= 8:
+            del _BUILT[next(iter(_BUILT))]
+        _BUILT[key] = _build(scn)
+    return _BUILT[key]
 
 
 def wall_args(scn: Scenario) -> tuple[np.ndarray, np.ndarray]:

@@ -16,10 +16,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from rainuav._checks import check_fits
+from rainuav._sampling import bilinear
 from rainuav.radio.mapdata import RadioMap
 from rainuav.radio.scenario import Scenario
 
-__all__ = ["RadioLevels", "build_radio_level_series", "build_radio_levels", "level_scenario"]
+__all__ = [
+    "RadioLevels",
+    "build_radio_level_series",
+    "build_radio_levels",
+    "level_scenario",
+    "sample_levels",
+]
 
 
 @dataclass(frozen=True)
@@ -107,3 +114,20 @@ def build_radio_level_series(
         series = build_radio_map_series(level_scenario(scn, a), t, cache=cache)
         out[:, k] = series.sinr_db
     return np.asarray(levels, dtype=float), t, out
+
+
+def sample_levels(
+    values: np.ndarray,
+    extent: tuple[float, float, float, float],
+    x: np.ndarray,
+    y: np.ndarray,
+    levels: np.ndarray,
+) -> np.ndarray:
+    """``values`` (L, H, W) read at the points ``(x, y)``, each on its level ``levels``:
+    bilinear between pixel centres, as the navigation task reads a map."""
+    x, y, levels = np.asarray(x, float), np.asarray(y, float), np.asarray(levels)
+    out = np.empty(x.shape)
+    for k in np.unique(levels):
+        on = levels == k
+        out[on] = bilinear(values[int(k)], extent, x[on], y[on])
+    return out

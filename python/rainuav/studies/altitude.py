@@ -18,11 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from rainuav._sampling import bilinear
 from rainuav.nav import planner
 from rainuav.nav.field import SignalField
 from rainuav.nav.task import NavConfig
-from rainuav.radio.levels import build_radio_levels
+from rainuav.radio.levels import build_radio_levels, sample_levels
 from rainuav.radio.scenario import Scenario
 
 __all__ = ["ALTITUDE_COLUMNS", "altitude_row"]
@@ -37,9 +36,11 @@ ALTITUDE_COLUMNS = (
 
 
 def _outage(sinr: np.ndarray, extent: Any, path: np.ndarray, lv: np.ndarray, thr: float) -> float:
-    s = [bilinear(sinr[k], extent, path[i : i + 1, 0], path[i : i + 1, 1])[0]
-         for i, k in enumerate(lv)][1:]  # fmt: skip
-    return float(np.mean(np.asarray(s) < thr)) if s else 0.0
+    """The share of a flight's moves that land below ``thr``, each on its level."""
+    if len(path) < 2:
+        return 0.0
+    s = sample_levels(sinr, extent, path[1:, 0], path[1:, 1], lv[1:])
+    return float(np.mean(s < thr))
 
 
 def altitude_row(

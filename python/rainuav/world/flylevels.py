@@ -19,7 +19,6 @@ from pathlib import Path
 import numpy as np
 
 from rainuav._io import begin_folder, write_atomic
-from rainuav._sampling import bilinear
 from rainuav.errors import InvalidInputError
 from rainuav.geo import latlon_text
 from rainuav.missions import (
@@ -35,7 +34,7 @@ from rainuav.nav import planner
 from rainuav.nav.field import SignalField, pixel_index
 from rainuav.nav.task import NavConfig
 from rainuav.radio import presets
-from rainuav.radio.levels import build_radio_levels
+from rainuav.radio.levels import build_radio_levels, sample_levels
 from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.terrain import obstacle_pixel_max, scenario_terrain
 from rainuav.world.flightplot import plot_flight
@@ -97,13 +96,12 @@ def fly_levels(
     path, lv = plan.path_m, plan.levels
     dur = np.ones(len(plan.actions))
     up, down = plan.actions == 4, plan.actions == 5
-    dur[up] = np.asarray(climb)[lv[:-1][up]] if up.any() else dur[up]
-    dur[down] = np.asarray(descend)[lv[1:][down]] if down.any() else dur[down]
+    dur[up] = np.asarray(climb)[lv[:-1][up]]
+    dur[down] = np.asarray(descend)[lv[1:][down]]
     t_s = np.concatenate([[0.0], np.cumsum(dur) * task.move_s])
-    sig = np.array([bilinear(sinr[k], extent, path[i : i + 1, 0], path[i : i + 1, 1])[0]
-                    for i, k in enumerate(lv)])  # fmt: skip
-    serving = np.array([stack.maps[k].serving_cell[pixel_index(shape, bounds, path[i:i + 1, 0],
-                        path[i:i + 1, 1])][0] for i, k in enumerate(lv)])  # fmt: skip
+    sig = sample_levels(sinr, extent, path[:, 0], path[:, 1], lv)
+    pi, pj = pixel_index(shape, bounds, path[:, 0], path[:, 1])
+    serving = np.stack([m.serving_cell for m in stack.maps])[lv, pi, pj]
     cost = -(plan.return_ - task.goal_reward)
     # The baselines: each level alone, exactly.
     per_level = []
@@ -111,7 +109,9 @@ def fly_levels(
         field = SignalField(sinr[k], extent, not_flyable=blocked[k])
         p = planner.plan_on(field, task, np.asarray(place.start_m)[None])[0]
         arrives = bool(np.hypot(*(p.path_m[-1] - np.asarray(place.goal_m))) <= task.tol_m)
-        s = bilinear(sinr[k], extent, p.path_m[1:, 0], p.path_m[1:, 1])
+        s = sample_levels(
+            sinr, extent, p.path_m[1:, 0], p.path_m[1:, 1], np.full(len(p.path_m) - 1, k)
+        )
         per_level.append((-(p.return_ - task.goal_reward) if arrives else None,
                           float(np.mean(s < threshold)) if arrives else None))  # fmt: skip
     fixed = int(np.argmin(np.abs(alts - scn.area.altitude_m)))
