@@ -243,31 +243,38 @@ def wall_args(scn: Scenario) -> tuple[np.ndarray, np.ndarray]:
 
 def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> np.ndarray:
     """The tallest building (m above the terrain) whose footprint overlaps each pixel of the
-    area (an overlap of positive area: footprints intersected with pixels as polygons),
-    (H, W). Each footprint, shrunk by a micrometre so that a pixel it only touches along an
-    edge or at a corner is not counted, is burnt into every pixel it touches
-    (``rasterio.features.rasterize``, ``all_touched``), the tallest last."""
+    area (an overlap of positive area: footprints intersected with pixels as polygons; a
+    pixel a footprint only touches along an edge or at a corner does not count), (H, W).
+    Every (footprint, pixel of its bounding box) pair is tested in one vectorised shapely
+    call."""
     import shapely
-    from rasterio.features import rasterize
-    from rasterio.transform import Affine
 
     a = scn.area
     h, w = a.shape if shape is None else shape
+    out = np.zeros((h, w))
     b = scenario_buildings(scn)
-    if b is None:
-        return np.zeros((h, w))
-    check_fits("the buildings' pixel heights", 16.0 * h * w, "use a coarser map")
+    if b is None or not b.footprints:
+        return out
     px = (a.x_max_m - a.x_min_m) / w
     py = (a.y_max_m - a.y_min_m) / h
+    bounds = np.array([f.polygon.bounds for f in b.footprints])  # (P, 4): x0, y0, x1, y1
+    j0 = np.clip(np.floor((bounds[:, 0] - a.x_min_m) / px), 0, w - 1).astype(np.int64)
+    j1 = np.clip(np.floor((bounds[:, 2] - a.x_min_m) / px), 0, w - 1).astype(np.int64)
+    i0 = np.clip(np.floor((bounds[:, 1] - a.y_min_m) / py), 0, h - 1).astype(np.int64)
+    i1 = np.clip(np.floor((bounds[:, 3] - a.y_min_m) / py), 0, h - 1).astype(np.int64)
+    counts = (j1 - j0 + 1) * (i1 - i0 + 1)
+    check_fits("the buildings' pixel tests", 200.0 * counts.sum() + 16.0 * h * w,
+               "use a coarser map")  # fmt: skip
+    owner = np.repeat(np.arange(len(counts)), counts)
+    k = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    width = (j1 - j0 + 1)[owner]
+    ii, jj = i0[owner] + k // width, j0[owner] + k % width
+    cells = shapely.box(a.x_min_m + jj * px, a.y_min_m + ii * py,
+                        a.x_min_m + (jj + 1) * px, a.y_min_m + (ii + 1) * py)  # fmt: skip
     polys = np.asarray([f.polygon for f in b.footprints], dtype=object)
-    tops = np.array([f.height_m for f in b.footprints])
-    order = np.argsort(tops, kind="stable")
-    shrunk = shapely.buffer(polys[order], -1e-6, join_style="mitre")
-    shapes = [(g, t) for g, t in zip(shrunk, tops[order], strict=True) if not g.is_empty]
-    if not shapes:
-        return np.zeros((h, w))
-    # Rows south to north: a transform with a positive north step.
-    transform = Affine(px, 0.0, a.x_min_m, 0.0, py, a.y_min_m)
-    return rasterize(
-        shapes, out_shape=(h, w), transform=transform, all_touched=True, fill=0.0, dtype="float64"
-    )
+    shapely.prepare(polys)
+    # Interiors that meet: an overlap of positive area, not a shared edge or corner.
+    hit = shapely.relate_pattern(polys[owner], cells, "T********")
+    tops = np.array([f.height_m for f in b.footprints])[owner]
+    np.maximum.at(out, (ii[hit], jj[hit]), tops[hit])
+    return out
