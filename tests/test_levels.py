@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 from rainuav.errors import InvalidInputError
@@ -42,50 +40,59 @@ def test_one_level_is_the_plane() -> None:
 
 
 def test_against_a_brute_force_over_every_move_sequence() -> None:
-    # Three levels 15 m apart (climb 5 m/s: 3 moves' time; descent 3 m/s: 5), a horizon of 5
-    # moves: the best of the 6^5 sequences, replayed move by move with the rule written here
-    # (duration x base reward; leaving the area or the band ends the flight with the
-    # penalty; arrival at any level), equals the planner's return. Tolerance 1e-9.
+    # Three levels 15 m apart (climb 5 m/s: 3 moves' time; descent 3 m/s: 5), a horizon of 6
+    # ticks of the flight's clock: the best of every move sequence until the clock reaches
+    # it, replayed move by move with the rule written here (duration x base reward; leaving
+    # the area or the band ends the flight with the penalty; arrival at any level), equals
+    # the planner's return. Tolerance 1e-9.
     from rainuav._sampling import bilinear
 
     sig = maps(3, seed=4)
-    c = cfg(max_steps=5, goal_m=(35.0, 25.0), mu=0.4)
+    c = cfg(max_steps=6, goal_m=(35.0, 25.0), mu=0.4, goal_reward=10.0)
     alts = [30.0, 45.0, 60.0]
     climb, descend = planner.level_durations(alts, c)
-    assert climb == pytest.approx([3.0, 3.0]) and descend == pytest.approx([5.0, 5.0])
+    assert climb == [3, 3] and descend == [5, 5]
 
     def base(level: int, x: float, y: float) -> float:
         s = float(bilinear(sig[level], EXTENT, np.array([x]), np.array([y]))[0])
         return -1.0 - c.mu * max(0.0, c.min_db - s)
 
-    def rollout(start, level, seq) -> float:
-        x, y, lv, ret = start[0], start[1], level, 0.0
-        for a in seq:
+    def best(x: float, y: float, lv: int, clock: int) -> float:
+        if clock >= c.max_steps:
+            return 0.0
+        out = -np.inf
+        for a in range(6):
             if a < 4:
                 dx, dy = [(10, 0), (0, 10), (-10, 0), (0, -10)][a]
                 nx, ny = x + dx, y + dy
-                out = not (EXTENT[0] <= nx <= EXTENT[1] and EXTENT[2] <= ny <= EXTENT[3])
-                cx, cy = np.clip(nx, *EXTENT[:2]), np.clip(ny, *EXTENT[2:])
-                r = base(lv, cx, cy)
-                if out:
-                    return ret + r - c.out_of_bounds_penalty
-                x, y = nx, ny
-                if np.hypot(x - c.goal_m[0], y - c.goal_m[1]) <= c.tol_m:
-                    return ret + r + c.goal_reward
-                ret += r
+                left = not (EXTENT[0] <= nx <= EXTENT[1] and EXTENT[2] <= ny <= EXTENT[3])
+                r = base(lv, np.clip(nx, *EXTENT[:2]), np.clip(ny, *EXTENT[2:]))
+                if left:
+                    v = r - c.out_of_bounds_penalty
+                elif np.hypot(nx - c.goal_m[0], ny - c.goal_m[1]) <= c.tol_m:
+                    v = r + c.goal_reward
+                else:
+                    v = r + best(nx, ny, lv, clock + 1)
             else:
                 to = lv + 1 if a == 4 else lv - 1
                 dur = climb[min(lv, 1)] if a == 4 else descend[max(lv - 1, 0)]
                 if not 0 <= to < 3:
-                    return ret + dur * base(lv, x, y) - c.out_of_bounds_penalty
-                ret += dur * base(to, x, y)
-                lv = to
-        return ret
+                    v = dur * base(lv, x, y) - c.out_of_bounds_penalty
+                else:
+                    v = dur * base(to, x, y) + best(x, y, to, clock + dur)
+            out = max(out, v)
+        return out
 
-    for start, level in (((5.0, 5.0), 0), ((15.0, 25.0), 1), ((35.0, 5.0), 2)):
-        want = max(rollout(start, level, s) for s in itertools.product(range(6), repeat=5))
-        got = planner.optimal_levels(sig, alts, EXTENT, c, [start], [level])[0]
-        assert got.return_ == pytest.approx(want, abs=1e-9), (start, level)
+    vertical = 0
+    for deep in (0.0, 30.0):  # the lowest level in deep outage: climbing pays
+        sig[0] -= deep
+        for start, level in (((5.0, 5.0), 0), ((15.0, 25.0), 1), ((35.0, 5.0), 2)):
+            want = best(start[0], start[1], level, 0)
+            got = planner.optimal_levels(sig, alts, EXTENT, c, [start], [level])[0]
+            assert got.return_ == pytest.approx(want, abs=1e-9), (start, level)
+            assert got.ticks[-2] < c.max_steps and np.all(np.diff(got.ticks) >= 1)
+            vertical += int(np.sum(got.actions >= 4))
+    assert vertical > 0  # the comparison covers climbs, not only the plane's moves
 
 
 def test_bad_altitude_sets_are_refused_in_one_line() -> None:
@@ -262,8 +269,33 @@ def test_maps_in_time_at_several_heights() -> None:
 
     scn = storm(seed=0, engine="ray")
     scn = scn.replace(area=Area(resolution_m=50.0, altitudes_m=[50.0, 100.0]))
-    alts, t, sinr = build_radio_level_series(scn, [0.0, 60.0, 120.0], cache=False)
-    assert sinr.shape == (3, 2, 40, 40) and list(alts) == [50.0, 100.0]
+    series = build_radio_level_series(scn, [0.0, 60.0, 120.0], cache=False)
+    sinr, t = series.sinr_db, series.t_s
+    assert sinr.shape == (3, 2, 40, 40) and list(series.altitudes_m) == [50.0, 100.0]
     one = build_radio_map_series(level_scenario(scn, 50.0), t, cache=False)
     assert np.array_equal(sinr[:, 0], one.sinr_db.astype(np.float32))
+    assert np.array_equal(series.serving_cell[:, 0], one.serving_cell)
     assert not np.array_equal(sinr[1, 0], sinr[1, 1])
+    assert series.not_flyable.shape == (2, 40, 40) and not series.not_flyable.any()
+
+
+@pytest.mark.timeout(120)
+def test_a_band_flies_weather_that_moves(tmp_path) -> None:
+    # Through the shipped radar file (13 scans: a weather that moves), `--altitudes 100:100:1`
+    # plans among levels in space-time and gives the flight at 100 m of today: the same cost
+    # and moves as the plane's space-time plan (tolerance 1e-9: the same rewards summed).
+    import json
+    from pathlib import Path
+
+    from rainuav.fly import main
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    base = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380", "--goal",
+            "47.3700,8.5420", "--weather", str(examples / "radar.nc")]  # fmt: skip
+    assert main([*base, "--out", str(tmp_path / "a")]) == 0
+    assert main([*base, "--altitudes", "100:100:1", "--out", str(tmp_path / "b")]) == 0
+    a = json.loads((tmp_path / "a" / "summary.json").read_text())
+    b = json.loads((tmp_path / "b" / "summary.json").read_text())
+    assert a["weather_moves"] and b["weather_moves"]
+    assert b["cost"] == pytest.approx(a["cost"], abs=1e-9) and b["moves"] == a["moves"]
+    assert b["flight_time_s"] == pytest.approx(a["flight_time_s"])

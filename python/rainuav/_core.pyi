@@ -237,10 +237,13 @@ def plan_optimal_in_time(
 
 def plan_optimal_levels(
     sinr_db: _F,
+    t_s: _F,
     extent_m: tuple[float, float, float, float],
     goal_m: tuple[float, float],
     starts: _F,
     *,
+    t0_s: float,
+    dt_s: float,
     step_m: float,
     tol_m: float,
     max_steps: int,
@@ -249,12 +252,13 @@ def plan_optimal_levels(
     sir_min_db: float,
     goal_reward: float,
     out_of_bounds_penalty: float,
-    climb: list[float],
-    descend: list[float],
+    climb: list[int],
+    descend: list[int],
     blocked: npt.NDArray[np.uint8] | None = None,
-) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
-    """Exact plans among levels (L, H, W): six moves, starts (N, 3) x, y, level; each a
-    (return, actions, path (T+1, 3): x, y, level)."""
+) -> list[tuple[float, npt.NDArray[np.uint8], _F, npt.NDArray[np.uint64]]]:
+    """Exact plans among levels, the signal (K, L, H, W) at the instants t_s (one slice: a
+    signal that does not change): six moves, starts (N, 3) x, y, level; climbs and descents
+    in ticks; each a (return, actions, path (T+1, 3): x, y, level, ticks (T+1,))."""
 
 def ray_power(
     tx_m: _F,

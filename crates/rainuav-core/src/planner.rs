@@ -89,18 +89,38 @@ pub(crate) const MOVES: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
 pub fn bilinear(s: &ArrayView2<'_, f64>, extent: [f64; 4], x: f64, y: f64) -> f64 {
     let [x0, x1, y0, y1] = extent;
     let (h, w) = s.dim();
-    let fx = ((x - x0) / (x1 - x0) * w as f64 - 0.5).clamp(0.0, w as f64 - 1.0);
-    let fy = ((y - y0) / (y1 - y0) * h as f64 - 0.5).clamp(0.0, h as f64 - 1.0);
-    let j0 = fx.floor().min(w.saturating_sub(2) as f64) as usize;
-    let i0 = fy.floor().min(h.saturating_sub(2) as f64) as usize;
-    let tx = fx - j0 as f64;
-    let ty = fy - i0 as f64;
-    let j1 = (j0 + 1).min(w - 1);
-    let i1 = (i0 + 1).min(h - 1);
-    s[(i0, j0)] * (1.0 - tx) * (1.0 - ty)
-        + s[(i0, j1)] * tx * (1.0 - ty)
-        + s[(i1, j0)] * (1.0 - tx) * ty
-        + s[(i1, j1)] * tx * ty
+    bilinear_taps(s, Tap::new(x, x0, x1, w), Tap::new(y, y0, y1, h))
+}
+
+/// One axis of [`bilinear`]: the two samples around a coordinate and the weight of the
+/// second, which depend on that coordinate alone (so a lattice's taps are computed once per
+/// row and column).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Tap {
+    lo: usize,
+    hi: usize,
+    t: f64,
+}
+
+impl Tap {
+    /// The tap of coordinate `v` on `n` pixels spanning `a..b`.
+    pub(crate) fn new(v: f64, a: f64, b: f64, n: usize) -> Tap {
+        let f = ((v - a) / (b - a) * n as f64 - 0.5).clamp(0.0, n as f64 - 1.0);
+        let lo = f.floor().min(n.saturating_sub(2) as f64) as usize;
+        Tap {
+            lo,
+            hi: (lo + 1).min(n - 1),
+            t: f - lo as f64,
+        }
+    }
+}
+
+/// [`bilinear`] from the taps of x (columns) and y (rows).
+pub(crate) fn bilinear_taps(s: &ArrayView2<'_, f64>, tx: Tap, ty: Tap) -> f64 {
+    s[(ty.lo, tx.lo)] * (1.0 - tx.t) * (1.0 - ty.t)
+        + s[(ty.lo, tx.hi)] * tx.t * (1.0 - ty.t)
+        + s[(ty.hi, tx.lo)] * (1.0 - tx.t) * ty.t
+        + s[(ty.hi, tx.hi)] * tx.t * ty.t
 }
 
 impl NavTask<'_> {
@@ -197,6 +217,20 @@ impl NavTask<'_> {
             RewardKind::Shortfall => -1.0 - self.mu * (self.sir_min_db - sir).max(0.0),
             RewardKind::Outage => -1.0 - self.mu * if sir < self.sir_min_db { 1.0 } else { 0.0 },
             RewardKind::Linear => -1.0 + self.mu * 10f64.powf(sir / 10.0),
+        }
+    }
+
+    /// [`Self::base_reward`] of each signal value of `sig`, into `out` (the same operations,
+    /// the kind chosen once).
+    pub(crate) fn base_rewards(&self, sig: impl Iterator<Item = f64>, out: &mut [f64]) {
+        let (mu, min) = (self.mu, self.sir_min_db);
+        let pairs = out.iter_mut().zip(sig);
+        match self.reward {
+            RewardKind::Shortfall => pairs.for_each(|(o, s)| *o = -1.0 - mu * (min - s).max(0.0)),
+            RewardKind::Outage => {
+                pairs.for_each(|(o, s)| *o = -1.0 - mu * if s < min { 1.0 } else { 0.0 })
+            }
+            RewardKind::Linear => pairs.for_each(|(o, s)| *o = -1.0 + mu * 10f64.powf(s / 10.0)),
         }
     }
 

@@ -49,25 +49,7 @@ impl Timeline<'_> {
                 "NaN or inf",
             ));
         }
-        let increasing = self.t_s.windows(2).all(|p| p[1] > p[0]);
-        if !increasing || self.t_s.iter().any(|v| !v.is_finite()) {
-            return Err(CoreError::invalid(
-                "t_s",
-                "must be finite and strictly increasing",
-                format!("{} instants", self.t_s.len()),
-            ));
-        }
-        if !self.t0_s.is_finite() || self.t0_s.abs() > 1e12 {
-            return Err(CoreError::invalid("t0_s", "must be finite", self.t0_s));
-        }
-        if !(self.dt_s.is_finite() && self.dt_s > 0.0 && self.dt_s < 1e9) {
-            return Err(CoreError::invalid(
-                "dt_s",
-                "must be finite and > 0",
-                self.dt_s,
-            ));
-        }
-        Ok(())
+        check_clock(self.t_s, self.t0_s, self.dt_s)
     }
 
     /// The instant move `t` (0-based) ends at.
@@ -78,18 +60,7 @@ impl Timeline<'_> {
     /// The slices around `tau` and the weight of the later one: `(k0, k1, f)`, `k0 == k1` at
     /// a slice's own instant and beyond the first or the last.
     pub fn bracket(&self, tau: f64) -> (usize, usize, f64) {
-        let t = self.t_s;
-        let k = t.partition_point(|&v| v < tau);
-        if k < t.len() && t[k] == tau {
-            return (k, k, 0.0);
-        }
-        if k == 0 {
-            return (0, 0, 0.0);
-        }
-        if k == t.len() {
-            return (k - 1, k - 1, 0.0);
-        }
-        (k - 1, k, (tau - t[k - 1]) / (t[k] - t[k - 1]))
+        bracket(self.t_s, tau)
     }
 
     /// The signal at `(x, y)` and the instant `tau`.
@@ -104,8 +75,44 @@ impl Timeline<'_> {
     }
 }
 
+/// Checks a clock: instants finite and strictly increasing, a finite take-off, a move's
+/// duration finite and > 0.
+pub(crate) fn check_clock(t_s: &[f64], t0_s: f64, dt_s: f64) -> Result<()> {
+    let increasing = t_s.windows(2).all(|p| p[1] > p[0]);
+    if !increasing || t_s.iter().any(|v| !v.is_finite()) {
+        return Err(CoreError::invalid(
+            "t_s",
+            "must be finite and strictly increasing",
+            format!("{} instants", t_s.len()),
+        ));
+    }
+    if !t0_s.is_finite() || t0_s.abs() > 1e12 {
+        return Err(CoreError::invalid("t0_s", "must be finite", t0_s));
+    }
+    if !(dt_s.is_finite() && dt_s > 0.0 && dt_s < 1e9) {
+        return Err(CoreError::invalid("dt_s", "must be finite and > 0", dt_s));
+    }
+    Ok(())
+}
+
+/// The slices of the instants `t` (increasing) around `tau` and the weight of the later one:
+/// `(k0, k1, f)`, `k0 == k1` at a slice's own instant and beyond the first or the last.
+pub(crate) fn bracket(t: &[f64], tau: f64) -> (usize, usize, f64) {
+    let k = t.partition_point(|&v| v < tau);
+    if k < t.len() && t[k] == tau {
+        return (k, k, 0.0);
+    }
+    if k == 0 {
+        return (0, 0, 0.0);
+    }
+    if k == t.len() {
+        return (k - 1, k - 1, 0.0);
+    }
+    (k - 1, k, (tau - t[k - 1]) / (t[k] - t[k - 1]))
+}
+
 /// Linear in time between two slices' values.
-fn blend(v0: f64, v1: f64, f: f64) -> f64 {
+pub(crate) fn blend(v0: f64, v1: f64, f: f64) -> f64 {
     (1.0 - f) * v0 + f * v1
 }
 

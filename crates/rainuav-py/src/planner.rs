@@ -5,10 +5,11 @@ use crate::{detached, to_py};
 use ndarray::Array1;
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+    PyReadonlyArray4,
 };
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
-use rainuav_core::planlevels::LevelTask;
+use rainuav_core::planlevels::{LevelTask, LevelTimeline};
 use rainuav_core::planner::{NavTask, Plan};
 use rainuav_core::plantime::Timeline;
 
@@ -186,21 +187,36 @@ fn sample_slices<'py>(
     Ok(Array1::from(out).into_pyarray(py))
 }
 
+/// One plan among levels handed to Python: (return, actions (T,) u8, path (T+1, 3): x, y,
+/// level, ticks (T+1,): the clock at each position).
+type LevelPlanOut<'py> = (
+    f64,
+    Bound<'py, PyArray1<u8>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<u64>>,
+);
+
 /// Exact plans with altitude as a decision (`rainuav_core::planlevels`): the signal of each
-/// level `sinr_db` (L, H, W), lowest first, and optionally each level's not-flyable pixels
-/// `blocked` (L, H', W'); `starts` (N, 3): x, y and the start level (-1: the best). Six moves (the plane's
-/// four, a climb, a descent); `climb[k]` and `descend[k]` (L - 1 each) are how many
-/// horizontal moves' time the climb from level k to k + 1 and the descent back last. A list of (return, actions (T,) u8, path (T+1, 3): x, y, level).
+/// level `sinr_db` (K, L, H, W) at the instants `t_s` (K,; one slice: a signal that does not
+/// change), lowest level first, and optionally each level's not-flyable pixels `blocked`
+/// (L, H', W'); `starts` (N, 3): x, y and the start level (-1: the best). Six moves (the
+/// plane's four, a climb, a descent); `climb[k]` and `descend[k]` (L - 1 each) are how many
+/// ticks (horizontal moves of `dt_s` seconds) the climb from level k to k + 1 and the
+/// descent back last; take-off at `t0_s`.
 #[pyfunction]
-#[pyo3(signature = (sinr_db, extent_m, goal_m, starts, *, step_m, tol_m, max_steps, mu, reward,
-    sir_min_db, goal_reward, out_of_bounds_penalty, climb, descend, blocked=None))]
+#[pyo3(signature = (sinr_db, t_s, extent_m, goal_m, starts, *, t0_s, dt_s, step_m, tol_m,
+    max_steps, mu, reward, sir_min_db, goal_reward, out_of_bounds_penalty, climb, descend,
+    blocked=None))]
 #[allow(clippy::too_many_arguments)]
 fn plan_optimal_levels<'py>(
     py: Python<'py>,
-    sinr_db: PyReadonlyArray3<'py, f64>,
+    sinr_db: PyReadonlyArray4<'py, f64>,
+    t_s: PyReadonlyArray1<'py, f64>,
     extent_m: [f64; 4],
     goal_m: [f64; 2],
     starts: PyReadonlyArray2<'py, f64>,
+    t0_s: f64,
+    dt_s: f64,
     step_m: f64,
     tol_m: f64,
     max_steps: usize,
@@ -209,13 +225,20 @@ fn plan_optimal_levels<'py>(
     sir_min_db: f64,
     goal_reward: f64,
     out_of_bounds_penalty: f64,
-    climb: Vec<f64>,
-    descend: Vec<f64>,
+    climb: Vec<usize>,
+    descend: Vec<usize>,
     blocked: Option<PyReadonlyArray3<'py, u8>>,
-) -> PyResult<Vec<PlanOut<'py>>> {
-    let maps = sinr_db.as_array();
+) -> PyResult<Vec<LevelPlanOut<'py>>> {
+    let slices = sinr_db.as_array();
     let masks = blocked.as_ref().map(|b| b.as_array());
-    let nl = maps.shape()[0];
+    let (nk, nl) = (slices.shape()[0], slices.shape()[1]);
+    if nk == 0 || nl == 0 {
+        return Err(to_py(CoreError::invalid(
+            "sinr_db",
+            "must hold at least one slice and one level",
+            format!("{:?}", slices.shape()),
+        )));
+    }
     if let Some(b) = &masks
         && b.shape()[0] != nl
     {
@@ -225,10 +248,18 @@ fn plan_optimal_levels<'py>(
             b.shape()[0],
         )));
     }
+    let times = t_s.as_slice().map_err(|_| {
+        to_py(CoreError::invalid(
+            "t_s",
+            "must be a contiguous 1-D array",
+            "strided",
+        ))
+    })?;
     let kind = reward.parse().map_err(to_py)?;
+    let first = slices.index_axis(ndarray::Axis(0), 0);
     let levels = (0..nl)
         .map(|l| NavTask {
-            sir_db: maps.index_axis(ndarray::Axis(0), l),
+            sir_db: first.index_axis(ndarray::Axis(0), l),
             extent: extent_m,
             goal: goal_m,
             step_m,
@@ -247,6 +278,12 @@ fn plan_optimal_levels<'py>(
         climb,
         descend,
     };
+    let tl = LevelTimeline {
+        slices: slices.view(),
+        t_s: times,
+        t0_s,
+        dt_s,
+    };
     let st = starts.as_array();
     if st.ncols() != 3 {
         return Err(to_py(CoreError::invalid(
@@ -262,7 +299,7 @@ fn plan_optimal_levels<'py>(
             pts.push(([r[0], r[1]], rainuav_core::planlevels::ANY_LEVEL));
             continue;
         }
-        if !(l.is_finite() && l >= 0.0 && l.fract() == 0.0 && (l as usize) < nl.max(1)) {
+        if !(l.is_finite() && l >= 0.0 && l.fract() == 0.0 && (l as usize) < nl) {
             return Err(to_py(CoreError::invalid(
                 "starts",
                 format!("levels must be whole numbers in 0..{nl}, or -1 (the best)"),
@@ -271,16 +308,19 @@ fn plan_optimal_levels<'py>(
         }
         pts.push(([r[0], r[1]], l as usize));
     }
-    let plans = detached(py, || task.optimal_many(&pts))?;
+    let moving = (nk > 1).then_some(&tl);
+    let plans = detached(py, || task.optimal_many(moving, &pts))?;
     Ok(plans
         .into_iter()
         .map(|p| {
             let n = p.path.len();
             let path = ndarray::Array2::from_shape_fn((n, 3), |(i, k)| p.path[i][k]);
+            let ticks: Vec<u64> = p.ticks.iter().map(|&t| t as u64).collect();
             (
                 p.return_,
                 Array1::from(p.actions).into_pyarray(py),
                 path.into_pyarray(py),
+                Array1::from(ticks).into_pyarray(py),
             )
         })
         .collect())

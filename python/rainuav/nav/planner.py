@@ -11,6 +11,7 @@ take-off, re-planning on the weather of the moment) are in :mod:`rainuav.nav.bas
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -118,6 +119,8 @@ class LevelPlan:
     """(T + 1,) the level of each position."""
     actions: npt.NDArray[np.int64]
     """(T,) actions: 0-3 the plane's moves, 4 climb, 5 descend."""
+    ticks: npt.NDArray[np.int64]
+    """(T + 1,) the flight's clock at each position, in horizontal moves (``move_s`` each)."""
 
 
 CLIMB_M_S = 5.0
@@ -131,17 +134,22 @@ def level_durations(
     cfg: NavConfig,
     climb_m_s: float = CLIMB_M_S,
     descend_m_s: float = DESCEND_M_S,
-) -> tuple[list[float], list[float]]:
-    """How long each climb and each descent between neighbouring levels lasts, in units of
-    one horizontal move (``cfg.move_s``): the gap over the climb or descent speed."""
+) -> tuple[list[int], list[int]]:
+    """How long each climb and each descent between neighbouring levels lasts, in ticks of
+    the flight's clock (one horizontal move, ``cfg.move_s``): the gap over the climb or
+    descent speed, rounded up to whole moves (at least one). With the defaults, 15 m gaps
+    and 1 s moves: 3 and 5 exactly."""
     gaps = np.diff(np.asarray(altitudes_m, dtype=np.float64))
     for name, v in (("climb_m_s", climb_m_s), ("descend_m_s", descend_m_s)):
         if not (np.isfinite(v) and 0.1 <= v <= 100.0):
             raise InvalidInputError(f"{name} must be in 0.1..100 m/s (got {v!r})")
     move = cfg.move_s
-    return [float(g / climb_m_s / move) for g in gaps], [
-        float(g / descend_m_s / move) for g in gaps
-    ]
+
+    def ticks(speed: float) -> list[int]:
+        # 1e-9 absorbs the rounding of a gap that is a whole number of moves.
+        return [max(1, math.ceil(g / speed / move - 1e-9)) for g in gaps]
+
+    return ticks(climb_m_s), ticks(descend_m_s)
 
 
 def optimal_levels(
@@ -152,24 +160,35 @@ def optimal_levels(
     starts_m: npt.ArrayLike,
     start_levels: npt.ArrayLike,
     *,
+    t_s: npt.ArrayLike | None = None,
     not_flyable: npt.ArrayLike | None = None,
     climb_m_s: float = CLIMB_M_S,
     descend_m_s: float = DESCEND_M_S,
 ) -> list[LevelPlan]:
     """Exact optimal plans with altitude as a decision (``rainuav_core::planlevels``): the
-    signal of each level (L, H, W) at ``altitudes_m`` (L,), the task ``cfg`` (``min_db``
-    resolved), starts (N, 2) at ``start_levels`` (N,; -1: the level whose optimum is best,
-    the take-off's climb left to the autopilot). Six moves: the plane's four, and a
-    climb or descent of one level, whose reward is its duration in horizontal moves
-    (:func:`level_durations`) times the base reward where it lands. A flight arrives at the
-    destination's horizontal position at any level; leaving the band or entering a
-    not-flyable cell ends it as leaving the area does."""
-    sig = np.ascontiguousarray(np.asarray(signal_db, dtype=np.float64))
+    signal of each level (L, H, W) at ``altitudes_m`` (L,), or in time (T, L, H, W) at the
+    instants ``t_s`` (T,; every flight taking off at 0); the task ``cfg`` (``min_db``
+    resolved); starts (N, 2) at ``start_levels`` (N,; -1: the level whose optimum is best,
+    the take-off's climb left to the autopilot). Six moves: the plane's four, and a climb or
+    descent of one level, which lasts its duration in ticks (:func:`level_durations`) and
+    earns that many times the base reward where and when it lands. The horizon
+    ``cfg.max_steps`` is in ticks. A flight arrives at the destination's horizontal position
+    at any level; leaving the band or entering a not-flyable cell ((L, H', W')
+    ``not_flyable``) ends it as leaving the area does."""
+    sig = np.asarray(signal_db, dtype=np.float64)
     alts = np.asarray(altitudes_m, dtype=np.float64).reshape(-1)
-    if sig.ndim != 3 or sig.shape[0] != alts.size or not np.all(np.isfinite(sig)):
+    if sig.ndim == 3:
+        sig, times = sig[None], np.zeros(1)
+    else:
+        times = np.zeros(0) if t_s is None else np.asarray(t_s, dtype=np.float64).reshape(-1)
+    if sig.ndim != 4 or sig.shape[1] != alts.size or not np.all(np.isfinite(sig)):
         raise InvalidInputError(
-            f"signal_db must be finite with shape (L, H, W), L = {alts.size} levels "
-            f"(got {sig.shape})"
+            f"signal_db must be finite with shape (L, H, W) or (T, L, H, W), L = {alts.size} "
+            f"levels (got {sig.shape})"
+        )
+    if times.size != sig.shape[0]:
+        raise InvalidInputError(
+            f"t_s must hold one instant a slice ({sig.shape[0]}; got {times.size})"
         )
     if cfg.min_db is None:
         raise InvalidInputError("cfg.min_db must be resolved (a threshold in dB)")
@@ -182,16 +201,24 @@ def optimal_levels(
     if not_flyable is not None:
         blocked = np.ascontiguousarray(np.asarray(not_flyable, dtype=np.uint8))
     raw = _core.plan_optimal_levels(
-        sig, tuple(float(v) for v in extent_m), (float(cfg.goal_m[0]), float(cfg.goal_m[1])),  # type: ignore[arg-type]
-        np.ascontiguousarray(np.column_stack([starts, lv])), step_m=float(cfg.step_m),
-        tol_m=float(cfg.tol_m), max_steps=int(cfg.max_steps), mu=float(cfg.mu),
-        reward=cfg.reward, sir_min_db=float(cfg.min_db), goal_reward=float(cfg.goal_reward),
-        out_of_bounds_penalty=float(cfg.out_of_bounds_penalty), climb=climb, descend=descend,
-        blocked=blocked,
+        np.ascontiguousarray(sig), np.ascontiguousarray(times),
+        tuple(float(v) for v in extent_m), (float(cfg.goal_m[0]), float(cfg.goal_m[1])),  # type: ignore[arg-type]
+        np.ascontiguousarray(np.column_stack([starts, lv])), t0_s=0.0, dt_s=float(cfg.move_s),
+        step_m=float(cfg.step_m), tol_m=float(cfg.tol_m), max_steps=int(cfg.max_steps),
+        mu=float(cfg.mu), reward=cfg.reward, sir_min_db=float(cfg.min_db),
+        goal_reward=float(cfg.goal_reward), out_of_bounds_penalty=float(cfg.out_of_bounds_penalty),
+        climb=climb, descend=descend, blocked=blocked,
     )  # fmt: skip
     out = []
-    for r, a, p in raw:
+    for r, a, p, ticks in raw:
         path = np.asarray(p)
-        levels = path[:, 2].astype(np.int64)
-        out.append(LevelPlan(float(r), path[:, :2], levels, np.asarray(a, dtype=np.int64)))
+        out.append(
+            LevelPlan(
+                float(r),
+                path[:, :2],
+                path[:, 2].astype(np.int64),
+                np.asarray(a, dtype=np.int64),
+                np.asarray(ticks, dtype=np.int64),
+            )
+        )
     return out

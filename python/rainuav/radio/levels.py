@@ -21,6 +21,7 @@ from rainuav.radio.mapdata import RadioMap
 from rainuav.radio.scenario import Scenario
 
 __all__ = [
+    "RadioLevelSeries",
     "RadioLevels",
     "build_radio_level_series",
     "build_radio_levels",
@@ -87,13 +88,34 @@ def build_radio_levels(scn: Scenario, *, cache: bool = True, progress: bool = Fa
     return RadioLevels(np.asarray(levels, dtype=float), tuple(maps))
 
 
+@dataclass(frozen=True)
+class RadioLevelSeries:
+    """A scenario's maps in time at each flight altitude: what a flight among levels through
+    weather that moves reads."""
+
+    altitudes_m: np.ndarray
+    """The levels (L,), m, lowest first."""
+    t_s: np.ndarray
+    """(T,) instants, s."""
+    sinr_db: np.ndarray
+    """(T, L, H, W) SINR, dB, float32."""
+    serving_cell: np.ndarray
+    """(T, L, H, W) serving cell (-1: none), int16."""
+    not_flyable: np.ndarray
+    """(L, H, W) the pixels a UAV may not enter at each level (the weather moves nothing on
+    the ground)."""
+    extent: tuple[float, float, float, float]
+    """(x_min, x_max, y_min, y_max), m."""
+
+
 def build_radio_level_series(
     scn: Scenario, times_s: object, *, cache: bool = True, progress: bool = False
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> RadioLevelSeries:
     """The maps in time of ``scn`` at each of ``area.levels``
-    (:func:`rainuav.radio.timemap.build_radio_map_series` per level): ``(altitudes (L,),
-    instants (T,), SINR (T, L, H, W) float32)``, memory checked for the whole stack first."""
+    (:func:`rainuav.radio.timemap.build_radio_map_series` per level), memory checked for the
+    whole stack first."""
     from rainuav._checks import as_real_array
+    from rainuav.radio.terrain import map_mask
     from rainuav.radio.timemap import build_radio_map_series
 
     levels = scn.area.levels
@@ -107,13 +129,21 @@ def build_radio_level_series(
         (len(levels) + 1) * t.size * (cells + 4) * h * w * 4.0,
         "use fewer levels or instants, or a coarser resolution_m",
     )
-    out = np.empty((t.size, len(levels), h, w), dtype=np.float32)
+    sinr = np.empty((t.size, len(levels), h, w), dtype=np.float32)
+    serving = np.empty((t.size, len(levels), h, w), dtype=np.int16)
+    masks = np.zeros((len(levels), h, w), dtype=bool)
+    extent = (scn.area.x_min_m, scn.area.x_max_m, scn.area.y_min_m, scn.area.y_max_m)
     for k, a in enumerate(levels):
         if progress:
             print(f"level {k + 1}/{len(levels)}: {a:g} m", flush=True)
-        series = build_radio_map_series(level_scenario(scn, a), t, cache=cache)
-        out[:, k] = series.sinr_db
-    return np.asarray(levels, dtype=float), t, out
+        one = level_scenario(scn, a)
+        series = build_radio_map_series(one, t, cache=cache)
+        sinr[:, k] = series.sinr_db
+        serving[:, k] = series.serving_cell
+        mask = map_mask(one)
+        if mask is not None:
+            masks[k] = mask
+    return RadioLevelSeries(np.asarray(levels, dtype=float), t, sinr, serving, masks, extent)
 
 
 def sample_levels(

@@ -40,6 +40,7 @@ from rainuav.radio.timemap import RadioMapSeries, build_radio_map_series, series
 
 __all__ = [
     "MAP_FILES",
+    "SLICE_S",
     "World",
     "WorldSpec",
     "build_source",
@@ -60,6 +61,8 @@ MAP_FILES = ("radiomap.npz", "radiomap_series.npz")
 ENGINES = ("", "hybrid", "ray", "pe")
 MAX_POOL = 64
 """The most storms flown at once (each holds its maps in time: about 20 MB)."""
+SLICE_S = 5.0
+"""Time between the maps ``fly`` makes of a weather file with several instants, s."""
 
 
 @dataclass

@@ -17,13 +17,26 @@ from rainuav.radio import presets
 __all__ = ["plot_flight"]
 
 
-def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path) -> None:
+def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any = None) -> None:
     """``flight.png``: the path over the SINR at take-off (a series: its first instant), the
-    rain at take-off outlined, the waypoints, the sites, the start and the destination."""
+    rain at take-off outlined, the waypoints, the sites, the start and the destination.
+    ``heights``: ``(t_s, altitude_m, outage)`` per vertex of a flight among levels, drawn
+    below as its height against time, the moves in outage marked."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
-    ax = fig.subplots()
+    if heights is None:
+        fig = Figure(figsize=(6.4, 5.6), layout="constrained")
+        ax = fig.subplots()
+    else:
+        fig = Figure(figsize=(6.4, 7.6), layout="constrained")
+        ax, prof = fig.subplots(2, 1, height_ratios=[3.2, 1.0])
+        t, z, out = (np.asarray(v) for v in heights)
+        prof.plot(t, z, "k-", lw=1.2, label="height")
+        prof.plot(t[out], z[out], "r|", ms=8, label="in outage")
+        prof.set_xlabel("flight time [s]")
+        prof.set_ylabel("height [m]")
+        prof.set_ylim(0.0, max(float(np.max(z)) * 1.15, 1.0))
+        prof.legend(loc="lower right", fontsize="small")
     a = place.scenario.area
     x0, x1, y0, y1 = a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m
     lo = float(presets.SINR_THRESHOLDS_DB["uma"])
@@ -50,7 +63,8 @@ def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path) -> None:
     ax.set_xlabel("east of origin [m]")
     ax.set_ylabel("north of origin [m]")
     origin = latlon_text(place.georef.lat_deg, place.georef.lon_deg)
-    ax.set_title(f"SINR and rain at take-off; origin {origin}", fontsize=10)
+    level = "" if heights is None else f" at {float(np.asarray(heights[1])[0]):g} m"
+    ax.set_title(f"SINR{level} and rain at take-off; origin {origin}", fontsize=10)
     ax.legend(loc="best", fontsize="small", framealpha=0.8)  # away from the flight
     fig.colorbar(im, ax=ax, label="SINR [dB]")
     write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))

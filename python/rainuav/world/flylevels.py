@@ -12,6 +12,7 @@ Beside the plan, the summary holds the baselines: the exact plan held at the lev
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -31,12 +32,14 @@ from rainuav.missions import (
     wpl_text,
 )
 from rainuav.nav import planner
-from rainuav.nav.field import SignalField, pixel_index
+from rainuav.nav.field import SignalField, SignalSeries, pixel_index
 from rainuav.nav.task import NavConfig
 from rainuav.radio import presets
-from rainuav.radio.levels import build_radio_levels, sample_levels
+from rainuav.radio.levels import build_radio_level_series, build_radio_levels, level_scenario
 from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.terrain import obstacle_pixel_max, scenario_terrain
+from rainuav.radio.timemap import build_radio_map_series, series_times
+from rainuav.world import SLICE_S
 from rainuav.world.flightplot import plot_flight
 
 __all__ = ["fly_levels"]
@@ -50,23 +53,40 @@ def fly_levels(
     ``start_altitude_m`` (default: the lowest the start may be flown at); returns the
     summary."""
     scn = place.scenario
-    if scn.medium.moves:
-        raise InvalidInputError(
-            "--altitudes: weather that moves is flown at one altitude (give --altitude-m)"
-        )
     if scn.area.msl and scn.terrain is not None:
         raise InvalidInputError(
             "--altitudes over --terrain are above the ground: not with --altitude-reference msl"
         )
     alts = np.asarray(scn.area.levels, dtype=float)
-    stack = build_radio_levels(scn, progress=progress)
-    sinr, blocked, extent = stack.sinr_db, stack.not_flyable, stack.extent
+    probe = NavConfig(speed_m_s=speed_m_s)
+    climb, descend = planner.level_durations(alts, probe)
     span = abs(place.goal_m[0] - place.start_m[0]) + abs(place.goal_m[1] - place.start_m[1])
-    steps = math.ceil(2.0 * span / 10.0) + 50 + 4 * len(alts)
+    # Room for a detour twice the direct route and for crossing the band up and down.
+    steps = math.ceil(2.0 * span / probe.step_m) + 50 + sum(climb) + sum(descend)
+    times = None
+    if scn.medium.moves:  # the weather of a file with several instants: maps every 5 s
+        horizon = math.ceil(steps * probe.move_s / SLICE_S) * SLICE_S
+        if scn.engine == "pe":
+            scn = dataclasses.replace(scn, engine="hybrid")
+        times = series_times(horizon, SLICE_S)
+        series = build_radio_level_series(scn, times, progress=progress)
+        sinr, blocked, extent = series.sinr_db.astype(np.float64), series.not_flyable, series.extent
+        fields: list = [
+            SignalSeries(sinr[:, k], times, extent, serving_cell=series.serving_cell[:, k],
+                         not_flyable=blocked[k])
+            for k in range(len(alts))
+        ]  # fmt: skip
+    else:
+        stack = build_radio_levels(scn, progress=progress)
+        sinr, blocked, extent = stack.sinr_db, stack.not_flyable, stack.extent
+        fields = [
+            SignalField(sinr[k], extent, serving_cell=m.serving_cell, not_flyable=blocked[k])
+            for k, m in enumerate(stack.maps)
+        ]
     threshold = presets.SINR_THRESHOLDS_DB["uma"] if min_db is None else min_db
     task = NavConfig(goal_m=place.goal_m, start_m=place.start_m, max_steps=steps,
                      speed_m_s=speed_m_s, min_db=threshold)  # fmt: skip
-    shape, bounds = sinr.shape[1:], scn.area.bounds
+    shape, bounds = blocked.shape[1:], scn.area.bounds
 
     def flyable(x: float, y: float) -> np.ndarray:
         i, j = pixel_index(shape, bounds, np.array([x]), np.array([y]))
@@ -89,29 +109,31 @@ def fly_levels(
                 f"{alts[np.flatnonzero(flyable(*place.start_m))[0]]:g} m"
             )
     plan = planner.optimal_levels(sinr, alts, extent, task, [place.start_m], [start_level],
-                                  not_flyable=blocked)[0]  # fmt: skip
+                                  t_s=times, not_flyable=blocked)[0]  # fmt: skip
     if np.hypot(*(plan.path_m[-1] - np.asarray(place.goal_m))) > task.tol_m:
         raise InvalidInputError(f"no flight reaches the destination within {steps} moves")
-    climb, descend = planner.level_durations(alts, task)
     path, lv = plan.path_m, plan.levels
-    dur = np.ones(len(plan.actions))
     up, down = plan.actions == 4, plan.actions == 5
-    dur[up] = np.asarray(climb)[lv[:-1][up]]
-    dur[down] = np.asarray(descend)[lv[1:][down]]
-    t_s = np.concatenate([[0.0], np.cumsum(dur) * task.move_s])
-    sig = sample_levels(sinr, extent, path[:, 0], path[:, 1], lv)
-    pi, pj = pixel_index(shape, bounds, path[:, 0], path[:, 1])
-    serving = np.stack([m.serving_cell for m in stack.maps])[lv, pi, pj]
+    t_s = plan.ticks * task.move_s
+
+    def along(p: np.ndarray, levels: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The signal and serving cell at each vertex, on its level, at its instant."""
+        sig, srv = np.empty(len(p)), np.empty(len(p), dtype=np.int64)
+        for k in np.unique(levels):
+            on = levels == k
+            sig[on] = fields[k](p[on, 0], p[on, 1], t[on])
+            srv[on] = fields[k].serving_cell(p[on, 0], p[on, 1], t[on])
+        return sig, srv
+
+    sig, serving = along(path, lv, t_s)
     cost = -(plan.return_ - task.goal_reward)
-    # The baselines: each level alone, exactly.
+    # The baselines: each level alone, exactly (in space-time where the weather moves).
     per_level = []
     for k in range(len(alts)):
-        field = SignalField(sinr[k], extent, not_flyable=blocked[k])
-        p = planner.plan_on(field, task, np.asarray(place.start_m)[None])[0]
+        p = planner.plan_on(fields[k], task, np.asarray(place.start_m)[None])[0]
         arrives = bool(np.hypot(*(p.path_m[-1] - np.asarray(place.goal_m))) <= task.tol_m)
-        s = sample_levels(
-            sinr, extent, p.path_m[1:, 0], p.path_m[1:, 1], np.full(len(p.path_m) - 1, k)
-        )
+        s, _ = along(p.path_m[1:], np.full(len(p.path_m) - 1, k),
+                     np.arange(1, len(p.path_m)) * task.move_s)  # fmt: skip
         per_level.append((-(p.return_ - task.goal_reward) if arrives else None,
                           float(np.mean(s < threshold)) if arrives else None))  # fmt: skip
     fixed = int(np.argmin(np.abs(alts - scn.area.altitude_m)))
@@ -141,7 +163,7 @@ def fly_levels(
         "altitudes_m": alts.tolist(), "start_altitude_m": float(alts[start_level]),
         "climbs": int(up.sum()), "descents": int(down.sum()),
         "fixed_altitude_m": float(alts[fixed]), "fixed_altitude_cost": per_level[fixed][0],
-        "fixed_altitude_outage_share": per_level[fixed][1],
+        "fixed_altitude_outage_share": per_level[fixed][1], "weather_moves": times is not None,
         "best_single_altitude_m": None if best_single is None else float(alts[best_single]),
         "best_single_altitude_cost": None if best_single is None else per_level[best_single][0],
         "flight_time_s": float(t_s[-1]), "moves": len(plan.actions), "waypoints": len(picks),
@@ -169,8 +191,13 @@ def fly_levels(
     }
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
-    plot_flight(stack.maps[start_level], path, place, out / "flight.png")
-    write_map_geotiff(stack.maps[start_level], out / "sinr.tif")
+    # The figure and the GIS map: the start level's map (at take-off where the weather moves).
+    if times is None:
+        rm = stack.maps[start_level]
+    else:  # built above with the series, so taken from the cache
+        rm = build_radio_map_series(level_scenario(scn, alts[start_level]), times)
+    plot_flight(rm, path, place, out / "flight.png", heights=(t_s, z, sig < threshold))
+    write_map_geotiff(rm, out / "sinr.tif", None if times is None else 0)
     done = json.dumps(summary, indent=2) + "\n"
     write_atomic(out / "summary.json", lambda tmp: tmp.write_text(done))
     return summary

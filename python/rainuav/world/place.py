@@ -46,13 +46,11 @@ from rainuav.radio.scenario import Area, FootprintsFile, Origin, Scenario, Terra
 from rainuav.radio.sites import read_site_rows, sites_from_rows
 from rainuav.radio.terrain import flight_heights_at, obstacle_pixel_max, scenario_terrain
 from rainuav.radio.timemap import build_radio_map_series, series_times
-from rainuav.world import World, world_from
+from rainuav.world import SLICE_S, World, world_from
 from rainuav.world.flightplot import plot_flight
 
 __all__ = ["MARGIN_M", "MAX_SIDE_M", "Place", "fly_place", "place_scenario"]
 
-SLICE_S = 5.0
-"""Time between the maps of a weather file with several instants, s."""
 MARGIN_M = 300.0
 """The area reaches this far beyond the start, the destination and the sites, m."""
 MAX_SIDE_M = 10_000.0
