@@ -1,7 +1,8 @@
 """Navigation: the task (:mod:`~rainuav.nav.task`), the signal field
 (:mod:`~rainuav.nav.field`), the Gymnasium environment (:mod:`~rainuav.nav.env`,
 ``rainuav/UAVNav-v0``), the batched stepper (:mod:`~rainuav.nav.batch`), the exact planner
-and baselines (:mod:`~rainuav.nav.planner`) and the shield (:mod:`~rainuav.nav.shield`).
+and baselines (:mod:`~rainuav.nav.planner`), the shield (:mod:`~rainuav.nav.shield`) and the
+task with altitude as a decision (:mod:`~rainuav.nav.levels`, six moves among flight levels).
 
 Works on any (H, W) map in dB (a RadioMap is read through its attributes); knows nothing of
 how maps are built (:mod:`rainuav.radio`; ``rainuav.envs`` joins the two for ``gym.make``) and
@@ -13,6 +14,7 @@ from __future__ import annotations
 from rainuav.nav.batch import BatchStepper
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField, SirField
+from rainuav.nav.levels import LevelField, UAVLevelsEnv
 from rainuav.nav.planner import Plan, optimal, optimal_many, straight_line
 from rainuav.nav.shield import shield_moves
 from rainuav.nav.task import (
@@ -30,11 +32,13 @@ __all__ = [
     "REWARDS",
     "SIGNALS",
     "BatchStepper",
+    "LevelField",
     "LoiteringWarning",
     "NavConfig",
     "Plan",
     "SignalField",
     "SirField",
+    "UAVLevelsEnv",
     "UAVNavEnv",
     "base_reward",
     "flight_cost",

@@ -11,7 +11,6 @@ take-off, re-planning on the weather of the moment) are in :mod:`rainuav.nav.bas
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -22,9 +21,18 @@ from rainuav import _core
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField
+from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, level_durations
 from rainuav.nav.task import NavConfig
 
-__all__ = ["Plan", "optimal", "optimal_many", "straight_line"]
+__all__ = [
+    "LevelPlan",
+    "Plan",
+    "level_durations",
+    "optimal",
+    "optimal_levels",
+    "optimal_many",
+    "straight_line",
+]
 
 
 @dataclass(frozen=True)
@@ -121,35 +129,6 @@ class LevelPlan:
     """(T,) actions: 0-3 the plane's moves, 4 climb, 5 descend."""
     ticks: npt.NDArray[np.int64]
     """(T + 1,) the flight's clock at each position, in horizontal moves (``move_s`` each)."""
-
-
-CLIMB_M_S = 5.0
-"""Default climb speed, m/s."""
-DESCEND_M_S = 3.0
-"""Default descent speed, m/s."""
-
-
-def level_durations(
-    altitudes_m: npt.ArrayLike,
-    cfg: NavConfig,
-    climb_m_s: float = CLIMB_M_S,
-    descend_m_s: float = DESCEND_M_S,
-) -> tuple[list[int], list[int]]:
-    """How long each climb and each descent between neighbouring levels lasts, in ticks of
-    the flight's clock (one horizontal move, ``cfg.move_s``): the gap over the climb or
-    descent speed, rounded up to whole moves (at least one). With the defaults, 15 m gaps
-    and 1 s moves: 3 and 5 exactly."""
-    gaps = np.diff(np.asarray(altitudes_m, dtype=np.float64))
-    for name, v in (("climb_m_s", climb_m_s), ("descend_m_s", descend_m_s)):
-        if not (np.isfinite(v) and 0.1 <= v <= 100.0):
-            raise InvalidInputError(f"{name} must be in 0.1..100 m/s (got {v!r})")
-    move = cfg.move_s
-
-    def ticks(speed: float) -> list[int]:
-        # 1e-9 absorbs the rounding of a gap that is a whole number of moves.
-        return [max(1, math.ceil(g / speed / move - 1e-9)) for g in gaps]
-
-    return ticks(climb_m_s), ticks(descend_m_s)
 
 
 def optimal_levels(
