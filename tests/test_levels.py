@@ -299,3 +299,31 @@ def test_a_band_flies_weather_that_moves(tmp_path) -> None:
     assert a["weather_moves"] and b["weather_moves"]
     assert b["cost"] == pytest.approx(a["cost"], abs=1e-9) and b["moves"] == a["moves"]
     assert b["flight_time_s"] == pytest.approx(a["flight_time_s"])
+
+
+def test_one_march_reads_every_level() -> None:
+    # The hybrid engine marches each cell once for every level. One height recorded by the
+    # levels' march is the single-height march bit for bit; the maps of the one march agree
+    # with each level's own build (its own grid and cone) within 0.5 dB of SINR everywhere
+    # (the cone of the highest level's grid is narrower; the rays carry the rest: measured
+    # 0.17 dB at 60 m here, 0.44 dB on `uma` at 28 GHz, 20 m pixels, 30 m), and within
+    # 0.05 dB at the highest level, whose grid it is.
+    from rainuav.radio.grid import march_grid
+    from rainuav.radio.levels import level_scenario, shares_a_march
+    from rainuav.radio.pe_engine import march_cell, march_cell_levels
+    from rainuav.radio.presets import paper
+    from rainuav.radio.scenario import PESettings
+
+    scn = paper().replace(area=Area(resolution_m=50.0, altitudes_m=[60.0, 100.0]),
+                          pe=PESettings(budget_gpoints=0.05), engine="hybrid")  # fmt: skip
+    assert shares_a_march(scn) and not shares_a_march(scn.replace(engine="pe"))
+    top = level_scenario(scn, 100.0)
+    site = top.sites[0]
+    grid = march_grid(top, site, site.cells[0])
+    one = march_cell(top, site, site.cells[0], grid)
+    assert np.array_equal(march_cell_levels(top, site, site.cells[0], grid, [100.0])[0], one)
+    shared = build_radio_levels(scn, cache=False)
+    apart = build_radio_levels(scn, cache=False, one_march=False)
+    assert (apart.maps[0].pe_share > 0.5).sum() > 50  # the PE carries part of the map
+    for k, tol in ((0, 0.5), (1, 0.05)):
+        assert np.abs(shared.maps[k].sinr_db - apart.maps[k].sinr_db).max() < tol

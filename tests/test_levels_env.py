@@ -137,3 +137,16 @@ def test_bad_input_is_refused_in_one_line() -> None:
     series = SignalSeries(stack(4, 2)[:, 0], [0.0, 5.0], EXTENT)
     with pytest.raises(InvalidInputError, match="all SignalField or all SignalSeries"):
         LevelField([series, field.fields[1], field.fields[2]], ALTS)
+
+
+def test_a_plan_too_big_for_memory_is_refused_before_allocating() -> None:
+    # 64 levels of 200 x 200 points over a horizon of 100 000 ticks would need about 2.6e11
+    # bytes of policy: refused in one line naming max_steps, in time and on maps.
+    sig = np.zeros((64, 200, 200))
+    c = cfg(max_steps=100_000, goal_m=(1900.0, 1900.0))
+    alts = np.arange(64) * 10.0 + 20.0
+    for t_s in (None, [0.0]):
+        s = sig if t_s is None else sig[None]
+        with pytest.raises(InvalidInputError, match="max_steps"):
+            planner.optimal_levels(s, alts, (0.0, 2000.0, 0.0, 2000.0), c, [[10.0, 10.0]], [0],
+                                   t_s=t_s)  # fmt: skip

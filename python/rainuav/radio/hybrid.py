@@ -14,11 +14,11 @@ import numpy as np
 from rainuav import _core
 from rainuav.radio.cell import Cell
 from rainuav.radio.grid import MarchGrid, cone_weight, march_grid
-from rainuav.radio.pe_engine import march_cell, resample
+from rainuav.radio.pe_engine import march_cell, march_cell_levels, resample
 from rainuav.radio.ray_engine import SOILS, Weight, ray_power
 from rainuav.radio.scenario import Scenario, Site
 
-__all__ = ["EngineParts", "engine_parts", "inside_cone"]
+__all__ = ["EngineParts", "engine_parts", "engine_parts_levels", "inside_cone"]
 
 
 def inside_cone(grid: MarchGrid) -> Weight:
@@ -104,3 +104,69 @@ def engine_parts(
         if bar is not None:
             bar.close()
     return EngineParts(power, carried, pe_power, grids, timings)
+
+
+def engine_parts_levels(
+    scns: Sequence[Scenario],
+    cells: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    progress: bool = False,
+) -> list[EngineParts]:
+    """:func:`engine_parts` at several flight altitudes (``scns``: the scenario at each,
+    lowest first; engine 'pe' or 'hybrid' over flat ground), each cell marched once: its grid
+    is the one of the highest level (its top clears every level), every level's two rows are
+    recorded after each step, and the rays' part inside the cone at each level uses that
+    grid's cone. A cell whose cone carries under 1% of its power at every pixel of every
+    level is not marched."""
+    top = scns[-1]
+    heights = [s.area.altitude_m for s in scns]
+    h, w = y_m.size, x_m.size
+    grids = [march_grid(top, site, cell) for site, cell in cells]
+    timings: dict[str, float] = {}
+    weights = [None if g is None else inside_cone(g) for g in grids]
+    parts = []
+    marched = np.zeros(len(cells), dtype=bool)
+    for scn in scns:
+        power = np.zeros((len(cells), h, w))
+        carried = np.zeros_like(power)
+        if top.engine != "pe":
+            t_r = time.perf_counter()
+            power, in_cone = ray_power(scn, cells, x_m, y_m, weights)
+            carried = np.zeros_like(power) if in_cone is None else in_cone
+            with np.errstate(divide="ignore", invalid="ignore"):
+                frac = np.where(power > 0, carried / power, 0.0)
+            marched |= frac.reshape(len(cells), -1).max(axis=1) >= 0.01
+            timings["rays"] = timings.get("rays", 0.0) + time.perf_counter() - t_r
+        else:
+            marched[:] = True
+        parts.append(EngineParts(power, carried, np.zeros_like(power), list(grids), timings))
+    for m, g in enumerate(grids):
+        if g is None or not marched[m]:
+            for p in parts:
+                p.grids[m] = None
+                p.carried[m] = 0.0
+        else:
+            _core.check_memory(g.bytes + 2 * len(scns) * g.steps * g.nx * 8)
+    bar = None
+    todo = [m for m in range(len(cells)) if parts[0].grids[m] is not None]
+    if progress and todo:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(todo), desc="radio map (PE, every level)", unit="cell")
+    try:
+        for m in todo:
+            site, cell = cells[m]
+            grid = grids[m]
+            assert grid is not None
+            p = march_cell_levels(top, site, cell, grid, heights, timings)
+            t_r = time.perf_counter()
+            for k, scn in enumerate(scns):
+                parts[k].pe_power[m] = resample(scn, site, grid, p[k], x_m, y_m)
+            timings["resample"] = timings.get("resample", 0.0) + time.perf_counter() - t_r
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    return parts

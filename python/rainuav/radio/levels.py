@@ -2,8 +2,10 @@
 on an altitude axis, so a flight can choose its height (:func:`rainuav.nav.planner.optimal_levels`).
 
 Each level is the scenario's map at that altitude, built by its engine (and cached as any
-map): the ray engine traces every level; the hybrid and PE engines march once per level
-(reading every level from one march is left for later). Memory is checked for the whole
+map): the ray engine traces every level; the hybrid engine over flat ground marches each cell
+once and reads every level from that march (its grid the highest level's, so its cone may
+be narrower than a lower level's own: the rays carry the rest); the PE engine, and the
+hybrid over terrain, march once per level. Memory is checked for the whole
 stack before the first level is built. Weather that moves: :func:`build_radio_level_series`,
 the maps in time of every level, (time, altitude, H, W).
 """
@@ -27,6 +29,7 @@ __all__ = [
     "build_radio_levels",
     "level_scenario",
     "sample_levels",
+    "shares_a_march",
 ]
 
 
@@ -67,8 +70,13 @@ def level_scenario(scn: Scenario, altitude_m: float) -> Scenario:
     return scn.replace(area=area)
 
 
-def build_radio_levels(scn: Scenario, *, cache: bool = True, progress: bool = False) -> RadioLevels:
-    """The maps of ``scn`` at each of ``area.levels`` (module docstring)."""
+def build_radio_levels(
+    scn: Scenario, *, cache: bool = True, progress: bool = False, one_march: bool = True
+) -> RadioLevels:
+    """The maps of ``scn`` at each of ``area.levels`` (module docstring). ``one_march``: the
+    hybrid engine over flat ground marches each cell once for every level
+    (:func:`rainuav.radio.hybrid.engine_parts_levels`, :func:`shares_a_march`); False: once
+    per level."""
     from rainuav.radio.radiomap import build_radio_map
 
     levels = scn.area.levels
@@ -80,12 +88,58 @@ def build_radio_levels(scn: Scenario, *, cache: bool = True, progress: bool = Fa
         len(levels) * (cells + 4) * h * w * 4.0,
         "use fewer levels or a coarser resolution_m",
     )
+    if one_march and shares_a_march(scn):
+        return _levels_from_one_march(scn, cache=cache, progress=progress)
     maps = []
     for k, a in enumerate(levels):
         if progress:
             print(f"level {k + 1}/{len(levels)}: {a:g} m", flush=True)
         maps.append(build_radio_map(level_scenario(scn, a), cache=cache))
     return RadioLevels(np.asarray(levels, dtype=float), tuple(maps))
+
+
+def shares_a_march(scn: Scenario) -> bool:
+    """Whether one march per cell serves every level: several levels, the hybrid engine
+    over a perfect conductor or no ground, and flat ground. Over terrain each level's
+    receiver surface follows the ground and marches apart; the 'pe' engine marches each
+    level on its own grid, whose cone is its own (a grid tall enough for the highest level
+    fits the budget with a narrower cone, and the PE alone has no rays for the rest)."""
+    from rainuav.radio.ray_engine import SOILS
+
+    return (
+        len(scn.area.levels) > 1
+        and scn.engine == "hybrid"
+        and scn.ground not in SOILS
+        and scn.terrain is None
+    )
+
+
+def _levels_from_one_march(scn: Scenario, *, cache: bool, progress: bool) -> RadioLevels:
+    """Every level's map with each cell marched once (cached apart from the maps each level
+    would get on its own: the cone is the highest level's)."""
+    import time
+
+    from rainuav.radio.cache import map_path
+    from rainuav.radio.hybrid import engine_parts_levels
+    from rainuav.radio.mapdata import store
+    from rainuav.radio.radiomap import cached_map, map_from_parts
+
+    levels = scn.area.levels
+    scns = [level_scenario(scn, a) for a in levels]
+    paths = [map_path(f"{scn.digest()}|one march|{k}") for k in range(len(levels))]
+    if cache:
+        hits = [cached_map(s, p) for s, p in zip(scns, paths, strict=True)]
+        if all(m is not None for m in hits):
+            return RadioLevels(np.asarray(levels, dtype=float), tuple(hits))  # type: ignore[arg-type]
+    t0 = time.perf_counter()
+    x_m, y_m = scn.area.centres()
+    cells = [(s, c) for s in scn.sites for c in s.cells]
+    parts = engine_parts_levels(scns, cells, x_m, y_m, progress)
+    maps = tuple(map_from_parts(s, p, t0) for s, p in zip(scns, parts, strict=True))
+    if cache:
+        for m, p in zip(maps, paths, strict=True):
+            store(m, p)
+    return RadioLevels(np.asarray(levels, dtype=float), maps)
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
@@ -19,7 +20,7 @@ import numpy as np
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cache import map_path
-from rainuav.radio.hybrid import engine_parts
+from rainuav.radio.hybrid import EngineParts, engine_parts
 from rainuav.radio.mapdata import FORMAT_VERSION, RadioMap, store
 from rainuav.radio.ray_engine import SOILS
 from rainuav.radio.scenario import Scenario
@@ -35,8 +36,9 @@ MAP_ARRAYS = 10
 """(cells, H, W) float64 arrays a map build holds at its peak (its memory check)."""
 
 
-def _cached(scn: Scenario) -> RadioMap | None:
-    path = map_path(scn.digest())
+def cached_map(scn: Scenario, path: Path | None = None) -> RadioMap | None:
+    """The cached map of ``scn`` (at ``path``, default its digest's), or None."""
+    path = map_path(scn.digest()) if path is None else path
     if not path.exists():
         return None
     try:
@@ -72,7 +74,7 @@ def build_radio_map(
         from rainuav.radio.timemap import build_radio_map_series
 
         return build_radio_map_series(scn, times_s, cache=cache, progress=progress)
-    if cache and (hit := _cached(scn)) is not None:
+    if cache and (hit := cached_map(scn)) is not None:
         return hit
     if scn.engine == "pe" and scn.ground in SOILS:
         raise InvalidInputError(
@@ -92,6 +94,18 @@ def build_radio_map(
         "use a coarser area.resolution_m, a smaller area or fewer cells",
     )
     parts = engine_parts(scn, [(s, c) for _, s, c in jobs], x_m, y_m, progress)
+    rm = map_from_parts(scn, parts, t0)
+    if cache:
+        store(rm, map_path(scn.digest()))
+    return rm
+
+
+def map_from_parts(scn: Scenario, parts: EngineParts, t0: float) -> RadioMap:
+    """The map of ``scn`` from its engine's parts (:mod:`rainuav.radio.hybrid`), its build
+    counted from ``t0`` (``time.perf_counter``)."""
+    a = scn.area
+    x_m, y_m = a.centres()
+    jobs = [(i, site, cell) for i, site in enumerate(scn.sites) for cell in site.cells]
     power, carried, pe_power, grids = parts.power, parts.carried, parts.pe_power, parts.grids
     timings = parts.timings
     if scn.engine == "pe":
@@ -133,6 +147,4 @@ def build_radio_map(
         timings=timings,
         not_flyable=map_mask(scn),
     )
-    if cache:
-        store(rm, map_path(scn.digest()))
     return rm
