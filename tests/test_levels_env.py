@@ -150,3 +150,23 @@ def test_a_plan_too_big_for_memory_is_refused_before_allocating() -> None:
         with pytest.raises(InvalidInputError, match="max_steps"):
             planner.optimal_levels(s, alts, (0.0, 2000.0, 0.0, 2000.0), c, [[10.0, 10.0]], [0],
                                    t_s=t_s)  # fmt: skip
+
+
+def test_gym_make_builds_the_levels_of_a_scenario() -> None:
+    # `gym.make("rainuav/UAVLevels-v0")`: the scenario mapped at each level, the preset's
+    # SINR threshold, a climb of 30 m lasting 6 moves; a keyword of the plane's weather
+    # observation is refused in one line.
+    import rainuav  # noqa: F401 - registers the environments
+    from rainuav.radio.presets import SINR_THRESHOLDS_DB, uma
+    from rainuav.radio.scenario import Area
+
+    scn = uma(0.0, 28e9, engine="ray").replace(area=Area(resolution_m=50.0))
+    env = gym.make("rainuav/UAVLevels-v0", scenario=scn, altitudes_m=[30.0, 60.0])
+    base = env.unwrapped
+    assert base.cfg.min_db == SINR_THRESHOLDS_DB["uma"] and base.climb == [6]
+    obs, info = env.reset(seed=0, options={"start_m": (500.0, 500.0)})
+    assert info["altitude_m"] == 30.0 and obs[2] == 0.0
+    obs, _, *_, info = env.step(4)
+    assert info["altitude_m"] == 60.0 and info["t_s"] == 6.0 and obs[2] == 1.0
+    with pytest.raises(InvalidInputError, match="observation"):
+        gym.make("rainuav/UAVLevels-v0", scenario=scn, observation="weather")

@@ -34,7 +34,7 @@ from rainuav.errors import InvalidInputError, RainuavError
 
 
 def _register() -> None:
-    """Registers ``rainuav/UAVNav-v0`` with Gymnasium (once)."""
+    """Registers ``rainuav/UAVNav-v0`` and ``rainuav/UAVLevels-v0`` with Gymnasium (once)."""
     import gymnasium as gym
 
     if "rainuav/UAVNav-v0" not in gym.registry:
@@ -43,6 +43,8 @@ def _register() -> None:
             entry_point="rainuav.envs:make_nav_env",
             vector_entry_point="rainuav.envs:make_nav_vector_env",
         )
+    if "rainuav/UAVLevels-v0" not in gym.registry:
+        gym.register(id="rainuav/UAVLevels-v0", entry_point="rainuav.envs:make_levels_env")
 
 
 class _RegisterWithGymnasium(importlib.abc.MetaPathFinder):

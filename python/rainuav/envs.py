@@ -1,5 +1,6 @@
-"""The registered environment ``rainuav/UAVNav-v0``: a world (:mod:`rainuav.world`) as a
-Gymnasium environment.
+"""The registered environments ``rainuav/UAVNav-v0``, a world (:mod:`rainuav.world`) as a
+Gymnasium environment, and ``rainuav/UAVLevels-v0``, the same with altitude as a decision
+(:func:`make_levels_env`).
 
 ``gym.make("rainuav/UAVNav-v0", ...)`` calls :func:`make_nav_env` and
 ``gym.make_vec("rainuav/UAVNav-v0", num_envs=N, vectorization_mode="vector_entry_point")``
@@ -39,7 +40,7 @@ from rainuav.radio.radiomap import RadioMap
 from rainuav.radio.scenario import Scenario
 from rainuav.world import WorldSpec, build_world
 
-__all__ = ["make_nav_env", "make_nav_vector_env"]
+__all__ = ["make_levels_env", "make_nav_env", "make_nav_vector_env"]
 
 
 def _world_env(
@@ -114,3 +115,76 @@ def make_nav_vector_env(
     the other keywords as :func:`make_nav_env`."""
     check_num_envs(num_envs)  # before the map is built
     return UAVNavVectorEnv(make_nav_env(radio_map, **kw), num_envs, autoreset_mode)
+
+
+def make_levels_env(
+    *,
+    scenario: str | Scenario = "uma",
+    altitudes_m: Any = (30.0, 45.0, 60.0, 75.0, 90.0, 105.0, 120.0),
+    rain_rate_mm_h: float | None = None,
+    freq_hz: float | None = None,
+    engine: str | None = None,
+    storm_seed: int | None = None,
+    slice_s: float | None = None,
+    climb_m_s: float | None = None,
+    descend_m_s: float | None = None,
+    start_level: int | None = None,
+    **task: Any,
+) -> Any:
+    """``gym.make("rainuav/UAVLevels-v0", scenario="uma", altitudes_m=[30, 60, 90])``: the
+    navigation task with altitude as a decision (:class:`rainuav.nav.levels.UAVLevelsEnv`)
+    over the scenario's maps at each of ``altitudes_m`` (in time where its weather moves,
+    every ``slice_s`` over the horizon); the weather keywords as :func:`make_nav_env`, the
+    task's fields as keywords (``min_db`` by default the preset's SINR threshold), the climb
+    and descent speeds (5 and 3 m/s by default) and the start level (default: the lowest
+    flyable at the start)."""
+    from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, LevelField, UAVLevelsEnv
+    from rainuav.radio.levels import build_radio_level_series, build_radio_levels
+    from rainuav.radio.presets import SINR_THRESHOLDS_DB
+    from rainuav.world import make_scenario, series_instants
+
+    if not isinstance(scenario, str | Scenario):
+        raise InvalidInputError(
+            f"scenario must be a preset name or a Scenario (got {type(scenario).__name__})"
+        )
+    for bad in ("observation", "random_goal", "signal"):
+        if bad in task:
+            raise InvalidInputError(f"{bad}: the environment among levels observes its position "
+                                    "and flies the SINR")  # fmt: skip
+    nav = make_config(**task)
+    freq = None if freq_hz is None else check_number("freq_hz", freq_hz, 1e9, 100e9) / 1e9
+    given = {"rain_rate": rain_rate_mm_h, "engine": engine, "freq_ghz": freq,
+             "storm_seed": storm_seed, "slice_s": slice_s}  # fmt: skip
+    given = {k: v.item() if isinstance(v, np.generic) else v for k, v in given.items()}
+    shared = {f.name for f in dataclasses.fields(WorldSpec)} & set(task) - {"goal_m"}
+    spec = WorldSpec(
+        scenario=scenario if isinstance(scenario, str) else "paper",
+        **{k: v for k, v in given.items() if v is not None},
+        **{k: task[k] for k in shared},
+    )
+    scn = make_scenario(spec, None if isinstance(scenario, str) else scenario)
+    scn = scn.replace(area=dataclasses.replace(scn.area, altitudes_m=list(altitudes_m)))
+    scn.area.check()
+    if scn.medium.moves:
+        if scn.engine == "pe":
+            scn = dataclasses.replace(scn, engine="hybrid")
+        series = build_radio_level_series(scn, series_instants(spec))
+        field = LevelField.from_stack(series.sinr_db, series.altitudes_m, series.extent,
+                                      t_s=series.t_s, not_flyable=series.not_flyable,
+                                      serving_cell=series.serving_cell)  # fmt: skip
+    else:
+        stack = build_radio_levels(scn)
+        serving = np.stack([m.serving_cell for m in stack.maps])
+        field = LevelField.from_stack(
+            stack.sinr_db, stack.altitudes_m, stack.extent, not_flyable=stack.not_flyable,
+            serving_cell=serving,
+        )  # fmt: skip
+    if nav.min_db is None:
+        nav = dataclasses.replace(nav, min_db=SINR_THRESHOLDS_DB.get(scn.name, 10.0))
+    return UAVLevelsEnv(
+        field,
+        nav,
+        climb_m_s=CLIMB_M_S if climb_m_s is None else climb_m_s,
+        descend_m_s=DESCEND_M_S if descend_m_s is None else descend_m_s,
+        start_level=start_level,
+    )
