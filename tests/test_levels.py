@@ -327,3 +327,18 @@ def test_one_march_reads_every_level() -> None:
     assert (apart.maps[0].pe_share > 0.5).sum() > 50  # the PE carries part of the map
     for k, tol in ((0, 0.5), (1, 0.05)):
         assert np.abs(shared.maps[k].sinr_db - apart.maps[k].sinr_db).max() < tol
+
+
+def test_more_levels_than_fit_in_memory_are_refused_before_building() -> None:
+    # 64 levels of `uma`'s 21 cells at 0.5 m pixels (16 million a level) need about 100 GB:
+    # refused in one line naming area.altitudes_m, before the first level is built (as are
+    # the maps in time).
+    from rainuav.radio.levels import build_radio_level_series
+
+    scn = uma(0.0, 28e9, engine="ray").replace(
+        area=Area(resolution_m=0.5, altitudes_m=[20.0 + 10.0 * k for k in range(64)])
+    )
+    with pytest.raises(InvalidInputError, match=r"area\.altitudes_m \(64 levels"):
+        build_radio_levels(scn, cache=False)
+    with pytest.raises(InvalidInputError, match=r"area\.altitudes_m \(64 levels"):
+        build_radio_level_series(scn, [0.0, 5.0], cache=False)
