@@ -279,28 +279,6 @@ def test_maps_in_time_at_several_heights() -> None:
     assert series.not_flyable.shape == (2, 40, 40) and not series.not_flyable.any()
 
 
-@pytest.mark.timeout(120)
-def test_a_band_flies_weather_that_moves(tmp_path) -> None:
-    # Through the shipped radar file (13 scans: a weather that moves), `--altitudes 100:100:1`
-    # plans among levels in space-time and gives the flight at 100 m of today: the same cost
-    # and moves as the plane's space-time plan (tolerance 1e-9: the same rewards summed).
-    import json
-    from pathlib import Path
-
-    from rainuav.fly import main
-
-    examples = Path(__file__).resolve().parents[1] / "examples"
-    base = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380", "--goal",
-            "47.3700,8.5420", "--weather", str(examples / "radar.nc")]  # fmt: skip
-    assert main([*base, "--out", str(tmp_path / "a")]) == 0
-    assert main([*base, "--altitudes", "100:100:1", "--out", str(tmp_path / "b")]) == 0
-    a = json.loads((tmp_path / "a" / "summary.json").read_text())
-    b = json.loads((tmp_path / "b" / "summary.json").read_text())
-    assert a["weather_moves"] and b["weather_moves"]
-    assert b["cost"] == pytest.approx(a["cost"], abs=1e-9) and b["moves"] == a["moves"]
-    assert b["flight_time_s"] == pytest.approx(a["flight_time_s"])
-
-
 def test_one_march_reads_every_level() -> None:
     # The hybrid engine marches each cell once for every level. One height recorded by the
     # levels' march is the single-height march bit for bit; the maps of the one march agree

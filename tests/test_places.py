@@ -378,16 +378,23 @@ def test_bad_radar_grids_are_refused(tmp_path) -> None:
 @pytest.mark.timeout(120)
 def test_fly_through_the_shipped_radar_file(tmp_path) -> None:
     """``--weather examples/radar.nc`` (dBZ on lat/lon, 13 scans): a weather that moves, the
-    plan in space-time, never worse than the straight line through the same storm."""
+    plan in space-time, never worse than the straight line through the same storm. With
+    ``--altitudes 100:100:1`` the plan among levels in space and time is the same flight (the
+    same cost and moves, to 1e-9: the same rewards summed)."""
     from rainuav.fly import main
 
     out = tmp_path / "flight"
     argv = ["--sites", str(EXAMPLE), "--start", "47.3660,8.5380", "--goal", "47.3700,8.5420",
-            "--weather", str(EXAMPLE.with_name("radar.nc")), "--out", str(out)]  # fmt: skip
-    assert main(argv) == 0
+            "--weather", str(EXAMPLE.with_name("radar.nc"))]  # fmt: skip
+    assert main([*argv, "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["weather_moves"] is True
     assert summary["cost"] <= summary["straight_line_cost"] + 1e-9
+    assert main([*argv, "--altitudes", "100:100:1", "--out", str(tmp_path / "band")]) == 0
+    band = json.loads((tmp_path / "band" / "summary.json").read_text())
+    assert band["weather_moves"] is True and band["moves"] == summary["moves"]
+    assert band["cost"] == pytest.approx(summary["cost"], abs=1e-9)
+    assert band["flight_time_s"] == pytest.approx(summary["flight_time_s"])
 
 
 def test_a_scenario_carries_its_origin(tmp_path) -> None:

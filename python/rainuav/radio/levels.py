@@ -160,6 +160,8 @@ class RadioLevelSeries:
     the ground)."""
     extent: tuple[float, float, float, float]
     """(x_min, x_max, y_min, y_max), m."""
+    at_take_off: tuple[RadioMap, ...] = ()
+    """Each level's map at the first instant (a static map: for a figure or a GeoTIFF)."""
 
 
 def build_radio_level_series(
@@ -186,6 +188,7 @@ def build_radio_level_series(
     sinr = np.empty((t.size, len(levels), h, w), dtype=np.float32)
     serving = np.empty((t.size, len(levels), h, w), dtype=np.int16)
     masks = np.zeros((len(levels), h, w), dtype=bool)
+    first: list[RadioMap] = []
     extent = (scn.area.x_min_m, scn.area.x_max_m, scn.area.y_min_m, scn.area.y_max_m)
     for k, a in enumerate(levels):
         if progress:
@@ -197,7 +200,10 @@ def build_radio_level_series(
         mask = map_mask(one)
         if mask is not None:
             masks[k] = mask
-    return RadioLevelSeries(np.asarray(levels, dtype=float), t, sinr, serving, masks, extent)
+        first.append(dataclasses.replace(series.at(float(t[0])), not_flyable=mask))
+    return RadioLevelSeries(
+        np.asarray(levels, dtype=float), t, sinr, serving, masks, extent, tuple(first)
+    )
 
 
 def sample_levels(

@@ -35,10 +35,10 @@ from rainuav.nav import planner
 from rainuav.nav.field import SignalField, SignalSeries, pixel_index
 from rainuav.nav.task import NavConfig
 from rainuav.radio import presets
-from rainuav.radio.levels import build_radio_level_series, build_radio_levels, level_scenario
+from rainuav.radio.levels import build_radio_level_series, build_radio_levels
 from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.terrain import obstacle_pixel_max, scenario_terrain
-from rainuav.radio.timemap import build_radio_map_series, series_times
+from rainuav.radio.timemap import series_times
 from rainuav.world import SLICE_S
 from rainuav.world.flightplot import plot_flight
 
@@ -192,12 +192,9 @@ def fly_levels(
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
     # The figure and the GIS map: the start level's map (at take-off where the weather moves).
-    if times is None:
-        rm = stack.maps[start_level]
-    else:  # built above with the series, so taken from the cache
-        rm = build_radio_map_series(level_scenario(scn, alts[start_level]), times)
+    rm = stack.maps[start_level] if times is None else series.at_take_off[start_level]
     plot_flight(rm, path, place, out / "flight.png", heights=(t_s, z, sig < threshold))
-    write_map_geotiff(rm, out / "sinr.tif", None if times is None else 0)
+    write_map_geotiff(rm, out / "sinr.tif")
     done = json.dumps(summary, indent=2) + "\n"
     write_atomic(out / "summary.json", lambda tmp: tmp.write_text(done))
     return summary
