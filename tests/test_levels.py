@@ -320,3 +320,44 @@ def test_more_levels_than_fit_in_memory_are_refused_before_building() -> None:
         build_radio_levels(scn, cache=False)
     with pytest.raises(InvalidInputError, match=r"area\.altitudes_m \(64 levels"):
         build_radio_level_series(scn, [0.0, 5.0], cache=False)
+
+
+def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
+    # `radiomap --altitudes 30:60:30` on a georeferenced scenario: per level a PNG, an .npz
+    # (the level's own map: its altitude, the same SINR as built alone) and a GeoTIFF tagged
+    # with its altitude; radiomap_levels.json last with the outage shares. A bad band or a
+    # band with maps in time: one line, exit 2, nothing written.
+    import json
+
+    import rasterio
+    from rainuav.radio.levels import level_scenario
+    from rainuav.radio.mapdata import RadioMap
+    from rainuav.radio.radiomap import build_radio_map
+    from rainuav.radio.scenario import Origin
+    from rainuav.radiomap import main
+
+    scn = uma(0.0, 28e9, engine="ray").replace(
+        area=Area(resolution_m=50.0), origin=Origin(47.37, 8.54)
+    )
+    cfg_file = tmp_path / "uma.toml"
+    cfg_file.write_text(scn.to_toml_string())
+    out = tmp_path / "maps"
+    assert main(["--config", str(cfg_file), "--altitudes", "30:60:30", "--out", str(out)]) == 0
+    summary = json.loads((out / "radiomap_levels.json").read_text())
+    assert [lv["altitude_m"] for lv in summary["levels"]] == [30.0, 60.0]
+    for lv in summary["levels"]:
+        a = lv["altitude_m"]
+        rm = RadioMap.load(out / lv["map"])
+        alone = build_radio_map(level_scenario(scn, a), cache=False)
+        assert rm.altitude_m == a and np.array_equal(rm.sinr_db, alone.sinr_db)
+        assert lv["outage_share"] == pytest.approx(float(np.mean(alone.sinr_db < -2.0)))
+        with rasterio.open(out / f"radiomap_{a:g}m.tif") as src:
+            assert src.count == 4 and float(src.tags()["altitude_m"]) == a
+        assert (out / f"sinr_{a:g}m.png").stat().st_size > 0
+    for extra in (["--altitudes", "60:30:15"], ["--altitudes", "30:60:30", "--duration-s", "10"]):
+        bad = tmp_path / "bad"
+        capsys.readouterr()
+        rc = main(["--config", str(cfg_file), *extra, "--out", str(bad)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and "--altitudes" in err[0], err
+        assert not (bad / "radiomap_levels.json").exists()

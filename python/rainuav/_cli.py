@@ -4,6 +4,7 @@ and renamed), and warnings are one line each."""
 
 from __future__ import annotations
 
+import math
 import re
 import sys
 import warnings
@@ -12,7 +13,7 @@ from typing import Any
 
 from rainuav.errors import CacheWarning, InvalidInputError
 
-__all__ = ["attach_negative_values", "run"]
+__all__ = ["altitude_band", "attach_negative_values", "run"]
 
 _NUMBERS = re.compile(r"^-(\d|\.\d)[\d.eE+\-]*(,\s*[+\-]?(\d|\.\d)[\d.eE+\-]*)*$")
 """A value that starts with a minus sign and is a number or a comma-separated list of them
@@ -63,3 +64,20 @@ def run(
             said = on_interrupt() if callable(on_interrupt) else on_interrupt
             print(f"interrupted: {said}", file=sys.stderr)
             return 130
+
+
+def altitude_band(text: str) -> list[float]:
+    """``--altitudes LOW:HIGH:STEP`` (m) as the levels LOW, LOW + STEP, ... up to HIGH (at
+    most 64), else one line naming the flag."""
+    try:
+        lo, hi, step = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise InvalidInputError(
+            f"--altitudes must be LOW:HIGH:STEP in metres, e.g. 30:120:15 (got {text!r})"
+        ) from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and step > 0 and hi >= lo):
+        raise InvalidInputError(f"--altitudes must have LOW <= HIGH and STEP > 0 (got {text!r})")
+    n = math.floor((hi - lo) / step + 1e-9) + 1
+    if n > 64:
+        raise InvalidInputError(f"--altitudes gives {n} levels (at most 64)")
+    return [lo + k * step for k in range(n)]

@@ -54,7 +54,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -171,7 +170,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 box = ()
             if len(box) != 4:
                 raise InvalidInputError(f"--area must be S,W,N,E in degrees (got {args.area!r})")
-        altitudes = None if args.altitudes is None else _band(args.altitudes)
+        altitudes = None if args.altitudes is None else _cli.altitude_band(args.altitudes)
         start_alt = args.start[2] if len(args.start) == 3 else None
         if start_alt is not None and altitudes is None:
             raise InvalidInputError(
@@ -241,22 +240,6 @@ def _policy(run: Path) -> tuple[object, str]:
         return roll["path"], bool(roll["reached"])
 
     return fly, f"network {run}"
-
-
-def _band(text: str) -> list[float]:
-    """``LOW:HIGH:STEP`` (m) as the levels LOW, LOW + STEP, ... up to HIGH."""
-    try:
-        lo, hi, step = (float(v) for v in text.split(":"))
-    except ValueError:
-        raise InvalidInputError(
-            f"--altitudes must be LOW:HIGH:STEP in metres, e.g. 30:120:15 (got {text!r})"
-        ) from None
-    if not (math.isfinite(lo) and math.isfinite(hi) and step > 0 and hi >= lo):
-        raise InvalidInputError(f"--altitudes must have LOW <= HIGH and STEP > 0 (got {text!r})")
-    n = math.floor((hi - lo) / step + 1e-9) + 1
-    if n > 64:
-        raise InvalidInputError(f"--altitudes gives {n} levels (at most 64)")
-    return [lo + k * step for k in range(n)]
 
 
 if __name__ == "__main__":

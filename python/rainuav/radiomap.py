@@ -6,13 +6,17 @@
     python -m rainuav.radiomap --config my_place.toml --terrain dem.tif --out maps/
     python -m rainuav.radiomap --config my_place.toml --footprints city.geojson --out maps/
     python -m rainuav.radiomap --scenario storm --storm-seed 3 --duration-s 300 --slice-s 5
+    python -m rainuav.radiomap --scenario uma --engine ray --altitudes 30:120:15 --out maps/
     python -m rainuav.radiomap --clear-cache
 
 Writes the PNGs first (and, for a georeferenced scenario, ``radiomap.tif``: SINR, the serving
 cell's power, the serving cell and the not-flyable pixels for a GIS,
 :mod:`rainuav.radio.maptiff`) and ``radiomap.npz`` (``radiomap_series.npz`` for maps in time) last:
 a folder holding it is complete (an earlier run's copy is removed before the new files are
-written). The library lives in :mod:`rainuav.radio`.
+written). At several heights (``--altitudes``, or a scenario with ``area.altitudes_m``): per
+level ``sinr_<A>m.png``, ``radiomap_<A>m.npz`` and for a georeferenced scenario
+``radiomap_<A>m.tif``, then ``radiomap_levels.json`` (the levels, their files and outage
+shares) last. The library lives in :mod:`rainuav.radio`.
 """
 
 from __future__ import annotations
@@ -99,6 +103,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="the flight altitude above the terrain under the UAV (ground, the default) or "
         "above mean sea level (msl)",
     )
+    ap.add_argument(
+        "--altitudes", default=None, metavar="LOW:HIGH:STEP",
+        help="map a band of flight altitudes, m (e.g. 30:120:15): one map a level "
+        "(rainuav.radio.levels)",
+    )  # fmt: skip
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
     ap.add_argument("--clear-cache", action="store_true", help="delete every cached map and exit")
@@ -168,6 +177,17 @@ def _build(args: argparse.Namespace) -> int:
 
         # Read (or refused) before anything is built; what was left out, said.
         print(scenario_buildings(scn).summary, file=sys.stderr)  # type: ignore[union-attr]
+    if args.altitudes is not None:
+        import dataclasses
+
+        band = _cli.altitude_band(args.altitudes)
+        scn = scn.replace(area=dataclasses.replace(scn.area, altitudes_m=band))
+        scn.area.check()
+    if scn.area.altitudes_m:
+        if args.duration_s is not None or args.slice_s is not None:
+            raise InvalidInputError("--altitudes: maps in time at several heights are not "
+                                    "written by this command (use one of the two)")  # fmt: skip
+        return _build_levels(args, scn)
     if args.duration_s is not None or args.slice_s is not None:
         return _build_series(args, scn)
     rm = build_radio_map(scn, cache=not args.no_cache, progress=True)
@@ -188,6 +208,42 @@ def _build(args: argparse.Namespace) -> int:
         f"{100 * float(rm.pe_share.mean()):.1f}%; built in {rm.build_seconds:.1f} s ({split})"
     )
     print(f"wrote {npz}, " + ", ".join(str(p) for p in pngs))
+    return 0
+
+
+def _build_levels(args: argparse.Namespace, scn: Any) -> int:
+    import json
+
+    import numpy as np
+
+    from rainuav._io import begin_folder, write_atomic
+    from rainuav.radio.levels import build_radio_levels
+    from rainuav.radio.plot import save_map_png
+    from rainuav.radio.presets import SINR_THRESHOLDS_DB
+
+    stack = build_radio_levels(scn, cache=not args.no_cache, progress=True)
+    threshold = SINR_THRESHOLDS_DB.get(scn.name)
+    begin_folder(args.out, "radiomap_levels.json")
+    written, levels = [], []
+    for a, rm in zip(stack.altitudes_m, stack.maps, strict=True):
+        name = f"{a:g}m"
+        written.append(save_map_png(rm, "sinr", args.out / f"sinr_{name}.png"))
+        if scn.origin is not None:
+            from rainuav.radio.maptiff import write_map_geotiff
+
+            written.append(write_map_geotiff(rm, args.out / f"radiomap_{name}.tif"))
+        written.append(rm.save(args.out / f"radiomap_{name}.npz"))
+        sinr = rm.sinr_db
+        out = None if threshold is None else float(np.mean(sinr < threshold))
+        levels.append({"altitude_m": float(a), "map": f"radiomap_{name}.npz",
+                       "median_sinr_db": float(np.median(sinr)), "outage_share": out})  # fmt: skip
+        tail = "" if out is None else f", {100 * out:.0f}% of the area below {threshold:g} dB"
+        print(f"{a:6g} m: SINR median {float(np.median(sinr)):.1f} dB{tail}")
+    summary = {"scenario": scn.name, "engine": scn.engine, "freq_ghz": scn.freq_hz / 1e9,
+               "min_db": threshold, "levels": levels}  # fmt: skip
+    done = json.dumps(summary, indent=2) + "\n"
+    last = write_atomic(args.out / "radiomap_levels.json", lambda tmp: tmp.write_text(done))
+    print(f"wrote {len(written)} files and {last}")
     return 0
 
 
