@@ -7,13 +7,17 @@ once and reads every level from that march (its grid the highest level's, so its
 be narrower than a lower level's own: the rays carry the rest); the PE engine, and the
 hybrid over terrain, march once per level. Memory is checked for the whole
 stack before the first level is built. Weather that moves: :func:`build_radio_level_series`,
-the maps in time of every level, (time, altitude, H, W).
+the maps in time of every level, (time, altitude, H, W) (the hybrid's clear-air march once a
+cell for every level, likewise).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -165,11 +169,17 @@ class RadioLevelSeries:
 
 
 def build_radio_level_series(
-    scn: Scenario, times_s: object, *, cache: bool = True, progress: bool = False
+    scn: Scenario,
+    times_s: object,
+    *,
+    cache: bool = True,
+    progress: bool = False,
+    one_march: bool = True,
 ) -> RadioLevelSeries:
     """The maps in time of ``scn`` at each of ``area.levels``
     (:func:`rainuav.radio.timemap.build_radio_map_series` per level), memory checked for the
-    whole stack first."""
+    whole stack first. ``one_march``: the hybrid over flat ground marches each cell once in
+    clear air for every level (:func:`shares_a_march`), as :func:`build_radio_levels` does."""
     from rainuav._checks import as_real_array
     from rainuav.radio.terrain import map_mask
     from rainuav.radio.timemap import build_radio_map_series
@@ -190,11 +200,33 @@ def build_radio_level_series(
     masks = np.zeros((len(levels), h, w), dtype=bool)
     first: list[RadioMap] = []
     extent = (scn.area.x_min_m, scn.area.x_max_m, scn.area.y_min_m, scn.area.y_max_m)
+    shared: Callable[[int], Any] | None = None
+    tag = ""
+    if one_march and shares_a_march(scn):
+        # The hybrid's clear-air march: every level from one march a cell, marched only if a
+        # level's series is not in the cache.
+        from rainuav.radio.hybrid import engine_parts_levels
+        from rainuav.radio.presets import with_rain
+
+        tag = f"|one march|{scn.digest()}"
+        parts: list = []
+
+        def from_one_march(k: int) -> Any:
+            if not parts:
+                clear = [with_rain(level_scenario(scn, a), 0.0) for a in levels]
+                jobs = [(s, c) for s in scn.sites for c in s.cells]
+                x_m, y_m = scn.area.centres()
+                parts.extend(engine_parts_levels(clear, jobs, x_m, y_m, progress))
+            return parts[k]
+
+        shared = from_one_march
+
     for k, a in enumerate(levels):
         if progress:
             print(f"level {k + 1}/{len(levels)}: {a:g} m", flush=True)
         one = level_scenario(scn, a)
-        series = build_radio_map_series(one, t, cache=cache)
+        clear_parts = None if shared is None else functools.partial(shared, k)
+        series = build_radio_map_series(one, t, cache=cache, clear_parts=clear_parts, cache_tag=tag)
         sinr[:, k] = series.sinr_db
         serving[:, k] = series.serving_cell
         mask = map_mask(one)

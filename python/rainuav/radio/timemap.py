@@ -26,6 +26,7 @@ import hashlib
 import math
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,7 @@ import numpy.typing as npt
 from rainuav._checks import as_real_array, as_real_scalar, check_fits, check_number
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cache import map_path
-from rainuav.radio.hybrid import engine_parts
+from rainuav.radio.hybrid import EngineParts, engine_parts
 from rainuav.radio.mapdata import (
     RadioMap,
     check_arrays,
@@ -189,14 +190,24 @@ def _peak_rate(scn: Scenario, t: np.ndarray) -> float:
 
 
 def _hybrid_terms(
-    scn: Scenario, jobs: list[tuple[Any, Any]], x_m: np.ndarray, y_m: np.ndarray, progress: bool
+    scn: Scenario,
+    jobs: list[tuple[Any, Any]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    progress: bool,
+    clear_parts: Callable[[], EngineParts] | None = None,
 ) -> np.ndarray | None:
     """The hybrid's terms for the slicer (None where it is the ray engine: engine 'ray', a
     soil, or no cell marched): the rays' terms less the part inside each PE cone, plus the
-    PE's power marched once in clear air as a direct ray's (module docstring)."""
+    PE's power marched once in clear air as a direct ray's (module docstring).
+    ``clear_parts``: the engine's parts in clear air where the caller has them (every level
+    from one march, :mod:`rainuav.radio.levels`)."""
     if scn.engine != "hybrid":
         return None
-    parts = engine_parts(with_rain(scn, 0.0), jobs, x_m, y_m, progress)
+    if clear_parts is not None:
+        parts = clear_parts()
+    else:
+        parts = engine_parts(with_rain(scn, 0.0), jobs, x_m, y_m, progress)
     if all(g is None for g in parts.grids):
         return None
     terms = ray_terms(scn, jobs, x_m, y_m, parts.weights)
@@ -205,12 +216,20 @@ def _hybrid_terms(
 
 
 def build_radio_map_series(
-    scn: Scenario, times_s: Any, *, cache: bool = True, progress: bool = False
+    scn: Scenario,
+    times_s: Any,
+    *,
+    cache: bool = True,
+    progress: bool = False,
+    clear_parts: Callable[[], EngineParts] | None = None,
+    cache_tag: str = "",
 ) -> RadioMapSeries:
     """The maps of ``scn`` at the instants ``times_s`` (strictly increasing, s), engine
     ``"ray"`` (module docstring). Memory is checked before anything is allocated. With
     ``cache``, a series of the same scenario, instants and engine code is read from the map
-    cache (:mod:`rainuav.radio.cache`) and a new one is kept there."""
+    cache (:mod:`rainuav.radio.cache`) and a new one is kept there. ``clear_parts``: the
+    hybrid's parts in clear air from elsewhere (called only if the series is built), kept in
+    the cache under ``cache_tag`` apart from the series built alone."""
     if scn.engine not in ("ray", "hybrid"):
         raise InvalidInputError(
             f"maps in time need engine 'ray' or 'hybrid' (got {scn.engine!r}: a PE march per "
@@ -223,7 +242,7 @@ def build_radio_map_series(
         raise InvalidInputError("times_s must be finite and strictly increasing")
     t0 = time.perf_counter()
     if cache:
-        path = map_path(_cache_key(scn, t))
+        path = map_path(_cache_key(scn, t) + cache_tag)
         if path.exists():
             try:
                 return _load(path)
@@ -240,7 +259,8 @@ def build_radio_map_series(
         "use fewer slices, a coarser area.resolution_m or a smaller area",
     )
     x_m, y_m = a.centres()
-    slicer = ray_slicer(scn, jobs, x_m, y_m, _hybrid_terms(scn, jobs, x_m, y_m, progress))
+    terms = _hybrid_terms(scn, jobs, x_m, y_m, progress, clear_parts)
+    slicer = ray_slicer(scn, jobs, x_m, y_m, terms)
     table = gamma_table(scn, _peak_rate(scn, t))
     timings = {"static": time.perf_counter() - t0}
     rss = np.empty((t.size, m, h, w), np.float32)
@@ -277,5 +297,5 @@ def build_radio_map_series(
         timings=timings,
     )
     if cache:
-        store(series, map_path(_cache_key(scn, t)))
+        store(series, map_path(_cache_key(scn, t) + cache_tag))
     return series
