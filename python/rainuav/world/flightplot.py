@@ -64,7 +64,8 @@ def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any
     ax.set_ylabel("north of origin [m]")
     origin = latlon_text(place.georef.lat_deg, place.georef.lon_deg)
     level = "" if heights is None else f" at {float(np.asarray(heights[1])[0]):g} m"
-    ax.set_title(f"SINR{level} and rain at take-off; origin {origin}", fontsize=10)
+    what = f"SINR{level} and rain" if scn.medium.varies else f"SINR{level}"
+    ax.set_title(f"{what} at take-off; origin {origin}", fontsize=10)
     ax.legend(loc="best", fontsize="small", framealpha=0.8)  # away from the flight
     fig.colorbar(im, ax=ax, label="SINR [dB]")
     write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
