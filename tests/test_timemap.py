@@ -178,6 +178,20 @@ def test_a_series_saves_loads_and_is_cached(series, tmp_path, monkeypatch) -> No
     again = build_radio_map(scn, times_s=[0.0, 30.0])
     assert again.build_seconds == 0.0 and np.array_equal(again.sinr_db, first.sinr_db)
     assert build_radio_map(scn, times_s=[0.0, 40.0]).build_seconds > 0  # other instants
+    # The cache entry carries its scenario's digest: a hit under that digest is the caller's
+    # scenario, its TOML not parsed again (seconds for a radar weather); a file read on its
+    # own is parsed and checked as before.
+    from rainuav.radio import scenario as scenario_module
+
+    def no_parse(*_: object) -> None:
+        raise AssertionError("the cached scenario's TOML was parsed")
+
+    monkeypatch.setattr(scenario_module.Scenario, "from_toml_string", no_parse)
+    hit = build_radio_map(scn, times_s=[0.0, 30.0])
+    assert hit.build_seconds == 0.0 and hit.scenario is scn
+    assert np.array_equal(hit.sinr_db, first.sinr_db)
+    monkeypatch.undo()
+    assert RadioMapSeries.load(path).scenario.digest() == series.scenario.digest()
 
 
 def test_a_bad_series_file_is_refused_in_one_line(series, tmp_path) -> None:

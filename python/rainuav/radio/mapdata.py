@@ -173,12 +173,18 @@ def write_npz(
 
 
 def read_npz(
-    path: str | os.PathLike[str], what: str, need: Iterable[str], version: int
+    path: str | os.PathLike[str],
+    what: str,
+    need: Iterable[str],
+    version: int,
+    known: tuple[str, Scenario] | None = None,
 ) -> tuple[dict[str, np.ndarray], Scenario]:
     """The arrays and the scenario of an .npz written by :func:`write_npz` (never unpickled),
     or :class:`InvalidInputError` naming the file: unreadable, missing an array of ``need``,
     of another format ``version``, or a scenario that is not valid (``what``: the kind of
-    file, for the message)."""
+    file, for the message). ``known``: ``(digest, scenario)`` the caller looked the file up
+    by (the map cache); where the file's stored digest is that one, its scenario is that
+    scenario and its TOML is not parsed again (seconds for a radar weather's rate maps)."""
     try:
         with np.load(path, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
@@ -194,6 +200,10 @@ def read_npz(
         raise InvalidInputError(f"{path}: {what} format {int(v)}, this rainuav reads {version}")
     if data["scenario_toml"].dtype.kind != "U":
         raise InvalidInputError(f"{path}: not a rainuav {what} (bad metadata)")
+    stored = data.get("digest")
+    if known is not None and stored is not None and stored.dtype.kind == "U":
+        if str(stored) == known[0]:
+            return data, known[1]
     try:
         scn = Scenario.from_toml_string(str(data["scenario_toml"]))
     except InvalidInputError as err:

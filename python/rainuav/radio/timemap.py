@@ -147,8 +147,10 @@ def _save(series: RadioMapSeries, path: str | os.PathLike[str]) -> Path:
     return write_npz(path, arrays, series.scenario, FORMAT_VERSION)
 
 
-def _load(path: str | os.PathLike[str]) -> RadioMapSeries:
-    data, scn = read_npz(path, "radio-map series", _ARRAYS, FORMAT_VERSION)
+def _load(
+    path: str | os.PathLike[str], known: tuple[str, Scenario] | None = None
+) -> RadioMapSeries:
+    data, scn = read_npz(path, "radio-map series", _ARRAYS, FORMAT_VERSION, known)
     _check_series_arrays(path, data, scn)
     return RadioMapSeries(scenario=scn, **{k: data[k] for k in _ARRAYS})
 
@@ -170,8 +172,8 @@ def _check_series_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) 
     check_arrays(path, data, scn, shapes, map_ranges(m, scn))
 
 
-def _cache_key(scn: Scenario, t: np.ndarray) -> str:
-    return f"{scn.digest()}|series|{hashlib.sha256(t.tobytes()).hexdigest()[:16]}"
+def _cache_key(digest: str, t: np.ndarray) -> str:
+    return f"{digest}|series|{hashlib.sha256(t.tobytes()).hexdigest()[:16]}"
 
 
 def _peak_rate(scn: Scenario, t: np.ndarray) -> float:
@@ -241,11 +243,12 @@ def build_radio_map_series(
     if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
         raise InvalidInputError("times_s must be finite and strictly increasing")
     t0 = time.perf_counter()
+    digest = scn.digest() if cache else ""
     if cache:
-        path = map_path(_cache_key(scn, t) + cache_tag)
+        path = map_path(_cache_key(digest, t) + cache_tag)
         if path.exists():
             try:
-                return _load(path)
+                return _load(path, (digest, scn))
             except InvalidInputError:
                 pass  # a corrupt or partial entry is rebuilt, never trusted
     a = scn.area
@@ -297,5 +300,5 @@ def build_radio_map_series(
         timings=timings,
     )
     if cache:
-        store(series, map_path(_cache_key(scn, t) + cache_tag))
+        store(series, map_path(_cache_key(digest, t) + cache_tag))
     return series
