@@ -34,7 +34,7 @@ import numpy as np
 from rainuav._checks import check_number
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.task import make_config
+from rainuav.nav.task import NavConfig, make_config
 from rainuav.nav.vector import UAVNavVectorEnv, check_num_envs
 from rainuav.radio.radiomap import RadioMap
 from rainuav.radio.scenario import Scenario
@@ -43,10 +43,12 @@ from rainuav.world import WorldSpec, build_world
 __all__ = ["make_levels_env", "make_nav_env", "make_nav_vector_env"]
 
 
-def _world_env(
+def _spec(
     scenario: str | Scenario, weather: dict[str, Any], task: dict[str, Any]
-) -> UAVNavEnv:
-    """The environment of a scenario's world with these weather and task keywords."""
+) -> tuple[WorldSpec, NavConfig]:
+    """The world spec of a scenario with these weather keywords and the task's fields (those
+    that are also the spec's go to both; ``observation`` and ``random_goal`` to the spec
+    alone), and the task."""
     if not isinstance(scenario, str | Scenario):
         raise InvalidInputError(
             f"scenario must be a preset name or a Scenario (got {type(scenario).__name__})"
@@ -70,6 +72,14 @@ def _world_env(
         **{k: task[k] for k in shared},
         **shown,
     )
+    return spec, nav
+
+
+def _world_env(
+    scenario: str | Scenario, weather: dict[str, Any], task: dict[str, Any]
+) -> UAVNavEnv:
+    """The environment of a scenario's world with these weather and task keywords."""
+    spec, nav = _spec(scenario, weather, task)
     scn = None if isinstance(scenario, str) else scenario
     return build_world(spec, task=nav, scenario=scn).env()
 
@@ -138,47 +148,21 @@ def make_levels_env(
     task's fields as keywords (``min_db`` by default the preset's SINR threshold), the climb
     and descent speeds (5 and 3 m/s by default) and the start level (default: the lowest
     flyable at the start)."""
-    from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, LevelField, UAVLevelsEnv
-    from rainuav.radio.levels import build_radio_level_series, build_radio_levels
+    from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, UAVLevelsEnv
     from rainuav.radio.presets import SINR_THRESHOLDS_DB
-    from rainuav.world import make_scenario, series_instants
+    from rainuav.world import level_field, make_scenario, series_instants
 
-    if not isinstance(scenario, str | Scenario):
-        raise InvalidInputError(
-            f"scenario must be a preset name or a Scenario (got {type(scenario).__name__})"
-        )
     for bad in ("observation", "random_goal", "signal"):
         if bad in task:
             raise InvalidInputError(f"{bad}: the environment among levels observes its position "
                                     "and flies the SINR")  # fmt: skip
-    nav = make_config(**task)
-    freq = None if freq_hz is None else check_number("freq_hz", freq_hz, 1e9, 100e9) / 1e9
-    given = {"rain_rate": rain_rate_mm_h, "engine": engine, "freq_ghz": freq,
-             "storm_seed": storm_seed, "slice_s": slice_s}  # fmt: skip
-    given = {k: v.item() if isinstance(v, np.generic) else v for k, v in given.items()}
-    shared = {f.name for f in dataclasses.fields(WorldSpec)} & set(task) - {"goal_m"}
-    spec = WorldSpec(
-        scenario=scenario if isinstance(scenario, str) else "paper",
-        **{k: v for k, v in given.items() if v is not None},
-        **{k: task[k] for k in shared},
-    )
+    weather = {"rain_rate_mm_h": rain_rate_mm_h, "freq_hz": freq_hz, "engine": engine,
+               "storm_seed": storm_seed, "slice_s": slice_s}  # fmt: skip
+    spec, nav = _spec(scenario, weather, task)
     scn = make_scenario(spec, None if isinstance(scenario, str) else scenario)
     scn = scn.replace(area=dataclasses.replace(scn.area, altitudes_m=list(altitudes_m)))
     scn.area.check()
-    if scn.medium.moves:
-        if scn.engine == "pe":
-            scn = dataclasses.replace(scn, engine="hybrid")
-        series = build_radio_level_series(scn, series_instants(spec))
-        field = LevelField.from_stack(series.sinr_db, series.altitudes_m, series.extent,
-                                      t_s=series.t_s, not_flyable=series.not_flyable,
-                                      serving_cell=series.serving_cell)  # fmt: skip
-    else:
-        stack = build_radio_levels(scn)
-        serving = np.stack([m.serving_cell for m in stack.maps])
-        field = LevelField.from_stack(
-            stack.sinr_db, stack.altitudes_m, stack.extent, not_flyable=stack.not_flyable,
-            serving_cell=serving,
-        )  # fmt: skip
+    field, _ = level_field(scn, series_instants(spec) if scn.medium.moves else None)
     if nav.min_db is None:
         nav = dataclasses.replace(nav, min_db=SINR_THRESHOLDS_DB.get(scn.name, 10.0))
     return UAVLevelsEnv(

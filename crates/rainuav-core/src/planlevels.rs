@@ -674,25 +674,11 @@ impl Sampler {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::planner::RewardKind;
     use crate::plantime::Timeline;
     use ndarray::{Array2, Array4};
 
     fn level(s: &Array2<f64>, max_steps: usize) -> NavTask<'_> {
-        NavTask {
-            sir_db: s.view(),
-            extent: [0.0, 40.0, 0.0, 30.0],
-            goal: [30.0, 20.0],
-            step_m: 10.0,
-            tol_m: 1.0,
-            max_steps,
-            mu: 0.5,
-            reward: RewardKind::Shortfall,
-            sir_min_db: 10.0,
-            goal_reward: 100.0,
-            out_of_bounds_penalty: 1000.0,
-            blocked: None,
-        }
+        crate::planner::test_task(s, max_steps)
     }
 
     /// Every action sequence until the clock reaches the horizon, by recursion.

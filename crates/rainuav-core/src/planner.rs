@@ -469,26 +469,33 @@ impl NavTask<'_> {
     }
 }
 
+/// The small task the planners' unit tests share: a 40 x 30 m area, 10 m moves, the
+/// destination at (30, 20), a 10 dB threshold.
+#[cfg(test)]
+pub(crate) fn test_task(s: &ndarray::Array2<f64>, max_steps: usize) -> NavTask<'_> {
+    NavTask {
+        sir_db: s.view(),
+        extent: [0.0, 40.0, 0.0, 30.0],
+        goal: [30.0, 20.0],
+        step_m: 10.0,
+        tol_m: 1.0,
+        max_steps,
+        mu: 0.5,
+        reward: RewardKind::Shortfall,
+        sir_min_db: 10.0,
+        goal_reward: 100.0,
+        out_of_bounds_penalty: 1000.0,
+        blocked: None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use ndarray::Array2;
 
     fn task(s: &Array2<f64>, max_steps: usize) -> NavTask<'_> {
-        NavTask {
-            sir_db: s.view(),
-            extent: [0.0, 40.0, 0.0, 30.0],
-            goal: [30.0, 20.0],
-            step_m: 10.0,
-            tol_m: 1.0,
-            max_steps,
-            mu: 0.5,
-            reward: RewardKind::Shortfall,
-            sir_min_db: 10.0,
-            goal_reward: 100.0,
-            out_of_bounds_penalty: 1000.0,
-            blocked: None,
-        }
+        test_task(s, max_steps)
     }
 
     #[test]

@@ -56,6 +56,17 @@ fn plan_optimal<'py>(
     Ok(plans_out(py, plans))
 }
 
+/// The instants of a signal in time, a contiguous 1-D array.
+fn instants<'a>(t_s: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
+    t_s.as_slice().map_err(|_| {
+        to_py(CoreError::invalid(
+            "t_s",
+            "must be a contiguous 1-D array",
+            "strided",
+        ))
+    })
+}
+
 /// The (N, 2) starts as points.
 fn start_points(starts_m: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; 2]>> {
     let starts = starts_m.as_array();
@@ -118,13 +129,7 @@ fn plan_optimal_in_time<'py>(
             "0",
         )));
     }
-    let times = t_s.as_slice().map_err(|_| {
-        to_py(CoreError::invalid(
-            "t_s",
-            "must be a contiguous 1-D array",
-            "strided",
-        ))
-    })?;
+    let times = instants(&t_s)?;
     let task = NavTask {
         sir_db: slices.index_axis(ndarray::Axis(0), 0),
         extent: extent_m,
@@ -248,13 +253,7 @@ fn plan_optimal_levels<'py>(
             b.shape()[0],
         )));
     }
-    let times = t_s.as_slice().map_err(|_| {
-        to_py(CoreError::invalid(
-            "t_s",
-            "must be a contiguous 1-D array",
-            "strided",
-        ))
-    })?;
+    let times = instants(&t_s)?;
     let kind = reward.parse().map_err(to_py)?;
     let first = slices.index_axis(ndarray::Axis(0), 0);
     let levels = (0..nl)

@@ -24,6 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from rainuav._checks import check_field_kinds
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
@@ -47,6 +49,7 @@ __all__ = [
     "build_world",
     "check_spec",
     "in_world",
+    "level_field",
     "load_world",
     "make_scenario",
     "saved_world",
@@ -287,6 +290,35 @@ def series_instants(spec: Any) -> Any:
     horizon (rounded up to a whole slice)."""
     horizon = spec.max_steps * spec.step_m / spec.speed_m_s
     return series_times(math.ceil(horizon / spec.slice_s - 1e-9) * spec.slice_s, spec.slice_s)
+
+
+def level_field(scn: Scenario, times_s: Any = None, *, progress: bool = False) -> tuple[Any, Any]:
+    """The signal at every level of ``scn``'s ``area.altitudes_m`` as a
+    :class:`rainuav.nav.levels.LevelField` (what the flights among levels read), and the maps
+    it came from: :func:`rainuav.radio.levels.build_radio_levels`, or where ``times_s`` are
+    given :func:`~rainuav.radio.levels.build_radio_level_series` (engine 'pe' then becomes
+    'hybrid': a march per cell and instant is refused)."""
+    from rainuav.nav.levels import LevelField
+    from rainuav.radio.levels import build_radio_level_series, build_radio_levels
+
+    if times_s is None:
+        stack = build_radio_levels(scn, progress=progress)
+        serving = np.stack([m.serving_cell for m in stack.maps])
+        field = LevelField.from_stack(
+            stack.sinr_db,
+            stack.altitudes_m,
+            stack.extent,
+            not_flyable=stack.not_flyable,
+            serving_cell=serving,
+        )
+        return field, stack
+    if scn.engine == "pe":
+        scn = dataclasses.replace(scn, engine="hybrid")
+    series = build_radio_level_series(scn, times_s, progress=progress)
+    field = LevelField.from_stack(series.sinr_db, series.altitudes_m, series.extent,
+                                  t_s=series.t_s, not_flyable=series.not_flyable,
+                                  serving_cell=series.serving_cell)  # fmt: skip
+    return field, series
 
 
 def build_world(

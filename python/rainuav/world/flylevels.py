@@ -12,7 +12,6 @@ Beside the plan, the summary holds the baselines: the exact plan held at the lev
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 from pathlib import Path
@@ -32,14 +31,13 @@ from rainuav.missions import (
     wpl_text,
 )
 from rainuav.nav import planner
-from rainuav.nav.field import SignalField, SignalSeries, pixel_index
+from rainuav.nav.field import pixel_index
 from rainuav.nav.task import NavConfig
 from rainuav.radio import presets
-from rainuav.radio.levels import build_radio_level_series, build_radio_levels
 from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.terrain import obstacle_pixel_max, scenario_terrain
 from rainuav.radio.timemap import series_times
-from rainuav.world import SLICE_S
+from rainuav.world import SLICE_S, level_field
 from rainuav.world.flightplot import plot_flight
 
 __all__ = ["fly_levels"]
@@ -65,32 +63,17 @@ def fly_levels(
     steps = math.ceil(2.0 * span / probe.step_m) + 50 + sum(climb) + sum(descend)
     times = None
     if scn.medium.moves:  # the weather of a file with several instants: maps every 5 s
-        horizon = math.ceil(steps * probe.move_s / SLICE_S) * SLICE_S
-        if scn.engine == "pe":
-            scn = dataclasses.replace(scn, engine="hybrid")
-        times = series_times(horizon, SLICE_S)
-        series = build_radio_level_series(scn, times, progress=progress)
-        sinr, blocked, extent = series.sinr_db.astype(np.float64), series.not_flyable, series.extent
-        fields: list = [
-            SignalSeries(sinr[:, k], times, extent, serving_cell=series.serving_cell[:, k],
-                         not_flyable=blocked[k])
-            for k in range(len(alts))
-        ]  # fmt: skip
-    else:
-        stack = build_radio_levels(scn, progress=progress)
-        sinr, blocked, extent = stack.sinr_db, stack.not_flyable, stack.extent
-        fields = [
-            SignalField(sinr[k], extent, serving_cell=m.serving_cell, not_flyable=blocked[k])
-            for k, m in enumerate(stack.maps)
-        ]
+        times = series_times(math.ceil(steps * probe.move_s / SLICE_S) * SLICE_S, SLICE_S)
+    field, source = level_field(scn, times, progress=progress)
+    sinr, blocked, extent = source.sinr_db, source.not_flyable, source.extent
     threshold = presets.SINR_THRESHOLDS_DB["uma"] if min_db is None else min_db
     task = NavConfig(goal_m=place.goal_m, start_m=place.start_m, max_steps=steps,
                      speed_m_s=speed_m_s, min_db=threshold)  # fmt: skip
     shape, bounds = blocked.shape[1:], scn.area.bounds
 
     def flyable(x: float, y: float) -> np.ndarray:
-        i, j = pixel_index(shape, bounds, np.array([x]), np.array([y]))
-        return ~blocked[:, i[0], j[0]]
+        every = np.arange(len(alts))
+        return ~field.blocked(np.full(len(alts), x), np.full(len(alts), y), every)
 
     for name, (x, y) in (("--start", place.start_m), ("--goal", place.goal_m)):
         if not flyable(x, y).any():
@@ -115,25 +98,16 @@ def fly_levels(
     path, lv = plan.path_m, plan.levels
     up, down = plan.actions == 4, plan.actions == 5
     t_s = plan.ticks * task.move_s
-
-    def along(p: np.ndarray, levels: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The signal and serving cell at each vertex, on its level, at its instant."""
-        sig, srv = np.empty(len(p)), np.empty(len(p), dtype=np.int64)
-        for k in np.unique(levels):
-            on = levels == k
-            sig[on] = fields[k](p[on, 0], p[on, 1], t[on])
-            srv[on] = fields[k].serving_cell(p[on, 0], p[on, 1], t[on])
-        return sig, srv
-
-    sig, serving = along(path, lv, t_s)
+    sig = field(path[:, 0], path[:, 1], t_s, lv)
+    serving = field.serving_cell(path[:, 0], path[:, 1], t_s, lv)
     cost = -(plan.return_ - task.goal_reward)
     # The baselines: each level alone, exactly (in space-time where the weather moves).
     per_level = []
     for k in range(len(alts)):
-        p = planner.plan_on(fields[k], task, np.asarray(place.start_m)[None])[0]
+        p = planner.plan_on(field.fields[k], task, np.asarray(place.start_m)[None])[0]
         arrives = bool(np.hypot(*(p.path_m[-1] - np.asarray(place.goal_m))) <= task.tol_m)
-        s, _ = along(p.path_m[1:], np.full(len(p.path_m) - 1, k),
-                     np.arange(1, len(p.path_m)) * task.move_s)  # fmt: skip
+        q = p.path_m[1:]
+        s = field(q[:, 0], q[:, 1], np.arange(1, len(p.path_m)) * task.move_s, k)
         per_level.append((-(p.return_ - task.goal_reward) if arrives else None,
                           float(np.mean(s < threshold)) if arrives else None))  # fmt: skip
     fixed = int(np.argmin(np.abs(alts - scn.area.altitude_m)))
@@ -192,7 +166,7 @@ def fly_levels(
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))
     # The figure and the GIS map: the start level's map (at take-off where the weather moves).
-    rm = stack.maps[start_level] if times is None else series.at_take_off[start_level]
+    rm = source.maps[start_level] if times is None else source.at_take_off[start_level]
     plot_flight(rm, path, place, out / "flight.png", heights=(t_s, z, sig < threshold))
     write_map_geotiff(rm, out / "sinr.tif")
     done = json.dumps(summary, indent=2) + "\n"
