@@ -256,6 +256,10 @@ class UAVLevelsEnv(gym.Env):
     """UAV navigation with altitude as a decision (module docstring): ``Discrete(6)``."""
 
     metadata = {"render_modes": []}  # noqa: RUF012 - gymnasium's convention
+    view = None
+    """The position observation only (no weather view, as ``UAVNavEnv``'s ``view``)."""
+    random_goal = False
+    """The task's one destination (as ``UAVNavEnv``'s ``random_goal``)."""
 
     def __init__(
         self,
@@ -323,6 +327,27 @@ class UAVLevelsEnv(gym.Env):
             raise InvalidInputError(f"({x:g}, {y:g}) is not flyable at any level")
         return int(np.flatnonzero(ok)[0])
 
+    def sample_start(self, rng: np.random.Generator) -> np.ndarray:
+        """Uniform in the area, farther than ``tol_m`` from the destination and flyable at
+        some level."""
+        x0, x1, y0, y1 = self.field.extent
+        g, every = np.asarray(self.cfg.goal_m), np.arange(self.field.levels)
+        for _ in range(100_000):
+            p = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1)])
+            if np.hypot(*(p - g)) > self.cfg.tol_m and not self.field.blocked(*p, every).all():
+                return p
+        raise InvalidInputError(
+            f"no flyable start farther than tol_m = {self.cfg.tol_m} m "
+            f"from the destination in the area {self.field.extent}"
+        )
+
+    def start_level_at(self, p: Any) -> int:
+        """The level a flight from ``p`` starts at: ``start_level`` where given, else the
+        lowest flyable there."""
+        if self.start_level is not None:
+            return int(self.start_level)
+        return self.lowest_flyable(float(p[0]), float(p[1]))
+
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
@@ -331,20 +356,15 @@ class UAVLevelsEnv(gym.Env):
         x0, x1, y0, y1 = self.field.extent
         p = opts.get("start_m", self.cfg.start_m)
         if p is None:
-            g = np.asarray(self.cfg.goal_m)
-            for _ in range(100_000):
-                p = self.np_random.uniform([x0, y0], [x1, y1])
-                far = np.hypot(*(p - g)) > self.cfg.tol_m
-                if far and not self.field.blocked(p[0], p[1], np.arange(self.field.levels)).all():
-                    break
+            p = self.sample_start(self.np_random)
         p = as_real_array("options['start_m']", p)
         if p.shape != (2,) or not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
             raise InvalidInputError(
                 f"options['start_m'] must be (x, y) inside the area (got {p!r})"
             )
-        level = opts.get("start_level", self.start_level)
+        level = opts.get("start_level")
         if level is None:
-            level = self.lowest_flyable(p[0], p[1])
+            level = self.start_level_at(p)
         if not (isinstance(level, int | np.integer) and 0 <= level < self.field.levels):
             raise InvalidInputError(
                 f"options['start_level'] must be an integer in 0..{self.field.levels - 1}"

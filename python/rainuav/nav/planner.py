@@ -21,7 +21,7 @@ from rainuav import _core
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField
-from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, level_durations
+from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, UAVLevelsEnv, level_durations
 from rainuav.nav.task import NavConfig
 
 __all__ = [
@@ -29,6 +29,7 @@ __all__ = [
     "Plan",
     "level_durations",
     "optimal",
+    "optimal_among_levels",
     "optimal_levels",
     "optimal_many",
     "straight_line",
@@ -201,3 +202,27 @@ def optimal_levels(
             )
         )
     return out
+
+
+def optimal_among_levels(
+    env: UAVLevelsEnv, starts_m: npt.ArrayLike, start_levels: npt.ArrayLike | None = None
+) -> list[LevelPlan]:
+    """:func:`optimal_levels` on the levels environment's signal and task (its levels' maps,
+    or maps in time, and masks) from each start (N, 2), at ``start_levels`` (N,; default
+    where the env starts a flight there: :meth:`UAVLevelsEnv.start_level_at`)."""
+    if not isinstance(env, UAVLevelsEnv):
+        raise InvalidInputError(f"env must be a UAVLevelsEnv (got {type(env).__name__})")
+    starts = np.asarray(starts_m, dtype=np.float64).reshape(-1, 2)
+    if start_levels is None:
+        start_levels = [env.start_level_at(p) for p in starts]
+    f = env.field.fields
+    sig = np.stack([g.db for g in f], axis=1 if env.field.varies else 0)
+    masks = [g.not_flyable for g in f]
+    blocked = None
+    if any(m is not None for m in masks):
+        blocked = np.stack([np.zeros(f[0].db.shape[-2:], bool) if m is None else m for m in masks])
+    return optimal_levels(
+        sig, env.field.altitudes_m, env.field.extent, env.cfg, starts, start_levels,
+        t_s=getattr(f[0], "t_s", None), not_flyable=blocked, climb_m_s=env.climb_m_s,
+        descend_m_s=env.descend_m_s,
+    )  # fmt: skip

@@ -15,18 +15,22 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from rainuav._checks import check_fits
 from rainuav._sampling import bilinear
-from rainuav.radio.mapdata import RadioMap
+from rainuav.errors import InvalidInputError
+from rainuav.radio.mapdata import RadioMap, read_npz, write_npz
 from rainuav.radio.scenario import Scenario
 
 __all__ = [
+    "LevelStack",
     "RadioLevelSeries",
     "RadioLevels",
     "build_radio_level_series",
@@ -253,3 +257,74 @@ def sample_levels(
         on = levels == k
         out[on] = bilinear(values[int(k)], extent, x[on], y[on])
     return out
+
+
+STACK_VERSION = 1
+"""Format of a saved :class:`LevelStack`."""
+
+
+@dataclass(frozen=True)
+class LevelStack:
+    """What a flight among levels reads, and what a training run among levels saves
+    (``radiolevels.npz``): every level's SINR and serving cell (static (L, H, W), or in time
+    (T, L, H, W) at ``t_s``), the not-flyable pixels (L, H, W), the levels and the area,
+    with the scenario they were built from."""
+
+    scenario: Scenario
+    altitudes_m: np.ndarray
+    sinr_db: np.ndarray
+    serving_cell: np.ndarray
+    not_flyable: np.ndarray
+    extent: tuple[float, float, float, float]
+    t_s: np.ndarray | None = None
+    """(T,) instants, s, of a stack in time; None: static."""
+
+    @classmethod
+    def of(cls, source: RadioLevels | RadioLevelSeries, scn: Scenario) -> LevelStack:
+        """The stack of built levels (:func:`build_radio_levels` or
+        :func:`build_radio_level_series`) of ``scn``."""
+        if isinstance(source, RadioLevels):
+            serving = np.stack([m.serving_cell for m in source.maps]).astype(np.int16)
+            sinr = source.sinr_db.astype(np.float32)
+            return cls(scn, source.altitudes_m, sinr, serving, source.not_flyable, source.extent)
+        return cls(scn, source.altitudes_m, source.sinr_db, source.serving_cell,
+                   source.not_flyable, source.extent, source.t_s)  # fmt: skip
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Writes an .npz (the scenario as TOML inside; no pickles), atomically."""
+        arrays = {
+            "altitudes_m": np.asarray(self.altitudes_m, np.float64),
+            "sinr_db": self.sinr_db,
+            "serving_cell": self.serving_cell,
+            "not_flyable": self.not_flyable,
+            "extent_m": np.asarray(self.extent, np.float64),
+        }
+        if self.t_s is not None:
+            arrays["t_s"] = np.asarray(self.t_s, np.float64)
+        return write_npz(path, arrays, self.scenario, STACK_VERSION)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> LevelStack:
+        """Reads a stack written by :meth:`save`, checked (shapes, finite values, its
+        scenario's area and levels); bit-exact round trip."""
+        need = ("altitudes_m", "sinr_db", "serving_cell", "not_flyable", "extent_m")
+        d, scn = read_npz(path, "stack of level maps", need, STACK_VERSION)
+        alts, sinr, t = d["altitudes_m"], d["sinr_db"], d.get("t_s")
+        want = (len(scn.area.levels), *scn.area.shape)
+        lead = () if t is None else (t.size,)
+        ok = (
+            alts.tolist() == scn.area.levels
+            and sinr.shape == (*lead, *want) and sinr.dtype.kind == "f"
+            and bool(np.all(np.isfinite(sinr)))
+            and d["serving_cell"].shape == sinr.shape and d["serving_cell"].dtype.kind == "i"
+            and d["not_flyable"].shape == want and d["not_flyable"].dtype == bool
+            and d["extent_m"].shape == (4,)
+            and (t is None or (t.ndim == 1 and bool(np.all(np.diff(t) > 0))))
+        )  # fmt: skip
+        if not ok:
+            raise InvalidInputError(
+                f"{path}: not a stack of level maps of its scenario (levels {scn.area.levels}, "
+                f"pixels {scn.area.shape}; finite SINR, a mask and serving cells of that shape)"
+            )
+        ext = tuple(float(v) for v in d["extent_m"])
+        return cls(scn, alts, sinr, d["serving_cell"], d["not_flyable"], ext, t)  # type: ignore[arg-type]

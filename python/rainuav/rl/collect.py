@@ -1,5 +1,8 @@
-"""Flying the agent: the UAVs in flight during training (:class:`Lanes`) and batched greedy
-flights from given starts (:func:`greedy_rollouts`)."""
+"""Flying the agent: the UAVs in flight during training (:class:`Lanes`), batched greedy
+flights from given starts (:func:`greedy_rollouts`), and the two calls every flight makes of
+its environment, on one level or among levels (:func:`observe`, :func:`step`): a UAV's
+state is its start, its offset in moves, its level (0 on one level) and its clock ``t``
+(moves on one level; ticks among levels, :mod:`rainuav.nav.levels`)."""
 
 from __future__ import annotations
 
@@ -10,18 +13,70 @@ from typing import Any
 import numpy as np
 
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.shield import shield_moves
 from rainuav.rl.dqn import Agent, NStepWindow, best_action
 from rainuav.rl.setup import torch_settings
 
-__all__ = ["Lanes", "greedy_rollouts"]
+__all__ = ["Lanes", "exploration_moves", "greedy_rollouts", "observe", "start_level", "step"]
+
+Env = UAVNavEnv | UAVLevelsEnv
+
+
+def observe(env: Env, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None) -> Any:
+    """The env's observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) after ``t`` (N,)
+    (``goal`` and ``world``: the plane's, :meth:`UAVNavEnv.observe`)."""
+    if isinstance(env, UAVLevelsEnv):
+        return env.observe(pos, level, t)
+    return env.observe(pos, t, goal, world)
+
+
+def step(
+    env: Env,
+    start: np.ndarray,
+    offset: np.ndarray,
+    level: np.ndarray,
+    t: np.ndarray,
+    action: np.ndarray,
+    goal: Any = None,
+    world: Any = None,
+) -> dict[str, np.ndarray]:
+    """One move of every UAV: the env's batched stepper's result, with ``t`` the new clock,
+    ``level`` the new level and ``duration`` each move's ticks (1 on one level)."""
+    if isinstance(env, UAVLevelsEnv):
+        r = env.stepper.step(start, offset, level, t, action)
+        r["t"] = r.pop("tick")
+        return r
+    r = env.stepper.step(start, offset, t, action, goal, world)
+    r["level"] = np.asarray(level, dtype=np.int64)
+    r["duration"] = np.ones(len(r["t"]), dtype=np.int64)
+    return r
+
+
+def exploration_moves(env: Env, level: np.ndarray) -> np.ndarray | None:
+    """(N, 6) bool: the moves an exploring UAV among levels draws from: every move but a
+    climb from the highest level and a descent from the lowest (each would end the flight
+    at once: random moves would end a sixth of the early flights at the lowest level, before
+    they learn anything; the network's own choices are never restricted). None on one level
+    (every move)."""
+    if not isinstance(env, UAVLevelsEnv):
+        return None
+    ok = np.ones((len(level), 6), dtype=bool)
+    ok[:, 4] = level < env.field.levels - 1
+    ok[:, 5] = level > 0
+    return ok
+
+
+def start_level(env: Env, start: np.ndarray) -> int:
+    """The level a flight from ``start`` takes off at (0 on one level)."""
+    return env.start_level_at(start) if isinstance(env, UAVLevelsEnv) else 0
 
 
 @dataclass
 class Lanes:
     """The UAVs in flight: each lane runs one episode at a time (its own start, offset from
-    the start in steps, step count, episode index, return so far, destination, world and
-    N-step window)."""
+    the start in steps, clock (moves; ticks among levels), episode index, return so far,
+    destination, world, level and N-step window)."""
 
     start: np.ndarray
     offset: np.ndarray
@@ -31,6 +86,7 @@ class Lanes:
     active: np.ndarray
     goal: np.ndarray
     world: np.ndarray
+    level: np.ndarray
     windows: list[NStepWindow]
 
     @classmethod
@@ -44,6 +100,7 @@ class Lanes:
             active=np.zeros(k, dtype=bool),
             goal=np.zeros((k, 2)),
             world=np.zeros(k, dtype=np.int64),
+            level=np.zeros(k, dtype=np.int64),
             windows=[NStepWindow(n_step, gamma) for _ in range(k)],
         )
 
@@ -58,7 +115,9 @@ class Lanes:
         return d
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        """Restores a :meth:`state_dict`; arrays of another shape or type raise ValueError."""
+        """Restores a :meth:`state_dict`; arrays of another shape or type raise ValueError
+        (a checkpoint from before levels has none: every lane on level 0)."""
+        d = {"level": np.zeros_like(self.level), **d}
         for f in dataclasses.fields(self):
             mine, v = getattr(self, f.name), d[f.name]
             if f.name == "windows":
@@ -75,9 +134,11 @@ class Lanes:
                 setattr(self, name, value)
 
     def launch(
-        self, k: int, start: np.ndarray, episode: int, goal: np.ndarray, world: int = 0
-    ) -> None:
+        self, k: int, start: np.ndarray, episode: int, goal: np.ndarray, world: int = 0,
+        level: int = 0,
+    ) -> None:  # fmt: skip
         self.start[k] = start
+        self.level[k] = level
         self.goal[k] = goal
         self.world[k] = world
         self.offset[k] = 0
@@ -89,29 +150,34 @@ class Lanes:
 
 def greedy_rollouts(
     agent: Agent,
-    env: UAVNavEnv,
+    env: Env,
     starts: np.ndarray,
     shield: bool | None = None,
     goals: np.ndarray | None = None,
 ) -> list[dict[str, Any]]:
     """Greedy episodes from every start at once (the batched stepper gives exactly the scalar
     environment's transitions), one dict per start: ``return``, ``steps``, ``path`` (T+1, 2),
-    ``signal`` (T,) along the path, ``reached`` and ``overridden`` (moves where the shield
-    replaced the network's choice). ``shield``: keep to the moves :func:`shield_moves`
-    allows (default: ``agent.cfg.shield``). ``goals`` (N, 2): each flight's destination
-    (default: the task's). Under training's torch settings (one CPU thread: the networks
-    are tiny, and two threads beside another job spin for the core: 60 ms a one-UAV decision)."""
+    ``levels`` and ``ticks`` (T+1,: each point's level and clock; zeros and the move count
+    on one level), ``signal`` (T,) along the path, ``reached`` and ``overridden`` (moves
+    where the shield replaced the network's choice). ``shield``: keep to the moves
+    :func:`shield_moves` allows (the plane's; default: ``agent.cfg.shield``). ``goals``
+    (N, 2): each flight's destination (default: the task's). Under training's torch
+    settings (one CPU thread: the networks are tiny, and two threads beside another job spin
+    for the core: 60 ms a one-UAV decision)."""
     with torch_settings(agent.device):
         return _rollouts(agent, env, starts, agent.cfg.shield if shield is None else shield, goals)
 
 
 def _rollouts(
-    agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool, goals: np.ndarray | None
+    agent: Agent, env: Env, starts: np.ndarray, shield: bool, goals: np.ndarray | None
 ) -> list[dict[str, Any]]:
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     n = len(starts)
     goal = None if goals is None else np.asarray(goals, dtype=np.float64).reshape(n, 2)
     off = np.zeros((n, 2), dtype=np.int64)
+    lv = np.array([start_level(env, s) for s in starts], dtype=np.int64)
+    levels: list[list[int]] = [[int(v)] for v in lv]
+    ticks: list[list[int]] = [[0] for _ in range(n)]
     visited: list[set[tuple[int, int]]] = [{(0, 0)} for _ in range(n)]  # lattice offsets
     t = np.zeros(n, dtype=np.int64)
     live = np.ones(n, dtype=bool)
@@ -124,18 +190,20 @@ def _rollouts(
         idx = np.flatnonzero(live)
         pos = starts[idx] + env.cfg.step_m * off[idx]
         g = None if goal is None else goal[idx]
-        q = agent.q_values(agent.observe(env.observe(pos, t[idx], g), t[idx]))
+        q = agent.q_values(agent.observe(observe(env, pos, lv[idx], t[idx], g), t[idx]))
         a = best_action(q)
-        if shield:
+        if shield and isinstance(env, UAVNavEnv):
             allowed = shield_moves(env, pos, t[idx], off[idx], [visited[k] for k in idx], g)
             free, a = a, best_action(q, allowed)
             overridden[idx] += a != free
-        r = env.stepper.step(starts[idx], off[idx], t[idx], a, g)
-        off[idx], t[idx] = r["offset"], r["t"]
+        r = step(env, starts[idx], off[idx], lv[idx], t[idx], a, g)
+        off[idx], lv[idx], t[idx] = r["offset"], r["level"], r["t"]
         ret[idx] += r["reward"]
         for j, k in enumerate(idx):
             visited[k].add((int(off[k, 0]), int(off[k, 1])))
             paths[k].append(r["position"][j].copy())
+            levels[k].append(int(lv[k]))
+            ticks[k].append(int(t[k]))
             signal[k].append(float(r["signal_db"][j]))
         end = r["terminated"] | r["truncated"]
         reached[idx[r["arrived"]]] = True
@@ -143,8 +211,10 @@ def _rollouts(
     return [
         {
             "return": float(ret[k]),
-            "steps": int(t[k]),
+            "steps": len(paths[k]) - 1,
             "path": np.array(paths[k]),
+            "levels": np.array(levels[k], dtype=np.int64),
+            "ticks": np.array(ticks[k], dtype=np.int64),
             "signal": np.array(signal[k]),
             "reached": bool(reached[k]),
             "overridden": int(overridden[k]),

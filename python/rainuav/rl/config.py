@@ -220,6 +220,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("device", cfg.device in ("auto", "cpu", "cuda"), "'auto', 'cpu' or 'cuda'"),
         ("replan_every", cfg.replan_every >= 1, ">= 1"),
         ("storm_episodes", cfg.storm_episodes >= 1, ">= 1"),
+        ("shield", not (d.shield and cfg.altitudes), "false with altitudes (the plane's)"),
     ]
     for name, ok, allowed in checks:
         if not ok:

@@ -30,7 +30,7 @@ __all__ = ["Agent", "Encoder", "NStepWindow", "Replay", "best_action", "double_q
 
 
 def best_action(q: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
-    """Argmax of the (N, 4) values ``q``, among the ``allowed`` (N, 4) actions when given."""
+    """Argmax of the (N, A) values ``q``, among the ``allowed`` (N, A) actions when given."""
     if allowed is not None:
         q = np.where(allowed, q, -np.inf)
     return q.argmax(axis=1)
@@ -149,19 +149,22 @@ def double_q_target(
     return ret + discount * (1.0 - done) * q_next_target.gather(1, a_star).squeeze(1)
 
 
-def memory_needed(cfg: DQNConfig, view: WeatherView | None = None) -> dict[str, int]:
+def memory_needed(
+    cfg: DQNConfig, view: WeatherView | None = None, levels: bool = False
+) -> dict[str, int]:
     """Bytes the agent of ``cfg`` allocates, by the field that sets them: ``hidden`` (the
     float32 weights of the network, seven times over: online, target, gradients, Adam's two
     moments, the weight average and a copy while reporting) and ``replay_capacity`` (the
-    replay's arrays). ``view``: the weather observation where the env gives it (its network
+    replay's arrays). ``levels``: altitude as a decision (the level an input, six actions);
+    ``view``: the weather observation where the env gives it (its network
     is built on the CPU to count its weights, a few ms). Computed from the sizes, so a run
     that cannot fit is refused before anything is built."""
     h = cfg.hidden
     if view is None:
-        n_smooth = 3 if cfg.time_aware else 2
+        n_smooth = (3 if cfg.time_aware else 2) + int(levels)
         obs_dim = n_smooth + 2 * cfg.goal_features
         d_in = obs_dim + n_smooth * 2 * cfg.fourier
-        params = d_in * h + h + h * h + h + (h + 1) + 4 * (h + 1)
+        params = d_in * h + h + h * h + h + (h + 1) + (6 if levels else 4) * (h + 1)
     else:
         enc = WeatherEncoder(cfg, view, (1.0, 1.0), MoveGeometry((1.0, 1.0), 1.0, 1.0))
         obs_dim = enc.dim
@@ -184,6 +187,7 @@ class Agent:
         self.device = device
         self.encoder = encoder
         self.obs_dim = encoder.dim
+        self.n_actions = encoder.n_actions
         torch.manual_seed(seed)
         self.online = encoder.make_net().to(device)
         self.target = encoder.make_net().to(device)
@@ -207,23 +211,31 @@ class Agent:
         moves (the encoder's)."""
         return self.encoder(env_obs, t)
 
-    def act(self, obs: np.ndarray, episodes: np.ndarray) -> np.ndarray:
+    def act(
+        self, obs: np.ndarray, episodes: np.ndarray, explore_among: np.ndarray | None = None
+    ) -> np.ndarray:
         """Epsilon-greedy actions for a batch of UAVs, each at its own episode's epsilon.
         Always draws one uniform and one action per UAV, so the random stream does not
-        depend on the network's choices."""
+        depend on the network's choices. ``explore_among`` (N, A) bool: the actions an
+        exploring UAV draws from (uniformly; default all); the greedy choice is the
+        network's own, among all actions."""
         n = len(obs)
         explore = self.rng.random(n) < self.epsilon(episodes)
-        random_a = self.rng.integers(4, size=n)
+        if explore_among is None:
+            random_a = self.rng.integers(self.n_actions, size=n)
+        else:
+            k = np.floor(self.rng.random(n) * explore_among.sum(axis=1))
+            random_a = np.argmax(np.cumsum(explore_among, axis=1) > k[:, None], axis=1)
         return np.where(explore, random_a, self.greedy(obs))
 
     def q_values(self, obs: np.ndarray) -> np.ndarray:
-        """The online network's (N, 4) action values."""
+        """The online network's (N, A) action values."""
         with torch.inference_mode():
             x = torch.as_tensor(np.atleast_2d(obs), dtype=torch.float32, device=self.device)
             return self.online(x).cpu().numpy()
 
     def greedy(self, obs: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
-        """The action of highest Q, among the ``allowed`` (N, 4) ones when given."""
+        """The action of highest Q, among the ``allowed`` (N, A) ones when given."""
         return best_action(self.q_values(obs), allowed)
 
     def learn(self) -> float | None:

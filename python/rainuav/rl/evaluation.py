@@ -1,7 +1,7 @@
 """Measuring a policy: the network's greedy flights from fixed starts against the exact
-planner and the baselines (the straight line; where the weather moves, the plan of the weather
-at take-off and re-planning: :mod:`rainuav.nav.baselines`), by success and excess cost
-(:func:`evaluate`), the
+planner and the baselines (:mod:`rainuav.rl.references`: the straight line; where the weather
+moves, the plan of the weather at take-off and re-planning; among levels, the plans of one
+altitude), by success and excess cost (:func:`evaluate`), the
 run's evaluation (:func:`evaluate_run_policy`) and the greedy checks on held-out validation
 starts during training (:class:`Validation`)."""
 
@@ -18,9 +18,8 @@ import torch
 
 from rainuav._checks import check_integer
 from rainuav.errors import InvalidInputError
-from rainuav.nav import baselines, planner
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.task import flight_cost
+from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.radio.radiomap import RadioMap
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
@@ -32,6 +31,13 @@ from rainuav.rl.config import (
     load_config,
 )
 from rainuav.rl.dqn import Agent
+from rainuav.rl.references import (
+    eval_starts,
+    flights,
+    reference_flights,
+    relative_gap,
+    summarise,
+)
 from rainuav.rl.setup import make_agent, pick_device
 from rainuav.world import World, load_world, task_of, world_from
 
@@ -47,117 +53,21 @@ __all__ = [
     "summarise",
 ]
 
-
-PLAN_CHUNK = 1000
-"""Starts planned per call of the exact planner: evaluations over more show a progress bar."""
-
-
-def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
-    """``n`` starts drawn uniformly (farther than the tolerance from the goal) from ``seed``."""
-    rng = np.random.default_rng(seed)
-    return np.array([env.sample_start(rng) for _ in range(n)], dtype=np.float64).reshape(-1, 2)
-
-
-def relative_gap(optimum: np.ndarray, returns: np.ndarray) -> np.ndarray:
-    """Per start, the share of the exact optimum's return the policy gave up (a secondary
-    figure: the arrival reward in both returns makes it look about 4x smaller than the extra
-    cost it stands for, PHYSICS.md section 6)."""
-    return (optimum - returns) / np.maximum(np.abs(optimum), 1e-9)
-
-
-def _arrived(env: UAVNavEnv, path: np.ndarray) -> bool:
-    """Whether a planner's path ends at the destination (inside the area)."""
-    x0, x1, y0, y1 = env.field.extent
-    p, g = path[-1], np.asarray(env.cfg.goal_m)
-    inside = x0 <= p[0] <= x1 and y0 <= p[1] <= y1
-    return bool(inside and np.hypot(*(p - g)) <= env.cfg.tol_m and len(path) > 1)
-
-
-def flights(env: UAVNavEnv, returns: Any, arrived: Any, paths: list) -> dict[str, Any]:
-    """Per flight: ``return``, ``arrived``, ``cost`` (:func:`rainuav.nav.task.flight_cost`),
-    ``steps``, the signal along the path (every position after the start): its mean and the
-    share of it below ``min_db``, and the ``paths`` themselves (for figures)."""
-    time_s = env.stepper.time_s  # the instant of each move, for a signal that changes
-    signal = [env.field(p[1:, 0], p[1:, 1], time_s(np.arange(1, len(p)))) for p in paths]
-    rets = np.asarray(returns, dtype=np.float64)
-    ok = np.asarray(arrived, dtype=bool)
-    return {
-        "return": rets,
-        "arrived": ok,
-        "cost": flight_cost(rets, ok, env.cfg),
-        "steps": np.array([len(p) - 1 for p in paths], dtype=np.float64),
-        "signal_sum": np.array([s.sum() for s in signal]),
-        "outage_sum": np.array([np.sum(s < env.cfg.min_db) for s in signal], dtype=np.float64),
-        "paths": paths,
-    }
-
-
-def summarise(f: dict[str, np.ndarray], optimum: dict[str, np.ndarray]) -> dict[str, Any]:
-    """Success, excess cost ``(C - C*) / C*`` over the flights that arrived where the optimum
-    did too (None where none did), return gap, flight time in moves, and the mean signal and
-    outage share over every position flown."""
-    both = f["arrived"] & optimum["arrived"]
-    excess = (f["cost"][both] - optimum["cost"][both]) / optimum["cost"][both]
-    gap = relative_gap(optimum["return"], f["return"])
-    moves = max(float(f["steps"].sum()), 1.0)
-    return {
-        "success_rate": float(f["arrived"].mean()),
-        "mean_excess_cost": float(excess.mean()) if both.any() else None,
-        "median_excess_cost": float(np.median(excess)) if both.any() else None,
-        "worst_excess_cost": float(excess.max()) if both.any() else None,
-        "mean_cost": float(f["cost"][f["arrived"]].mean()) if f["arrived"].any() else None,
-        "mean_steps": float(f["steps"].mean()),
-        "mean_signal_db": float(f["signal_sum"].sum() / moves),
-        "outage_share": float(f["outage_sum"].sum() / moves),
-        "mean_gap_to_optimal": float(gap.mean()),
-        "worst_gap_to_optimal": float(gap.max()),
-        "mean_return": float(f["return"].mean()),
-    }
-
-
-def reference_flights(
-    env: UAVNavEnv, starts: np.ndarray, replan_every: int = baselines.DEFAULT_REPLAN_EVERY
-) -> dict[str, dict[str, Any]]:
-    """The exact planner's flights (the yardstick) and the baselines': the straight line, and
-    where the signal changes in time the plan of the weather at take-off (``frozen_plan``) and
-    re-planning every ``replan_every`` moves (``replan``), each flown through the moving
-    weather."""
-    plans = []
-    chunks = range(0, len(starts), PLAN_CHUNK)
-    if len(starts) > PLAN_CHUNK:  # a long evaluation shows its progress
-        from tqdm.auto import tqdm
-
-        chunks = tqdm(chunks, desc="exact plans", unit="chunk", total=len(chunks))
-    for i in chunks:
-        plans += planner.optimal_many(env, starts[i : i + PLAN_CHUNK])
-    flown = {"optimal": plans, "straight_line": [planner.straight_line(env, s) for s in starts]}
-    if env.field.varies:
-        flown["frozen_plan"] = baselines.frozen_plans(env, starts)
-        flown["replan"] = baselines.replans(env, starts, replan_every)
-    return {
-        name: flights(
-            env,
-            [p.return_ for p in ps],
-            [_arrived(env, p.path_m) for p in ps],
-            [p.path_m for p in ps],
-        )
-        for name, ps in flown.items()
-    }
+Env = UAVNavEnv | UAVLevelsEnv
 
 
 def _policy_flights(
-    agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool
+    agent: Agent, env: Env, starts: np.ndarray, shield: bool
 ) -> tuple[dict[str, np.ndarray], list]:
     rolls = greedy_rollouts(agent, env, starts, shield=shield)
-    f = flights(
-        env, [r["return"] for r in rolls], [r["reached"] for r in rolls], [r["path"] for r in rolls]
-    )
+    f = flights(env, *([r[k] for r in rolls] for k in ("return", "reached", "path", "levels",
+                                                       "ticks")))  # fmt: skip
     return f, rolls
 
 
 def evaluate(
     agent: Agent,
-    env: UAVNavEnv,
+    env: Env,
     starts: np.ndarray,
     references: dict[str, dict[str, np.ndarray]] | None = None,
 ) -> tuple[dict[str, Any], list]:
@@ -184,6 +94,13 @@ def evaluate(
         keys = ("success_rate", "mean_excess_cost", "worst_excess_cost")
         metrics.update({f"shielded_{k}": s[k] for k in keys})
         metrics["shielded_flights"] = float(np.mean([r["overridden"] > 0 for r in rolls_s]))
+    if isinstance(env, UAVLevelsEnv):  # the heights the network flies at
+        alts = env.field.altitudes_m
+        metrics["altitudes_m"] = alts.tolist()
+        metrics["mean_altitude_m"] = float(np.mean(np.concatenate(
+            [alts[r["levels"][1:]] for r in rolls])))  # fmt: skip
+        changes = [np.count_nonzero(np.diff(r["levels"])) for r in rolls]
+        metrics["vertical_moves"] = float(np.mean(changes))  # climbs and descents a flight
     metrics["eval_starts"] = len(starts)
     return metrics, rolls
 
@@ -210,7 +127,7 @@ class Validation:
         """Lower is better: each missed flight weighs as much as 100% excess cost."""
         return (1.0 - success) + (1.0 if excess is None else excess)
 
-    def check(self, agent: Agent, env: UAVNavEnv, finished: int) -> tuple[float, float]:
+    def check(self, agent: Agent, env: Env, finished: int) -> tuple[float, float]:
         """Flies the network alone from the validation starts; returns (success, mean excess
         cost; 1 where no flight arrived)."""
         f, _ = _policy_flights(agent, env, self.starts, shield=False)
@@ -240,7 +157,7 @@ class Validation:
 
 
 def evaluate_run_policy(
-    cfg: TrainConfig, agent: Agent, env: UAVNavEnv, checks: Validation
+    cfg: TrainConfig, agent: Agent, env: Env, checks: Validation
 ) -> tuple[dict[str, Any], list]:
     """Evaluates the run's policy from the evaluation starts and leaves it in ``agent``.
 
@@ -270,7 +187,7 @@ def evaluate_run_policy(
 
 
 def load_agent(
-    path: Path, state: dict[str, Any], cfg: TrainConfig, env: UAVNavEnv, device: str, online: bool
+    path: Path, state: dict[str, Any], cfg: TrainConfig, env: Env, device: str, online: bool
 ) -> tuple[Agent, int, float]:
     """The agent of a run's checkpoint ``state`` (read from ``path``) for ``env``, holding the
     network the run reports (or with ``online`` its last online one); with its episodes and

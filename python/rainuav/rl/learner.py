@@ -101,10 +101,13 @@ def learning_reward(
     times the undiscounted price of a move at gamma 0.998. Weighting the SIR part up
     restores the balance of the undiscounted return the policy is judged by; a position-only
     policy then loops from a few starts, which the shield breaks (1.25 by default; see
-    ``docs/learner.md``). ``goal`` (N, 2): each UAV's destination (default: the task's)."""
+    ``docs/learner.md``). ``goal`` (N, 2): each UAV's destination (default: the task's).
+    Among levels the shaping's potential is the plane's (the moves still needed on the
+    lattice, whatever the level): a potential of the state, so the optimum is kept."""
     reward = r["reward"]
-    if d.sir_weight != 1.0:
-        reward = reward + (d.sir_weight - 1.0) * (base_reward(r["signal_db"], env.cfg) + 1.0)
+    if d.sir_weight != 1.0:  # among levels each move's part weighs its duration, as its reward
+        sir = (base_reward(r["signal_db"], env.cfg) + 1.0) * r.get("duration", 1.0)
+        reward = reward + (d.sir_weight - 1.0) * sir
     return reward + shaping_term(env, d, pos, r["position"], learner_ends(d, r), goal)
 
 

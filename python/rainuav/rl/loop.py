@@ -16,7 +16,6 @@ configuration continues from it and reproduces the uninterrupted run), and at th
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import json
 import time
@@ -32,7 +31,14 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.radio.storms import check_storm_seed
 from rainuav.rl import checkpoint
-from rainuav.rl.collect import Lanes, greedy_rollouts
+from rainuav.rl.collect import (
+    Lanes,
+    exploration_moves,
+    greedy_rollouts,
+    observe,
+    start_level,
+    step,
+)
 from rainuav.rl.config import (
     TrainConfig,
     apply_preset,
@@ -50,6 +56,7 @@ from rainuav.rl.evaluation import (
 )
 from rainuav.rl.learner import learner_ends, learning_reward, training_task
 from rainuav.rl.plots import plot_policy, plot_returns, plot_stages, plot_storm_flights
+from rainuav.rl.runlog import RunLog
 from rainuav.rl.setup import check_fits, make_agent, pick_device, torch_settings
 from rainuav.world import World, build_world, task_of
 from rainuav.world.pool import VALIDATION_SEEDS, StormPool
@@ -92,68 +99,6 @@ def load_checkpoint(path: Path, cfg: TrainConfig) -> dict[str, Any]:
             f"--resume: the configuration differs from the checkpoint's in {'; '.join(diff)}"
         )
     return state
-
-
-def cut_log(path: Path, done: int) -> None:
-    """Cuts ``log.csv`` back to the episodes a checkpoint holds (``finished <= done``): the
-    rows an interrupted run logged after its last checkpoint are logged again on resume.
-    Rewritten atomically; a row that does not parse ends the kept part."""
-    with path.open(newline="") as fh:
-        rows = list(csv.reader(fh))
-    keep = rows[:1]
-    for row in rows[1:]:
-        try:
-            finished = int(row[0])
-        except (ValueError, IndexError):
-            break
-        if finished > done:
-            break
-        keep.append(row)
-
-    def write(tmp: Path) -> None:
-        with tmp.open("w", newline="") as fh:
-            csv.writer(fh).writerows(keep)
-
-    write_atomic(path, write)
-
-
-class RunLog:
-    """``log.csv`` (one row per finished episode), TensorBoard scalars and the progress bar."""
-
-    def __init__(self, out: Path, resume: bool, total: int, done: int, progress: bool) -> None:
-        from torch.utils.tensorboard import SummaryWriter
-
-        self.tb = SummaryWriter(str(out / "tb"))
-        path = out / "log.csv"
-        new = not (resume and path.exists())
-        if not new:
-            cut_log(path, done)
-        self.fh = path.open("w" if new else "a", newline="")
-        self.csv = csv.writer(self.fh)
-        if new:
-            self.csv.writerow(
-                ["finished", "episode", "return", "steps", "reached", "epsilon", "seconds"]
-            )
-        self.bar = None
-        if progress:
-            from tqdm.auto import tqdm
-
-            self.bar = tqdm(total=total, initial=done, desc="train", unit="ep")
-
-    def episode(self, n_done: int, row: tuple[int, float, int, bool, float, float]) -> None:
-        """One finished episode: (episode index, return, steps, reached, epsilon, seconds)."""
-        episode, ret, steps, reached, eps, seconds = row
-        self.csv.writerow(
-            [n_done, episode, f"{ret:.4f}", steps, int(reached), f"{eps:.5f}", f"{seconds:.2f}"]
-        )
-        self.tb.add_scalar("return", ret, n_done)
-        self.tb.add_scalar("epsilon", eps, n_done)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-        self.fh.close()
-        self.tb.close()
 
 
 # -- the job ----------------------------------------------------------------------------------
@@ -265,7 +210,7 @@ def run_loop(
         start, goal, world = training_task(env, d, env.np_random)
         if pool is not None:
             world = storm_slot(pool, lanes, k, per_storm, cfg.storm_episodes)
-        lanes.launch(k, start, episode, goal, world)
+        lanes.launch(k, start, episode, goal, world, start_level(env, start))
 
     started, returns, successes, stages = 0, [], [], []
     train_seconds, pending = 0.0, 0  # pending: transitions not yet paid for by a gradient step
@@ -305,15 +250,15 @@ def run_loop(
             pos = lanes.start[idx] + env.cfg.step_m * lanes.offset[idx]
             goal = lanes.goal[idx] if weather else None  # each UAV's destination and world
             world = lanes.world[idx] if pool is not None else None
-            obs = agent.observe(env.observe(pos, lanes.t[idx], goal, world), lanes.t[idx])
-            act = agent.act(obs, lanes.episode[idx])
-            r = env.stepper.step(
-                lanes.start[idx], lanes.offset[idx], lanes.t[idx], act, goal, world
-            )
-            lanes.offset[idx], lanes.t[idx] = r["offset"], r["t"]
+            level, t = lanes.level[idx], lanes.t[idx]
+            obs = agent.observe(observe(env, pos, level, t, goal, world), t)
+            act = agent.act(obs, lanes.episode[idx], exploration_moves(env, level))
+            r = step(env, lanes.start[idx], lanes.offset[idx], level, t, act, goal, world)
+            lanes.offset[idx], lanes.level[idx], lanes.t[idx] = r["offset"], r["level"], r["t"]
             lanes.ret[idx] += r["reward"]
             # Store: each UAV's N-step window hands finished transitions to the replay.
-            nobs = agent.observe(env.observe(r["position"], r["t"], goal, world), r["t"])
+            nobs = agent.observe(observe(env, r["position"], r["level"], r["t"], goal, world),
+                                 r["t"])  # fmt: skip
             stop = learner_ends(d, r)
             learn_r = learning_reward(env, d, pos, r, goal)
             for j, k in enumerate(idx):
@@ -440,7 +385,7 @@ def finish(
     write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
     plot_returns(returns, out / "returns.png", checks.history)
     plot_policy(env, metrics, rolls[:40], out / "trajectories.png")
-    if env.field.varies:
+    if env.field.varies and isinstance(env, UAVNavEnv):  # (among levels: trajectories.png)
         plot_storm_flights(env, rolls[:6], out / "storm_flights.png")
     if stages:
         plot_stages(env, stages, out / "stages.png")

@@ -92,11 +92,12 @@ class DuelingQNet(nn.Module):
 
 
 class PositionEncoder:
-    """The single-map learner's input: the env's (N, 2) position (N, 3 with the time where
-    the signal moves), then t / horizon when time-aware and the env does not give it, then
-    the goal-relative features ``tanh(d / (step 4^k))`` (functions of the position and the
-    fixed destination, so nothing the environment does not give; they let the network
-    resolve the 10 m arrival disc, which global features blur)."""
+    """The single-map learner's input: the env's (N, 2) position (among levels, then the
+    level over the highest index; then the time where the signal moves), then t / horizon
+    when time-aware and the env does not give it, then the goal-relative features
+    ``tanh(d / (step 4^k))`` (functions of the position and the fixed destination, so
+    nothing the environment does not give; they let the network resolve the 10 m arrival
+    disc, which global features blur). ``n_actions``: 4 on one level, 6 among levels."""
 
     def __init__(
         self,
@@ -105,14 +106,20 @@ class PositionEncoder:
         goal: tuple[float, float],
         step: tuple[float, float],
         env_dims: int = 2,
+        *,
+        gives_time: bool | None = None,
+        n_actions: int = 4,
     ) -> None:
-        self.cfg, self.horizon = cfg, horizon
+        """``gives_time``: whether the env's observation ends with the time (default: it has
+        three dimensions, the plane's in time)."""
+        self.cfg, self.horizon, self.n_actions = cfg, horizon, n_actions
         self.goal = np.asarray(goal, dtype=np.float32)
         self.goal_scale = (
             np.asarray(step, dtype=np.float32)[:, None] * 4.0 ** np.arange(cfg.goal_features)
         ).astype(np.float32)  # (2, K)
         # The time is an input where the env gives it, or where the learner is time-aware.
-        self.adds_time = cfg.time_aware and env_dims == 2
+        gives = env_dims == 3 if gives_time is None else gives_time
+        self.adds_time = cfg.time_aware and not gives
         self.n_smooth = env_dims + int(self.adds_time)
         self.dim = self.n_smooth + 2 * cfg.goal_features
 
@@ -128,7 +135,9 @@ class PositionEncoder:
 
     def make_net(self) -> nn.Module:
         c = self.cfg
-        return DuelingQNet(c.hidden, c.fourier, obs_dim=self.dim, smooth_dim=self.n_smooth)
+        return DuelingQNet(
+            c.hidden, c.fourier, self.n_actions, obs_dim=self.dim, smooth_dim=self.n_smooth
+        )
 
 
 class WeatherQNet(DuelingQNet):
@@ -294,6 +303,8 @@ class MoveGeometry:
 class WeatherEncoder:
     """The weather-reading learner's input: the env's ``Dict`` observation flattened
     (:meth:`WeatherView.flat`); the network splits it (:class:`WeatherQNet`)."""
+
+    n_actions = 4
 
     def __init__(
         self,

@@ -12,6 +12,7 @@ import numpy as np
 
 from rainuav._io import write_atomic
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.levels import UAVLevelsEnv
 
 __all__ = [
     "draw_flights",
@@ -25,13 +26,14 @@ __all__ = [
 ]
 
 
-def map_image(ax: Any, env: UAVNavEnv) -> Any:
-    """The task's signal map on ``ax`` (where it changes in time, at take-off), its colour
-    scale centred on the outage threshold."""
+def map_image(ax: Any, env: UAVNavEnv | UAVLevelsEnv) -> Any:
+    """The task's signal map on ``ax`` (where it changes in time, at take-off; among levels,
+    the lowest level's), its colour scale centred on the outage threshold."""
     x0, x1, y0, y1 = env.field.extent
     lo = float(env.cfg.min_db if env.cfg.min_db is not None else 0.0)
+    field = env.field.fields[0] if isinstance(env, UAVLevelsEnv) else env.field
     return ax.imshow(
-        env.field.frozen(0.0).db,
+        field.frozen(0.0).db,
         origin="lower",
         extent=(x0, x1, y0, y1),
         cmap="RdYlGn",
@@ -61,14 +63,35 @@ def draw_flights(ax: Any, env: UAVNavEnv, rolls: list, optimal: Sequence[Any] = 
 
 
 def plot_trajectories(
-    env: UAVNavEnv, rolls: list, path: Path, title: str, optimal: Sequence[Any] = ()
+    env: UAVNavEnv | UAVLevelsEnv,
+    rolls: list,
+    path: Path,
+    title: str,
+    optimal: Sequence[Any] = (),
+    heights: Sequence[Any] = (),
 ) -> None:
-    """The flights over the map (:func:`draw_flights`) with a colour bar, a legend and axes."""
+    """The flights over the map (:func:`draw_flights`) with a colour bar, a legend and axes;
+    among levels, beside it each flight's altitude against time (the network's in black,
+    ``heights``: the optimum's (ticks, levels), dashed blue)."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(6.4, 5.4))
-    ax = fig.subplots()
+    levels = isinstance(env, UAVLevelsEnv)
+    fig = Figure(figsize=(11.4 if levels else 6.4, 5.4))
+    ax, *side = fig.subplots(1, 2 if levels else 1, squeeze=False)[0]
     im = draw_flights(ax, env, rolls, optimal)
+    if levels:
+        alts, move_s = env.field.altitudes_m, env.cfg.move_s
+        for k, (ticks, lv) in enumerate(heights):
+            side[0].plot(ticks * move_s, alts[lv], "--", color="tab:blue", lw=0.9, alpha=0.8,
+                         label="exact optimum" if k == 0 else None)  # fmt: skip
+        for k, r in enumerate(rolls):
+            side[0].plot(r["ticks"] * move_s, alts[r["levels"]], "-", color="k", lw=0.8,
+                         alpha=0.7, label="policy" if k == 0 else None)  # fmt: skip
+        side[0].set_xlabel("time [s]")
+        side[0].set_ylabel("altitude [m]")
+        side[0].set_yticks(alts)
+        side[0].legend(loc="upper right", fontsize="small")
+        side[0].set_title(f"heights flown (map: the lowest level, {alts[0]:g} m)")
     label = f"{env.cfg.signal.upper()} [dB] (outage below {env.cfg.min_db:g})"
     fig.colorbar(im, ax=ax, label=label)
     ax.legend(loc="lower right", fontsize="small")
@@ -79,22 +102,32 @@ def plot_trajectories(
     write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
 
 
-def optimal_paths(env: UAVNavEnv, rolls: list) -> list:
+def optimal_paths(env: UAVNavEnv | UAVLevelsEnv, rolls: list) -> list:
     """The exact planner's paths from the starts of ``rolls`` (to draw beside them)."""
+    return [p.path_m for p in optimal_plans(env, rolls)]
+
+
+def optimal_plans(env: UAVNavEnv | UAVLevelsEnv, rolls: list) -> list:
+    """The exact planner's plans from the starts of ``rolls``."""
     from rainuav.nav import planner
 
     starts = np.array([r["path"][0] for r in rolls]).reshape(-1, 2)
-    return [p.path_m for p in planner.optimal_many(env, starts)]
+    if isinstance(env, UAVLevelsEnv):
+        return planner.optimal_among_levels(env, starts)
+    return planner.optimal_many(env, starts)
 
 
-def plot_policy(env: UAVNavEnv, metrics: dict[str, Any], rolls: list, path: Path) -> None:
+def plot_policy(
+    env: UAVNavEnv | UAVLevelsEnv, metrics: dict[str, Any], rolls: list, path: Path
+) -> None:
     """The network's flights beside the exact optimum from the same starts, titled with its
-    success and mean excess cost."""
-    optimal = optimal_paths(env, rolls)
+    success and mean excess cost (among levels, with the heights flown)."""
+    plans = optimal_plans(env, rolls)
+    heights = [(p.ticks, p.levels) for p in plans] if isinstance(env, UAVLevelsEnv) else []
     excess = metrics.get("mean_excess_cost")
     cost = "n/a" if excess is None else f"{100 * excess:.1f}%"
     title = f"network alone: success {100 * metrics['success_rate']:.0f}%, excess cost {cost}"
-    plot_trajectories(env, rolls, path, title, optimal)
+    plot_trajectories(env, rolls, path, title, [p.path_m for p in plans], heights)
 
 
 def plot_returns(

@@ -13,6 +13,7 @@ import torch
 from rainuav._checks import check_fits as check_fits_memory
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.dqn import Agent, Encoder, memory_needed
@@ -24,7 +25,8 @@ __all__ = ["check_fits", "make_agent", "make_encoder", "pick_device", "torch_set
 def check_fits(cfg: TrainConfig) -> None:
     """Refuses a run whose agent cannot fit in memory, naming the field and the GB
     (:func:`rainuav.rl.dqn.memory_needed`); called before any map is built."""
-    need = memory_needed(cfg.dqn, WeatherView() if cfg.observation == "weather" else None)
+    view = WeatherView() if cfg.observation == "weather" else None
+    need = memory_needed(cfg.dqn, view, levels=bool(cfg.altitudes))
     biggest = max(need, key=lambda k: need[k])
     check_fits_memory(
         f"{biggest} = {getattr(cfg.dqn, biggest.split('.')[1])}",
@@ -33,7 +35,7 @@ def check_fits(cfg: TrainConfig) -> None:
     )
 
 
-def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
+def make_agent(cfg: TrainConfig, env: UAVNavEnv | UAVLevelsEnv, device: torch.device) -> Agent:
     """An agent for ``env``: the time limit, the destination and one move in observation
     units (refused first if it cannot fit in memory: :func:`check_fits`)."""
     check_fits(cfg)
@@ -43,16 +45,22 @@ def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
     return Agent(cfg.dqn, cfg.seed, device, make_encoder(cfg.dqn, env, step))
 
 
-def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Encoder:
+def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float, float]) -> Encoder:
     """The encoder (and network) for ``env``'s observation (:mod:`rainuav.rl.networks`):
     the weather-reading one where the env shows the weather, else the position one (with
-    the env's fixed destination)."""
+    the env's fixed destination; among levels with the level and six actions)."""
+    dims = int(env.observation_space.shape[0])  # type: ignore[index]
+    if isinstance(env, UAVLevelsEnv):
+        x0, x1, y0, y1 = env.field.extent
+        gx, gy = env.cfg.goal_m
+        goal = ((gx - x0) / (x1 - x0), (gy - y0) / (y1 - y0))
+        return PositionEncoder(d, env.cfg.max_steps, goal, step, dims,
+                               gives_time=env.field.varies, n_actions=6)  # fmt: skip
     if env.view is not None:
         x0, x1, y0, y1 = env.field.extent
         geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
         return WeatherEncoder(d, env.view, step, geometry)
     goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())
-    dims = int(env.observation_space.shape[0])  # type: ignore[index]
     return PositionEncoder(d, env.cfg.max_steps, goal, step, dims)
 
 

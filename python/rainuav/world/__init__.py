@@ -27,12 +27,15 @@ from typing import Any
 import numpy as np
 
 from rainuav._checks import check_field_kinds
+from rainuav._cli import altitude_band
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalBank, SignalField, SignalSeries
+from rainuav.nav.levels import LevelField, UAVLevelsEnv
 from rainuav.nav.task import NavConfig
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio import presets
+from rainuav.radio.levels import LevelStack
 from rainuav.radio.mapdata import RadioMap
 from rainuav.radio.radiomap import build_radio_map
 from rainuav.radio.scenario import Scenario
@@ -59,8 +62,9 @@ __all__ = [
     "world_from",
 ]
 
-MAP_FILES = ("radiomap.npz", "radiomap_series.npz")
-"""The files a world's signal is saved in: a single map, or maps in time."""
+MAP_FILES = ("radiomap.npz", "radiomap_series.npz", "radiolevels.npz")
+"""The files a world's signal is saved in: a single map, maps in time, or the maps of every
+flight level (:class:`rainuav.radio.levels.LevelStack`)."""
 ENGINES = ("", "hybrid", "ray", "pe")
 MAX_POOL = 64
 """The most storms flown at once (each holds its maps in time: about 20 MB)."""
@@ -134,6 +138,10 @@ class WorldSpec:
     calm_share: float = 0.0
     """Of a storm pool's storms, the share flown calm: the storm's uniform background rain
     alone, its cells left out (rainuav.world.pool.is_calm says which seeds)."""
+    altitudes: str = ""
+    """Flight levels LOW:HIGH:STEP, m (e.g. 25:115:15): altitude as a decision, six moves
+    (rainuav.nav.levels: climb and descend one level, each lasting its duration), flights
+    starting at the lowest level; '' the scenario's one altitude."""
 
 
 def spec_of(obj: Any) -> WorldSpec:
@@ -179,11 +187,15 @@ def check_spec(spec: Any) -> None:
         ("out_of_bounds_penalty", math.isfinite(spec.out_of_bounds_penalty), "finite"),
         ("rain_rate", spec.rain_rate is None or 0 <= spec.rain_rate <= 500,
          "unset or in [0, 500] mm/h"),
+        ("altitudes", not spec.altitudes or (spec.observation == "position"
+         and spec.signal == "sinr"), "'' unless observation = 'position' and signal = 'sinr'"),
     ]  # fmt: skip
     for name, ok, allowed in checks:
         if not ok:
             raise InvalidInputError(f"{name} must be {allowed} (got {getattr(spec, name)!r})")
     check_storm_seed(spec.storm_seed)
+    if spec.altitudes:
+        altitude_band(spec.altitudes)
 
 
 def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
@@ -210,6 +222,9 @@ def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
         scn = dataclasses.replace(scn, freq_hz=spec.freq_ghz * 1e9)
     if spec.engine:
         scn = dataclasses.replace(scn, engine=spec.engine)
+    if spec.altitudes:
+        area = dataclasses.replace(scn.area, altitudes_m=altitude_band(spec.altitudes))
+        scn = scn.replace(area=area)
     return scn
 
 
@@ -217,10 +232,11 @@ def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
 class World:
     """A signal (one map, or maps in time) and the task flown on it (``min_db`` resolved)."""
 
-    source: RadioMap | RadioMapSeries | None
+    source: RadioMap | RadioMapSeries | LevelStack | None
     """What the signal is read from (saved with a run; None for a storm pool's bank)."""
-    field: SignalField | SignalSeries | SignalBank
-    """The signal the UAV flies through."""
+    field: SignalField | SignalSeries | SignalBank | LevelField
+    """The signal the UAV flies through (a :class:`LevelField` where altitude is a
+    decision)."""
     task: NavConfig
     """The navigation task."""
     observation: str = "position"
@@ -235,8 +251,11 @@ class World:
         """Whether the signal changes in time."""
         return self.field.varies
 
-    def env(self) -> UAVNavEnv:
-        """A Gymnasium environment of this world (a fresh one per call)."""
+    def env(self) -> Any:
+        """A Gymnasium environment of this world (a fresh one per call): a
+        :class:`UAVNavEnv`, or among levels a :class:`rainuav.nav.levels.UAVLevelsEnv`."""
+        if isinstance(self.field, LevelField):
+            return UAVLevelsEnv(self.field, self.task)
         return UAVNavEnv(
             field=self.field,
             config=self.task,
@@ -253,7 +272,8 @@ class World:
         storm pool's storms are not saved: their seeds rebuild them)."""
         if self.source is None:
             return None
-        name = MAP_FILES[1] if isinstance(self.source, RadioMapSeries) else MAP_FILES[0]
+        kinds = (RadioMap, RadioMapSeries, LevelStack)
+        name = next(n for n, k in zip(MAP_FILES, kinds, strict=True) if isinstance(self.source, k))
         return self.source.save(Path(folder) / name)
 
 
@@ -261,8 +281,13 @@ def world_from(source: Any, task: NavConfig) -> World:
     """The world of a built map or series and a task (``min_db`` unset: the scenario's
     documented threshold for the signal flown)."""
     signal = task.signal
-    if isinstance(source, RadioMapSeries):
-        field: SignalField | SignalSeries = SignalSeries(
+    field: SignalField | SignalSeries | LevelField
+    if isinstance(source, LevelStack):  # altitude as a decision: the SINR of every level
+        field = LevelField.from_stack(source.sinr_db, source.altitudes_m, source.extent,
+                                      t_s=source.t_s, not_flyable=source.not_flyable,
+                                      serving_cell=source.serving_cell)  # fmt: skip
+    elif isinstance(source, RadioMapSeries):
+        field = SignalSeries(
             getattr(source, f"{signal}_db"),
             source.t_s,
             _extent(source.scenario),
@@ -277,7 +302,7 @@ def world_from(source: Any, task: NavConfig) -> World:
         )  # fmt: skip
     else:
         raise InvalidInputError(
-            f"a world needs a RadioMap or RadioMapSeries (got {type(source).__name__})"
+            f"a world needs a RadioMap, RadioMapSeries or LevelStack (got {type(source).__name__})"
         )
     min_db = task.min_db
     if min_db is None:  # the same rule for a map and a series (by the scenario's name)
@@ -347,6 +372,9 @@ def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: boo
     """The signal's source for the scenario ``scn`` of ``spec``: its map, or where its
     weather moves its maps at :func:`series_instants` (engine 'pe' then becomes 'hybrid': a
     march per cell and instant is refused); built, or taken from the cache."""
+    if spec.altitudes:  # every level's maps (in time where the weather moves)
+        times = series_instants(spec) if scn.medium.moves else None
+        return LevelStack.of(level_field(scn, times, progress=progress)[1], scn)
     if scn.medium.moves:
         if scn.engine == "pe":
             scn = dataclasses.replace(scn, engine="hybrid")
@@ -366,7 +394,7 @@ def source_key(spec: Any, scn: Scenario) -> str:
 def load_world(folder: Path, spec: Any) -> World | None:
     """The world saved in a run's ``folder`` (:meth:`World.save`) with the task of
     ``spec``, or None where the folder holds none."""
-    for name, kind in zip(MAP_FILES, (RadioMap, RadioMapSeries), strict=True):
+    for name, kind in zip(MAP_FILES, (RadioMap, RadioMapSeries, LevelStack), strict=True):
         if (Path(folder) / name).exists():
             return _observed(world_from(kind.load(Path(folder) / name), task_of(spec)), spec)
     return None

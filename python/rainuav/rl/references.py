@@ -1,0 +1,205 @@
+"""The yardsticks a policy is measured against: fixed starts (:func:`eval_starts`), the
+exact planner's flights and the baselines' (:func:`reference_flights`), what a set of flights
+comes to (:func:`flights`) and how it compares with the optimum (:func:`summarise`).
+
+On one level: the exact optimum, the straight line, and where the weather moves the plan of
+the weather at take-off and re-planning (:mod:`rainuav.nav.baselines`). Among levels
+(:class:`rainuav.nav.levels.UAVLevelsEnv`): the exact optimum among levels from the level a
+flight starts at, and the baselines of one altitude (``fixed_altitude``: the exact plan held
+at the level nearest :data:`PAPER_ALTITUDE_M`, the paper's; ``best_single_altitude``: the
+exact plan at each level, the best chosen with hindsight per flight; ``straight_line``: the
+straight line at the fixed level), each flown from the start at its own level (the take-off
+climb is the autopilot's, as in ``fly``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from rainuav.errors import InvalidInputError
+from rainuav.nav import baselines, planner
+from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.levels import UAVLevelsEnv
+from rainuav.nav.task import flight_cost
+
+__all__ = [
+    "PAPER_ALTITUDE_M",
+    "PLAN_CHUNK",
+    "eval_starts",
+    "flights",
+    "level_reference_flights",
+    "reference_flights",
+    "relative_gap",
+    "summarise",
+]
+
+PAPER_ALTITUDE_M = 100.0
+"""The paper's one flight altitude, m: the fixed-altitude baseline among levels flies the
+level nearest it."""
+
+PLAN_CHUNK = 1000
+"""Starts planned per call of the exact planner: evaluations over more show a progress bar."""
+
+
+def eval_starts(env: UAVNavEnv | UAVLevelsEnv, n: int, seed: int) -> np.ndarray:
+    """``n`` starts drawn uniformly (farther than the tolerance from the goal) from ``seed``."""
+    rng = np.random.default_rng(seed)
+    return np.array([env.sample_start(rng) for _ in range(n)], dtype=np.float64).reshape(-1, 2)
+
+
+def relative_gap(optimum: np.ndarray, returns: np.ndarray) -> np.ndarray:
+    """Per start, the share of the exact optimum's return the policy gave up (a secondary
+    figure: the arrival reward in both returns makes it look about 4x smaller than the extra
+    cost it stands for, PHYSICS.md section 6)."""
+    return (optimum - returns) / np.maximum(np.abs(optimum), 1e-9)
+
+
+def _arrived(env: UAVNavEnv | UAVLevelsEnv, path: np.ndarray) -> bool:
+    """Whether a planner's path ends at the destination (inside the area)."""
+    x0, x1, y0, y1 = env.field.extent
+    p, g = path[-1], np.asarray(env.cfg.goal_m)
+    inside = x0 <= p[0] <= x1 and y0 <= p[1] <= y1
+    return bool(inside and np.hypot(*(p - g)) <= env.cfg.tol_m and len(path) > 1)
+
+
+def flights(
+    env: UAVNavEnv | UAVLevelsEnv,
+    returns: Any,
+    arrived: Any,
+    paths: list,
+    levels: list | None = None,
+    ticks: list | None = None,
+) -> dict[str, Any]:
+    """Per flight: ``return``, ``arrived``, ``cost`` (:func:`rainuav.nav.task.flight_cost`),
+    ``steps`` (moves), the signal along the path (every position after the start): its mean
+    and the share of it below ``min_db`` (per move), and the ``paths`` themselves (for
+    figures). Among levels ``levels`` and ``ticks`` give each point's level and clock."""
+    time_s = env.stepper.time_s  # the instant of each move, for a signal that changes
+    if isinstance(env, UAVLevelsEnv):
+        if levels is None or ticks is None:
+            raise InvalidInputError("flights among levels need their levels and ticks")
+        signal = [env.field(p[1:, 0], p[1:, 1], time_s(t[1:]), lv[1:])
+                  for p, lv, t in zip(paths, levels, ticks, strict=True)]  # fmt: skip
+    else:
+        signal = [env.field(p[1:, 0], p[1:, 1], time_s(np.arange(1, len(p)))) for p in paths]
+    rets = np.asarray(returns, dtype=np.float64)
+    ok = np.asarray(arrived, dtype=bool)
+    return {
+        "return": rets,
+        "arrived": ok,
+        "cost": flight_cost(rets, ok, env.cfg),
+        "steps": np.array([len(p) - 1 for p in paths], dtype=np.float64),
+        "signal_sum": np.array([s.sum() for s in signal]),
+        "outage_sum": np.array([np.sum(s < env.cfg.min_db) for s in signal], dtype=np.float64),
+        "paths": paths,
+    }
+
+
+def summarise(f: dict[str, np.ndarray], optimum: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Success, excess cost ``(C - C*) / C*`` over the flights that arrived where the optimum
+    did too (None where none did), return gap, flight time in moves, and the mean signal and
+    outage share over every position flown."""
+    both = f["arrived"] & optimum["arrived"]
+    excess = (f["cost"][both] - optimum["cost"][both]) / optimum["cost"][both]
+    gap = relative_gap(optimum["return"], f["return"])
+    moves = max(float(f["steps"].sum()), 1.0)
+    return {
+        "success_rate": float(f["arrived"].mean()),
+        "mean_excess_cost": float(excess.mean()) if both.any() else None,
+        "median_excess_cost": float(np.median(excess)) if both.any() else None,
+        "worst_excess_cost": float(excess.max()) if both.any() else None,
+        "mean_cost": float(f["cost"][f["arrived"]].mean()) if f["arrived"].any() else None,
+        "mean_steps": float(f["steps"].mean()),
+        "mean_signal_db": float(f["signal_sum"].sum() / moves),
+        "outage_share": float(f["outage_sum"].sum() / moves),
+        "mean_gap_to_optimal": float(gap.mean()),
+        "worst_gap_to_optimal": float(gap.max()),
+        "mean_return": float(f["return"].mean()),
+    }
+
+
+def reference_flights(
+    env: UAVNavEnv | UAVLevelsEnv,
+    starts: np.ndarray,
+    replan_every: int = baselines.DEFAULT_REPLAN_EVERY,
+) -> dict[str, dict[str, Any]]:
+    """The exact planner's flights (the yardstick) and the baselines': the straight line, and
+    where the signal changes in time the plan of the weather at take-off (``frozen_plan``) and
+    re-planning every ``replan_every`` moves (``replan``), each flown through the moving
+    weather. Among levels: :func:`level_reference_flights`."""
+    if isinstance(env, UAVLevelsEnv):
+        return level_reference_flights(env, starts)
+    plans = []
+    chunks = range(0, len(starts), PLAN_CHUNK)
+    if len(starts) > PLAN_CHUNK:  # a long evaluation shows its progress
+        from tqdm.auto import tqdm
+
+        chunks = tqdm(chunks, desc="exact plans", unit="chunk", total=len(chunks))
+    for i in chunks:
+        plans += planner.optimal_many(env, starts[i : i + PLAN_CHUNK])
+    flown = {"optimal": plans, "straight_line": [planner.straight_line(env, s) for s in starts]}
+    if env.field.varies:
+        flown["frozen_plan"] = baselines.frozen_plans(env, starts)
+        flown["replan"] = baselines.replans(env, starts, replan_every)
+    return {
+        name: flights(
+            env,
+            [p.return_ for p in ps],
+            [_arrived(env, p.path_m) for p in ps],
+            [p.path_m for p in ps],
+        )
+        for name, ps in flown.items()
+    }
+
+
+def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
+    """:func:`flights` of planned flights (plans or level plans)."""
+    lv = [getattr(p, "levels", None) for p in plans]
+    ticks = [getattr(p, "ticks", None) for p in plans]
+    return flights(
+        env,
+        [p.return_ for p in plans],
+        [_arrived(env, p.path_m) for p in plans],
+        [p.path_m for p in plans],
+        None if lv and lv[0] is None else lv,
+        None if ticks and ticks[0] is None else ticks,
+    )
+
+
+def level_reference_flights(env: UAVLevelsEnv, starts: np.ndarray) -> dict[str, dict[str, Any]]:
+    """Among levels (module docstring): ``optimal`` (the exact plan among levels),
+    ``fixed_altitude``, ``best_single_altitude`` and ``straight_line``. A level whose plane
+    cannot hold the task (its destination not flyable) flies no flight that arrives."""
+    starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
+    refs = {"optimal": _plans(planner.optimal_among_levels(env, starts), env)}
+    per_level = []
+    for k in range(env.field.levels):
+        try:
+            plane = UAVNavEnv(field=env.field.fields[k], config=env.cfg)
+        except InvalidInputError:
+            per_level.append(None)
+            continue
+        per_level.append((plane, _plans(planner.optimal_many(plane, starts), plane)))
+    fixed = int(np.argmin(np.abs(env.field.altitudes_m - PAPER_ALTITUDE_M)))
+    if per_level[fixed] is None:
+        raise InvalidInputError(
+            f"the destination is not flyable at {env.field.altitudes_m[fixed]:g} m, the "
+            "fixed-altitude baseline's level"
+        )
+    plane, refs["fixed_altitude"] = per_level[fixed]
+    line = [planner.straight_line(plane, s) for s in starts]
+    refs["straight_line"] = _plans(line, plane)
+    # Per flight, the level whose plan costs least (of those that arrive).
+    costs = np.stack([np.where(f["arrived"], f["cost"], np.inf) if f is not None
+                      else np.full(len(starts), np.inf)
+                      for f in (None if q is None else q[1] for q in per_level)])  # fmt: skip
+    pick = np.argmin(costs, axis=0)
+    best: dict[str, Any] = {}
+    for key in refs["fixed_altitude"]:
+        values = [per_level[int(k)][1][key][j] for j, k in enumerate(pick)]  # type: ignore[index]
+        best[key] = values if key == "paths" else np.asarray(values)
+    best["altitude_m"] = env.field.altitudes_m[pick]
+    refs["best_single_altitude"] = best
+    return refs

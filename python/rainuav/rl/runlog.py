@@ -1,0 +1,73 @@
+"""A training run's record: ``log.csv`` (one row per finished episode; cut back to the last
+checkpoint when a run resumes), TensorBoard scalars and the progress bar."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+from rainuav._io import write_atomic
+
+__all__ = ["RunLog", "cut_log"]
+
+
+def cut_log(path: Path, done: int) -> None:
+    """Cuts ``log.csv`` back to the episodes a checkpoint holds (``finished <= done``): the
+    rows an interrupted run logged after its last checkpoint are logged again on resume.
+    Rewritten atomically; a row that does not parse ends the kept part."""
+    with path.open(newline="") as fh:
+        rows = list(csv.reader(fh))
+    keep = rows[:1]
+    for row in rows[1:]:
+        try:
+            finished = int(row[0])
+        except (ValueError, IndexError):
+            break
+        if finished > done:
+            break
+        keep.append(row)
+
+    def write(tmp: Path) -> None:
+        with tmp.open("w", newline="") as fh:
+            csv.writer(fh).writerows(keep)
+
+    write_atomic(path, write)
+
+
+class RunLog:
+    """``log.csv`` (one row per finished episode), TensorBoard scalars and the progress bar."""
+
+    def __init__(self, out: Path, resume: bool, total: int, done: int, progress: bool) -> None:
+        from torch.utils.tensorboard import SummaryWriter
+
+        self.tb = SummaryWriter(str(out / "tb"))
+        path = out / "log.csv"
+        new = not (resume and path.exists())
+        if not new:
+            cut_log(path, done)
+        self.fh = path.open("w" if new else "a", newline="")
+        self.csv = csv.writer(self.fh)
+        if new:
+            self.csv.writerow(
+                ["finished", "episode", "return", "steps", "reached", "epsilon", "seconds"]
+            )
+        self.bar = None
+        if progress:
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(total=total, initial=done, desc="train", unit="ep")
+
+    def episode(self, n_done: int, row: tuple[int, float, int, bool, float, float]) -> None:
+        """One finished episode: (episode index, return, steps, reached, epsilon, seconds)."""
+        episode, ret, steps, reached, eps, seconds = row
+        self.csv.writerow(
+            [n_done, episode, f"{ret:.4f}", steps, int(reached), f"{eps:.5f}", f"{seconds:.2f}"]
+        )
+        self.tb.add_scalar("return", ret, n_done)
+        self.tb.add_scalar("epsilon", eps, n_done)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+        self.fh.close()
+        self.tb.close()
