@@ -48,6 +48,15 @@ def tiny_stack() -> LevelStack:
                       np.zeros(sinr.shape, bool), (0.0, 400.0, 0.0, 400.0))  # fmt: skip
 
 
+def moving_stack() -> LevelStack:
+    """:func:`tiny_stack` in time: four slices 40 s apart, the lowest level's band moving
+    north 40 m a slice."""
+    s = tiny_stack()
+    slices = np.stack([np.roll(s.sinr_db, 4 * k, axis=1) for k in range(4)])
+    return dataclasses.replace(s, sinr_db=slices, serving_cell=np.zeros(slices.shape, np.int16),
+                               t_s=np.array([0.0, 40.0, 80.0, 120.0]))  # fmt: skip
+
+
 def small_cfg(out: Path, episodes: int, **kw) -> TrainConfig:
     return TrainConfig(
         out=str(out), goal_x_m=300.0, goal_y_m=350.0, max_steps=100, eval_starts=50,
@@ -204,3 +213,32 @@ def test_bad_levels_configurations_are_refused_in_one_line(tmp_path: Path) -> No
     ):
         with pytest.raises(InvalidInputError, match=match):
             check_config(dataclasses.replace(base, **kw))
+
+
+def test_learning_among_levels_in_time(tmp_path: Path) -> None:
+    # Among levels through a signal that moves: the observation carries the clock, the
+    # yardsticks plan in space and time, the run is saved in time and read back. A short run
+    # (100 episodes): the figures are the job's, not a learning claim.
+    cfg = small_cfg(tmp_path, 100)
+    m = train(*in_world(cfg, moving_stack()), progress=False)
+    env = in_world(cfg, moving_stack())[1].env()
+    assert env.field.varies and env.observation_space.shape == (4,)
+    opt = planner.optimal_among_levels(env, eval_starts(env, cfg.eval_starts, cfg.eval_seed))
+    assert m["optimal_mean_return"] == pytest.approx(np.mean([p.return_ for p in opt]), abs=1e-9)
+    back = LevelStack.load(tmp_path / "radiolevels.npz")
+    assert back.t_s is not None and back.sinr_db.shape == (4, 3, 40, 40)
+    saved, _, _ = evaluate_saved_run(tmp_path)
+    assert saved["mean_return"] == m["mean_return"]
+    assert not (tmp_path / "storm_flights.png").exists()  # the plane's figure; here trajectories
+
+
+def test_the_memory_check_counts_the_levels_network() -> None:
+    # The memory check before any map is built counts the network among levels (the level
+    # an input, six actions) as the network that is then built: the same number of weights.
+    from rainuav.rl.dqn import memory_needed
+
+    cfg = small_cfg(Path("."), 10)
+    agent = make_agent(cfg, world(cfg).env(), torch.device("cpu"))
+    weights = sum(p.numel() for p in agent.online.parameters())
+    assert memory_needed(cfg.dqn, levels=True)["dqn.hidden"] == 7 * 4 * weights
+    assert agent.online.advantage.out_features == 6

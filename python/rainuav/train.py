@@ -143,7 +143,7 @@ def config_from_args(args: argparse.Namespace) -> Any:
 
 def summary(metrics: dict[str, Any], out: Path) -> str:
     """The primary figures of a finished run as a short table (the network alone, the
-    straight line, the exact optimum) and where its files are."""
+    baselines, the exact optimum) and where its files are."""
 
     def pct(v: Any) -> str:
         return "-" if v is None else f"{100 * v:.1f}%"
@@ -156,9 +156,12 @@ def summary(metrics: dict[str, Any], out: Path) -> str:
         ("straight line", "straight_line_", "straight_line_mean_excess_cost"),
         ("frozen plan", "frozen_plan_", "frozen_plan_mean_excess_cost"),
         ("replanning", "replan_", "replan_mean_excess_cost"),
+        ("fixed altitude", "fixed_altitude_", "fixed_altitude_mean_excess_cost"),
+        ("best altitude", "best_single_altitude_", "best_single_altitude_mean_excess_cost"),
         ("exact optimum", "optimal_", None),
     ]
-    # The plan of the weather at take-off and re-planning are there where the weather moves.
+    # The plan of the weather at take-off and re-planning are there where the weather moves;
+    # the plans of one altitude where the flight chooses among levels.
     rows = [r for r in rows if r[1] == "" or f"{r[1]}success_rate" in metrics]
     lines = [
         f"{metrics['eval_starts']} evaluation starts, {metrics['episodes']} episodes, "

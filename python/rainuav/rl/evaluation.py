@@ -97,8 +97,11 @@ def evaluate(
     if isinstance(env, UAVLevelsEnv):  # the heights the network flies at
         alts = env.field.altitudes_m
         metrics["altitudes_m"] = alts.tolist()
-        metrics["mean_altitude_m"] = float(np.mean(np.concatenate(
-            [alts[r["levels"][1:]] for r in rolls])))  # fmt: skip
+        for name, levels in (("", [r["levels"] for r in rolls]),
+                             ("optimal_", refs["optimal"].get("levels", []))):  # fmt: skip
+            if levels:
+                flown = np.concatenate([alts[lv[1:]] for lv in levels])
+                metrics[f"{name}mean_altitude_m"] = float(np.mean(flown))
         changes = [np.count_nonzero(np.diff(r["levels"])) for r in rolls]
         metrics["vertical_moves"] = float(np.mean(changes))  # climbs and descents a flight
     metrics["eval_starts"] = len(starts)

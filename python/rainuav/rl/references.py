@@ -158,7 +158,7 @@ def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
     """:func:`flights` of planned flights (plans or level plans)."""
     lv = [getattr(p, "levels", None) for p in plans]
     ticks = [getattr(p, "ticks", None) for p in plans]
-    return flights(
+    f = flights(
         env,
         [p.return_ for p in plans],
         [_arrived(env, p.path_m) for p in plans],
@@ -166,6 +166,9 @@ def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
         None if lv and lv[0] is None else lv,
         None if ticks and ticks[0] is None else ticks,
     )
+    if isinstance(env, UAVLevelsEnv):  # each flight's levels (for the heights flown)
+        f["levels"] = lv
+    return f
 
 
 def level_reference_flights(env: UAVLevelsEnv, starts: np.ndarray) -> dict[str, dict[str, Any]]:
