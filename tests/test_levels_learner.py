@@ -17,6 +17,7 @@ from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import base_reward
 from rainuav.radio.levels import LevelStack
 from rainuav.radio.scenario import Area, Scenario, Site
+from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts, step
 from rainuav.rl.config import DQNConfig, TrainConfig, check_config
 from rainuav.rl.evaluation import eval_starts, evaluate, evaluate_saved_run
@@ -24,7 +25,7 @@ from rainuav.rl.learner import learning_reward
 from rainuav.rl.loop import train
 from rainuav.rl.references import reference_flights
 from rainuav.rl.setup import make_agent
-from rainuav.world import World, in_world, load_world
+from rainuav.world import World, in_world, load_world, saved_world
 
 ALTS = [30.0, 45.0, 100.0]
 
@@ -242,3 +243,35 @@ def test_the_memory_check_counts_the_levels_network() -> None:
     weights = sum(p.numel() for p in agent.online.parameters())
     assert memory_needed(cfg.dqn, levels=True)["dqn.hidden"] == 7 * 4 * weights
     assert agent.online.advantage.out_features == 6
+
+
+def test_a_run_among_levels_resumes_as_if_never_stopped(tmp_path: Path) -> None:
+    # Interrupted at its checkpoint with UAVs in flight on several levels, resumed from the
+    # run folder (its world read back from radiolevels.npz): the same network, bit for bit.
+    def cfg(out: Path) -> TrainConfig:  # few starts: the weights are what is compared
+        return dataclasses.replace(small_cfg(out, 120), eval_starts=5, validate_starts=5)
+
+    full = train(*in_world(cfg(tmp_path / "full"), tiny_stack()), progress=False)
+    part = cfg(tmp_path / "part")
+    assert train(*in_world(part, tiny_stack()), progress=False, stop_after=50) == {}
+    resumed = train(*saved_world(part), resume=True, progress=False)
+    assert resumed["mean_return"] == full["mean_return"]
+    a = checkpoint.load(tmp_path / "full" / "checkpoint.pt")["agent"]["online"]
+    b = checkpoint.load(tmp_path / "part" / "checkpoint.pt")["agent"]["online"]
+    assert all(torch.equal(a[k], b[k]) for k in a)
+
+
+def test_training_flights_take_off_at_drawn_levels_at_the_given_rate() -> None:
+    # level_starts 0: the lowest flyable level and no draw (the random stream is the one of
+    # a run without the option); 1: uniform over the three levels (12 000 draws: each share
+    # within 0.02 of a third, about 4.7 standard errors).
+    from rainuav.rl.learner import training_level
+
+    env = world(small_cfg(Path("."), 10)).env()
+    rng = np.random.default_rng(0)
+    state = rng.bit_generator.state
+    assert training_level(env, DQNConfig(), np.array([55.0, 55.0]), rng) == 0
+    assert rng.bit_generator.state == state
+    d = DQNConfig(level_starts=1.0)
+    drawn = [training_level(env, d, np.array([55.0, 55.0]), rng) for _ in range(12_000)]
+    assert np.allclose(np.bincount(drawn, minlength=3) / 12_000, 1 / 3, atol=0.02)

@@ -108,6 +108,10 @@ class DQNConfig:
     """Weight of the potential-based shaping -(steps to the goal); 0: the plain rewards."""
     sir_weight: float = 1.25
     """Factor on the SIR part of each reward (b + 1) inside the learner; 1: the env's rewards."""
+    level_starts: float = 0.0
+    """Among flight levels, the share of the training flights that take off at a level drawn
+    uniformly among those flyable at the start (the rest, and every validation and evaluation
+    flight, at the lowest flyable level)."""
     shield: bool = False
     """Also report greedy flights that keep to moves that stay in the area and can still
     arrive in max_steps, and avoid positions they already visited while they can
@@ -197,6 +201,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("goal_features", d.goal_features >= 0, ">= 0"),
         ("conv", 1 <= d.conv <= 256, "in 1..256"),
         ("goal_starts", 0 <= d.goal_starts <= 1, "in [0, 1]"),
+        ("level_starts", 0 <= d.level_starts <= 1, "in [0, 1]"),
         ("task_goals", 0 <= d.task_goals <= 1, "in [0, 1]"),
         ("shaping", 0 <= d.shaping < math.inf, ">= 0 and finite"),
         ("sir_weight", 0 <= d.sir_weight < math.inf, ">= 0 and finite"),

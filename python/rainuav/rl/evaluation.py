@@ -296,6 +296,7 @@ def evaluate_saved_run(
         "scenario": cfg.scenario,
         "rain_rate": cfg.rain_rate,
         **({"storm_seed": cfg.storm_seed} if cfg.scenario == "storm" else {}),
+        **({"altitudes": cfg.altitudes} if cfg.altitudes else {}),
     }
     metrics["network"] = "last online" if online else "reported"
     metrics["episodes"] = episodes

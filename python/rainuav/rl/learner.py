@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import base_reward
 from rainuav.rl.config import DQNConfig
 
@@ -20,6 +21,7 @@ __all__ = [
     "learner_ends",
     "learning_reward",
     "shaping_term",
+    "training_level",
     "training_start",
     "training_task",
 ]
@@ -77,6 +79,22 @@ def training_start(env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator) -> np
         return env.sample_start(rng)
     p = near_goal(env, np.asarray(env.cfg.goal_m, dtype=np.float64), rng)
     return env.sample_start(rng) if p is None else p
+
+
+def training_level(
+    env: UAVNavEnv | UAVLevelsEnv, d: DQNConfig, start: np.ndarray, rng: np.random.Generator
+) -> int:
+    """The level a training flight from ``start`` takes off at: among levels, with
+    probability ``level_starts`` uniform among the levels flyable there, else the lowest
+    (the task's own start); 0 on one level. Draws nothing where ``level_starts`` is 0."""
+    if not isinstance(env, UAVLevelsEnv):
+        return 0
+    if d.level_starts == 0.0 or rng.random() >= d.level_starts:
+        return env.start_level_at(start)
+    every = np.arange(env.field.levels)
+    ok = np.flatnonzero(~env.field.blocked(np.full(every.size, start[0]),
+                                           np.full(every.size, start[1]), every))  # fmt: skip
+    return int(ok[rng.integers(ok.size)])
 
 
 def learner_ends(d: DQNConfig, r: dict[str, np.ndarray]) -> np.ndarray:

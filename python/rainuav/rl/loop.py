@@ -36,7 +36,6 @@ from rainuav.rl.collect import (
     exploration_moves,
     greedy_rollouts,
     observe,
-    start_level,
     step,
 )
 from rainuav.rl.config import (
@@ -54,7 +53,7 @@ from rainuav.rl.evaluation import (
     evaluate_run_policy,
     reference_flights,
 )
-from rainuav.rl.learner import learner_ends, learning_reward, training_task
+from rainuav.rl.learner import learner_ends, learning_reward, training_level, training_task
 from rainuav.rl.plots import plot_policy, plot_returns, plot_stages, plot_storm_flights
 from rainuav.rl.runlog import RunLog
 from rainuav.rl.setup import check_fits, make_agent, pick_device, torch_settings
@@ -210,7 +209,7 @@ def run_loop(
         start, goal, world = training_task(env, d, env.np_random)
         if pool is not None:
             world = storm_slot(pool, lanes, k, per_storm, cfg.storm_episodes)
-        lanes.launch(k, start, episode, goal, world, start_level(env, start))
+        lanes.launch(k, start, episode, goal, world, training_level(env, d, start, env.np_random))
 
     started, returns, successes, stages = 0, [], [], []
     train_seconds, pending = 0.0, 0  # pending: transitions not yet paid for by a gradient step
