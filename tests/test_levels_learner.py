@@ -151,19 +151,23 @@ def test_the_yardsticks_among_levels_are_the_planners() -> None:
     assert np.all(refs["optimal"]["return"] >= low - 1e-9)
 
 
+EPISODES = 600
+
+
 def test_learning_among_levels_end_to_end(tmp_path: Path) -> None:
     # 600 episodes on the 40 x 40 stack take about 10 s here. Measured on this build for
-    # seeds 0-4 (this test runs seed 0): success 0.98 / 0.28 / 0.54 / 0.68 / 0.98, mean
-    # excess cost over the exact optimum among levels 0.235 / 1.628 / 0.956 / 0.542 / 0.282
-    # against the straight line's 1.962 (at 100 m, in the weak top level). The bands hold
-    # every seed: success at least 0.2 (an untrained network arrives from none of the
-    # starts), excess cost from 0 (no flight beats the exact optimum) to 0.9 of the straight
-    # line's. The learner's real measure is the `uma` runs of docs/guide/altitude.md.
-    cfg = small_cfg(tmp_path, 600)
+    # seeds 0-4 (this test runs seed 0), 30 evaluation starts: success 1.00 / 0.33 / 0.53 /
+    # 0.70 / 0.97, mean excess cost over the exact optimum among levels 0.233 / 1.856 /
+    # 0.935 / 0.533 / 0.281 against the straight line's 1.980 (at 100 m, in the weak top
+    # level). The bands hold every seed: success at least 0.2 (an untrained network arrives
+    # from none of the starts), excess cost from 0 (no flight beats the exact optimum) to
+    # 0.95 of the straight line's. The straight line learns nothing: its figure is exact.
+    # The learner's real measure is the `uma` runs of docs/guide/altitude.md.
+    cfg = dataclasses.replace(small_cfg(tmp_path, EPISODES), eval_starts=30, validate_every=100)
     m = train(cfg, world(cfg), progress=False)
     assert 0.2 <= m["success_rate"] <= 1.0, m
-    assert m["straight_line_mean_excess_cost"] == pytest.approx(1.962, abs=1e-3), m
-    assert 0.0 <= m["mean_excess_cost"] <= 0.9 * m["straight_line_mean_excess_cost"], m
+    assert m["straight_line_mean_excess_cost"] == pytest.approx(1.98009, abs=1e-4), m
+    assert 0.0 <= m["mean_excess_cost"] <= 0.95 * m["straight_line_mean_excess_cost"], m
     assert m["altitudes_m"] == ALTS, m
     for key in ("fixed_altitude", "best_single_altitude", "straight_line"):
         assert f"{key}_outage_share" in m and f"{key}_mean_excess_cost" in m, key

@@ -49,11 +49,11 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float,
     """The encoder (and network) for ``env``'s observation (:mod:`rainuav.rl.networks`):
     the weather-reading one where the env shows the weather, else the position one (with
     the env's fixed destination; among levels with the level and six actions)."""
-    dims = int(env.observation_space.shape[0])  # type: ignore[index]
     if isinstance(env, UAVLevelsEnv):
         x0, x1, y0, y1 = env.field.extent
         gx, gy = env.cfg.goal_m
         goal = ((gx - x0) / (x1 - x0), (gy - y0) / (y1 - y0))
+        dims = int(env.observation_space.shape[0])  # type: ignore[index]
         return PositionEncoder(d, env.cfg.max_steps, goal, step, dims,
                                gives_time=env.field.varies, n_actions=6)  # fmt: skip
     if env.view is not None:
@@ -61,6 +61,7 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float,
         geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
         return WeatherEncoder(d, env.view, step, geometry)
     goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())
+    dims = int(env.observation_space.shape[0])  # type: ignore[index]
     return PositionEncoder(d, env.cfg.max_steps, goal, step, dims)
 
 
