@@ -8,9 +8,10 @@ anneal, sync the target, record stages, validate and checkpoint. The run ends wi
 :func:`finish` (evaluation, ``policy.pt``, ``metrics.json``, figures).
 
 Outputs in ``cfg.out``: ``config.toml``, the world's signal (``radiomap.npz``, or
-``radiomap_series.npz`` for a weather that moves), ``log.csv``, TensorBoard events,
-``checkpoint.pt`` (every ``checkpoint_every`` finished episodes; ``resume=True`` with the same
-configuration continues from it and reproduces the uninterrupted run), and at the end
+``radiomap_series.npz`` for a weather that moves, ``radiolevels.npz`` among flight levels),
+``log.csv``, TensorBoard events, ``checkpoint.pt`` (every ``checkpoint_every`` finished
+episodes; ``resume=True`` with the same configuration continues from it and reproduces the
+uninterrupted run), and at the end
 ``metrics.json``, ``policy.pt``, ``returns.png``, ``trajectories.png`` and ``stages.png``.
 """
 
