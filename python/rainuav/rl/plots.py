@@ -91,7 +91,8 @@ def plot_trajectories(
         side[0].set_ylabel("altitude [m]")
         side[0].set_yticks(alts)
         side[0].legend(loc="upper right", fontsize="small")
-        side[0].set_title(f"heights flown (map: the lowest level, {alts[0]:g} m)")
+        when = ", at take-off" if env.field.varies else ""
+        side[0].set_title(f"heights flown (map: the lowest level, {alts[0]:g} m{when})")
     label = f"{env.cfg.signal.upper()} [dB] (outage below {env.cfg.min_db:g})"
     fig.colorbar(im, ax=ax, label=label)
     ax.legend(loc="lower right", fontsize="small")
