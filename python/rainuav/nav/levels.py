@@ -165,6 +165,11 @@ class LevelField:
             out[on] = self.fields[int(k)].serving_cell(x[on], y[on], t[on])
         return out
 
+    def flyable(self, x: float, y: float) -> np.ndarray:
+        """(L,) bool: the levels a UAV may fly at over ``(x, y)``."""
+        every = np.arange(self.levels)
+        return ~self.blocked(np.full(self.levels, x), np.full(self.levels, y), every)
+
     def blocked(self, x: Any, y: Any, level: Any) -> np.ndarray:
         """Whether the pixel holding ``(x, y)`` may not be entered on ``level``."""
         x, y, lv = np.broadcast_arrays(*(np.asarray(v) for v in (x, y, level)))
@@ -321,8 +326,7 @@ class UAVLevelsEnv(gym.Env):
 
     def lowest_flyable(self, x: float, y: float) -> int:
         """The lowest level the UAV may fly at over ``(x, y)``."""
-        ok = ~self.field.blocked(np.full(self.field.levels, x), np.full(self.field.levels, y),
-                                 np.arange(self.field.levels))  # fmt: skip
+        ok = self.field.flyable(x, y)
         if not ok.any():
             raise InvalidInputError(f"({x:g}, {y:g}) is not flyable at any level")
         return int(np.flatnonzero(ok)[0])
@@ -331,10 +335,10 @@ class UAVLevelsEnv(gym.Env):
         """Uniform in the area, farther than ``tol_m`` from the destination and flyable at
         some level."""
         x0, x1, y0, y1 = self.field.extent
-        g, every = np.asarray(self.cfg.goal_m), np.arange(self.field.levels)
+        g = np.asarray(self.cfg.goal_m)
         for _ in range(100_000):
             p = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1)])
-            if np.hypot(*(p - g)) > self.cfg.tol_m and not self.field.blocked(*p, every).all():
+            if np.hypot(*(p - g)) > self.cfg.tol_m and self.field.flyable(*p).any():
                 return p
         raise InvalidInputError(
             f"no flyable start farther than tol_m = {self.cfg.tol_m} m "

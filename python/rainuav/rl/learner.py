@@ -91,9 +91,7 @@ def training_level(
         return 0
     if d.level_starts == 0.0 or rng.random() >= d.level_starts:
         return env.start_level_at(start)
-    every = np.arange(env.field.levels)
-    ok = np.flatnonzero(~env.field.blocked(np.full(every.size, start[0]),
-                                           np.full(every.size, start[1]), every))  # fmt: skip
+    ok = np.flatnonzero(env.field.flyable(float(start[0]), float(start[1])))
     return int(ok[rng.integers(ok.size)])
 
 

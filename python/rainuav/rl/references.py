@@ -143,31 +143,24 @@ def reference_flights(
     if env.field.varies:
         flown["frozen_plan"] = baselines.frozen_plans(env, starts)
         flown["replan"] = baselines.replans(env, starts, replan_every)
-    return {
-        name: flights(
-            env,
-            [p.return_ for p in ps],
-            [_arrived(env, p.path_m) for p in ps],
-            [p.path_m for p in ps],
-        )
-        for name, ps in flown.items()
-    }
+    return {name: _plans(ps, env) for name, ps in flown.items()}
 
 
 def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
-    """:func:`flights` of planned flights (plans or level plans)."""
-    lv = [getattr(p, "levels", None) for p in plans]
-    ticks = [getattr(p, "ticks", None) for p in plans]
+    """:func:`flights` of planned flights (plans, or among levels level plans, whose
+    levels are kept for the heights flown)."""
+    among = isinstance(env, UAVLevelsEnv)
+    levels = [p.levels for p in plans] if among else None
     f = flights(
         env,
         [p.return_ for p in plans],
         [_arrived(env, p.path_m) for p in plans],
         [p.path_m for p in plans],
-        None if lv and lv[0] is None else lv,
-        None if ticks and ticks[0] is None else ticks,
+        levels,
+        [p.ticks for p in plans] if among else None,
     )
-    if isinstance(env, UAVLevelsEnv):  # each flight's levels (for the heights flown)
-        f["levels"] = lv
+    if among:
+        f["levels"] = levels
     return f
 
 
@@ -194,15 +187,16 @@ def level_reference_flights(env: UAVLevelsEnv, starts: np.ndarray) -> dict[str, 
     plane, refs["fixed_altitude"] = per_level[fixed]
     line = [planner.straight_line(plane, s) for s in starts]
     refs["straight_line"] = _plans(line, plane)
-    # Per flight, the level whose plan costs least (of those that arrive).
-    costs = np.stack([np.where(f["arrived"], f["cost"], np.inf) if f is not None
-                      else np.full(len(starts), np.inf)
-                      for f in (None if q is None else q[1] for q in per_level)])  # fmt: skip
+    # Per flight, the level whose plan costs least (of those that arrive; among the levels
+    # that hold the task).
+    held = [k for k, q in enumerate(per_level) if q is not None]
+    flown = [per_level[k][1] for k in held]  # type: ignore[index]
+    costs = np.stack([np.where(f["arrived"], f["cost"], np.inf) for f in flown])
     pick = np.argmin(costs, axis=0)
     best: dict[str, Any] = {}
     for key in refs["fixed_altitude"]:
-        values = [per_level[int(k)][1][key][j] for j, k in enumerate(pick)]  # type: ignore[index]
+        values = [flown[k][key][j] for j, k in enumerate(pick)]
         best[key] = values if key == "paths" else np.asarray(values)
-    best["altitude_m"] = env.field.altitudes_m[pick]
+    best["altitude_m"] = env.field.altitudes_m[np.asarray(held)[pick]]
     refs["best_single_altitude"] = best
     return refs

@@ -71,10 +71,7 @@ def fly_levels(
                      speed_m_s=speed_m_s, min_db=threshold)  # fmt: skip
     shape, bounds = blocked.shape[1:], scn.area.bounds
 
-    def flyable(x: float, y: float) -> np.ndarray:
-        every = np.arange(len(alts))
-        return ~field.blocked(np.full(len(alts), x), np.full(len(alts), y), every)
-
+    flyable = field.flyable
     for name, (x, y) in (("--start", place.start_m), ("--goal", place.goal_m)):
         if not flyable(x, y).any():
             lat, lon = place.georef.to_latlon(x, y)
