@@ -207,8 +207,7 @@ def test_bad_levels_configurations_are_refused_in_one_line(tmp_path: Path) -> No
     for kw, match in (
         ({"altitudes": "100:30:15"}, "--altitudes must have LOW <= HIGH"),
         ({"altitudes": "thirty"}, "--altitudes must be LOW:HIGH:STEP"),
-        ({"observation": "weather"}, "altitudes must be '' unless observation = 'position'"),
-        ({"signal": "sir"}, "altitudes must be '' unless"),
+        ({"signal": "sir"}, "altitudes must be '' unless signal = 'sinr'"),
         (
             {"dqn": dataclasses.replace(base.dqn, shield=True)},
             "shield must be false with altitudes",

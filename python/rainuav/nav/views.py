@@ -5,10 +5,15 @@
 
 - ``position``, ``goal``: the UAV's position and its destination, scaled to [0, 1]^2;
 - ``time``: the moves so far over ``max_steps``;
+- ``level`` (among flight levels only, ``layers`` > 1): the UAV's level over the highest
+  level's index;
 - ``local``: the signal now on a ``window`` x ``window`` grid centred on the UAV,
   ``window_step_m`` apart (11 x 11 at 40 m by default: 200 m each way, 20 moves);
 - ``area``: the signal now at the centres of an ``area`` x ``area`` grid over the whole area
   (16 x 16: 125 m cells), where the route's big detours are decided.
+
+Among flight levels (:mod:`rainuav.nav.levels`) the two grids have one layer a level, lowest
+first (``layers``): the UAV sees the signal at every height around it and over the area.
 
 Signal values enter as ``tanh((S - min_db) / scale_db)`` (0 at the outage threshold, +-0.76
 10 dB either side), so every storm and every map reads on one scale. "Now" is the instant of
@@ -40,8 +45,9 @@ GOAL_MARGIN_M = 100.0
 """Random destinations keep this far from the area's edges, m."""
 REACH = 0.75
 """A start for a random destination is at most this share of the horizon's moves away."""
-KEYS = ("position", "goal", "time", "local", "area")
-"""The observation's parts, in the order the flat encoding concatenates them."""
+KEYS = ("position", "goal", "time", "level", "local", "area")
+"""The observation's parts, in the order the flat encoding concatenates them (``level``
+only among levels)."""
 
 
 @dataclass(frozen=True)
@@ -56,12 +62,16 @@ class WeatherView:
     """Side of the whole-area grid, samples."""
     scale_db: float = 10.0
     """Signal scale: a sample is tanh((S - min_db) / scale_db)."""
+    layers: int = 1
+    """Layers of the grids: 1 on one level, the number of flight levels among levels."""
 
     def __post_init__(self) -> None:
         if not (isinstance(self.window, int) and self.window >= 1 and self.window % 2 == 1):
             raise InvalidInputError(f"window must be an odd integer >= 1 (got {self.window!r})")
         if not (isinstance(self.area, int) and 1 <= self.area <= 256):
             raise InvalidInputError(f"area must be an integer in 1..256 (got {self.area!r})")
+        if not (isinstance(self.layers, int) and 1 <= self.layers <= 64):
+            raise InvalidInputError(f"layers must be an integer in 1..64 (got {self.layers!r})")
         for name in ("window_step_m", "scale_db"):
             v = getattr(self, name)
             if not (isinstance(v, int | float) and 0 < v < np.inf):
@@ -69,21 +79,30 @@ class WeatherView:
 
     @property
     def sizes(self) -> dict[str, int]:
-        """Floats per part of the flat encoding (:data:`KEYS` order)."""
-        return {"position": 2, "goal": 2, "time": 1, "local": self.window**2, "area": self.area**2}
+        """Floats per part of the flat encoding (:data:`KEYS` order; ``level`` among levels
+        only)."""
+        level = {"level": 1} if self.layers > 1 else {}
+        n = self.layers
+        return {"position": 2, "goal": 2, "time": 1, **level, "local": n * self.window**2,
+                "area": n * self.area**2}  # fmt: skip
+
+    @property
+    def vector(self) -> int:
+        """Floats of the flat encoding before the grids (position, goal, time, level)."""
+        return 5 + int(self.layers > 1)
 
     def space(self) -> gym.spaces.Dict:
         """The Gymnasium observation space."""
-        box = gym.spaces.Box
-        return gym.spaces.Dict(
-            {
-                "position": box(0.0, 1.0, shape=(2,), dtype=np.float32),
-                "goal": box(0.0, 1.0, shape=(2,), dtype=np.float32),
-                "time": box(0.0, 1.0, shape=(1,), dtype=np.float32),
-                "local": box(-1.0, 1.0, shape=(1, self.window, self.window), dtype=np.float32),
-                "area": box(-1.0, 1.0, shape=(1, self.area, self.area), dtype=np.float32),
-            }
-        )
+        box, n = gym.spaces.Box, self.layers
+        parts = {
+            "position": box(0.0, 1.0, shape=(2,), dtype=np.float32),
+            "goal": box(0.0, 1.0, shape=(2,), dtype=np.float32),
+            "time": box(0.0, 1.0, shape=(1,), dtype=np.float32),
+            "level": box(0.0, 1.0, shape=(1,), dtype=np.float32),
+            "local": box(-1.0, 1.0, shape=(n, self.window, self.window), dtype=np.float32),
+            "area": box(-1.0, 1.0, shape=(n, self.area, self.area), dtype=np.float32),
+        }
+        return gym.spaces.Dict({k: parts[k] for k in KEYS if k in self.sizes})
 
     def local_offsets(self) -> np.ndarray:
         """(window^2, 2) offsets of the local grid from the UAV, m: row i (south to north),
@@ -104,11 +123,14 @@ class WeatherView:
         goal: np.ndarray,
         min_db: float,
         area_db: np.ndarray | None = None,
+        level_frac: np.ndarray | None = None,
     ) -> dict[str, np.ndarray]:
         """The observations of N UAVs at ``pos`` (N, 2) heading for ``goal`` (N, 2), at the
         time fractions ``t_frac`` (N,); ``sample(x, y)`` gives the signal, dB, at points
-        (N, M) (row n: UAV n's world and instant). ``area_db`` (N, area^2): the signal at
-        :meth:`area_points` where the caller has it (sampled once per map), else sampled."""
+        (N, M) (row n: UAV n's world and instant; (N, layers, M) among levels, every level).
+        ``area_db`` (N, [layers,] area^2): the signal at :meth:`area_points` where the caller
+        has it (sampled once per map), else sampled. ``level_frac`` (N,): among levels, each
+        UAV's level over the highest index."""
         x0, x1, y0, y1 = extent
         lo, span = np.array([x0, y0]), np.array([x1 - x0, y1 - y0])
         pos = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
@@ -119,27 +141,35 @@ class WeatherView:
             pts, a2 = self.area_points(extent), self.area**2
             x = np.concatenate([x, np.broadcast_to(pts[:, 0], (n, a2))], axis=1)
             y = np.concatenate([y, np.broadcast_to(pts[:, 1], (n, a2))], axis=1)
-        db = np.asarray(sample(x, y))
+        nl = self.layers
+        db = np.asarray(sample(x, y)).reshape(n, nl, -1)
         if area_db is not None:
-            db = np.concatenate([db, np.asarray(area_db).reshape(n, -1)], axis=1)
+            db = np.concatenate([db, np.asarray(area_db).reshape(n, nl, -1)], axis=2)
         s = np.tanh((db - min_db) / self.scale_db).astype(np.float32)
         w2 = self.window**2
         g = np.broadcast_to(np.asarray(goal, dtype=np.float64).reshape(-1, 2), (n, 2))
-        return {
+        obs = {
             "position": ((pos - lo) / span).astype(np.float32),
             "goal": ((g - lo) / span).astype(np.float32),
             "time": np.broadcast_to(np.asarray(t_frac, np.float32).reshape(-1, 1), (n, 1)).copy(),
-            "local": s[:, :w2].reshape(n, 1, self.window, self.window),
-            "area": s[:, w2:].reshape(n, 1, self.area, self.area),
+            "local": s[:, :, :w2].reshape(n, nl, self.window, self.window),
+            "area": s[:, :, w2:].reshape(n, nl, self.area, self.area),
         }
+        if nl > 1:
+            if level_frac is None:
+                raise InvalidInputError("a view of several levels needs level_frac")
+            lv = np.asarray(level_frac, np.float32).reshape(-1, 1)
+            obs["level"] = np.broadcast_to(lv, (n, 1)).copy()
+        return obs
 
     def flat(self, obs: dict[str, Any]) -> np.ndarray:
         """(N, sum of :attr:`sizes`) float32: the parts of a batch of observations (or of
         one) concatenated in :data:`KEYS` order, the form a replay memory stores."""
         first = np.asarray(obs["position"])
         n = 1 if first.ndim == 1 else len(first)
+        keys = [k for k in KEYS if k in self.sizes]
         return np.concatenate(
-            [np.asarray(obs[k], dtype=np.float32).reshape(n, -1) for k in KEYS], axis=1
+            [np.asarray(obs[k], dtype=np.float32).reshape(n, -1) for k in keys], axis=1
         )
 
 

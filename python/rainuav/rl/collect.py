@@ -24,10 +24,11 @@ Env = UAVNavEnv | UAVLevelsEnv
 
 
 def observe(env: Env, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None) -> Any:
-    """The env's observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) after ``t`` (N,)
-    (``goal`` and ``world``: the plane's, :meth:`UAVNavEnv.observe`)."""
+    """The env's observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) after ``t`` (N,),
+    heading for ``goal`` (N, 2) in the worlds ``world`` (N,) where the env shows the weather
+    (:meth:`UAVNavEnv.observe`, :meth:`UAVLevelsEnv.observe`)."""
     if isinstance(env, UAVLevelsEnv):
-        return env.observe(pos, level, t)
+        return env.observe(pos, level, t, goal, world)
     return env.observe(pos, t, goal, world)
 
 
@@ -44,7 +45,7 @@ def step(
     """One move of every UAV: the env's batched stepper's result, with ``t`` the new clock,
     ``level`` the new level and ``duration`` each move's ticks (1 on one level)."""
     if isinstance(env, UAVLevelsEnv):
-        r = env.stepper.step(start, offset, level, t, action)
+        r = env.stepper.step(start, offset, level, t, action, goal, world)
         r["t"] = r.pop("tick")
         return r
     r = env.stepper.step(start, offset, t, action, goal, world)

@@ -166,7 +166,8 @@ def memory_needed(
         d_in = obs_dim + n_smooth * 2 * cfg.fourier
         params = d_in * h + h + h * h + h + (h + 1) + (6 if levels else 4) * (h + 1)
     else:
-        enc = WeatherEncoder(cfg, view, (1.0, 1.0), MoveGeometry((1.0, 1.0), 1.0, 1.0))
+        geometry = MoveGeometry((1.0, 1.0), 1.0, 1.0)
+        enc = WeatherEncoder(cfg, view, (1.0, 1.0), geometry, 6 if levels else 4)
         obs_dim = enc.dim
         params = sum(p.numel() for p in enc.make_net().parameters())
     return {

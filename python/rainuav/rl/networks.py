@@ -6,11 +6,11 @@ never looks inside the observation.
   the time where the signal moves), goal-relative features of the fixed destination, into an
   MLP with Fourier features.
 - :class:`WeatherEncoder` + :class:`WeatherQNet`: the learner that reads the weather
-  (``UAVNavEnv(observation="weather")``). The ``Dict`` observation
-  (:class:`rainuav.nav.views.WeatherView`) is flattened in a fixed order for the replay; the
-  network splits it again: two small convolutional stacks read the local window and the
-  whole-area grid, an MLP reads them with the position, the destination, the time and
-  goal-relative features.
+  (``UAVNavEnv(observation="weather")``, or among levels ``UAVLevelsEnv``'s). The ``Dict``
+  observation (:class:`rainuav.nav.views.WeatherView`) is flattened in a fixed order for the
+  replay; the network splits it again: two small convolutional stacks read the local window
+  and the whole-area grid (one channel a level among levels), an MLP reads them with the
+  position, the destination, the time (and the level) and goal-relative features.
 
 An encoder has ``dim`` (floats per encoded observation), ``__call__(env_obs, t)`` (a batch
 of the env's observations after ``t`` moves -> (N, dim) float32) and ``make_net()``.
@@ -166,9 +166,11 @@ class WeatherQNet(DuelingQNet):
         conv: int = 16,
         moves: MoveGeometry | None = None,
         goal_maps: MoveGeometry | None = None,
+        n_actions: int = 4,
     ) -> None:
-        super().__init__(hidden, fourier, obs_dim=5, smooth_dim=5)
-        self.window, self.area = view.window, view.area
+        nv = view.vector  # position, goal, time (and the level among levels)
+        super().__init__(hidden, fourier, n_actions, obs_dim=nv, smooth_dim=nv)
+        self.window, self.area, self.layers, self.n_vec = view.window, view.area, view.layers, nv
         self.register_buffer("goal_scale", torch.as_tensor(goal_scale, dtype=torch.float32))
 
         def stack(first_stride: int, channels: int) -> nn.Sequential:
@@ -200,7 +202,8 @@ class WeatherQNet(DuelingQNet):
             ):
                 self.register_buffer(name, value.contiguous(), persistent=False)
         extra = (1, 2) if goal_maps is not None else (0, 0)
-        self.local, self.whole = stack(1, 1 + extra[0]), stack(2, 1 + extra[1])
+        self.local = stack(1, view.layers + extra[0])
+        self.whole = stack(2, view.layers + extra[1])
 
         def out(n: int, first: int) -> int:
             n = (n - 1) // first + 1
@@ -210,17 +213,20 @@ class WeatherQNet(DuelingQNet):
         d_moves = 0
         if moves is not None:
             self.register_buffer("span", torch.as_tensor(moves.span_m, dtype=torch.float32))
-            self.register_buffer("shifts", torch.as_tensor(moves.shifts_m, dtype=torch.float32))
+            shifts = np.zeros((n_actions, 2), dtype=np.float32)  # a climb or descent: none
+            shifts[:4] = moves.shifts_m
+            self.register_buffer("shifts", torch.as_tensor(shifts))
             self.move_gain = nn.Linear(MoveGeometry.per_move, 1, bias=False)
-            d_moves = MoveGeometry.per_move * len(moves.shifts_m)
+            d_moves = MoveGeometry.per_move * n_actions
         d_grid = out(self.window, 1) + out(self.area, 2)
-        d_vec = 5 + 5 * 2 * fourier + 2 * goal_scale.shape[1] + d_moves
+        d_vec = nv + nv * 2 * fourier + 2 * goal_scale.shape[1] + d_moves
         self.body = nn.Sequential(
             nn.Linear(d_grid + d_vec, hidden), nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU()
         )
 
     def move_features(self, vec: torch.Tensor) -> torch.Tensor:
-        """(B, 4, 2): per move, arrival (0/1) and progress toward the destination, moves."""
+        """(B, A, 2): per move, arrival (0/1) and progress toward the destination, moves (a
+        climb or a descent: neither, it stays over the same point)."""
         assert self.moves is not None
         rel = (vec[:, 2:4] - vec[:, 0:2]) * self.span  # (B, 2) metres to the destination
         after = torch.linalg.vector_norm(rel[:, None, :] - self.shifts, dim=-1)  # (B, 4)
@@ -248,10 +254,11 @@ class WeatherQNet(DuelingQNet):
         # The layers are called as functions (ReLU in place): the same
         # operations as the modules' calls, bit for bit, with less overhead per call; a
         # decision is a few dozen small operations (benches/decision.py).
-        w2, a2 = self.window**2, self.area**2
-        vec = obs[:, :5]
-        local = obs[:, 5 : 5 + w2].reshape(-1, 1, self.window, self.window)
-        whole = obs[:, 5 + w2 : 5 + w2 + a2].reshape(-1, 1, self.area, self.area)
+        nl, nv = self.layers, self.n_vec
+        w2, a2 = nl * self.window**2, nl * self.area**2
+        vec = obs[:, :nv]
+        local = obs[:, nv : nv + w2].reshape(-1, nl, self.window, self.window)
+        whole = obs[:, nv + w2 : nv + w2 + a2].reshape(-1, nl, self.area, self.area)
         if self.goal_maps is not None:
             near, area = self.goal_channels(vec)
             local, whole = torch.cat([local, near], dim=1), torch.cat([whole, area], dim=1)
@@ -271,7 +278,7 @@ class WeatherQNet(DuelingQNet):
         q = self.head(h.relu_())
         if mf is None:
             return q
-        gain = F.linear(mf, self.move_gain.weight).squeeze(-1)  # (B, 4)
+        gain = F.linear(mf, self.move_gain.weight).squeeze(-1)  # (B, A)
         return q + gain - gain.mean(dim=-1, keepdim=True)  # the advantage's part only
 
 
@@ -302,9 +309,8 @@ class MoveGeometry:
 
 class WeatherEncoder:
     """The weather-reading learner's input: the env's ``Dict`` observation flattened
-    (:meth:`WeatherView.flat`); the network splits it (:class:`WeatherQNet`)."""
-
-    n_actions = 4
+    (:meth:`WeatherView.flat`); the network splits it (:class:`WeatherQNet`).
+    ``n_actions``: 4 on one level, 6 among levels."""
 
     def __init__(
         self,
@@ -312,8 +318,9 @@ class WeatherEncoder:
         view: WeatherView,
         step: tuple[float, float],
         moves: MoveGeometry | None = None,
+        n_actions: int = 4,
     ) -> None:
-        self.cfg, self.view = cfg, view
+        self.cfg, self.view, self.n_actions = cfg, view, n_actions
         if cfg.move_features and moves is None:
             raise InvalidInputError("move_features needs the env's geometry (MoveGeometry)")
         self.moves = moves if cfg.move_features else None
@@ -332,5 +339,6 @@ class WeatherEncoder:
     def make_net(self) -> nn.Module:
         c = self.cfg
         return WeatherQNet(
-            self.view, c.hidden, c.fourier, self.goal_scale, c.conv, self.moves, self.goal_maps
-        )
+            self.view, c.hidden, c.fourier, self.goal_scale, c.conv, self.moves, self.goal_maps,
+            self.n_actions,
+        )  # fmt: skip

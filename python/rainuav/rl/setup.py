@@ -11,6 +11,7 @@ import numpy as np
 import torch
 
 from rainuav._checks import check_fits as check_fits_memory
+from rainuav._cli import altitude_band
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.levels import UAVLevelsEnv
@@ -25,7 +26,8 @@ __all__ = ["check_fits", "make_agent", "make_encoder", "pick_device", "torch_set
 def check_fits(cfg: TrainConfig) -> None:
     """Refuses a run whose agent cannot fit in memory, naming the field and the GB
     (:func:`rainuav.rl.dqn.memory_needed`); called before any map is built."""
-    view = WeatherView() if cfg.observation == "weather" else None
+    layers = len(altitude_band(cfg.altitudes)) if cfg.altitudes else 1
+    view = WeatherView(layers=layers) if cfg.observation == "weather" else None
     need = memory_needed(cfg.dqn, view, levels=bool(cfg.altitudes))
     biggest = max(need, key=lambda k: need[k])
     check_fits_memory(
@@ -49,6 +51,11 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float,
     """The encoder (and network) for ``env``'s observation (:mod:`rainuav.rl.networks`):
     the weather-reading one where the env shows the weather, else the position one (with
     the env's fixed destination; among levels with the level and six actions)."""
+    if env.view is not None:
+        x0, x1, y0, y1 = env.field.extent
+        geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
+        n = 6 if isinstance(env, UAVLevelsEnv) else 4
+        return WeatherEncoder(d, env.view, step, geometry, n)
     if isinstance(env, UAVLevelsEnv):
         x0, x1, y0, y1 = env.field.extent
         gx, gy = env.cfg.goal_m
@@ -56,10 +63,6 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float,
         dims = int(env.observation_space.shape[0])  # type: ignore[index]
         return PositionEncoder(d, env.cfg.max_steps, goal, step, dims,
                                gives_time=env.field.varies, n_actions=6)  # fmt: skip
-    if env.view is not None:
-        x0, x1, y0, y1 = env.field.extent
-        geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
-        return WeatherEncoder(d, env.view, step, geometry)
     goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())
     dims = int(env.observation_space.shape[0])  # type: ignore[index]
     return PositionEncoder(d, env.cfg.max_steps, goal, step, dims)

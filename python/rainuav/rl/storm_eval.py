@@ -35,9 +35,13 @@ SUMMARY_KEYS = (
     "success_rate", "mean_excess_cost", "worst_excess_cost", "outage_share",
     "optimal_outage_share", "straight_line_success_rate", "straight_line_mean_excess_cost",
     "frozen_plan_success_rate", "frozen_plan_mean_excess_cost", "replan_success_rate",
-    "replan_mean_excess_cost",
+    "replan_mean_excess_cost", "fixed_altitude_success_rate", "fixed_altitude_mean_excess_cost",
+    "fixed_altitude_outage_share", "best_single_altitude_success_rate",
+    "best_single_altitude_mean_excess_cost", "best_single_altitude_outage_share",
+    "mean_altitude_m", "optimal_mean_altitude_m", "vertical_moves",
 )  # fmt: skip
-"""The figures averaged over the storms (``worst_excess_cost``: the worst over them)."""
+"""The figures averaged over the storms (``worst_excess_cost``: the worst over them); among
+levels also the plans held at one altitude and the heights flown (absent on one level)."""
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -139,6 +143,8 @@ def _mean(rows: list[dict[str, Any]], worst: bool) -> dict[str, Any]:
     ``worst_excess_cost`` the largest)."""
     out: dict[str, Any] = {}
     for key in SUMMARY_KEYS:
+        if not any(key in r for r in rows):
+            continue  # a figure of the other kind of task (levels or one level)
         vals = [r[key] for r in rows if r.get(key) is not None]
         if key.startswith("worst_") and worst:
             out[key] = max(vals) if vals else None

@@ -141,7 +141,8 @@ class WorldSpec:
     altitudes: str = ""
     """Flight levels LOW:HIGH:STEP, m (e.g. 25:115:15): altitude as a decision, six moves
     (rainuav.nav.levels: climb and descend one level, each lasting its duration), flights
-    starting at the lowest level; '' the scenario's one altitude."""
+    starting at the lowest level (the weather observation then shows every level); '' the
+    scenario's one altitude."""
 
 
 def spec_of(obj: Any) -> WorldSpec:
@@ -187,8 +188,7 @@ def check_spec(spec: Any) -> None:
         ("out_of_bounds_penalty", math.isfinite(spec.out_of_bounds_penalty), "finite"),
         ("rain_rate", spec.rain_rate is None or 0 <= spec.rain_rate <= 500,
          "unset or in [0, 500] mm/h"),
-        ("altitudes", not spec.altitudes or (spec.observation == "position"
-         and spec.signal == "sinr"), "'' unless observation = 'position' and signal = 'sinr'"),
+        ("altitudes", not spec.altitudes or spec.signal == "sinr", "'' unless signal = 'sinr'"),
     ]  # fmt: skip
     for name, ok, allowed in checks:
         if not ok:
@@ -255,7 +255,8 @@ class World:
         """A Gymnasium environment of this world (a fresh one per call): a
         :class:`UAVNavEnv`, or among levels a :class:`rainuav.nav.levels.UAVLevelsEnv`."""
         if isinstance(self.field, LevelField):
-            return UAVLevelsEnv(self.field, self.task)
+            return UAVLevelsEnv(self.field, self.task, observation=self.observation,
+                                random_goal=self.random_goal)  # fmt: skip
         return UAVNavEnv(
             field=self.field,
             config=self.task,

@@ -15,12 +15,15 @@ from typing import Any
 
 import numpy as np
 
+from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.nav.field import SignalBank, SignalSeries
+from rainuav.nav.levelfield import LevelField
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.timemap import build_radio_map_series
 from rainuav.world import (
     World,
+    build_source,
     check_spec,
     make_scenario,
     series_instants,
@@ -66,7 +69,13 @@ class StormPool:
     ``spec.calm_share`` of them flown calm: :func:`is_calm`, :func:`calm`). The next storm
     is mapped in a background thread while training goes on (the engine releases the GIL);
     the maps are not cached on disk (each storm is flown once). ``map_seconds``: the time
-    spent mapping storms, and ``wait_seconds``: the part training waited for."""
+    spent mapping storms, and ``wait_seconds``: the part training waited for; ``flown``: the
+    seeds of the storms put in a slot, in order (not the one being mapped next).
+
+    Among flight levels (``spec.altitudes``) a storm is the maps of every level in time
+    (:class:`rainuav.radio.levels.LevelStack`) and the bank a
+    :meth:`rainuav.nav.levelfield.LevelField.bank`; the pool's memory (the slots, the
+    storm being mapped and the one being put) is checked once the first storm is mapped."""
 
     def __init__(self, spec: Any, seed: int, *, progress: bool = False) -> None:
         check_spec(spec)
@@ -77,12 +86,23 @@ class StormPool:
         self.map_seconds = self.wait_seconds = 0.0
         self.seeds: list[int] = []
         self.flown: list[int] = []
-        first = [self._build(self._draw()) for _ in range(spec.storm_pool)]
+        first = [self._build(self._draw())]
+        one = _maps(first[0][1])
+        check_fits(f"storm_pool = {spec.storm_pool}", 3 * (spec.storm_pool + 2) * one.nbytes,
+                   "lower storm_pool")  # fmt: skip
+        first += [self._build(self._draw()) for _ in range(spec.storm_pool - 1)]
         field = first[0][1].field
-        assert isinstance(field, SignalSeries)  # a storm moves
         self.task = first[0][1].task
-        self.bank = SignalBank([w.field.db for _, w in first], field.t_s, field.extent)
+        self.bank: SignalBank | LevelField
+        if isinstance(field, LevelField):
+            stacks = np.stack([_maps(w) for _, w in first])
+            t_s = field.fields[0].t_s  # type: ignore[union-attr]
+            self.bank = LevelField.bank(stacks, t_s, field.extent, field.altitudes_m)
+        else:
+            assert isinstance(field, SignalSeries)  # a storm moves
+            self.bank = SignalBank([w.field.db for _, w in first], field.t_s, field.extent)
         self.seeds = [k for k, _ in first]
+        self.flown.extend(self.seeds)
         self._executor = ThreadPoolExecutor(1)
         self._next_seed = self._draw()
         self._next: Future[Any] = self._executor.submit(self._build, self._next_seed)
@@ -96,10 +116,12 @@ class StormPool:
         scn = make_scenario(spec)
         if is_calm(storm_seed, self.spec.calm_share):
             scn = calm(scn)
-        source = build_radio_map_series(scn, series_instants(spec), cache=False)
+        if spec.altitudes:
+            source = build_source(spec, scn, cache=False)
+        else:
+            source = build_radio_map_series(scn, series_instants(spec), cache=False)
         world = world_from(source, task_of(spec))
         self.map_seconds += time.perf_counter() - t0
-        self.flown.append(storm_seed)
         return storm_seed, world
 
     def world(self) -> World:
@@ -115,8 +137,9 @@ class StormPool:
         t0 = time.perf_counter()
         storm_seed, world = self._next.result()
         self.wait_seconds += time.perf_counter() - t0
-        self.bank.put(slot, world.field.db)
+        self.bank.put(slot, _maps(world))
         self.seeds[slot] = storm_seed
+        self.flown.append(storm_seed)
         self._next_seed = self._draw()
         self._next = self._executor.submit(self._build, self._next_seed)
         return self.seeds[slot]
@@ -145,7 +168,7 @@ class StormPool:
             self._next.result()  # the storm being mapped finishes; the state says what follows
         for slot, k in enumerate(seeds):
             if k != self.seeds[slot]:
-                self.bank.put(slot, self._build(k)[1].field.db)
+                self.bank.put(slot, _maps(self._build(k)[1]))
                 self.seeds[slot] = k
         self.rng.bit_generator.state = d["rng"]
         self.flown = [int(k) for k in d["flown"]]
@@ -155,3 +178,11 @@ class StormPool:
     def close(self) -> None:
         """Stops the background mapping (the storm being mapped is finished first)."""
         self._executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _maps(world: World) -> np.ndarray:
+    """What a storm puts in a bank's slot: its maps in time (T, H, W), or among levels every
+    level's (T, L, H, W)."""
+    if isinstance(world.field, LevelField):
+        return np.asarray(world.source.sinr_db)  # type: ignore[union-attr]
+    return np.asarray(world.field.db)  # type: ignore[union-attr]
