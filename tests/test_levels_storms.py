@@ -216,14 +216,14 @@ def test_bad_weather_options_among_levels_are_refused() -> None:
 
 def pool_cfg(out: Path, **kw: object) -> object:
     """A tiny run over the storm distribution among three levels (2 storms renewed every 3
-    episodes, 40 moves)."""
+    episodes, 40 moves; half of them calm, whose weather does not move)."""
     from rainuav.rl.config import TrainConfig
 
     fields = {
         "scenario": "storm", "observation": "weather", "random_goal": True, "storm_pool": 2,
         "storm_episodes": 3, "max_steps": 40, "out": str(out), "eval_starts": 3,
         "validate_every": 0, "stages": 1, "checkpoint_every": 1000, "engine": "ray",
-        "altitudes": "50:110:30",
+        "altitudes": "50:110:30", "calm_share": 0.5,
         "dqn": DQNConfig(episodes=12, lanes=4, learning_starts=50, replay_capacity=1000,
                          hidden=16, conv=4),
     }  # fmt: skip
@@ -240,7 +240,7 @@ def test_storm_pool_among_levels_is_seeded_resumes_exactly_and_is_evaluated(
     among levels and the plans held at one altitude."""
     from rainuav.rl.loop import train
     from rainuav.rl.storm_eval import evaluate_storms
-    from rainuav.world.pool import TRAINING_SEEDS, StormPool
+    from rainuav.world.pool import TRAINING_SEEDS, StormPool, is_calm
 
     def log(out: str) -> str:
         rows = (tmp_path / out / "log.csv").read_text().splitlines()
@@ -257,6 +257,7 @@ def test_storm_pool_among_levels_is_seeded_resumes_exactly_and_is_evaluated(
     keep = [k for k in m_a if "seconds" not in k]
     assert json.dumps({k: m_a[k] for k in keep}) == json.dumps({k: m_b[k] for k in keep})
     assert m_a["storms_flown"] == len(pool.flown) >= 3  # renewed at least once
+    assert any(is_calm(k, 0.5) for k in pool.flown)
     assert all(TRAINING_SEEDS[0] <= k < TRAINING_SEEDS[1] for k in pool.flown)
     assert m_a["altitudes_m"] == [50.0, 80.0, 110.0] and "fixed_altitude_success_rate" in m_a
     result, first = evaluate_storms(tmp_path / "a", [1_000_000], starts=2, progress=False)

@@ -231,6 +231,12 @@ def _policy(run: Path) -> tuple[object, str]:
             f"--policy {run}: its network sees only its own map (trained with observation = "
             f"{cfg.observation!r}); fly a network that reads the weather (--observation weather)"
         )
+    if cfg.altitudes:
+        raise InvalidInputError(
+            f"--policy {run}: its network chooses among the flight levels {cfg.altitudes} m, "
+            "and --policy flies one altitude; fly it with rainuav.evaluate, or give a run "
+            "trained on one altitude"
+        )
     state = checkpoint.load(run / "checkpoint.pt", ("agent", "returns", "train_seconds"))
 
     def fly(env: object) -> tuple[object, bool]:

@@ -19,12 +19,13 @@ from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.nav.field import SignalBank, SignalSeries
 from rainuav.nav.levelfield import LevelField
+from rainuav.radio.levels import LevelStack
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.timemap import build_radio_map_series
 from rainuav.world import (
     World,
-    build_source,
     check_spec,
+    level_field,
     make_scenario,
     series_instants,
     spec_of,
@@ -116,8 +117,8 @@ class StormPool:
         scn = make_scenario(spec)
         if is_calm(storm_seed, self.spec.calm_share):
             scn = calm(scn)
-        if spec.altitudes:
-            source = build_source(spec, scn, cache=False)
+        if spec.altitudes:  # in time even where calm: every slot holds one instants' series
+            source = LevelStack.of(level_field(scn, series_instants(spec))[1], scn)
         else:
             source = build_radio_map_series(scn, series_instants(spec), cache=False)
         world = world_from(source, task_of(spec))
