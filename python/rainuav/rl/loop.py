@@ -52,10 +52,10 @@ from rainuav.rl.evaluation import (
     Validation,
     eval_starts,
     evaluate_run_policy,
-    reference_flights,
 )
 from rainuav.rl.learner import learner_ends, learning_reward, training_level, training_task
 from rainuav.rl.plots import plot_policy, plot_returns, plot_stages, plot_storm_flights
+from rainuav.rl.references import optimal_flights
 from rainuav.rl.runlog import RunLog
 from rainuav.rl.setup import check_fits, make_agent, pick_device, torch_settings
 from rainuav.world import World, build_world, task_of
@@ -200,7 +200,7 @@ def run_loop(
     lanes = Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
     n_val = cfg.validate_starts if cfg.validate_every else 0
     val_starts = eval_starts(ref, n_val, cfg.eval_seed + 2)
-    checks = Validation(val_starts, reference_flights(ref, val_starts)["optimal"])
+    checks = Validation(val_starts, optimal_flights(ref, val_starts))
     stage_every = max(1, d.episodes // max(cfg.stages, 1))
     stage_starts = eval_starts(ref, 5, cfg.eval_seed + 1)
     weather = env.view is not None

@@ -30,6 +30,7 @@ __all__ = [
     "eval_starts",
     "flights",
     "level_reference_flights",
+    "optimal_flights",
     "reference_flights",
     "relative_gap",
     "summarise",
@@ -131,6 +132,21 @@ def reference_flights(
     weather. Among levels: :func:`level_reference_flights`."""
     if isinstance(env, UAVLevelsEnv):
         return level_reference_flights(env, starts)
+    flown = {"straight_line": [planner.straight_line(env, s) for s in starts]}
+    if env.field.varies:
+        flown["frozen_plan"] = baselines.frozen_plans(env, starts)
+        flown["replan"] = baselines.replans(env, starts, replan_every)
+    refs = {name: _plans(ps, env) for name, ps in flown.items()}
+    return {"optimal": optimal_flights(env, starts), **refs}
+
+
+def optimal_flights(env: UAVNavEnv | UAVLevelsEnv, starts: np.ndarray) -> dict[str, Any]:
+    """The exact planner's flights from ``starts`` (among levels: the plan among levels from
+    the level each flight starts at), as :func:`reference_flights` gives ``optimal``: the
+    yardstick alone, for the checks during training."""
+    starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
+    if isinstance(env, UAVLevelsEnv):
+        return _plans(planner.optimal_among_levels(env, starts), env)
     plans = []
     chunks = range(0, len(starts), PLAN_CHUNK)
     if len(starts) > PLAN_CHUNK:  # a long evaluation shows its progress
@@ -139,11 +155,7 @@ def reference_flights(
         chunks = tqdm(chunks, desc="exact plans", unit="chunk", total=len(chunks))
     for i in chunks:
         plans += planner.optimal_many(env, starts[i : i + PLAN_CHUNK])
-    flown = {"optimal": plans, "straight_line": [planner.straight_line(env, s) for s in starts]}
-    if env.field.varies:
-        flown["frozen_plan"] = baselines.frozen_plans(env, starts)
-        flown["replan"] = baselines.replans(env, starts, replan_every)
-    return {name: _plans(ps, env) for name, ps in flown.items()}
+    return _plans(plans, env)
 
 
 def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
@@ -169,7 +181,7 @@ def level_reference_flights(env: UAVLevelsEnv, starts: np.ndarray) -> dict[str, 
     ``fixed_altitude``, ``best_single_altitude`` and ``straight_line``. A level whose plane
     cannot hold the task (its destination not flyable) flies no flight that arrives."""
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
-    refs = {"optimal": _plans(planner.optimal_among_levels(env, starts), env)}
+    refs = {"optimal": optimal_flights(env, starts)}
     per_level = []
     for k in range(env.field.levels):
         try:
