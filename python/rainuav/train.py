@@ -90,7 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
             more = (
                 " Or 'random': one network over the storm distribution (--storm-pool "
                 f"{DEFAULT_POOL}, --observation weather, --random-goal true, the storm "
-                "learner's [dqn] fields and a 55-minute budget unless given)"
+                "learner's [dqn] fields and a 55-minute budget unless given; with "
+                "--altitudes also --storm-pool 8, --storm-episodes 48, --engine ray and "
+                "--episodes 4000)"
                 if f.name == "storm_seed"
                 else ""
             )
@@ -110,6 +112,8 @@ def config_from_args(args: argparse.Namespace) -> Any:
         STORM_BUDGET_S,
         STORM_CALM_SHARE,
         STORM_LEARNER,
+        STORM_LEVELS,
+        STORM_LEVELS_EPISODES,
         DQNConfig,
         TrainConfig,
         apply_preset,
@@ -128,6 +132,10 @@ def config_from_args(args: argparse.Namespace) -> Any:
             base[f.name] = getattr(args, f.name)
     if base.get("storm_seed") == "random":  # the storm distribution: a pool of storms
         base["storm_seed"] = 0
+        if base.get("altitudes"):  # among levels: fewer storms at once, mapped by the rays
+            for k, v in STORM_LEVELS.items():
+                base.setdefault(k, v)
+            dqn_kw.setdefault("episodes", STORM_LEVELS_EPISODES)
         base.setdefault("storm_pool", DEFAULT_POOL)
         base.setdefault("observation", "weather")
         base.setdefault("random_goal", True)
