@@ -363,7 +363,9 @@ def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
         assert not (bad / "radiomap_levels.json").exists()
 
 
-def test_maps_in_time_read_every_level_from_one_clear_air_march() -> None:
+def test_maps_in_time_read_every_level_from_one_clear_air_march(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     # The hybrid series in time at two levels through moving rain cells: the PE's clear-air
     # march once a cell for both levels, against each level's own series: SINR within 0.5 dB
     # at the lower level and 0.05 dB at the highest (as the static maps), at every instant.
@@ -383,3 +385,23 @@ def test_maps_in_time_read_every_level_from_one_clear_air_march() -> None:
     d = np.abs(shared.sinr_db - apart.sinr_db)
     assert d[:, 0].max() < 0.5 and d[:, 1].max() < 0.05
     assert not np.array_equal(shared.sinr_db[0, 0], shared.sinr_db[1, 0])  # the rain moves
+    # Another weather over the same network (a storm pool's next storm) marches nothing: the
+    # clear-air march is the last one's, and the series is the one a fresh march gives.
+    from rainuav.radio import hybrid, levels
+
+    other = scn.replace(medium=Medium(kind="cells", rain_rate_mm_h=20.0, cells=cells))
+    marches = []
+    real = hybrid.engine_parts_levels
+
+    def counted(*a: object, **k: object) -> object:
+        marches.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(hybrid, "engine_parts_levels", counted)
+    again = build_radio_level_series(other, [0.0, 60.0], cache=False)
+    assert marches == []
+    levels._CLEAR_PARTS.clear()
+    fresh = build_radio_level_series(other, [0.0, 60.0], cache=False)
+    assert marches == [1]
+    np.testing.assert_array_equal(again.sinr_db, fresh.sinr_db)
+    assert not np.array_equal(again.sinr_db, shared.sinr_db)  # its own rain

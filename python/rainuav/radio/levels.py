@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import os
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -172,6 +173,13 @@ class RadioLevelSeries:
     """Each level's map at the first instant (a static map: for a figure or a GeoTIFF)."""
 
 
+_CLEAR_LOCK = threading.Lock()
+_CLEAR_PARTS: dict[str, Any] = {}
+"""The last clear-air march of every level (its scenarios' digests, and the parts): the
+hybrid's PE part does not depend on the weather, so the storms of one network (a storm pool
+maps one after another) march their cells once. Read only (the series add to copies)."""
+
+
 def build_radio_level_series(
     scn: Scenario,
     times_s: object,
@@ -218,9 +226,14 @@ def build_radio_level_series(
         def from_one_march(k: int) -> Any:
             if not parts:
                 clear = [with_rain(level_scenario(scn, a), 0.0) for a in levels]
-                jobs = [(s, c) for s in scn.sites for c in s.cells]
-                x_m, y_m = scn.area.centres()
-                parts.extend(engine_parts_levels(clear, jobs, x_m, y_m, progress))
+                key = tuple(c.digest() for c in clear)
+                with _CLEAR_LOCK:  # storms of one network share their clear-air march
+                    if _CLEAR_PARTS.get("key") != key:
+                        jobs = [(s, c) for s in scn.sites for c in s.cells]
+                        x_m, y_m = scn.area.centres()
+                        got = engine_parts_levels(clear, jobs, x_m, y_m, progress)
+                        _CLEAR_PARTS.update(key=key, parts=got)
+                    parts.extend(_CLEAR_PARTS["parts"])
             return parts[k]
 
         shared = from_one_march
