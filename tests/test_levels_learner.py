@@ -232,6 +232,11 @@ def test_learning_among_levels_in_time(tmp_path: Path) -> None:
     saved, _, _ = evaluate_saved_run(tmp_path)
     assert saved["mean_return"] == m["mean_return"]
     assert not (tmp_path / "storm_flights.png").exists()  # the plane's figure; here trajectories
+    from rainuav.evaluate import main as evaluate_main  # the CLI draws the heights flown
+
+    assert evaluate_main([str(tmp_path), "--out", str(tmp_path / "ev")]) == 0
+    assert (tmp_path / "ev" / "evaluation_trajectories.png").stat().st_size > 0
+    assert not (tmp_path / "ev" / "evaluation_storm_flights.png").exists()
 
 
 def test_the_memory_check_counts_the_levels_network() -> None:

@@ -268,6 +268,13 @@ def test_storm_pool_among_levels_is_seeded_resumes_exactly_and_is_evaluated(
         assert key in result["mean"]
     assert "frozen_plan_success_rate" not in result["mean"]
     assert first is not None and "levels" in first[1][0]
+    from rainuav.evaluate import main as evaluate_main  # the CLI: the flights and heights
+
+    ev = tmp_path / "ev"
+    argv = [str(tmp_path / "a"), "--storm-seeds", "1000000-1000000", "--starts", "2"]
+    assert evaluate_main([*argv, "--out", str(ev)]) == 0
+    saved = json.loads((ev / "evaluation.json").read_text())
+    assert saved["mean"] == result["mean"] and (ev / "evaluation_trajectories.png").exists()
 
 
 def test_a_pool_that_cannot_fit_is_refused(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
