@@ -154,8 +154,8 @@ def test_a_plan_too_big_for_memory_is_refused_before_allocating() -> None:
 
 def test_gym_make_builds_the_levels_of_a_scenario() -> None:
     # `gym.make("rainuav/UAVLevels-v0")`: the scenario mapped at each level, the preset's
-    # SINR threshold, a climb of 30 m lasting 6 moves; a keyword of the plane's weather
-    # observation is refused in one line.
+    # SINR threshold, a climb of 30 m lasting 6 moves; the weather observation shows both
+    # levels; the signal is the SINR (another is refused in one line).
     import rainuav  # noqa: F401 - registers the environments
     from rainuav.radio.presets import SINR_THRESHOLDS_DB, uma
     from rainuav.radio.scenario import Area
@@ -168,5 +168,9 @@ def test_gym_make_builds_the_levels_of_a_scenario() -> None:
     assert info["altitude_m"] == 30.0 and obs[2] == 0.0
     obs, _, *_, info = env.step(4)
     assert info["altitude_m"] == 60.0 and info["t_s"] == 6.0 and obs[2] == 1.0
-    with pytest.raises(InvalidInputError, match="observation"):
-        gym.make("rainuav/UAVLevels-v0", scenario=scn, observation="weather")
+    env = gym.make("rainuav/UAVLevels-v0", scenario=scn, altitudes_m=[30.0, 60.0],
+                   observation="weather", random_goal=True)  # fmt: skip
+    obs, info = env.reset(seed=0)
+    assert obs["local"].shape == (2, 11, 11) and obs["level"][0] == 0.0 and "goal_m" in info
+    with pytest.raises(InvalidInputError, match="signal: the environment among levels"):
+        gym.make("rainuav/UAVLevels-v0", scenario=scn, signal="sir")
