@@ -280,15 +280,20 @@ def test_storm_pool_among_levels_is_seeded_resumes_exactly_and_is_evaluated(
 def test_a_pool_that_cannot_fit_is_refused(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """The pool's memory is checked once its first storm is mapped, naming storm_pool (here
     one storm's levels need 0.05 GB to map and 1.4 MB to keep: 64 of them do not fit in 0.1
-    GB, one does)."""
+    GB, one does); its storms are flown once and never kept in the map cache."""
     from rainuav import _core
     from rainuav.world.pool import StormPool
 
     monkeypatch.setattr(_core, "available_memory_bytes", lambda: 10**8)
+    monkeypatch.setenv("RAINUAV_CACHE_DIR", str(tmp_path / "cache"))
     cfg = dataclasses.replace(pool_cfg(tmp_path), max_steps=10)
     with pytest.raises(InvalidInputError, match="storm_pool = 64 needs"):
         StormPool(dataclasses.replace(cfg, storm_pool=64), 0)
-    StormPool(dataclasses.replace(cfg, storm_pool=1), 0).close()
+    pool = StormPool(dataclasses.replace(cfg, storm_pool=1), 0)
+    pool.renew(0)
+    pool.close()
+    cached = tmp_path / "cache"
+    assert len(pool.flown) == 2 and not (cached.exists() and any(cached.rglob("*.npz")))
 
 
 def test_storm_seed_random_among_levels_sets_its_pool_and_engine() -> None:

@@ -318,17 +318,20 @@ def series_instants(spec: Any) -> Any:
     return series_times(math.ceil(horizon / spec.slice_s - 1e-9) * spec.slice_s, spec.slice_s)
 
 
-def level_field(scn: Scenario, times_s: Any = None, *, progress: bool = False) -> tuple[Any, Any]:
+def level_field(
+    scn: Scenario, times_s: Any = None, *, progress: bool = False, cache: bool = True
+) -> tuple[Any, Any]:
     """The signal at every level of ``scn``'s ``area.altitudes_m`` as a
     :class:`rainuav.nav.levels.LevelField` (what the flights among levels read), and the maps
     it came from: :func:`rainuav.radio.levels.build_radio_levels`, or where ``times_s`` are
     given :func:`~rainuav.radio.levels.build_radio_level_series` (engine 'pe' then becomes
-    'hybrid': a march per cell and instant is refused)."""
+    'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown once (a
+    storm pool's), not kept in the map cache."""
     from rainuav.nav.levels import LevelField
     from rainuav.radio.levels import build_radio_level_series, build_radio_levels
 
     if times_s is None:
-        stack = build_radio_levels(scn, progress=progress)
+        stack = build_radio_levels(scn, progress=progress, cache=cache)
         serving = np.stack([m.serving_cell for m in stack.maps])
         field = LevelField.from_stack(
             stack.sinr_db,
@@ -340,7 +343,7 @@ def level_field(scn: Scenario, times_s: Any = None, *, progress: bool = False) -
         return field, stack
     if scn.engine == "pe":
         scn = dataclasses.replace(scn, engine="hybrid")
-    series = build_radio_level_series(scn, times_s, progress=progress)
+    series = build_radio_level_series(scn, times_s, progress=progress, cache=cache)
     field = LevelField.from_stack(series.sinr_db, series.altitudes_m, series.extent,
                                   t_s=series.t_s, not_flyable=series.not_flyable,
                                   serving_cell=series.serving_cell)  # fmt: skip
@@ -375,7 +378,7 @@ def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: boo
     march per cell and instant is refused); built, or taken from the cache."""
     if spec.altitudes:  # every level's maps (in time where the weather moves)
         times = series_instants(spec) if scn.medium.moves else None
-        return LevelStack.of(level_field(scn, times, progress=progress)[1], scn)
+        return LevelStack.of(level_field(scn, times, progress=progress, cache=cache)[1], scn)
     if scn.medium.moves:
         if scn.engine == "pe":
             scn = dataclasses.replace(scn, engine="hybrid")

@@ -118,7 +118,7 @@ class StormPool:
         if is_calm(storm_seed, self.spec.calm_share):
             scn = calm(scn)
         if spec.altitudes:  # in time even where calm: every slot holds one instants' series
-            source = LevelStack.of(level_field(scn, series_instants(spec))[1], scn)
+            source = LevelStack.of(level_field(scn, series_instants(spec), cache=False)[1], scn)
         else:
             source = build_radio_map_series(scn, series_instants(spec), cache=False)
         world = world_from(source, task_of(spec))
