@@ -470,6 +470,35 @@ def test_written_files_honour_the_umask(tmp_path: Path, umask: int) -> None:
     accepted(f"umask {oct(umask)}")
 
 
+def test_a_full_disk_is_one_line_and_keeps_the_earlier_copy(tmp_path: Path, capsys) -> None:
+    """A write that fails as a full disk fails (the OS's ENOSPC; torch's RuntimeError from its
+    zip writer) raises WriteError naming the file and the free space, leaves the earlier copy
+    as it was, and a CLI prints it as one line and exits 1."""
+    import errno
+
+    from rainuav import _cli
+    from rainuav.errors import WriteError
+
+    path = tmp_path / "checkpoint.pt"
+    path.write_text("earlier")
+
+    def full(t: Path) -> None:
+        t.write_text("half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    def torch_full(t: Path) -> None:
+        raise RuntimeError("[enforce fail at inline_container.cc:671] . unexpected pos 2349248")
+
+    for write in (full, torch_full):
+        with pytest.raises(WriteError, match=r"cannot write .*checkpoint\.pt .* GB free there"):
+            write_atomic(path, write)
+        assert path.read_text() == "earlier" and list(tmp_path.iterdir()) == [path]
+    assert _cli.run(lambda: write_atomic(path, full) and 0) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: cannot write")
+    accepted("a full disk")
+
+
 # -- 5. What users of this field would try next ----------------------------------------------
 @pytest.mark.parametrize("name", ["config.toml", "radiomap.npz", "checkpoint.pt"])
 @pytest.mark.parametrize("how", ["missing", "empty", "garbage", "a folder"])

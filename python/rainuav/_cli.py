@@ -11,7 +11,7 @@ import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from rainuav.errors import CacheWarning, InvalidInputError
+from rainuav.errors import CacheWarning, InvalidInputError, WriteError
 
 __all__ = ["altitude_band", "attach_negative_values", "run"]
 
@@ -49,7 +49,8 @@ def run(
     on_interrupt: str | Callable[[], str] = "nothing half-written was kept",
 ) -> int:
     """Runs a CLI's ``body`` and returns its exit code: :class:`InvalidInputError` prints
-    ``error: <message>`` and returns 2; Ctrl-C prints ``interrupted: <on_interrupt>`` (a
+    ``error: <message>`` and returns 2 (a file that cannot be written, :class:`WriteError`:
+    returns 1); Ctrl-C prints ``interrupted: <on_interrupt>`` (a
     string, or a function that says what was kept) and returns 130; warnings (the radio-map
     cache's among them) print as ``warning: <message>``."""
     with warnings.catch_warnings():
@@ -60,6 +61,9 @@ def run(
         except InvalidInputError as err:
             print(f"error: {err}", file=sys.stderr)
             return 2
+        except WriteError as err:  # a full disk: one line, exit 1 (not the input's fault)
+            print(f"error: {err}", file=sys.stderr)
+            return 1
         except KeyboardInterrupt:
             said = on_interrupt() if callable(on_interrupt) else on_interrupt
             print(f"interrupted: {said}", file=sys.stderr)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import os
 import secrets
+import shutil
 import tempfile
 import warnings
 from collections.abc import Callable, Iterator
@@ -14,7 +15,7 @@ from typing import Any
 
 import tomllib
 
-from rainuav.errors import InvalidInputError
+from rainuav.errors import InvalidInputError, WriteError
 
 
 def _create_beside(target: Path) -> Path:
@@ -47,9 +48,24 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
 
 def write_atomic(path: str | os.PathLike[str], write: Callable[[Path], None]) -> Path:
-    """Calls ``write(tmp)`` and renames ``tmp`` onto ``path``; returns ``path``."""
-    with atomic_path(path) as tmp:
-        write(tmp)
+    """Calls ``write(tmp)`` and renames ``tmp`` onto ``path``; returns ``path``. A write that
+    fails (torch and numpy report a full disk as ``RuntimeError`` or ``OSError``) raises
+    :class:`WriteError` naming the file, the reason and the free space; ``path`` is left as
+    it was."""
+    try:
+        with atomic_path(path) as tmp:
+            write(tmp)
+    except (OSError, RuntimeError) as err:
+        if isinstance(err, WriteError):
+            raise
+        try:
+            free = f"{shutil.disk_usage(Path(path).parent).free / 1e9:.3g} GB free there"
+        except OSError:
+            free = "free space unknown"
+        reason = str(err).splitlines()[0] if str(err) else type(err).__name__
+        raise WriteError(
+            f"cannot write {path} ({reason}; {free}); its earlier copy, if any, is kept"
+        ) from err
     return Path(path)
 
 

@@ -14,6 +14,11 @@ class InvalidInputError(RainuavError, ValueError):
     The message names the argument and the allowed range."""
 
 
+class WriteError(RainuavError, OSError):
+    """A file could not be written (a full disk, a folder that is not writable): the message
+    names the file, the reason and the free space; the earlier copy of the file is kept."""
+
+
 class CacheWarning(UserWarning):
     """The radio-map cache could not be read or written (a read-only or invalid
     ``RAINUAV_CACHE_DIR``, a full disk): the map is still built, returned and written where
