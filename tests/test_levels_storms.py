@@ -239,7 +239,6 @@ def test_storm_pool_among_levels_is_seeded_resumes_exactly_and_is_evaluated(
     storms are training storms; it is evaluated on a held-out storm against the exact plan
     among levels and the plans held at one altitude."""
     from rainuav.rl.loop import train
-    from rainuav.rl.storm_eval import evaluate_storms
     from rainuav.world.pool import TRAINING_SEEDS, StormPool, is_calm
 
     def log(out: str) -> str:
@@ -260,21 +259,19 @@ def test_storm_pool_among_levels_is_seeded_resumes_exactly_and_is_evaluated(
     assert any(is_calm(k, 0.5) for k in pool.flown)
     assert all(TRAINING_SEEDS[0] <= k < TRAINING_SEEDS[1] for k in pool.flown)
     assert m_a["altitudes_m"] == [50.0, 80.0, 110.0] and "fixed_altitude_success_rate" in m_a
-    result, first = evaluate_storms(tmp_path / "a", [1_000_000], starts=2, progress=False)
+    from rainuav.evaluate import main as evaluate_main  # the CLI: figures, flights, heights
+
+    ev = tmp_path / "ev"
+    argv = [str(tmp_path / "a"), "--storm-seeds", "1000000-1000000", "--starts", "2"]
+    assert evaluate_main([*argv, "--out", str(ev)]) == 0
+    result = json.loads((ev / "evaluation.json").read_text())
     row = result["worlds"][0]
     assert result["mean"]["held_out"] and row["storm_seed"] == 1_000_000
     for key in ("fixed_altitude_mean_excess_cost", "best_single_altitude_success_rate",
                 "mean_altitude_m", "vertical_moves"):  # fmt: skip
         assert key in result["mean"]
     assert "frozen_plan_success_rate" not in result["mean"]
-    assert first is not None and "levels" in first[1][0]
-    from rainuav.evaluate import main as evaluate_main  # the CLI: the flights and heights
-
-    ev = tmp_path / "ev"
-    argv = [str(tmp_path / "a"), "--storm-seeds", "1000000-1000000", "--starts", "2"]
-    assert evaluate_main([*argv, "--out", str(ev)]) == 0
-    saved = json.loads((ev / "evaluation.json").read_text())
-    assert saved["mean"] == result["mean"] and (ev / "evaluation_trajectories.png").exists()
+    assert (ev / "evaluation_trajectories.png").stat().st_size > 0
 
 
 def test_a_pool_that_cannot_fit_is_refused(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
