@@ -258,10 +258,11 @@ STORM_LEVELS: dict[str, Any] = {
     "engine": "ray",
 }
 """What ``--storm-seed random`` with ``--altitudes`` changes besides, unless given: a storm among
-seven levels takes 19 s to map with the ray engine and 55 s with the hybrid (which marches
-every cell for the low levels), against 2.9 s on one level; 8 storms at once, each renewed
-after 48 episodes, keep the mapping thread ahead of training (docs/guide/altitude.md, "One
-network for every storm among levels"); with [dqn] ``episodes`` =
+seven levels takes 19 s to map with the ray engine, against 2.9 s on one level (the hybrid
+marches every cell for the low levels: 44-55 s for a network's first storm, 14 s for the next
+with the march shared); 8 storms at once, each renewed after 48 episodes, keep the mapping
+thread nearly ahead of training (docs/guide/altitude.md, "One network for every storm among
+levels", where the network trained so is measured); with [dqn] ``episodes`` =
 :data:`STORM_LEVELS_EPISODES`."""
 STORM_LEVELS_EPISODES = 4000
 """The episodes of ``--storm-seed random`` with ``--altitudes`` unless given."""
