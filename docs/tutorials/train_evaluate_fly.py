@@ -40,7 +40,16 @@ def main() -> None:
 
     # 1. Train one network over the storm distribution (the default command: about 25-60 min
     #    on 2 cores; it resumes with --resume if stopped).
-    small_train = ["--episodes", "8", "--storm-pool", "2", "--eval-starts", "4"]
+    small_train = [
+        "--episodes",
+        "8",
+        "--storm-pool",
+        "2",
+        "--eval-starts",
+        "4",
+        "--validate-starts",
+        "4",
+    ]
     run(["rainuav.train", "--scenario", "storm", "--storm-seed", "random", "--out", storms,
          *(small_train if args.small else [])])  # fmt: skip
 
