@@ -24,10 +24,8 @@ from rainuav.rl.collect import observe, step
 from rainuav.rl.config import DQNConfig
 from rainuav.rl.dqn import memory_needed
 from rainuav.rl.networks import MoveGeometry, WeatherEncoder
+from test_one_network import EXTENT, T_S, exact, plane  # the analytic signal and its grid
 
-EXTENT = (0.0, 1000.0, 0.0, 800.0)
-H, W = 40, 50  # 20 m pixels over 1000 x 800 m
-T_S = np.array([0.0, 10.0, 20.0])
 ALTS = [30.0, 60.0, 90.0]
 
 
@@ -36,27 +34,10 @@ def coef(world: int, level: int) -> tuple[float, float, float, float]:
     return (0.02 - 0.01 * level, -0.015 + 0.005 * world, 0.3 * (level - 1), -4.0 + 3.0 * level)
 
 
-def plane(c: tuple[float, ...]) -> np.ndarray:
-    """The plane ``c`` at the pixel centres of (T, H, W): bilinear in space and linear in time
-    reproduce it exactly between the outermost centres."""
-    a, b, k, d = c
-    x = EXTENT[0] + (np.arange(W) + 0.5) * (EXTENT[1] - EXTENT[0]) / W
-    y = EXTENT[2] + (np.arange(H) + 0.5) * (EXTENT[3] - EXTENT[2]) / H
-    return a * x[None, None, :] + b * y[None, :, None] + k * T_S[:, None, None] + d
-
-
-def exact(x: np.ndarray, y: np.ndarray, t: float, c: tuple[float, ...]) -> np.ndarray:
-    """The analytic plane at (x, y, t), with the edge values beyond the outermost centres."""
-    a, b, k, d = c
-    x = np.clip(x, EXTENT[0] + 10.0, EXTENT[1] - 10.0)
-    y = np.clip(y, EXTENT[2] + 10.0, EXTENT[3] - 10.0)
-    return a * x + b * y + k * np.clip(t, T_S[0], T_S[-1]) + d
-
-
 def stacks(worlds: int = 2) -> np.ndarray:
     """(P, T, L, H, W): every world's levels in time."""
     return np.stack(
-        [np.stack([plane(coef(p, k)) for k in range(len(ALTS))], axis=1) for p in range(worlds)]
+        [np.stack([plane(*coef(p, k)) for k in range(len(ALTS))], axis=1) for p in range(worlds)]
     )
 
 
