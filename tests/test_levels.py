@@ -119,10 +119,11 @@ def test_maps_at_several_heights_are_each_level_s_map() -> None:
 
 def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) -> None:
     # A 40 m wall across the whole place between the start and the destination: at 30 m it
-    # is not flyable (its 10 m clearance), at 60 m it is. `fly --altitudes 30:60:30` starts
-    # at 30 m, climbs to cross, and every file carries the heights: pymavlink reads the
+    # is not flyable (its 10 m clearance), at 60 m it is. `fly --altitudes 30:60:30` started
+    # at 30 m climbs to cross, and every file carries the heights: pymavlink reads the
     # waypoints at the path's levels (relative to home), the GeoJSON's vertices too, and the
     # plan costs no more than the flight held at its start level (which cannot cross).
+    # Without a start height the exact planner chooses the take-off level and says so.
     import json
     from pathlib import Path
 
@@ -135,12 +136,13 @@ def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) ->
           {"height": 40}, "geometry": {"type": "Polygon", "coordinates": [wall]}}]}  # fmt: skip
     (tmp_path / "wall.geojson").write_text(json.dumps(fc))
     out = tmp_path / "flight"
-    argv = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380", "--goal",
+    argv = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380,30", "--goal",
             "47.3800,8.5560", "--footprints", str(tmp_path / "wall.geojson"), "--altitudes",
             "30:60:30", "--engine", "ray", "--out", str(out)]  # fmt: skip
     assert main(argv) == 0
     s = json.loads((out / "summary.json").read_text())
     assert s["start_altitude_m"] == 30.0 and s["climbs"] >= 1
+    assert s["start_altitude_chosen_by"] == "--start"
     line = json.loads((out / "flight.geojson").read_text())["features"][0]
     z = np.array(line["geometry"]["coordinates"])[:, 2]
     assert set(np.unique(z)) == {30.0, 60.0}
@@ -153,11 +155,14 @@ def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) ->
     # 1 + mu x 38 dB of shortfall, SINR being clipped at -40 dB) plus the 60 m plan.
     assert s["best_single_altitude_m"] == 60.0
     assert s["cost"] <= s["best_single_altitude_cost"] + 6 * (1 + 10 / 43 * 38)
-    # Started at 60 m (`--start LAT,LON,60`, the same maps): no climb is needed.
-    out2 = tmp_path / "from_60"
-    assert main([*argv[:2], "--start", "47.3660,8.5380,60", *argv[4:-1], str(out2)]) == 0
+    # No start height (the same maps): the planner takes off at 60 m, the best level here,
+    # needs no climb, and costs what the plan held at 60 m costs (the same flight).
+    out2 = tmp_path / "chosen"
+    assert main([*argv[:2], "--start", "47.3660,8.5380", *argv[4:-1], str(out2)]) == 0
     s2 = json.loads((out2 / "summary.json").read_text())
     assert s2["start_altitude_m"] == 60.0 and s2["climbs"] == 0
+    assert s2["start_altitude_chosen_by"] == "planner"
+    assert s2["cost"] == pytest.approx(s["best_single_altitude_cost"], abs=1e-9)
 
 
 def test_the_altitude_study_and_its_figures() -> None:

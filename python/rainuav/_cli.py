@@ -13,7 +13,7 @@ from typing import Any
 
 from rainuav.errors import CacheWarning, InvalidInputError, WriteError
 
-__all__ = ["altitude_band", "attach_negative_values", "run"]
+__all__ = ["altitude_band", "attach_negative_values", "plain_help", "run"]
 
 _NUMBERS = re.compile(r"^-(\d|\.\d)[\d.eE+\-]*(,\s*[+\-]?(\d|\.\d)[\d.eE+\-]*)*$")
 """A value that starts with a minus sign and is a number or a comma-separated list of them
@@ -68,6 +68,25 @@ def run(
             said = on_interrupt() if callable(on_interrupt) else on_interrupt
             print(f"interrupted: {said}", file=sys.stderr)
             return 130
+
+
+_ROLE = re.compile(r":[a-z]+:`~?([^`<]*?)(?:\s*<[^>]*>)?`")
+
+
+def plain_help(text: str | None) -> str:
+    """A docstring as a terminal shows it: reStructuredText's roles (:mod:`a.b`, :func:`~a.b.c`)
+    as the names they link, ````literals```` as the text, escaped backslashes single, so no
+    ``--help`` prints raw markup."""
+    if not text:
+        return ""
+
+    def role(m: re.Match[str]) -> str:
+        name = m.group(1).strip()
+        return name.rsplit(".", 1)[-1] if m.group(0)[m.group(0).index("`") + 1] == "~" else name
+
+    out = _ROLE.sub(role, text)
+    out = out.replace("``", "")
+    return out.replace("\\\\", "\\")
 
 
 def altitude_band(text: str) -> list[float]:

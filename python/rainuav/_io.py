@@ -107,7 +107,9 @@ def check_out_dir(path: str | os.PathLike[str], flag: str = "--out") -> Path:
         os.rmdir(tempfile.mkdtemp(prefix=".rainuav-probe-", dir=probe))
     except OSError as err:
         why = err.strerror or type(err).__name__
-        raise InvalidInputError(f"{flag} {p}: cannot be written ({probe}: {why})") from None
+        raise InvalidInputError(
+            f"{flag} {p}: cannot be written: no folder can be made in {probe} ({why})"
+        ) from None
     return p
 
 

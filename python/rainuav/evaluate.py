@@ -79,7 +79,7 @@ def _world(args: argparse.Namespace) -> object:
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.evaluate",
-        description=__doc__,
+        description=_cli.plain_help(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("run_dir", type=Path)

@@ -89,7 +89,7 @@ def _start(text: str) -> tuple[float, ...]:
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.fly",
-        description=__doc__,
+        description=_cli.plain_help(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("--sites", type=Path, required=True, help="sites file (.csv or .geojson)")
@@ -97,7 +97,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--start", type=_start, required=True,
         help="take-off point LAT,LON in degrees, south and west negative (--start -33.87,151.21 "
         "and --start=-33.87,151.21 both work); with --altitudes, LAT,LON,ALTITUDE starts at "
-        "that level (default: the lowest the start may be flown at)",
+        "that level (default: the exact planner chooses the take-off level, and the summary says "
+        "which)",
     )  # fmt: skip
     ap.add_argument("--goal", type=_latlon, required=True, help="destination LAT,LON, as --start")
     ap.add_argument(
@@ -128,6 +129,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--footprints", type=Path, default=None,
         help="building footprints in GeoJSON (longitude/latitude, OpenStreetMap height tags): "
         "buildings that block, diffract and reflect, and that the flight keeps clear of",
+    )  # fmt: skip
+    ap.add_argument(
+        "--default-height", type=float, default=None, metavar="M",
+        help="with --footprints: the roof of a building whose footprint gives neither a height "
+        "nor storeys, m (default 10; central-city buildings are often 18-28 m)",
     )  # fmt: skip
     ap.add_argument(
         "--engine", choices=("hybrid", "ray", "pe"), default=None,
@@ -184,11 +190,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = check_out_dir(args.out, "--out")
         if not args.sites.is_file():
             raise InvalidInputError(f"--sites: no file {args.sites}")
+        if args.policy is not None:  # before any map or torch: seconds and memory
+            _check_policy_run(args.policy)
+            if altitudes is not None:
+                raise InvalidInputError("--policy flies one altitude: not with --altitudes")
         place = place_scenario(
             args.sites, args.start[:2], args.goal, altitude_m=args.altitude_m,
             freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
             box=box, terrain=args.terrain, altitude_reference=args.altitude_reference,
             footprints=args.footprints, altitudes=altitudes, engine=args.engine,
+            default_height_m=args.default_height,
         )  # fmt: skip
         if args.footprints is not None:
             from rainuav.radio.buildings import scenario_buildings
@@ -205,10 +216,41 @@ def main(argv: Sequence[str] | None = None) -> int:
             start_altitude_m=start_alt,
         )
         print(json.dumps(summary, indent=2))
+        if place.scenario.footprints is not None:
+            from rainuav.world.place import default_height_warning
+
+            warn = default_height_warning(summary, place.scenario.footprints.default_height_m)
+            if warn:
+                print(warn, file=sys.stderr)
         print(f"wrote {out.resolve()}", file=sys.stderr)
         return 0
 
     return _cli.run(body)
+
+
+def _check_policy_run(run: Path) -> None:
+    """Refuses, in one line and before anything is mapped or torch is loaded, a ``--policy``
+    that is not a run of a network reading the weather on one altitude (its ``config.toml``
+    read as data)."""
+    from rainuav._io import read_toml
+
+    if not (run / "config.toml").is_file() or not (run / "checkpoint.pt").is_file():
+        raise InvalidInputError(
+            f"--policy {run}: not a rainuav.train run (config.toml, checkpoint.pt)"
+        )
+    cfg = read_toml(run / "config.toml", f"--policy {run}: config.toml")
+    observation = cfg.get("observation", "position")
+    if observation != "weather":
+        raise InvalidInputError(
+            f"--policy {run}: its network sees only its own map (trained with observation = "
+            f"{observation!r}); fly a network that reads the weather (--observation weather)"
+        )
+    if cfg.get("altitudes"):
+        raise InvalidInputError(
+            f"--policy {run}: its network chooses among the flight levels {cfg['altitudes']} m, "
+            "and --policy flies one altitude; fly it with rainuav.evaluate, or give a run "
+            "trained on one altitude"
+        )
 
 
 def _policy(run: Path) -> tuple[object, str]:

@@ -15,11 +15,13 @@ station or a GIS loads.
 - :func:`kml_text`: the same for Google Earth (altitude relative to the ground).
 - Over terrain (:func:`terrain_waypoints`): the waypoints carry altitudes above mean sea level
   (MAVLink's ``MAV_FRAME_GLOBAL``, QGroundControl's absolute altitude mode), the terrain under
-  each plus the flight altitude, and there are enough of them that the straight climb or
-  descent the autopilot flies between two never passes closer to the terrain and obstacles
-  under the path than the clearance. Above sea level rather than MAVLink's terrain frame:
-  the autopilot then flies the heights the map was made for, not those of its own terrain
-  database.
+  each plus the flight altitude, and there are enough of them that the straight line the
+  autopilot flies between two holds the planned height above the ground within
+  :data:`HOLD_M` along the whole leg (checked :data:`SAMPLES_PER_MOVE` times a move against
+  the DEM) and never passes closer to the terrain and obstacles under the path than the
+  clearance. Above sea level rather than MAVLink's terrain frame
+  (``MAV_FRAME_GLOBAL_TERRAIN_ALT``): the autopilot then flies the heights the map was made
+  for, over the DEM the map was made on, not those of its own terrain database.
 
 Coordinates in: latitude and longitude in degrees (WGS 84), from :class:`rainuav.geo.Georef`.
 """
@@ -35,10 +37,13 @@ import numpy as np
 from rainuav.errors import InvalidInputError
 
 __all__ = [
+    "HOLD_M",
     "MAV_CMD_NAV_LAND",
     "MAV_CMD_NAV_TAKEOFF",
     "MAV_CMD_NAV_WAYPOINT",
+    "SAMPLES_PER_MOVE",
     "corners",
+    "densify",
     "expand",
     "geojson_dict",
     "kml_text",
@@ -83,20 +88,43 @@ def expand(points: Any, step_m: float) -> np.ndarray:
     return np.array(out)
 
 
+HOLD_M = 5.0
+"""Over terrain, how far the straight line between two waypoints may stray from the planned
+height above the ground at any point of the leg, m (checked every :data:`SAMPLES_PER_MOVE`-th
+of a move: the height the map was made for, flown within this)."""
+SAMPLES_PER_MOVE = 4
+"""The points of each move where a leg is checked against the ground (:func:`densify`)."""
+
+
+def densify(path: Any, step_m: float, samples: int = SAMPLES_PER_MOVE) -> np.ndarray:
+    """The lattice path ``path`` (T+1, 2 or 3; moves of ``step_m``) with ``samples`` points a
+    move: the same straight legs, sampled finely enough to check against the ground."""
+    p = np.asarray(path, dtype=np.float64)
+    if len(p) < 2:
+        return p.copy()
+    return expand(p[corners(p)], step_m / samples)
+
+
 def terrain_waypoints(
-    path: Any, height_amsl_m: Any, top_amsl_m: Any, clearance_m: float
+    path: Any,
+    height_amsl_m: Any,
+    top_amsl_m: Any,
+    clearance_m: float,
+    hold_m: float | None = HOLD_M,
 ) -> np.ndarray:
-    """Indices of the waypoints that fly ``path`` (T+1, 2) over terrain: its corners
+    """Indices of the waypoints that fly ``path`` (N, 2 or 3) over terrain: its corners
     (:func:`corners`), and within each straight leg as few more as keep the straight line
-    between two waypoints' heights (``height_amsl_m`` (T+1,), the flight height over each
-    vertex) at least ``clearance_m`` above ``top_amsl_m`` (T+1,), the highest terrain or
-    obstacle under each vertex (greedy: each waypoint as far along the leg as the check
-    allows)."""
+    between two waypoints' heights (``height_amsl_m`` (N,), the planned flight height over
+    each vertex) within ``hold_m`` of the planned height (None: any) and at least
+    ``clearance_m`` above ``top_amsl_m`` (N,), the highest terrain or obstacle under each
+    vertex (greedy: each waypoint as far along the leg as the checks allow). Give a path
+    sampled finely (:func:`densify`): the checks are at its vertices."""
     z = np.asarray(height_amsl_m, dtype=np.float64)
     top = np.asarray(top_amsl_m, dtype=np.float64)
     turns = corners(path)
     if z.shape != (len(np.asarray(path)),) or top.shape != z.shape:
         raise InvalidInputError("height_amsl_m and top_amsl_m need one value per path vertex")
+    hold = np.inf if hold_m is None else float(hold_m)
     keep = [int(turns[0])]
     for a0, b0 in itertools.pairwise(turns):
         a = int(a0)
@@ -105,7 +133,7 @@ def terrain_waypoints(
             while b > a + 1:
                 k = np.arange(a + 1, b)
                 line = z[a] + (z[b] - z[a]) * (k - a) / (b - a)
-                if np.all(line - top[k] >= clearance_m):
+                if np.all(line - top[k] >= clearance_m) and np.all(np.abs(line - z[k]) <= hold):
                     break
                 b -= 1
             keep.append(b)

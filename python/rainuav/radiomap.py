@@ -97,6 +97,11 @@ def build_parser() -> argparse.ArgumentParser:
         "the scenario needs an [origin] (a --config TOML)",
     )
     ap.add_argument(
+        "--default-height", type=float, default=None, metavar="M",
+        help="the roof of a building whose footprint gives neither a height nor storeys, m "
+        "(default: the scenario's footprints.default_height_m, 10 m)",
+    )  # fmt: skip
+    ap.add_argument(
         "--altitude-reference",
         choices=("ground", "msl"),
         default=None,
@@ -110,6 +115,11 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
+    ap.add_argument(
+        "--min-db", type=float, default=None,
+        help="the SINR counted as outage in the summaries, dB (default: the preset's; for a "
+        "scenario file the uma preset's, as fly uses)",
+    )  # fmt: skip
     ap.add_argument("--clear-cache", action="store_true", help="delete every cached map and exit")
     return ap
 
@@ -128,6 +138,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _build(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from rainuav._checks import check_number
     from rainuav._io import begin_folder, check_out_dir
     from rainuav.radio import Scenario, build_radio_map, presets
     from rainuav.radio.plot import save_map_png
@@ -165,6 +176,14 @@ def _build(args: argparse.Namespace) -> int:
         if not args.footprints.is_file():
             raise InvalidInputError(f"--footprints {args.footprints}: no such file")
         scn = scn.replace(footprints=FootprintsFile(str(args.footprints.resolve())))
+    if args.default_height is not None:
+        import dataclasses
+
+        if scn.footprints is None:
+            raise InvalidInputError("--default-height needs building footprints (--footprints)")
+        check_number("--default-height", args.default_height, 0.5, 1000.0, " m")
+        fp = dataclasses.replace(scn.footprints, default_height_m=float(args.default_height))
+        scn = scn.replace(footprints=fp)
     if args.engine is not None:
         scn = scn.replace(engine=args.engine)
     if args.altitude_reference is not None:
@@ -211,6 +230,17 @@ def _build(args: argparse.Namespace) -> int:
     return 0
 
 
+def _threshold(args: argparse.Namespace, scn: Any) -> float:
+    """The SINR counted as outage, dB: ``--min-db``, else the preset's navigation threshold,
+    else (a scenario file, a place) the ``uma`` preset's, the one ``fly`` uses."""
+    from rainuav._checks import check_number
+    from rainuav.radio.presets import SINR_THRESHOLDS_DB
+
+    if args.min_db is not None:
+        return check_number("--min-db", args.min_db, -40.0, 60.0, " dB")
+    return SINR_THRESHOLDS_DB.get(scn.name, SINR_THRESHOLDS_DB["uma"])
+
+
 def _build_levels(args: argparse.Namespace, scn: Any) -> int:
     import json
 
@@ -219,10 +249,9 @@ def _build_levels(args: argparse.Namespace, scn: Any) -> int:
     from rainuav._io import begin_folder, write_atomic
     from rainuav.radio.levels import build_radio_levels
     from rainuav.radio.plot import save_map_png
-    from rainuav.radio.presets import SINR_THRESHOLDS_DB
 
     stack = build_radio_levels(scn, cache=not args.no_cache, progress=True)
-    threshold = SINR_THRESHOLDS_DB.get(scn.name)
+    threshold = _threshold(args, scn)
     begin_folder(args.out, "radiomap_levels.json")
     written, levels = [], []
     for a, rm in zip(stack.altitudes_m, stack.maps, strict=True):
@@ -265,9 +294,7 @@ def _build_series(args: argparse.Namespace, scn: Any) -> int:
         )
     times = series_times(args.duration_s, 5.0 if args.slice_s is None else args.slice_s)
     series = build_radio_map_series(scn, times, cache=not args.no_cache, progress=True)
-    from rainuav.radio.presets import SINR_THRESHOLDS_DB
-
-    threshold = SINR_THRESHOLDS_DB.get(scn.name)
+    threshold = _threshold(args, scn)
     begin_folder(args.out, "radiomap_series.npz")
     gif = save_series_gif(series, args.out / "storm.gif", min_db=threshold, progress=True)
     npz = series.save(args.out / "radiomap_series.npz")  # last: the folder is complete

@@ -1,5 +1,5 @@
-"""``python -m rainuav.study NAME --out DIR``: run a study (a built-in one, ``paper``,
-``mmwave`` or ``storms``, or a study TOML file; format: :mod:`rainuav.studies.spec`).
+"""``python -m rainuav.study NAME --out DIR``: run a study (a built-in one, or a study TOML
+file; the format: the Studies page of the documentation, :mod:`rainuav.studies.spec`).
 
 Every case runs in its own folder ``DIR/cases/<case>`` (``result.json`` written last); a
 rerun skips finished cases, so an interrupted study resumes. ``--workers`` cases run at once
@@ -26,16 +26,28 @@ from rainuav.errors import InvalidInputError
 
 def main(argv: Sequence[str] | None = None) -> int:
     from rainuav.studies import load_study, run_study
+    from rainuav.studies.spec import BUILT_IN
 
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.study",
-        description=__doc__,
+        description=_cli.plain_help(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    ap.add_argument("study", help="'paper', 'mmwave' or a study TOML file")
-    ap.add_argument("--out", type=Path, required=True)
-    ap.add_argument("--workers", type=int, default=None)
-    ap.add_argument("--quick", action="store_true")
+    names = ", ".join(f"'{n}'" for n in BUILT_IN)
+    ap.add_argument("study", help=f"a built-in study ({names}) or a study TOML file")
+    ap.add_argument(
+        "--out", type=Path, required=True,
+        help="the study's folder: cases/, report.md and, last, results.csv",
+    )  # fmt: skip
+    ap.add_argument(
+        "--workers", type=int, default=None,
+        help="cases run at once in spawned processes (default: the cores, at most the cases)",
+    )  # fmt: skip
+    ap.add_argument(
+        "--quick", action="store_true",
+        help="apply the study's [quick] changes (short trainings, the ray engine): a check "
+        "that the study runs, in minutes",
+    )  # fmt: skip
     ap.add_argument(
         "--ray",
         default=None,

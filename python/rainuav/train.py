@@ -1,7 +1,9 @@
 """``python -m rainuav.train``: learn to fly from any start to the destination (the main job).
 
-With no arguments: the paper preset in its own weather (25 mm/h; radio map built or taken
-from the cache), Table I hyperparameters, seed 0, results in ``runs/paper``. Every flag is a
+With no arguments: the paper's scenario in its own weather (25 mm/h; radio map built or taken
+from the cache), the default learner (the paper's Algorithm 1 with measured departures from
+its Table I, each listed on the Learning page; ``--preset paper`` runs Algorithm 1 and Table I
+literally), seed 0, results in ``runs/paper``. Every flag is a
 field of :class:`rainuav.rl.config.TrainConfig` or :class:`rainuav.rl.config.DQNConfig`
 (``--help`` lists them); ``--config run.toml`` reads them from a file, and flags given beside
 it win. ``--resume`` continues an interrupted run from its checkpoint (same configuration).
@@ -75,7 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
     flag_types = {"int": int, "float": float, "str": str, "bool": _parse_bool}
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.train",
-        description=__doc__,
+        description=_cli.plain_help(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("--config", type=Path, help="a TOML file of TrainConfig fields")
@@ -101,7 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
                 dest=f.name,
                 type=kind,
                 default=None,
-                help=f"{docs.get(f.name, '')}{more} (default {default})",
+                help=_cli.plain_help(f"{docs.get(f.name, '')}{more} (default {default})"),
             )
     return ap
 

@@ -104,7 +104,9 @@ def run_rain(out_dir: Path) -> dict[str, Path]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m rainuav.validate", description=__doc__)
+    parser = argparse.ArgumentParser(
+        prog="python -m rainuav.validate", description=_cli.plain_help(__doc__)
+    )
     sub = parser.add_subparsers(dest="what", required=True)
     rain = sub.add_parser("rain", help="rain attenuation against ITU-R P.838-3")
     rain.add_argument("--out", type=Path, default=Path("validation"), help="output directory")

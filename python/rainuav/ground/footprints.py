@@ -1,23 +1,45 @@
-"""Building footprints from the files cities publish (``shared/PHYSICS.md`` section 12): GeoJSON
-(RFC 7946: longitude/latitude on WGS 84) Polygon and MultiPolygon features, holes included,
-read with shapely onto a scenario's local east/north metres.
+"""Building footprints from the files cities publish and OpenStreetMap exports (the physics
+reference's buildings page): GeoJSON (RFC 7946: longitude/latitude on WGS 84) Polygon,
+MultiPolygon and GeometryCollection features, holes included, read with shapely onto a
+scenario's local east/north metres. An OpenStreetMap extract exported with
+``osmium export -f geojson`` or ``ogr2ogr`` reads as it is.
 
-**Heights, by OpenStreetMap's conventions.** A feature's roof is ``height`` (metres; also
-``"12 m"``, ``"40 ft"``, ``"40'"``), else ``building:levels`` times :data:`STOREY_HEIGHT_M`
-plus ``roof:height``, else :data:`DEFAULT_HEIGHT_M`. The walls end ``roof:height`` below the
-roof (a pitched roof's eaves). The prism starts at ``min_height`` (else ``building:min_level``
-times the storey height; default 0: on the ground). Heights are above the terrain under the
-building. The wall material is ``building:material`` where it names one of ITU-R P.2040's
-materials (:data:`MATERIALS`; OpenStreetMap's synonyms in :data:`OSM_MATERIALS`), else the
-default (concrete).
+**Heights, as OpenStreetMap's wiki defines them** (Key:height, Key:building:levels and Simple 3D
+Buildings). A feature's roof is ``height`` (metres), else ``building:levels`` storeys of
+:data:`STOREY_HEIGHT_M` plus its roof (``roof:height``, else ``roof:levels`` storeys;
+``building:levels=0`` is a real value: no storey below the roof). With neither, a feature
+raised off the ground (``min_height`` > 0: a part standing on another, such as a dome) has its
+roof at ``min_height`` plus its ``roof:height`` (else plus one storey); one on the ground
+stands at the default height (:data:`DEFAULT_HEIGHT_M`, ``[footprints] default_height_m``,
+counted: its clearance is a guess). The walls end ``roof:height`` below the roof (a pitched
+roof's eaves). The prism starts at ``min_height`` (else ``building:min_level`` storeys; default
+0: on the ground). Heights are above the terrain under the building.
 
-**What is kept.** Features wholly outside the area are skipped and counted; features across
-its edge are clipped to it. Geometries that are not polygons are skipped and counted.
-Self-intersecting polygons are repaired with shapely's ``make_valid`` (its polygonal parts
-kept) and counted. Everything else that is wrong (not JSON, not a FeatureCollection, a ``crs``
-other than WGS 84, coordinates off the Earth, a height that is negative, over 1000 m or not a
-length, a ``min_height`` at or above the roof, more than :data:`MAX_FEATURES` features) is an
-:class:`~rainuav.errors.InvalidInputError` naming the file and the feature.
+**Values as mappers write them** (:func:`parse_length`, :func:`parse_levels`): the first of a
+list (``12;15``), the upper end of a range (``3-4``), an approximate value (``~20``), a unit
+(``20 m``, ``40 ft``, ``40'``, ``12'6"``) and a decimal comma (``12,5``: one rule for lengths
+and storeys).
+
+**Outlines and parts.** Where a building's outline (``building=*``) and its Simple 3D
+Buildings parts (``building:part=*``) overlap, the parts give the shape: the outline is kept
+only where it has no parts (counted in :attr:`Footprints.outlines_cut`).
+
+**What is kept.** Features wholly outside the area are skipped and counted, and so is a
+feature no value of which can be read (a height that is not a length, negative or over
+:data:`MAX_HEIGHT_M`, a bottom at or above its roof, coordinates off the Earth, a geometry
+shapely cannot build): :attr:`Footprints.skipped` names each, and the summary the first few.
+Features across the area's edge are clipped to it. Geometries with no polygon are skipped and
+counted. Self-intersecting polygons are repaired with shapely's ``make_valid`` (its polygonal
+parts kept) and counted. The material is ``building:material`` where it names one of ITU-R
+P.2040's materials (:data:`MATERIALS`; OpenStreetMap's synonyms in :data:`OSM_MATERIALS`), else
+the default (concrete).
+
+**What is refused** (an :class:`~rainuav.errors.InvalidInputError` naming the file): a file
+that is not JSON, not a FeatureCollection, in a ``crs`` other than WGS 84, with more than
+:data:`MAX_FEATURES` features; a file that yields no building (naming the first feature
+skipped and why), and one whose every feature lies outside the area (naming both extents:
+latitude and longitude swapped, or another city). One unreadable feature never refuses a
+file that has buildings.
 """
 
 from __future__ import annotations
@@ -26,6 +48,7 @@ import json
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,6 +69,7 @@ __all__ = [
     "Footprints",
     "material_permittivity",
     "parse_length",
+    "parse_levels",
     "read_footprints",
 ]
 
@@ -87,10 +111,26 @@ OSM_MATERIALS: dict[str, str] = {
 """OpenStreetMap ``building:material`` values read as one of :data:`MATERIALS`."""
 
 _EPS0 = 8.8541878128e-12
-_LENGTH = re.compile(
-    r"^\s*(?P<v>[0-9]*\.?[0-9]+)\s*(?P<u>m|meters?|metres?|ft|feet|')?\s*$", re.IGNORECASE
-)
-_FEET_INCHES = re.compile(r"""^\s*(?P<f>[0-9]+)\s*'\s*(?P<i>[0-9]+(\.[0-9]+)?)\s*"\s*$""")
+_NUMBER = r"[0-9]*\.?[0-9]+"
+_LENGTH = re.compile(rf"^(?P<v>{_NUMBER})\s*(?P<u>m|meters?|metres?|ft|feet|')?$", re.IGNORECASE)
+_FEET_INCHES = re.compile(r"""^(?P<f>[0-9]+)\s*'\s*(?P<i>[0-9]+(\.[0-9]+)?)\s*"$""")
+_RANGE = re.compile(rf"^{_NUMBER}\s*(?:-|\.\.|to)\s*(?P<hi>{_NUMBER}.*)$", re.IGNORECASE)
+MAX_NAMED = 3
+"""The skipped features a summary names (the rest are counted)."""
+
+
+def _clean(text: Any) -> str:
+    """An OpenStreetMap value as one number and its unit: the first of a ``;`` list, the
+    upper end of a range (``3-4``, ``3..4``), without ``~`` (approximately), with a decimal
+    comma (``12,5``) read as a point. Raises ValueError for a value that is not text or a
+    number."""
+    if isinstance(text, bool) or not isinstance(text, str | int | float):
+        raise ValueError(repr(text))
+    s = str(text).split(";")[0].strip().lstrip("~\u2248").strip()
+    s = re.sub(r"(?<=[0-9]),(?=[0-9])", ".", s)
+    if m := _RANGE.match(s):
+        s = m["hi"]
+    return s
 
 
 def material_permittivity(material: str, freq_hz: float) -> complex:
@@ -104,23 +144,38 @@ def material_permittivity(material: str, freq_hz: float) -> complex:
 
 def parse_length(text: Any) -> float:
     """A length in metres from an OpenStreetMap value: a number (metres), ``"12 m"``,
-    ``"40 ft"``, ``"40'"`` or ``12'6"``. Raises ValueError for anything else (negative numbers
-    included)."""
-    if isinstance(text, bool):
-        raise ValueError(repr(text))
-    if isinstance(text, int | float):
+    ``"40 ft"``, ``"40'"`` or ``12'6"``, read by :func:`_clean`'s rules (``"12;15"`` is 12,
+    ``"~20"`` 20, ``"12,5"`` 12.5, ``"10-12"`` 12). Raises ValueError for anything else
+    (negative numbers included)."""
+    if isinstance(text, int | float) and not isinstance(text, bool):
         v = float(text)
         if not math.isfinite(v) or v < 0:
             raise ValueError(repr(text))
         return v
-    s = str(text)
+    s = _clean(text)
     if m := _FEET_INCHES.match(s):
         return (float(m["f"]) * 12.0 + float(m["i"])) * 0.0254
-    m = _LENGTH.match(s.replace(",", "."))
+    m = _LENGTH.match(s)
     if m is None:
         raise ValueError(repr(text))
     unit = (m["u"] or "m").lower()
     return float(m["v"]) * (0.3048 if unit in ("ft", "feet", "'") else 1.0)
+
+
+def parse_levels(text: Any) -> float:
+    """A number of storeys from an OpenStreetMap value (``"3"``, ``"2.5"``, ``"2,5"``,
+    ``"3-4"``: the upper end, ``"3;4"``: the first; 0 is a real value). Raises ValueError for
+    anything else (negative numbers included)."""
+    if isinstance(text, int | float) and not isinstance(text, bool):
+        v = float(text)
+    else:
+        s = _clean(text)
+        if re.fullmatch(_NUMBER, s) is None:
+            raise ValueError(repr(text))
+        v = float(s)
+    if not math.isfinite(v) or v < 0:
+        raise ValueError(repr(text))
+    return v
 
 
 @dataclass(frozen=True)
@@ -137,6 +192,8 @@ class Footprint:
     """Where the walls end (the eaves), m; None: the roof."""
     material: str = "concrete"
     """The walls' P.2040 material."""
+    guessed: bool = False
+    """Whether the roof is the default height (the file gave no height and no storeys)."""
 
     @property
     def eaves_m(self) -> float:
@@ -157,24 +214,37 @@ class Footprints:
     outside: int = 0
     """Features wholly outside the area (skipped)."""
     not_polygons: int = 0
-    """Features that are not polygons (skipped)."""
+    """Features with no polygon (skipped)."""
     clipped: int = 0
     """Features cut at the area's edge."""
     repaired: int = 0
     """Self-intersecting polygons repaired with shapely's make_valid."""
+    outlines_cut: int = 0
+    """Building outlines replaced by their Simple 3D Buildings parts (wholly or in part)."""
     default_height: int = 0
-    """Buildings given :data:`DEFAULT_HEIGHT_M` (no height, no levels)."""
+    """Buildings kept at the default height (no height, no storeys)."""
+    default_height_m: float = DEFAULT_HEIGHT_M
+    """That default, m."""
     default_material: int = 0
     """Buildings whose material tag named no P.2040 material (the default used)."""
+    skipped: list[str] = field(default_factory=list)
+    """Each feature skipped because a value could not be read: where it is and why."""
 
     def summary(self) -> str:
-        """One line: what was read and what was left out."""
-        return (
+        """One line: what was read and what was left out (the first few skipped features
+        named)."""
+        line = (
             f"footprints {self.path}: {len(self.buildings)} buildings from {self.features} "
             f"features ({self.outside} outside the area, {self.not_polygons} not polygons, "
-            f"{self.clipped} clipped, {self.repaired} repaired, {self.default_height} at the "
-            f"default height {DEFAULT_HEIGHT_M:g} m)"
+            f"{len(self.skipped)} unreadable, {self.clipped} clipped, {self.repaired} repaired, "
+            f"{self.outlines_cut} outlines replaced by their parts; {self.default_height} of the "
+            f"buildings kept at the default height {self.default_height_m:g} m)"
         )
+        if self.skipped:
+            more = len(self.skipped) - MAX_NAMED
+            named = "; ".join(self.skipped[:MAX_NAMED]) + (f"; {more} more" if more > 0 else "")
+            line += f"; skipped: {named}"
+        return line
 
 
 def _crs_ok(crs: Any) -> bool:
@@ -187,58 +257,65 @@ def _crs_ok(crs: Any) -> bool:
     return name.endswith("CRS84") or name.replace("::", ":").endswith("EPSG:4326")
 
 
-def _heights(props: dict[str, Any], where: str) -> tuple[float, float, float | None, bool]:
-    """(roof, bottom, eaves or None, whether the default height was used) of a feature."""
+class _Unreadable(ValueError):
+    """A feature's value that cannot be read (the feature is skipped)."""
+
+
+def _heights(
+    props: dict[str, Any], default_height_m: float
+) -> tuple[float, float, float | None, bool]:
+    """(roof, bottom, eaves or None, whether the default height was used) of a feature, by the
+    module docstring's rules; raises :class:`_Unreadable` naming the tag."""
+
+    def read(key: str, parse: Any, what: str, top: float) -> float | None:
+        v = props.get(key)
+        if v is None or (isinstance(v, str) and not v.strip()):
+            return None
+        try:
+            x = parse(v)
+        except ValueError:
+            raise _Unreadable(f"{key} = {v!r} is not {what}") from None
+        if x > top:
+            raise _Unreadable(f"{key} = {v!r} is over {top:g}")
+        return x
 
     def length(key: str) -> float | None:
-        if props.get(key) in (None, ""):
-            return None
-        try:
-            v = parse_length(props[key])
-        except ValueError:
-            raise InvalidInputError(
-                f"{where}: {key} = {props[key]!r} is not a length in 0..{MAX_HEIGHT_M:g} m "
-                "(e.g. 12, '12 m', '40 ft')"
-            ) from None
-        if v > MAX_HEIGHT_M:
-            raise InvalidInputError(f"{where}: {key} = {props[key]!r} is over {MAX_HEIGHT_M:g} m")
-        return v
+        return read(key, parse_length, f"a length in 0..{MAX_HEIGHT_M:g} m", MAX_HEIGHT_M)
 
     def levels(key: str) -> float | None:
-        if props.get(key) in (None, ""):
-            return None
-        try:
-            v = float(str(props[key]).strip())
-        except ValueError:
-            v = -1.0
-        if not (0 <= v <= MAX_HEIGHT_M / STOREY_HEIGHT_M):
-            raise InvalidInputError(
-                f"{where}: {key} = {props[key]!r} is not a number of storeys in "
-                f"0..{MAX_HEIGHT_M / STOREY_HEIGHT_M:g}"
-            )
-        return v
+        top = MAX_HEIGHT_M / STOREY_HEIGHT_M
+        return read(key, parse_levels, f"a number of storeys in 0..{top:g}", top)
 
     roof_h = length("roof:height")
-    height = length("height")
-    default = False
-    if height is None:
-        lv = levels("building:levels")
-        if lv is None:
-            height, default = DEFAULT_HEIGHT_M, True
-        else:
-            height = lv * STOREY_HEIGHT_M + (roof_h or 0.0)
+    if roof_h is None and (roof_lv := levels("roof:levels")) is not None:
+        roof_h = roof_lv * STOREY_HEIGHT_M
     bottom = length("min_height")
     if bottom is None:
         ml = levels("building:min_level")
         bottom = 0.0 if ml is None else ml * STOREY_HEIGHT_M
-    if height <= 0.0:
-        raise InvalidInputError(f"{where}: height must be above 0 m (got {height:g})")
-    if bottom >= height:
-        raise InvalidInputError(
-            f"{where}: min_height {bottom:g} m must be below the roof ({height:g} m)"
+    height = length("height")
+    default = False
+    if height is None:
+        lv = levels("building:levels")
+        if lv is not None:
+            height = lv * STOREY_HEIGHT_M + (roof_h or 0.0)
+        elif bottom > 0.0:  # a raised part: its own roof on its bottom
+            height = bottom + (STOREY_HEIGHT_M if roof_h is None else roof_h)
+            default = roof_h is None
+        else:
+            height, default = max(default_height_m, roof_h or 0.0), True
+    if height <= bottom:
+        raise _Unreadable(
+            f"its roof ({height:g} m) is not above its bottom (min_height {bottom:g} m)"
         )
     eaves = None if roof_h is None else max(bottom, height - roof_h)
     return height, bottom, eaves, default
+
+
+def _is_part(props: dict[str, Any]) -> bool:
+    """Whether a feature is a Simple 3D Buildings part (``building:part`` set, not ``no``)."""
+    v = props.get("building:part")
+    return v not in (None, "", "no", False)
 
 
 def read_footprints(
@@ -246,13 +323,19 @@ def read_footprints(
     georef: Georef,
     bounds: tuple[float, float, float, float],
     default_material: str = "concrete",
+    default_height_m: float = DEFAULT_HEIGHT_M,
 ) -> Footprints:
     """The buildings of the GeoJSON file ``path`` within ``bounds`` (x_min, x_max, y_min,
-    y_max in the local metres of ``georef``): module docstring."""
+    y_max in the local metres of ``georef``): module docstring. ``default_height_m``: the roof
+    of a building on the ground with neither a height nor storeys."""
     import shapely
 
     path = os.fspath(path)
     what = f"footprints file {path}"
+    if not (isinstance(default_height_m, int | float) and 0.5 <= default_height_m <= MAX_HEIGHT_M):
+        raise InvalidInputError(
+            f"footprints.default_height_m {default_height_m!r} must be in 0.5..{MAX_HEIGHT_M:g} m"
+        )
     try:
         size = os.path.getsize(path)
     except OSError as err:
@@ -285,54 +368,61 @@ def read_footprints(
         raise InvalidInputError(
             f"footprints.material {default_material!r} must be one of {sorted(MATERIALS)}"
         )
-    out = Footprints(path=path, features=len(feats))
+    out = Footprints(path=path, features=len(feats), default_height_m=float(default_height_m))
     area = shapely.box(bounds[0], bounds[2], bounds[1], bounds[3])
-    geoms, attrs = [], []
+    geoms, where, props_of = [], [], []
     for k, feat in enumerate(feats):
         fid = feat.get("id") if isinstance(feat, dict) else None
-        where = f"{what}: feature {k}" + (f" (id {fid})" if fid is not None else "")
+        if fid is None and isinstance(feat, dict) and isinstance(feat.get("properties"), dict):
+            fid = feat["properties"].get("@id") or feat["properties"].get("osm_id")
+        here = f"feature {k}" + (f" (id {fid})" if fid is not None else "")
         geom = feat.get("geometry") if isinstance(feat, dict) else None
-        if not isinstance(geom, dict) or geom.get("type") not in ("Polygon", "MultiPolygon"):
+        kinds = ("Polygon", "MultiPolygon", "GeometryCollection")
+        if not isinstance(geom, dict) or geom.get("type") not in kinds:
             out.not_polygons += 1
             continue
         try:
-            shape = shapely.geometry.shape(geom)
-        except (ValueError, TypeError, AttributeError, shapely.errors.ShapelyError) as err:
-            raise InvalidInputError(f"{where}: not a valid {geom['type']} ({err})") from None
-        coords = shapely.get_coordinates(shape)
-        if coords.size == 0:
+            with warnings.catch_warnings():  # NaN vertices: refused below, in one line
+                warnings.simplefilter("ignore", RuntimeWarning)
+                shape = shapely.geometry.shape(geom)
+        except (ValueError, TypeError, AttributeError, KeyError, IndexError,
+                shapely.errors.ShapelyError) as err:  # fmt: skip
+            out.skipped.append(f"{here}: not a valid {geom['type']} ({err})")
+            continue
+        # A GeometryCollection keeps its polygons.
+        polys = [g for g in shapely.get_parts(shape) if isinstance(g, shapely.Polygon)]
+        polys += [q for g in shapely.get_parts(shape) if isinstance(g, shapely.MultiPolygon)
+                  for q in shapely.get_parts(g)]  # fmt: skip
+        if not polys:
             out.not_polygons += 1
             continue
+        shape = polys[0] if len(polys) == 1 else shapely.MultiPolygon(polys)
+        coords = shapely.get_coordinates(shape)
         if not (
             np.all(np.isfinite(coords))
             and np.all(np.abs(coords[:, 0]) <= 180)
             and np.all(np.abs(coords[:, 1]) <= 90)
         ):
-            raise InvalidInputError(
-                f"{where}: coordinates must be longitude -180..180, latitude -90..90"
-            )
+            out.skipped.append(f"{here}: coordinates must be longitude -180..180, latitude -90..90")
+            continue
         props = feat.get("properties") or {}
         if not isinstance(props, dict):
-            raise InvalidInputError(f"{where}: properties must be an object")
-        height, bottom, eaves, default = _heights(props, where)
-        tag = str(props.get("building:material", "")).strip().lower()
-        material = OSM_MATERIALS.get(tag, tag)
-        if material not in MATERIALS:
-            out.default_material += bool(tag)
-            material = default_material
-        out.default_height += default
+            out.skipped.append(f"{here}: properties must be an object")
+            continue
         geoms.append(shape)
-        attrs.append((height, bottom, eaves, material))
-    if not geoms:
-        return out
-    # Longitude/latitude to the scenario's metres, every vertex at once.
-    local = shapely.transform(
-        np.asarray(geoms, dtype=object),
-        lambda xy: np.column_stack(georef.to_local(xy[:, 1], xy[:, 0], name=what)),
-    )
-    valid = shapely.is_valid(local)
-    for g, ok, (height, bottom, eaves, material) in zip(local, valid, attrs, strict=True):
-        if not ok:
+        where.append(here)
+        props_of.append(props)
+    if geoms:
+        # Longitude/latitude to the scenario's metres, every vertex at once.
+        local = shapely.transform(
+            np.asarray(geoms, dtype=object),
+            lambda xy: np.column_stack(georef.to_local(xy[:, 1], xy[:, 0], name=what)),
+        )
+    else:
+        local = np.zeros(0, dtype=object)
+    kept: list[tuple[Any, str, dict[str, Any]]] = []  # (area-clipped geometry, where, tags)
+    for g, here, props in zip(local, where, props_of, strict=True):
+        if not shapely.is_valid(g):
             g = shapely.make_valid(g)
             out.repaired += 1
         if not shapely.intersects(g, area):
@@ -341,11 +431,72 @@ def read_footprints(
         if not shapely.within(g, area):
             g = shapely.intersection(g, area)
             out.clipped += 1
-        for part in shapely.get_parts(g):
-            if isinstance(part, shapely.Polygon) and part.area > 0:
-                out.buildings.append(Footprint(part, height, bottom, eaves, material))
-            elif isinstance(part, shapely.GeometryCollection | shapely.MultiPolygon):
-                for p in shapely.get_parts(part):
-                    if isinstance(p, shapely.Polygon) and p.area > 0:
-                        out.buildings.append(Footprint(p, height, bottom, eaves, material))
+        kept.append((g, here, props))
+    # Outlines and parts: the parts give the shape where they overlap an outline.
+    parts = [g for g, _, props in kept if _is_part(props)]
+    parts_union = shapely.union_all(parts) if parts else None
+    for g, here, props in kept:
+        try:
+            height, bottom, eaves, default = _heights(props, default_height_m)
+        except _Unreadable as err:
+            out.skipped.append(f"{here}: {err}")
+            continue
+        if parts_union is not None and not _is_part(props) and shapely.intersects(g, parts_union):
+            rest = shapely.difference(g, parts_union)
+            if shapely.area(rest) < shapely.area(g) - 1e-6:
+                out.outlines_cut += 1
+                g = rest
+        tag = str(props.get("building:material", "")).strip().lower()
+        material = OSM_MATERIALS.get(tag, tag)
+        if material not in MATERIALS:
+            out.default_material += bool(tag)
+            material = default_material
+        n = len(out.buildings)
+        for part in _polygons(g):
+            if part.area > 1e-6:
+                out.buildings.append(
+                    Footprint(part, height, bottom, eaves, material, guessed=default)
+                )
+        out.default_height += default and len(out.buildings) > n
+    if not out.buildings:
+        _refuse_empty(out, what, local, area, georef, bounds)
     return out
+
+
+def _polygons(g: Any) -> list[Any]:
+    """The polygons of a geometry (a collection's polygonal parts, at any depth)."""
+    import shapely
+
+    if isinstance(g, shapely.Polygon):
+        return [g]
+    if isinstance(g, shapely.MultiPolygon | shapely.GeometryCollection):
+        return [p for part in shapely.get_parts(g) for p in _polygons(part)]
+    return []
+
+
+def _refuse_empty(
+    out: Footprints, what: str, local: Any, area: Any, georef: Georef, bounds: Any
+) -> None:
+    """Refuses a file that yields no building, in one line that says why."""
+    import shapely
+
+    if out.outside and out.outside == len(local):
+        lat, lon = georef.to_latlon(np.array(bounds[:2]), np.array(bounds[2:]))
+        x0, y0, x1, y1 = shapely.total_bounds(np.asarray(local, dtype=object))
+        flat, flon = georef.to_latlon(np.array([x0, x1]), np.array([y0, y1]))
+        raise InvalidInputError(
+            f"{what}: all {out.outside} features lie outside the area (latitude "
+            f"{lat.min():.4f}..{lat.max():.4f}, longitude {lon.min():.4f}..{lon.max():.4f}); "
+            f"the file's features span latitude {flat.min():.4f}..{flat.max():.4f}, longitude "
+            f"{flon.min():.4f}..{flon.max():.4f}: another place, or latitude and longitude "
+            "swapped?"
+        )
+    if out.skipped:
+        raise InvalidInputError(
+            f"{what}: no building could be read ({len(out.skipped)} features skipped; "
+            f"{out.skipped[0]})"
+        )
+    raise InvalidInputError(
+        f"{what}: no building footprints in the area ({out.features} features, "
+        f"{out.not_polygons} not polygons, {out.outside} outside the area)"
+    )

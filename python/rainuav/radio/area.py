@@ -146,3 +146,7 @@ class FootprintsFile:
     OpenStreetMap's height tags; in a TOML file, relative to the TOML's folder."""
     material: str = "concrete"
     """The walls' ITU-R P.2040 material where a feature's ``building:material`` names none."""
+    default_height_m: float = 10.0
+    """The roof of a building on the ground whose feature gives neither a height nor storeys,
+    m (:data:`rainuav.ground.footprints.DEFAULT_HEIGHT_M`; central-city buildings are often
+    18-28 m: a guess either way, which ``fly`` reports)."""

@@ -62,7 +62,7 @@ def _merge(items: list[Footprint]) -> list[Footprint]:
     if not items:
         return []
     polys = shapely.set_precision(np.asarray([f.polygon for f in items], dtype=object), 1e-3)
-    keys = [(f.height_m, f.min_height_m, f.wall_top_m, f.material) for f in items]
+    keys = [(f.height_m, f.min_height_m, f.wall_top_m, f.material, f.guessed) for f in items]
     a, b = shapely.STRtree(polys).query(polys, predicate="intersects")
     same = np.fromiter((keys[i] == keys[j] for i, j in zip(a, b, strict=True)), bool, a.size)
     graph = coo_matrix((np.ones(same.sum()), (a[same], b[same])), shape=(len(items),) * 2)
@@ -78,7 +78,8 @@ def _merge(items: list[Footprint]) -> list[Footprint]:
             if isinstance(p, shapely.Polygon) and p.area > 0:
                 f = items[group[0]]
                 p = shapely.geometry.polygon.orient(p, 1.0)
-                out.append(Footprint(p, f.height_m, f.min_height_m, f.wall_top_m, f.material))
+                out.append(Footprint(p, f.height_m, f.min_height_m, f.wall_top_m, f.material,
+                                     f.guessed))  # fmt: skip
     out.sort(key=lambda f: (f.polygon.bounds, f.polygon.area, f.height_m))
     return out
 
@@ -182,8 +183,9 @@ def _build(scn: Scenario) -> Buildings:
     summary = ""
     if scn.footprints is not None and scn.georef is not None:
         fp = read_footprints(
-            scn.footprints.file, scn.georef, scn.area.bounds, scn.footprints.material
-        )
+            scn.footprints.file, scn.georef, scn.area.bounds, scn.footprints.material,
+            scn.footprints.default_height_m,
+        )  # fmt: skip
         items.extend(fp.buildings)
         summary = fp.summary()
     merged = _merge(items)

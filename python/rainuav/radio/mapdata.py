@@ -114,10 +114,15 @@ class RadioMap:
         return write_npz(path, arrays, self.scenario, FORMAT_VERSION)
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> RadioMap:
-        """Reads a map written by :meth:`save` (bit-exact round trip)."""
+    def load(
+        cls, path: str | os.PathLike[str], known: tuple[str, Scenario] | None = None
+    ) -> RadioMap:
+        """Reads a map written by :meth:`save` (bit-exact round trip). ``known``: ``(digest,
+        scenario)`` the caller looked the file up by (a cache hit): where the file's digest
+        is that one, the map carries the caller's scenario, never the stored one (whose
+        DEM or footprint file may have moved since: the key is their contents)."""
         need = (*cls._ARRAYS, "extent_m", "altitude_m")
-        data, scn = read_npz(path, "radio map", need, FORMAT_VERSION)
+        data, scn = read_npz(path, "radio map", need, FORMAT_VERSION, known)
         if data["extent_m"].shape != (4,):
             raise InvalidInputError(f"{path}: not a rainuav radio map (bad metadata)")
         check_map_arrays(path, data, scn)

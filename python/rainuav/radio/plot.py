@@ -36,9 +36,22 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
             if not 0 <= cell < len(rm.rss_dbm):
                 raise InvalidInputError(f"cell must be within 0..{len(rm.rss_dbm) - 1}")
             data, label = rm.rss_dbm[cell], f"RSS of cell {cell} [dBm]"
-        finite = data[data > RSS_FLOOR_DBM]
+        reach = data > RSS_FLOOR_DBM
+        finite = data[reach]
         vmin = float(np.percentile(finite, 2)) if finite.size else None
-        im = ax.imshow(data, origin="lower", extent=rm.extent_m, cmap="viridis", vmin=vmin)
+        # Out of reach (no path: the files hold the -250 dBm floor): grey, and said so.
+        import matplotlib as mpl
+
+        cmap = mpl.colormaps["viridis"].with_extremes(bad="0.75")
+        shown = np.ma.masked_where(~reach, data)
+        im = ax.imshow(shown, origin="lower", extent=rm.extent_m, cmap=cmap, vmin=vmin)
+        if not reach.all():
+            from matplotlib.patches import Patch
+
+            floor = Patch(
+                facecolor="0.75", label=f"out of reach ({RSS_FLOOR_DBM:g} dBm in the files)"
+            )
+            ax.legend(handles=[floor], loc="upper right", fontsize="small", framealpha=0.8)
     elif kind == "serving":
         data, label = rm.serving_cell, "serving cell"
         cells = max(len(rm.rss_dbm), 1)

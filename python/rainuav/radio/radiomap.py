@@ -38,14 +38,16 @@ MAP_ARRAYS = 10
 
 def cached_map(scn: Scenario, path: Path | None = None) -> RadioMap | None:
     """The cached map of ``scn`` (at ``path``, default its digest's), or None."""
-    path = map_path(scn.digest()) if path is None else path
+    digest = scn.digest()
+    path = map_path(digest) if path is None else path
     if not path.exists():
         return None
     try:
-        rm = RadioMap.load(path)
+        # The map carries ``scn``: a hit never reaches for the files the stored scenario named.
+        rm = RadioMap.load(path, known=(digest, scn))
     except Exception:  # a corrupt or partial entry is rebuilt, never trusted
         return None
-    if rm.scenario.digest() != scn.digest():
+    if rm.scenario is not scn:  # an entry without its digest (or another's): rebuilt
         return None
     return rm
 

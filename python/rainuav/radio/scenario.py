@@ -225,6 +225,7 @@ class Scenario:
             from rainuav.ground.footprints import MATERIALS
 
             _choice("footprints.material", self.footprints.material, tuple(sorted(MATERIALS)))
+            _num("footprints.default_height_m", self.footprints.default_height_m, 0.5, 1000.0, " m")
         a = self.area
         if not self.sites:
             raise InvalidInputError("sites must hold at least one site")
@@ -315,6 +316,7 @@ class Scenario:
                 d["footprints"] = {
                     "sha256": file_digest(self.footprints.file),
                     "material": self.footprints.material,
+                    "default_height_m": self.footprints.default_height_m,
                 }
             except OSError as err:
                 raise InvalidInputError(

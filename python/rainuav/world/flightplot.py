@@ -19,7 +19,9 @@ __all__ = ["plot_flight"]
 
 def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any = None) -> None:
     """``flight.png``: the path over the SINR at take-off (a series: its first instant), the
-    rain at take-off outlined, the waypoints, the sites, the start and the destination.
+    rain at take-off outlined, the buildings' footprints, the pixels the UAV may not fly
+    (hatched), the waypoints, the sites, the start and the destination; the legend below the
+    map, where it hides nothing.
     ``heights``: ``(t_s, altitude_m, outage)`` per vertex of a flight among levels, drawn
     below as its height against time, the moves in outage marked."""
     from matplotlib.figure import Figure
@@ -53,6 +55,7 @@ def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any
         if levels:
             cs = ax.contour(xx, yy, rate, levels=levels, colors="navy", linewidths=1.0)
             ax.clabel(cs, fmt="%g mm/h", fontsize=7)
+    proxies = _obstacles(ax, rm, scn, (x0, x1, y0, y1), None)
     ax.plot(path[:, 0], path[:, 1], "k-", lw=1.5, label="planned flight")
     wp = path[corners(path)]
     ax.plot(wp[:, 0], wp[:, 1], "ko", ms=3, label="waypoints")
@@ -66,6 +69,45 @@ def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any
     level = "" if heights is None else f" at {float(np.asarray(heights[1])[0]):g} m"
     what = f"SINR{level} and rain" if scn.medium.varies else f"SINR{level}"
     ax.set_title(f"{what} at take-off; origin {origin}", fontsize=10)
-    ax.legend(loc="best", fontsize="small", framealpha=0.8)  # away from the flight
     fig.colorbar(im, ax=ax, label="SINR [dB]")
+    # Below the map: a legend inside it could hide the destination.
+    handles, labels = ax.get_legend_handles_labels()
+    handles += proxies
+    labels += [h.get_label() for h in proxies]
+    fig.legend(handles, labels, loc="outside lower center", ncols=4, fontsize="small",
+               frameon=False)  # fmt: skip
     write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
+
+
+def _obstacles(
+    ax: Any, rm: Any, scn: Any, extent: tuple[float, ...], level: int | None
+) -> list[Any]:
+    """The buildings' footprints (grey) and the pixels the UAV may not fly (hatched: terrain
+    or a building within the clearance of the flight height) on ``ax``; returns the legend's
+    entry for the hatching (contours carry no label)."""
+    from matplotlib.patches import Patch, Polygon
+
+    proxies: list[Any] = []
+    nf = getattr(rm, "not_flyable", None)
+    if nf is not None:
+        nf = np.asarray(nf)
+        if nf.ndim == 3:
+            nf = nf[0 if level is None else level]
+        if nf.any():
+            h, w = nf.shape
+            xs = np.linspace(extent[0], extent[1], w + 1)
+            ys = np.linspace(extent[2], extent[3], h + 1)
+            ax.contourf(0.5 * (xs[1:] + xs[:-1]), 0.5 * (ys[1:] + ys[:-1]), nf.astype(float),
+                        levels=[0.5, 1.5], colors="none", hatches=["xxxx"])  # fmt: skip
+            proxies.append(Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=0.5,
+                                 label="not flyable"))  # fmt: skip
+    if scn.buildings or scn.footprints is not None:
+        from rainuav.radio.buildings import scenario_buildings
+
+        b = scenario_buildings(scn)
+        for k, f in enumerate(() if b is None else b.footprints):
+            ring = np.asarray(f.polygon.exterior.coords)[:, :2]
+            label = "buildings" if k == 0 else None
+            ax.add_patch(Polygon(ring, closed=True, facecolor="0.55", edgecolor="0.25",
+                                 lw=0.4, alpha=0.6, label=label))  # fmt: skip
+    return proxies

@@ -1,7 +1,8 @@
 """``fly`` with altitude as a decision (``--altitudes``): the place mapped at each flight
 level (:mod:`rainuav.radio.levels`), the exact plan among them
 (:func:`rainuav.nav.planner.optimal_levels`: climbs and descents weighted by their duration)
-from the lowest level flyable at the start, and the flight's files with a height on every
+from the take-off level the planner finds best (of those flyable at the start; or the one
+given), and the flight's files with a height on every
 waypoint (relative to home; over a DEM, above sea level, with as many waypoints as keep every
 straight leg, climb or descent the clearance above the ground).
 
@@ -23,6 +24,7 @@ from rainuav.errors import InvalidInputError
 from rainuav.geo import latlon_text
 from rainuav.missions import (
     corners,
+    densify,
     expand,
     geojson_dict,
     kml_text,
@@ -39,6 +41,7 @@ from rainuav.radio.terrain import obstacle_pixel_max, scenario_terrain
 from rainuav.radio.timemap import series_times
 from rainuav.world import SLICE_S, level_field
 from rainuav.world.flightplot import plot_flight
+from rainuav.world.place import buildings_near_route
 
 __all__ = ["fly_levels"]
 
@@ -48,8 +51,8 @@ def fly_levels(
     progress: bool = False, start_altitude_m: float | None = None,
 ) -> dict:  # fmt: skip
     """Plans and writes the flight among ``place``'s levels (module docstring), from the level
-    ``start_altitude_m`` (default: the lowest the start may be flown at); returns the
-    summary."""
+    ``start_altitude_m`` (default: the planner's choice, the level whose optimum is best among
+    those the start may be flown at, which the summary names); returns the summary."""
     scn = place.scenario
     if scn.area.msl and scn.terrain is not None:
         raise InvalidInputError(
@@ -79,7 +82,7 @@ def fly_levels(
                 f"{name} {latlon_text(float(lat), float(lon))} lies where the UAV may not fly "
                 f"at any of --altitudes: obstacles within {scn.area.clearance_m:g} m"
             )
-    start_level = int(np.flatnonzero(flyable(*place.start_m))[0])
+    start_level = -1  # the exact planner's choice: the level whose optimum is best
     if start_altitude_m is not None:
         start_level = int(np.argmin(np.abs(alts - start_altitude_m)))
         if not flyable(*place.start_m)[start_level]:
@@ -93,6 +96,8 @@ def fly_levels(
     if np.hypot(*(plan.path_m[-1] - np.asarray(place.goal_m))) > task.tol_m:
         raise InvalidInputError(f"no flight reaches the destination within {steps} moves")
     path, lv = plan.path_m, plan.levels
+    chosen_by = "planner" if start_level < 0 else "--start"
+    start_level = int(lv[0])
     up, down = plan.actions == 4, plan.actions == 5
     t_s = plan.ticks * task.move_s
     sig = field(path[:, 0], path[:, 1], t_s, lv)
@@ -119,19 +124,25 @@ def fly_levels(
     ll = np.stack([lat, lon], axis=1)
     z = alts[lv]
     # Over terrain: heights above sea level, with as many waypoints as keep each straight
-    # climb, descent or leg at least the clearance above the ground and the obstacles.
-    heights, home_amsl = None, 0.0
+    # climb, descent or leg within the hold of the planned height above the ground and at
+    # least the clearance above the ground and the obstacles (checked along the legs).
+    heights, home_amsl, wp_ll, wp_z = None, 0.0, ll[picks], z[picks]
     t = scenario_terrain(scn)
     if t is not None:
-        ground = t.at(path[:, 0], path[:, 1])
-        under = pixel_index(shape, bounds, path[:, 0], path[:, 1])
+        dense = densify(xyz, task.step_m)
+        dz = np.interp(dense[:, 2] / task.step_m, np.arange(len(alts)), alts)
+        ground = t.at(dense[:, 0], dense[:, 1])
+        under = pixel_index(shape, bounds, dense[:, 0], dense[:, 1])
         top = (t.pixel_max(shape) + obstacle_pixel_max(scn))[under]
-        picks = terrain_waypoints(xyz, ground + z, top, scn.area.clearance_m)
-        heights, home_amsl = (ground + z)[picks], float(ground[0])
+        picks = terrain_waypoints(dense, ground + dz, top, scn.area.clearance_m)
+        heights, home_amsl = (ground + dz)[picks], float(ground[0])
+        wp_ll = np.stack(place.georef.to_latlon(dense[picks, 0], dense[picks, 1]), axis=1)
+        wp_z = dz[picks]
     summary = {
         "flown_by": "exact optimum among levels", "cost": cost, "optimal_cost": cost,
         "excess_over_optimum": 0.0, "outage_share": float(np.mean(sig[1:] < threshold)),
         "altitudes_m": alts.tolist(), "start_altitude_m": float(alts[start_level]),
+        "start_altitude_chosen_by": chosen_by,
         "climbs": int(up.sum()), "descents": int(down.sum()),
         "fixed_altitude_m": float(alts[fixed]), "fixed_altitude_cost": per_level[fixed][0],
         "fixed_altitude_outage_share": per_level[fixed][1], "weather_moves": times is not None,
@@ -142,6 +153,7 @@ def fly_levels(
         "origin": {"lat": place.georef.lat_deg, "lon": place.georef.lon_deg,
                    "projection": place.georef.proj4},
         "area_m": list(scn.area.bounds),
+        **(buildings_near_route(scn, path) or {}),
     }  # fmt: skip
     begin_folder(out, "summary.json")
     home = (float(ll[0, 0]), float(ll[0, 1]))
@@ -156,9 +168,9 @@ def fly_levels(
         "flight.geojson": json.dumps(geojson_dict(ll, z, props, sites, summary), indent=1),
         "flight.kml": kml_text(ll, z, "rainuav flight", sites),
         "mission.plan": json.dumps(
-            plan_dict(home, ll[picks], z[picks], speed_m_s, heights, home_amsl), indent=2
+            plan_dict(home, wp_ll, wp_z, speed_m_s, heights, home_amsl), indent=2
         ),
-        "mission.waypoints": wpl_text(home, ll[picks], z[picks], heights, home_amsl),
+        "mission.waypoints": wpl_text(home, wp_ll, wp_z, heights, home_amsl),
     }
     for name, text in texts.items():
         write_atomic(out / name, lambda tmp, text=text: tmp.write_text(text + "\n"))

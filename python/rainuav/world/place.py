@@ -27,6 +27,7 @@ from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef, latlon_text
 from rainuav.missions import (
     corners,
+    densify,
     expand,
     geojson_dict,
     kml_text,
@@ -94,6 +95,7 @@ def place_scenario(
     footprints: str | Path | None = None,
     altitudes: list[float] | None = None,
     engine: str | None = None,
+    default_height_m: float | None = None,
 ) -> Place:
     """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees.
     ``weather``: a georeferenced rain file (:mod:`rainuav.radio.radar`, mm/h or dBZ, one
@@ -105,7 +107,8 @@ def place_scenario(
     level (``"msl"``). ``footprints``: building footprints in GeoJSON
     (:mod:`rainuav.ground.footprints`) standing on it. ``altitudes``: the flight levels a
     flight chooses among (``area.altitudes_m``). ``engine``: the maps' engine (default the
-    preset's, hybrid)."""
+    preset's, hybrid). ``default_height_m``: the roof of a footprint with neither a height nor
+    storeys (``[footprints] default_height_m``, default 10 m)."""
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
@@ -179,7 +182,12 @@ def place_scenario(
     if footprints is not None:
         if not Path(footprints).is_file():
             raise InvalidInputError(f"--footprints: no file {footprints}")
-        scn = dataclasses.replace(scn, footprints=FootprintsFile(str(Path(footprints).resolve())))
+        fp = FootprintsFile(str(Path(footprints).resolve()))
+        if default_height_m is not None:
+            fp = dataclasses.replace(fp, default_height_m=default_height_m)
+        scn = dataclasses.replace(scn, footprints=fp)
+    elif default_height_m is not None:
+        raise InvalidInputError("--default-height needs building footprints (--footprints)")
     scn.check()
     return Place(scn, geo, (float(sx), float(sy)), (float(gx), float(gy)), rows)
 
@@ -349,25 +357,65 @@ def fly_place(
         "origin": {"lat": place.georef.lat_deg, "lon": place.georef.lon_deg,
                    "projection": place.georef.proj4},
         "area_m": [a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m],
+        **(buildings_near_route(scn, path) or {}),
     }  # fmt: skip
     _write(place, out, ll, path, t_s, sinr, serving, min_db, summary, rm)
     return summary
 
 
+NEAR_ROUTE_M = 100.0
+"""Buildings within this distance of a flight's path count as near it (the summary's
+``buildings_near_route``), m."""
+
+
+def buildings_near_route(scn: Scenario, path: np.ndarray) -> dict[str, int] | None:
+    """How many of ``scn``'s buildings stand within :data:`NEAR_ROUTE_M` of ``path`` (N, 2),
+    and how many of those stand at the default height (their clearance a guess); None without
+    buildings."""
+    from rainuav.radio.buildings import scenario_buildings
+
+    b = scenario_buildings(scn)
+    if b is None:
+        return None
+    import shapely
+
+    line = shapely.LineString(path[:, :2]) if len(path) > 1 else shapely.Point(path[0, :2])
+    near = [f for f in b.footprints if shapely.distance(f.polygon, line) <= NEAR_ROUTE_M]
+    return {
+        "buildings_near_route": len(near),
+        "buildings_near_route_at_default_height": sum(f.guessed for f in near),
+    }
+
+
+def default_height_warning(summary: dict[str, Any], default_height_m: float) -> str | None:
+    """A warning line where most buildings near the route stand at the default height."""
+    n = summary.get("buildings_near_route") or 0
+    k = summary.get("buildings_near_route_at_default_height") or 0
+    if n == 0 or 2 * k <= n:
+        return None
+    return (
+        f"warning: {k} of the {n} buildings within {NEAR_ROUTE_M:g} m of the route stand at the "
+        f"default height {default_height_m:g} m (their file gives no height or storeys): the "
+        "clearance over them is a guess; set --default-height or add heights to the file"
+    )
+
+
 def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, float]:
-    """The mission's waypoints along ``path`` (indices), their heights above mean sea level
-    (None over flat open ground: the flight altitude relative to home) and home's height:
-    over terrain, :func:`rainuav.missions.terrain_waypoints` with the flight height and the
-    highest terrain or obstacle of the pixel under each vertex."""
+    """The mission's waypoints along ``path`` (K, 2: local metres), their heights above mean
+    sea level (None over flat open ground: the flight altitude relative to home) and home's
+    height: over terrain, :func:`rainuav.missions.terrain_waypoints` on the path sampled
+    :data:`rainuav.missions.SAMPLES_PER_MOVE` times a move, with the planned flight height
+    and the highest terrain or obstacle of the pixel under each sample."""
     t = scenario_terrain(scn)
     if t is None:
-        return corners(path), None, 0.0
+        return path[corners(path)], None, 0.0
     a = scn.area
-    x, y = path[:, 0], path[:, 1]
+    dense = densify(path, a.resolution_m)
+    x, y = dense[:, 0], dense[:, 1]
     z = flight_heights_at(scn, x, y)
     top = (t.pixel_max(a.shape) + obstacle_pixel_max(scn))[pixel_index(a.shape, a.bounds, x, y)]
-    picks = terrain_waypoints(path, z, top, a.clearance_m)
-    return picks, z[picks], float(t.at(x[0], y[0]))
+    picks = terrain_waypoints(dense, z, top, a.clearance_m)
+    return dense[picks], z[picks], float(t.at(x[0], y[0]))
 
 
 def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.ndarray,
@@ -375,8 +423,8 @@ def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.nd
            rm: Any) -> None:  # fmt: skip
     begin_folder(out, "summary.json")
     alt = place.scenario.area.altitude_m
-    picks, heights, home_amsl = mission_heights(place.scenario, path)
-    wp = ll[picks]
+    wp_m, heights, home_amsl = mission_heights(place.scenario, path)
+    wp = np.stack(place.georef.to_latlon(wp_m[:, 0], wp_m[:, 1]), axis=1)
     home = (float(ll[0, 0]), float(ll[0, 1]))
     props = {
         "t_s": t_s.tolist(), "sinr_db": np.round(sinr, 3).tolist(),
