@@ -341,8 +341,10 @@ def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
     from rainuav.radio.scenario import Origin
     from rainuav.radiomap import main
 
+    # A scenario of its own name (a place's): the outage counted at the uma preset's -2 dB,
+    # the threshold fly uses, not left out.
     scn = uma(0.0, 28e9, engine="ray").replace(
-        area=Area(resolution_m=50.0), origin=Origin(47.37, 8.54)
+        name="my_place", area=Area(resolution_m=50.0), origin=Origin(47.37, 8.54)
     )
     cfg_file = tmp_path / "uma.toml"
     cfg_file.write_text(scn.to_toml_string())
@@ -350,6 +352,7 @@ def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
     assert main(["--config", str(cfg_file), "--altitudes", "30:60:30", "--out", str(out)]) == 0
     summary = json.loads((out / "radiomap_levels.json").read_text())
     assert [lv["altitude_m"] for lv in summary["levels"]] == [30.0, 60.0]
+    assert summary["min_db"] == -2.0
     for lv in summary["levels"]:
         a = lv["altitude_m"]
         rm = RadioMap.load(out / lv["map"])

@@ -610,6 +610,19 @@ def test_fly_over_terrain_writes_heights_above_sea_level(tmp_path: Path) -> None
     )
     flown = np.interp(s_path, s_wp, alts)
     assert np.min(flown - under) >= 10.0 - 1.0
+    # Every leg the autopilot flies, sampled every metre against the ground: the planned 100 m
+    # above it within HOLD_M (1 m more: the file's int16 heights, and the DEM's bilinear
+    # surface between the checks every quarter move).
+    from rainuav.missions import HOLD_M
+
+    worst = 0.0
+    for k in range(len(wx) - 1):
+        n = max(2, int(np.hypot(wx[k + 1] - wx[k], wy[k + 1] - wy[k])) + 1)
+        f = np.linspace(0.0, 1.0, n)
+        la, lo = g.to_latlon(wx[k] + f * (wx[k + 1] - wx[k]), wy[k] + f * (wy[k + 1] - wy[k]))
+        above = alts[k] + f * (alts[k + 1] - alts[k]) - _ground(la, lo, ridge=True)
+        worst = max(worst, float(np.max(np.abs(above - 100.0))))
+    assert worst <= HOLD_M + 1.0, worst
 
 
 def test_fly_refuses_a_start_where_it_may_not_fly(tmp_path: Path, capsys) -> None:

@@ -211,6 +211,8 @@ class Footprints:
     """The buildings within the area (clipped to it)."""
     features: int = 0
     """Features in the file."""
+    read: int = 0
+    """Features read within the area (an outline wholly covered by its parts among them)."""
     outside: int = 0
     """Features wholly outside the area (skipped)."""
     not_polygons: int = 0
@@ -432,15 +434,17 @@ def read_footprints(
             g = shapely.intersection(g, area)
             out.clipped += 1
         kept.append((g, here, props))
-    # Outlines and parts: the parts give the shape where they overlap an outline.
-    parts = [g for g, _, props in kept if _is_part(props)]
-    parts_union = shapely.union_all(parts) if parts else None
+    # Heights first: a part that cannot be read does not cut its outline.
+    readable = []
     for g, here, props in kept:
         try:
-            height, bottom, eaves, default = _heights(props, default_height_m)
+            readable.append((g, props, _heights(props, default_height_m)))
         except _Unreadable as err:
             out.skipped.append(f"{here}: {err}")
-            continue
+    # Outlines and parts: the parts give the shape where they overlap an outline.
+    parts = [g for g, props, _ in readable if _is_part(props)]
+    parts_union = shapely.union_all(parts) if parts else None
+    for g, props, (height, bottom, eaves, default) in readable:
         if parts_union is not None and not _is_part(props) and shapely.intersects(g, parts_union):
             rest = shapely.difference(g, parts_union)
             if shapely.area(rest) < shapely.area(g) - 1e-6:
@@ -457,6 +461,7 @@ def read_footprints(
                 out.buildings.append(
                     Footprint(part, height, bottom, eaves, material, guessed=default)
                 )
+        out.read += 1
         out.default_height += default and len(out.buildings) > n
     if not out.buildings:
         _refuse_empty(out, what, local, area, georef, bounds)
