@@ -1,4 +1,4 @@
-"""Buildings from footprint files (PHYSICS.md section 12): OpenStreetMap's height tags, roofs
+"""Buildings from footprint files (docs/physics.md section 12): OpenStreetMap's height tags, roofs
 that diffract as a profile (against an independent delta-Bullington), walls that reflect
 (against the closed-form image method), boxes as footprints, order and split features,
 reciprocity, the not-flyable pixels, the cache key and bad files refused in one line."""

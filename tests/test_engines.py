@@ -188,7 +188,7 @@ def test_pe_rain_agrees_with_the_rays_inside_the_cone() -> None:
 def test_rain_raises_sinr_where_interference_limited() -> None:
     # uma at 100 m sees every sector in line of sight: interference-limited (noise far below
     # the interference), so rain suppresses the distant interferers more than the near
-    # server. An independent two-ray estimate (PHYSICS.md section 9) gives a median +3.2 dB
+    # server. An independent two-ray estimate (docs/physics.md section 9) gives a median +3.2 dB
     # at 50 mm/h, 28 GHz, and under 0.2 dB at 4.9 GHz; we require the sign and size: median
     # above +1 dB at 28 GHz, below 0.2 dB in magnitude at 4.9 GHz.
     for freq, lo, hi in ((28e9, 1.0, 6.0), (4.9e9, -0.2, 0.2)):

@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -861,6 +862,114 @@ def test_bad_footprint_files_are_refused_by_radiomap_in_one_line(tmp_path, capsy
         rc, err = run_cli(radiomap, argv, capsys)
         refused(f"radiomap --footprints ({what})", rc, err, path.name, word)
         assert not (out / "radiomap.npz").exists()
+
+
+def test_a_cached_map_never_reaches_for_the_dem_it_was_made_from(tmp_path, capsys) -> None:
+    # fly --terrain A/dem.tif, the DEM moved to B/ and A/ deleted: the next fly --terrain
+    # B/dem.tif (the same contents: a cache hit) plans without reaching for A/dem.tif.
+    from rainuav import fly
+    from test_terrain import _zurich_hill_dem
+
+    a, b = tmp_path / "A", tmp_path / "B"
+    a.mkdir()
+    b.mkdir()
+    dem = _zurich_hill_dem(a / "dem.tif")
+    base = ["--sites", EXAMPLES / "sites.csv", *TRIP, "--engine", "ray"]
+    rc, err = run_cli(fly, [*base, "--terrain", dem, "--out", tmp_path / "one"], capsys)
+    assert rc == 0, err
+    shutil.move(dem, b / "dem.tif")
+    shutil.rmtree(a)
+    rc, err = run_cli(fly, [*base, "--terrain", b / "dem.tif", "--out", tmp_path / "two"], capsys)
+    assert rc == 0 and "error" not in err, err
+    one = json.loads((tmp_path / "one" / "summary.json").read_text())
+    two = json.loads((tmp_path / "two" / "summary.json").read_text())
+    assert one["cost"] == two["cost"]
+    accepted("fly --terrain with the DEM moved since the map was cached")
+
+
+def test_a_nan_vertex_in_a_footprint_file_is_one_line_and_no_warning(tmp_path, capsys) -> None:
+    from rainuav import fly
+
+    ring = [[8.54, 47.37], [float("nan"), 47.371], [8.541, 47.371], [8.54, 47.37]]
+    fc = {"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {
+        "height": 10}, "geometry": {"type": "Polygon", "coordinates": [ring]}}]}  # fmt: skip
+    (tmp_path / "nan.geojson").write_text(json.dumps(fc))
+    argv = ["--sites", EXAMPLES / "sites.csv", *TRIP, "--footprints", tmp_path / "nan.geojson",
+            "--out", tmp_path / "o"]  # fmt: skip
+    rc, err = run_cli(fly, argv, capsys)
+    refused("fly --footprints with a NaN vertex", rc, err, "nan.geojson", "longitude")
+    assert len(err.strip().splitlines()) == 1, err  # no warning line before it
+    assert not (tmp_path / "o").exists()
+
+
+def test_fly_policy_is_checked_before_maps_and_torch(tmp_path) -> None:
+    # A --policy that is no run is refused before the footprints are read or torch loaded
+    # (a fresh interpreter: torch absent from sys.modules after the refusal).
+    fc = {"type": "FeatureCollection", "features": []}
+    (tmp_path / "none.geojson").write_text(json.dumps(fc))
+    code = (
+        "import sys; from rainuav.fly import main; "
+        f"rc = main(['--sites', {str(EXAMPLES / 'sites.csv')!r}, '--start', '47.3700,8.5400', "
+        f"'--goal', '47.3830,8.5570', '--footprints', {str(tmp_path / 'none.geojson')!r}, "
+        f"'--policy', {str(tmp_path / 'no_run')!r}, '--out', {str(tmp_path / 'o')!r}]); "
+        "print(rc, 'torch' in sys.modules)"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.stdout.split() == ["2", "False"], (res.stdout, res.stderr)
+    refused("fly --policy no_run", 2, res.stderr, "--policy", "not a rainuav.train run")
+
+
+def test_fly_start_height_outside_the_band_is_refused(tmp_path, capsys) -> None:
+    from rainuav import fly
+
+    argv = ["--sites", EXAMPLES / "sites.csv", "--start", "47.3700,8.5400,100", "--goal",
+            "47.3830,8.5570", "--altitudes", "30:120:15", "--out", tmp_path / "o"]  # fmt: skip
+    rc, err = run_cli(fly, argv, capsys)
+    refused("fly --start at 100 m of 30:120:15", rc, err, "100 m", "--altitudes")
+
+
+CLI_MODULES = ("fly", "radiomap", "train", "evaluate", "study", "validate")
+
+
+@pytest.mark.parametrize("cli", CLI_MODULES)
+def test_no_help_prints_raw_markup(cli: str, capsys) -> None:
+    # reStructuredText's roles and literals are for the documentation site: a terminal shows
+    # the names they link.
+    import importlib
+    import re
+
+    text = _help(importlib.import_module(f"rainuav.{cli}"), capsys)
+    assert not re.search(r":[a-z]+:`|``", text), re.search(r".{30}(:[a-z]+:`|``).{30}", text)
+    assert "PHYSICS" not in text and "docs/learner.md" not in text
+
+
+def test_study_help_names_every_built_in_study(capsys) -> None:
+    from rainuav.studies.spec import BUILT_IN
+
+    text = _help(study, capsys)
+    assert all(f"'{name}'" in text for name in BUILT_IN)
+    for flag, word in (("--out", "results.csv"), ("--workers", "at once"), ("--quick", "[quick]")):
+        assert re.search(rf"{flag}\b[^-]*{re.escape(word)}", text), (flag, text)
+
+
+def test_train_help_agrees_with_the_learning_page(capsys) -> None:
+    text = _help(train, capsys)
+    assert "Table I hyperparameters" not in text
+    assert "--preset paper runs Algorithm 1 and Table I literally" in text
+
+
+def test_out_of_reach_pixels_are_named_in_the_rss_figure() -> None:
+    from rainuav.radio.plot import plot_map
+    from rainuav.radio.sinr import RSS_FLOOR_DBM
+
+    rm = build_radio_map(tiny_scenario(), cache=False)
+    rm.rss_dbm[0, :3, :3] = RSS_FLOOR_DBM
+    ax = plot_map(rm, "rss")
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("out of reach" in t and "-250 dBm" in t for t in texts), texts
+    import matplotlib.pyplot as plt
+
+    plt.close(ax.figure)
 
 
 def test_the_corpus_totals(capsys) -> None:

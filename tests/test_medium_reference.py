@@ -1,4 +1,4 @@
-"""The rain medium against independent references: PHYSICS.md's reference values,
+"""The rain medium against independent references: docs/physics.md's reference values,
 miepython, the Rayleigh limit, the itur package and ITU-R P.838-3."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from rainuav import medium as m
 
 
 def test_water_permittivity_reference_values() -> None:
-    # PHYSICS.md section 1 quotes 5 significant figures: 1e-3 absolute.
+    # docs/physics.md section 1 quotes 5 significant figures: 1e-3 absolute.
     f = np.array([4.9e9, 4.9e9, 4.9e9, 10e9])
     t = np.array([20.0, 10.0, 0.0, 20.0])
     want = np.array([74.319 - 19.932j, 73.580 - 26.384j, 68.764 - 34.641j, 60.804 - 32.709j])
@@ -22,14 +22,14 @@ def test_water_permittivity_reference_values() -> None:
 
 
 def test_marshall_palmer_reference_values() -> None:
-    # PHYSICS.md section 2 quotes 4 significant figures: 1e-3 relative.
+    # docs/physics.md section 2 quotes 4 significant figures: 1e-3 relative.
     got = m.marshall_palmer([1.0, 2.0], 25.0)
     np.testing.assert_allclose(got, [993.9, 123.5], rtol=1e-3)
     assert m.marshall_palmer(1.0, 0.0) == 0.0
 
 
 def test_depolarisation_reference_values() -> None:
-    # PHYSICS.md section 2 quotes 5 decimals: 1e-5 absolute.
+    # docs/physics.md section 2 quotes 5 decimals: 1e-5 absolute.
     for r, lx, lz in [(0.9, 0.31909, 0.36182), (0.7, 0.28397, 0.43207), (0.5, 0.23640, 0.52720)]:
         got = _core.depolarisation_factors(r)
         assert got == pytest.approx((lx, lz), abs=1e-5)
@@ -68,7 +68,7 @@ def test_mie_against_miepython(m_eng: complex, x: float) -> None:
 def test_forward_scattering_rayleigh_limit() -> None:
     # Drops of 0.1-0.3 mm at 1 GHz have |m x| < 0.03: the van de Hulst index must equal the
     # quasi-static sphere result n - 1 = (3/2) f_v (eps_w - 1)/(eps_w + 2) up to O((m x)^2)
-    # ~ 1e-3 relative (PHYSICS.md section 3). 3e-3 relative on n - 1.
+    # ~ 1e-3 relative (docs/physics.md section 3). 3e-3 relative on n - 1.
     d = np.linspace(0.1, 0.3, 41)
     dsd = m.tabulated_dsd(d, np.full_like(d, 5000.0))
     rate = dsd.table_rain_rate_mm_h
@@ -105,7 +105,7 @@ def test_itu_p838_against_itur(polarization: str, elevation_deg: float) -> None:
 
 
 def test_itu_p838_reference_and_tilt() -> None:
-    # PHYSICS.md section 3, 4 significant figures.
+    # docs/physics.md section 3, 4 significant figures.
     assert m.itu_p838(4.9e9, 25.0) == pytest.approx(0.04639, rel=5e-4)
     assert m.itu_p838(4.9e9, 25.0, polarization="v") == pytest.approx(0.03068, rel=5e-4)
     assert m.itu_p838(28e9, 25.0) == pytest.approx(4.624, rel=5e-4)
@@ -114,14 +114,14 @@ def test_itu_p838_reference_and_tilt() -> None:
 
 
 def test_physics_md_forward_scattering_values() -> None:
-    # PHYSICS.md: Marshall-Palmer, 20 C, spheres, H, 25 mm/h, quoted to 2-3 figures: 2%.
+    # docs/physics.md: Marshall-Palmer, 20 C, spheres, H, 25 mm/h, quoted to 2-3 figures: 2%.
     f = np.array([4.9e9, 10e9, 28e9, 60e9])
     got = m.specific_attenuation(f, 25.0, shape="sphere")
     np.testing.assert_allclose(got, [0.044, 0.59, 4.80, 12.3], rtol=0.02)
 
 
 def test_quasi_static_is_low_above_a_few_ghz() -> None:
-    # PHYSICS.md: the paper's model is ~2.7x low at 4.9 GHz / 25 mm/h and ~10x at 10-20 GHz.
+    # docs/physics.md: the paper's model is ~2.7x low at 4.9 GHz / 25 mm/h and ~10x at 10-20 GHz.
     ratio_49 = m.itu_p838(4.9e9, 25.0) / m.specific_attenuation(4.9e9, 25.0, model="quasi-static")
     assert 2.0 < ratio_49 < 3.5
     ratio_15 = m.itu_p838(15e9, 25.0) / m.specific_attenuation(15e9, 25.0, model="quasi-static")

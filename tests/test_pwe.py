@@ -1,5 +1,5 @@
 """The split-step PE march against analytic solutions and an independent float64 numpy march
-(shared/PHYSICS.md section 4). Each tolerance says why it is right."""
+(docs/physics.md section 4). Each tolerance says why it is right."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ def grid(nx: int, ny: int, d: float) -> tuple[np.ndarray, np.ndarray]:
 
 def numpy_march(u0, d, dz, steps, propagator="wide", n=1.0):
     """Reference: float64 angular-spectrum march on a periodic grid, written from
-    PHYSICS.md independently of the Rust code."""
+    docs/physics.md independently of the Rust code."""
     nx, ny = u0.shape
     kx = 2 * np.pi * np.fft.fftfreq(nx, d)[:, None]
     ky = 2 * np.pi * np.fft.fftfreq(ny, d)[None, :]
@@ -68,7 +68,7 @@ def test_against_float64_numpy_march(propagator: str) -> None:
 
 
 def test_narrow_against_analytic_beam() -> None:
-    # PHYSICS.md: w0 = 2 m at 4.9 GHz, zR = 205.39 m; after 750 m (3.65 zR) the split-step is
+    # docs/physics.md: w0 = 2 m at 4.9 GHz, zR = 205.39 m; after 750 m (3.65 zR) the split-step is
     # exact for the paraxial equation, so only complex64 rounding remains: 1e-3 (the issue's).
     d, n, w0 = 0.25, 256, 2.0
     zr = K0 * w0**2 / 2

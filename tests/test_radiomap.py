@@ -74,7 +74,7 @@ def boresight(rm):
 
 def test_friis_on_boresight() -> None:
     # Far-field boresight power of a Gaussian beam: Pt + D + 20 log10(lambda / (4 pi r)) with
-    # D = 4 ln2 / (sin(bh/2) sin(bv/2)) (PHYSICS.md beam). zR = 4.7 m here, so beyond 100 m
+    # D = 4 ln2 / (sin(bh/2) sin(bv/2)) (docs/physics.md beam). zR = 4.7 m here, so beyond 100 m
     # the near-field correction is < 0.01 dB; 0.5 dB is the bar on the calibration.
     scn = beam_line()
     rm = build_radio_map(scn, cache=False)
@@ -142,7 +142,7 @@ def test_building_casts_a_shadow() -> None:
 
 
 def test_sir_by_hand() -> None:
-    # Three cells, three pixels: hand-computed serving cell, SIR and SINR (PHYSICS.md 5).
+    # Three cells, three pixels: hand-computed serving cell, SIR and SINR (docs/physics.md 5).
     p = np.array([[[1.0, 1e-3, 0.0]], [[0.5, 2e-3, 0.0]], [[0.25, 0.0, 0.0]]])
     serving, sir, sinr = sinr_mod.sir_from_power(p, noise_dbm=10 * np.log10(0.25))
     assert serving.tolist() == [[0, 1, -1]]
@@ -420,7 +420,7 @@ def test_cli_clear_cache(tmp_path: Path) -> None:
 
 
 def test_noise_from_bandwidth_and_noise_figure() -> None:
-    # PHYSICS.md section 9: N = -174 dBm/Hz + 10 log10(B) + NF; 20 MHz and 7 dB give -93.99
+    # docs/physics.md section 9: N = -174 dBm/Hz + 10 log10(B) + NF; 20 MHz and 7 dB give -93.99
     # dBm (PHYSICS rounds to -94); the defaults (10 MHz, 9 dB) give -95 dBm exactly, the
     # previous fixed noise, so existing maps keep their SINR. An explicit noise_dbm wins.
     assert beam_line().replace(bandwidth_hz=20e6, noise_figure_db=7.0).noise_power_dbm == (

@@ -1,6 +1,6 @@
 """Terrain: the DEM read onto the area, the diffraction over each path's profile against
 independent references, maps over a DEM in two CRSs, shifts, and bad DEMs refused in one line
-(PHYSICS.md section 12)."""
+(docs/physics.md section 12)."""
 
 from __future__ import annotations
 
@@ -113,7 +113,7 @@ def scenario(dem: Path | None, site_x: float = 200.0, **area: object) -> Scenari
 def test_knife_edge_j_is_within_0_2_db_of_the_exact_fresnel_integral() -> None:
     # P.526 eq. (31) is an approximation of the exact knife edge: the loss of
     # |F(nu)| = |(1 + j)/2 [(1/2 - C(nu)) - j (1/2 - S(nu))]| (P.526 eq. 26); its stated
-    # accuracy is about 0.2 dB over nu >= -0.78 (PHYSICS.md section 12).
+    # accuracy is about 0.2 dB over nu >= -0.78 (docs/physics.md section 12).
     from scipy.special import fresnel
 
     nu = np.linspace(-0.78, 5.0, 2001)
@@ -124,7 +124,7 @@ def test_knife_edge_j_is_within_0_2_db_of_the_exact_fresnel_integral() -> None:
 
 
 def _bullington_by_hand(d, h, dist, hts, hrs, lam):
-    """PHYSICS.md section 12 written out directly (km and the 0.002 factor, as P.526)."""
+    """docs/physics.md section 12 written out directly (km and the 0.002 factor, as P.526)."""
     ce = 1 / 8500.0
     di, dk = d / 1000.0, dist / 1000.0
     g = h + 500 * ce * di * (dk - di)
@@ -160,7 +160,7 @@ ENDS = [(25.0, 100.0), (30.0, 60.0), (40.0, 250.0)]
 @pytest.mark.parametrize("name", list(PROFILES))
 @pytest.mark.parametrize("freq_ghz", [4.9, 28.0])
 def test_bullington_against_the_formulas_by_hand(name: str, freq_ghz: float) -> None:
-    # The core's construction against the formulas of PHYSICS.md section 12 written out in
+    # The core's construction against the formulas of docs/physics.md section 12 written out in
     # km in the test: the same arithmetic, so within 0.01 dB.
     d = np.arange(10.0, 3000.0, 10.0)
     h = PROFILES[name](d)

@@ -16,7 +16,7 @@ Layers, bottom up (each imports only the ones below it):
 - :mod:`rainuav.rl`: the dueling double DQN and its training loop (torch), given a world.
 
 Entry points: ``python -m rainuav.train``, ``rainuav.evaluate``, ``rainuav.radiomap``,
-``rainuav.validate``, ``rainuav.study``. Physics conventions: ``shared/PHYSICS.md`` (time dependence
+``rainuav.validate``, ``rainuav.study``. Physics conventions: ``docs/physics.md`` (time dependence
 ``exp(+j w t)``, lossy media have ``Im eps <= 0``).
 """
 

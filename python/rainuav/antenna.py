@@ -1,6 +1,6 @@
 """Antenna gain patterns: gain in dBi at (azimuth, elevation) in the antenna's own frame.
 
-Conventions (PHYSICS.md section 7): azimuth from the antenna's boresight azimuth, counter-
+Conventions (docs/physics.md section 7): azimuth from the antenna's boresight azimuth, counter-
 clockwise (toward +y when the boresight is +x), degrees, wrapped to [-180, 180); elevation
 positive up, degrees. Every pattern is vectorised (numpy broadcasting over the two angle
 arrays) and returns float64 dBi.
@@ -10,7 +10,7 @@ arrays) and returns float64 dBi.
 - :func:`uniform_array`: a uniform vertical array of that element (rows, spacing in
   wavelengths, electrical tilt by phase progression), optionally with columns; gain =
   element + array factor, normalised so that the pattern integrates to 4 pi over the sphere.
-- :func:`gaussian`: the paper's beam (PHYSICS.md section 4), optionally with a sidelobe floor
+- :func:`gaussian`: the paper's beam (docs/physics.md section 4), optionally with a sidelobe floor
   (then normalised to 4 pi as well: a floor adds power in every direction).
 - :func:`tabulated`: a measured or computed table, bilinear in (azimuth, elevation).
 
@@ -136,7 +136,7 @@ class UniformArray:
     (positive up: a 10 degree downtilt is -10), and ``columns`` side by side
     ``column_spacing`` wavelengths apart (broadside). Gain in dBi:
     ``element + 10 log10(|AF_v|^2 |AF_h|^2) + norm_db`` with
-    ``|AF_v|^2 = |sum_n exp(j 2 pi n d (sin e - sin e0))|^2 / rows`` (PHYSICS.md section 7) and
+    ``|AF_v|^2 = |sum_n exp(j 2 pi n d (sin e - sin e0))|^2 / rows`` (docs/physics.md section 7) and
     ``|AF_h|^2 = |sum_m exp(j 2 pi m d_h cos e sin ph)|^2 / columns``; ``norm_db`` makes the
     pattern integrate to 4 pi over the sphere."""
 
@@ -202,7 +202,7 @@ def uniform_array(
 # -- the paper's Gaussian beam ----------------------------------------------------------------
 @dataclass(frozen=True)
 class GaussianBeam:
-    """The paper's beam in the far field (PHYSICS.md sections 4 and 7):
+    """The paper's beam in the far field (docs/physics.md sections 4 and 7):
     ``G = G0 exp(-4 ln2 (ph / bw_h)^2) exp(-4 ln2 ((e - tilt) / bw_v)^2)`` with
     ``G0 = 4 ln2 / (sin(bw_h / 2) sin(bw_v / 2))`` (the PE source's directivity). With
     ``floor_db`` the gain never falls below ``G0 - floor_db`` (a stand-in for sidelobes and

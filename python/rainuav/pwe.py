@@ -1,4 +1,4 @@
-"""3-D split-step parabolic-equation propagation (``shared/PHYSICS.md`` section 4).
+"""3-D split-step parabolic-equation propagation (``docs/physics.md`` section 4).
 
 Frame of one transmitter: z = range (the march axis), x = cross-range, y = height. Fields are
 ``u[ix, iy]`` (complex64) on ``x = (ix - nx//2) dx_m``, ``y = iy dy_m``; with a ground, row
@@ -328,7 +328,7 @@ def gaussian_beam(
     elevation_deg: float,
     beamwidth_deg: float,
 ) -> Complex64Array:
-    """Gaussian-beam aperture (PHYSICS.md section 4): centred at ``x = 0`` (column nx//2) and
+    """Gaussian-beam aperture (docs/physics.md section 4): centred at ``x = 0`` (column nx//2) and
     ``y = height_m``, tilted up by ``elevation_deg``, with far-field half-power full width
     ``beamwidth_deg``: ``exp(-j k0 sin(el) (y - h)) exp(-a^2 (x^2 + (y - h)^2) / (2 ln 2))``,
     ``a = k0 sin(beamwidth / 2)``. Returns (nx, ny) complex64."""
@@ -412,7 +412,7 @@ def pattern_source(
     spec[np.ix_(okx, oky)] = interp[np.ix_(okx, oky)]
     propagating = (kx[:, None] ** 2 + ky[None, :] ** 2) < k0**2
     spec = spec * propagating
-    # A wave leaving at positive angles is exp(-j k0 sin(angle) y) (PHYSICS.md convention),
+    # A wave leaving at positive angles is exp(-j k0 sin(angle) y) (docs/physics.md convention),
     # which numpy's inverse FFT holds at negative wavenumbers: mirror the sampled pattern.
     spec = spec[(-np.arange(nx)) % nx][:, (-np.arange(ny)) % ny]
     # Centre the aperture at x = 0 (column nx//2) and y = h: f(r - r0) <-> F(k) exp(-j k r0).

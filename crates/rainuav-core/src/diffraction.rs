@@ -1,6 +1,6 @@
 //! Diffraction over a path's profile: ITU-R P.526-15 section 4.5.1, the Bullington
 //! construction for a general path with its correction for real terrain (the same method as
-//! ITU-R P.452-16 section 4.2.1). `shared/PHYSICS.md` section 12 gives the formulas; here they
+//! ITU-R P.452-16 section 4.2.1). `docs/physics.md` section 12 gives the formulas; here they
 //! are written in metres throughout.
 //!
 //! For a profile of heights `h_i` (m above sea level) at distances `d_i` (m) from the

@@ -1,5 +1,5 @@
 //! Single raindrops: shape, depolarisation factors, quasi-static polarisability and fall
-//! speed (PHYSICS.md sections 2 and 3).
+//! speed (docs/physics.md sections 2 and 3).
 
 use crate::error::{CoreError, Result};
 use num_complex::Complex64;
@@ -88,7 +88,7 @@ pub fn terminal_velocity_m_s(d_mm: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// PHYSICS.md gives 5 decimals: 1e-5 absolute.
+    /// docs/physics.md gives 5 decimals: 1e-5 absolute.
     #[test]
     fn depolarisation_reference_values() {
         for (r, lx, lz) in [

@@ -1,4 +1,4 @@
-//! Drop-size distributions N(D) in m^-3 mm^-1, D in mm (PHYSICS.md section 2).
+//! Drop-size distributions N(D) in m^-3 mm^-1, D in mm (docs/physics.md section 2).
 
 use crate::drops::terminal_velocity_m_s;
 use crate::error::{CoreError, Result};
@@ -221,7 +221,7 @@ impl Dsd {
     }
 }
 
-/// Marshall-Palmer N(D) in m^-3 mm^-1 (PHYSICS.md section 2); zero for a zero rate.
+/// Marshall-Palmer N(D) in m^-3 mm^-1 (docs/physics.md section 2); zero for a zero rate.
 pub fn marshall_palmer(d_mm: f64, rain_rate_mm_h: f64) -> f64 {
     if rain_rate_mm_h == 0.0 {
         return 0.0;
@@ -233,7 +233,7 @@ pub fn marshall_palmer(d_mm: f64, rain_rate_mm_h: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// PHYSICS.md gives 4 significant figures: 1e-4 relative.
+    /// docs/physics.md gives 4 significant figures: 1e-4 relative.
     #[test]
     fn marshall_palmer_reference_values() {
         let lam = |r: f64| 4.1 * r.powf(-0.21);

@@ -2,7 +2,7 @@
 //!
 //! The pure-Rust physics of rainuav: water permittivity, drop-size distributions, drop
 //! shapes, Mie scattering, Gauss-Legendre quadrature, the effective medium of rain and
-//! ITU-R P.838-3. Conventions follow `shared/PHYSICS.md`: time dependence `exp(+j w t)`,
+//! ITU-R P.838-3. Conventions follow `docs/physics.md`: time dependence `exp(+j w t)`,
 //! lossy media have `Im eps <= 0`, drop diameters in mm.
 //!
 //! ```

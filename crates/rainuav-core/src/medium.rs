@@ -1,4 +1,4 @@
-//! Effective medium of rain (PHYSICS.md section 3): the paper's quasi-static model and the
+//! Effective medium of rain (docs/physics.md section 3): the paper's quasi-static model and the
 //! forward-scattering (Mie, van de Hulst) model, integrated over a drop-size distribution
 //! on a composite Gauss-Legendre rule.
 //!
@@ -491,7 +491,7 @@ mod tests {
             .gamma_db_per_km
     }
 
-    /// PHYSICS.md's measured values for Marshall-Palmer, 20 C, spheres (2 significant
+    /// docs/physics.md's measured values for Marshall-Palmer, 20 C, spheres (2 significant
     /// figures quoted, so 2% relative).
     #[test]
     fn forward_scattering_matches_physics_md() {

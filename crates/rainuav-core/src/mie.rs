@@ -1,6 +1,6 @@
 //! Lorenz-Mie scattering by a homogeneous sphere, Bohren & Huffman conventions
 //! (`exp(-i w t)`, refractive index `m` with `Im m >= 0`). Callers in the engineering
-//! convention pass `conj(n)` and conjugate what comes back (PHYSICS.md section 0).
+//! convention pass `conj(n)` and conjugate what comes back (docs/physics.md section 0).
 //!
 //! The logarithmic derivative `D_n(m x)` is computed by downward recurrence from
 //! `n = max(n_stop, |m x|) + 16` with `D = 0` as the seed, which is stable for any

@@ -1,4 +1,4 @@
-//! Buildings as prisms (PHYSICS.md section 12): footprint polygons (rings of vertices, holes
+//! Buildings as prisms (docs/physics.md section 12): footprint polygons (rings of vertices, holes
 //! included, even-odd rule) extruded from the terrain to a flat roof `top` metres above it.
 //! Boxes are the four-cornered case ([`Prisms::from_boxes`]).
 //!

@@ -89,7 +89,7 @@ pub fn specific_attenuation(
 mod tests {
     use super::*;
 
-    /// PHYSICS.md section 3 reference values, given to 4 significant figures: 5e-4 relative.
+    /// docs/physics.md section 3 reference values, given to 4 significant figures: 5e-4 relative.
     #[test]
     fn reference_values() {
         let (kh, ah, _, _) = coefficients_hv(4.9e9);

@@ -1,4 +1,4 @@
-//! Exact planner for the UAV navigation MDP (PHYSICS.md section 6, `rainuav.nav`).
+//! Exact planner for the UAV navigation MDP (docs/physics.md section 6, `rainuav.nav`).
 //!
 //! Moves are deterministic on the lattice `start + step (i, j)`, so the finite-horizon
 //! optimum is a backward dynamic programme over (steps left, lattice point): `V_T = 0`,

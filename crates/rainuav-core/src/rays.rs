@@ -1,4 +1,4 @@
-//! Ray model over flat ground (PHYSICS.md section 8): for one transmitter and every pixel of
+//! Ray model over flat ground (docs/physics.md section 8): for one transmitter and every pixel of
 //! a horizontal map, the line-of-sight ray and the ray reflected by the ground, each with the
 //! antenna gain in its own departure direction (given per pixel by the caller), free-space
 //! spreading, rain attenuation integrated along the ray, and a knife-edge diffraction loss
@@ -16,7 +16,7 @@
 //! uniform (`gamma d` exactly) or a raster of nodes, bilinear, held beyond the outermost nodes,
 //! integrated by the trapezoid rule at the node spacing.
 //!
-//! **Ground and obstacles** (PHYSICS.md section 12). Optionally a terrain (a raster of heights
+//! **Ground and obstacles** (docs/physics.md section 12). Optionally a terrain (a raster of heights
 //! above sea level at nodes, bilinear between them) under everything, and obstacles standing
 //! on it: boxes and a raster of obstacle heights over cells. A site's antenna stands
 //! `height` above the terrain at the site; the receiver flies `altitude_m` above the terrain
@@ -393,7 +393,7 @@ impl RayScene<'_> {
     }
 
     /// Whether the rays travel over flat open ground (no terrain, no obstacles): the closed
-    /// forms of PHYSICS.md section 8.
+    /// forms of docs/physics.md section 8.
     pub fn flat_open(&self) -> bool {
         self.terrain.is_none() && self.prisms.is_none_or(|p| p.is_empty()) && self.heights.is_none()
     }
@@ -1075,7 +1075,7 @@ mod tests {
     #[test]
     fn a_building_on_the_path_costs_its_bullington_loss() {
         // Transmitter at 25 m, receiver at 100 m, 1000 m away; a 200 m tall wall, 10 m thick,
-        // at 500 m. By hand (PHYSICS.md section 12): both faces are profile points; beyond
+        // at 500 m. By hand (docs/physics.md section 12): both faces are profile points; beyond
         // line of sight the steepest line from the transmitter meets the near face (495 m) and
         // the one from the receiver the far face (505 m); they cross at the Bullington point.
         let (x, y) = ([1000.0], [0.0]);

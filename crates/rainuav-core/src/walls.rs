@@ -1,4 +1,4 @@
-//! First-order reflections off building walls (PHYSICS.md section 12), by the image method.
+//! First-order reflections off building walls (docs/physics.md section 12), by the image method.
 //!
 //! A wall is a footprint edge extruded from `base` to `top` metres above the terrain, its
 //! outward normal on the right of `a -> b` (outer rings counter-clockwise, holes clockwise).

@@ -1,6 +1,6 @@
 //! Complex permittivity of liquid water: the double-Debye model of Liebe et al. (1991)
 //! as used by ITU-R P.840, in the engineering convention `eps = eps' - j eps''`
-//! (PHYSICS.md sections 0 and 1).
+//! (docs/physics.md sections 0 and 1).
 
 use crate::error::{Result, check_range};
 use num_complex::Complex64;
@@ -41,7 +41,7 @@ pub fn water_permittivity(freq_hz: f64, temperature_c: f64) -> Complex64 {
 mod tests {
     use super::*;
 
-    /// PHYSICS.md section 1 gives the reference to 5 significant figures, so 1e-3 absolute.
+    /// docs/physics.md section 1 gives the reference to 5 significant figures, so 1e-3 absolute.
     #[test]
     fn matches_physics_md_reference_values() {
         let cases = [

@@ -1,4 +1,4 @@
-//! Accuracy tests of the split-step march against analytic solutions (PHYSICS.md section 4).
+//! Accuracy tests of the split-step march against analytic solutions (docs/physics.md section 4).
 
 use ndarray::Array2;
 use num_complex::{Complex32, Complex64};
@@ -131,7 +131,7 @@ fn energy_is_conserved() {
     }
 }
 
-/// Homogeneous lossy medium: power falls by exactly exp(-k0 |Im n^2| d) (PHYSICS.md); the
+/// Homogeneous lossy medium: power falls by exactly exp(-k0 |Im n^2| d) (docs/physics.md); the
 /// screen is applied in f64 and rounded once per step, so 1e-5 relative.
 #[test]
 fn homogeneous_rain_decay() {

@@ -1,6 +1,6 @@
 """Gymnasium environment: fly a UAV on a lattice over a SINR (or SIR) map to a destination.
 
-Semantics (the planner and the tests rely on them; PHYSICS.md section 6):
+Semantics (the planner and the tests rely on them; docs/physics.md section 6):
 
 - Signal at a position: bilinear interpolation of the map (H, W) whose sample [i, j] sits at
   ``x = x_min + (j + 0.5) (x_max - x_min) / W``, ``y = y_min + (i + 0.5) (y_max - y_min) / H``;

@@ -4,7 +4,7 @@ Rule 1 (:meth:`rainuav.nav.batch.BatchStepper.safe_actions`): only moves after w
 is still in the area and can still arrive within ``max_steps``. Rule 2: among those, moves
 onto a position the flight has not visited, where one exists. The shield is a safety layer
 around a policy, not part of it: metrics report the policy alone first (see
-``docs/learner.md``).
+``docs/guide/learning.md``).
 """
 
 from __future__ import annotations

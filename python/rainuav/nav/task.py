@@ -1,4 +1,4 @@
-"""The navigation task: its configuration, moves and rewards (PHYSICS.md section 6).
+"""The navigation task: its configuration, moves and rewards (docs/physics.md section 6).
 
 - Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y, each one ``step_m`` long.
 - The signal S is the map's SINR (``signal="sinr"``, default) or SIR (``"sir"``, the
@@ -14,7 +14,7 @@
   at the new position and the instant the move ends (:mod:`rainuav.nav.field`; a single map
   does not change in time, so time changes nothing there).
 - A flight's **cost** is its return without the arrival reward, negated: the moves plus the
-  weighted shortfall (PHYSICS.md section 6, :func:`flight_cost`).
+  weighted shortfall (docs/physics.md section 6, :func:`flight_cost`).
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ class LoiteringWarning(UserWarning):
 
 @dataclass
 class NavConfig:
-    """The navigation task (defaults: the paper's Table I and PHYSICS.md section 6)."""
+    """The navigation task (defaults: the paper's Table I and docs/physics.md section 6)."""
 
     goal_m: tuple[float, float] = (1400.0, 1600.0)
     """Destination, m."""
@@ -131,7 +131,7 @@ def base_reward(signal_db: Any, cfg: NavConfig) -> Any:
 
 def flight_cost(returns: Any, arrived: Any, cfg: NavConfig) -> Any:
     """The cost of flights with these undiscounted ``returns``: the return without the arrival
-    reward, negated (moves plus weighted shortfall, PHYSICS.md section 6). Meaningful for
+    reward, negated (moves plus weighted shortfall, docs/physics.md section 6). Meaningful for
     flights that arrived (a flight that left the area also pays ``out_of_bounds_penalty``)."""
     return -(np.asarray(returns, dtype=np.float64) - cfg.goal_reward * np.asarray(arrived))
 

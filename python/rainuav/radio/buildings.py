@@ -1,4 +1,4 @@
-"""A scenario's buildings as the radio layer uses them (PHYSICS.md section 12): the boxes of
+"""A scenario's buildings as the radio layer uses them (docs/physics.md section 12): the boxes of
 ``Scenario.buildings`` and the footprints of ``Scenario.footprints``
 (:mod:`rainuav.ground.footprints`) as one set of prisms standing on the terrain, their walls,
 and the pixels they touch.

@@ -1,7 +1,7 @@
 """A cell (one sector of a site) and its antenna: which pattern it radiates with, where it
 points, and its gain toward any direction in the global frame.
 
-Conventions (PHYSICS.md section 7): ``azimuth_deg`` is the boresight direction counter-
+Conventions (docs/physics.md section 7): ``azimuth_deg`` is the boresight direction counter-
 clockwise from +x (east); ``tilt_deg`` is the mechanical tilt, the boresight elevation
 (positive up). A cell's gain toward a global direction (azimuth ``a``, elevation ``e``) is its
 pattern's gain at ``(a - azimuth_deg, e - tilt_deg)``: the tilt shifts the pattern in

@@ -62,7 +62,7 @@ def _aperture(scn: Scenario, site: Site, cell: Cell, grid: MarchGrid) -> tuple[n
     k0 = 2 * math.pi * scn.freq_hz / C0_M_S
     kx = 2 * math.pi * np.fft.fftfreq(grid.nx, grid.dx_m)
     ky = 2 * math.pi * np.fft.fftfreq(grid.ny, grid.dy_m)
-    # A wave leaving at positive angles is exp(-j k0 sin(angle) y) (PHYSICS.md convention):
+    # A wave leaving at positive angles is exp(-j k0 sin(angle) y) (docs/physics.md convention):
     # the inverse FFT holds direction s at wavenumber -k0 s.
     sx = (-kx / k0)[:, None]
     sy = (-ky / k0)[None, :]

@@ -1,4 +1,4 @@
-"""The ray engine: every cell's received power at every pixel from two rays (PHYSICS.md
+"""The ray engine: every cell's received power at every pixel from two rays (docs/physics.md
 section 8), the per-pixel work in Rust (``rainuav_core::rays``).
 
 For each cell and pixel: the line-of-sight ray and the ray reflected by the ground, each with
@@ -11,7 +11,7 @@ and obstacles (buildings, the height map, standing on the terrain), each site-pi
 its profile: the direct ray gets the Bullington loss of the whole profile (ITU-R P.526-15
 section 4.5.1) with the antenna gain toward the diffracting edge, and the ground reflection
 bounces off the local ground line only where both ends see its specular point
-(:func:`departures`; PHYSICS.md section 12). Each pixel holds the mean power over its area
+(:func:`departures`; docs/physics.md section 12). Each pixel holds the mean power over its area
 (ground-reflection fringes finer than a pixel are averaged, not aliased).
 
 With ``weights``, :func:`ray_power` also returns the power of the part of each pattern the

@@ -1,4 +1,4 @@
-"""Serving cell, SIR and SINR from every cell's received power (PHYSICS.md section 5)."""
+"""Serving cell, SIR and SINR from every cell's received power (docs/physics.md section 5)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""A scenario's ground as the radio layer uses it (PHYSICS.md section 12): its terrain on the
+"""A scenario's ground as the radio layer uses it (docs/physics.md section 12): its terrain on the
 area's nodes (:mod:`rainuav.ground`), the heights the ray engine takes, the flight height over
 every pixel and the pixels that are not flyable.
 

@@ -1,4 +1,4 @@
-"""The rays that building walls reflect (PHYSICS.md section 12), for the ray engine: each
+"""The rays that building walls reflect (docs/physics.md section 12), for the ray engine: each
 site's rays traced once in the core (:func:`rainuav._core.ray_walls`: the image method per
 wall, the specular point within the wall, both legs clear), then each cell's antenna gain
 toward each ray's specular point, the powers added incoherently per pixel
@@ -93,7 +93,7 @@ def wall_terms(
     weights: Sequence[Weight | None] | None = None,
     rays: tuple[WallRays, dict[int, int]] | None = None,
 ) -> np.ndarray | None:
-    """Each cell's rays reflected by walls at every pixel (PHYSICS.md section 12), (M, H, W,
+    """Each cell's rays reflected by walls at every pixel (docs/physics.md section 12), (M, H, W,
     2): their clear-air power (mW, each with the cell's gain toward its specular point; added
     incoherently) and their power-weighted mean length (m); with ``weights``, the part of
     each pattern they select. None where ``scn`` has no walls (``rays``: from

@@ -111,7 +111,7 @@ class Medium:
     wind_speed_m_s: float = 0.0
     """Wind across the path, m/s."""
     wind_model: str = "canting"
-    """How wind acts: 'canting' (drops cant by atan(v_wind / v_t); PHYSICS.md) or 'paper' (the
+    """How wind acts: 'canting' (drops cant by atan(v_wind / v_t); docs/physics.md) or 'paper' (the
     paper's 1/cos factor, for reproducing it only; rainuav.medium)."""
 
     def at(self, t_s: float) -> Medium:

@@ -2,7 +2,7 @@
 (:mod:`~rainuav.rl.config`), what it learns from (:mod:`~rainuav.rl.learner`), flights
 (:mod:`~rainuav.rl.collect`), measurement (:mod:`~rainuav.rl.evaluation`), the training loop
 (:mod:`~rainuav.rl.loop`) and its figures (:mod:`~rainuav.rl.plots`). The design choices and
-what they measured: ``docs/learner.md``.
+what they measured: ``docs/guide/learning.md``.
 """
 
 from __future__ import annotations

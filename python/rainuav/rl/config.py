@@ -127,8 +127,8 @@ class TrainConfig(WorldSpec):
     (``dqn``). One docstring line per field = one CLI flag."""
 
     preset: str = ""
-    """Learner preset: '' (the tuned learner, docs/learner.md) or 'paper' (Algorithm 1 and
-    Table I literally: the [dqn] fields are set as docs/learner.md lists, and any given beside
+    """Learner preset: '' (the tuned learner, docs/guide/learning.md) or 'paper' (Algorithm 1 and
+    Table I literally: the [dqn] fields are set as docs/guide/learning.md lists, and any given beside
     it are refused)."""
     seed: int = 0
     """Seed of every random choice (python, numpy, torch, environment)."""
@@ -248,7 +248,7 @@ STORM_LEARNER: dict[str, Any] = {
 """What ``--storm-seed random`` changes in [dqn] unless given: a larger minibatch, a lower
 learning rate and a slower target for the convolutional network over many storms, and the
 destination drawn on its grids (goal maps) (chosen on validation storms 900 000-900 009 and
-``uma`` at 5 mm/h, with training storms only: docs/learner.md, "One network for every
+``uma`` at 5 mm/h, with training storms only: docs/guide/learning.md, "One network for every
 storm"); with ``time_budget_s`` = :data:`STORM_BUDGET_S` and ``calm_share`` =
 :data:`STORM_CALM_SHARE`."""
 
@@ -269,7 +269,7 @@ STORM_LEVELS_EPISODES = 4000
 
 STORM_CALM_SHARE = 0.15
 """The share of the pool's storms ``--storm-seed random`` flies calm unless given (selected on
-validation with the goal maps: docs/learner.md, "Goal maps with calm weather")."""
+validation with the goal maps: docs/guide/learning.md, "Goal maps with calm weather")."""
 STORM_BUDGET_S = 3300.0
 """The wall-clock budget of ``--storm-seed random`` unless given: 55 minutes (the issue's
 ceiling is 60)."""

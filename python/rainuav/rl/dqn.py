@@ -3,7 +3,7 @@
 Reads top to bottom: the network, the N-step sliding window, the replay memory, the double-Q
 target and the agent (observe, act, learn, sync). Hyperparameters: :class:`rainuav.rl.config.
 DQNConfig`. Every choice beyond the paper's Table I, and what it measured, is in
-``docs/learner.md``.
+``docs/guide/learning.md``.
 """
 
 from __future__ import annotations

@@ -115,7 +115,7 @@ class Validation:
     of (episodes, success, mean excess cost over the optimum) and the online weights with the
     best score are kept (highest success, then lowest mean excess cost: ``score``). With
     ``keep_best`` those weights are the run's result (early stopping; when that pays:
-    ``docs/learner.md``)."""
+    ``docs/guide/learning.md``)."""
 
     starts: np.ndarray
     optimum: dict[str, np.ndarray]

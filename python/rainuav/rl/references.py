@@ -53,7 +53,7 @@ def eval_starts(env: UAVNavEnv | UAVLevelsEnv, n: int, seed: int) -> np.ndarray:
 def relative_gap(optimum: np.ndarray, returns: np.ndarray) -> np.ndarray:
     """Per start, the share of the exact optimum's return the policy gave up (a secondary
     figure: the arrival reward in both returns makes it look about 4x smaller than the extra
-    cost it stands for, PHYSICS.md section 6)."""
+    cost it stands for, docs/physics.md section 6)."""
     return (optimum - returns) / np.maximum(np.abs(optimum), 1e-9)
 
 

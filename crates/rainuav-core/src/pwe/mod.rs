@@ -1,4 +1,4 @@
-//! 3-D split-step parabolic-equation march (PHYSICS.md section 4).
+//! 3-D split-step parabolic-equation march (docs/physics.md section 4).
 //!
 //! Frame: z = range (the march axis), x = cross-range, y = height. The field `u[ix, iy]` is
 //! stored row-major (`iy` fastest), `x = (ix - nx/2) dx`, `y = iy dy`; with a ground, row

@@ -11,7 +11,7 @@ use super::spec::{Ground, MarchSpec, Propagator};
 use crate::memory::check_memory;
 use rayon::prelude::*;
 
-/// Gaussian-beam aperture (PHYSICS.md section 4): height `height_m`, elevation tilt
+/// Gaussian-beam aperture (docs/physics.md section 4): height `height_m`, elevation tilt
 /// `elevation_deg`, half-power beamwidth `beamwidth_deg`, on the grid `x = (ix - nx/2) dx`,
 /// `y = iy dy`. Computed in f64, stored as complex64.
 // Mirrors `rainuav.pwe.gaussian_beam`'s signature one to one.
