@@ -1,5 +1,6 @@
 """Argument checking and broadcasting shared by the public modules: every check raises
-:class:`rainuav.InvalidInputError` with one line naming the argument and the allowed range."""
+[`rainuav.InvalidInputError`][rainuav.errors.InvalidInputError] with one line naming the argument
+and the allowed range."""
 
 from __future__ import annotations
 
@@ -75,7 +76,7 @@ rule as the Rust core's ``check_memory``)."""
 
 def check_fits(what: str, nbytes: float, hint: str) -> None:
     """Refuses, before anything is allocated, a job whose arrays need ``nbytes`` when that is
-    over :data:`MEMORY_SHARE` of the available memory: one line naming ``what`` sets the size,
+    over `MEMORY_SHARE` of the available memory: one line naming ``what`` sets the size,
     the GB needed and available, and ``hint`` (how to shrink it)."""
     from rainuav import _core
 

@@ -48,8 +48,10 @@ def run(
     body: Callable[[], int],
     on_interrupt: str | Callable[[], str] = "nothing half-written was kept",
 ) -> int:
-    """Runs a CLI's ``body`` and returns its exit code: :class:`InvalidInputError` prints
-    ``error: <message>`` and returns 2 (a file that cannot be written, :class:`WriteError`:
+    """Runs a CLI's ``body`` and returns its exit code:
+    [`InvalidInputError`][rainuav.errors.InvalidInputError] prints
+    ``error: <message>`` and returns 2 (a file that cannot be written,
+    [`WriteError`][rainuav.errors.WriteError]:
     returns 1); Ctrl-C prints ``interrupted: <on_interrupt>`` (a
     string, or a function that says what was kept) and returns 130; warnings (the radio-map
     cache's among them) print as ``warning: <message>``."""
@@ -71,11 +73,13 @@ def run(
 
 
 _ROLE = re.compile(r":[a-z]+:`~?([^`<]*?)(?:\s*<[^>]*>)?`")
+_XREF = re.compile(r"\[`?([^`\]]+?)`?\]\[[^\]]*\]")
 
 
 def plain_help(text: str | None) -> str:
-    """A docstring as a terminal shows it: reStructuredText's roles (:mod:`a.b`, :func:`~a.b.c`)
-    as the names they link, ````literals```` as the text, escaped backslashes single, so no
+    """A docstring as a terminal shows it: reStructuredText's roles (``:mod:`a.b```,
+    ``:func:`~a.b.c```) and MkDocs' cross-references (``[`c`][a.b.c]``) as the names they link,
+    ````literals```` as the text, escaped backslashes single, so no
     ``--help`` prints raw markup."""
     if not text:
         return ""
@@ -84,7 +88,7 @@ def plain_help(text: str | None) -> str:
         name = m.group(1).strip()
         return name.rsplit(".", 1)[-1] if m.group(0)[m.group(0).index("`") + 1] == "~" else name
 
-    out = _ROLE.sub(role, text)
+    out = _XREF.sub(lambda m: m.group(1), _ROLE.sub(role, text))
     out = out.replace("``", "")
     return out.replace("\\\\", "\\")
 

@@ -50,7 +50,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 def write_atomic(path: str | os.PathLike[str], write: Callable[[Path], None]) -> Path:
     """Calls ``write(tmp)`` and renames ``tmp`` onto ``path``; returns ``path``. A write that
     fails (torch and numpy report a full disk as ``RuntimeError`` or ``OSError``) raises
-    :class:`WriteError` naming the file, the reason and the free space; ``path`` is left as
+    [`WriteError`][rainuav.errors.WriteError] naming the file, the reason and the free space;
+    ``path`` is left as
     it was."""
     try:
         with atomic_path(path) as tmp:
@@ -71,7 +72,8 @@ def write_atomic(path: str | os.PathLike[str], write: Callable[[Path], None]) ->
 
 def read_toml(path: str | os.PathLike[str], what: str = "file") -> dict[str, Any]:
     """The TOML table in ``path``; a missing, unreadable or malformed file raises
-    :class:`InvalidInputError` naming ``what``, the file and the problem in one line."""
+    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming ``what``, the file and the
+    problem in one line."""
     p = Path(path)
     try:
         text = p.read_text()
@@ -88,7 +90,8 @@ def read_toml(path: str | os.PathLike[str], what: str = "file") -> dict[str, Any
 def check_out_dir(path: str | os.PathLike[str], flag: str = "--out") -> Path:
     """Checks, before any work, that the output folder ``path`` exists as a writable folder
     or can be made (its nearest existing parent is a writable folder); else raises
-    :class:`InvalidInputError` naming ``flag`` and the path. Creates nothing that stays.
+    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming ``flag`` and the path. Creates
+    nothing that stays.
 
     Permission bits do not settle it (root passes every ``os.access`` test, and ``/proc`` or
     a read-only mount refuse new folders whatever the bits say), so the check makes an empty

@@ -37,7 +37,7 @@ def in_time(
     """``values`` (S, H, W) float64 at the points ``(x, y)``, each point between its slices
     ``k0`` and ``k1``: ``(1 - f) bilinear(.., k0) + f bilinear(.., k1)`` (the first alone
     where ``k0 == k1``), every argument broadcast to one shape. One pass in the Rust core
-    (``rainuav._core.sample_slices``), operation for operation as :func:`bilinear`. Where
+    (``rainuav._core.sample_slices``), operation for operation as `bilinear`. Where
     ``k0``, ``k1`` and ``f`` do not vary along the last axis (one instant per UAV for the
     points of its window, shape (N, 1)) they cross once per row, not once per point."""
     shape = np.broadcast_shapes(*(np.shape(a) for a in (x, y, k0, k1, f)))

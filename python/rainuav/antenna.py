@@ -5,16 +5,21 @@ clockwise (toward +y when the boresight is +x), degrees, wrapped to [-180, 180);
 positive up, degrees. Every pattern is vectorised (numpy broadcasting over the two angle
 arrays) and returns float64 dBi.
 
-- :func:`tr38901_element`: the 3GPP TR 38.901 sector element (Table 7.3-1: 65 degree
+- [`tr38901_element()`][rainuav.antenna.tr38901_element]: the 3GPP TR 38.901 sector element (Table
+  7.3-1: 65 degree
   half-power widths, SLA_V 30 dB, A_max 30 dB, 8 dBi).
-- :func:`uniform_array`: a uniform vertical array of that element (rows, spacing in
+- [`uniform_array()`][rainuav.antenna.uniform_array]: a uniform vertical array of that element
+  (rows, spacing in
   wavelengths, electrical tilt by phase progression), optionally with columns; gain =
   element + array factor, normalised so that the pattern integrates to 4 pi over the sphere.
-- :func:`gaussian`: the paper's beam (docs/physics.md section 4), optionally with a sidelobe floor
+- [`gaussian()`][rainuav.antenna.gaussian]: the paper's beam (docs/physics.md section 4), optionally
+  with a sidelobe floor
   (then normalised to 4 pi as well: a floor adds power in every direction).
-- :func:`tabulated`: a measured or computed table, bilinear in (azimuth, elevation).
+- [`tabulated()`][rainuav.antenna.tabulated]: a measured or computed table, bilinear in (azimuth,
+  elevation).
 
-:func:`sphere_mean` is the mean linear gain over the sphere (1 for a lossless pattern).
+[`sphere_mean()`][rainuav.antenna.sphere_mean] is the mean linear gain over the sphere (1 for a
+lossless pattern).
 """
 
 from __future__ import annotations
@@ -316,7 +321,7 @@ def tabulated(
     azimuth_deg: Any, elevation_deg: Any, gain_db: Any, *, normalise: bool = True
 ) -> TabulatedPattern:
     """A pattern from a table ``gain_db[i][j]`` at ``(azimuth_deg[i], elevation_deg[j])``
-    (the form of :class:`rainuav.radio.scenario.Pattern`)."""
+    (the form of [`rainuav.radio.scenario.Pattern`][rainuav.radio.cell.Pattern])."""
 
     g = as_real_array("gain_db", gain_db)
     if g.ndim != 2:

@@ -1,5 +1,6 @@
-"""The exceptions rainuav raises. Everything derives from :class:`RainuavError`;
-bad input also derives from :class:`ValueError`, so ``except ValueError`` keeps working."""
+"""The exceptions rainuav raises. Everything derives from
+[`RainuavError`][rainuav.errors.RainuavError];
+bad input also derives from `ValueError`, so ``except ValueError`` keeps working."""
 
 from __future__ import annotations
 

@@ -8,16 +8,18 @@
 
 ``--storm-seeds A-B`` flies the network through every storm of the range (20 starts each by
 default; ``--random-goals``: each start to its own destination) with every baseline and
-writes the per-storm figures and their mean (:mod:`rainuav.rl.storm_eval`) into
+writes the per-storm figures and their mean ([`rainuav.rl.storm_eval`][rainuav.rl.storm_eval]) into
 ``RUN_DIR/eval_storms_A-B`` with ``evaluation_storm_flights.png`` of the first storm.
 
 Loads the run's ``config.toml`` and ``checkpoint.pt`` and flies the network the run reports
 (the weight average of the last episodes, the final one with ``average_from = 1``, or with
 ``keep_best`` the best on validation; ``--online``: the last online network) from fixed
 starts, against the exact optimum of the map flown and the straight line
-(:func:`rainuav.rl.evaluation.evaluate_saved_run`). ``--scenario``, ``--rain-rate``,
+([`rainuav.rl.evaluation.evaluate_saved_run()`][rainuav.rl.evaluation.evaluate_saved_run]).
+``--scenario``, ``--rain-rate``,
 ``--engine`` and ``--storm-seed`` fly it in another world (the run's spec with those
-changed, built or taken from the cache: :func:`rainuav.world.build_world`): the paper's
+changed, built or taken from the cache: [`rainuav.world.build_world()`][rainuav.world.build_world]):
+the paper's
 central comparison, a policy trained in clear air flown in rain against one trained in rain,
 or a network trained on one storm flown through another. In a weather that moves, the plan of
 the weather at take-off and re-planning are reported beside it. Writes
@@ -143,7 +145,8 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 def _evaluate_storms(args: argparse.Namespace) -> int:
     """``--storm-seeds`` (every storm of the range) or ``--random-goals`` (in the one world
-    the flags give): :func:`rainuav.rl.storm_eval.evaluate_worlds`."""
+    the flags give):
+    [`rainuav.rl.storm_eval.evaluate_worlds()`][rainuav.rl.storm_eval.evaluate_worlds]."""
     from rainuav.errors import InvalidInputError
     from rainuav.nav.levels import UAVLevelsEnv
     from rainuav.rl.plots import plot_policy, plot_storm_flights

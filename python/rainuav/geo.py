@@ -1,7 +1,8 @@
 """Where a scenario lies on the Earth: its georeference.
 
 A scenario's positions are metres east (``x``) and north (``y``) of an origin. A
-:class:`Georef` ties that origin to a latitude and longitude (WGS 84) through an azimuthal
+[`Georef`][rainuav.geo.Georef] ties that origin to a latitude and longitude (WGS 84) through an
+azimuthal
 equidistant projection centred on it (PROJ's ``aeqd``, through pyproj): distances and
 bearings from the origin are exact, and over the few kilometres of a drone's flight the scale
 error elsewhere stays below 1e-6 (it grows as (d / R)^2 / 6 with the distance d from the

@@ -179,7 +179,8 @@ def effective_permittivity(
         temperature_c: water temperature, 0-40 C.
         wind_speed_m_s: horizontal wind across the path, 0-60 m/s.
         dsd: ``"marshall-palmer"``, ``"joss-drizzle"``, ``"joss-thunderstorm"`` or a
-            :class:`DropSizeDistribution` from :func:`gamma_dsd` / :func:`tabulated_dsd`.
+            `DropSizeDistribution` from [`gamma_dsd()`][rainuav.medium.gamma_dsd] /
+            [`tabulated_dsd()`][rainuav.medium.tabulated_dsd].
         wind_model: ``"canting"`` (drops cant by ``atan(v_wind / v_t)``; default) or
             ``"paper"`` (the paper's ``1/cos(atan(v_wind / v_t))`` factor, unbounded in strong
             wind; for reproducing the paper only).
@@ -202,7 +203,7 @@ def effective_index(
     wind_model: WindModel = "canting",
 ) -> Any:
     """Effective refractive index ``n = sqrt(eps)`` of rain (``Im n <= 0``); the keywords
-    are those of :func:`effective_permittivity`."""
+    are those of [`effective_permittivity()`][rainuav.medium.effective_permittivity]."""
     cfg = _config(model, polarization, shape, temperature_c, wind_speed_m_s, dsd, wind_model)
     out_shape, _, n, _ = _medium(freq_hz, rain_rate_mm_h, cfg)
     return _shaped(n, out_shape)
@@ -221,7 +222,7 @@ def specific_attenuation(
     wind_model: WindModel = "canting",
 ) -> Any:
     """Specific attenuation of rain in dB/km (power): ``8685.9 k0 |Im n|``. The keywords are
-    those of :func:`effective_permittivity`."""
+    those of [`effective_permittivity()`][rainuav.medium.effective_permittivity]."""
     cfg = _config(model, polarization, shape, temperature_c, wind_speed_m_s, dsd, wind_model)
     out_shape, _, _, gamma = _medium(freq_hz, rain_rate_mm_h, cfg)
     return _shaped(gamma, out_shape)
@@ -256,7 +257,8 @@ class RainMedium:
 
     Everything that depends only on the frequency and the options (Mie amplitudes on the
     quadrature nodes) is computed once here, so evaluating a map of rain rates is a cheap
-    pass over ~100 nodes per value. Keywords as in :func:`effective_permittivity`.
+    pass over ~100 nodes per value. Keywords as in
+    [`effective_permittivity()`][rainuav.medium.effective_permittivity].
     """
 
     def __init__(

@@ -40,7 +40,7 @@ Complex64Array = npt.NDArray[np.complex64]
 
 @dataclass(frozen=True)
 class Marched:
-    """Result of :func:`march`."""
+    """Result of [`march()`][rainuav.pwe.march]."""
 
     field: Complex64Array
     """(nx, ny) complex64: the field after the last step."""
@@ -144,7 +144,8 @@ def march(
         steps: number of range steps (>= 1).
         freq_hz: frequency (1e6-1e12 Hz).
         n: refractive index: a complex scalar (homogeneous, e.g. rain from
-            :func:`rainuav.medium.effective_index`), an (nx, ny) array constant along range,
+            [`rainuav.medium.effective_index()`][rainuav.medium.effective_index]), an (nx, ny) array
+            constant along range,
             a (steps, nx, ny) array, or a callable ``n(step) -> scalar | (nx, ny)``.
         propagator: ``"wide"`` (exact spectral; evanescent waves decay) or ``"narrow"``
             (paraxial, the paper's).
@@ -172,7 +173,8 @@ def march(
             follows the ground); the shifted rows must stay within the grid.
 
     Returns:
-        :class:`Marched` with ``field`` (nx, ny), ``rows`` (len(record_rows), steps, nx) and
+        [`Marched`][rainuav.pwe.Marched] with ``field`` (nx, ny), ``rows`` (len(record_rows), steps,
+        nx) and
         ``column`` (steps, ny) or None, all complex64.
     """
     u = _field("u0", u0)
@@ -364,7 +366,8 @@ def pattern_source(
     The aperture's angular spectrum is the amplitude pattern ``10^(gain_db / 20)`` sampled at
     ``sin(angle) = k / k0`` (bilinear, zero outside the table and for evanescent waves),
     shifted to ``height_m`` and brought to the aperture plane by an inverse FFT. Returns
-    (nx, ny) complex64 with ``x = (ix - nx//2) dx``, ``y = iy dy``, like :func:`gaussian_beam`.
+    (nx, ny) complex64 with ``x = (ix - nx//2) dx``, ``y = iy dy``, like
+    [`gaussian_beam()`][rainuav.pwe.gaussian_beam].
     """
     az = np.asarray(azimuth_deg, dtype=np.float64)
     el = np.asarray(elevation_deg, dtype=np.float64)

@@ -1,5 +1,6 @@
 """``python -m rainuav.study NAME --out DIR``: run a study (a built-in one, or a study TOML
-file; the format: the Studies page of the documentation, :mod:`rainuav.studies.spec`).
+file; the format: the Studies page of the documentation,
+[`rainuav.studies.spec`][rainuav.studies.spec]).
 
 Every case runs in its own folder ``DIR/cases/<case>`` (``result.json`` written last); a
 rerun skips finished cases, so an interrupted study resumes. ``--workers`` cases run at once

@@ -4,7 +4,8 @@ rasterio (GDAL) and pyproj onto the nodes of a scenario's area.
 
 **How it is resampled.** The area's nodes (a regular grid at most 10 m apart that holds every
 pixel corner) are projected into the DEM's CRS (local metres -> latitude and longitude through
-the scenario's :class:`rainuav.geo.Georef` -> the DEM's CRS) and read **bilinearly between the
+the scenario's [`rainuav.geo.Georef`][rainuav.geo.Georef] -> the DEM's CRS) and read **bilinearly
+between the
 DEM's cell centres** (GDAL's convention: a value belongs to its cell's centre). Between the
 nodes the ray engine is bilinear again (``rainuav_core::rays::Raster``). Only the window of the
 file over the area is read, and its memory is checked before reading, so a continent-sized
@@ -12,7 +13,8 @@ file costs what the area costs.
 
 **Refused, in one line naming the file:** a file that is not a raster; no CRS; a rotated or
 flipped transform; a band unit that is not metres (where the file states one); the area not
-inside the file; nodata on a cell the area reads; heights outside :data:`HEIGHT_RANGE_M`; a
+inside the file; nodata on a cell the area reads; heights outside
+[`HEIGHT_RANGE_M`][rainuav.ground.dem.HEIGHT_RANGE_M]; a
 window too big for the memory.
 
 Needs the ``geo`` extra (pyproj, rasterio).
@@ -107,7 +109,8 @@ def terrain_nodes(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The terrain's nodes over ``bounds`` (x_min, x_max, y_min, y_max, m) mapped as ``shape``
     (H, W) pixels: east (nx,) and north (ny,) coordinates, the same whole number of nodes per
-    pixel each way, at most :data:`MAX_NODE_SPACING_M` apart, every pixel corner among them."""
+    pixel each way, at most [`MAX_NODE_SPACING_M`][rainuav.ground.dem.MAX_NODE_SPACING_M] apart,
+    every pixel corner among them."""
     x0, x1, y0, y1 = bounds
     hh, ww = shape
     k = max(1, math.ceil(max((x1 - x0) / ww, (y1 - y0) / hh) / MAX_NODE_SPACING_M - 1e-9))
@@ -158,7 +161,8 @@ class Terrain:
 
     def pixel_max(self, shape: tuple[int, int]) -> np.ndarray:
         """The highest terrain within each pixel of the map of ``shape`` (H, W) whose nodes
-        these are (:func:`terrain_nodes`): the largest node on the pixel's closed square
+        these are ([`terrain_nodes()`][rainuav.ground.dem.terrain_nodes]): the largest node on the
+        pixel's closed square
         (bilinear between nodes has its extremes at nodes)."""
         hh, ww = shape
         h = self.heights_m
@@ -184,7 +188,8 @@ def read_dem(
     bounds: tuple[float, float, float, float],
     shape: tuple[int, int],
 ) -> Terrain:
-    """The terrain of the DEM GeoTIFF at ``path`` on the nodes (:func:`terrain_nodes`) of the
+    """The terrain of the DEM GeoTIFF at ``path`` on the nodes
+    ([`terrain_nodes()`][rainuav.ground.dem.terrain_nodes]) of the
     area ``bounds`` (x_min, x_max, y_min, y_max: metres of ``georef``'s local frame) mapped as
     ``shape`` (H, W) pixels (module docstring: how, and what is refused)."""
     from rasterio.windows import Window

@@ -7,11 +7,12 @@ Semantics (the planner and the tests rely on them; docs/physics.md section 6):
   beyond the outermost centres the edge values hold. The map is a RadioMap's ``sinr_db``
   (``signal="sinr"``, default) or ``sir_db`` (``"sir"``, the paper's), or a raw array.
 - Observation: position scaled to [0, 1]^2 (float32); where the signal changes in time (a
-  :class:`rainuav.nav.field.SignalSeries`), a third entry, the moves so far over
+  [`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]), a third entry, the moves so
+  far over
   ``max_steps`` (the flight time over the horizon). Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y.
 - Time: a move takes ``step_m / speed_m_s`` s and earns the signal at the new position and the
   instant it ends; every episode takes off at time 0 of the field.
-- Moves and rewards: :mod:`rainuav.nav.task` (shortfall below ``min_db`` by default,
+- Moves and rewards: [`rainuav.nav.task`][rainuav.nav.task] (shortfall below ``min_db`` by default,
   ``goal_reward`` on arrival, ``out_of_bounds_penalty`` on leaving the area, truncated after
   ``max_steps``). ``min_db`` defaults to the map's own threshold (a preset's documented SINR
   threshold, ``RadioMap.default_min_db``), else 10 dB.
@@ -21,7 +22,7 @@ Semantics (the planner and the tests rely on them; docs/physics.md section 6):
   point lies exactly on the start's lattice (the exact planner's state space).
 
 ``gym.make("rainuav/UAVNav-v0", scenario="uma", rain_rate_mm_h=50)`` builds the map first
-(:mod:`rainuav.envs`); this class takes a map.
+([`rainuav.envs`][rainuav.envs]); this class takes a map.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ __all__ = ["DEFAULT_MIN_DB", "OBSERVATIONS", "UAVNavEnv", "check_action", "signa
 OBSERVATIONS = ("position", "weather")
 """What the UAV observes: its position (and the time where the signal moves), or the weather
 around it and over the area with its position, time and destination
-(:class:`rainuav.nav.views.WeatherView`)."""
+([`rainuav.nav.views.WeatherView`][rainuav.nav.views.WeatherView])."""
 
 DEFAULT_MIN_DB = 10.0
 """The outage threshold of a map that names none (the paper's minimum SIR), dB."""
@@ -85,7 +86,8 @@ def signal_field(
 def check_action(action: Any) -> int:
     """``action`` as an int if it is one integer in 0..3 (a Python or numpy integer, or a
     0-d integer array, as Gymnasium's ``Discrete(4)`` holds); anything else (a float such as
-    1.7, a string, a bool) raises :class:`InvalidInputError`, never a silent rounding."""
+    1.7, a string, a bool) raises [`InvalidInputError`][rainuav.errors.InvalidInputError], never a
+    silent rounding."""
     a = np.asarray(action) if isinstance(action, np.ndarray) else action
     if isinstance(a, np.ndarray):
         ok = a.shape == () and np.issubdtype(a.dtype, np.integer)
@@ -130,8 +132,10 @@ class UAVNavEnv(gym.Env):
         """A map (``radio_map``, one raw array with ``extent_m``, or a built ``field``: a
         signal in time, or a bank of worlds, one drawn per episode) and the task: its fields
         as keywords, or a whole ``config`` (then ``signal`` and ``min_db`` given here win).
-        ``observation``: :data:`OBSERVATIONS` (``view`` sets the weather's grids);
-        ``random_goal``: a destination per episode (:func:`rainuav.nav.views.sample_goal`;
+        ``observation``: [`OBSERVATIONS`][rainuav.nav.env.OBSERVATIONS] (``view`` sets the weather's
+        grids);
+        ``random_goal``: a destination per episode
+        ([`rainuav.nav.views.sample_goal()`][rainuav.nav.views.sample_goal];
         needs the weather observation, which shows it)."""
         super().__init__()
         cfg = config or NavConfig(
@@ -212,7 +216,7 @@ class UAVNavEnv(gym.Env):
         """The observation at ``pos`` after ``t`` moves. Position observation: the position
         scaled to [0, 1]^2, float32 (works on (..., 2) arrays), and where the signal changes
         in time ``t`` over ``max_steps``. Weather observation: the
-        :class:`~rainuav.nav.views.WeatherView` dict for the destinations ``goal`` (N, 2;
+        [`WeatherView`][rainuav.nav.views.WeatherView] dict for the destinations ``goal`` (N, 2;
         default the task's) and, in a bank, the ``world`` (N,) each UAV flies; batched for
         (N, 2) positions, one for a (2,) position."""
         if self.view is not None:
@@ -270,8 +274,10 @@ class UAVNavEnv(gym.Env):
     ) -> tuple[np.ndarray, np.ndarray, int]:
         """A new episode's (start, destination, world): the world uniform among a bank's (0
         otherwise), then the destination (``goal`` where given; drawn,
-        :func:`~rainuav.nav.views.sample_goal`, where ``random_goal``; else the task's), then
-        the start (:meth:`sample_start`, or within reach of a drawn destination)."""
+        [`sample_goal()`][rainuav.nav.views.sample_goal], where ``random_goal``; else the task's),
+        then
+        the start ([`sample_start()`][rainuav.nav.env.UAVNavEnv.sample_start], or within reach of a
+        drawn destination)."""
         world = int(rng.integers(self.field.worlds)) if isinstance(self.field, SignalBank) else 0
         if goal is None and not self.random_goal:
             return self.sample_start(rng), np.asarray(self.cfg.goal_m, dtype=np.float64), world

@@ -1,12 +1,13 @@
 """The signal field the UAV flies through: pixel-centred bilinear sampling of a map in dB (SINR
-or SIR, :mod:`rainuav._sampling`), with its input checked once, and the serving cell at the
+or SIR, `rainuav._sampling`), with its input checked once, and the serving cell at the
 nearest pixel when the map names one.
 
 Two kinds, one interface (``field(x, y, t_s)``, ``field.serving_cell(x, y, t_s)``,
-``field.varies``): :class:`SignalField`, one map (time is ignored), and :class:`SignalSeries`,
+``field.varies``): [`SignalField`][rainuav.nav.field.SignalField], one map (time is ignored), and
+[`SignalSeries`][rainuav.nav.field.SignalSeries],
 maps at instants ``t_s`` (a storm that moves), linear in time between them. The exact planner
 in space-time (``rainuav_core::plantime``) reads the series operation for operation as
-:meth:`SignalSeries.__call__` does."""
+``SignalSeries.__call__`` does."""
 
 from __future__ import annotations
 
@@ -117,10 +118,10 @@ class _PointCache:
 
 class SignalField:
     """A SINR (or SIR) map in dB over ``extent_m = (x_min, x_max, y_min, y_max)``, sampled
-    bilinearly between pixel centres (:func:`rainuav._sampling.bilinear`). ``name`` is the
+    bilinearly between pixel centres (`rainuav._sampling.bilinear`). ``name`` is the
     array's name in error messages; ``serving_cell`` (H, W), optional, is looked up at the
     nearest pixel; ``not_flyable`` (H, W), optional, marks the pixels a UAV may not enter
-    (:func:`blocked_at`)."""
+    ([`blocked_at()`][rainuav.nav.field.blocked_at])."""
 
     varies = False
     """One map: the signal does not change in time."""
@@ -245,7 +246,7 @@ class SignalSeries:
 
     def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
         """(N, M): the signal at the fixed points (M, 2) at each of the N instants ``t_s``,
-        as :meth:`__call__` gives it; every slice is sampled once per set of points."""
+        as `__call__` gives it; every slice is sampled once per set of points."""
         g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
         return _lerp(g, *self.brackets(np.atleast_1d(t_s)))
 
@@ -253,9 +254,11 @@ class SignalSeries:
 class SignalBank:
     """Several worlds' signals in one array, each point reading its own world: ``values_db``
     (P, K, H, W), the P worlds' maps at the common instants ``t_s`` (K,) over one extent, read
-    as each world's :class:`SignalSeries` reads it (a one-instant bank is P still maps). The
+    as each world's [`SignalSeries`][rainuav.nav.field.SignalSeries] reads it (a one-instant bank is
+    P still maps). The
     UAVs of one training batch fly different storms through one call; a world's slot is
-    replaced in place (:meth:`put`) when the learner moves on to a new storm."""
+    replaced in place ([`put()`][rainuav.nav.field.SignalBank.put]) when the learner moves on to a
+    new storm."""
 
     varies = True
     """The worlds' signals may change in time (a bank of still maps says False)."""
@@ -298,8 +301,8 @@ class SignalBank:
 
     def at_points(self, points: np.ndarray, t_s: Any, world: Any) -> np.ndarray:
         """(N, M): world ``world[n]``'s signal at the fixed points (M, 2) at the instants
-        ``t_s[n]``, as :meth:`__call__` gives it; every slice sampled once per set of
-        points (until :meth:`put`)."""
+        ``t_s[n]``, as `__call__` gives it; every slice sampled once per set of
+        points (until [`put()`][rainuav.nav.field.SignalBank.put])."""
         g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
         t = np.atleast_1d(t_s)
         w = np.broadcast_to(np.asarray(world, dtype=np.int64), t.shape)
@@ -309,7 +312,8 @@ class SignalBank:
 
     def __call__(self, x: Any, y: Any, t_s: Any, world: Any) -> Any:
         """The signal of world ``world`` (one per point, or one) at the points ``(x, y)`` at
-        the instants ``t_s``, as that world's :class:`SignalSeries` gives it."""
+        the instants ``t_s``, as that world's [`SignalSeries`][rainuav.nav.field.SignalSeries] gives
+        it."""
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         k0, k1, f = self._times.brackets(np.asarray(t_s, dtype=np.float64))
         base = np.asarray(world, dtype=np.int64) * self.db.shape[1]

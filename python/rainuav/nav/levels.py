@@ -2,11 +2,12 @@
 
 The UAV flies on a stack of levels (one signal per flight altitude, lowest first; each a map
 or maps in time, each with its not-flyable pixels) and has six moves: the plane's four on its
-level (:mod:`rainuav.nav.task`) and a climb or a descent of one level.
+level ([`rainuav.nav.task`][rainuav.nav.task]) and a climb or a descent of one level.
 
 - **Clock.** The flight's clock ticks once per horizontal move (``move_s`` seconds). A climb
   lasts the gap over ``climb_m_s`` and a descent the gap over ``descend_m_s``, rounded up to
-  whole ticks (:func:`level_durations`; the defaults, 15 m gaps and 1 s moves: 3 and 5). A
+  whole ticks ([`level_durations()`][rainuav.nav.levelfield.level_durations]; the defaults, 15 m
+  gaps and 1 s moves: 3 and 5). A
   move lands at the tick its duration later and reads the signal there and then.
 - **Rewards.** A move earns its duration in ticks times the base reward where and when it
   lands (``-1 - mu shortfall`` by default): the flight's cost is its time plus the weighted
@@ -20,14 +21,16 @@ level (:mod:`rainuav.nav.task`) and a climb or a descent of one level.
 - **Observation.** Position scaled to [0, 1]^2, the level over the highest level index (0 on
   one level), and where the signal moves the clock over ``max_steps``. ``info`` adds
   ``altitude_m`` and ``level`` to the plane's keys. With ``observation="weather"`` the
-  :class:`~rainuav.nav.views.WeatherView` of every level (one layer a level: the signal now
+  [`WeatherView`][rainuav.nav.views.WeatherView] of every level (one layer a level: the signal now
   around the UAV and over the area), its position, destination, clock and level; then
   ``random_goal`` draws a destination per flight, and a field of banks (a storm pool among
   levels) a world per flight, as ``UAVNavEnv`` does.
 
-The exact optimum of this task is :func:`rainuav.nav.planner.optimal_levels`
+The exact optimum of this task is
+[`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]
 (``rainuav_core::planlevels``), which reads the signal operation for operation as
-:class:`LevelStepper` does; its plans replayed here earn its returns (tested).
+[`LevelStepper`][rainuav.nav.levelfield.LevelStepper] does; its plans replayed here earn its returns
+(tested).
 """
 
 from __future__ import annotations

@@ -1,12 +1,14 @@
-"""Exact and baseline planners for :class:`rainuav.nav.env.UAVNavEnv`.
+"""Exact and baseline planners for [`rainuav.nav.env.UAVNavEnv`][rainuav.nav.env.UAVNavEnv].
 
 The moves are deterministic on the start's lattice, so the exact finite-horizon optimum of the
 undiscounted return is a dynamic programme (in Rust; many starts run in parallel). It is the
 yardstick for learned policies. Where the signal changes in time (a
-:class:`rainuav.nav.field.SignalSeries`) the programme's rewards depend on the step: it is then
+[`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]) the programme's rewards depend
+on the step: it is then
 the exact optimum on the space-time lattice, the storm's motion known
 (``rainuav_core::plantime``). The baselines a user would try instead (the plan of the weather at
-take-off, re-planning on the weather of the moment) are in :mod:`rainuav.nav.baselines`.
+take-off, re-planning on the weather of the moment) are in
+[`rainuav.nav.baselines`][rainuav.nav.baselines].
 """
 
 from __future__ import annotations
@@ -63,7 +65,7 @@ def optimal_many(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
 
 def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
     """Exact optimal plans of the task ``cfg`` (``min_db`` resolved) on ``field`` (a
-    :class:`SignalField`, or a series in time) from each start."""
+    [`SignalField`][rainuav.nav.field.SignalField], or a series in time) from each start."""
     starts = np.ascontiguousarray(np.asarray(starts_m, dtype=np.float64).reshape(-1, 2))
     task = {
         "step_m": float(cfg.step_m),
@@ -150,7 +152,8 @@ def optimal_levels(
     instants ``t_s`` (T,; every flight taking off at 0); the task ``cfg`` (``min_db``
     resolved); starts (N, 2) at ``start_levels`` (N,; -1: the level whose optimum is best,
     the take-off's climb left to the autopilot). Six moves: the plane's four, and a climb or
-    descent of one level, which lasts its duration in ticks (:func:`level_durations`) and
+    descent of one level, which lasts its duration in ticks
+    ([`level_durations()`][rainuav.nav.levelfield.level_durations]) and
     earns that many times the base reward where and when it lands. The horizon
     ``cfg.max_steps`` is in ticks. A flight arrives at the destination's horizontal position
     at any level; leaving the band or entering a not-flyable cell ((L, H', W')
@@ -207,9 +210,11 @@ def optimal_levels(
 def optimal_among_levels(
     env: UAVLevelsEnv, starts_m: npt.ArrayLike, start_levels: npt.ArrayLike | None = None
 ) -> list[LevelPlan]:
-    """:func:`optimal_levels` on the levels environment's signal and task (its levels' maps,
+    """[`optimal_levels()`][rainuav.nav.planner.optimal_levels] on the levels environment's signal
+    and task (its levels' maps,
     or maps in time, and masks) from each start (N, 2), at ``start_levels`` (N,; default
-    where the env starts a flight there: :meth:`UAVLevelsEnv.start_level_at`)."""
+    where the env starts a flight there:
+    [`UAVLevelsEnv.start_level_at()`][rainuav.nav.levels.UAVLevelsEnv.start_level_at])."""
     if not isinstance(env, UAVLevelsEnv):
         raise InvalidInputError(f"env must be a UAVLevelsEnv (got {type(env).__name__})")
     starts = np.asarray(starts_m, dtype=np.float64).reshape(-1, 2)

@@ -1,7 +1,8 @@
 """A shield for greedy flights (Alshiekh et al., AAAI 2018): which moves a flight may take.
 
-Rule 1 (:meth:`rainuav.nav.batch.BatchStepper.safe_actions`): only moves after which the UAV
-is still in the area and can still arrive within ``max_steps``. Rule 2: among those, moves
+Rule 1 ([`BatchStepper.safe_actions()`][rainuav.nav.batch.BatchStepper.safe_actions]):
+only moves after which the UAV is still in the area and can still arrive within ``max_steps``. Rule
+2: among those, moves
 onto a position the flight has not visited, where one exists. The shield is a safety layer
 around a policy, not part of it: metrics report the policy alone first (see
 ``docs/guide/learning.md``).
@@ -41,7 +42,9 @@ def shield_moves(
     goal: np.ndarray | None = None,
 ) -> np.ndarray:
     """(N, 4) bool: the moves the shield allows. First the safe moves (still in the area and
-    able to arrive within ``max_steps``, :meth:`rainuav.nav.batch.BatchStepper.safe_actions`); among
+    able to arrive within ``max_steps``,
+    [`rainuav.nav.batch.BatchStepper.safe_actions()`][rainuav.nav.batch.BatchStepper.safe_actions]);
+    among
     them, the moves to a position the flight has not visited (``visited``: each flight's
     lattice offsets so far), where there is one. The second rule applies where every move
     costs at least 1 (``"shortfall"`` and ``"outage"`` with ``mu >= 0``, ``"linear"`` with

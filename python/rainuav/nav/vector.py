@@ -1,5 +1,6 @@
 """A Gymnasium vector environment over the batched stepper: ``num_envs`` UAVs on one map, each
-its own episode, stepped by one call (:class:`rainuav.nav.batch.BatchStepper`), with exactly
+its own episode, stepped by one call
+([`rainuav.nav.batch.BatchStepper`][rainuav.nav.batch.BatchStepper]), with exactly
 the scalar environment's transitions.
 
 Autoreset (Gymnasium's ``metadata["autoreset_mode"]``): ``NEXT_STEP`` (Gymnasium's default,
@@ -7,7 +8,7 @@ what CleanRL expects): the step after a UAV's episode ends resets it, ignores it
 returns its new start with reward 0; ``SAME_STEP``: the ending step already returns the new
 start, and the last observation of the finished episode is ``info["final_obs"]``.
 ``gym.make_vec("rainuav/UAVNav-v0", num_envs=N, vectorization_mode="vector_entry_point")``
-builds one (:mod:`rainuav.envs`).
+builds one ([`rainuav.envs`][rainuav.envs]).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ and the stepper's temporaries, about 300 bytes)."""
 
 def check_num_envs(num_envs: Any) -> int:
     """``num_envs`` if it is an integer >= 1 whose UAVs fit in memory (refused before any
-    allocation, naming the GB), else :class:`InvalidInputError`."""
+    allocation, naming the GB), else [`InvalidInputError`][rainuav.errors.InvalidInputError]."""
     if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
         raise InvalidInputError(f"num_envs must be an integer >= 1 (got {num_envs!r})")
     if num_envs < 1:
@@ -43,7 +44,8 @@ def check_num_envs(num_envs: Any) -> int:
 
 
 class UAVNavVectorEnv(gym.vector.VectorEnv):
-    """``num_envs`` UAVs flying the task of ``env`` (a :class:`UAVNavEnv`: its map and task;
+    """``num_envs`` UAVs flying the task of ``env`` (a [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv]: its
+    map and task;
     its own state is not used), batched."""
 
     def __init__(

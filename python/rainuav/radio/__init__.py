@@ -1,17 +1,20 @@
 """Radio maps: a scenario (network, weather, airspace) in, every cell's received power, the
 serving cell, SIR and SINR at the flight altitude out.
 
-Modules, bottom up: :mod:`~rainuav.radio.cell` (a cell and its antenna),
-:mod:`~rainuav.radio.scenario` (the dataclasses and their TOML form),
-:mod:`~rainuav.radio.presets` (the paper's and our scenarios), :mod:`~rainuav.radio.grid`
-(one cell's PE grid and cone), :mod:`~rainuav.radio.pe_engine` (the march per cell),
-:mod:`~rainuav.radio.ray_engine` (two rays per cell and pixel, in Rust),
-:mod:`~rainuav.radio.sinr`, :mod:`~rainuav.radio.radiomap` (the map and its builder),
-:mod:`~rainuav.radio.weather`, :mod:`~rainuav.radio.storms`, :mod:`~rainuav.radio.rategrid`
-and :mod:`~rainuav.radio.stochastic` (weather in time),
-:mod:`~rainuav.radio.timemap` (maps of a moving weather at many instants),
-:mod:`~rainuav.radio.cache` and :mod:`~rainuav.radio.plot`. Depends on :mod:`rainuav.medium`,
-:mod:`rainuav.antenna` and :mod:`rainuav.pwe` only; nothing here knows about navigation or learning.
+Modules, bottom up: [`cell`][rainuav.radio.cell] (a cell and its antenna),
+[`scenario`][rainuav.radio.scenario] (the dataclasses and their TOML form),
+[`presets`][rainuav.radio.presets] (the paper's and our scenarios), [`grid`][rainuav.radio.grid]
+(one cell's PE grid and cone), [`pe_engine`][rainuav.radio.pe_engine] (the march per cell),
+[`ray_engine`][rainuav.radio.ray_engine] (two rays per cell and pixel, in Rust),
+[`sinr`][rainuav.radio.sinr], [`radiomap`][rainuav.radio.radiomap] (the map and its builder),
+[`weather`][rainuav.radio.weather], [`storms`][rainuav.radio.storms],
+[`rategrid`][rainuav.radio.rategrid]
+and [`stochastic`][rainuav.radio.stochastic] (weather in time),
+[`timemap`][rainuav.radio.timemap] (maps of a moving weather at many instants),
+[`cache`][rainuav.radio.cache] and [`plot`][rainuav.radio.plot]. Depends on
+[`rainuav.medium`][rainuav.medium],
+[`rainuav.antenna`][rainuav.antenna] and [`rainuav.pwe`][rainuav.pwe] only; nothing here knows about
+navigation or learning.
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
-"""The airspace of a scenario (:class:`Area`) and the terrain under it (:class:`TerrainFile`),
-as dataclasses validated by :class:`rainuav.radio.scenario.Scenario`."""
+"""The airspace of a scenario ([`Area`][rainuav.radio.area.Area]) and the terrain under it
+([`TerrainFile`][rainuav.radio.area.TerrainFile]),
+as dataclasses validated by [`rainuav.radio.scenario.Scenario`][rainuav.radio.scenario.Scenario]."""
 
 from __future__ import annotations
 
@@ -43,7 +44,8 @@ class Area:
     altitudes_m: list[float] | None = None
     """The flight altitudes a UAV may choose among (m, increasing, in the altitude reference
     of ``altitude_reference``), e.g. 30 to 120 every 15; None: ``altitude_m`` alone
-    (:func:`rainuav.radio.levels.build_radio_levels` maps each)."""
+    ([`rainuav.radio.levels.build_radio_levels()`][rainuav.radio.levels.build_radio_levels] maps
+    each)."""
 
     def check(self, where: str = "area") -> None:
         for k in ("x_min_m", "x_max_m", "y_min_m", "y_max_m"):
@@ -95,7 +97,8 @@ class Area:
 
     @property
     def levels(self) -> list[float]:
-        """The flight altitudes, m: :attr:`altitudes_m`, else :attr:`altitude_m` alone."""
+        """The flight altitudes, m: [`altitudes_m`][rainuav.radio.area.Area.altitudes_m], else
+        [`altitude_m`][rainuav.radio.area.Area.altitude_m] alone."""
         return [float(a) for a in self.altitudes_m] if self.altitudes_m else [self.altitude_m]
 
     @property
@@ -105,7 +108,8 @@ class Area:
 
     @property
     def clearance_m(self) -> float:
-        """The minimum clearance over terrain and obstacles, m (:attr:`min_clearance_m`)."""
+        """The minimum clearance over terrain and obstacles, m
+        ([`min_clearance_m`][rainuav.radio.area.Area.min_clearance_m])."""
         return DEFAULT_MIN_CLEARANCE_M if self.min_clearance_m is None else self.min_clearance_m
 
     @property
@@ -130,7 +134,8 @@ class Area:
 
 @dataclass
 class TerrainFile:
-    """The terrain under the area: a digital elevation model (:mod:`rainuav.ground.dem`)."""
+    """The terrain under the area: a digital elevation model
+    ([`rainuav.ground.dem`][rainuav.ground.dem])."""
 
     file: str
     """A GeoTIFF of heights above sea level in any CRS (SRTM, Copernicus GLO-30); in a TOML
@@ -139,7 +144,8 @@ class TerrainFile:
 
 @dataclass
 class FootprintsFile:
-    """Buildings from a footprint file (:mod:`rainuav.ground.footprints`)."""
+    """Buildings from a footprint file
+    ([`rainuav.ground.footprints`][rainuav.ground.footprints])."""
 
     file: str
     """A GeoJSON file of Polygon and MultiPolygon features in longitude/latitude, with
@@ -148,5 +154,6 @@ class FootprintsFile:
     """The walls' ITU-R P.2040 material where a feature's ``building:material`` names none."""
     default_height_m: float = 10.0
     """The roof of a building on the ground whose feature gives neither a height nor storeys,
-    m (:data:`rainuav.ground.footprints.DEFAULT_HEIGHT_M`; central-city buildings are often
+    m ([`rainuav.ground.footprints.DEFAULT_HEIGHT_M`][rainuav.ground.footprints.DEFAULT_HEIGHT_M];
+    central-city buildings are often
     18-28 m: a guess either way, which ``fly`` reports)."""

@@ -1,10 +1,11 @@
 """A scenario's buildings as the radio layer uses them (docs/physics.md section 12): the boxes of
 ``Scenario.buildings`` and the footprints of ``Scenario.footprints``
-(:mod:`rainuav.ground.footprints`) as one set of prisms standing on the terrain, their walls,
+([`rainuav.ground.footprints`][rainuav.ground.footprints]) as one set of prisms standing on the
+terrain, their walls,
 and the pixels they touch.
 
 - **One kind of obstacle.** A box is the four-cornered footprint; both are
-  :class:`rainuav._core.Prisms` for the ray engine (profiles, diffraction, visibility) and for
+  `rainuav._core.Prisms` for the ray engine (profiles, diffraction, visibility) and for
   the parabolic equation's obstacle heights.
 - **Merged where they touch.** Footprints with the same heights and material that touch are
   merged into one polygon (a building mapped in parts, or a terrace of equal houses): a wall
@@ -202,7 +203,8 @@ def _build(scn: Scenario) -> Buildings:
 
 
 _BUILT: dict[str, Buildings] = {}
-"""The last few scenarios' buildings, by what they depend on (:func:`scenario_buildings`)."""
+"""The last few scenarios' buildings, by what they depend on
+([`scenario_buildings()`][rainuav.radio.buildings.scenario_buildings])."""
 
 
 def scenario_buildings(scn: Scenario) -> Buildings | None:
@@ -234,7 +236,7 @@ def scenario_buildings(scn: Scenario) -> Buildings | None:
 
 def wall_args(scn: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """The walls (K, 6) and their permittivities (K, 2: real, imaginary) at ``scn``'s
-    frequency, as :func:`rainuav._core.ray_walls` takes them."""
+    frequency, as `rainuav._core.ray_walls` takes them."""
     b = scenario_buildings(scn)
     if b is None or b.walls.shape[0] == 0:
         return np.zeros((0, 6)), np.zeros((0, 2))

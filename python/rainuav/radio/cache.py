@@ -1,8 +1,10 @@
 """The on-disk cache of radio maps.
 
 A map is stored under ``cache_dir()/radiomaps/<key>.npz`` where the key hashes the scenario
-(:meth:`rainuav.radio.scenario.Scenario.digest`) together with the fingerprint of the code
-that built it (:func:`engine_fingerprint`): a map built by other engine code is never reused.
+([`rainuav.radio.scenario.Scenario.digest()`][rainuav.radio.scenario.Scenario.digest]) together with
+the fingerprint of the code
+that built it ([`engine_fingerprint()`][rainuav.radio.cache.engine_fingerprint]): a map built by
+other engine code is never reused.
 Clear the cache with ``python -m rainuav.radiomap --clear-cache`` (or delete the folder).
 """
 
@@ -53,7 +55,8 @@ def cache_dir() -> Path:
 
 @functools.cache
 def engine_fingerprint() -> str:
-    """A hash of what produces a map: :data:`ENGINE_VERSION`, the source of the Python engine
+    """A hash of what produces a map: [`ENGINE_VERSION`][rainuav.radio.cache.ENGINE_VERSION], the
+    source of the Python engine
     modules and the compiled core (``rainuav._core``, which holds the PE march and the rain
     medium)."""
     import importlib

@@ -7,7 +7,7 @@ clockwise from +x (east); ``tilt_deg`` is the mechanical tilt, the boresight ele
 pattern's gain at ``(a - azimuth_deg, e - tilt_deg)``: the tilt shifts the pattern in
 elevation (exact in the boresight's vertical plane, and what the PE source does with a tilt).
 
-Antennas (``Cell.antenna``; :mod:`rainuav.antenna` holds the patterns):
+Antennas (``Cell.antenna``; [`rainuav.antenna`][rainuav.antenna] holds the patterns):
 
 - ``"gaussian"``: the paper's beam, half-power widths ``beamwidth_deg`` / ``beamwidth_v_deg``,
   optionally with a sidelobe floor ``floor_db`` below the peak (``None``: the pure beam).
@@ -152,7 +152,8 @@ class Cell:
 
 @functools.lru_cache(maxsize=64)
 def pattern_by_key(key: tuple[Any, ...]) -> antenna.Pattern:
-    """The pattern of any cell whose :meth:`Cell.key` is ``key`` (built once, cached)."""
+    """The pattern of any cell whose [`Cell.key()`][rainuav.radio.cell.Cell.key] is ``key`` (built
+    once, cached)."""
     kind = key[0]
     if kind == "gaussian":
         _, bh, bv, floor = key

@@ -1,6 +1,6 @@
 """Rain from GeoTIFF files, as many radar archives and GIS exports deliver it,
 read with rasterio (GDAL) into the same CF form as a NetCDF rain file, so one reader
-(:func:`rainuav.radio.radar.read_radar_grid`) reprojects both.
+([`rainuav.radio.radar.read_radar_grid()`][rainuav.radio.radar.read_radar_grid]) reprojects both.
 
 - **One file, one band per instant**, or **a folder of such files** (``*.tif``, ``*.tiff``;
   one per scan, as archives keep them), all on the same grid.
@@ -10,7 +10,8 @@ read with rasterio (GDAL) into the same CF form as a NetCDF rain file, so one re
   (``2026:06:01 14:00:00``). A band without one is refused: the weather's motion would be a
   guess.
 - **Units**: the band's unit (``units``, GDAL's band unit type) or its ``units`` tag, else the
-  file's ``units`` tag: ``mm/h`` or ``dBZ`` (:mod:`rainuav.radio.radar` converts dBZ).
+  file's ``units`` tag: ``mm/h`` or ``dBZ`` ([`rainuav.radio.radar`][rainuav.radio.radar] converts
+  dBZ).
 - **Georeference**: the file's CRS and its affine transform (north-up grids only: a rotated
   transform is refused); pixel centres become the ``x``/``y`` coordinates. The file's nodata
   value reads as missing (the area must then avoid it).

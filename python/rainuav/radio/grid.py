@@ -4,12 +4,14 @@ The cone: the widest directions (as direction cosines across range and in height
 cell's pattern is within ``pe.dynamic_range_db`` of its peak, narrowed until the march fits
 ``pe.budget_gpoints``. The transverse steps resolve it, ``d = lambda / (2 sin theta_max)``;
 the PE carries the pattern fully inside ``CONE_FULL`` of the cone and tapers it to zero at
-the edge (:func:`cone_weight`); the rays carry the rest in the hybrid engine.
+the edge ([`cone_weight()`][rainuav.radio.grid.cone_weight]); the rays carry the rest in the hybrid
+engine.
 
 The domain spans the beam's spread over the longest range that reaches the area (or
 the area's own cross-range extent, if smaller), plus the absorbing taper; in height, the
 ground (or a margin below) up to ``max(altitude, site) + top_margin_m``, plus the taper. Over
-terrain (:mod:`rainuav.radio.terrain`) heights count from the lowest ground of the area: the
+terrain ([`rainuav.radio.terrain`][rainuav.radio.terrain]) heights count from the lowest ground of
+the area: the
 grid's PEC floor lies there, the terrain above it is a staircase of obstacles, and the top
 clears the highest flight height over the area.
 Sizes are rounded up to products of 2, 3 and 5 for the FFTs. Energy that leaves through the
@@ -82,7 +84,8 @@ class MarchGrid:
 
 CONE_FULL = 0.6
 """The PE carries a pattern fully out to this fraction of its cone's sine and tapers it (cos^2)
-to zero at the cone's edge; the rays carry the rest (:func:`cone_weight`)."""
+to zero at the cone's edge; the rays carry the rest
+([`cone_weight()`][rainuav.radio.grid.cone_weight])."""
 _MIN_SINE = math.sin(math.radians(0.5))
 
 

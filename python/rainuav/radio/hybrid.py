@@ -1,7 +1,10 @@
-"""What the engines compute before their powers are combined (:func:`engine_parts`): every
+"""What the engines compute before their powers are combined
+([`engine_parts()`][rainuav.radio.hybrid.engine_parts]): every
 cell's power by the rays, the part of it the PE would carry, and the PE's power inside its
-cone. :func:`rainuav.radio.radiomap.build_radio_map` combines them into a map; the maps in time
-(:mod:`rainuav.radio.timemap`) reuse the PE's part from clear air at every instant."""
+cone. [`rainuav.radio.radiomap.build_radio_map()`][rainuav.radio.radiomap.build_radio_map] combines
+them into a map; the maps in time
+([`rainuav.radio.timemap`][rainuav.radio.timemap]) reuse the PE's part from clear air at every
+instant."""
 
 from __future__ import annotations
 
@@ -113,7 +116,8 @@ def engine_parts_levels(
     y_m: np.ndarray,
     progress: bool = False,
 ) -> list[EngineParts]:
-    """:func:`engine_parts` at several flight altitudes (``scns``: the scenario at each,
+    """[`engine_parts()`][rainuav.radio.hybrid.engine_parts] at several flight altitudes (``scns``:
+    the scenario at each,
     lowest first; engine 'pe' or 'hybrid' over flat ground), each cell marched once: its grid
     is the one of the highest level (its top clears every level), every level's two rows are
     recorded after each step, and the rays' part inside the cone at each level uses that

@@ -1,6 +1,8 @@
-"""A radio map as data: :class:`RadioMap` (received power per cell, serving cell, SIR and SINR
+"""A radio map as data: [`RadioMap`][rainuav.radio.mapdata.RadioMap] (received power per cell,
+serving cell, SIR and SINR
 at the flight altitude), its .npz form, the checks a map file must pass, and keeping a map in
-the cache. :mod:`rainuav.radio.radiomap` builds maps; :mod:`rainuav.radio.timemap` builds
+the cache. [`rainuav.radio.radiomap`][rainuav.radio.radiomap] builds maps;
+[`rainuav.radio.timemap`][rainuav.radio.timemap] builds
 them in time."""
 
 from __future__ import annotations
@@ -37,7 +39,8 @@ __all__ = [
 ]
 
 FORMAT_VERSION = 2
-"""Version of the .npz layout written by :meth:`RadioMap.save`."""
+"""Version of the .npz layout written by
+[`RadioMap.save()`][rainuav.radio.mapdata.RadioMap.save]."""
 
 
 @dataclass
@@ -76,7 +79,8 @@ class RadioMap:
     """Seconds per phase of the build: source, screens, march, resample (empty if cached)."""
     not_flyable: npt.NDArray[np.bool_] | None = None
     """(H, W) the pixels a UAV may not enter: terrain or obstacles within the clearance of the
-    flight height (:func:`rainuav.radio.terrain.not_flyable`); None over flat open ground."""
+    flight height ([`rainuav.radio.terrain.not_flyable()`][rainuav.radio.terrain.not_flyable]); None
+    over flat open ground."""
 
     _ARRAYS = (
         "x_m",
@@ -117,7 +121,8 @@ class RadioMap:
     def load(
         cls, path: str | os.PathLike[str], known: tuple[str, Scenario] | None = None
     ) -> RadioMap:
-        """Reads a map written by :meth:`save` (bit-exact round trip). ``known``: ``(digest,
+        """Reads a map written by [`save()`][rainuav.radio.mapdata.RadioMap.save] (bit-exact round
+        trip). ``known``: ``(digest,
         scenario)`` the caller looked the file up by (a cache hit): where the file's digest
         is that one, the map carries the caller's scenario, never the stored one (whose
         DEM or footprint file may have moved since: the key is their contents)."""
@@ -151,7 +156,7 @@ class RadioMap:
     def plot(self, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
         """Draws the map in dB (``kind`` 'sir', 'sinr' or 'rss'; ``cell`` selects one cell's
         RSS, default the strongest) with the sites marked; returns the matplotlib Axes
-        (:func:`rainuav.radio.plot.plot_map`)."""
+        ([`rainuav.radio.plot.plot_map()`][rainuav.radio.plot.plot_map])."""
         return plot_map(self, kind, cell, ax)
 
     def coverage(self, sir_min_db: float = 10.0) -> float:
@@ -184,8 +189,10 @@ def read_npz(
     version: int,
     known: tuple[str, Scenario] | None = None,
 ) -> tuple[dict[str, np.ndarray], Scenario]:
-    """The arrays and the scenario of an .npz written by :func:`write_npz` (never unpickled),
-    or :class:`InvalidInputError` naming the file: unreadable, missing an array of ``need``,
+    """The arrays and the scenario of an .npz written by
+    [`write_npz()`][rainuav.radio.mapdata.write_npz] (never unpickled),
+    or [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file: unreadable, missing
+    an array of ``need``,
     of another format ``version``, or a scenario that is not valid (``what``: the kind of
     file, for the message). ``known``: ``(digest, scenario)`` the caller looked the file up
     by (the map cache); where the file's stored digest is that one, its scenario is that
@@ -225,7 +232,7 @@ def check_arrays(
 ) -> None:
     """Each array of ``shapes`` numeric, of its shape and finite, each of ``ranges`` within
     its bounds, and ``x_m``, ``y_m`` the pixel centres of ``scn``'s area; else
-    :class:`InvalidInputError` naming the file and the array."""
+    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file and the array."""
     for k, shape in shapes.items():
         a = data[k]
         if a.shape != shape or a.dtype.kind not in "fiu":
@@ -247,7 +254,8 @@ def check_arrays(
 
 
 def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
-    """A map's arrays as :func:`build_radio_map` writes them, or :class:`InvalidInputError`
+    """A map's arrays as [`build_radio_map()`][rainuav.radio.radiomap.build_radio_map] writes them,
+    or [`InvalidInputError`][rainuav.errors.InvalidInputError]
     naming the file and the array: shapes from the scenario, types, and values finite and in
     their physical ranges (SIR and SINR within [SIR_FLOOR_DB, SIR_CEIL_DB], RSS within
     [RSS_FLOOR_DBM, 100] dBm, serving cells and sites that exist, PE shares in [0, 1], pixel
@@ -278,7 +286,8 @@ def map_ranges(cells: int, scn: Scenario) -> dict[str, tuple[float, float]]:
 
 def store(rm: Any, path: Path) -> None:
     """Keeps ``rm`` (a map or a map series: anything with ``save``) in the cache at ``path``;
-    a cache that cannot be written is a :class:`CacheWarning` (the map is the caller's all
+    a cache that cannot be written is a [`CacheWarning`][rainuav.errors.CacheWarning] (the map is
+    the caller's all
     the same)."""
     try:
         rm.save(path)

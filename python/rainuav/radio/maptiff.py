@@ -1,7 +1,8 @@
 """Radio maps out as GeoTIFF, as GIS tools (QGIS, GDAL) read them.
 
 One file, four float32 bands over the map's pixels, north-up, in the scenario's own projection
-(its :class:`rainuav.geo.Georef`: an azimuthal equidistant projection on WGS 84 centred on the
+(its [`rainuav.geo.Georef`][rainuav.geo.Georef]: an azimuthal equidistant projection on WGS 84
+centred on the
 origin, written as the file's CRS), with band descriptions and units:
 
 1. ``sinr_db``: SINR, dB;
@@ -10,7 +11,8 @@ origin, written as the file's CRS), with band descriptions and units:
 4. ``not_flyable``: 1 where the UAV may not fly (terrain or obstacles within the clearance
    of the flight height), else 0.
 
-The nodata value is :data:`NODATA`. Written to a temporary file and renamed: a reader never
+The nodata value is [`NODATA`][rainuav.radio.maptiff.NODATA]. Written to a temporary file and
+renamed: a reader never
 sees half a file. Needs rasterio (the ``geo`` extra).
 """
 
@@ -62,7 +64,8 @@ def _bands(rm: Any, slice_index: int | None) -> np.ndarray:
 def write_map_geotiff(
     rm: Any, path: str | os.PathLike[str], slice_index: int | None = None
 ) -> Path:
-    """Writes the map ``rm`` (a :class:`rainuav.radio.RadioMap`, or one instant
+    """Writes the map ``rm`` (a [`rainuav.radio.RadioMap`][rainuav.radio.mapdata.RadioMap], or one
+    instant
     ``slice_index`` of a map series) of a georeferenced scenario as GeoTIFF at ``path``
     (module docstring), atomically."""
     try:

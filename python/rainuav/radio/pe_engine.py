@@ -1,12 +1,14 @@
 """The PE engine: one split-step march per cell, recorded at the flight altitude.
 
 Each cell runs one march in its own frame (range along its azimuth, cross-range horizontal,
-height up; gridded by :mod:`rainuav.radio.grid`), records the field at the flight altitude
+height up; gridded by [`rainuav.radio.grid`][rainuav.radio.grid]), records the field at the flight
+altitude
 after every step, and is resampled onto the map grid:
 
 - **Source**: the aperture whose angular spectrum radiates the cell's pattern (any antenna,
-  :mod:`rainuav.radio.cell`) times the cone weight of its grid (:func:`~rainuav.radio.grid.
-  cone_weight`): the PE carries the pattern inside its cone, the rays the rest.
+  [`rainuav.radio.cell`][rainuav.radio.cell]) times the cone weight of its grid
+  ([`cone_weight()`][rainuav.radio.grid.cone_weight]): the PE carries the pattern inside its cone,
+  the rays the rest.
 - **Power**: a cell radiating ``tx_power_dbm`` puts ``P s |u|^2 / integral |u0|^2 dx dy``
   W/m^2 where the march field is ``u`` (power conservation of the march) and ``s`` the share
   of the power inside the cone; an isotropic receiver collects that times
@@ -14,7 +16,8 @@ after every step, and is resampled onto the map grid:
 - **Weather**: homogeneous rain is one complex index; rain cells and rate maps become
   cross-range index profiles per step (``n`` tabulated against rain rate once per frequency
   and interpolated); buildings become obstacle heights per step.
-- **Terrain** (:mod:`rainuav.radio.terrain`): the grid's floor is the area's lowest ground (a
+- **Terrain** ([`rainuav.radio.terrain`][rainuav.radio.terrain]): the grid's floor is the area's
+  lowest ground (a
   PEC plane, by images); the terrain above it zeroes the field below its surface at every step
   (staircase masking: exact for horizontal polarisation, whose field vanishes on a conductor;
   for vertical polarisation the surface should be an impedance boundary, which the mask

@@ -95,7 +95,8 @@ RAIN_CONTOURS_MM_H = (10.0, 30.0, 100.0)
 
 
 def _rain_contours(rm: Any, ax: Any) -> None:
-    """Outlines the rain at :data:`RAIN_CONTOURS_MM_H` where the weather varies over the area
+    """Outlines the rain at [`RAIN_CONTOURS_MM_H`][rainuav.radio.plot.RAIN_CONTOURS_MM_H] where the
+    weather varies over the area
     (rain cells, a storm at its instant, a rate map), labelled in mm/h."""
     from rainuav.radio.pe_engine import rain_rate_at
 
@@ -126,7 +127,8 @@ def save_series_gif(
     fps: float = 8.0,
     progress: bool = False,
 ) -> Path:
-    """Writes the SINR of a map series (:class:`rainuav.radio.timemap.RadioMapSeries`) as an
+    """Writes the SINR of a map series
+    ([`rainuav.radio.timemap.RadioMapSeries`][rainuav.radio.timemap.RadioMapSeries]) as an
     animated GIF, one frame a slice on one colour scale, with the rain outlined at each
     instant (10/30/100 mm/h), the outage edge (SINR = ``min_db``, dashed) and the sites
     (``progress``: a bar over the frames)."""

@@ -207,8 +207,9 @@ def storm(
     speed_m_s: float | None = None,
     **overrides: Any,
 ) -> Scenario:
-    """``uma`` at 28 GHz under the random storm of ``seed`` (:func:`rainuav.radio.storms.
-    draw_storm`: moving, growing and decaying Gaussian cells over a uniform background; its
+    """``uma`` at 28 GHz under the random storm of ``seed``
+    ([`draw_storm()`][rainuav.radio.storms.draw_storm]: moving, growing and decaying Gaussian cells
+    over a uniform background; its
     ``medium.at(t_s)`` is the weather t_s seconds into the storm). ``rain_rate_mm_h`` replaces
     the drawn background rate; ``speed_m_s`` the storm's speed (every cell's velocity scaled
     by the same factor, each cell still at its drawn place at mid-storm; 0: cells that stay

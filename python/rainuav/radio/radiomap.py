@@ -1,11 +1,15 @@
 """Radio maps: received power per cell, the serving cell, SIR and SINR over the flight altitude.
 
-:func:`build_radio_map` grids every cell (:mod:`rainuav.radio.grid`), marches it
-(:mod:`rainuav.radio.pe_engine`), resamples its power onto the map's pixel centres, and
-combines the cells (:mod:`rainuav.radio.sinr`). ``sir_db`` and ``sinr_db`` are clipped to
+[`build_radio_map()`][rainuav.radio.radiomap.build_radio_map] grids every cell
+([`rainuav.radio.grid`][rainuav.radio.grid]), marches it
+([`rainuav.radio.pe_engine`][rainuav.radio.pe_engine]), resamples its power onto the map's pixel
+centres, and
+combines the cells ([`rainuav.radio.sinr`][rainuav.radio.sinr]). ``sir_db`` and ``sinr_db`` are
+clipped to
 [-40, 60] dB: -40 where no cell reaches (and the serving cell is -1), 60 where only one cell
 does. ``rss_dbm`` is -250 dBm where a cell does not reach. Cells are computed one after
-another, each march using every core. Maps are cached on disk (:mod:`rainuav.radio.cache`).
+another, each march using every core. Maps are cached on disk
+([`rainuav.radio.cache`][rainuav.radio.cache]).
 """
 
 from __future__ import annotations
@@ -65,7 +69,7 @@ def build_radio_map(
 ) -> RadioMap | RadioMapSeries:
     """Builds (or loads from the cache) the radio map of ``scn`` with its engine (with
     ``times_s``, the maps of its moving weather at those instants:
-    :func:`rainuav.radio.timemap.build_radio_map_series`):
+    [`rainuav.radio.timemap.build_radio_map_series()`][rainuav.radio.timemap.build_radio_map_series]):
     ``"pe"`` marches each cell's pattern inside its cone; ``"ray"`` traces two rays per
     cell and pixel; ``"hybrid"`` lets the PE carry each pattern inside its cone and the rays
     the rest (the PE needs a ``pec`` ground or none: over a soil the hybrid is
@@ -103,7 +107,8 @@ def build_radio_map(
 
 
 def map_from_parts(scn: Scenario, parts: EngineParts, t0: float) -> RadioMap:
-    """The map of ``scn`` from its engine's parts (:mod:`rainuav.radio.hybrid`), its build
+    """The map of ``scn`` from its engine's parts ([`rainuav.radio.hybrid`][rainuav.radio.hybrid]),
+    its build
     counted from ``t0`` (``time.perf_counter``)."""
     a = scn.area
     x_m, y_m = a.centres()

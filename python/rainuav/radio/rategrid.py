@@ -1,8 +1,9 @@
 """Rain from a file: a NetCDF dataset of rain rates on (time, y, x) in the scenario's metres, read
-with xarray into a moving weather (:class:`rainuav.radio.weather.Medium` of kind ``'map'`` with
+with xarray into a moving weather ([`rainuav.radio.weather.Medium`][rainuav.radio.weather.Medium] of
+kind ``'map'`` with
 one map per instant; ``medium.at(t)`` interpolates linearly in time, exact at the file's own
 instants). Georeferenced grids (latitude/longitude, a CRS, dBZ) are read by
-:mod:`rainuav.radio.radar`.
+[`rainuav.radio.radar`][rainuav.radio.radar].
 
 The file holds one data variable with dimensions ``(time, y, x)`` (or the one named by
 ``variable``) in ``mm/h`` (``units`` attribute: ``mm/h``, ``mm h-1``, ``mm hr-1`` or

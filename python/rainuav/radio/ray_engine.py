@@ -2,21 +2,25 @@
 section 8), the per-pixel work in Rust (``rainuav_core::rays``).
 
 For each cell and pixel: the line-of-sight ray and the ray reflected by the ground, each with
-the cell's antenna gain in its own departure direction (:mod:`rainuav.radio.cell`) and
+the cell's antenna gain in its own departure direction ([`rainuav.radio.cell`][rainuav.radio.cell])
+and
 free-space spreading; the ground is PEC, absent, or an ITU-R P.527 soil (Fresnel
 coefficients for the scenario's polarisation); rain attenuation is integrated along each ray
 through the scenario's rain field (homogeneous: ``gamma d``; rain cells and rate maps: a
-raster of ``gamma`` nodes integrated along the ray). Over terrain (:mod:`rainuav.radio.terrain`)
+raster of ``gamma`` nodes integrated along the ray). Over terrain
+([`rainuav.radio.terrain`][rainuav.radio.terrain])
 and obstacles (buildings, the height map, standing on the terrain), each site-pixel path reads
 its profile: the direct ray gets the Bullington loss of the whole profile (ITU-R P.526-15
 section 4.5.1) with the antenna gain toward the diffracting edge, and the ground reflection
 bounces off the local ground line only where both ends see its specular point
-(:func:`departures`; docs/physics.md section 12). Each pixel holds the mean power over its area
+([`departures()`][rainuav.radio.ray_engine.departures]; docs/physics.md section 12). Each pixel
+holds the mean power over its area
 (ground-reflection fringes finer than a pixel are averaged, not aliased).
 
-With ``weights``, :func:`ray_power` also returns the power of the part of each pattern the
+With ``weights``, [`ray_power()`][rainuav.radio.ray_engine.ray_power] also returns the power of the
+part of each pattern the
 weights select: what the PE would carry in the hybrid engine
-(:func:`rainuav.radio.radiomap.build_radio_map`).
+([`rainuav.radio.radiomap.build_radio_map()`][rainuav.radio.radiomap.build_radio_map]).
 """
 
 from __future__ import annotations
@@ -88,7 +92,8 @@ def gamma_field(
     """The rain's specific attenuation for the rays: (uniform dB/m, raster of nodes in dB/m
     or None, (x0, dx, y0, dy) of the raster). Rain cells and rate maps are sampled at nodes
     ``spacing_m`` apart (default: the pixel, at most 10 m) over the area; ``table``
-    (:func:`gamma_table`, covering the field's rates) saves tabulating gamma again."""
+    ([`gamma_table()`][rainuav.radio.ray_engine.gamma_table], covering the field's rates) saves
+    tabulating gamma again."""
     m = scn.medium
     if m.kind == "clear":
         return 0.0, None, (0.0, 1.0, 0.0, 1.0)
@@ -136,14 +141,14 @@ def departures(
     """The departure elevations (degrees) toward which each site's antenna gains are taken,
     (S, H, W, 2): the direct ray's (the diffracting edge where the profile costs a loss, else
     the pixel) and the reflected ray's (the specular point). Over flat open ground these are
-    the closed forms of :func:`_directions`."""
+    the closed forms of ``_directions``."""
     return np.degrees(_path_table(scn, sites, x_m, y_m)[1][..., 3:5])
 
 
 Paths = tuple[np.ndarray, np.ndarray]
 """Every path of some sites traced once: the sites (S, 3: x, y, height) and the geometry of
 each path (S, H, W, 7: ``[d1, d2, loss_db, el_direct, el_reflect, psi, reflect]``, elevations
-in radians), as :func:`rainuav._core.ray_power` takes them back."""
+in radians), as `rainuav._core.ray_power` takes them back."""
 
 
 def _path_table(scn: Scenario, sites: Sequence[Site], x_m: np.ndarray, y_m: np.ndarray) -> Paths:
@@ -224,7 +229,8 @@ def ray_directions(
     scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
 ) -> Directions:
     """Each (site, cell)'s azimuth and departure elevations toward every pixel (H, W): the
-    closed forms over flat open ground, else :func:`departures` (toward the diffracting edge
+    closed forms over flat open ground, else [`departures()`][rainuav.radio.ray_engine.departures]
+    (toward the diffracting edge
     and the specular point), traced once per site."""
     return _paths(scn, jobs, x_m, y_m)[0]
 
@@ -232,7 +238,8 @@ def ray_directions(
 def _paths(
     scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
 ) -> tuple[Directions, Paths | None]:
-    """:func:`ray_directions`, and the paths traced for them (None over flat open ground,
+    """[`ray_directions()`][rainuav.radio.ray_engine.ray_directions], and the paths traced for them
+    (None over flat open ground,
     where the core's closed forms need no tracing)."""
     paths, index = None, {}
     if not _flat_open(scn):
@@ -258,7 +265,8 @@ def ray_gains(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The linear antenna gain of every (site, cell) toward every pixel along the direct and
     the reflected ray, two (M, H, W) arrays: the part of a ray map that no weather changes
-    (``directions``: :func:`ray_directions`, computed here if not given)."""
+    (``directions``: [`ray_directions()`][rainuav.radio.ray_engine.ray_directions], computed here if
+    not given)."""
     dirs = ray_directions(scn, jobs, x_m, y_m) if directions is None else directions
     shape = (len(jobs), y_m.size, x_m.size)
     gd, gr = np.empty(shape), np.empty(shape)
@@ -277,10 +285,12 @@ def ray_terms(
     """Everything of a ray map that no weather changes: each cell's clear-air power at every
     pixel split into direct, reflected and interference parts, and its rays' lengths,
     (M, H, W, 7): ``[direct, reflect, cross, d1, d2, wall, d3]`` (antenna gains,
-    spreading, ground, pixel means, diffraction, the walls' rays: :func:`wall_terms`); with
-    ``weights`` (as :func:`ray_power` takes them), the parts of the whole pattern less those
+    spreading, ground, pixel means, diffraction, the walls' rays:
+    [`wall_terms()`][rainuav.radio.wall_rays.wall_terms]); with
+    ``weights`` (as [`ray_power()`][rainuav.radio.ray_engine.ray_power] takes them), the parts of
+    the whole pattern less those
     of the weighted part (what the rays keep where the PE carries the rest).
-    :func:`ray_slicer` adds the rain."""
+    [`ray_slicer()`][rainuav.radio.ray_engine.ray_slicer] adds the rain."""
     dirs, paths = _paths(scn, jobs, x_m, y_m)
     gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)
@@ -329,7 +339,7 @@ def ray_slicer(
     terms: np.ndarray | None = None,
 ) -> _core.RaySlicer:
     """Every cell's rays over the map traced once in clear air (``terms``, default
-    :func:`ray_terms`), with each site's fan of lines for the rain
+    [`ray_terms()`][rainuav.radio.ray_engine.ray_terms]), with each site's fan of lines for the rain
     (``rainuav_core::raytime``): ``slicer.power(**rain_args(scn_at_t))`` is the received
     power (M, H, W) of the weather of any instant, the rain integrated once per site for every
     pixel at once and shared by the site's cells and both rays."""
@@ -346,8 +356,8 @@ def ray_slicer(
 
 
 def rain_args(scn: Scenario, table: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, Any]:
-    """The rain of ``scn`` as :meth:`rainuav._core.RaySlicer.power` takes it (``table``: see
-    :func:`gamma_field`)."""
+    """The rain of ``scn`` as `rainuav._core.RaySlicer.power` takes it (``table``: see
+    [`gamma_field()`][rainuav.radio.ray_engine.gamma_field])."""
     g_uniform, g_raster, g_os = gamma_field(scn, table=table)
     return {"gamma_db_per_m": g_uniform, "gamma_raster": g_raster, "gamma_origin_step": g_os}
 

@@ -41,7 +41,7 @@ THERMAL_NOISE_DBM_HZ = -174.0
 """Thermal noise density at 290 K, dBm/Hz."""
 
 ENGINES = ("hybrid", "ray", "pe")
-"""Propagation engines (:mod:`rainuav.radio.radiomap`)."""
+"""Propagation engines ([`rainuav.radio.radiomap`][rainuav.radio.radiomap])."""
 GROUNDS = ("pec", "none", "very-dry", "medium-dry", "wet")
 """Grounds: perfectly conducting, none (free space), or ITU-R P.527 dielectric soils."""
 
@@ -170,7 +170,8 @@ class Scenario:
     """Gridding of the PE marches."""
     origin: Origin | None = None
     """Where (0, 0) lies on the Earth, if the scenario is georeferenced (``[origin]`` with
-    ``lat_deg``, ``lon_deg``: :class:`rainuav.geo.Georef`, an azimuthal equidistant projection
+    ``lat_deg``, ``lon_deg``: [`rainuav.geo.Georef`][rainuav.geo.Georef], an azimuthal equidistant
+    projection
     on WGS 84); every position then has a latitude and longitude too."""
     terrain: TerrainFile | None = None
     """The terrain (``[terrain] file = "dem.tif"``; needs ``origin``): heights are then above
@@ -297,7 +298,8 @@ class Scenario:
     def digest(self) -> str:
         """A hash of every field (two scenarios with the same digest describe the same
         network, weather and airspace). The radio-map cache keys on it together with the
-        engine's fingerprint (:func:`rainuav.radio.cache.engine_fingerprint`)."""
+        engine's fingerprint
+        ([`rainuav.radio.cache.engine_fingerprint()`][rainuav.radio.cache.engine_fingerprint])."""
         d = self.to_dict()
         if self.terrain is not None:
             # The map follows the DEM's contents, not its name.

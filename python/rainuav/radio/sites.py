@@ -1,5 +1,5 @@
 """Base stations from a file, in latitude and longitude: one row per sector, as an
-operator's site list has them, into the scenario's :class:`~rainuav.radio.scenario.Site`\\ s.
+operator's site list has them, into the scenario's [`Site`][rainuav.radio.scenario.Site]\\ s.
 
 CSV (a header row, then one sector per row) or GeoJSON (a ``FeatureCollection`` of ``Point``
 features whose properties are the same fields; the point gives ``lat`` and ``lon``):
@@ -53,7 +53,8 @@ SiteRow = dict[str, Any]
 
 
 def _field(where: str, name: str, raw: Any) -> Any:
-    """One field of a row, checked: a number within :data:`RANGES`, an integer for
+    """One field of a row, checked: a number within [`RANGES`][rainuav.radio.sites.RANGES], an
+    integer for
     ``rows``, an antenna name, or an id."""
     if name == "site_id":
         text = str(raw).strip() if raw is not None else ""

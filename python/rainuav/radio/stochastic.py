@@ -7,7 +7,7 @@ noise field ``N`` of zero mean and unit variance whose 2-D power spectrum falls 
 is made by filtering white noise in Fourier space
 (``pysteps.noise.fftgenerators.generate_noise_2d_fft_filter``) on a periodic square of side
 ``side_m`` from the origin (default 4 km: twice the presets' area), on a grid of at most
-:data:`MAX_GRID` nodes a side (about 10 m). Rain falls
+[`MAX_GRID`][rainuav.radio.stochastic.MAX_GRID] nodes a side (about 10 m). Rain falls
 where ``N > z`` with ``z`` the ``1 - wet_fraction`` quantile of the standard normal; there it
 is log-normal, ``R = c exp(sigma N)`` (``sigma`` = ``log_sd``), with ``c`` set so that the
 expected mean over the area is ``mean_rate_mm_h``:
@@ -135,7 +135,7 @@ def noise_field(seed: int, knot: int, n: int, beta: float) -> np.ndarray:
 
 def nodes(side_m: float) -> int:
     """Noise nodes along a side of the square: about 10 m apart, a power of two, at most
-    :data:`MAX_GRID`."""
+    [`MAX_GRID`][rainuav.radio.stochastic.MAX_GRID]."""
     return int(min(MAX_GRID, 2 ** math.ceil(math.log2(max(side_m / 10.0, 16.0)))))
 
 

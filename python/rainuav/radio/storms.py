@@ -1,5 +1,6 @@
 """Random storms: moving, growing and decaying convective cells over a uniform background, drawn
-from one documented distribution (:func:`draw_storm`), the weather of the ``storm`` preset.
+from one documented distribution ([`draw_storm()`][rainuav.radio.storms.draw_storm]), the weather of
+the ``storm`` preset.
 
 The distribution (every draw from ``numpy.random.default_rng(seed)``, in this order):
 
@@ -15,7 +16,8 @@ The distribution (every draw from ``numpy.random.default_rng(seed)``, in this or
   that each cell crosses the area during the storm's 300 s; its position at time 0 follows from
   its velocity.
 
-Storm seeds at or above :data:`EVAL_SEEDS_FROM` are reserved for evaluation: nothing is trained
+Storm seeds at or above [`EVAL_SEEDS_FROM`][rainuav.radio.storms.EVAL_SEEDS_FROM] are reserved for
+evaluation: nothing is trained
 or tuned on them (``check_storm_seed`` refuses them where training asks).
 """
 
@@ -51,7 +53,8 @@ EFOLD_MIN = (10.0, 30.0)
 
 
 def check_storm_seed(seed: object, training: bool = False) -> int:
-    """``seed`` as an int in 0..2^63-1; with ``training``, below :data:`EVAL_SEEDS_FROM`."""
+    """``seed`` as an int in 0..2^63-1; with ``training``, below
+    [`EVAL_SEEDS_FROM`][rainuav.radio.storms.EVAL_SEEDS_FROM]."""
     hi = EVAL_SEEDS_FROM - 1 if training else MAX_STORM_SEED
     try:
         return check_integer("storm_seed", seed, 0, hi)
@@ -70,7 +73,8 @@ def draw_storm(
     speed_m_s: float | None = None,
 ) -> Medium:
     """The storm of ``seed`` over the area ``extent_m`` (x0, x1, y0, y1), as a weather whose
-    cells move (:meth:`rainuav.radio.weather.Medium.at` gives it at any instant; time 0 is the
+    cells move ([`rainuav.radio.weather.Medium.at()`][rainuav.radio.weather.Medium.at] gives it at
+    any instant; time 0 is the
     storm's start). The distribution is the module docstring's; ``speed_m_s``, where given,
     scales every cell's velocity by the factor that makes the storm's speed that (the same
     draws: 0 keeps each cell at its mid-storm place)."""

@@ -1,5 +1,6 @@
 """A scenario's ground as the radio layer uses it (docs/physics.md section 12): its terrain on the
-area's nodes (:mod:`rainuav.ground`), the heights the ray engine takes, the flight height over
+area's nodes ([`rainuav.ground`][rainuav.ground]), the heights the ray engine takes, the flight
+height over
 every pixel and the pixels that are not flyable.
 
 - A site's antenna stands ``height_m`` above the terrain at the site; the UAV flies
@@ -8,7 +9,7 @@ every pixel and the pixels that are not flyable.
 - A pixel is **not flyable** where the highest point of terrain and obstacles within it, plus
   ``area.min_clearance_m`` (default 10 m), reaches the flight height over the pixel's centre.
   Obstacles (buildings, ``height_map_m``) count wherever they overlap the pixel: footprints
-  and boxes intersected with it as polygons (:mod:`rainuav.radio.buildings`).
+  and boxes intersected with it as polygons ([`rainuav.radio.buildings`][rainuav.radio.buildings]).
 - Without a terrain the ground is flat at 0: a flat DEM at any height gives the same map.
 """
 
@@ -120,7 +121,8 @@ def not_flyable(scn: Scenario) -> np.ndarray:
 
 
 def map_mask(scn: Scenario) -> np.ndarray | None:
-    """The not-flyable pixels a map of ``scn`` carries: :func:`not_flyable` where anything
+    """The not-flyable pixels a map of ``scn`` carries:
+    [`not_flyable()`][rainuav.radio.terrain.not_flyable] where anything
     stands on the ground (terrain, buildings, a height map), None over flat open ground (where
     every pixel is flyable)."""
     if (
@@ -141,7 +143,7 @@ def floor_m(scn: Scenario) -> float:
 
 
 def site_height_above_floor(scn: Scenario, x_m: float, y_m: float, height_m: float) -> float:
-    """A site's antenna height above :func:`floor_m`, m."""
+    """A site's antenna height above [`floor_m()`][rainuav.radio.terrain.floor_m], m."""
     t = scenario_terrain(scn)
     if t is None:
         return float(height_m)

@@ -1,8 +1,10 @@
-"""Radio maps in time: a scenario whose weather moves (:meth:`rainuav.radio.weather.Medium.at`)
+"""Radio maps in time: a scenario whose weather moves
+([`rainuav.radio.weather.Medium.at()`][rainuav.radio.weather.Medium.at])
 mapped at many instants, and the static map of any instant between them.
 
 What does not move is computed once: every cell's rays traced in clear air, their power split
-into direct, reflected and interference parts (:func:`rainuav.radio.ray_engine.ray_terms`).
+into direct, reflected and interference parts
+([`rainuav.radio.ray_engine.ray_terms()`][rainuav.radio.ray_engine.ray_terms]).
 Each slice then integrates the rain of its instant once per site, from the site to every pixel
 at once (cumulative integrals along lines fanning out from the site, read between lines:
 ``rainuav_core::raytime``), shared by the site's cells and by both rays (the reflection point
@@ -56,13 +58,14 @@ __all__ = ["MAX_SLICES", "RadioMapSeries", "build_radio_map_series", "series_tim
 MAX_SLICES = 10_000
 """The most instants one series may hold."""
 FORMAT_VERSION = 1
-"""Version of the .npz layout :meth:`RadioMapSeries.save` writes."""
+"""Version of the .npz layout [`RadioMapSeries.save()`][rainuav.radio.timemap.RadioMapSeries.save]
+writes."""
 _ARRAYS = ("t_s", "rss_dbm", "sinr_db", "sir_db", "serving_cell", "x_m", "y_m", "cell_site")
 
 
 def series_times(duration_s: float, slice_s: float) -> npt.NDArray[np.float64]:
     """The instants 0, ``slice_s``, ..., ``duration_s``: the step must divide the duration
-    (to 1e-9 of it) and give 2 to :data:`MAX_SLICES` instants."""
+    (to 1e-9 of it) and give 2 to [`MAX_SLICES`][rainuav.radio.timemap.MAX_SLICES] instants."""
     d = check_number("duration_s", duration_s, 1e-3, 1e6, " s")
     step = check_number("slice_s", slice_s, 1e-3, d, f" s (at most duration_s = {d:g})")
     n = round(d / step)
@@ -103,7 +106,8 @@ class RadioMapSeries:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> RadioMapSeries:
-        """Reads a series written by :meth:`save`, checked (shapes, ranges, its scenario);
+        """Reads a series written by [`save()`][rainuav.radio.mapdata.RadioMap.save], checked
+        (shapes, ranges, its scenario);
         bit-exact round trip."""
         return _load(path)
 
@@ -156,7 +160,8 @@ def _load(
 
 
 def _check_series_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
-    """The arrays of a saved series as :func:`build_radio_map_series` writes them, or one
+    """The arrays of a saved series as
+    [`build_radio_map_series()`][rainuav.radio.timemap.build_radio_map_series] writes them, or one
     line naming the file and the array (instants, shapes, types, finite, physical ranges)."""
     t = data["t_s"]
     if t.ndim != 1 or not 1 <= t.size <= MAX_SLICES or t.dtype.kind != "f":
@@ -203,7 +208,7 @@ def _hybrid_terms(
     soil, or no cell marched): the rays' terms less the part inside each PE cone, plus the
     PE's power marched once in clear air as a direct ray's (module docstring).
     ``clear_parts``: the engine's parts in clear air where the caller has them (every level
-    from one march, :mod:`rainuav.radio.levels`)."""
+    from one march, [`rainuav.radio.levels`][rainuav.radio.levels])."""
     if scn.engine != "hybrid":
         return None
     if clear_parts is not None:
@@ -229,7 +234,8 @@ def build_radio_map_series(
     """The maps of ``scn`` at the instants ``times_s`` (strictly increasing, s), engine
     ``"ray"`` (module docstring). Memory is checked before anything is allocated. With
     ``cache``, a series of the same scenario, instants and engine code is read from the map
-    cache (:mod:`rainuav.radio.cache`) and a new one is kept there. ``clear_parts``: the
+    cache ([`rainuav.radio.cache`][rainuav.radio.cache]) and a new one is kept there.
+    ``clear_parts``: the
     hybrid's parts in clear air from elsewhere (called only if the series is built), kept in
     the cache under ``cache_tag`` apart from the series built alone."""
     if scn.engine not in ("ray", "hybrid"):

@@ -1,9 +1,10 @@
 """The rays that building walls reflect (docs/physics.md section 12), for the ray engine: each
-site's rays traced once in the core (:func:`rainuav._core.ray_walls`: the image method per
+site's rays traced once in the core (`rainuav._core.ray_walls`: the image method per
 wall, the specular point within the wall, both legs clear), then each cell's antenna gain
 toward each ray's specular point, the powers added incoherently per pixel
-(:func:`wall_terms`). Also the obstacles (buildings and the height map) as the core's ray
-functions take them (:func:`obstacle_args`).
+([`wall_terms()`][rainuav.radio.wall_rays.wall_terms]). Also the obstacles (buildings and the height
+map) as the core's ray
+functions take them ([`obstacle_args()`][rainuav.radio.wall_rays.obstacle_args]).
 
 **Rain** on a wall's ray is the mean specific attenuation of the site-pixel line times the
 ray's length (the pixel's wall rays together: their power-weighted mean length): exact in
@@ -42,7 +43,8 @@ def _heights(scn: Scenario) -> tuple[np.ndarray | None, tuple[float, float, floa
 
 
 def obstacle_args(scn: Scenario) -> dict[str, Any]:
-    """The buildings (boxes and footprints, :mod:`rainuav.radio.buildings`) and the height
+    """The buildings (boxes and footprints, [`rainuav.radio.buildings`][rainuav.radio.buildings])
+    and the height
     map of ``scn`` as the core's ray functions take them."""
     b = scenario_buildings(scn)
     heights, h_os = _heights(scn)
@@ -55,7 +57,7 @@ def obstacle_args(scn: Scenario) -> dict[str, Any]:
 
 
 WallRays = tuple[np.ndarray, ...]
-"""Per wall ray (:func:`rainuav._core.ray_walls`): its site (index into the distinct sites),
+"""Per wall ray (`rainuav._core.ray_walls`): its site (index into the distinct sites),
 pixel, departure azimuth and elevation (degrees), power per mW for isotropic antennas, and
 length (m)."""
 
@@ -97,7 +99,7 @@ def wall_terms(
     2): their clear-air power (mW, each with the cell's gain toward its specular point; added
     incoherently) and their power-weighted mean length (m); with ``weights``, the part of
     each pattern they select. None where ``scn`` has no walls (``rays``: from
-    :func:`_wall_rays`, traced here if not given)."""
+    `_wall_rays`, traced here if not given)."""
     traced = trace_walls(scn, jobs, x_m, y_m) if rays is None else rays
     if traced is None:
         return None

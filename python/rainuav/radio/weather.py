@@ -1,6 +1,7 @@
 """The weather of a scenario: clear air, homogeneous rain, rain cells or a rain-rate map, in
 time: a rain cell may move (``vx_m_s``, ``vy_m_s``) and grow or decay (``growth_s``), and
-:meth:`Medium.at` gives the frozen weather at any instant, to which every static tool applies."""
+[`Medium.at()`][rainuav.radio.weather.Medium.at] gives the frozen weather at any instant, to which
+every static tool applies."""
 
 from __future__ import annotations
 
@@ -97,9 +98,9 @@ class Medium:
     """The instants (s, strictly increasing) of the maps of ``rate_map_mm_h`` when it holds
     one per instant ('map'): the weather at t is interpolated linearly between the two maps
     around t (exactly a map at its own instant) and held beyond the first and the last
-    (:func:`read_rate_grid` reads them from a NetCDF file)."""
+    ([`read_rate_grid()`][rainuav.radio.rategrid.read_rate_grid] reads them from a NetCDF file)."""
     field: StochasticRain | None = None
-    """A stochastic rain field ('field'; :mod:`rainuav.radio.stochastic`)."""
+    """A stochastic rain field ('field'; [`rainuav.radio.stochastic`][rainuav.radio.stochastic])."""
     model: str = "forward-scattering"
     """Effective-medium model (rainuav.medium)."""
     dsd: str = "marshall-palmer"
@@ -115,7 +116,8 @@ class Medium:
     paper's 1/cos factor, for reproducing it only; rainuav.medium)."""
 
     def at(self, t_s: float) -> Medium:
-        """The weather at time ``t_s``, s: every rain cell moved and grown (:meth:`RainCell.at`);
+        """The weather at time ``t_s``, s: every rain cell moved and grown
+        ([`RainCell.at()`][rainuav.radio.weather.RainCell.at]);
         the rest does not change in time. A weather that does not move returns itself."""
         t = _num("t_s", t_s, -1e6, 1e6, " s")
         if self.kind == "map" and self.rate_times_s is not None:

@@ -1,7 +1,8 @@
-"""Learning to fly: the dueling double DQN (:mod:`~rainuav.rl.dqn`), its configuration
-(:mod:`~rainuav.rl.config`), what it learns from (:mod:`~rainuav.rl.learner`), flights
-(:mod:`~rainuav.rl.collect`), measurement (:mod:`~rainuav.rl.evaluation`), the training loop
-(:mod:`~rainuav.rl.loop`) and its figures (:mod:`~rainuav.rl.plots`). The design choices and
+"""Learning to fly: the dueling double DQN ([`dqn`][rainuav.rl.dqn]), its configuration
+([`config`][rainuav.rl.config]), what it learns from ([`learner`][rainuav.rl.learner]), flights
+([`collect`][rainuav.rl.collect]), measurement ([`evaluation`][rainuav.rl.evaluation]), the training
+loop
+([`loop`][rainuav.rl.loop]) and its figures ([`plots`][rainuav.rl.plots]). The design choices and
 what they measured: ``docs/guide/learning.md``.
 """
 

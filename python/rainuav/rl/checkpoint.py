@@ -1,9 +1,11 @@
 """Checkpoints and policy files that are data, never code.
 
 A run folder is something people hand each other, so loading one must not run anything it
-holds. Files are written by :func:`save` with tensors and plain types only (numbers, strings,
+holds. Files are written by [`save()`][rainuav.rl.checkpoint.save] with tensors and plain types only
+(numbers, strings,
 lists, tuples, dicts, None): a numpy array is stored as ``{"__ndarray__": tensor}`` (a numpy
-scalar as a 0-d one) and restored bit for bit by :func:`load`, which reads with
+scalar as a 0-d one) and restored bit for bit by [`load()`][rainuav.rl.checkpoint.load], which reads
+with
 ``torch.load(..., weights_only=True)``: torch's restricted unpickler, which builds tensors and
 plain containers and refuses any other global. A file that needs more (a pickle that would call
 a function, a class, an older checkpoint holding raw numpy objects) or that is not a checkpoint
@@ -45,7 +47,8 @@ def to_plain(obj: Any) -> Any:
 
 
 def from_plain(obj: Any) -> Any:
-    """The inverse of :func:`to_plain`: 0-d arrays come back as numpy scalars."""
+    """The inverse of [`to_plain()`][rainuav.rl.checkpoint.to_plain]: 0-d arrays come back as numpy
+    scalars."""
     if isinstance(obj, dict):
         if set(obj) == {_ARRAY} and isinstance(obj[_ARRAY], torch.Tensor):
             arr = obj[_ARRAY].numpy()
@@ -67,8 +70,10 @@ def save(path: str | os.PathLike[str], state: dict[str, Any]) -> Path:
 def load(
     path: str | os.PathLike[str], required: tuple[str, ...] = (), what: str = "checkpoint"
 ) -> dict[str, Any]:
-    """The dict saved at ``path`` by :func:`save`, read without running code
-    (``weights_only=True``, on the CPU); anything else raises :class:`InvalidInputError`
+    """The dict saved at ``path`` by [`save()`][rainuav.rl.checkpoint.save], read without running
+    code
+    (``weights_only=True``, on the CPU); anything else raises
+    [`InvalidInputError`][rainuav.errors.InvalidInputError]
     naming the file: missing, unreadable, not a checkpoint, holding more than tensors and
     plain data, or lacking one of the ``required`` keys."""
     p = Path(path)

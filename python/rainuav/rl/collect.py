@@ -1,8 +1,11 @@
-"""Flying the agent: the UAVs in flight during training (:class:`Lanes`), batched greedy
-flights from given starts (:func:`greedy_rollouts`), and the two calls every flight makes of
-its environment, on one level or among levels (:func:`observe`, :func:`step`): a UAV's
+"""Flying the agent: the UAVs in flight during training ([`Lanes`][rainuav.rl.collect.Lanes]),
+batched greedy
+flights from given starts ([`greedy_rollouts()`][rainuav.rl.collect.greedy_rollouts]), and the two
+calls every flight makes of
+its environment, on one level or among levels ([`observe()`][rainuav.rl.collect.observe],
+[`step()`][rainuav.rl.collect.step]): a UAV's
 state is its start, its offset in moves, its level (0 on one level) and its clock ``t``
-(moves on one level; ticks among levels, :mod:`rainuav.nav.levels`)."""
+(moves on one level; ticks among levels, [`rainuav.nav.levels`][rainuav.nav.levels])."""
 
 from __future__ import annotations
 
@@ -26,7 +29,8 @@ Env = UAVNavEnv | UAVLevelsEnv
 def observe(env: Env, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None) -> Any:
     """The env's observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) after ``t`` (N,),
     heading for ``goal`` (N, 2) in the worlds ``world`` (N,) where the env shows the weather
-    (:meth:`UAVNavEnv.observe`, :meth:`UAVLevelsEnv.observe`)."""
+    ([`UAVNavEnv.observe()`][rainuav.nav.env.UAVNavEnv.observe],
+    [`UAVLevelsEnv.observe()`][rainuav.nav.levels.UAVLevelsEnv.observe])."""
     if isinstance(env, UAVLevelsEnv):
         return env.observe(pos, level, t, goal, world)
     return env.observe(pos, t, goal, world)
@@ -116,7 +120,9 @@ class Lanes:
         return d
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        """Restores a :meth:`state_dict`; arrays of another shape or type raise ValueError
+        """Restores a [`state_dict()`][rainuav.rl.collect.Lanes.state_dict]; arrays of another shape
+        or
+        type raise ValueError
         (a checkpoint from before levels has none: every lane on level 0)."""
         d = {"level": np.zeros_like(self.level), **d}
         for f in dataclasses.fields(self):
@@ -161,7 +167,8 @@ def greedy_rollouts(
     ``levels`` and ``ticks`` (T+1,: each point's level and clock; zeros and the move count
     on one level), ``signal`` (T,) along the path, ``reached`` and ``overridden`` (moves
     where the shield replaced the network's choice). ``shield``: keep to the moves
-    :func:`shield_moves` allows (the plane's; default: ``agent.cfg.shield``). ``goals``
+    [`shield_moves()`][rainuav.nav.shield.shield_moves] allows (the plane's; default:
+    ``agent.cfg.shield``). ``goals``
     (N, 2): each flight's destination (default: the task's). Under training's torch
     settings (one CPU thread: the networks are tiny, and two threads beside another job spin
     for the core: 60 ms a one-UAV decision)."""

@@ -1,5 +1,7 @@
-"""What a training run depends on: the learner's hyperparameters (:class:`DQNConfig`) and the
-run's settings (:class:`TrainConfig`), their checks, their TOML form and the random streams
+"""What a training run depends on: the learner's hyperparameters
+([`DQNConfig`][rainuav.rl.config.DQNConfig]) and the
+run's settings ([`TrainConfig`][rainuav.rl.config.TrainConfig]), their checks, their TOML form and
+the random streams
 derived from the run's one seed."""
 
 from __future__ import annotations
@@ -92,12 +94,12 @@ class DQNConfig:
     move_features: bool = False
     """A weather-reading network also reads, for each move, the destination's geometry after
     it (arrival, progress toward the destination), into its body and straight into the
-    advantage head (:class:`rainuav.rl.networks.WeatherQNet`)."""
+    advantage head ([`rainuav.rl.networks.WeatherQNet`][rainuav.rl.networks.WeatherQNet])."""
     goal_maps: bool = False
     """A weather-reading network also sees the destination drawn on its grids: on the local
     window how much nearer each point is to it, on the whole area each cell's distance to it
     and to the UAV (extra input channels of the convolutions;
-    :meth:`rainuav.rl.networks.WeatherQNet.goal_channels`)."""
+    [`rainuav.rl.networks.WeatherQNet.goal_channels()`][rainuav.rl.networks.WeatherQNet.goal_channels])."""
     goal_starts: float = 0.25
     """Fraction of the training episodes that start near the destination (uniform in the
     square of half side ``GOAL_START_MOVES`` moves around it, outside the arrival disc); the
@@ -122,13 +124,15 @@ class DQNConfig:
 
 @dataclass
 class TrainConfig(WorldSpec):
-    """Everything a training run depends on: the world's spec (:class:`rainuav.world.WorldSpec`:
+    """Everything a training run depends on: the world's spec
+    ([`rainuav.world.WorldSpec`][rainuav.world.WorldSpec]:
     scenario, weather, task), the run's settings below and the learner's hyperparameters
     (``dqn``). One docstring line per field = one CLI flag."""
 
     preset: str = ""
     """Learner preset: '' (the tuned learner, docs/guide/learning.md) or 'paper' (Algorithm 1 and
-    Table I literally: the [dqn] fields are set as docs/guide/learning.md lists, and any given beside
+    Table I literally: the [dqn] fields are set as docs/guide/learning.md lists, and any given
+    beside
     it are refused)."""
     seed: int = 0
     """Seed of every random choice (python, numpy, torch, environment)."""
@@ -249,8 +253,9 @@ STORM_LEARNER: dict[str, Any] = {
 learning rate and a slower target for the convolutional network over many storms, and the
 destination drawn on its grids (goal maps) (chosen on validation storms 900 000-900 009 and
 ``uma`` at 5 mm/h, with training storms only: docs/guide/learning.md, "One network for every
-storm"); with ``time_budget_s`` = :data:`STORM_BUDGET_S` and ``calm_share`` =
-:data:`STORM_CALM_SHARE`."""
+storm"); with ``time_budget_s`` = [`STORM_BUDGET_S`][rainuav.rl.config.STORM_BUDGET_S] and
+``calm_share`` =
+[`STORM_CALM_SHARE`][rainuav.rl.config.STORM_CALM_SHARE]."""
 
 STORM_LEVELS: dict[str, Any] = {
     "storm_pool": 8,
@@ -263,7 +268,7 @@ marches every cell for the low levels: 44-55 s for a network's first storm, 14 s
 with the march shared); 8 storms at once, each renewed after 48 episodes, keep the mapping
 thread nearly ahead of training (docs/guide/altitude.md, "One network for every storm among
 levels", where the network trained so is measured); with [dqn] ``episodes`` =
-:data:`STORM_LEVELS_EPISODES`."""
+[`STORM_LEVELS_EPISODES`][rainuav.rl.config.STORM_LEVELS_EPISODES]."""
 STORM_LEVELS_EPISODES = 4000
 """The episodes of ``--storm-seed random`` with ``--altitudes`` unless given."""
 
@@ -305,7 +310,8 @@ given), with a constant learning rate; ``episodes`` (Table I: 3000) may be lower
 
 
 def apply_preset(cfg: TrainConfig, given: Iterable[str] = ()) -> TrainConfig:
-    """``cfg`` with its learner preset applied (``preset = "paper"``: :data:`PAPER_LEARNER`,
+    """``cfg`` with its learner preset applied (``preset = "paper"``:
+    [`PAPER_LEARNER`][rainuav.rl.config.PAPER_LEARNER],
     constant learning rate). ``given``: the [dqn] fields the user set explicitly; one that
     the preset fixes is refused, naming it."""
     if cfg.preset != "paper":

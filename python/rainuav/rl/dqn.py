@@ -1,8 +1,9 @@
 """The dueling double DQN with multi-step returns (the paper's Algorithm 1), in torch.
 
 Reads top to bottom: the network, the N-step sliding window, the replay memory, the double-Q
-target and the agent (observe, act, learn, sync). Hyperparameters: :class:`rainuav.rl.config.
-DQNConfig`. Every choice beyond the paper's Table I, and what it measured, is in
+target and the agent (observe, act, learn, sync). Hyperparameters:
+[`DQNConfig`][rainuav.rl.config.DQNConfig]. Every choice beyond the paper's Table I, and what it
+measured, is in
 ``docs/guide/learning.md``.
 """
 
@@ -24,7 +25,7 @@ from rainuav.rl.networks import MoveGeometry, PositionEncoder, WeatherEncoder
 
 Encoder = PositionEncoder | WeatherEncoder
 """How an env's observation becomes the network's input, and the network
-(:mod:`rainuav.rl.networks`)."""
+([`rainuav.rl.networks`][rainuav.rl.networks])."""
 
 __all__ = ["Agent", "Encoder", "NStepWindow", "Replay", "best_action", "double_q_target"]
 
@@ -114,13 +115,15 @@ class Replay:
         }
 
     def state_dict(self) -> dict[str, Any]:
+        """The memory's arrays and counters, as a checkpoint saves them."""
         return {
             k: getattr(self, k)
             for k in ("obs", "action", "ret", "next_obs", "discount", "done", "size", "pos")
         }
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        """Restores a :meth:`state_dict`; arrays of another shape or type, or counters out of
+        """Restores a [`state_dict()`][rainuav.rl.dqn.Replay.state_dict]; arrays of another shape or
+        type, or counters out of
         range, raise ValueError (a checkpoint is checked before it is trusted)."""
         for k in ("obs", "action", "ret", "next_obs", "discount", "done"):
             mine, v = getattr(self, k), d[k]
@@ -181,9 +184,10 @@ class Agent:
 
     def __init__(self, cfg: DQNConfig, seed: int, device: torch.device, encoder: Encoder) -> None:
         """``seed``: the run's seed (the network's initial weights; exploration and replay
-        sampling draw from its ``"agent"`` stream, :func:`rainuav.rl.config.random_streams`);
+        sampling draw from its ``"agent"`` stream,
+        [`rainuav.rl.config.random_streams()`][rainuav.rl.config.random_streams]);
         ``encoder``: how the env's observations become the network's input, and the network
-        (:mod:`rainuav.rl.networks`)."""
+        ([`rainuav.rl.networks`][rainuav.rl.networks])."""
         self.cfg = cfg
         self.device = device
         self.encoder = encoder
@@ -297,7 +301,8 @@ class Agent:
 
     @contextmanager
     def reporting(self) -> Iterator[None]:
-        """Within: the online network holds :meth:`reported_weights` (for greedy checks);
+        """Within: the online network holds
+        [`reported_weights()`][rainuav.rl.dqn.Agent.reported_weights] (for greedy checks);
         its own weights are restored after."""
         if self.average is None:
             yield

@@ -1,9 +1,11 @@
 """Measuring a policy: the network's greedy flights from fixed starts against the exact
-planner and the baselines (:mod:`rainuav.rl.references`: the straight line; where the weather
+planner and the baselines ([`rainuav.rl.references`][rainuav.rl.references]: the straight line;
+where the weather
 moves, the plan of the weather at take-off and re-planning; among levels, the plans of one
-altitude), by success and excess cost (:func:`evaluate`), the
-run's evaluation (:func:`evaluate_run_policy`) and the greedy checks on held-out validation
-starts during training (:class:`Validation`)."""
+altitude), by success and excess cost ([`evaluate()`][rainuav.rl.evaluation.evaluate]), the
+run's evaluation ([`evaluate_run_policy()`][rainuav.rl.evaluation.evaluate_run_policy]) and the
+greedy checks on held-out validation
+starts during training ([`Validation`][rainuav.rl.evaluation.Validation])."""
 
 from __future__ import annotations
 
@@ -120,7 +122,8 @@ class Validation:
     starts: np.ndarray
     optimum: dict[str, np.ndarray]
     best_gap: float = math.inf
-    """The best score so far (:meth:`score`; lower is better)."""
+    """The best score so far ([`score()`][rainuav.rl.evaluation.Validation.score]; lower is
+    better)."""
     best_at: int = 0
     best_online: dict[str, torch.Tensor] | None = None
     history: list[tuple[int, float, float]] = field(default_factory=list)
@@ -232,7 +235,8 @@ def evaluate_saved_run(
     """Flies a saved training run's policy (the network the run reports: the final one, the
     weight average with ``average_from``, or with ``keep_best`` the best on validation). In
     the run's own world by default; ``world`` (built by the caller, e.g. another scenario,
-    rain rate or storm: :func:`rainuav.world.build_world`; or a function of the run's
+    rain rate or storm: [`rainuav.world.build_world()`][rainuav.world.build_world]; or a function of
+    the run's
     configuration that builds it, called once the run's files are read) or ``radio_map``
     (another map, with the run's task) fly it elsewhere. ``starts``/``seed``: the number and
     seed of the fixed starts (default: the run's evaluation starts); ``shield``: report

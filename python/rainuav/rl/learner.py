@@ -1,9 +1,12 @@
 """What the learner learns from: where its training flights start, the reward it stores for a
 move and where its episodes end.
 
-A share of the training flights starts near the destination (:func:`training_start`). The
-environment's reward with its SIR part weighted (:func:`learning_reward`), plus
-potential-based shaping by the straight-line value (:func:`shaping_term`). Why each, and what
+A share of the training flights starts near the destination
+([`training_start()`][rainuav.rl.learner.training_start]). The
+environment's reward with its SIR part weighted
+([`learning_reward()`][rainuav.rl.learner.learning_reward]), plus
+potential-based shaping by the straight-line value
+([`shaping_term()`][rainuav.rl.learner.shaping_term]). Why each, and what
 it measured: ``docs/guide/learning.md``.
 """
 
@@ -35,9 +38,10 @@ def training_task(
     env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """A training flight's (start, destination, world). The env's fixed destination and
-    :func:`training_start` where the env observes the position (the draws of the single-map
+    [`training_start()`][rainuav.rl.learner.training_start] where the env observes the position (the
+    draws of the single-map
     learner, unchanged); where it observes the weather, the env's draw
-    (:meth:`~rainuav.nav.env.UAVNavEnv.draw_task`: a random destination where the env has
+    ([`draw_task()`][rainuav.nav.env.UAVNavEnv.draw_task]: a random destination where the env has
     them; the task's own one with probability ``task_goals``), its start then moved near the
     destination with probability ``goal_starts``."""
     if env.view is None:
@@ -51,7 +55,8 @@ def training_task(
 
 
 def near_goal(env: UAVNavEnv, goal: np.ndarray, rng: np.random.Generator) -> np.ndarray | None:
-    """Uniform in the square of half side :data:`GOAL_START_MOVES` moves around ``goal``
+    """Uniform in the square of half side [`GOAL_START_MOVES`][rainuav.rl.learner.GOAL_START_MOVES]
+    moves around ``goal``
     (clipped to the area), outside the arrival disc; None where 100 draws found no such
     point."""
     x0, x1, y0, y1 = env.field.extent
@@ -65,7 +70,8 @@ def near_goal(env: UAVNavEnv, goal: np.ndarray, rng: np.random.Generator) -> np.
 
 def training_start(env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator) -> np.ndarray:
     """The start of a training flight: with probability ``goal_starts`` uniform in the square
-    of half side :data:`GOAL_START_MOVES` moves around the destination (clipped to the area,
+    of half side [`GOAL_START_MOVES`][rainuav.rl.learner.GOAL_START_MOVES] moves around the
+    destination (clipped to the area,
     outside the arrival disc; uniform in the area where 100 draws found no such point, as
     when the tolerance covers the square), else uniform in the area (``env.sample_start``).
 
@@ -111,7 +117,8 @@ def learning_reward(
     """The reward the learner stores for the moves ``pos -> r["position"]`` of a batch step.
 
     The env's reward with its SIR part ``b + 1`` weighted by ``sir_weight``, plus the
-    potential-based shaping term (zero potential where :func:`learner_ends`). Discounting
+    potential-based shaping term (zero potential where
+    [`learner_ends()`][rainuav.rl.learner.learner_ends]). Discounting
     and the destination reward make the learner value time above the SIR: a move later
     costs ``(1 - gamma) gamma^k R_des`` of the destination reward on top of its -1, several
     times the undiscounted price of a move at gamma 0.998. Weighting the SIR part up

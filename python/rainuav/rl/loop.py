@@ -1,11 +1,13 @@
 """The training job: Algorithm 1 with several UAVs in flight at once.
 
-:func:`train` receives a built world (:mod:`rainuav.world`: the signal and the task), builds
+[`train()`][rainuav.rl.loop.train] receives a built world ([`rainuav.world`][rainuav.world]: the
+signal and the task), builds
 its environment and the agent, then runs
-:func:`run_loop`, which reads top to bottom: act, step the UAVs, store their N-step
+[`run_loop()`][rainuav.rl.loop.run_loop], which reads top to bottom: act, step the UAVs, store their
+N-step
 transitions, learn (sample, double-Q target, loss, optimiser step), and per finished episode
 anneal, sync the target, record stages, validate and checkpoint. The run ends with
-:func:`finish` (evaluation, ``policy.pt``, ``metrics.json``, figures).
+[`finish()`][rainuav.rl.loop.finish] (evaluation, ``policy.pt``, ``metrics.json``, figures).
 
 Outputs in ``cfg.out``: ``config.toml``, the world's signal (``radiomap.npz``, or
 ``radiomap_series.npz`` for a weather that moves, ``radiolevels.npz`` among flight levels),
@@ -73,7 +75,8 @@ stopped)."""
 
 # -- setup ------------------------------------------------------------------------------------
 def save_checkpoint(path: Path, state: dict[str, Any]) -> None:
-    """Tensors and plain data only (:mod:`rainuav.rl.checkpoint`), to a temporary file, then
+    """Tensors and plain data only ([`rainuav.rl.checkpoint`][rainuav.rl.checkpoint]), to a
+    temporary file, then
     rename."""
     checkpoint.save(path, state)
 
@@ -86,7 +89,8 @@ CHECKPOINT_KEYS = (
 
 
 def load_checkpoint(path: Path, cfg: TrainConfig) -> dict[str, Any]:
-    """The checkpoint at ``path`` (read as data: :func:`rainuav.rl.checkpoint.load`), refused
+    """The checkpoint at ``path`` (read as data:
+    [`rainuav.rl.checkpoint.load()`][rainuav.rl.checkpoint.load]), refused
     if its run's configuration differs from ``cfg`` (the differing fields are named)."""
     if not path.exists():
         raise InvalidInputError(f"--resume: no checkpoint at {path}")
@@ -112,7 +116,8 @@ def train(
     yardstick: bool = False,
 ) -> dict[str, Any]:
     """Runs the whole job in ``world`` (built by the caller from the configuration's world
-    part, :func:`rainuav.world.build_world`; tests hand in small synthetic worlds; its task
+    part, [`rainuav.world.build_world()`][rainuav.world.build_world]; tests hand in small synthetic
+    worlds; its task
     must be the configuration's) and returns the metrics; the world's signal is saved with
     the run. ``stop_after`` ends the call, as an
     interruption would, at the first checkpoint with at least that many finished episodes
@@ -159,7 +164,8 @@ def storm_slot(
 
     Of the storms that have had ``storm_episodes`` episodes, the one with the fewest UAVs in
     flight drains: it takes no new episode (unless it is the only storm), so it stays the
-    emptiest, and once no UAV flies it any more it is renewed (:meth:`StormPool.renew`); one
+    emptiest, and once no UAV flies it any more it is renewed
+    ([`StormPool.renew()`][rainuav.world.pool.StormPool.renew]); one
     at a time, so the others keep the UAVs flying.
     The lane takes the storm with the fewest UAVs in flight (the first on ties), so with as
     many storms as lanes each UAV has its own."""
@@ -191,9 +197,11 @@ def run_loop(
     pool: StormPool | None = None,
 ) -> dict[str, Any]:
     """Algorithm 1 over ``cfg.dqn.episodes`` episodes, ``lanes`` UAVs at a time; from
-    ``saved`` (a checkpoint's state) when resuming. Returns :func:`finish`'s metrics, or
+    ``saved`` (a checkpoint's state) when resuming. Returns [`finish()`][rainuav.rl.loop.finish]'s
+    metrics, or
     ``{}`` when stopped at ``stop_after``. ``pool``: the storms the UAVs fly
-    (:func:`storm_slot`); validation, stages and the evaluation then fly ``ref_env``
+    ([`storm_slot()`][rainuav.rl.loop.storm_slot]); validation, stages and the evaluation then fly
+    ``ref_env``
     (default: ``env``)."""
     d = cfg.dqn
     ref = env if ref_env is None else ref_env
@@ -368,7 +376,9 @@ def finish(
     checks: Validation,
     pool: StormPool | None = None,
 ) -> dict[str, Any]:
-    """Evaluates the run (:func:`rainuav.rl.evaluation.evaluate_run_policy`), saves the
+    """Evaluates the run
+    ([`rainuav.rl.evaluation.evaluate_run_policy()`][rainuav.rl.evaluation.evaluate_run_policy]),
+    saves the
     evaluated network's weights to ``policy.pt`` and writes ``metrics.json`` and the figures."""
     metrics, rolls = evaluate_run_policy(cfg, agent, env, checks)
     policy = {k: v.detach().cpu() for k, v in agent.online.state_dict().items()}

@@ -1,13 +1,17 @@
 """The parts a learner is built from: how an environment's observation becomes the network's
-input (an *encoder*), and the network. The DQN (:mod:`rainuav.rl.dqn`) takes any encoder and
+input (an *encoder*), and the network. The DQN ([`rainuav.rl.dqn`][rainuav.rl.dqn]) takes any
+encoder and
 never looks inside the observation.
 
-- :class:`PositionEncoder` + :class:`DuelingQNet`: the single-map learner. The position (and
+- [`PositionEncoder`][rainuav.rl.networks.PositionEncoder] +
+  [`DuelingQNet`][rainuav.rl.networks.DuelingQNet]: the single-map learner. The position (and
   the time where the signal moves), goal-relative features of the fixed destination, into an
   MLP with Fourier features.
-- :class:`WeatherEncoder` + :class:`WeatherQNet`: the learner that reads the weather
+- [`WeatherEncoder`][rainuav.rl.networks.WeatherEncoder] +
+  [`WeatherQNet`][rainuav.rl.networks.WeatherQNet]: the learner that reads the weather
   (``UAVNavEnv(observation="weather")``, or among levels ``UAVLevelsEnv``'s). The ``Dict``
-  observation (:class:`rainuav.nav.views.WeatherView`) is flattened in a fixed order for the
+  observation ([`rainuav.nav.views.WeatherView`][rainuav.nav.views.WeatherView]) is flattened in a
+  fixed order for the
   replay; the network splits it again: two small convolutional stacks read the local window
   and the whole-area grid (one channel a level among levels), an MLP reads them with the
   position, the destination, the time (and the level) and goal-relative features.
@@ -148,13 +152,15 @@ class WeatherQNet(DuelingQNet):
     with ``fourier`` sine/cosine frequencies, and goal-relative features at
     ``len(goal_scale)`` scales; two hidden ReLU layers of ``hidden``.
 
-    With ``moves`` (:class:`MoveGeometry`), for each of the four moves the destination as
+    With ``moves`` ([`MoveGeometry`][rainuav.rl.networks.MoveGeometry]), for each of the four moves
+    the destination as
     it would be after it: whether the move arrives, and how much nearer it brings the UAV
     (in moves, in [-1, 1]). They are functions of the position and the destination the
     observation holds (nothing the env does not show), fed to the body and, through one
     weight per feature shared by the moves, straight into the advantage: where destinations
     are drawn per flight the arrival disc is met at any offset from the lattice, and a
-    network that must find the disc's edge from its other inputs circles it (docs/guide/learning.md).
+    network that must find the disc's edge from its other inputs circles it
+    (docs/guide/learning.md).
     """
 
     def __init__(
@@ -283,7 +289,8 @@ class WeatherQNet(DuelingQNet):
 
 
 def _conv_stack(stack: nn.Module, x: torch.Tensor) -> torch.Tensor:
-    """A grid's two convolutions and ReLUs (the ``stack`` of :class:`WeatherQNet`), flattened."""
+    """A grid's two convolutions and ReLUs (the ``stack`` of
+    [`WeatherQNet`][rainuav.rl.networks.WeatherQNet]), flattened."""
     c1, _, c2, _, _ = stack
     x = F.conv2d(x, c1.weight, c1.bias, c1.stride, c1.padding).relu_()
     return F.conv2d(x, c2.weight, c2.bias, c2.stride, c2.padding).relu_().flatten(1)
@@ -309,7 +316,8 @@ class MoveGeometry:
 
 class WeatherEncoder:
     """The weather-reading learner's input: the env's ``Dict`` observation flattened
-    (:meth:`WeatherView.flat`); the network splits it (:class:`WeatherQNet`).
+    ([`WeatherView.flat()`][rainuav.nav.views.WeatherView.flat]); the network splits it
+    ([`WeatherQNet`][rainuav.rl.networks.WeatherQNet]).
     ``n_actions``: 4 on one level, 6 among levels."""
 
     def __init__(

@@ -70,7 +70,8 @@ def plot_trajectories(
     optimal: Sequence[Any] = (),
     heights: Sequence[Any] = (),
 ) -> None:
-    """The flights over the map (:func:`draw_flights`) with a colour bar, a legend and axes;
+    """The flights over the map ([`draw_flights()`][rainuav.rl.plots.draw_flights]) with a colour
+    bar, a legend and axes;
     among levels, beside it each flight's altitude against time (the network's in black,
     ``heights``: the optimum's (ticks, levels), dashed blue)."""
     from matplotlib.figure import Figure

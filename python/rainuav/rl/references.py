@@ -1,12 +1,18 @@
-"""The yardsticks a policy is measured against: fixed starts (:func:`eval_starts`), the
-exact planner's flights and the baselines' (:func:`reference_flights`), what a set of flights
-comes to (:func:`flights`) and how it compares with the optimum (:func:`summarise`).
+"""The yardsticks a policy is measured against: fixed starts
+([`eval_starts()`][rainuav.rl.references.eval_starts]), the
+exact planner's flights and the baselines'
+([`reference_flights()`][rainuav.rl.references.reference_flights]), what a set of flights
+comes to ([`flights()`][rainuav.rl.references.flights]) and how it compares with the optimum
+([`summarise()`][rainuav.rl.references.summarise]).
 
 On one level: the exact optimum, the straight line, and where the weather moves the plan of
-the weather at take-off and re-planning (:mod:`rainuav.nav.baselines`). Among levels
-(:class:`rainuav.nav.levels.UAVLevelsEnv`): the exact optimum among levels from the level a
+the weather at take-off and re-planning ([`rainuav.nav.baselines`][rainuav.nav.baselines]). Among
+levels
+([`rainuav.nav.levels.UAVLevelsEnv`][rainuav.nav.levels.UAVLevelsEnv]): the exact optimum among
+levels from the level a
 flight starts at, and the baselines of one altitude (``fixed_altitude``: the exact plan held
-at the level nearest :data:`PAPER_ALTITUDE_M`, the paper's; ``best_single_altitude``: the
+at the level nearest [`PAPER_ALTITUDE_M`][rainuav.rl.references.PAPER_ALTITUDE_M], the paper's;
+``best_single_altitude``: the
 exact plan at each level, the best chosen with hindsight per flight; ``straight_line``: the
 straight line at the fixed level), each flown from the start at its own level (the take-off
 climb is the autopilot's, as in ``fly``).
@@ -73,7 +79,8 @@ def flights(
     levels: list | None = None,
     ticks: list | None = None,
 ) -> dict[str, Any]:
-    """Per flight: ``return``, ``arrived``, ``cost`` (:func:`rainuav.nav.task.flight_cost`),
+    """Per flight: ``return``, ``arrived``, ``cost``
+    ([`rainuav.nav.task.flight_cost()`][rainuav.nav.task.flight_cost]),
     ``steps`` (moves), the signal along the path (every position after the start): its mean
     and the share of it below ``min_db`` (per move), and the ``paths`` themselves (for
     figures). Among levels ``levels`` and ``ticks`` give each point's level and clock."""
@@ -129,7 +136,8 @@ def reference_flights(
     """The exact planner's flights (the yardstick) and the baselines': the straight line, and
     where the signal changes in time the plan of the weather at take-off (``frozen_plan``) and
     re-planning every ``replan_every`` moves (``replan``), each flown through the moving
-    weather. Among levels: :func:`level_reference_flights`."""
+    weather. Among levels:
+    [`level_reference_flights()`][rainuav.rl.references.level_reference_flights]."""
     if isinstance(env, UAVLevelsEnv):
         return level_reference_flights(env, starts)
     flown = {"straight_line": [planner.straight_line(env, s) for s in starts]}
@@ -142,7 +150,8 @@ def reference_flights(
 
 def optimal_flights(env: UAVNavEnv | UAVLevelsEnv, starts: np.ndarray) -> dict[str, Any]:
     """The exact planner's flights from ``starts`` (among levels: the plan among levels from
-    the level each flight starts at), as :func:`reference_flights` gives ``optimal``: the
+    the level each flight starts at), as
+    [`reference_flights()`][rainuav.rl.references.reference_flights] gives ``optimal``: the
     yardstick alone, for the checks during training."""
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     if isinstance(env, UAVLevelsEnv):
@@ -159,7 +168,8 @@ def optimal_flights(env: UAVNavEnv | UAVLevelsEnv, starts: np.ndarray) -> dict[s
 
 
 def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
-    """:func:`flights` of planned flights (plans, or among levels level plans, whose
+    """[`flights()`][rainuav.rl.references.flights] of planned flights (plans, or among levels level
+    plans, whose
     levels are kept for the heights flown)."""
     among = isinstance(env, UAVLevelsEnv)
     levels = [p.levels for p in plans] if among else None

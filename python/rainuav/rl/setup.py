@@ -1,6 +1,6 @@
 """Building a run's pieces from its configuration: the agent for an environment, the device,
 and torch's settings for the run (restored afterwards). The environment comes from the world
-(:mod:`rainuav.world`)."""
+([`rainuav.world`][rainuav.world])."""
 
 from __future__ import annotations
 
@@ -25,7 +25,8 @@ __all__ = ["check_fits", "make_agent", "make_encoder", "pick_device", "torch_set
 
 def check_fits(cfg: TrainConfig) -> None:
     """Refuses a run whose agent cannot fit in memory, naming the field and the GB
-    (:func:`rainuav.rl.dqn.memory_needed`); called before any map is built."""
+    ([`rainuav.rl.dqn.memory_needed()`][rainuav.rl.dqn.memory_needed]); called before any map is
+    built."""
     layers = len(altitude_band(cfg.altitudes)) if cfg.altitudes else 1
     view = WeatherView(layers=layers) if cfg.observation == "weather" else None
     need = memory_needed(cfg.dqn, view, levels=bool(cfg.altitudes))
@@ -39,7 +40,8 @@ def check_fits(cfg: TrainConfig) -> None:
 
 def make_agent(cfg: TrainConfig, env: UAVNavEnv | UAVLevelsEnv, device: torch.device) -> Agent:
     """An agent for ``env``: the time limit, the destination and one move in observation
-    units (refused first if it cannot fit in memory: :func:`check_fits`)."""
+    units (refused first if it cannot fit in memory:
+    [`check_fits()`][rainuav.rl.setup.check_fits])."""
     check_fits(cfg)
     x0, x1, y0, y1 = env.field.extent
     s = env.cfg.step_m
@@ -48,7 +50,8 @@ def make_agent(cfg: TrainConfig, env: UAVNavEnv | UAVLevelsEnv, device: torch.de
 
 
 def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float, float]) -> Encoder:
-    """The encoder (and network) for ``env``'s observation (:mod:`rainuav.rl.networks`):
+    """The encoder (and network) for ``env``'s observation
+    ([`rainuav.rl.networks`][rainuav.rl.networks]):
     the weather-reading one where the env shows the weather, else the position one (with
     the env's fixed destination; among levels with the level and six actions)."""
     if env.view is not None:

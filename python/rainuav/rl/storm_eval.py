@@ -5,7 +5,8 @@ take-off plan, re-planning and the straight line from the same fixed starts, the
 over the worlds.
 
 Destinations: the task's fixed one, or with ``random_goals`` one per start, drawn as training
-draws them (:func:`rainuav.nav.views.sample_goal`, the start within reach of it), each flight
+draws them ([`rainuav.nav.views.sample_goal()`][rainuav.nav.views.sample_goal], the start within
+reach of it), each flight
 then planned and judged against its own destination's optimum.
 """
 
@@ -46,7 +47,7 @@ levels also the plans held at one altitude and the heights flown (absent on one 
 
 def parse_seeds(text: str) -> list[int]:
     """``"A-B"`` (inclusive) or ``"K"``: the storm seeds, each in 0..2^63-1, at most
-    :data:`MAX_STORMS` of them."""
+    [`MAX_STORMS`][rainuav.rl.storm_eval.MAX_STORMS] of them."""
     parts = str(text).split("-")
     try:
         lo, hi = (int(parts[0]), int(parts[-1])) if len(parts) <= 2 else (None, None)
@@ -64,7 +65,8 @@ def _flights(agent: Any, env: UAVNavEnv, pts: np.ndarray, replan_every: int) -> 
 
 
 def evaluate_storms(run_dir: Path, seeds: list[int], **kw: Any) -> tuple[dict[str, Any], Any]:
-    """:func:`evaluate_worlds` through the storms ``seeds`` (the run's scenario must be the
+    """[`evaluate_worlds()`][rainuav.rl.storm_eval.evaluate_worlds] through the storms ``seeds``
+    (the run's scenario must be the
     storm's)."""
     return evaluate_worlds(run_dir, [{"storm_seed": k} for k in seeds], storms=True, **kw)
 
@@ -139,7 +141,8 @@ def evaluate_worlds(
 
 
 def _mean(rows: list[dict[str, Any]], worst: bool) -> dict[str, Any]:
-    """The mean of each :data:`SUMMARY_KEYS` figure over ``rows`` (None values left out;
+    """The mean of each [`SUMMARY_KEYS`][rainuav.rl.storm_eval.SUMMARY_KEYS] figure over ``rows``
+    (None values left out;
     ``worst_excess_cost`` the largest)."""
     out: dict[str, Any] = {}
     for key in SUMMARY_KEYS:

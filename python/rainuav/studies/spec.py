@@ -23,7 +23,7 @@
 ``one_at_a_time`` runs the base case, then each axis value with the other fields at the
 base (the change per axis is read against the base); ``grid`` runs every combination. Each
 case runs once per seed. Unknown fields, empty axes and values out of range are refused with
-the field named (:func:`load_study`), before any work starts.
+the field named ([`load_study()`][rainuav.studies.spec.load_study]), before any work starts.
 """
 
 from __future__ import annotations

@@ -1,10 +1,13 @@
 """The world a UAV flies: a signal field in time joined to a navigation task, built from one
-spec (:class:`WorldSpec`) for every entry point: ``gym.make("rainuav/UAVNav-v0")``,
+spec ([`WorldSpec`][rainuav.world.WorldSpec]) for every entry point:
+``gym.make("rainuav/UAVNav-v0")``,
 ``python -m rainuav.train``, ``rainuav.evaluate`` and the studies.
 
-Where things go: a new weather is a :class:`rainuav.radio.Medium` kind (``radio``); a new task
-rule goes in :mod:`rainuav.nav` (``NavConfig`` and ``UAVNavEnv``); a new learner goes in
-:mod:`rainuav.rl` and receives a built :class:`World` (or its env), the way Stable-Baselines3's
+Where things go: a new weather is a [`rainuav.radio.Medium`][rainuav.radio.weather.Medium] kind
+(``radio``); a new task
+rule goes in [`rainuav.nav`][rainuav.nav] (``NavConfig`` and ``UAVNavEnv``); a new learner goes in
+[`rainuav.rl`][rainuav.rl] and receives a built [`World`][rainuav.world.World] (or its env), the way
+Stable-Baselines3's
 ``DQN(env).learn()`` does. This module is the only place where a scenario, its weather and a
 task become something to fly; it sits above ``radio`` and ``nav`` and below ``rl``.
 
@@ -12,8 +15,8 @@ A spec names the scenario (a preset, or a scenario file), its weather (the scena
 homogeneous rain at ``rain_rate``, or the random storm ``storm_seed`` of the ``storm``
 preset), the propagation engine and the task's fields. A weather that moves is mapped at
 instants ``slice_s`` apart over the task's horizon (``max_steps`` moves of ``step_m /
-speed_m_s`` seconds; :mod:`rainuav.radio.timemap`), and the UAV flies the series
-(:class:`rainuav.nav.field.SignalSeries`).
+speed_m_s`` seconds; [`rainuav.radio.timemap`][rainuav.radio.timemap]), and the UAV flies the series
+([`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]).
 """
 
 from __future__ import annotations
@@ -64,7 +67,7 @@ __all__ = [
 
 MAP_FILES = ("radiomap.npz", "radiomap_series.npz", "radiolevels.npz")
 """The files a world's signal is saved in: a single map, maps in time, or the maps of every
-flight level (:class:`rainuav.radio.levels.LevelStack`)."""
+flight level ([`rainuav.radio.levels.LevelStack`][rainuav.radio.levels.LevelStack])."""
 ENGINES = ("", "hybrid", "ray", "pe")
 MAX_POOL = 64
 """The most storms flown at once (each holds its maps in time: about 20 MB)."""
@@ -235,7 +238,8 @@ class World:
     source: RadioMap | RadioMapSeries | LevelStack | None
     """What the signal is read from (saved with a run; None for a storm pool's bank)."""
     field: SignalField | SignalSeries | SignalBank | LevelField
-    """The signal the UAV flies through (a :class:`LevelField` where altitude is a
+    """The signal the UAV flies through (a [`LevelField`][rainuav.nav.levelfield.LevelField] where
+    altitude is a
     decision)."""
     task: NavConfig
     """The navigation task."""
@@ -244,7 +248,8 @@ class World:
     random_goal: bool = False
     """A destination drawn per episode."""
     pool: Any = None
-    """The :class:`StormPool` whose bank is the field, where the world is one."""
+    """The [`StormPool`][rainuav.world.pool.StormPool] whose bank is the field, where the world is
+    one."""
 
     @property
     def varies(self) -> bool:
@@ -253,7 +258,8 @@ class World:
 
     def env(self) -> Any:
         """A Gymnasium environment of this world (a fresh one per call): a
-        :class:`UAVNavEnv`, or among levels a :class:`rainuav.nav.levels.UAVLevelsEnv`."""
+        [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv], or among levels a
+        [`rainuav.nav.levels.UAVLevelsEnv`][rainuav.nav.levels.UAVLevelsEnv]."""
         if isinstance(self.field, LevelField):
             return UAVLevelsEnv(self.field, self.task, observation=self.observation,
                                 random_goal=self.random_goal)  # fmt: skip
@@ -269,7 +275,8 @@ class World:
         return UAVNavVectorEnv(self.env(), num_envs, autoreset_mode)
 
     def save(self, folder: Path) -> Path | None:
-        """Writes the signal's source into ``folder`` (:data:`MAP_FILES`), atomically (a
+        """Writes the signal's source into ``folder`` ([`MAP_FILES`][rainuav.world.MAP_FILES]),
+        atomically (a
         storm pool's storms are not saved: their seeds rebuild them)."""
         if self.source is None:
             return None
@@ -322,9 +329,13 @@ def level_field(
     scn: Scenario, times_s: Any = None, *, progress: bool = False, cache: bool = True
 ) -> tuple[Any, Any]:
     """The signal at every level of ``scn``'s ``area.altitudes_m`` as a
-    :class:`rainuav.nav.levels.LevelField` (what the flights among levels read), and the maps
-    it came from: :func:`rainuav.radio.levels.build_radio_levels`, or where ``times_s`` are
-    given :func:`~rainuav.radio.levels.build_radio_level_series` (engine 'pe' then becomes
+    [`rainuav.nav.levels.LevelField`][rainuav.nav.levelfield.LevelField] (what the flights among
+    levels read), and the maps
+    it came from:
+    [`rainuav.radio.levels.build_radio_levels()`][rainuav.radio.levels.build_radio_levels], or where
+    ``times_s`` are
+    given [`build_radio_level_series()`][rainuav.radio.levels.build_radio_level_series] (engine 'pe'
+    then becomes
     'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown once (a
     storm pool's), not kept in the map cache."""
     from rainuav.nav.levels import LevelField
@@ -374,7 +385,8 @@ def _observed(world: World, spec: Any) -> World:
 
 def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: bool = True) -> Any:
     """The signal's source for the scenario ``scn`` of ``spec``: its map, or where its
-    weather moves its maps at :func:`series_instants` (engine 'pe' then becomes 'hybrid': a
+    weather moves its maps at [`series_instants()`][rainuav.world.series_instants] (engine 'pe' then
+    becomes 'hybrid': a
     march per cell and instant is refused); built, or taken from the cache."""
     if spec.altitudes:  # every level's maps (in time where the weather moves)
         times = series_instants(spec) if scn.medium.moves else None
@@ -387,7 +399,8 @@ def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: boo
 
 
 def source_key(spec: Any, scn: Scenario) -> str:
-    """What identifies the source :func:`build_source` gives (the scenario, and for a
+    """What identifies the source [`build_source()`][rainuav.world.build_source] gives (the
+    scenario, and for a
     weather that moves its instants)."""
     if not scn.medium.moves:
         return scn.digest()
@@ -396,7 +409,8 @@ def source_key(spec: Any, scn: Scenario) -> str:
 
 
 def load_world(folder: Path, spec: Any) -> World | None:
-    """The world saved in a run's ``folder`` (:meth:`World.save`) with the task of
+    """The world saved in a run's ``folder`` ([`World.save()`][rainuav.world.World.save]) with the
+    task of
     ``spec``, or None where the folder holds none."""
     for name, kind in zip(MAP_FILES, (RadioMap, RadioMapSeries, LevelStack), strict=True):
         if (Path(folder) / name).exists():

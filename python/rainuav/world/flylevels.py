@@ -1,6 +1,7 @@
 """``fly`` with altitude as a decision (``--altitudes``): the place mapped at each flight
-level (:mod:`rainuav.radio.levels`), the exact plan among them
-(:func:`rainuav.nav.planner.optimal_levels`: climbs and descents weighted by their duration)
+level ([`rainuav.radio.levels`][rainuav.radio.levels]), the exact plan among them
+([`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]: climbs and descents
+weighted by their duration)
 from the take-off level the planner finds best (of those flyable at the start; or the one
 given), and the flight's files with a height on every
 waypoint (relative to home; over a DEM, above sea level, with as many waypoints as keep every

@@ -1,13 +1,15 @@
 """A real place as a world, and a flight through it written for an autopilot
 (``python -m rainuav.fly``).
 
-:func:`place_scenario`: sites from a file (:mod:`rainuav.radio.sites`), a start and a
+[`place_scenario()`][rainuav.world.place.place_scenario]: sites from a file
+([`rainuav.radio.sites`][rainuav.radio.sites]), a start and a
 destination in latitude and longitude, the flight altitude, the carrier and homogeneous rain
 become a scenario of the ``uma`` preset's radio settings (bandwidth, noise figure, ground,
 engine) over an area around the start, the destination and the sites with a margin, in metres
-of a :class:`rainuav.geo.Georef` centred on that box. :func:`fly_place` plans the exact
+of a [`rainuav.geo.Georef`][rainuav.geo.Georef] centred on that box.
+[`fly_place()`][rainuav.world.place.fly_place] plans the exact
 optimum from the start (``rainuav.nav.planner``) and the straight line, and writes the flight
-(:mod:`rainuav.missions`).
+([`rainuav.missions`][rainuav.missions]).
 """
 
 from __future__ import annotations
@@ -98,14 +100,17 @@ def place_scenario(
     default_height_m: float | None = None,
 ) -> Place:
     """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees.
-    ``weather``: a georeferenced rain file (:mod:`rainuav.radio.radar`, mm/h or dBZ, one
+    ``weather``: a georeferenced rain file ([`rainuav.radio.radar`][rainuav.radio.radar], mm/h or
+    dBZ, one
     instant or several) in place of homogeneous rain. ``box``: the area as (south latitude,
     west longitude, north latitude, east longitude), degrees, in place of the box around the
     start, the destination and the sites; the start and the destination must lie in it.
-    ``terrain``: a DEM GeoTIFF under the place (:mod:`rainuav.ground.dem`), with the flight
+    ``terrain``: a DEM GeoTIFF under the place ([`rainuav.ground.dem`][rainuav.ground.dem]), with
+    the flight
     altitude above the terrain (``altitude_reference="ground"``, the default) or above sea
     level (``"msl"``). ``footprints``: building footprints in GeoJSON
-    (:mod:`rainuav.ground.footprints`) standing on it. ``altitudes``: the flight levels a
+    ([`rainuav.ground.footprints`][rainuav.ground.footprints]) standing on it. ``altitudes``: the
+    flight levels a
     flight chooses among (``area.altitudes_m``). ``engine``: the maps' engine (default the
     preset's, hybrid). ``default_height_m``: the roof of a footprint with neither a height nor
     storeys (``[footprints] default_height_m``, default 10 m)."""
@@ -216,7 +221,8 @@ def _check_leg(start: tuple[float, float], goal: tuple[float, float]) -> None:
 
 
 def _check_size(w: float, h: float, what: str, hint: str = "give a smaller box") -> None:
-    """Refuses an area ``w`` x ``h`` m wider or taller than :data:`MAX_SIDE_M`."""
+    """Refuses an area ``w`` x ``h`` m wider or taller than
+    [`MAX_SIDE_M`][rainuav.world.place.MAX_SIDE_M]."""
     if max(w, h) > MAX_SIDE_M:
         raise InvalidInputError(
             f"{what} {w / 1e3:.1f} km east-west and {h / 1e3:.1f} km north-south; fly maps at "
@@ -232,7 +238,8 @@ def _check_reach(
     goal_m: tuple[float, float],
 ) -> None:
     """Refuses, in the user's terms, an area around the start, the destination and the sites
-    (with :data:`MARGIN_M`) wider or taller than :data:`MAX_SIDE_M`: naming the distance
+    (with [`MARGIN_M`][rainuav.world.place.MARGIN_M]) wider or taller than
+    [`MAX_SIDE_M`][rainuav.world.place.MAX_SIDE_M]: naming the distance
     between the start and the destination, or the site farthest from the route."""
     (x0, x1), (y0, y1) = sorted((start_m[0], goal_m[0])), sorted((start_m[1], goal_m[1]))
     leg_w, leg_h = x1 - x0 + 2 * MARGIN_M, y1 - y0 + 2 * MARGIN_M
@@ -269,13 +276,14 @@ def fly_place(
     start_altitude_m: float | None = None,
 ) -> dict:
     """Builds the place's map, plans the exact optimum and the straight line from the start,
-    writes :data:`FLIGHT_FILES` into ``out`` (each atomically) and returns the summary.
+    writes [`FLIGHT_FILES`][rainuav.world.place.FLIGHT_FILES] into ``out`` (each atomically) and
+    returns the summary.
     ``min_db``: the outage threshold of the SINR (default: the ``uma`` preset's, whose radio
     settings the place takes). ``flyer``: flies the place's env (with the weather
     observation) from its start and returns the path and whether it arrived, in place of
     the exact optimum (which stays the yardstick: ``excess_over_optimum``); ``flown_by``
     names it in the summary. ``start_altitude_m``: with ``area.altitudes_m``, the level to
-    start at (:func:`rainuav.world.flylevels.fly_levels`)."""
+    start at ([`rainuav.world.flylevels.fly_levels()`][rainuav.world.flylevels.fly_levels])."""
     a = place.scenario.area
     if a.altitudes_m:  # altitude as a decision
         if flyer is not None:
@@ -369,7 +377,8 @@ NEAR_ROUTE_M = 100.0
 
 
 def buildings_near_route(scn: Scenario, path: np.ndarray) -> dict[str, int] | None:
-    """How many of ``scn``'s buildings stand within :data:`NEAR_ROUTE_M` of ``path`` (N, 2),
+    """How many of ``scn``'s buildings stand within
+    [`NEAR_ROUTE_M`][rainuav.world.place.NEAR_ROUTE_M] of ``path`` (N, 2),
     and how many of those stand at the default height (their clearance a guess); None without
     buildings."""
     from rainuav.radio.buildings import scenario_buildings
@@ -403,8 +412,10 @@ def default_height_warning(summary: dict[str, Any], default_height_m: float) -> 
 def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, float]:
     """The mission's waypoints along ``path`` (K, 2: local metres), their heights above mean
     sea level (None over flat open ground: the flight altitude relative to home) and home's
-    height: over terrain, :func:`rainuav.missions.terrain_waypoints` on the path sampled
-    :data:`rainuav.missions.SAMPLES_PER_MOVE` times a move, with the planned flight height
+    height: over terrain,
+    [`rainuav.missions.terrain_waypoints()`][rainuav.missions.terrain_waypoints] on the path sampled
+    [`rainuav.missions.SAMPLES_PER_MOVE`][rainuav.missions.SAMPLES_PER_MOVE] times a move, with the
+    planned flight height
     and the highest terrain or obstacle of the pixel under each sample."""
     t = scenario_terrain(scn)
     if t is None:
