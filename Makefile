@@ -4,7 +4,8 @@
 #   make wheel  one abi3 wheel (CPython 3.10+) in target/wheels
 #   make wheel-check  install that wheel into a fresh venv away from the source and run it
 #   make fmt    format Rust and Python in place
-#   make docs   the documentation site into site/ (warnings are errors; the docs extra)
+#   make docs   the gallery's examples, then the documentation site into site/ (warnings are
+#               errors; the docs extra)
 #   make figures  regenerate the documentation's figures from the package
 PYTHON ?= python
 # The suite on both cores of the 2-core machine, one file per worker (a file's tests share
@@ -56,6 +57,7 @@ validate: build
 	$(PYTHON) -m rainuav.validate rain --out validation
 
 docs:
+	$(PYTHON) docs/gallery.py
 	NO_MKDOCS_2_WARNING=1 $(PYTHON) -m mkdocs build --strict --site-dir site
 
 figures: build

@@ -1,7 +1,7 @@
 """The shipped district's buildings: what their walls add to the map, and the same flight
 planned with and without them (the Buildings page's figure and figures).
 
-    python docs/buildings_example.py [--out docs/figures/buildings.png]
+    python docs/buildings_example.py [--out figures/buildings.png]   # make figures: docs/figures
 
 The shipped place (``examples/sites.csv``, 28 GHz, clear air, 40 m above the ground) among
 the footprints of ``examples/buildings.geojson`` (ray engine, so the wall rays can be shown
@@ -30,7 +30,7 @@ ALTITUDE_M = 40.0
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "figures" / "buildings.png")
+    ap.add_argument("--out", type=Path, default=Path("figures") / "buildings.png")
     args = ap.parse_args()
 
     from matplotlib.figure import Figure

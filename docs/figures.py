@@ -60,9 +60,10 @@ def main() -> None:
                    "47.3660,8.5380", "--goal", "47.3800,8.5560", "--weather",
                    "examples/radar.nc", "--out", str(flight)])  # fmt: skip
         stamp(flight / "flight.png", FIGURES / "fly_example.png", cmd.replace(str(flight), "OUT"))
-    run(["docs/tutorials/radiomap_in_rain.py"])  # stamps its own figure
-    run(["docs/terrain_example.py"])  # stamps its own figure
-    run(["docs/buildings_example.py"])  # stamps its own figure
+    # Each stamps its own figure; by default they write outside docs/ (figures/).
+    run(["docs/tutorials/radiomap_in_rain.py", "--out", str(FIGURES)])
+    run(["docs/terrain_example.py", "--out", str(FIGURES / "terrain_flight.png")])
+    run(["docs/buildings_example.py", "--out", str(FIGURES / "buildings.png")])
     if args.storm_run is None:
         print("not regenerated (give --storm-run RUN): storm_network_1000000.png, "
               "storm_network_worst.png")  # fmt: skip

@@ -1,6 +1,6 @@
 """The same flight planned with and without the ground (the Terrain page's figure and figures).
 
-    python docs/terrain_example.py [--out docs/figures/terrain_flight.png]
+    python docs/terrain_example.py [--out figures/terrain_flight.png]   # make figures: docs/figures
 
 The shipped place (``examples/sites.csv``, 28 GHz, 25 mm/h of rain, 100 m above the ground) from
 47.3660 N 8.5380 E to 47.3800 N 8.5560 E, planned exactly on flat ground and over
@@ -29,7 +29,7 @@ ALTITUDE_MSL_M = 530.0
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "figures" / "terrain_flight.png")
+    ap.add_argument("--out", type=Path, default=Path("figures") / "terrain_flight.png")
     args = ap.parse_args()
 
     from matplotlib.figure import Figure

@@ -1,6 +1,6 @@
 """Tutorial: a radio map of your network in rain.
 
-    python docs/tutorials/radiomap_in_rain.py            # the published figures (10 m, hybrid)
+    python docs/tutorials/radiomap_in_rain.py     # full figures in figures/ (10 m, hybrid)
     python docs/tutorials/radiomap_in_rain.py --small    # a quick check (40 m, ray engine)
 
 Your base stations as a sites file (latitude, longitude, height, azimuth clockwise from north,
@@ -43,7 +43,7 @@ def made_by(command: str) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--small", action="store_true", help="40 m pixels and the ray engine")
-    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "figures")
+    ap.add_argument("--out", type=Path, default=Path("figures"))
     args = ap.parse_args()
 
     # 1. The network and the area: the shipped sites file (three tri-sector sites in Zurich),

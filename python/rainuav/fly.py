@@ -51,7 +51,7 @@ A planning aid, not an airworthiness tool: check the airspace, obstacles the map
 know (without ``--terrain`` it assumes flat open ground; a DEM leaves out vegetation and
 clutter, footprints leave out masts, cranes and trees), and the link budget's assumptions
 before flying. Needs the ``geo`` extra
-(``pip install 'rainuav[geo]'``).
+(``pip install '.[geo]' from the rainuav clone``).
 """
 
 from __future__ import annotations

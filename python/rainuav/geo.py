@@ -10,7 +10,7 @@ origin: 4e-7 at 10 km), so a scenario's metres are ground metres. A UTM zone wou
 inside one zone, but breaks at its edges and is not centred on the area; a plain
 equirectangular approximation errs by metres over kilometres.
 
-Needs pyproj (the ``geo`` extra: ``pip install 'rainuav[geo]'``).
+Needs pyproj (the ``geo`` extra: ``pip install '.[geo]' from the rainuav clone``).
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def pyproj_module() -> Any:
         import pyproj
     except ImportError as err:
         raise InvalidInputError(
-            "georeferenced input needs pyproj: pip install 'rainuav[geo]'"
+            "georeferenced input needs pyproj: pip install '.[geo]' from the rainuav clone"
         ) from err
     return pyproj
 

@@ -62,7 +62,8 @@ def open_raster(path: str | os.PathLike[str], what: str) -> Any:
         import rasterio
     except ImportError as err:
         raise InvalidInputError(
-            f"{what} {path}: reading GeoTIFF needs rasterio: pip install 'rainuav[geo]'"
+            f"{what} {path}: reading GeoTIFF needs rasterio: pip install '.[geo]' from the "
+            "rainuav clone"
         ) from err
     if not Path(path).is_file():
         raise InvalidInputError(f"{what} {path}: no such file")

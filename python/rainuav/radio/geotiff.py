@@ -47,7 +47,8 @@ def _rasterio(path: Any) -> Any:
         import rasterio
     except ImportError as err:
         raise InvalidInputError(
-            f"rain file {path}: reading GeoTIFF needs rasterio: pip install 'rainuav[geo]'"
+            f"rain file {path}: reading GeoTIFF needs rasterio: pip install '.[geo]' from "
+            "the rainuav clone"
         ) from err
     return rasterio
 

@@ -73,7 +73,7 @@ def write_map_geotiff(
         from rasterio.transform import Affine
     except ImportError as err:
         raise InvalidInputError(
-            "writing GeoTIFF needs rasterio: pip install 'rainuav[geo]'"
+            "writing GeoTIFF needs rasterio: pip install '.[geo]' from the rainuav clone"
         ) from err
     scn = rm.scenario
     geo = scn.georef

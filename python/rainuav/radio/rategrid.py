@@ -12,7 +12,8 @@ area) and ``time`` in seconds (numbers) or as datetimes (taken from the first). 
 interpolated bilinearly (xarray's ``interp``) onto the centres of a grid over the area, at most
 ``max_cells`` a side, and must be finite, within 0..500 mm/h.
 
-Needs the optional ``weather`` extra (``pip install 'rainuav[weather]'``: xarray and h5netcdf,
+Needs the optional ``weather`` extra (``pip install '.[weather]' from the rainuav clone``: xarray
+and h5netcdf,
 so that both NetCDF-3 and NetCDF-4 files open).
 """
 
@@ -40,7 +41,7 @@ def _open(path: str | os.PathLike[str]) -> Any:
         import xarray as xr
     except ImportError as err:
         raise InvalidInputError(
-            "reading rain-rate files needs xarray: pip install 'rainuav[weather]'"
+            "reading rain-rate files needs xarray: pip install '.[weather]' from the rainuav clone"
         ) from err
     if not os.path.isfile(path):
         raise InvalidInputError(f"rain-rate file {path}: no such file")

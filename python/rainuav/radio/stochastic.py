@@ -25,7 +25,8 @@ the fraction of the way from knot k to k + 1, which keeps ``N`` Gaussian with un
 every instant and changes it continuously (a Lagrangian decorrelation time of about
 ``lifetime_s``; convective rain decorrelates in 10-30 minutes).
 
-``pysteps`` is an optional dependency (``pip install 'rainuav[weather]'``); without it a field
+``pysteps`` is an optional dependency (``pip install '.[weather]' from the rainuav clone``); without
+it a field
 is refused in one line.
 """
 
@@ -113,7 +114,7 @@ def _pysteps() -> Any:
             from pysteps.noise import fftgenerators
     except ImportError as err:
         raise InvalidInputError(
-            "stochastic rain fields need pysteps: pip install 'rainuav[weather]'"
+            "stochastic rain fields need pysteps: pip install '.[weather]' from the rainuav clone"
         ) from err
     return fftgenerators
 

@@ -169,7 +169,9 @@ def _run_ray(study: Study, todo: list[Case], out: Path, ray_address: str, bar: A
     try:
         import ray
     except ImportError as err:
-        raise InvalidInputError("--ray needs Ray: pip install 'rainuav[ray]'") from err
+        raise InvalidInputError(
+            "--ray needs Ray: pip install '.[ray]' from the rainuav clone"
+        ) from err
     if not ray.is_initialized():
         ray.init(address=None if ray_address == "local" else ray_address)
     maps, of = _maps(todo)

@@ -1,0 +1,42 @@
+"""What the gallery's examples share: their ``--out`` folder (``gallery/`` under the current
+folder unless given: an example never writes into ``docs/``) and the stamp under each figure
+(the command, the date and the machine)."""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import platform
+from pathlib import Path
+
+
+def out_dir(doc: str | None, argv: list[str] | None = None) -> Path:
+    """The ``--out`` folder of an example (made if missing)."""
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--out", type=Path, default=Path("gallery"), help="output folder")
+    out = ap.parse_args(argv).out
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def cpu() -> str:
+    """The CPU model and the cores."""
+    name = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                name = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{name}, {os.cpu_count()} cores"
+
+
+def stamp(fig, script: str) -> None:
+    """Writes the command, today's date and the machine under ``fig``."""
+    text = f"python examples/gallery/{script}; {datetime.date.today()}; {cpu()}"
+    engine = fig.get_layout_engine()
+    if engine is not None:  # room for the line below the axes
+        engine.set(rect=(0.0, 0.035, 1.0, 0.965))
+    fig.text(0.01, 0.005, text, fontsize=6, color="0.45", va="bottom")
