@@ -221,7 +221,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         print(json.dumps(summary, indent=2))
         if place.scenario.footprints is not None:
-            from rainuav.world.place import default_height_warning
+            from rainuav.radio.buildings import default_height_warning
 
             warn = default_height_warning(summary, place.scenario.footprints.default_height_m)
             if warn:

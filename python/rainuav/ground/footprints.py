@@ -56,7 +56,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import re
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
@@ -66,6 +65,16 @@ import numpy as np
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef
+from rainuav.ground.osm import (
+    DEFAULT_HEIGHT_M,
+    MAX_HEIGHT_M,
+    STOREY_HEIGHT_M,
+    Unreadable,
+    feature_heights,
+    is_part,
+    parse_length,
+    parse_levels,
+)
 
 __all__ = [
     "DEFAULT_HEIGHT_M",
@@ -82,13 +91,6 @@ __all__ = [
     "read_footprints",
 ]
 
-STOREY_HEIGHT_M = 3.0
-"""Height of one storey (``building:levels``), m: OpenStreetMap's usual 3 m."""
-DEFAULT_HEIGHT_M = 10.0
-"""Roof height of a building with neither ``height`` nor ``building:levels``, m (about three
-storeys)."""
-MAX_HEIGHT_M = 1000.0
-"""The tallest height accepted, m (the tallest building is 828 m)."""
 MAX_FEATURES = 500_000
 """The most features a file may hold (a city of a few million people has about this many
 buildings; larger files are cut to the area first, e.g. with ``ogr2ogr -clipsrc``)."""
@@ -121,26 +123,8 @@ OSM_MATERIALS: dict[str, str] = {
 [`MATERIALS`][rainuav.ground.footprints.MATERIALS]."""
 
 _EPS0 = 8.8541878128e-12
-_NUMBER = r"[0-9]*\.?[0-9]+"
-_LENGTH = re.compile(rf"^(?P<v>{_NUMBER})\s*(?P<u>m|meters?|metres?|ft|feet|')?$", re.IGNORECASE)
-_FEET_INCHES = re.compile(r"""^(?P<f>[0-9]+)\s*'\s*(?P<i>[0-9]+(\.[0-9]+)?)\s*"$""")
-_RANGE = re.compile(rf"^{_NUMBER}\s*(?:-|\.\.|to)\s*(?P<hi>{_NUMBER}.*)$", re.IGNORECASE)
 MAX_NAMED = 3
 """The skipped features a summary names (the rest are counted)."""
-
-
-def _clean(text: Any) -> str:
-    """An OpenStreetMap value as one number and its unit: the first of a ``;`` list, the
-    upper end of a range (``3-4``, ``3..4``), without ``~`` (approximately), with a decimal
-    comma (``12,5``) read as a point. Raises ValueError for a value that is not text or a
-    number."""
-    if isinstance(text, bool) or not isinstance(text, str | int | float):
-        raise ValueError(repr(text))
-    s = str(text).split(";")[0].strip().lstrip("~\u2248").strip()
-    s = re.sub(r"(?<=[0-9]),(?=[0-9])", ".", s)
-    if m := _RANGE.match(s):
-        s = m["hi"]
-    return s
 
 
 def material_permittivity(material: str, freq_hz: float) -> complex:
@@ -150,43 +134,6 @@ def material_permittivity(material: str, freq_hz: float) -> complex:
     f_ghz = freq_hz / 1e9
     sigma = c * f_ghz**d
     return complex(a * f_ghz**b, -sigma / (2.0 * math.pi * freq_hz * _EPS0))
-
-
-def parse_length(text: Any) -> float:
-    """A length in metres from an OpenStreetMap value: a number (metres), ``"12 m"``,
-    ``"40 ft"``, ``"40'"`` or ``12'6"``, read by ``_clean``'s
-    rules (``"12;15"`` is 12,
-    ``"~20"`` 20, ``"12,5"`` 12.5, ``"10-12"`` 12). Raises ValueError for anything else
-    (negative numbers included)."""
-    if isinstance(text, int | float) and not isinstance(text, bool):
-        v = float(text)
-        if not math.isfinite(v) or v < 0:
-            raise ValueError(repr(text))
-        return v
-    s = _clean(text)
-    if m := _FEET_INCHES.match(s):
-        return (float(m["f"]) * 12.0 + float(m["i"])) * 0.0254
-    m = _LENGTH.match(s)
-    if m is None:
-        raise ValueError(repr(text))
-    unit = (m["u"] or "m").lower()
-    return float(m["v"]) * (0.3048 if unit in ("ft", "feet", "'") else 1.0)
-
-
-def parse_levels(text: Any) -> float:
-    """A number of storeys from an OpenStreetMap value (``"3"``, ``"2.5"``, ``"2,5"``,
-    ``"3-4"``: the upper end, ``"3;4"``: the first; 0 is a real value). Raises ValueError for
-    anything else (negative numbers included)."""
-    if isinstance(text, int | float) and not isinstance(text, bool):
-        v = float(text)
-    else:
-        s = _clean(text)
-        if re.fullmatch(_NUMBER, s) is None:
-            raise ValueError(repr(text))
-        v = float(s)
-    if not math.isfinite(v) or v < 0:
-        raise ValueError(repr(text))
-    return v
 
 
 @dataclass(frozen=True)
@@ -268,68 +215,6 @@ def _crs_ok(crs: Any) -> bool:
     except (TypeError, KeyError):
         return False
     return name.endswith("CRS84") or name.replace("::", ":").endswith("EPSG:4326")
-
-
-class _Unreadable(ValueError):
-    """A feature's value that cannot be read (the feature is skipped)."""
-
-
-def _heights(
-    props: dict[str, Any], default_height_m: float
-) -> tuple[float, float, float | None, bool]:
-    """(roof, bottom, eaves or None, whether the default height was used) of a feature, by the
-    module docstring's rules; raises [`_Unreadable`][rainuav.ground.footprints._Unreadable] naming
-    the tag."""
-
-    def read(key: str, parse: Any, what: str, top: float) -> float | None:
-        v = props.get(key)
-        if v is None or (isinstance(v, str) and not v.strip()):
-            return None
-        try:
-            x = parse(v)
-        except ValueError:
-            raise _Unreadable(f"{key} = {v!r} is not {what}") from None
-        if x > top:
-            raise _Unreadable(f"{key} = {v!r} is over {top:g}")
-        return x
-
-    def length(key: str) -> float | None:
-        return read(key, parse_length, f"a length in 0..{MAX_HEIGHT_M:g} m", MAX_HEIGHT_M)
-
-    def levels(key: str) -> float | None:
-        top = MAX_HEIGHT_M / STOREY_HEIGHT_M
-        return read(key, parse_levels, f"a number of storeys in 0..{top:g}", top)
-
-    roof_h = length("roof:height")
-    if roof_h is None and (roof_lv := levels("roof:levels")) is not None:
-        roof_h = roof_lv * STOREY_HEIGHT_M
-    bottom = length("min_height")
-    if bottom is None:
-        ml = levels("building:min_level")
-        bottom = 0.0 if ml is None else ml * STOREY_HEIGHT_M
-    height = length("height")
-    default = False
-    if height is None:
-        lv = levels("building:levels")
-        if lv is not None:
-            height = lv * STOREY_HEIGHT_M + (roof_h or 0.0)
-        elif bottom > 0.0:  # a raised part: its own roof on its bottom
-            height = bottom + (STOREY_HEIGHT_M if roof_h is None else roof_h)
-            default = roof_h is None
-        else:
-            height, default = max(default_height_m, roof_h or 0.0), True
-    if height <= bottom:
-        raise _Unreadable(
-            f"its roof ({height:g} m) is not above its bottom (min_height {bottom:g} m)"
-        )
-    eaves = None if roof_h is None else max(bottom, height - roof_h)
-    return height, bottom, eaves, default
-
-
-def _is_part(props: dict[str, Any]) -> bool:
-    """Whether a feature is a Simple 3D Buildings part (``building:part`` set, not ``no``)."""
-    v = props.get("building:part")
-    return v not in (None, "", "no", False)
 
 
 def read_footprints(
@@ -450,14 +335,14 @@ def read_footprints(
     readable = []
     for g, here, props in kept:
         try:
-            readable.append((g, props, _heights(props, default_height_m)))
-        except _Unreadable as err:
+            readable.append((g, props, feature_heights(props, default_height_m)))
+        except Unreadable as err:
             out.skipped.append(f"{here}: {err}")
     # Outlines and parts: the parts give the shape where they overlap an outline.
-    parts = [g for g, props, _ in readable if _is_part(props)]
+    parts = [g for g, props, _ in readable if is_part(props)]
     parts_union = shapely.union_all(parts) if parts else None
     for g, props, (height, bottom, eaves, default) in readable:
-        if parts_union is not None and not _is_part(props) and shapely.intersects(g, parts_union):
+        if parts_union is not None and not is_part(props) and shapely.intersects(g, parts_union):
             rest = shapely.difference(g, parts_union)
             if shapely.area(rest) < shapely.area(g) - 1e-6:
                 out.outlines_cut += 1

@@ -298,6 +298,14 @@ class UAVNavEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Starts an episode at time 0 and returns the observation and ``info``.
+
+        ``seed`` seeds the environment's generator (Gymnasium's rule: once, then it carries
+        on). ``options``: ``start_m`` (x, y in metres, inside the area and flyable; default
+        the task's ``start_m``, else a start drawn from the generator) and, with
+        ``observation="weather"``, ``goal_m`` (a destination in place of the drawn one) and
+        ``world`` (which storm of a bank). ``info`` holds ``signal_db`` at the start,
+        ``serving_cell``, ``position_m``, ``outage``, ``arrived`` and ``t_s``."""
         super().reset(seed=seed)
         if options is not None and not isinstance(options, dict):
             raise InvalidInputError(f"options must be a dict (got {type(options).__name__})")
@@ -365,6 +373,12 @@ class UAVNavEnv(gym.Env):
         return info
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """One move: ``action`` 0 = +x, 1 = +y, 2 = -x, 3 = -y (an integer). Returns
+        ``(observation, reward, terminated, truncated, info)``: the reward of the task
+        ([`rainuav.nav.task`][rainuav.nav.task]: -1 less the SINR shortfall where and when the
+        move lands, the arrival reward, or the penalty for leaving the area or entering a pixel
+        the UAV may not fly), ``terminated`` on arrival or leaving, ``truncated`` after
+        ``max_steps`` moves; ``info`` as [`reset()`][rainuav.nav.env.UAVNavEnv.reset]'s."""
         a = check_action(action)
         if not self._ready:
             raise InvalidInputError("step() before reset(): call reset() to start an episode")

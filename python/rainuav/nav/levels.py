@@ -226,6 +226,10 @@ class UAVLevelsEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Starts an episode at time 0 and returns the observation and ``info``, as
+        [`UAVNavEnv.reset()`][rainuav.nav.env.UAVNavEnv.reset] does; the start also has a
+        level (``options["start_level"]``, an index into the altitudes, flyable at the start;
+        default [`start_level_at()`][rainuav.nav.levels.UAVLevelsEnv.start_level_at])."""
         super().reset(seed=seed)
         opts = options or {}
         p = opts.get("start_m", self.cfg.start_m)
@@ -299,6 +303,10 @@ class UAVLevelsEnv(gym.Env):
         return info
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """One move: the plane's four (0-3) or a climb (4) or descent (5) of one level, which
+        lasts its duration in moves and earns that many times the move's reward. Returns
+        ``(observation, reward, terminated, truncated, info)`` as
+        [`UAVNavEnv.step()`][rainuav.nav.env.UAVNavEnv.step] does."""
         ok = isinstance(action, int | np.integer) and not isinstance(action, bool)
         if isinstance(action, np.ndarray) and action.shape == () and action.dtype.kind in "iu":
             action, ok = int(action), True

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -31,7 +32,15 @@ from rainuav.errors import InvalidInputError
 from rainuav.ground.footprints import Footprint, material_permittivity, read_footprints
 from rainuav.radio.scenario import Scenario
 
-__all__ = ["Buildings", "pixels_touched_max", "scenario_buildings", "wall_args"]
+__all__ = [
+    "NEAR_ROUTE_M",
+    "Buildings",
+    "buildings_near_route",
+    "default_height_warning",
+    "pixels_touched_max",
+    "scenario_buildings",
+    "wall_args",
+]
 
 
 @dataclass(frozen=True)
@@ -282,3 +291,39 @@ def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> n
     tops = np.array([f.height_m for f in b.footprints])[owner]
     np.maximum.at(out, (ii[hit], jj[hit]), tops[hit])
     return out
+
+
+NEAR_ROUTE_M = 100.0
+"""Buildings within this distance of a flight's path count as near it (the summary's
+``buildings_near_route``), m."""
+
+
+def buildings_near_route(scn: Scenario, path: np.ndarray) -> dict[str, int] | None:
+    """How many of ``scn``'s buildings stand within
+    [`NEAR_ROUTE_M`][rainuav.radio.buildings.NEAR_ROUTE_M] of ``path`` (N, 2),
+    and how many of those stand at the default height (their clearance a guess); None without
+    buildings."""
+    b = scenario_buildings(scn)
+    if b is None:
+        return None
+    import shapely
+
+    line = shapely.LineString(path[:, :2]) if len(path) > 1 else shapely.Point(path[0, :2])
+    near = [f for f in b.footprints if shapely.distance(f.polygon, line) <= NEAR_ROUTE_M]
+    return {
+        "buildings_near_route": len(near),
+        "buildings_near_route_at_default_height": sum(f.guessed for f in near),
+    }
+
+
+def default_height_warning(summary: dict[str, Any], default_height_m: float) -> str | None:
+    """A warning line where most buildings near the route stand at the default height."""
+    n = summary.get("buildings_near_route") or 0
+    k = summary.get("buildings_near_route_at_default_height") or 0
+    if n == 0 or 2 * k <= n:
+        return None
+    return (
+        f"warning: {k} of the {n} buildings within {NEAR_ROUTE_M:g} m of the route stand at the "
+        f"default height {default_height_m:g} m (their file gives no height or storeys): the "
+        "clearance over them is a guess; set --default-height or add heights to the file"
+    )

@@ -37,12 +37,12 @@ from rainuav.nav import planner
 from rainuav.nav.field import pixel_index
 from rainuav.nav.task import NavConfig
 from rainuav.radio import presets
+from rainuav.radio.buildings import buildings_near_route
 from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.terrain import obstacle_pixel_max, scenario_terrain
 from rainuav.radio.timemap import series_times
 from rainuav.world import SLICE_S, level_field
 from rainuav.world.flightplot import plot_flight
-from rainuav.world.place import buildings_near_route
 
 __all__ = ["fly_levels"]
 

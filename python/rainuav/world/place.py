@@ -42,6 +42,7 @@ from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import blocked_at, pixel_index
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio import presets
+from rainuav.radio.buildings import buildings_near_route
 from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.radar import read_radar_grid
 from rainuav.radio.radiomap import build_radio_map
@@ -369,44 +370,6 @@ def fly_place(
     }  # fmt: skip
     _write(place, out, ll, path, t_s, sinr, serving, min_db, summary, rm)
     return summary
-
-
-NEAR_ROUTE_M = 100.0
-"""Buildings within this distance of a flight's path count as near it (the summary's
-``buildings_near_route``), m."""
-
-
-def buildings_near_route(scn: Scenario, path: np.ndarray) -> dict[str, int] | None:
-    """How many of ``scn``'s buildings stand within
-    [`NEAR_ROUTE_M`][rainuav.world.place.NEAR_ROUTE_M] of ``path`` (N, 2),
-    and how many of those stand at the default height (their clearance a guess); None without
-    buildings."""
-    from rainuav.radio.buildings import scenario_buildings
-
-    b = scenario_buildings(scn)
-    if b is None:
-        return None
-    import shapely
-
-    line = shapely.LineString(path[:, :2]) if len(path) > 1 else shapely.Point(path[0, :2])
-    near = [f for f in b.footprints if shapely.distance(f.polygon, line) <= NEAR_ROUTE_M]
-    return {
-        "buildings_near_route": len(near),
-        "buildings_near_route_at_default_height": sum(f.guessed for f in near),
-    }
-
-
-def default_height_warning(summary: dict[str, Any], default_height_m: float) -> str | None:
-    """A warning line where most buildings near the route stand at the default height."""
-    n = summary.get("buildings_near_route") or 0
-    k = summary.get("buildings_near_route_at_default_height") or 0
-    if n == 0 or 2 * k <= n:
-        return None
-    return (
-        f"warning: {k} of the {n} buildings within {NEAR_ROUTE_M:g} m of the route stand at the "
-        f"default height {default_height_m:g} m (their file gives no height or storeys): the "
-        "clearance over them is a guess; set --default-height or add heights to the file"
-    )
 
 
 def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, float]:
