@@ -972,6 +972,55 @@ def test_out_of_reach_pixels_are_named_in_the_rss_figure() -> None:
     plt.close(ax.figure)
 
 
+OSM_TAG_VARIANTS = [
+    ({"height": "12;15"}, 12.0), ({"height": "~20"}, 20.0), ({"height": "20 m"}, 20.0),
+    ({"height": "12,5"}, 12.5), ({"building:levels": "3-4"}, 12.0),
+    ({"building:levels": "2.5"}, 7.5), ({"building:levels": "2,5"}, 7.5),
+    ({"building:levels": "0", "roof:height": "3"}, 3.0),
+    ({"building:levels": "2", "roof:levels": "1"}, 9.0),
+    ({"building:part": "yes", "min_height": "18", "roof:height": "5"}, 23.0),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("tags", "roof"), OSM_TAG_VARIANTS)
+def test_openstreetmap_tag_variants_are_read(tmp_path, tags, roof) -> None:
+    # Values as real exports carry them: each read (rightly accepted), the roof as the OSM
+    # wiki defines it.
+    import test_buildings
+    from rainuav.ground.footprints import read_footprints
+
+    one = test_buildings.feature(test_buildings.rect(0, 0, 40, 40), **tags)
+    path = test_buildings.write(tmp_path / "v.geojson", [one])
+    fp = read_footprints(path, test_buildings.GEO, (0.0, 800.0, 0.0, 800.0))
+    assert [b.height_m for b in fp.buildings] == [pytest.approx(roof)] and not fp.skipped
+    accepted(f"footprint tags {tags}")
+
+
+def test_a_bad_tag_outside_the_area_never_refuses_a_city(tmp_path, capsys) -> None:
+    # radiomap --footprints: a file with a building in the area and an unreadable one far
+    # outside it builds the map; one whose every feature lies outside is refused in one line.
+    import test_buildings
+
+    toml = tmp_path / "place.toml"
+    test_buildings.scenario(None, [Site(100.0, 400.0, 30.0, [test_buildings.iso_cell()])]).to_toml(
+        toml
+    )
+    f, rect = test_buildings.feature, test_buildings.rect
+    ok = test_buildings.write(tmp_path / "city.geojson", [f(rect(300, 300, 340, 340), height=20),
+                              f(rect(9000, 9000, 9040, 9040), height="very tall")])  # fmt: skip
+    out = tmp_path / "ok"
+    rc, err = run_cli(radiomap, ["--config", toml, "--footprints", ok, "--out", out, "--no-cache"],
+                      capsys)  # fmt: skip
+    assert rc == 0 and "1 buildings from 2 features (1 outside the area" in err, err
+    accepted("radiomap --footprints with a bad tag outside the area")
+    away = test_buildings.write(tmp_path / "away.geojson", [f(rect(9000, 9000, 9040, 9040))])
+    out = tmp_path / "away"
+    rc, err = run_cli(radiomap, ["--config", toml, "--footprints", away, "--out", out,
+                                 "--no-cache"], capsys)  # fmt: skip
+    refused("radiomap --footprints all outside", rc, err, "away.geojson", "outside the area")
+    assert not (out / "radiomap.npz").exists()
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():

@@ -198,3 +198,40 @@ def test_a_real_helsinki_extract_reads_whole(tmp_path: Path) -> None:
     every = shapely.transform(every, lambda xy: np.column_stack(geo.to_local(xy[:, 1], xy[:, 0])))
     kept = shapely.union_all([b.polygon for b in fp.buildings])
     assert kept.area == pytest.approx(every.area, rel=1e-6)
+
+
+def test_fly_warns_when_most_buildings_near_the_route_are_a_guess(tmp_path: Path, capsys) -> None:
+    # Untagged buildings beside the route: fly counts them in summary.json and warns in one
+    # line that their clearance is a guess; with heights given, no warning.
+    from rainuav.fly import main
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    geo = Georef(47.3730, 8.5470)  # any frame: the features are written in degrees
+    start, goal = (47.3660, 8.5380), (47.3800, 8.5560)
+
+    def box(lat: float, lon: float, **tags) -> dict:
+        x, y = geo.to_local(lat, lon)
+        ring = [(x + 20, y + 20), (x + 40, y + 20), (x + 40, y + 40), (x + 20, y + 40)]
+        la, lo = geo.to_latlon(np.array([p[0] for p in ring]), np.array([p[1] for p in ring]))
+        pts = [[float(b), float(a)] for a, b in zip(la, lo, strict=True)]
+        return {"type": "Feature", "properties": tags,
+                "geometry": {"type": "Polygon", "coordinates": [[*pts, pts[0]]]}}  # fmt: skip
+
+    for name, tags, warned in (("guess", {}, True), ("tagged", {"height": 12}, False)):
+        feats = [box(*start, **tags), box(*goal, **tags)]
+        path = tmp_path / f"{name}.geojson"
+        path.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+        out = tmp_path / name
+        capsys.readouterr()
+        argv = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380", "--goal",
+                "47.3800,8.5560", "--footprints", str(path), "--engine", "ray",
+                "--out", str(out)]  # fmt: skip
+        assert main(argv) == 0
+        err = capsys.readouterr().err
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["buildings_near_route"] == 2
+        assert summary["buildings_near_route_at_default_height"] == (2 if warned else 0)
+        lines = [line for line in err.splitlines() if line.startswith("warning:")]
+        assert bool(lines) == warned, err
+        if warned:
+            assert "2 of the 2 buildings" in lines[0] and "--default-height" in lines[0]
