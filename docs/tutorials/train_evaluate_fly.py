@@ -33,7 +33,9 @@ def run(args: list[str]) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=ROOT / "runs" / "tutorial")
-    ap.add_argument("--small", action="store_true", help="a tiny budget, to check it runs")
+    ap.add_argument(
+        "--small", action="store_true", help="a tiny budget and the ray engine, to check it runs"
+    )
     args = ap.parse_args()
     out = args.out.resolve()
     storms = out / "storms"
@@ -49,6 +51,8 @@ def main() -> None:
         "4",
         "--validate-starts",
         "4",
+        "--engine",
+        "ray",
     ]
     run(["rainuav.train", "--scenario", "storm", "--storm-seed", "random", "--out", storms,
          *(small_train if args.small else [])])  # fmt: skip
@@ -65,7 +69,7 @@ def main() -> None:
     run(["rainuav.fly", "--sites", ROOT / "examples" / "sites.csv",
          "--start", "47.3660,8.5380", "--goal", "47.3800,8.5560",
          "--weather", ROOT / "examples" / "radar.nc", "--policy", storms,
-         "--out", out / "flight"])  # fmt: skip
+         "--out", out / "flight", *(["--engine", "ray"] if args.small else [])])  # fmt: skip
     summary = json.loads((out / "flight" / "summary.json").read_text())
     print({k: summary[k] for k in ("flown_by", "excess_over_optimum", "outage_share",
                                    "flight_time_s", "waypoints")})  # fmt: skip

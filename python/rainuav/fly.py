@@ -24,11 +24,13 @@ projection centred on it ([`rainuav.geo`][rainuav.geo]). Plans the exact optimum
   the sites as points), ``flight.kml`` (Google Earth, altitude above the ground);
 - ``mission.plan`` (QGroundControl) and ``mission.waypoints`` (QGC WPL 110): take-off, the
   path's corners at the flight altitude relative to home, landing; over ``--terrain``, the
-  waypoints above mean sea level (MAVLink's global frame), enough of them that no straight
-  climb or descent between two passes closer to the ground than the clearance
+  waypoints above mean sea level (MAVLink's global frame), enough of them that every straight
+  leg between two holds the planned height above the ground within 5 m and never passes
+  closer to the ground than the clearance
   ([`rainuav.missions.terrain_waypoints()`][rainuav.missions.terrain_waypoints]);
-- ``flight.png`` (the path over the SINR map with the sites) and ``summary.json`` (cost,
-  outage share and flight time, against the straight line).
+- ``flight.png`` (the path over the SINR map with the sites, the buildings and the pixels the
+  UAV may not fly) and ``summary.json`` (cost, outage share and flight time, against the
+  straight line; the fields: the documentation's troubleshooting page).
 
 ``summary.json`` is written last: a folder without it holds a flight that was stopped part
 way (an earlier run's ``summary.json`` is removed before the new files are written).
