@@ -62,7 +62,11 @@ def test_no_reference_leaves_the_repository() -> None:
     link = re.compile(r"\]\((?!https?:|mailto:|#)([^)#\s]+)")
     for p in DOCS.rglob("*.md"):
         for m in link.finditer(p.read_text()):
-            assert (p.parent / m.group(1)).resolve().exists(), (p.name, m.group(1))
+            target = m.group(1)
+            if p.name == "gallery.md" and target.startswith("gallery/"):
+                # A figure `make docs` draws: the example that draws it exists.
+                target = f"../examples/gallery/{Path(target).stem}.py"
+            assert (p.parent / target).resolve().exists(), (p.name, target)
 
 
 def _docstrings() -> list[tuple[str, str]]:

@@ -1021,6 +1021,30 @@ def test_a_bad_tag_outside_the_area_never_refuses_a_city(tmp_path, capsys) -> No
     assert not (out / "radiomap.npz").exists()
 
 
+def test_the_default_height_is_a_flag(tmp_path, capsys) -> None:
+    # radiomap --default-height: the untagged building's roof and the summary follow it; out of
+    # range or without footprints, one line and nothing written.
+    import test_buildings
+
+    toml = tmp_path / "place.toml"
+    test_buildings.scenario(None, [Site(100.0, 400.0, 30.0, [test_buildings.iso_cell()])]).to_toml(
+        toml
+    )
+    f, rect = test_buildings.feature, test_buildings.rect
+    path = test_buildings.write(tmp_path / "plain.geojson", [f(rect(300, 300, 340, 340))])
+    base = ["--config", toml, "--no-cache"]
+    rc, err = run_cli(radiomap, [*base, "--footprints", path, "--default-height", "24",
+                                 "--out", tmp_path / "ok"], capsys)  # fmt: skip
+    assert rc == 0 and "1 of the buildings kept at the default height 24 m" in err, err
+    accepted("radiomap --default-height 24")
+    for extra, needle in ((["--footprints", path, "--default-height", "-3"], "--default-height"),
+                          (["--default-height", "20"], "--footprints")):  # fmt: skip
+        out = tmp_path / "bad"
+        rc, err = run_cli(radiomap, [*base, *extra, "--out", out], capsys)
+        refused(f"radiomap {extra}", rc, err, needle)
+        assert not (out / "radiomap.npz").exists()
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():

@@ -54,4 +54,7 @@ def test_relative_links_resolve(path: Path) -> None:
     for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", path.read_text()):
         if "://" in target:
             continue
+        if path.name == "gallery.md" and target.startswith("gallery/"):
+            # A figure `make docs` draws: the example that draws it exists.
+            target = f"../examples/gallery/{Path(target).stem}.py"
         assert (path.parent / target).exists(), (path.name, target)
