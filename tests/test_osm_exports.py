@@ -235,3 +235,36 @@ def test_fly_warns_when_most_buildings_near_the_route_are_a_guess(tmp_path: Path
         assert bool(lines) == warned, err
         if warned:
             assert "2 of the 2 buildings" in lines[0] and "--default-height" in lines[0]
+
+
+def test_the_flight_figure_draws_buildings_and_not_flyable_pixels_and_hides_nothing() -> None:
+    # flight.png among the shipped district at 40 m (its towers within the clearance): every
+    # building drawn, the not-flyable pixels hatched and in the legend, and the legend below
+    # the map, where it cannot hide the destination.
+    from rainuav.radio import build_radio_map
+    from rainuav.radio.buildings import scenario_buildings
+    from rainuav.world.flightplot import flight_figure
+    from rainuav.world.place import place_scenario
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    place = place_scenario(examples / "sites.csv", (47.3660, 8.5380), (47.3800, 8.5560),
+                           altitude_m=40.0, footprints=examples / "buildings.geojson",
+                           engine="ray")  # fmt: skip
+    rm = build_radio_map(place.scenario)
+    assert rm.not_flyable.any()
+    path = np.array([place.start_m, (place.goal_m[0], place.start_m[1]), place.goal_m])
+    fig = flight_figure(rm, path, place)
+    ax = fig.axes[0]
+    assert ax.get_legend() is None and len(fig.legends) == 1
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert {"buildings", "not flyable", "destination", "start"} <= set(labels), labels
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.patches import Polygon
+
+    n = len(scenario_buildings(place.scenario).footprints)
+    assert sum(isinstance(p, Polygon) for p in ax.patches) == n  # one patch a building
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()  # the constrained layout placed
+    renderer = canvas.get_renderer()
+    legend = fig.legends[0].get_window_extent(renderer)
+    assert not legend.overlaps(ax.get_window_extent(renderer))

@@ -14,14 +14,21 @@ from rainuav.geo import latlon_text
 from rainuav.missions import corners
 from rainuav.radio import presets
 
-__all__ = ["plot_flight"]
+__all__ = ["flight_figure", "plot_flight"]
 
 
 def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any = None) -> None:
-    """``flight.png``: the path over the SINR at take-off (a series: its first instant), the
-    rain at take-off outlined, the buildings' footprints, the pixels the UAV may not fly
-    (hatched), the waypoints, the sites, the start and the destination; the legend below the
-    map, where it hides nothing.
+    """Writes ``flight.png`` ([`flight_figure()`][rainuav.world.flightplot.flight_figure]) to
+    ``where``, atomically."""
+    fig = flight_figure(rm, path, place, heights)
+    write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
+
+
+def flight_figure(rm: Any, path: np.ndarray, place: Any, heights: Any = None) -> Any:
+    """The figure of ``flight.png`` (a matplotlib Figure): the path over the SINR at take-off
+    (a series: its first instant), the rain at take-off outlined, the buildings' footprints,
+    the pixels the UAV may not fly (hatched), the waypoints, the sites, the start and the
+    destination; the legend below the map, where it hides nothing.
     ``heights``: ``(t_s, altitude_m, outage)`` per vertex of a flight among levels, drawn
     below as its height against time, the moves in outage marked."""
     from matplotlib.figure import Figure
@@ -76,7 +83,7 @@ def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any
     labels += [h.get_label() for h in proxies]
     fig.legend(handles, labels, loc="outside lower center", ncols=4, fontsize="small",
                frameon=False)  # fmt: skip
-    write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
+    return fig
 
 
 def _obstacles(
