@@ -288,14 +288,15 @@ def read_footprints(
                 shapely.errors.ShapelyError) as err:  # fmt: skip
             out.skipped.append(f"{here}: not a valid {geom['type']} ({err})")
             continue
-        # A GeometryCollection keeps its polygons.
-        polys = [g for g in shapely.get_parts(shape) if isinstance(g, shapely.Polygon)]
-        polys += [q for g in shapely.get_parts(shape) if isinstance(g, shapely.MultiPolygon)
-                  for q in shapely.get_parts(g)]  # fmt: skip
-        if not polys:
+        if isinstance(shape, shapely.GeometryCollection):  # it keeps its polygons
+            polys = _polygons(shape)
+            if not polys:
+                out.not_polygons += 1
+                continue
+            shape = polys[0] if len(polys) == 1 else shapely.MultiPolygon(polys)
+        elif shape.is_empty:
             out.not_polygons += 1
             continue
-        shape = polys[0] if len(polys) == 1 else shapely.MultiPolygon(polys)
         coords = shapely.get_coordinates(shape)
         if not (
             np.all(np.isfinite(coords))
@@ -320,8 +321,9 @@ def read_footprints(
     else:
         local = np.zeros(0, dtype=object)
     kept: list[tuple[Any, str, dict[str, Any]]] = []  # (area-clipped geometry, where, tags)
-    for g, here, props in zip(local, where, props_of, strict=True):
-        if not shapely.is_valid(g):
+    valid = shapely.is_valid(local)
+    for g, ok, here, props in zip(local, valid, where, props_of, strict=True):
+        if not ok:
             g = shapely.make_valid(g)
             out.repaired += 1
         if not shapely.intersects(g, area):
