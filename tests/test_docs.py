@@ -154,6 +154,13 @@ def test_shared_figures_agree_between_pages() -> None:
     assert "results.md#terrain" in terrain and not re.search(r"\d+\.\d+ s against", terrain)
 
 
+def documented_summary_fields() -> set[str]:
+    """The ``summary.json`` fields the troubleshooting page explains (its table)."""
+    text = (DOCS / "faq.md").read_text()
+    rows = [line for line in text.splitlines() if line.startswith("| `")]
+    return {name for row in rows for name in re.findall(r"`([a-z_]+)`", row.split("|")[1])}
+
+
 @pytest.mark.parametrize("name", ["index.md", "install.md", "faq.md", "physics.md"])
 def test_the_new_pages_are_in_the_navigation(name: str) -> None:
     assert f": {name}" in (ROOT / "mkdocs.yml").read_text()

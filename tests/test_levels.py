@@ -141,6 +141,9 @@ def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) ->
             "30:60:30", "--engine", "ray", "--out", str(out)]  # fmt: skip
     assert main(argv) == 0
     s = json.loads((out / "summary.json").read_text())
+    from test_docs import documented_summary_fields
+
+    assert set(s) <= documented_summary_fields(), set(s) - documented_summary_fields()
     assert s["start_altitude_m"] == 30.0 and s["climbs"] >= 1
     assert s["start_altitude_chosen_by"] == "--start"
     line = json.loads((out / "flight.geojson").read_text())["features"][0]

@@ -229,6 +229,11 @@ def test_fly_warns_when_most_buildings_near_the_route_are_a_guess(tmp_path: Path
         assert main(argv) == 0
         err = capsys.readouterr().err
         summary = json.loads((out / "summary.json").read_text())
+        from test_docs import documented_summary_fields
+
+        assert set(summary) <= documented_summary_fields(), (
+            set(summary) - documented_summary_fields()
+        )
         assert summary["buildings_near_route"] == 2
         assert summary["buildings_near_route_at_default_height"] == (2 if warned else 0)
         lines = [line for line in err.splitlines() if line.startswith("warning:")]

@@ -236,6 +236,9 @@ def test_fly_cli_writes_files_real_clients_load(tmp_path) -> None:
                  "flight.png", "summary.json"):  # fmt: skip
         assert (out / name).stat().st_size > 0, name
     summary = json.loads((out / "summary.json").read_text())
+    from test_docs import documented_summary_fields
+
+    assert set(summary) <= documented_summary_fields(), set(summary) - documented_summary_fields()
     g = Georef(summary["origin"]["lat"], summary["origin"]["lon"])
     text = (out / "flight.geojson").read_text()
     assert geojson.loads(text).is_valid
