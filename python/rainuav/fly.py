@@ -174,6 +174,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.weather is not None and args.rain_rate:
             raise InvalidInputError("give --rain-rate or --weather, not both")
         check_number("--speed-m-s", args.speed_m_s, 0.1, 100.0, " m/s")
+        if args.default_height is not None:
+            check_number("--default-height", args.default_height, 0.5, 1000.0, " m")
         box = None
         if args.area is not None:
             try:
@@ -263,29 +265,15 @@ def _policy(run: Path) -> tuple[object, str]:
     """A flyer for [`rainuav.world.place.fly_place()`][rainuav.world.place.fly_place]: the network
     the run ``run`` reports,
     flown greedily from the place's start (read as data, refused in one line if it does not
-    read the weather)."""
+    read the weather: ``_check_policy_run`` is the one place that says so)."""
     from rainuav.rl import checkpoint
     from rainuav.rl.collect import greedy_rollouts
     from rainuav.rl.config import check_config, load_config
     from rainuav.rl.evaluation import load_agent
 
-    if not (run / "config.toml").is_file() or not (run / "checkpoint.pt").is_file():
-        raise InvalidInputError(
-            f"--policy {run}: not a rainuav.train run (config.toml, checkpoint.pt)"
-        )
+    _check_policy_run(run)  # main checked it before any map; a direct caller gets it here
     cfg = load_config(run / "config.toml")
     check_config(cfg)
-    if cfg.observation != "weather":
-        raise InvalidInputError(
-            f"--policy {run}: its network sees only its own map (trained with observation = "
-            f"{cfg.observation!r}); fly a network that reads the weather (--observation weather)"
-        )
-    if cfg.altitudes:
-        raise InvalidInputError(
-            f"--policy {run}: its network chooses among the flight levels {cfg.altitudes} m, "
-            "and --policy flies one altitude; fly it with rainuav.evaluate, or give a run "
-            "trained on one altitude"
-        )
     state = checkpoint.load(run / "checkpoint.pt", ("agent", "returns", "train_seconds"))
 
     def fly(env: object) -> tuple[object, bool]:

@@ -350,6 +350,7 @@ def fly_place(
         np.hypot(*(straight.path_m[-1] - np.asarray(place.goal_m))) <= task.tol_m
     )
     cost_straight = -(straight.return_ - task.goal_reward) if straight_arrives else None
+    mission = mission_heights(scn, path)  # once: the summary counts what _write writes
     summary = {
         "flown_by": flown_by, "cost": cost, "optimal_cost": cost_best,
         "excess_over_optimum": (cost - cost_best) / cost_best,
@@ -362,13 +363,13 @@ def fly_place(
             np.arange(1, len(straight.path_m)) * task.move_s) < min_db)),
         "weather_moves": bool(scn.medium.moves),
         "flight_time_s": float(t_s[-1]), "moves": len(path) - 1,
-        "waypoints": len(mission_heights(scn, path)[0]), "min_db": min_db,
+        "waypoints": len(mission[0]), "min_db": min_db,
         "origin": {"lat": place.georef.lat_deg, "lon": place.georef.lon_deg,
                    "projection": place.georef.proj4},
         "area_m": [a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m],
         **(buildings_near_route(scn, path) or {}),
     }  # fmt: skip
-    _write(place, out, ll, path, t_s, sinr, serving, min_db, summary, rm)
+    _write(place, out, ll, path, t_s, sinr, serving, min_db, summary, rm, mission)
     return summary
 
 
@@ -394,10 +395,10 @@ def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, f
 
 def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.ndarray,
            sinr: np.ndarray, serving: np.ndarray, min_db: float, summary: dict,
-           rm: Any) -> None:  # fmt: skip
+           rm: Any, mission: tuple[np.ndarray, Any, float]) -> None:  # fmt: skip
     begin_folder(out, "summary.json")
     alt = place.scenario.area.altitude_m
-    wp_m, heights, home_amsl = mission_heights(place.scenario, path)
+    wp_m, heights, home_amsl = mission  # mission_heights' waypoints, heights and home
     wp = np.stack(place.georef.to_latlon(wp_m[:, 0], wp_m[:, 1]), axis=1)
     home = (float(ll[0, 0]), float(ll[0, 1]))
     props = {
