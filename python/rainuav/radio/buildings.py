@@ -309,10 +309,12 @@ def buildings_near_route(scn: Scenario, path: np.ndarray) -> dict[str, int] | No
     import shapely
 
     line = shapely.LineString(path[:, :2]) if len(path) > 1 else shapely.Point(path[0, :2])
-    near = [f for f in b.footprints if shapely.distance(f.polygon, line) <= NEAR_ROUTE_M]
+    polys = np.asarray([f.polygon for f in b.footprints], dtype=object)
+    near = shapely.distance(polys, line) <= NEAR_ROUTE_M  # every building at once
+    guessed = np.fromiter((f.guessed for f in b.footprints), bool, len(b.footprints))
     return {
-        "buildings_near_route": len(near),
-        "buildings_near_route_at_default_height": sum(f.guessed for f in near),
+        "buildings_near_route": int(near.sum()),
+        "buildings_near_route_at_default_height": int((near & guessed).sum()),
     }
 
 
