@@ -1,14 +1,15 @@
 """What the gallery's examples share: their ``--out`` folder (``gallery/`` under the current
 folder unless given: an example never writes into ``docs/``) and the stamp under each figure
-(the command, the date and the machine)."""
+(the command, the date and the machine: the tutorials' ``made_by``)."""
 
 from __future__ import annotations
 
 import argparse
-import datetime
-import os
-import platform
+import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "docs" / "tutorials"))
+from radiomap_in_rain import made_by  # the stamp every published figure carries
 
 
 def out_dir(doc: str | None, argv: list[str] | None = None) -> Path:
@@ -20,23 +21,10 @@ def out_dir(doc: str | None, argv: list[str] | None = None) -> Path:
     return out
 
 
-def cpu() -> str:
-    """The CPU model and the cores."""
-    name = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                name = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{name}, {os.cpu_count()} cores"
-
-
 def stamp(fig, script: str) -> None:
     """Writes the command, today's date and the machine under ``fig``."""
-    text = f"python examples/gallery/{script}; {datetime.date.today()}; {cpu()}"
     engine = fig.get_layout_engine()
     if engine is not None:  # room for the line below the axes
         engine.set(rect=(0.0, 0.035, 1.0, 0.965))
+    text = made_by(f"python examples/gallery/{script}")
     fig.text(0.01, 0.005, text, fontsize=6, color="0.45", va="bottom")
