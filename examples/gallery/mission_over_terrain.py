@@ -74,17 +74,8 @@ fig = Figure(figsize=(7.2, 4.8), layout="constrained")
 top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
 top.fill_between(s, ground.min() - 20, ground, color="0.75", label="ground (the DEM)")
 top.plot(s, flown, "k-", lw=1.2, label="the flight between waypoints")
-top.plot(
-    np.interp(
-        np.arange(len(wps)),
-        np.arange(len(wps)),
-        [0, *np.cumsum(np.hypot(np.diff(wx), np.diff(wy)))],
-    ),
-    z,
-    "ko",
-    ms=4,
-    label="waypoints",
-)
+at_waypoints = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(wx), np.diff(wy)))])
+top.plot(at_waypoints, z, "ko", ms=4, label="waypoints")
 top.set_ylabel("height above sea level [m]")
 top.legend(fontsize="small", loc="upper left")
 bottom.plot(s, above, "k-", lw=1.0)
