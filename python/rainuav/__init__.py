@@ -3,26 +3,21 @@
 Layers, bottom up (each imports only the ones below it):
 
 - [`rainuav.medium`][rainuav.medium]: what rain does to a radio wave (effective permittivity,
-  specific
-  attenuation, ITU-R P.838).
+  specific attenuation, ITU-R P.838).
 - [`rainuav.antenna`][rainuav.antenna]: antenna gain patterns (3GPP TR 38.901 element and arrays,
-  the
-  paper's Gaussian beam, tables).
+  the paper's Gaussian beam, tables).
 - [`rainuav.pwe`][rainuav.pwe]: the 3-D split-step parabolic-equation march.
 - [`rainuav.radio`][rainuav.radio]: scenarios, presets and radio maps (received power per cell,
-  serving
-  cell, SIR, SINR).
+  serving cell, SIR, SINR).
 - [`rainuav.nav`][rainuav.nav]: the navigation task on any map or maps in time, the Gymnasium
   environment, the exact planner (in space-time), the baselines and the shield (no torch).
 - [`rainuav.world`][rainuav.world]: a world, a signal in time joined to a task, built from one spec
-  for
-  every entry point (``gym.make("rainuav/UAVNav-v0")``, train, evaluate, studies).
+  for every entry point (``gym.make("rainuav/UAVNav-v0")``, train, evaluate, studies).
 - [`rainuav.rl`][rainuav.rl]: the dueling double DQN and its training loop (torch), given a world.
 
 Entry points: ``python -m rainuav.train``, ``rainuav.evaluate``, ``rainuav.radiomap``,
 ``rainuav.validate``, ``rainuav.study``. Physics conventions: ``docs/physics.md`` (time dependence
-``exp(+j w t)``, lossy media have ``Im eps <= 0``).
-"""
+``exp(+j w t)``, lossy media have ``Im eps <= 0``)."""
 
 from __future__ import annotations
 

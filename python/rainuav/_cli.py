@@ -49,12 +49,10 @@ def run(
     on_interrupt: str | Callable[[], str] = "nothing half-written was kept",
 ) -> int:
     """Runs a CLI's ``body`` and returns its exit code:
-    [`InvalidInputError`][rainuav.errors.InvalidInputError] prints
-    ``error: <message>`` and returns 2 (a file that cannot be written,
-    [`WriteError`][rainuav.errors.WriteError]:
-    returns 1); Ctrl-C prints ``interrupted: <on_interrupt>`` (a
-    string, or a function that says what was kept) and returns 130; warnings (the radio-map
-    cache's among them) print as ``warning: <message>``."""
+    [`InvalidInputError`][rainuav.errors.InvalidInputError] prints ``error: <message>`` and returns
+    2 (a file that cannot be written, [`WriteError`][rainuav.errors.WriteError]: returns 1); Ctrl-C
+    prints ``interrupted: <on_interrupt>`` (a string, or a function that says what was kept) and
+    returns 130; warnings (the radio-map cache's among them) print as ``warning: <message>``."""
     with warnings.catch_warnings():
         warnings.simplefilter("default", CacheWarning)
         warnings.showwarning = _one_line

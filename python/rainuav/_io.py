@@ -48,11 +48,10 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
 
 def write_atomic(path: str | os.PathLike[str], write: Callable[[Path], None]) -> Path:
-    """Calls ``write(tmp)`` and renames ``tmp`` onto ``path``; returns ``path``. A write that
-    fails (torch and numpy report a full disk as ``RuntimeError`` or ``OSError``) raises
+    """Calls ``write(tmp)`` and renames ``tmp`` onto ``path``; returns ``path``. A write that fails
+    (torch and numpy report a full disk as ``RuntimeError`` or ``OSError``) raises
     [`WriteError`][rainuav.errors.WriteError] naming the file, the reason and the free space;
-    ``path`` is left as
-    it was."""
+    ``path`` is left as it was."""
     try:
         with atomic_path(path) as tmp:
             write(tmp)

@@ -6,21 +6,17 @@ positive up, degrees. Every pattern is vectorised (numpy broadcasting over the t
 arrays) and returns float64 dBi.
 
 - [`tr38901_element()`][rainuav.antenna.tr38901_element]: the 3GPP TR 38.901 sector element (Table
-  7.3-1: 65 degree
-  half-power widths, SLA_V 30 dB, A_max 30 dB, 8 dBi).
+  7.3-1: 65 degree half-power widths, SLA_V 30 dB, A_max 30 dB, 8 dBi).
 - [`uniform_array()`][rainuav.antenna.uniform_array]: a uniform vertical array of that element
-  (rows, spacing in
-  wavelengths, electrical tilt by phase progression), optionally with columns; gain =
-  element + array factor, normalised so that the pattern integrates to 4 pi over the sphere.
+  (rows, spacing in wavelengths, electrical tilt by phase progression), optionally with columns;
+  gain = element + array factor, normalised so that the pattern integrates to 4 pi over the sphere.
 - [`gaussian()`][rainuav.antenna.gaussian]: the paper's beam (docs/physics.md section 4), optionally
-  with a sidelobe floor
-  (then normalised to 4 pi as well: a floor adds power in every direction).
+  with a sidelobe floor (then normalised to 4 pi as well: a floor adds power in every direction).
 - [`tabulated()`][rainuav.antenna.tabulated]: a measured or computed table, bilinear in (azimuth,
   elevation).
 
 [`sphere_mean()`][rainuav.antenna.sphere_mean] is the mean linear gain over the sphere (1 for a
-lossless pattern).
-"""
+lossless pattern)."""
 
 from __future__ import annotations
 
@@ -136,14 +132,13 @@ def _array_factor(n: int, psi: FloatArray) -> FloatArray:
 
 @dataclass(frozen=True)
 class UniformArray:
-    """A planar array of identical elements: ``rows`` in a vertical column ``spacing``
-    wavelengths apart, steered by phase progression to elevation ``electrical_tilt_deg``
-    (positive up: a 10 degree downtilt is -10), and ``columns`` side by side
-    ``column_spacing`` wavelengths apart (broadside). Gain in dBi:
-    ``element + 10 log10(|AF_v|^2 |AF_h|^2) + norm_db`` with
-    ``|AF_v|^2 = |sum_n exp(j 2 pi n d (sin e - sin e0))|^2 / rows`` (docs/physics.md section 7) and
-    ``|AF_h|^2 = |sum_m exp(j 2 pi m d_h cos e sin ph)|^2 / columns``; ``norm_db`` makes the
-    pattern integrate to 4 pi over the sphere."""
+    """A planar array of identical elements: ``rows`` in a vertical column ``spacing`` wavelengths
+    apart, steered by phase progression to elevation ``electrical_tilt_deg`` (positive up: a 10
+    degree downtilt is -10), and ``columns`` side by side ``column_spacing`` wavelengths apart
+    (broadside). Gain in dBi: ``element + 10 log10(|AF_v|^2 |AF_h|^2) + norm_db`` with ``|AF_v|^2 =
+    |sum_n exp(j 2 pi n d (sin e - sin e0))|^2 / rows`` (docs/physics.md section 7) and ``|AF_h|^2 =
+    |sum_m exp(j 2 pi m d_h cos e sin ph)|^2 / columns``; ``norm_db`` makes the pattern integrate to
+    4 pi over the sphere."""
 
     element: TR38901Element = field(default_factory=TR38901Element)
     rows: int = 8

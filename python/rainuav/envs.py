@@ -1,6 +1,5 @@
 """The registered environments ``rainuav/UAVNav-v0``, a world ([`rainuav.world`][rainuav.world]) as
-a
-Gymnasium environment, and ``rainuav/UAVLevels-v0``, the same with altitude as a decision
+a Gymnasium environment, and ``rainuav/UAVLevels-v0``, the same with altitude as a decision
 ([`make_levels_env()`][rainuav.envs.make_levels_env]).
 
 ``gym.make("rainuav/UAVNav-v0", ...)`` calls [`make_nav_env()`][rainuav.envs.make_nav_env] and
@@ -8,26 +7,21 @@ Gymnasium environment, and ``rainuav/UAVLevels-v0``, the same with altitude as a
 calls [`make_nav_vector_env()`][rainuav.envs.make_nav_vector_env]. Either takes one signal source:
 
 - ``radio_map=`` a [`rainuav.radio.RadioMap`][rainuav.radio.mapdata.RadioMap];
-- ``scenario=`` a preset name (``"paper"``, ``"uma"``, ``"rain_cell"``, ``"urban"``,
-  ``"storm"``) or a [`rainuav.radio.Scenario`][rainuav.radio.scenario.Scenario], with
-  ``rain_rate_mm_h`` (homogeneous
-  rain in place of its weather), ``freq_hz``, ``engine``, ``storm_seed`` (the ``storm``
-  preset's storm) and ``slice_s`` (time between the maps of a weather that moves) optional:
-  the world is built ([`rainuav.world.build_world()`][rainuav.world.build_world]), or taken from the
-  cache
-  (``engine="ray"`` builds any preset in about a second; the default hybrid takes longer);
-  a weather that moves gives an environment whose signal changes in time;
+- ``scenario=`` a preset name (``"paper"``, ``"uma"``, ``"rain_cell"``, ``"urban"``, ``"storm"``) or
+  a [`rainuav.radio.Scenario`][rainuav.radio.scenario.Scenario], with ``rain_rate_mm_h``
+  (homogeneous rain in place of its weather), ``freq_hz``, ``engine``, ``storm_seed`` (the ``storm``
+  preset's storm) and ``slice_s`` (time between the maps of a weather that moves) optional: the
+  world is built ([`rainuav.world.build_world()`][rainuav.world.build_world]), or taken from the
+  cache (``engine="ray"`` builds any preset in about a second; the default hybrid takes longer); a
+  weather that moves gives an environment whose signal changes in time;
 - a raw ``sinr_db`` or ``sir_db`` array with ``extent_m``;
 
 and the task's fields as keywords ([`rainuav.nav.task.NavConfig`][rainuav.nav.task.NavConfig]:
-``signal``,
-``min_db``, ``goal_m``, ``step_m``, ``speed_m_s``, ...), with ``observation="weather"`` (a
-``Dict`` of the SINR around the UAV and over the area, its position, time and destination:
+``signal``, ``min_db``, ``goal_m``, ``step_m``, ``speed_m_s``, ...), with ``observation="weather"``
+(a ``Dict`` of the SINR around the UAV and over the area, its position, time and destination:
 [`rainuav.nav.views`][rainuav.nav.views]) and ``random_goal=True`` (a destination per episode)
-optional.
-Without ``min_db`` a preset's map uses the preset's documented SINR threshold
-(``rainuav.radio.presets.SINR_THRESHOLDS_DB``).
-"""
+optional. Without ``min_db`` a preset's map uses the preset's documented SINR threshold
+(``rainuav.radio.presets.SINR_THRESHOLDS_DB``)."""
 
 from __future__ import annotations
 
@@ -127,8 +121,8 @@ def make_nav_vector_env(
     **kw: Any,
 ) -> UAVNavVectorEnv:
     """``num_envs`` UAVs in one world, batched
-    ([`rainuav.nav.vector.UAVNavVectorEnv`][rainuav.nav.vector.UAVNavVectorEnv]);
-    the other keywords as [`make_nav_env()`][rainuav.envs.make_nav_env]."""
+    ([`rainuav.nav.vector.UAVNavVectorEnv`][rainuav.nav.vector.UAVNavVectorEnv]); the other keywords
+    as [`make_nav_env()`][rainuav.envs.make_nav_env]."""
     check_num_envs(num_envs)  # before the map is built
     return UAVNavVectorEnv(make_nav_env(radio_map, **kw), num_envs, autoreset_mode)
 
@@ -151,16 +145,14 @@ def make_levels_env(
 ) -> Any:
     """``gym.make("rainuav/UAVLevels-v0", scenario="uma", altitudes_m=[30, 60, 90])``: the
     navigation task with altitude as a decision
-    ([`rainuav.nav.levels.UAVLevelsEnv`][rainuav.nav.levels.UAVLevelsEnv])
-    over the scenario's maps at each of ``altitudes_m`` (in time where its weather moves,
-    every ``slice_s`` over the horizon); the weather keywords as
-    [`make_nav_env()`][rainuav.envs.make_nav_env], the
-    task's fields as keywords (``min_db`` by default the preset's SINR threshold), the climb
-    and descent speeds (5 and 3 m/s by default) and the start level (default: the lowest
-    flyable at the start); ``observation="weather"`` shows every level's weather
+    ([`rainuav.nav.levels.UAVLevelsEnv`][rainuav.nav.levels.UAVLevelsEnv]) over the scenario's maps
+    at each of ``altitudes_m`` (in time where its weather moves, every ``slice_s`` over the
+    horizon); the weather keywords as [`make_nav_env()`][rainuav.envs.make_nav_env], the task's
+    fields as keywords (``min_db`` by default the preset's SINR threshold), the climb and descent
+    speeds (5 and 3 m/s by default) and the start level (default: the lowest flyable at the start);
+    ``observation="weather"`` shows every level's weather
     ([`rainuav.nav.views.WeatherView`][rainuav.nav.views.WeatherView], one layer a level) and
-    ``random_goal`` draws a
-    destination per episode."""
+    ``random_goal`` draws a destination per episode."""
     from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, UAVLevelsEnv
     from rainuav.radio.presets import SINR_THRESHOLDS_DB
     from rainuav.world import level_field, make_scenario, series_instants

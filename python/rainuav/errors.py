@@ -1,6 +1,6 @@
 """The exceptions rainuav raises. Everything derives from
-[`RainuavError`][rainuav.errors.RainuavError];
-bad input also derives from `ValueError`, so ``except ValueError`` keeps working."""
+[`RainuavError`][rainuav.errors.RainuavError]; bad input also derives from `ValueError`, so ``except
+ValueError`` keeps working."""
 
 from __future__ import annotations
 

@@ -11,24 +11,21 @@ default; ``--random-goals``: each start to its own destination) with every basel
 writes the per-storm figures and their mean ([`rainuav.rl.storm_eval`][rainuav.rl.storm_eval]) into
 ``RUN_DIR/eval_storms_A-B`` with ``evaluation_storm_flights.png`` of the first storm.
 
-Loads the run's ``config.toml`` and ``checkpoint.pt`` and flies the network the run reports
-(the weight average of the last episodes, the final one with ``average_from = 1``, or with
-``keep_best`` the best on validation; ``--online``: the last online network) from fixed
-starts, against the exact optimum of the map flown and the straight line
+Loads the run's ``config.toml`` and ``checkpoint.pt`` and flies the network the run reports (the
+weight average of the last episodes, the final one with ``average_from = 1``, or with ``keep_best``
+the best on validation; ``--online``: the last online network) from fixed starts, against the exact
+optimum of the map flown and the straight line
 ([`rainuav.rl.evaluation.evaluate_saved_run()`][rainuav.rl.evaluation.evaluate_saved_run]).
-``--scenario``, ``--rain-rate``,
-``--engine`` and ``--storm-seed`` fly it in another world (the run's spec with those
-changed, built or taken from the cache: [`rainuav.world.build_world()`][rainuav.world.build_world]):
-the paper's
-central comparison, a policy trained in clear air flown in rain against one trained in rain,
-or a network trained on one storm flown through another. In a weather that moves, the plan of
-the weather at take-off and re-planning are reported beside it. Writes
-``evaluation.json`` and ``evaluation_trajectories.png`` (the network's flights and the exact
-optimum's from the same starts) into ``--out`` (default: the run's folder for its own map,
-``RUN_DIR/eval_<scenario>_<rain>mmh`` for another; with ``--online``, ``RUN_DIR/eval_online``
-and ``..._online``). The run's own files are never touched. ``evaluation.json`` is written
-last: a folder holding it is complete.
-"""
+``--scenario``, ``--rain-rate``, ``--engine`` and ``--storm-seed`` fly it in another world (the
+run's spec with those changed, built or taken from the cache:
+[`rainuav.world.build_world()`][rainuav.world.build_world]): the paper's central comparison, a
+policy trained in clear air flown in rain against one trained in rain, or a network trained on one
+storm flown through another. In a weather that moves, the plan of the weather at take-off and
+re-planning are reported beside it. Writes ``evaluation.json`` and ``evaluation_trajectories.png``
+(the network's flights and the exact optimum's from the same starts) into ``--out`` (default: the
+run's folder for its own map, ``RUN_DIR/eval_<scenario>_<rain>mmh`` for another; with ``--online``,
+``RUN_DIR/eval_online`` and ``..._online``). The run's own files are never touched.
+``evaluation.json`` is written last: a folder holding it is complete."""
 
 from __future__ import annotations
 
@@ -144,8 +141,8 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def _evaluate_storms(args: argparse.Namespace) -> int:
-    """``--storm-seeds`` (every storm of the range) or ``--random-goals`` (in the one world
-    the flags give):
+    """``--storm-seeds`` (every storm of the range) or ``--random-goals`` (in the one world the
+    flags give):
     [`rainuav.rl.storm_eval.evaluate_worlds()`][rainuav.rl.storm_eval.evaluate_worlds]."""
     from rainuav.errors import InvalidInputError
     from rainuav.nav.levels import UAVLevelsEnv

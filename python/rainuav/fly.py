@@ -5,29 +5,26 @@
     python -m rainuav.fly --sites examples/sites.csv --start 47.3700,8.5400 \\
         --goal 47.3830,8.5570 --terrain dem.tif --out runs/flight
 
-Sites from a CSV or GeoJSON file (one row per sector: ``site_id, lat, lon, height_m,
-azimuth_deg, electrical_tilt_deg, tx_power_dbm``, optional ``antenna, rows,
-mechanical_tilt_deg, freq_ghz``; azimuths clockwise from north, tilts positive down, as
-operators give them: [`rainuav.radio.sites`][rainuav.radio.sites]), the start and destination as
-``LAT,LON``
-(degrees, WGS 84; south and west negative), the flight altitude, the carrier and homogeneous
-rain (``--rain-rate``) or a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with
-one band per instant or a folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several
-instants give a weather that moves and the exact plan in space-time:
-[`rainuav.radio.radar`][rainuav.radio.radar]). The area is the box around the start, the destination
-and the
-sites with a 300 m margin (at most 10 km x 10 km), in metres of an azimuthal equidistant
-projection centred on it ([`rainuav.geo`][rainuav.geo]). Plans the exact optimum
-(``rainuav.nav.planner``) and writes into ``--out``:
+Sites from a CSV or GeoJSON file (one row per sector: ``site_id, lat, lon, height_m, azimuth_deg,
+electrical_tilt_deg, tx_power_dbm``, optional ``antenna, rows, mechanical_tilt_deg, freq_ghz``;
+azimuths clockwise from north, tilts positive down, as operators give them:
+[`rainuav.radio.sites`][rainuav.radio.sites]), the start and destination as ``LAT,LON`` (degrees,
+WGS 84; south and west negative), the flight altitude, the carrier and homogeneous rain
+(``--rain-rate``) or a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with one band per
+instant or a folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several instants give a
+weather that moves and the exact plan in space-time: [`rainuav.radio.radar`][rainuav.radio.radar]).
+The area is the box around the start, the destination and the sites with a 300 m margin (at most 10
+km x 10 km), in metres of an azimuthal equidistant projection centred on it
+([`rainuav.geo`][rainuav.geo]). Plans the exact optimum (``rainuav.nav.planner``) and writes into
+``--out``:
 
 - ``flight.geojson`` (the path, WGS 84, with per-vertex time, SINR, serving cell and outage;
   the sites as points), ``flight.kml`` (Google Earth, altitude above the ground);
-- ``mission.plan`` (QGroundControl) and ``mission.waypoints`` (QGC WPL 110): take-off, the
-  path's corners at the flight altitude relative to home, landing; over ``--terrain``, the
-  waypoints above mean sea level (MAVLink's global frame), enough of them that every straight
-  leg between two holds the planned height above the ground within 5 m and never passes
-  closer to the ground than the clearance
-  ([`rainuav.missions.terrain_waypoints()`][rainuav.missions.terrain_waypoints]);
+- ``mission.plan`` (QGroundControl) and ``mission.waypoints`` (QGC WPL 110): take-off, the path's
+  corners at the flight altitude relative to home, landing; over ``--terrain``, the waypoints above
+  mean sea level (MAVLink's global frame), enough of them that every straight leg between two holds
+  the planned height above the ground within 5 m and never passes closer to the ground than the
+  clearance ([`rainuav.missions.terrain_waypoints()`][rainuav.missions.terrain_waypoints]);
 - ``flight.png`` (the path over the SINR map with the sites, the buildings and the pixels the
   UAV may not fly) and ``summary.json`` (cost, outage share and flight time, against the
   straight line; the fields: the documentation's troubleshooting page).
@@ -35,26 +32,22 @@ projection centred on it ([`rainuav.geo`][rainuav.geo]). Plans the exact optimum
 ``summary.json`` is written last: a folder without it holds a flight that was stopped part
 way (an earlier run's ``summary.json`` is removed before the new files are written).
 
-``--terrain DEM.tif`` puts the place on its ground (a GeoTIFF in any CRS, heights in metres
-above sea level, as SRTM or Copernicus GLO-30 deliver it:
-[`rainuav.ground.dem`][rainuav.ground.dem]): the
-map is made over it (the march over the ground, the rays over each path's profile), the
-altitude is above the terrain under the UAV (``--altitude-reference ground``, the default)
-or above sea level (``msl``), and the flight keeps out of the pixels where terrain comes
-within 10 m of it; a start or destination there is refused.
+``--terrain DEM.tif`` puts the place on its ground (a GeoTIFF in any CRS, heights in metres above
+sea level, as SRTM or Copernicus GLO-30 deliver it: [`rainuav.ground.dem`][rainuav.ground.dem]): the
+map is made over it (the march over the ground, the rays over each path's profile), the altitude is
+above the terrain under the UAV (``--altitude-reference ground``, the default) or above sea level
+(``msl``), and the flight keeps out of the pixels where terrain comes within 10 m of it; a start or
+destination there is refused.
 
 ``--footprints FILE.geojson`` adds buildings (OpenStreetMap's footprints and height tags:
 [`rainuav.ground.footprints`][rainuav.ground.footprints]) standing on that ground: their roofs
-diffract, their walls
-reflect, and the flight keeps out of every pixel a building overlaps that reaches within
-10 m of it.
+diffract, their walls reflect, and the flight keeps out of every pixel a building overlaps that
+reaches within 10 m of it.
 
-A planning aid, not an airworthiness tool: check the airspace, obstacles the map does not
-know (without ``--terrain`` it assumes flat open ground; a DEM leaves out vegetation and
-clutter, footprints leave out masts, cranes and trees), and the link budget's assumptions
-before flying. Needs the ``geo`` extra
-(``pip install '.[geo]' from the rainuav clone``).
-"""
+A planning aid, not an airworthiness tool: check the airspace, obstacles the map does not know
+(without ``--terrain`` it assumes flat open ground; a DEM leaves out vegetation and clutter,
+footprints leave out masts, cranes and trees), and the link budget's assumptions before flying.
+Needs the ``geo`` extra (``pip install '.[geo]' from the rainuav clone``). """
 
 from __future__ import annotations
 
@@ -263,9 +256,8 @@ def _check_policy_run(run: Path) -> None:
 
 def _policy(run: Path) -> tuple[object, str]:
     """A flyer for [`rainuav.world.place.fly_place()`][rainuav.world.place.fly_place]: the network
-    the run ``run`` reports,
-    flown greedily from the place's start (read as data, refused in one line if it does not
-    read the weather: ``_check_policy_run`` is the one place that says so)."""
+    the run ``run`` reports, flown greedily from the place's start (read as data, refused in one
+    line if it does not read the weather: ``_check_policy_run`` is the one place that says so)."""
     from rainuav.rl import checkpoint
     from rainuav.rl.collect import greedy_rollouts
     from rainuav.rl.config import check_config, load_config

@@ -2,13 +2,12 @@
 
 A scenario's positions are metres east (``x``) and north (``y``) of an origin. A
 [`Georef`][rainuav.geo.Georef] ties that origin to a latitude and longitude (WGS 84) through an
-azimuthal
-equidistant projection centred on it (PROJ's ``aeqd``, through pyproj): distances and
-bearings from the origin are exact, and over the few kilometres of a drone's flight the scale
-error elsewhere stays below 1e-6 (it grows as (d / R)^2 / 6 with the distance d from the
-origin: 4e-7 at 10 km), so a scenario's metres are ground metres. A UTM zone would serve as well
-inside one zone, but breaks at its edges and is not centred on the area; a plain
-equirectangular approximation errs by metres over kilometres.
+azimuthal equidistant projection centred on it (PROJ's ``aeqd``, through pyproj): distances and
+bearings from the origin are exact, and over the few kilometres of a drone's flight the scale error
+elsewhere stays below 1e-6 (it grows as (d / R)^2 / 6 with the distance d from the origin: 4e-7 at
+10 km), so a scenario's metres are ground metres. A UTM zone would serve as well inside one zone,
+but breaks at its edges and is not centred on the area; a plain equirectangular approximation errs
+by metres over kilometres.
 
 Needs pyproj (the ``geo`` extra: ``pip install '.[geo]' from the rainuav clone``).
 """

@@ -255,10 +255,9 @@ def itu_p838(
 class RainMedium:
     """The rain medium at one frequency, for many rain rates.
 
-    Everything that depends only on the frequency and the options (Mie amplitudes on the
-    quadrature nodes) is computed once here, so evaluating a map of rain rates is a cheap
-    pass over ~100 nodes per value. Keywords as in
-    [`effective_permittivity()`][rainuav.medium.effective_permittivity].
+    Everything that depends only on the frequency and the options (Mie amplitudes on the quadrature
+    nodes) is computed once here, so evaluating a map of rain rates is a cheap pass over ~100 nodes
+    per value. Keywords as in [`effective_permittivity()`][rainuav.medium.effective_permittivity].
     """
 
     def __init__(

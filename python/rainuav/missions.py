@@ -2,38 +2,32 @@
 station or a GIS loads.
 
 - [`corners()`][rainuav.missions.corners]: the vertices of a lattice path where its direction
-  changes (and its two
-  ends). Flying straight between them is the same path, move for move
+  changes (and its two ends). Flying straight between them is the same path, move for move
   ([`expand()`][rainuav.missions.expand]).
 - [`wpl_text()`][rainuav.missions.wpl_text]: QGroundControl's plain-text mission (``QGC WPL 110``,
-  as MAVLink documents
-  it: tab-separated, ``INDEX CURRENT FRAME COMMAND P1 P2 P3 P4 LAT LON ALT AUTOCONTINUE``):
-  home, take-off, the waypoints at the flight altitude relative to home, landing.
+  as MAVLink documents it: tab-separated, ``INDEX CURRENT FRAME COMMAND P1 P2 P3 P4 LAT LON ALT
+  AUTOCONTINUE``): home, take-off, the waypoints at the flight altitude relative to home, landing.
 - [`plan_dict()`][rainuav.missions.plan_dict]: the same mission as a QGroundControl ``.plan`` (JSON,
-  the fields QGC's
-  developer guide lists: ``fileType``, ``version``, ``groundStation``, ``mission`` with
-  ``items``, ``plannedHomePosition``, ``firmwareType``, ``vehicleType``, ``cruiseSpeed``,
+  the fields QGC's developer guide lists: ``fileType``, ``version``, ``groundStation``, ``mission``
+  with ``items``, ``plannedHomePosition``, ``firmwareType``, ``vehicleType``, ``cruiseSpeed``,
   ``hoverSpeed``, ``globalPlanAltitudeMode``; ``geoFence`` and ``rallyPoints`` empty).
 - [`geojson_dict()`][rainuav.missions.geojson_dict]: the path as a GeoJSON ``LineString`` (RFC 7946:
-  longitude, latitude,
-  altitude) with per-vertex properties, and the sites as points.
+  longitude, latitude, altitude) with per-vertex properties, and the sites as points.
 - [`kml_text()`][rainuav.missions.kml_text]: the same for Google Earth (altitude relative to the
   ground).
 - Over terrain ([`terrain_waypoints()`][rainuav.missions.terrain_waypoints]): the waypoints carry
-  altitudes above mean sea level
-  (MAVLink's ``MAV_FRAME_GLOBAL``, QGroundControl's absolute altitude mode), the terrain under
-  each plus the flight altitude, and there are enough of them that the straight line the
-  autopilot flies between two holds the planned height above the ground within
+  altitudes above mean sea level (MAVLink's ``MAV_FRAME_GLOBAL``, QGroundControl's absolute altitude
+  mode), the terrain under each plus the flight altitude, and there are enough of them that the
+  straight line the autopilot flies between two holds the planned height above the ground within
   [`HOLD_M`][rainuav.missions.HOLD_M] along the whole leg (checked
-  [`SAMPLES_PER_MOVE`][rainuav.missions.SAMPLES_PER_MOVE] times a move against
-  the DEM) and never passes closer to the terrain and obstacles under the path than the
-  clearance. Above sea level rather than MAVLink's terrain frame
-  (``MAV_FRAME_GLOBAL_TERRAIN_ALT``): the autopilot then flies the heights the map was made
-  for, over the DEM the map was made on, not those of its own terrain database.
+  [`SAMPLES_PER_MOVE`][rainuav.missions.SAMPLES_PER_MOVE] times a move against the DEM) and never
+  passes closer to the terrain and obstacles under the path than the clearance. Above sea level
+  rather than MAVLink's terrain frame (``MAV_FRAME_GLOBAL_TERRAIN_ALT``): the autopilot then flies
+  the heights the map was made for, over the DEM the map was made on, not those of its own terrain
+  database.
 
 Coordinates in: latitude and longitude in degrees (WGS 84), from
-[`rainuav.geo.Georef`][rainuav.geo.Georef].
-"""
+[`rainuav.geo.Georef`][rainuav.geo.Georef]."""
 
 from __future__ import annotations
 
@@ -86,9 +80,8 @@ def corners(path: Any) -> np.ndarray:
 
 
 def expand(points: Any, step_m: float) -> np.ndarray:
-    """The lattice path that flies straight between ``points`` (K, 2) in moves of
-    ``step_m`` (each leg a whole number of moves along one axis, as
-    [`corners()`][rainuav.missions.corners] leaves
+    """The lattice path that flies straight between ``points`` (K, 2) in moves of ``step_m`` (each
+    leg a whole number of moves along one axis, as [`corners()`][rainuav.missions.corners] leaves
     them)."""
     pts = np.asarray(points, dtype=np.float64)
     out = [pts[0]]
@@ -99,10 +92,10 @@ def expand(points: Any, step_m: float) -> np.ndarray:
 
 
 HOLD_M = 5.0
-"""Over terrain, how far the straight line between two waypoints may stray from the planned
-height above the ground at any point of the leg, m (checked every
-[`SAMPLES_PER_MOVE`][rainuav.missions.SAMPLES_PER_MOVE]-th
-of a move: the height the map was made for, flown within this)."""
+"""Over terrain, how far the straight line between two waypoints may stray from the planned height
+above the ground at any point of the leg, m (checked every
+[`SAMPLES_PER_MOVE`][rainuav.missions.SAMPLES_PER_MOVE]-th of a move: the height the map was made
+for, flown within this)."""
 SAMPLES_PER_MOVE = 4
 """The points of each move where a leg is checked against the ground
 ([`densify()`][rainuav.missions.densify])."""
@@ -126,12 +119,11 @@ def terrain_waypoints(
 ) -> np.ndarray:
     """Indices of the waypoints that fly ``path`` (N, 2 or 3) over terrain: its corners
     ([`corners()`][rainuav.missions.corners]), and within each straight leg as few more as keep the
-    straight line
-    between two waypoints' heights (``height_amsl_m`` (N,), the planned flight height over
-    each vertex) within ``hold_m`` of the planned height (None: any) and at least
-    ``clearance_m`` above ``top_amsl_m`` (N,), the highest terrain or obstacle under each
-    vertex (greedy: each waypoint as far along the leg as the checks allow). Give a path
-    sampled finely ([`densify()`][rainuav.missions.densify]): the checks are at its vertices."""
+    straight line between two waypoints' heights (``height_amsl_m`` (N,), the planned flight height
+    over each vertex) within ``hold_m`` of the planned height (None: any) and at least
+    ``clearance_m`` above ``top_amsl_m`` (N,), the highest terrain or obstacle under each vertex
+    (greedy: each waypoint as far along the leg as the checks allow). Give a path sampled finely
+    ([`densify()`][rainuav.missions.densify]): the checks are at its vertices."""
     z = np.asarray(height_amsl_m, dtype=np.float64)
     top = np.asarray(top_amsl_m, dtype=np.float64)
     turns = corners(path)
@@ -210,8 +202,7 @@ def wpl_text(
 ) -> str:
     """The mission as ``QGC WPL 110`` text: item 0 the home position (frame global, at
     ``home_amsl_m``), then [`mission_items()`][rainuav.missions.mission_items] (yaw, param 4,
-    written 0: keep the
-    heading)."""
+    written 0: keep the heading)."""
     rows = [[0, 1, MAV_FRAME_GLOBAL, MAV_CMD_NAV_WAYPOINT, 0, 0, 0, 0, home[0], home[1],
              float(home_amsl_m), 1]]  # fmt: skip
     items = mission_items(home, waypoints, altitude_m, altitudes_amsl_m)

@@ -362,13 +362,12 @@ def pattern_source(
     """Aperture synthesised from a tabulated antenna power pattern.
 
     ``gain_db[i, j]`` is the gain at ``azimuth_deg[i]`` (cross-range angle, increasing) and
-    ``elevation_deg[j]`` (increasing), relative to boresight; ``tilt_deg`` tilts boresight up.
-    The aperture's angular spectrum is the amplitude pattern ``10^(gain_db / 20)`` sampled at
-    ``sin(angle) = k / k0`` (bilinear, zero outside the table and for evanescent waves),
-    shifted to ``height_m`` and brought to the aperture plane by an inverse FFT. Returns
-    (nx, ny) complex64 with ``x = (ix - nx//2) dx``, ``y = iy dy``, like
-    [`gaussian_beam()`][rainuav.pwe.gaussian_beam].
-    """
+    ``elevation_deg[j]`` (increasing), relative to boresight; ``tilt_deg`` tilts boresight up. The
+    aperture's angular spectrum is the amplitude pattern ``10^(gain_db / 20)`` sampled at
+    ``sin(angle) = k / k0`` (bilinear, zero outside the table and for evanescent waves), shifted to
+    ``height_m`` and brought to the aperture plane by an inverse FFT. Returns (nx, ny) complex64
+    with ``x = (ix - nx//2) dx``, ``y = iy dy``, like
+    [`gaussian_beam()`][rainuav.pwe.gaussian_beam]."""
     az = np.asarray(azimuth_deg, dtype=np.float64)
     el = np.asarray(elevation_deg, dtype=np.float64)
     g = np.asarray(gain_db, dtype=np.float64)

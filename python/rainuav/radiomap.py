@@ -9,16 +9,14 @@
     python -m rainuav.radiomap --scenario uma --engine ray --altitudes 30:120:15 --out maps/
     python -m rainuav.radiomap --clear-cache
 
-Writes the PNGs first (and, for a georeferenced scenario, ``radiomap.tif``: SINR, the serving
-cell's power, the serving cell and the not-flyable pixels for a GIS,
+Writes the PNGs first (and, for a georeferenced scenario, ``radiomap.tif``: SINR, the serving cell's
+power, the serving cell and the not-flyable pixels for a GIS,
 [`rainuav.radio.maptiff`][rainuav.radio.maptiff]) and ``radiomap.npz`` (``radiomap_series.npz`` for
-maps in time) last:
-a folder holding it is complete (an earlier run's copy is removed before the new files are
-written). At several heights (``--altitudes``, or a scenario with ``area.altitudes_m``): per
-level ``sinr_<A>m.png``, ``radiomap_<A>m.npz`` and for a georeferenced scenario
-``radiomap_<A>m.tif``, then ``radiomap_levels.json`` (the levels, their files and outage
-shares) last. The library lives in [`rainuav.radio`][rainuav.radio].
-"""
+maps in time) last: a folder holding it is complete (an earlier run's copy is removed before the new
+files are written). At several heights (``--altitudes``, or a scenario with ``area.altitudes_m``):
+per level ``sinr_<A>m.png``, ``radiomap_<A>m.npz`` and for a georeferenced scenario
+``radiomap_<A>m.tif``, then ``radiomap_levels.json`` (the levels, their files and outage shares)
+last. The library lives in [`rainuav.radio`][rainuav.radio]."""
 
 from __future__ import annotations
 

@@ -1,17 +1,14 @@
-"""``python -m rainuav.study NAME --out DIR``: run a study (a built-in one, or a study TOML
-file; the format: the Studies page of the documentation,
-[`rainuav.studies.spec`][rainuav.studies.spec]).
+"""``python -m rainuav.study NAME --out DIR``: run a study (a built-in one, or a study TOML file;
+the format: the Studies page of the documentation, [`rainuav.studies.spec`][rainuav.studies.spec]).
 
-Every case runs in its own folder ``DIR/cases/<case>`` (``result.json`` written last); a
-rerun skips finished cases, so an interrupted study resumes. ``--workers`` cases run at once
-in spawned processes (default: the cores, at most the cases); ``--ray ADDRESS`` runs each
-case as a task on a Ray cluster instead (``pip install '.[ray]' from the rainuav clone``).
-``--quick`` applies the
-study's ``[quick]`` changes (short trainings, the ray engine). Writes ``report.md`` and then,
-last, ``results.csv`` in ``DIR``: a study folder holding ``results.csv`` is complete. The
-study file is checked before any work starts: an unknown field, an empty axis or a value out
-of range is refused with the field named (exit 2).
-"""
+Every case runs in its own folder ``DIR/cases/<case>`` (``result.json`` written last); a rerun skips
+finished cases, so an interrupted study resumes. ``--workers`` cases run at once in spawned
+processes (default: the cores, at most the cases); ``--ray ADDRESS`` runs each case as a task on a
+Ray cluster instead (``pip install '.[ray]' from the rainuav clone``). ``--quick`` applies the
+study's ``[quick]`` changes (short trainings, the ray engine). Writes ``report.md`` and then, last,
+``results.csv`` in ``DIR``: a study folder holding ``results.csv`` is complete. The study file is
+checked before any work starts: an unknown field, an empty axis or a value out of range is refused
+with the field named (exit 2)."""
 
 from __future__ import annotations
 

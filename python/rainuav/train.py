@@ -1,17 +1,16 @@
 """``python -m rainuav.train``: learn to fly from any start to the destination (the main job).
 
-With no arguments: the paper's scenario in its own weather (25 mm/h; radio map built or taken
-from the cache), the default learner (the paper's Algorithm 1 with measured departures from
-its Table I, each listed on the Learning page; ``--preset paper`` runs Algorithm 1 and Table I
-literally), seed 0, results in ``runs/paper``. Every flag is a
-field of [`rainuav.rl.config.TrainConfig`][rainuav.rl.config.TrainConfig] or
-[`rainuav.rl.config.DQNConfig`][rainuav.rl.config.DQNConfig]
-(``--help`` lists them); ``--config run.toml`` reads them from a file, and flags given beside
-it win. ``--resume`` continues an interrupted run from its checkpoint (same configuration).
-The world (map or maps in time, and the task) is built here from the configuration's world
-part ([`rainuav.world.build_world()`][rainuav.world.build_world]) and handed to the job,
-[`rainuav.rl.loop.train()`][rainuav.rl.loop.train].
-"""
+With no arguments: the paper's scenario in its own weather (25 mm/h; radio map built or taken from
+the cache), the default learner (the paper's Algorithm 1 with measured departures from its Table I,
+each listed on the Learning page; ``--preset paper`` runs Algorithm 1 and Table I literally), seed
+0, results in ``runs/paper``. Every flag is a field of
+[`rainuav.rl.config.TrainConfig`][rainuav.rl.config.TrainConfig] or
+[`rainuav.rl.config.DQNConfig`][rainuav.rl.config.DQNConfig] (``--help`` lists them); ``--config
+run.toml`` reads them from a file, and flags given beside it win. ``--resume`` continues an
+interrupted run from its checkpoint (same configuration). The world (map or maps in time, and the
+task) is built here from the configuration's world part
+([`rainuav.world.build_world()`][rainuav.world.build_world]) and handed to the job,
+[`rainuav.rl.loop.train()`][rainuav.rl.loop.train]."""
 
 from __future__ import annotations
 

@@ -2,20 +2,18 @@
 deliver it (EPSG:4326, metres above the geoid, int16 or float32, a nodata value), read with
 rasterio (GDAL) and pyproj onto the nodes of a scenario's area.
 
-**How it is resampled.** The area's nodes (a regular grid at most 10 m apart that holds every
-pixel corner) are projected into the DEM's CRS (local metres -> latitude and longitude through
-the scenario's [`rainuav.geo.Georef`][rainuav.geo.Georef] -> the DEM's CRS) and read **bilinearly
-between the
-DEM's cell centres** (GDAL's convention: a value belongs to its cell's centre). Between the
-nodes the ray engine is bilinear again (``rainuav_core::rays::Raster``). Only the window of the
-file over the area is read, and its memory is checked before reading, so a continent-sized
-file costs what the area costs.
+**How it is resampled.** The area's nodes (a regular grid at most 10 m apart that holds every pixel
+corner) are projected into the DEM's CRS (local metres -> latitude and longitude through the
+scenario's [`rainuav.geo.Georef`][rainuav.geo.Georef] -> the DEM's CRS) and read **bilinearly
+between the DEM's cell centres** (GDAL's convention: a value belongs to its cell's centre). Between
+the nodes the ray engine is bilinear again (``rainuav_core::rays::Raster``). Only the window of the
+file over the area is read, and its memory is checked before reading, so a continent-sized file
+costs what the area costs.
 
-**Refused, in one line naming the file:** a file that is not a raster; no CRS; a rotated or
-flipped transform; a band unit that is not metres (where the file states one); the area not
-inside the file; nodata on a cell the area reads; heights outside
-[`HEIGHT_RANGE_M`][rainuav.ground.dem.HEIGHT_RANGE_M]; a
-window too big for the memory.
+**Refused, in one line naming the file:** a file that is not a raster; no CRS; a rotated or flipped
+transform; a band unit that is not metres (where the file states one); the area not inside the file;
+nodata on a cell the area reads; heights outside
+[`HEIGHT_RANGE_M`][rainuav.ground.dem.HEIGHT_RANGE_M]; a window too big for the memory.
 
 Needs the ``geo`` extra (pyproj, rasterio).
 """
@@ -161,10 +159,9 @@ class Terrain:
         )
 
     def pixel_max(self, shape: tuple[int, int]) -> np.ndarray:
-        """The highest terrain within each pixel of the map of ``shape`` (H, W) whose nodes
-        these are ([`terrain_nodes()`][rainuav.ground.dem.terrain_nodes]): the largest node on the
-        pixel's closed square
-        (bilinear between nodes has its extremes at nodes)."""
+        """The highest terrain within each pixel of the map of ``shape`` (H, W) whose nodes these
+        are ([`terrain_nodes()`][rainuav.ground.dem.terrain_nodes]): the largest node on the pixel's
+        closed square (bilinear between nodes has its extremes at nodes)."""
         hh, ww = shape
         h = self.heights_m
         k = (h.shape[1] - 1) // ww
@@ -190,9 +187,9 @@ def read_dem(
     shape: tuple[int, int],
 ) -> Terrain:
     """The terrain of the DEM GeoTIFF at ``path`` on the nodes
-    ([`terrain_nodes()`][rainuav.ground.dem.terrain_nodes]) of the
-    area ``bounds`` (x_min, x_max, y_min, y_max: metres of ``georef``'s local frame) mapped as
-    ``shape`` (H, W) pixels (module docstring: how, and what is refused)."""
+    ([`terrain_nodes()`][rainuav.ground.dem.terrain_nodes]) of the area ``bounds`` (x_min, x_max,
+    y_min, y_max: metres of ``georef``'s local frame) mapped as ``shape`` (H, W) pixels (module
+    docstring: how, and what is refused)."""
     from rasterio.windows import Window
     from scipy.ndimage import map_coordinates
 

@@ -7,15 +7,14 @@ scenario's local east/north metres. An OpenStreetMap extract exported with
 **Heights, as OpenStreetMap's wiki defines them** (Key:height, Key:building:levels and Simple 3D
 Buildings). A feature's roof is ``height`` (metres), else ``building:levels`` storeys of
 [`STOREY_HEIGHT_M`][rainuav.ground.footprints.STOREY_HEIGHT_M] plus its roof (``roof:height``, else
-``roof:levels`` storeys;
-``building:levels=0`` is a real value: no storey below the roof). With neither, a feature
-raised off the ground (``min_height`` > 0: a part standing on another, such as a dome) has its
-roof at ``min_height`` plus its ``roof:height`` (else plus one storey); one on the ground
-stands at the default height ([`DEFAULT_HEIGHT_M`][rainuav.ground.footprints.DEFAULT_HEIGHT_M],
-``[footprints] default_height_m``,
-counted: its clearance is a guess). The walls end ``roof:height`` below the roof (a pitched
-roof's eaves). The prism starts at ``min_height`` (else ``building:min_level`` storeys; default
-0: on the ground). Heights are above the terrain under the building.
+``roof:levels`` storeys; ``building:levels=0`` is a real value: no storey below the roof). With
+neither, a feature raised off the ground (``min_height`` > 0: a part standing on another, such as a
+dome) has its roof at ``min_height`` plus its ``roof:height`` (else plus one storey); one on the
+ground stands at the default height
+([`DEFAULT_HEIGHT_M`][rainuav.ground.footprints.DEFAULT_HEIGHT_M], ``[footprints]
+default_height_m``, counted: its clearance is a guess). The walls end ``roof:height`` below the roof
+(a pitched roof's eaves). The prism starts at ``min_height`` (else ``building:min_level`` storeys;
+default 0: on the ground). Heights are above the terrain under the building.
 
 **Values as mappers write them** ([`parse_length()`][rainuav.ground.footprints.parse_length],
 [`parse_levels()`][rainuav.ground.footprints.parse_levels]): the first of a
@@ -23,33 +22,28 @@ list (``12;15``), the upper end of a range (``3-4``), an approximate value (``~2
 (``20 m``, ``40 ft``, ``40'``, ``12'6"``) and a decimal comma (``12,5``: one rule for lengths
 and storeys).
 
-**Outlines and parts.** Where a building's outline (``building=*``) and its Simple 3D
-Buildings parts (``building:part=*``) overlap, the parts give the shape: the outline is kept
-only where it has no parts (counted in
+**Outlines and parts.** Where a building's outline (``building=*``) and its Simple 3D Buildings
+parts (``building:part=*``) overlap, the parts give the shape: the outline is kept only where it has
+no parts (counted in
 [`Footprints.outlines_cut`][rainuav.ground.footprints.Footprints.outlines_cut]).
 
-**What is kept.** Features wholly outside the area are skipped and counted, and so is a
-feature no value of which can be read (a height that is not a length, negative or over
+**What is kept.** Features wholly outside the area are skipped and counted, and so is a feature no
+value of which can be read (a height that is not a length, negative or over
 [`MAX_HEIGHT_M`][rainuav.ground.footprints.MAX_HEIGHT_M], a bottom at or above its roof, coordinates
-off the Earth, a geometry
-shapely cannot build): [`Footprints.skipped`][rainuav.ground.footprints.Footprints.skipped] names
-each, and the summary the first few.
-Features across the area's edge are clipped to it. Geometries with no polygon are skipped and
-counted. Self-intersecting polygons are repaired with shapely's ``make_valid`` (its polygonal
-parts kept) and counted. The material is ``building:material`` where it names one of ITU-R
-P.2040's materials ([`MATERIALS`][rainuav.ground.footprints.MATERIALS]; OpenStreetMap's synonyms in
-[`OSM_MATERIALS`][rainuav.ground.footprints.OSM_MATERIALS]), else
-the default (concrete).
+off the Earth, a geometry shapely cannot build):
+[`Footprints.skipped`][rainuav.ground.footprints.Footprints.skipped] names each, and the summary the
+first few. Features across the area's edge are clipped to it. Geometries with no polygon are skipped
+and counted. Self-intersecting polygons are repaired with shapely's ``make_valid`` (its polygonal
+parts kept) and counted. The material is ``building:material`` where it names one of ITU-R P.2040's
+materials ([`MATERIALS`][rainuav.ground.footprints.MATERIALS]; OpenStreetMap's synonyms in
+[`OSM_MATERIALS`][rainuav.ground.footprints.OSM_MATERIALS]), else the default (concrete).
 
 **What is refused** (an [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file): a
-file
-that is not JSON, not a FeatureCollection, in a ``crs`` other than WGS 84, with more than
+file that is not JSON, not a FeatureCollection, in a ``crs`` other than WGS 84, with more than
 [`MAX_FEATURES`][rainuav.ground.footprints.MAX_FEATURES] features; a file that yields no building
-(naming the first feature
-skipped and why), and one whose every feature lies outside the area (naming both extents:
-latitude and longitude swapped, or another city). One unreadable feature never refuses a
-file that has buildings.
-"""
+(naming the first feature skipped and why), and one whose every feature lies outside the area
+(naming both extents: latitude and longitude swapped, or another city). One unreadable feature never
+refuses a file that has buildings."""
 
 from __future__ import annotations
 

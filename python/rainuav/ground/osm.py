@@ -1,8 +1,8 @@
 """OpenStreetMap's building tags read as the OpenStreetMap wiki defines them (Key:height,
 Key:building:levels, Simple 3D Buildings), for
-[`rainuav.ground.footprints`][rainuav.ground.footprints]: values as
-mappers write them (the first of a list, the upper end of a range, ``~``, units, a decimal
-comma) and the heights of a feature (its roof, bottom and eaves) from its tags."""
+[`rainuav.ground.footprints`][rainuav.ground.footprints]: values as mappers write them (the first of
+a list, the upper end of a range, ``~``, units, a decimal comma) and the heights of a feature (its
+roof, bottom and eaves) from its tags."""
 
 from __future__ import annotations
 
@@ -49,11 +49,9 @@ def _clean(text: Any) -> str:
 
 
 def parse_length(text: Any) -> float:
-    """A length in metres from an OpenStreetMap value: a number (metres), ``"12 m"``,
-    ``"40 ft"``, ``"40'"`` or ``12'6"``, read by ``_clean``'s
-    rules (``"12;15"`` is 12,
-    ``"~20"`` 20, ``"12,5"`` 12.5, ``"10-12"`` 12). Raises ValueError for anything else
-    (negative numbers included)."""
+    """A length in metres from an OpenStreetMap value: a number (metres), ``"12 m"``, ``"40 ft"``,
+    ``"40'"`` or ``12'6"``, read by ``_clean``'s rules (``"12;15"`` is 12, ``"~20"`` 20, ``"12,5"``
+    12.5, ``"10-12"`` 12). Raises ValueError for anything else (negative numbers included)."""
     if isinstance(text, int | float) and not isinstance(text, bool):
         v = float(text)
         if not math.isfinite(v) or v < 0:

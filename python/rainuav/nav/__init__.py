@@ -1,15 +1,12 @@
 """Navigation: the task ([`task`][rainuav.nav.task]), the signal field
 ([`field`][rainuav.nav.field]), the Gymnasium environment ([`env`][rainuav.nav.env],
-``rainuav/UAVNav-v0``), the batched stepper ([`batch`][rainuav.nav.batch]), the exact planner
-and baselines ([`planner`][rainuav.nav.planner]), the shield ([`shield`][rainuav.nav.shield]) and
-the
+``rainuav/UAVNav-v0``), the batched stepper ([`batch`][rainuav.nav.batch]), the exact planner and
+baselines ([`planner`][rainuav.nav.planner]), the shield ([`shield`][rainuav.nav.shield]) and the
 task with altitude as a decision ([`levels`][rainuav.nav.levels], six moves among flight levels).
 
-Works on any (H, W) map in dB (a RadioMap is read through its attributes); knows nothing of
-how maps are built ([`rainuav.radio`][rainuav.radio]; ``rainuav.envs`` joins the two for
-``gym.make``) and
-does not import torch.
-"""
+Works on any (H, W) map in dB (a RadioMap is read through its attributes); knows nothing of how maps
+are built ([`rainuav.radio`][rainuav.radio]; ``rainuav.envs`` joins the two for ``gym.make``) and
+does not import torch."""
 
 from __future__ import annotations
 

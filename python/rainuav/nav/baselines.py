@@ -2,11 +2,10 @@
 weather as it moves (each is scored by the environment's own rewards, move by move):
 
 - [`frozen_plans()`][rainuav.nav.baselines.frozen_plans]: the exact plan on the weather at take-off,
-  held still (what a static
-  planning tool gives), flown through the moving storm;
+  held still (what a static planning tool gives), flown through the moving storm;
 - [`replans()`][rainuav.nav.baselines.replans]: every ``every`` moves, the exact plan from where the
-  UAV is, on the weather
-  of that moment held still (persistence), of which the next ``every`` moves are flown;
+  UAV is, on the weather of that moment held still (persistence), of which the next ``every`` moves
+  are flown;
 - the straight line: [`rainuav.nav.planner.straight_line()`][rainuav.nav.planner.straight_line].
 
 On a single map (nothing moves) both are the exact optimum.

@@ -33,11 +33,11 @@ class BatchStepper:
         world: np.ndarray | None = None,
     ) -> dict[str, np.ndarray]:
         """One move for every UAV. Returns new ``offset``, ``t``, ``position`` (after clamping),
-        ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area or
-        entered a pixel that is not flyable),
-        ``arrived`` (reached the goal) and ``t_s`` (the instant the move ends, s). ``goal``
-        (N, 2): each UAV's destination (default: the task's); ``world`` (N,): each UAV's world
-        where the field is a [`rainuav.nav.field.SignalBank`][rainuav.nav.field.SignalBank]."""
+        ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area or entered
+        a pixel that is not flyable), ``arrived`` (reached the goal) and ``t_s`` (the instant the
+        move ends, s). ``goal`` (N, 2): each UAV's destination (default: the task's); ``world``
+        (N,): each UAV's world where the field is a
+        [`rainuav.nav.field.SignalBank`][rainuav.nav.field.SignalBank]."""
         cfg = self.cfg
         g = self.goal if goal is None else np.asarray(goal, dtype=np.float64).reshape(-1, 2).T
         x0, x1, y0, y1 = self.field.extent

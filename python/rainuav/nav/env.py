@@ -8,8 +8,8 @@ Semantics (the planner and the tests rely on them; docs/physics.md section 6):
   (``signal="sinr"``, default) or ``sir_db`` (``"sir"``, the paper's), or a raw array.
 - Observation: position scaled to [0, 1]^2 (float32); where the signal changes in time (a
   [`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]), a third entry, the moves so
-  far over
-  ``max_steps`` (the flight time over the horizon). Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y.
+  far over ``max_steps`` (the flight time over the horizon). Actions: 0 = +x, 1 = +y, 2 = -x, 3 =
+  -y.
 - Time: a move takes ``step_m / speed_m_s`` s and earns the signal at the new position and the
   instant it ends; every episode takes off at time 0 of the field.
 - Moves and rewards: [`rainuav.nav.task`][rainuav.nav.task] (shortfall below ``min_db`` by default,
@@ -22,8 +22,7 @@ Semantics (the planner and the tests rely on them; docs/physics.md section 6):
   point lies exactly on the start's lattice (the exact planner's state space).
 
 ``gym.make("rainuav/UAVNav-v0", scenario="uma", rain_rate_mm_h=50)`` builds the map first
-([`rainuav.envs`][rainuav.envs]); this class takes a map.
-"""
+([`rainuav.envs`][rainuav.envs]); this class takes a map."""
 
 from __future__ import annotations
 
@@ -45,8 +44,8 @@ from rainuav.nav.views import WeatherView, sample_goal, sample_start_for
 __all__ = ["DEFAULT_MIN_DB", "OBSERVATIONS", "UAVNavEnv", "check_action", "signal_field"]
 
 OBSERVATIONS = ("position", "weather")
-"""What the UAV observes: its position (and the time where the signal moves), or the weather
-around it and over the area with its position, time and destination
+"""What the UAV observes: its position (and the time where the signal moves), or the weather around
+it and over the area with its position, time and destination
 ([`rainuav.nav.views.WeatherView`][rainuav.nav.views.WeatherView])."""
 
 DEFAULT_MIN_DB = 10.0
@@ -129,14 +128,13 @@ class UAVNavEnv(gym.Env):
         view: WeatherView | None = None,
         random_goal: bool = False,
     ) -> None:
-        """A map (``radio_map``, one raw array with ``extent_m``, or a built ``field``: a
-        signal in time, or a bank of worlds, one drawn per episode) and the task: its fields
-        as keywords, or a whole ``config`` (then ``signal`` and ``min_db`` given here win).
-        ``observation``: [`OBSERVATIONS`][rainuav.nav.env.OBSERVATIONS] (``view`` sets the weather's
-        grids);
+        """A map (``radio_map``, one raw array with ``extent_m``, or a built ``field``: a signal in
+        time, or a bank of worlds, one drawn per episode) and the task: its fields as keywords, or a
+        whole ``config`` (then ``signal`` and ``min_db`` given here win). ``observation``:
+        [`OBSERVATIONS`][rainuav.nav.env.OBSERVATIONS] (``view`` sets the weather's grids);
         ``random_goal``: a destination per episode
-        ([`rainuav.nav.views.sample_goal()`][rainuav.nav.views.sample_goal];
-        needs the weather observation, which shows it)."""
+        ([`rainuav.nav.views.sample_goal()`][rainuav.nav.views.sample_goal]; needs the weather
+        observation, which shows it)."""
         super().__init__()
         cfg = config or NavConfig(
             goal_m=tuple(goal_m),
@@ -213,12 +211,11 @@ class UAVNavEnv(gym.Env):
 
     # -- helpers ----------------------------------------------------------------------------
     def observe(self, pos: np.ndarray, t: Any = 0, goal: Any = None, world: Any = None) -> Any:
-        """The observation at ``pos`` after ``t`` moves. Position observation: the position
-        scaled to [0, 1]^2, float32 (works on (..., 2) arrays), and where the signal changes
-        in time ``t`` over ``max_steps``. Weather observation: the
-        [`WeatherView`][rainuav.nav.views.WeatherView] dict for the destinations ``goal`` (N, 2;
-        default the task's) and, in a bank, the ``world`` (N,) each UAV flies; batched for
-        (N, 2) positions, one for a (2,) position."""
+        """The observation at ``pos`` after ``t`` moves. Position observation: the position scaled
+        to [0, 1]^2, float32 (works on (..., 2) arrays), and where the signal changes in time ``t``
+        over ``max_steps``. Weather observation: the [`WeatherView`][rainuav.nav.views.WeatherView]
+        dict for the destinations ``goal`` (N, 2; default the task's) and, in a bank, the ``world``
+        (N,) each UAV flies; batched for (N, 2) positions, one for a (2,) position."""
         if self.view is not None:
             return self._weather(pos, t, goal, world)
         x0, x1, y0, y1 = self.field.extent
@@ -275,9 +272,8 @@ class UAVNavEnv(gym.Env):
         """A new episode's (start, destination, world): the world uniform among a bank's (0
         otherwise), then the destination (``goal`` where given; drawn,
         [`sample_goal()`][rainuav.nav.views.sample_goal], where ``random_goal``; else the task's),
-        then
-        the start ([`sample_start()`][rainuav.nav.env.UAVNavEnv.sample_start], or within reach of a
-        drawn destination)."""
+        then the start ([`sample_start()`][rainuav.nav.env.UAVNavEnv.sample_start], or within reach
+        of a drawn destination)."""
         world = int(rng.integers(self.field.worlds)) if isinstance(self.field, SignalBank) else 0
         if goal is None and not self.random_goal:
             return self.sample_start(rng), np.asarray(self.cfg.goal_m, dtype=np.float64), world

@@ -4,10 +4,9 @@ nearest pixel when the map names one.
 
 Two kinds, one interface (``field(x, y, t_s)``, ``field.serving_cell(x, y, t_s)``,
 ``field.varies``): [`SignalField`][rainuav.nav.field.SignalField], one map (time is ignored), and
-[`SignalSeries`][rainuav.nav.field.SignalSeries],
-maps at instants ``t_s`` (a storm that moves), linear in time between them. The exact planner
-in space-time (``rainuav_core::plantime``) reads the series operation for operation as
-``SignalSeries.__call__`` does."""
+[`SignalSeries`][rainuav.nav.field.SignalSeries], maps at instants ``t_s`` (a storm that moves),
+linear in time between them. The exact planner in space-time (``rainuav_core::plantime``) reads the
+series operation for operation as ``SignalSeries.__call__`` does."""
 
 from __future__ import annotations
 
@@ -252,11 +251,10 @@ class SignalSeries:
 
 
 class SignalBank:
-    """Several worlds' signals in one array, each point reading its own world: ``values_db``
-    (P, K, H, W), the P worlds' maps at the common instants ``t_s`` (K,) over one extent, read
-    as each world's [`SignalSeries`][rainuav.nav.field.SignalSeries] reads it (a one-instant bank is
-    P still maps). The
-    UAVs of one training batch fly different storms through one call; a world's slot is
+    """Several worlds' signals in one array, each point reading its own world: ``values_db`` (P, K,
+    H, W), the P worlds' maps at the common instants ``t_s`` (K,) over one extent, read as each
+    world's [`SignalSeries`][rainuav.nav.field.SignalSeries] reads it (a one-instant bank is P still
+    maps). The UAVs of one training batch fly different storms through one call; a world's slot is
     replaced in place ([`put()`][rainuav.nav.field.SignalBank.put]) when the learner moves on to a
     new storm."""
 

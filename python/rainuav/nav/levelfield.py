@@ -1,10 +1,9 @@
 """The signal of every flight level and the stepping rules among levels (the task is in
 [`rainuav.nav.levels`][rainuav.nav.levels]): [`LevelField`][rainuav.nav.levelfield.LevelField] (one
-signal a level: maps, maps in time, or
-a bank of storms in time), [`level_durations()`][rainuav.nav.levelfield.level_durations] (how long a
-climb and a descent last) and
-[`LevelStepper`][rainuav.nav.levelfield.LevelStepper] (many UAVs moved at once, as the exact planner
-replays a plan)."""
+signal a level: maps, maps in time, or a bank of storms in time),
+[`level_durations()`][rainuav.nav.levelfield.level_durations] (how long a climb and a descent last)
+and [`LevelStepper`][rainuav.nav.levelfield.LevelStepper] (many UAVs moved at once, as the exact
+planner replays a plan)."""
 
 from __future__ import annotations
 
@@ -62,12 +61,10 @@ def level_durations(
 
 class LevelField:
     """The signal of every level: one [`SignalField`][rainuav.nav.field.SignalField],
-    [`SignalSeries`][rainuav.nav.field.SignalSeries] or
-    [`SignalBank`][rainuav.nav.field.SignalBank] a level (all of one kind, over one area), lowest
-    first, at
-    ``altitudes_m``. A field of banks holds many storms' levels at once (a storm pool among
-    levels): each UAV reads its own world's (``world``), and
-    [`put()`][rainuav.nav.field.SignalBank.put] renews one."""
+    [`SignalSeries`][rainuav.nav.field.SignalSeries] or [`SignalBank`][rainuav.nav.field.SignalBank]
+    a level (all of one kind, over one area), lowest first, at ``altitudes_m``. A field of banks
+    holds many storms' levels at once (a storm pool among levels): each UAV reads its own world's
+    (``world``), and [`put()`][rainuav.nav.field.SignalBank.put] renews one."""
 
     def __init__(
         self,

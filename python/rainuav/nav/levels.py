@@ -4,11 +4,10 @@ The UAV flies on a stack of levels (one signal per flight altitude, lowest first
 or maps in time, each with its not-flyable pixels) and has six moves: the plane's four on its
 level ([`rainuav.nav.task`][rainuav.nav.task]) and a climb or a descent of one level.
 
-- **Clock.** The flight's clock ticks once per horizontal move (``move_s`` seconds). A climb
-  lasts the gap over ``climb_m_s`` and a descent the gap over ``descend_m_s``, rounded up to
-  whole ticks ([`level_durations()`][rainuav.nav.levelfield.level_durations]; the defaults, 15 m
-  gaps and 1 s moves: 3 and 5). A
-  move lands at the tick its duration later and reads the signal there and then.
+- **Clock.** The flight's clock ticks once per horizontal move (``move_s`` seconds). A climb lasts
+  the gap over ``climb_m_s`` and a descent the gap over ``descend_m_s``, rounded up to whole ticks
+  ([`level_durations()`][rainuav.nav.levelfield.level_durations]; the defaults, 15 m gaps and 1 s
+  moves: 3 and 5). A move lands at the tick its duration later and reads the signal there and then.
 - **Rewards.** A move earns its duration in ticks times the base reward where and when it
   lands (``-1 - mu shortfall`` by default): the flight's cost is its time plus the weighted
   shortfall, each move weighted by how long it lasts. Leaving the area, climbing above the
@@ -30,8 +29,7 @@ The exact optimum of this task is
 [`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]
 (``rainuav_core::planlevels``), which reads the signal operation for operation as
 [`LevelStepper`][rainuav.nav.levelfield.LevelStepper] does; its plans replayed here earn its returns
-(tested).
-"""
+(tested)."""
 
 from __future__ import annotations
 
@@ -303,9 +301,9 @@ class UAVLevelsEnv(gym.Env):
         return info
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """One move: the plane's four (0-3) or a climb (4) or descent (5) of one level, which
-        lasts its duration in moves and earns that many times the move's reward. Returns
-        ``(observation, reward, terminated, truncated, info)`` as
+        """One move: the plane's four (0-3) or a climb (4) or descent (5) of one level, which lasts
+        its duration in moves and earns that many times the move's reward. Returns ``(observation,
+        reward, terminated, truncated, info)`` as
         [`UAVNavEnv.step()`][rainuav.nav.env.UAVNavEnv.step] does."""
         ok = isinstance(action, int | np.integer) and not isinstance(action, bool)
         if isinstance(action, np.ndarray) and action.shape == () and action.dtype.kind in "iu":

@@ -4,12 +4,10 @@ The moves are deterministic on the start's lattice, so the exact finite-horizon 
 undiscounted return is a dynamic programme (in Rust; many starts run in parallel). It is the
 yardstick for learned policies. Where the signal changes in time (a
 [`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]) the programme's rewards depend
-on the step: it is then
-the exact optimum on the space-time lattice, the storm's motion known
+on the step: it is then the exact optimum on the space-time lattice, the storm's motion known
 (``rainuav_core::plantime``). The baselines a user would try instead (the plan of the weather at
 take-off, re-planning on the weather of the moment) are in
-[`rainuav.nav.baselines`][rainuav.nav.baselines].
-"""
+[`rainuav.nav.baselines`][rainuav.nav.baselines]."""
 
 from __future__ import annotations
 
@@ -147,17 +145,15 @@ def optimal_levels(
     climb_m_s: float = CLIMB_M_S,
     descend_m_s: float = DESCEND_M_S,
 ) -> list[LevelPlan]:
-    """Exact optimal plans with altitude as a decision (``rainuav_core::planlevels``): the
-    signal of each level (L, H, W) at ``altitudes_m`` (L,), or in time (T, L, H, W) at the
-    instants ``t_s`` (T,; every flight taking off at 0); the task ``cfg`` (``min_db``
-    resolved); starts (N, 2) at ``start_levels`` (N,; -1: the level whose optimum is best,
-    the take-off's climb left to the autopilot). Six moves: the plane's four, and a climb or
-    descent of one level, which lasts its duration in ticks
-    ([`level_durations()`][rainuav.nav.levelfield.level_durations]) and
-    earns that many times the base reward where and when it lands. The horizon
-    ``cfg.max_steps`` is in ticks. A flight arrives at the destination's horizontal position
-    at any level; leaving the band or entering a not-flyable cell ((L, H', W')
-    ``not_flyable``) ends it as leaving the area does."""
+    """Exact optimal plans with altitude as a decision (``rainuav_core::planlevels``): the signal of
+    each level (L, H, W) at ``altitudes_m`` (L,), or in time (T, L, H, W) at the instants ``t_s``
+    (T,; every flight taking off at 0); the task ``cfg`` (``min_db`` resolved); starts (N, 2) at
+    ``start_levels`` (N,; -1: the level whose optimum is best, the take-off's climb left to the
+    autopilot). Six moves: the plane's four, and a climb or descent of one level, which lasts its
+    duration in ticks ([`level_durations()`][rainuav.nav.levelfield.level_durations]) and earns that
+    many times the base reward where and when it lands. The horizon ``cfg.max_steps`` is in ticks. A
+    flight arrives at the destination's horizontal position at any level; leaving the band or
+    entering a not-flyable cell ((L, H', W') ``not_flyable``) ends it as leaving the area does."""
     sig = np.asarray(signal_db, dtype=np.float64)
     alts = np.asarray(altitudes_m, dtype=np.float64).reshape(-1)
     if sig.ndim == 3:
@@ -211,9 +207,8 @@ def optimal_among_levels(
     env: UAVLevelsEnv, starts_m: npt.ArrayLike, start_levels: npt.ArrayLike | None = None
 ) -> list[LevelPlan]:
     """[`optimal_levels()`][rainuav.nav.planner.optimal_levels] on the levels environment's signal
-    and task (its levels' maps,
-    or maps in time, and masks) from each start (N, 2), at ``start_levels`` (N,; default
-    where the env starts a flight there:
+    and task (its levels' maps, or maps in time, and masks) from each start (N, 2), at
+    ``start_levels`` (N,; default where the env starts a flight there:
     [`UAVLevelsEnv.start_level_at()`][rainuav.nav.levels.UAVLevelsEnv.start_level_at])."""
     if not isinstance(env, UAVLevelsEnv):
         raise InvalidInputError(f"env must be a UAVLevelsEnv (got {type(env).__name__})")

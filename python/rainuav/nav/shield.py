@@ -1,12 +1,10 @@
 """A shield for greedy flights (Alshiekh et al., AAAI 2018): which moves a flight may take.
 
-Rule 1 ([`BatchStepper.safe_actions()`][rainuav.nav.batch.BatchStepper.safe_actions]):
-only moves after which the UAV is still in the area and can still arrive within ``max_steps``. Rule
-2: among those, moves
-onto a position the flight has not visited, where one exists. The shield is a safety layer
-around a policy, not part of it: metrics report the policy alone first (see
-``docs/guide/learning.md``).
-"""
+Rule 1 ([`BatchStepper.safe_actions()`][rainuav.nav.batch.BatchStepper.safe_actions]): only moves
+after which the UAV is still in the area and can still arrive within ``max_steps``. Rule 2: among
+those, moves onto a position the flight has not visited, where one exists. The shield is a safety
+layer around a policy, not part of it: metrics report the policy alone first (see
+``docs/guide/learning.md``)."""
 
 from __future__ import annotations
 
@@ -41,17 +39,16 @@ def shield_moves(
     visited: Sequence[set[tuple[int, int]]],
     goal: np.ndarray | None = None,
 ) -> np.ndarray:
-    """(N, 4) bool: the moves the shield allows. First the safe moves (still in the area and
-    able to arrive within ``max_steps``,
+    """(N, 4) bool: the moves the shield allows. First the safe moves (still in the area and able to
+    arrive within ``max_steps``,
     [`rainuav.nav.batch.BatchStepper.safe_actions()`][rainuav.nav.batch.BatchStepper.safe_actions]);
-    among
-    them, the moves to a position the flight has not visited (``visited``: each flight's
-    lattice offsets so far), where there is one. The second rule applies where every move
-    costs at least 1 (``"shortfall"`` and ``"outage"`` with ``mu >= 0``, ``"linear"`` with
-    ``mu <= 0``): cutting a loop out of a path then gains at least its length, so an optimal
-    flight never revisits a position and the rule only removes moves no optimal flight makes.
-    Elsewhere (the paper's ``"linear"`` with ``mu > 0``: loitering can pay) only the first
-    rule applies. ``goal`` (N, 2): each flight's destination (default: the task's)."""
+    among them, the moves to a position the flight has not visited (``visited``: each flight's
+    lattice offsets so far), where there is one. The second rule applies where every move costs at
+    least 1 (``"shortfall"`` and ``"outage"`` with ``mu >= 0``, ``"linear"`` with ``mu <= 0``):
+    cutting a loop out of a path then gains at least its length, so an optimal flight never revisits
+    a position and the rule only removes moves no optimal flight makes. Elsewhere (the paper's
+    ``"linear"`` with ``mu > 0``: loitering can pay) only the first rule applies. ``goal`` (N, 2):
+    each flight's destination (default: the task's)."""
     allowed = env.stepper.safe_actions(pos, t, goal)
     loops_can_pay = env.cfg.mu > 0 if env.cfg.reward == "linear" else env.cfg.mu < 0
     if loops_can_pay:

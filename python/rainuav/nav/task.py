@@ -10,10 +10,9 @@
   out_of_bounds_penalty``, terminated, the UAV stays at ``clamp(q')``. Reaching the goal
   (``|q' - goal| <= tol_m``): ``b(q') + goal_reward``, terminated. Truncated after
   ``max_steps`` steps (unless terminated on that step).
-- Time: each move takes ``step_m / speed_m_s`` seconds, and the signal it earns is the field's
-  at the new position and the instant the move ends ([`rainuav.nav.field`][rainuav.nav.field]; a
-  single map
-  does not change in time, so time changes nothing there).
+- Time: each move takes ``step_m / speed_m_s`` seconds, and the signal it earns is the field's at
+  the new position and the instant the move ends ([`rainuav.nav.field`][rainuav.nav.field]; a single
+  map does not change in time, so time changes nothing there).
 - A flight's **cost** is its return without the arrival reward, negated: the moves plus the
   weighted shortfall (docs/physics.md section 6, [`flight_cost()`][rainuav.nav.task.flight_cost]).
 """

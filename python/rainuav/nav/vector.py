@@ -1,14 +1,13 @@
-"""A Gymnasium vector environment over the batched stepper: ``num_envs`` UAVs on one map, each
-its own episode, stepped by one call
-([`rainuav.nav.batch.BatchStepper`][rainuav.nav.batch.BatchStepper]), with exactly
-the scalar environment's transitions.
+"""A Gymnasium vector environment over the batched stepper: ``num_envs`` UAVs on one map, each its
+own episode, stepped by one call
+([`rainuav.nav.batch.BatchStepper`][rainuav.nav.batch.BatchStepper]), with exactly the scalar
+environment's transitions.
 
-Autoreset (Gymnasium's ``metadata["autoreset_mode"]``): ``NEXT_STEP`` (Gymnasium's default,
-what CleanRL expects): the step after a UAV's episode ends resets it, ignores its action and
-returns its new start with reward 0; ``SAME_STEP``: the ending step already returns the new
-start, and the last observation of the finished episode is ``info["final_obs"]``.
-``gym.make_vec("rainuav/UAVNav-v0", num_envs=N, vectorization_mode="vector_entry_point")``
-builds one ([`rainuav.envs`][rainuav.envs]).
+Autoreset (Gymnasium's ``metadata["autoreset_mode"]``): ``NEXT_STEP`` (Gymnasium's default, what
+CleanRL expects): the step after a UAV's episode ends resets it, ignores its action and returns its
+new start with reward 0; ``SAME_STEP``: the ending step already returns the new start, and the last
+observation of the finished episode is ``info["final_obs"]``. ``gym.make_vec("rainuav/UAVNav-v0",
+num_envs=N, vectorization_mode="vector_entry_point")`` builds one ([`rainuav.envs`][rainuav.envs]).
 """
 
 from __future__ import annotations
@@ -45,8 +44,7 @@ def check_num_envs(num_envs: Any) -> int:
 
 class UAVNavVectorEnv(gym.vector.VectorEnv):
     """``num_envs`` UAVs flying the task of ``env`` (a [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv]: its
-    map and task;
-    its own state is not used), batched."""
+    map and task; its own state is not used), batched."""
 
     def __init__(
         self,

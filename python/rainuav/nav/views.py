@@ -1,8 +1,7 @@
 """What a UAV that reads the weather sees, and where its destinations come from.
 
 [`WeatherView`][rainuav.nav.views.WeatherView] is the observation of a policy that flies any storm
-it is shown
-(``UAVNavEnv(observation="weather")``): a Gymnasium ``Dict`` of
+it is shown (``UAVNavEnv(observation="weather")``): a Gymnasium ``Dict`` of
 
 - ``position``, ``goal``: the UAV's position and its destination, scaled to [0, 1]^2;
 - ``time``: the moves so far over ``max_steps``;
@@ -14,8 +13,8 @@ it is shown
   (16 x 16: 125 m cells), where the route's big detours are decided.
 
 Among flight levels ([`rainuav.nav.levels`][rainuav.nav.levels]) the two grids have one layer a
-level, lowest
-first (``layers``): the UAV sees the signal at every height around it and over the area.
+level, lowest first (``layers``): the UAV sees the signal at every height around it and over the
+area.
 
 Signal values enter as ``tanh((S - min_db) / scale_db)`` (0 at the outage threshold, +-0.76
 10 dB either side), so every storm and every map reads on one scale. "Now" is the instant of
@@ -23,11 +22,9 @@ the UAV's last move: the weather as an operator with a radar would know it; the 
 shown the future. Grid points beyond the area read the edge values, as the field does.
 
 Destinations ([`sample_goal()`][rainuav.nav.views.sample_goal]): uniform in the area shrunk by
-[`GOAL_MARGIN_M`][rainuav.nav.views.GOAL_MARGIN_M] on
-every side; the start then uniform in the area, farther than ``tol_m`` from the destination and
-at most [`REACH`][rainuav.nav.views.REACH] of the horizon away (lattice moves), so every flight can
-arrive in time.
-"""
+[`GOAL_MARGIN_M`][rainuav.nav.views.GOAL_MARGIN_M] on every side; the start then uniform in the
+area, farther than ``tol_m`` from the destination and at most [`REACH`][rainuav.nav.views.REACH] of
+the horizon away (lattice moves), so every flight can arrive in time."""
 
 from __future__ import annotations
 
@@ -84,8 +81,7 @@ class WeatherView:
     @property
     def sizes(self) -> dict[str, int]:
         """Floats per part of the flat encoding ([`KEYS`][rainuav.nav.views.KEYS] order; ``level``
-        among levels
-        only)."""
+        among levels only)."""
         level = {"level": 1} if self.layers > 1 else {}
         n = self.layers
         return {"position": 2, "goal": 2, "time": 1, **level, "local": n * self.window**2,
@@ -130,13 +126,13 @@ class WeatherView:
         area_db: np.ndarray | None = None,
         level_frac: np.ndarray | None = None,
     ) -> dict[str, np.ndarray]:
-        """The observations of N UAVs at ``pos`` (N, 2) heading for ``goal`` (N, 2), at the
-        time fractions ``t_frac`` (N,); ``sample(x, y)`` gives the signal, dB, at points
-        (N, M) (row n: UAV n's world and instant; (N, layers, M) among levels, every level).
-        ``area_db`` (N, [layers,] area^2): the signal at
-        [`area_points()`][rainuav.nav.views.WeatherView.area_points] where the caller
-        has it (sampled once per map), else sampled. ``level_frac`` (N,): among levels, each
-        UAV's level over the highest index."""
+        """The observations of N UAVs at ``pos`` (N, 2) heading for ``goal`` (N, 2), at the time
+        fractions ``t_frac`` (N,); ``sample(x, y)`` gives the signal, dB, at points (N, M) (row n:
+        UAV n's world and instant; (N, layers, M) among levels, every level). ``area_db`` (N,
+        [layers,] area^2): the signal at
+        [`area_points()`][rainuav.nav.views.WeatherView.area_points] where the caller has it
+        (sampled once per map), else sampled. ``level_frac`` (N,): among levels, each UAV's level
+        over the highest index."""
         x0, x1, y0, y1 = extent
         lo, span = np.array([x0, y0]), np.array([x1 - x0, y1 - y0])
         pos = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
@@ -170,9 +166,8 @@ class WeatherView:
 
     def flat(self, obs: dict[str, Any]) -> np.ndarray:
         """(N, sum of [`sizes`][rainuav.nav.views.WeatherView.sizes]) float32: the parts of a batch
-        of observations (or of
-        one) concatenated in [`KEYS`][rainuav.nav.views.KEYS] order, the form a replay memory
-        stores."""
+        of observations (or of one) concatenated in [`KEYS`][rainuav.nav.views.KEYS] order, the form
+        a replay memory stores."""
         first = np.asarray(obs["position"])
         n = 1 if first.ndim == 1 else len(first)
         keys = [k for k in KEYS if k in self.sizes]
@@ -204,8 +199,8 @@ def _area_points(n: int, extent: tuple[float, float, float, float]) -> np.ndarra
 
 def sample_goal(rng: np.random.Generator, extent: tuple[float, float, float, float]) -> np.ndarray:
     """A destination uniform in the area shrunk by
-    [`GOAL_MARGIN_M`][rainuav.nav.views.GOAL_MARGIN_M] on every side (the
-    whole area where it is narrower than twice the margin)."""
+    [`GOAL_MARGIN_M`][rainuav.nav.views.GOAL_MARGIN_M] on every side (the whole area where it is
+    narrower than twice the margin)."""
     x0, x1, y0, y1 = extent
     mx = GOAL_MARGIN_M if x1 - x0 > 2 * GOAL_MARGIN_M else 0.0
     my = GOAL_MARGIN_M if y1 - y0 > 2 * GOAL_MARGIN_M else 0.0
@@ -221,9 +216,8 @@ def sample_start_for(
 ) -> np.ndarray:
     """A start uniform in the area, farther than ``tol_m`` from ``goal`` and at most
     [`REACH`][rainuav.nav.views.REACH] of ``max_steps`` moves from it (Manhattan distance), never in
-    a pixel of
-    ``field``'s not-flyable mask; refused where 1000 draws found none (an area the arrival
-    disc covers)."""
+    a pixel of ``field``'s not-flyable mask; refused where 1000 draws found none (an area the
+    arrival disc covers)."""
     x0, x1, y0, y1 = extent
     reach = REACH * cfg.max_steps * cfg.step_m
     for _ in range(1000):

@@ -8,14 +8,11 @@ Modules, bottom up: [`cell`][rainuav.radio.cell] (a cell and its antenna),
 [`ray_engine`][rainuav.radio.ray_engine] (two rays per cell and pixel, in Rust),
 [`sinr`][rainuav.radio.sinr], [`radiomap`][rainuav.radio.radiomap] (the map and its builder),
 [`weather`][rainuav.radio.weather], [`storms`][rainuav.radio.storms],
-[`rategrid`][rainuav.radio.rategrid]
-and [`stochastic`][rainuav.radio.stochastic] (weather in time),
+[`rategrid`][rainuav.radio.rategrid] and [`stochastic`][rainuav.radio.stochastic] (weather in time),
 [`timemap`][rainuav.radio.timemap] (maps of a moving weather at many instants),
 [`cache`][rainuav.radio.cache] and [`plot`][rainuav.radio.plot]. Depends on
-[`rainuav.medium`][rainuav.medium],
-[`rainuav.antenna`][rainuav.antenna] and [`rainuav.pwe`][rainuav.pwe] only; nothing here knows about
-navigation or learning.
-"""
+[`rainuav.medium`][rainuav.medium], [`rainuav.antenna`][rainuav.antenna] and
+[`rainuav.pwe`][rainuav.pwe] only; nothing here knows about navigation or learning."""
 
 from __future__ import annotations
 

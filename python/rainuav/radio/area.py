@@ -1,6 +1,6 @@
 """The airspace of a scenario ([`Area`][rainuav.radio.area.Area]) and the terrain under it
-([`TerrainFile`][rainuav.radio.area.TerrainFile]),
-as dataclasses validated by [`rainuav.radio.scenario.Scenario`][rainuav.radio.scenario.Scenario]."""
+([`TerrainFile`][rainuav.radio.area.TerrainFile]), as dataclasses validated by
+[`rainuav.radio.scenario.Scenario`][rainuav.radio.scenario.Scenario]."""
 
 from __future__ import annotations
 
@@ -153,7 +153,6 @@ class FootprintsFile:
     material: str = "concrete"
     """The walls' ITU-R P.2040 material where a feature's ``building:material`` names none."""
     default_height_m: float = 10.0
-    """The roof of a building on the ground whose feature gives neither a height nor storeys,
-    m ([`rainuav.ground.footprints.DEFAULT_HEIGHT_M`][rainuav.ground.footprints.DEFAULT_HEIGHT_M];
-    central-city buildings are often
-    18-28 m: a guess either way, which ``fly`` reports)."""
+    """The roof of a building on the ground whose feature gives neither a height nor storeys, m
+    ([`rainuav.ground.footprints.DEFAULT_HEIGHT_M`][rainuav.ground.footprints.DEFAULT_HEIGHT_M];
+    central-city buildings are often 18-28 m: a guess either way, which ``fly`` reports)."""

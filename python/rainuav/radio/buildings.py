@@ -1,8 +1,7 @@
 """A scenario's buildings as the radio layer uses them (docs/physics.md section 12): the boxes of
 ``Scenario.buildings`` and the footprints of ``Scenario.footprints``
 ([`rainuav.ground.footprints`][rainuav.ground.footprints]) as one set of prisms standing on the
-terrain, their walls,
-and the pixels they touch.
+terrain, their walls, and the pixels they touch.
 
 - **One kind of obstacle.** A box is the four-cornered footprint; both are
   `rainuav._core.Prisms` for the ray engine (profiles, diffraction, visibility) and for
@@ -300,9 +299,8 @@ NEAR_ROUTE_M = 100.0
 
 def buildings_near_route(scn: Scenario, path: np.ndarray) -> dict[str, int] | None:
     """How many of ``scn``'s buildings stand within
-    [`NEAR_ROUTE_M`][rainuav.radio.buildings.NEAR_ROUTE_M] of ``path`` (N, 2),
-    and how many of those stand at the default height (their clearance a guess); None without
-    buildings."""
+    [`NEAR_ROUTE_M`][rainuav.radio.buildings.NEAR_ROUTE_M] of ``path`` (N, 2), and how many of those
+    stand at the default height (their clearance a guess); None without buildings."""
     b = scenario_buildings(scn)
     if b is None:
         return None

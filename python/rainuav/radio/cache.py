@@ -2,11 +2,10 @@
 
 A map is stored under ``cache_dir()/radiomaps/<key>.npz`` where the key hashes the scenario
 ([`rainuav.radio.scenario.Scenario.digest()`][rainuav.radio.scenario.Scenario.digest]) together with
-the fingerprint of the code
-that built it ([`engine_fingerprint()`][rainuav.radio.cache.engine_fingerprint]): a map built by
-other engine code is never reused.
-Clear the cache with ``python -m rainuav.radiomap --clear-cache`` (or delete the folder).
-"""
+the fingerprint of the code that built it
+([`engine_fingerprint()`][rainuav.radio.cache.engine_fingerprint]): a map built by other engine code
+is never reused. Clear the cache with ``python -m rainuav.radiomap --clear-cache`` (or delete the
+folder)."""
 
 from __future__ import annotations
 
@@ -56,9 +55,8 @@ def cache_dir() -> Path:
 @functools.cache
 def engine_fingerprint() -> str:
     """A hash of what produces a map: [`ENGINE_VERSION`][rainuav.radio.cache.ENGINE_VERSION], the
-    source of the Python engine
-    modules and the compiled core (``rainuav._core``, which holds the PE march and the rain
-    medium)."""
+    source of the Python engine modules and the compiled core (``rainuav._core``, which holds the PE
+    march and the rain medium)."""
     import importlib
 
     h = hashlib.sha256(f"engine {ENGINE_VERSION}".encode())

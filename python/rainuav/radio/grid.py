@@ -7,16 +7,14 @@ the PE carries the pattern fully inside ``CONE_FULL`` of the cone and tapers it 
 the edge ([`cone_weight()`][rainuav.radio.grid.cone_weight]); the rays carry the rest in the hybrid
 engine.
 
-The domain spans the beam's spread over the longest range that reaches the area (or
-the area's own cross-range extent, if smaller), plus the absorbing taper; in height, the
-ground (or a margin below) up to ``max(altitude, site) + top_margin_m``, plus the taper. Over
-terrain ([`rainuav.radio.terrain`][rainuav.radio.terrain]) heights count from the lowest ground of
-the area: the
-grid's PEC floor lies there, the terrain above it is a staircase of obstacles, and the top
-clears the highest flight height over the area.
-Sizes are rounded up to products of 2, 3 and 5 for the FFTs. Energy that leaves through the
-top never returns over flat ground, so the top only needs to clear the flight altitude.
-"""
+The domain spans the beam's spread over the longest range that reaches the area (or the area's own
+cross-range extent, if smaller), plus the absorbing taper; in height, the ground (or a margin below)
+up to ``max(altitude, site) + top_margin_m``, plus the taper. Over terrain
+([`rainuav.radio.terrain`][rainuav.radio.terrain]) heights count from the lowest ground of the area:
+the grid's PEC floor lies there, the terrain above it is a staircase of obstacles, and the top
+clears the highest flight height over the area. Sizes are rounded up to products of 2, 3 and 5 for
+the FFTs. Energy that leaves through the top never returns over flat ground, so the top only needs
+to clear the flight altitude."""
 
 from __future__ import annotations
 
@@ -83,8 +81,8 @@ class MarchGrid:
 
 
 CONE_FULL = 0.6
-"""The PE carries a pattern fully out to this fraction of its cone's sine and tapers it (cos^2)
-to zero at the cone's edge; the rays carry the rest
+"""The PE carries a pattern fully out to this fraction of its cone's sine and tapers it (cos^2) to
+zero at the cone's edge; the rays carry the rest
 ([`cone_weight()`][rainuav.radio.grid.cone_weight])."""
 _MIN_SINE = math.sin(math.radians(0.5))
 

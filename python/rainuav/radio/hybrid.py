@@ -1,10 +1,9 @@
 """What the engines compute before their powers are combined
-([`engine_parts()`][rainuav.radio.hybrid.engine_parts]): every
-cell's power by the rays, the part of it the PE would carry, and the PE's power inside its
-cone. [`rainuav.radio.radiomap.build_radio_map()`][rainuav.radio.radiomap.build_radio_map] combines
-them into a map; the maps in time
-([`rainuav.radio.timemap`][rainuav.radio.timemap]) reuse the PE's part from clear air at every
-instant."""
+([`engine_parts()`][rainuav.radio.hybrid.engine_parts]): every cell's power by the rays, the part of
+it the PE would carry, and the PE's power inside its cone.
+[`rainuav.radio.radiomap.build_radio_map()`][rainuav.radio.radiomap.build_radio_map] combines them
+into a map; the maps in time ([`rainuav.radio.timemap`][rainuav.radio.timemap]) reuse the PE's part
+from clear air at every instant."""
 
 from __future__ import annotations
 
@@ -117,12 +116,11 @@ def engine_parts_levels(
     progress: bool = False,
 ) -> list[EngineParts]:
     """[`engine_parts()`][rainuav.radio.hybrid.engine_parts] at several flight altitudes (``scns``:
-    the scenario at each,
-    lowest first; engine 'pe' or 'hybrid' over flat ground), each cell marched once: its grid
-    is the one of the highest level (its top clears every level), every level's two rows are
-    recorded after each step, and the rays' part inside the cone at each level uses that
-    grid's cone. A cell whose cone carries under 1% of its power at every pixel of every
-    level is not marched."""
+    the scenario at each, lowest first; engine 'pe' or 'hybrid' over flat ground), each cell marched
+    once: its grid is the one of the highest level (its top clears every level), every level's two
+    rows are recorded after each step, and the rays' part inside the cone at each level uses that
+    grid's cone. A cell whose cone carries under 1% of its power at every pixel of every level is
+    not marched."""
     top = scns[-1]
     heights = [s.area.altitude_m for s in scns]
     h, w = y_m.size, x_m.size

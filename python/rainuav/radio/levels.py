@@ -1,17 +1,15 @@
-"""Radio maps at several flight altitudes (``area.altitudes_m``): one map per level, stacked
-on an altitude axis, so a flight can choose its height
+"""Radio maps at several flight altitudes (``area.altitudes_m``): one map per level, stacked on an
+altitude axis, so a flight can choose its height
 ([`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]).
 
-Each level is the scenario's map at that altitude, built by its engine (and cached as any
-map): the ray engine traces every level; the hybrid engine over flat ground marches each cell
-once and reads every level from that march (its grid the highest level's, so its cone may
-be narrower than a lower level's own: the rays carry the rest); the PE engine, and the
-hybrid over terrain, march once per level. Memory is checked for the whole
-stack before the first level is built. Weather that moves:
-[`build_radio_level_series()`][rainuav.radio.levels.build_radio_level_series],
-the maps in time of every level, (time, altitude, H, W) (the hybrid's clear-air march once a
-cell for every level, likewise).
-"""
+Each level is the scenario's map at that altitude, built by its engine (and cached as any map): the
+ray engine traces every level; the hybrid engine over flat ground marches each cell once and reads
+every level from that march (its grid the highest level's, so its cone may be narrower than a lower
+level's own: the rays carry the rest); the PE engine, and the hybrid over terrain, march once per
+level. Memory is checked for the whole stack before the first level is built. Weather that moves:
+[`build_radio_level_series()`][rainuav.radio.levels.build_radio_level_series], the maps in time of
+every level, (time, altitude, H, W) (the hybrid's clear-air march once a cell for every level,
+likewise)."""
 
 from __future__ import annotations
 
@@ -192,11 +190,10 @@ def build_radio_level_series(
     one_march: bool = True,
 ) -> RadioLevelSeries:
     """The maps in time of ``scn`` at each of ``area.levels``
-    ([`build_radio_map_series()`][rainuav.radio.timemap.build_radio_map_series] per
-    level), memory checked for the whole stack first. ``one_march``: the hybrid over flat ground
-    marches each cell once in
-    clear air for every level ([`shares_a_march()`][rainuav.radio.levels.shares_a_march]), as
-    [`build_radio_levels()`][rainuav.radio.levels.build_radio_levels] does."""
+    ([`build_radio_map_series()`][rainuav.radio.timemap.build_radio_map_series] per level), memory
+    checked for the whole stack first. ``one_march``: the hybrid over flat ground marches each cell
+    once in clear air for every level ([`shares_a_march()`][rainuav.radio.levels.shares_a_march]),
+    as [`build_radio_levels()`][rainuav.radio.levels.build_radio_levels] does."""
     from rainuav._checks import as_real_array
     from rainuav.radio.terrain import map_mask
     from rainuav.radio.timemap import build_radio_map_series
@@ -326,8 +323,7 @@ class LevelStack:
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> LevelStack:
         """Reads a stack written by [`save()`][rainuav.radio.mapdata.RadioMap.save], checked
-        (shapes, finite values, its
-        scenario's area and levels); bit-exact round trip."""
+        (shapes, finite values, its scenario's area and levels); bit-exact round trip."""
         need = ("altitudes_m", "sinr_db", "serving_cell", "not_flyable", "extent_m")
         d, scn = read_npz(path, "stack of level maps", need, STACK_VERSION)
         alts, sinr, t = d["altitudes_m"], d["sinr_db"], d.get("t_s")

@@ -1,9 +1,7 @@
 """A radio map as data: [`RadioMap`][rainuav.radio.mapdata.RadioMap] (received power per cell,
-serving cell, SIR and SINR
-at the flight altitude), its .npz form, the checks a map file must pass, and keeping a map in
-the cache. [`rainuav.radio.radiomap`][rainuav.radio.radiomap] builds maps;
-[`rainuav.radio.timemap`][rainuav.radio.timemap] builds
-them in time."""
+serving cell, SIR and SINR at the flight altitude), its .npz form, the checks a map file must pass,
+and keeping a map in the cache. [`rainuav.radio.radiomap`][rainuav.radio.radiomap] builds maps;
+[`rainuav.radio.timemap`][rainuav.radio.timemap] builds them in time."""
 
 from __future__ import annotations
 
@@ -122,10 +120,9 @@ class RadioMap:
         cls, path: str | os.PathLike[str], known: tuple[str, Scenario] | None = None
     ) -> RadioMap:
         """Reads a map written by [`save()`][rainuav.radio.mapdata.RadioMap.save] (bit-exact round
-        trip). ``known``: ``(digest,
-        scenario)`` the caller looked the file up by (a cache hit): where the file's digest
-        is that one, the map carries the caller's scenario, never the stored one (whose
-        DEM or footprint file may have moved since: the key is their contents)."""
+        trip). ``known``: ``(digest, scenario)`` the caller looked the file up by (a cache hit):
+        where the file's digest is that one, the map carries the caller's scenario, never the stored
+        one (whose DEM or footprint file may have moved since: the key is their contents)."""
         need = (*cls._ARRAYS, "extent_m", "altitude_m")
         data, scn = read_npz(path, "radio map", need, FORMAT_VERSION, known)
         if data["extent_m"].shape != (4,):
@@ -190,13 +187,12 @@ def read_npz(
     known: tuple[str, Scenario] | None = None,
 ) -> tuple[dict[str, np.ndarray], Scenario]:
     """The arrays and the scenario of an .npz written by
-    [`write_npz()`][rainuav.radio.mapdata.write_npz] (never unpickled),
-    or [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file: unreadable, missing
-    an array of ``need``,
-    of another format ``version``, or a scenario that is not valid (``what``: the kind of
-    file, for the message). ``known``: ``(digest, scenario)`` the caller looked the file up
-    by (the map cache); where the file's stored digest is that one, its scenario is that
-    scenario and its TOML is not parsed again (seconds for a radar weather's rate maps)."""
+    [`write_npz()`][rainuav.radio.mapdata.write_npz] (never unpickled), or
+    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file: unreadable, missing an
+    array of ``need``, of another format ``version``, or a scenario that is not valid (``what``: the
+    kind of file, for the message). ``known``: ``(digest, scenario)`` the caller looked the file up
+    by (the map cache); where the file's stored digest is that one, its scenario is that scenario
+    and its TOML is not parsed again (seconds for a radar weather's rate maps)."""
     try:
         with np.load(path, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
@@ -255,11 +251,10 @@ def check_arrays(
 
 def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
     """A map's arrays as [`build_radio_map()`][rainuav.radio.radiomap.build_radio_map] writes them,
-    or [`InvalidInputError`][rainuav.errors.InvalidInputError]
-    naming the file and the array: shapes from the scenario, types, and values finite and in
-    their physical ranges (SIR and SINR within [SIR_FLOOR_DB, SIR_CEIL_DB], RSS within
-    [RSS_FLOOR_DBM, 100] dBm, serving cells and sites that exist, PE shares in [0, 1], pixel
-    centres where the area puts them)."""
+    or [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file and the array: shapes
+    from the scenario, types, and values finite and in their physical ranges (SIR and SINR within
+    [SIR_FLOOR_DB, SIR_CEIL_DB], RSS within [RSS_FLOOR_DBM, 100] dBm, serving cells and sites that
+    exist, PE shares in [0, 1], pixel centres where the area puts them)."""
     h, w = scn.area.shape
     m = len(data["cell_site"]) if data["cell_site"].ndim == 1 else -1  # the map's own cells
     shapes = {
@@ -285,10 +280,9 @@ def map_ranges(cells: int, scn: Scenario) -> dict[str, tuple[float, float]]:
 
 
 def store(rm: Any, path: Path) -> None:
-    """Keeps ``rm`` (a map or a map series: anything with ``save``) in the cache at ``path``;
-    a cache that cannot be written is a [`CacheWarning`][rainuav.errors.CacheWarning] (the map is
-    the caller's all
-    the same)."""
+    """Keeps ``rm`` (a map or a map series: anything with ``save``) in the cache at ``path``; a
+    cache that cannot be written is a [`CacheWarning`][rainuav.errors.CacheWarning] (the map is the
+    caller's all the same)."""
     try:
         rm.save(path)
     except OSError as err:

@@ -1,9 +1,8 @@
 """Radio maps out as GeoTIFF, as GIS tools (QGIS, GDAL) read them.
 
-One file, four float32 bands over the map's pixels, north-up, in the scenario's own projection
-(its [`rainuav.geo.Georef`][rainuav.geo.Georef]: an azimuthal equidistant projection on WGS 84
-centred on the
-origin, written as the file's CRS), with band descriptions and units:
+One file, four float32 bands over the map's pixels, north-up, in the scenario's own projection (its
+[`rainuav.geo.Georef`][rainuav.geo.Georef]: an azimuthal equidistant projection on WGS 84 centred on
+the origin, written as the file's CRS), with band descriptions and units:
 
 1. ``sinr_db``: SINR, dB;
 2. ``rss_serving_dbm``: the received power of the serving cell, dBm;
@@ -12,9 +11,7 @@ origin, written as the file's CRS), with band descriptions and units:
    of the flight height), else 0.
 
 The nodata value is [`NODATA`][rainuav.radio.maptiff.NODATA]. Written to a temporary file and
-renamed: a reader never
-sees half a file. Needs rasterio (the ``geo`` extra).
-"""
+renamed: a reader never sees half a file. Needs rasterio (the ``geo`` extra)."""
 
 from __future__ import annotations
 
@@ -65,8 +62,7 @@ def write_map_geotiff(
     rm: Any, path: str | os.PathLike[str], slice_index: int | None = None
 ) -> Path:
     """Writes the map ``rm`` (a [`rainuav.radio.RadioMap`][rainuav.radio.mapdata.RadioMap], or one
-    instant
-    ``slice_index`` of a map series) of a georeferenced scenario as GeoTIFF at ``path``
+    instant ``slice_index`` of a map series) of a georeferenced scenario as GeoTIFF at ``path``
     (module docstring), atomically."""
     try:
         import rasterio

@@ -1,8 +1,7 @@
 """The PE engine: one split-step march per cell, recorded at the flight altitude.
 
-Each cell runs one march in its own frame (range along its azimuth, cross-range horizontal,
-height up; gridded by [`rainuav.radio.grid`][rainuav.radio.grid]), records the field at the flight
-altitude
+Each cell runs one march in its own frame (range along its azimuth, cross-range horizontal, height
+up; gridded by [`rainuav.radio.grid`][rainuav.radio.grid]), records the field at the flight altitude
 after every step, and is resampled onto the map grid:
 
 - **Source**: the aperture whose angular spectrum radiates the cell's pattern (any antenna,
@@ -17,12 +16,11 @@ after every step, and is resampled onto the map grid:
   cross-range index profiles per step (``n`` tabulated against rain rate once per frequency
   and interpolated); buildings become obstacle heights per step.
 - **Terrain** ([`rainuav.radio.terrain`][rainuav.radio.terrain]): the grid's floor is the area's
-  lowest ground (a
-  PEC plane, by images); the terrain above it zeroes the field below its surface at every step
-  (staircase masking: exact for horizontal polarisation, whose field vanishes on a conductor;
-  for vertical polarisation the surface should be an impedance boundary, which the mask
-  approximates), obstacles stand on it, and each column records the two rows around the
-  UAV's own height over the ground there.
+  lowest ground (a PEC plane, by images); the terrain above it zeroes the field below its surface at
+  every step (staircase masking: exact for horizontal polarisation, whose field vanishes on a
+  conductor; for vertical polarisation the surface should be an impedance boundary, which the mask
+  approximates), obstacles stand on it, and each column records the two rows around the UAV's own
+  height over the ground there.
 - **Reach**: pixels behind a cell, beyond its march, or in its absorbing taper get no signal
   from it.
 """

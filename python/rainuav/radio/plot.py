@@ -96,8 +96,8 @@ RAIN_CONTOURS_MM_H = (10.0, 30.0, 100.0)
 
 def _rain_contours(rm: Any, ax: Any) -> None:
     """Outlines the rain at [`RAIN_CONTOURS_MM_H`][rainuav.radio.plot.RAIN_CONTOURS_MM_H] where the
-    weather varies over the area
-    (rain cells, a storm at its instant, a rate map), labelled in mm/h."""
+    weather varies over the area (rain cells, a storm at its instant, a rate map), labelled in
+    mm/h."""
     from rainuav.radio.pe_engine import rain_rate_at
 
     if not rm.scenario.medium.varies:
@@ -128,10 +128,10 @@ def save_series_gif(
     progress: bool = False,
 ) -> Path:
     """Writes the SINR of a map series
-    ([`rainuav.radio.timemap.RadioMapSeries`][rainuav.radio.timemap.RadioMapSeries]) as an
-    animated GIF, one frame a slice on one colour scale, with the rain outlined at each
-    instant (10/30/100 mm/h), the outage edge (SINR = ``min_db``, dashed) and the sites
-    (``progress``: a bar over the frames)."""
+    ([`rainuav.radio.timemap.RadioMapSeries`][rainuav.radio.timemap.RadioMapSeries]) as an animated
+    GIF, one frame a slice on one colour scale, with the rain outlined at each instant (10/30/100
+    mm/h), the outage edge (SINR = ``min_db``, dashed) and the sites (``progress``: a bar over the
+    frames)."""
     import io
 
     from matplotlib.figure import Figure

@@ -209,11 +209,11 @@ def storm(
 ) -> Scenario:
     """``uma`` at 28 GHz under the random storm of ``seed``
     ([`draw_storm()`][rainuav.radio.storms.draw_storm]: moving, growing and decaying Gaussian cells
-    over a uniform background; its
-    ``medium.at(t_s)`` is the weather t_s seconds into the storm). ``rain_rate_mm_h`` replaces
-    the drawn background rate; ``speed_m_s`` the storm's speed (every cell's velocity scaled
-    by the same factor, each cell still at its drawn place at mid-storm; 0: cells that stay
-    where they are and only grow or decay). Seeds from 1 000 000 are the evaluation storms."""
+    over a uniform background; its ``medium.at(t_s)`` is the weather t_s seconds into the storm).
+    ``rain_rate_mm_h`` replaces the drawn background rate; ``speed_m_s`` the storm's speed (every
+    cell's velocity scaled by the same factor, each cell still at its drawn place at mid-storm; 0:
+    cells that stay where they are and only grow or decay). Seeds from 1 000 000 are the evaluation
+    storms."""
     weather = draw_storm(seed, (0.0, 2000.0, 0.0, 2000.0), speed_m_s)
     if rain_rate_mm_h is not None:
         weather = dataclasses.replace(weather, rain_rate_mm_h=float(rain_rate_mm_h))

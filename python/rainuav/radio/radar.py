@@ -1,9 +1,8 @@
-"""Rain from a georeferenced grid, as weather radars and nowcasts deliver it: a
-NetCDF (CF) file of rain rate or reflectivity on (time, lat, lon) or on projected (time, y, x)
-with its CRS, or GeoTIFF (a file with one band per instant, or a folder of them: read by
+"""Rain from a georeferenced grid, as weather radars and nowcasts deliver it: a NetCDF (CF) file of
+rain rate or reflectivity on (time, lat, lon) or on projected (time, y, x) with its CRS, or GeoTIFF
+(a file with one band per instant, or a folder of them: read by
 [`rainuav.radio.geotiff`][rainuav.radio.geotiff] into the same form), reprojected onto a
-georeferenced scenario's
-area.
+georeferenced scenario's area.
 
 - **Coordinates.** Either 1-D ``lat``/``lon`` (or ``latitude``/``longitude``) coordinates, in
   degrees (WGS 84), or 1-D ``x``/``y`` with the data variable's ``grid_mapping`` attribute
@@ -11,19 +10,16 @@ area.
   rioxarray and most radar products write). A grid without either is refused: its positions
   would be a guess.
 - **Units.** ``mm/h`` (the spellings of
-  [`rainuav.radio.rategrid.UNITS`][rainuav.radio.rategrid.UNITS]) or reflectivity in
-  ``dBZ``, converted by the Marshall-Palmer relation ``Z = 200 R^1.6`` (Z in mm^6/m^3, R in
-  mm/h; Marshall and Palmer 1948, the default of most radar software for stratiform rain):
-  ``R = (10^(dBZ/10) / 200)^(1/1.6)``. Reflectivity below
-  [`NO_ECHO_DBZ`][rainuav.radio.radar.NO_ECHO_DBZ] (0 dBZ, 0.04
+  [`rainuav.radio.rategrid.UNITS`][rainuav.radio.rategrid.UNITS]) or reflectivity in ``dBZ``,
+  converted by the Marshall-Palmer relation ``Z = 200 R^1.6`` (Z in mm^6/m^3, R in mm/h; Marshall
+  and Palmer 1948, the default of most radar software for stratiform rain): ``R = (10^(dBZ/10) /
+  200)^(1/1.6)``. Reflectivity below [`NO_ECHO_DBZ`][rainuav.radio.radar.NO_ECHO_DBZ] (0 dBZ, 0.04
   mm/h) is no rain, as radar products mark clutter-free no-echo pixels.
-- **Reprojection.** Each sample point of the area (the centres of a grid of at most
-  ``max_cells`` a side over it, as [`rainuav.radio.rategrid`][rainuav.radio.rategrid] samples) is
-  taken to latitude
+- **Reprojection.** Each sample point of the area (the centres of a grid of at most ``max_cells`` a
+  side over it, as [`rainuav.radio.rategrid`][rainuav.radio.rategrid] samples) is taken to latitude
   and longitude through the scenario's [`rainuav.geo.Georef`][rainuav.geo.Georef], then into the
-  file's CRS
-  (pyproj), and the file is interpolated bilinearly there (xarray's ``interp``). The file must
-  cover the area.
+  file's CRS (pyproj), and the file is interpolated bilinearly there (xarray's ``interp``). The file
+  must cover the area.
 
 Needs the ``weather`` and ``geo`` extras (xarray, h5netcdf, pyproj; rasterio for GeoTIFF).
 """

@@ -3,14 +3,11 @@
 [`build_radio_map()`][rainuav.radio.radiomap.build_radio_map] grids every cell
 ([`rainuav.radio.grid`][rainuav.radio.grid]), marches it
 ([`rainuav.radio.pe_engine`][rainuav.radio.pe_engine]), resamples its power onto the map's pixel
-centres, and
-combines the cells ([`rainuav.radio.sinr`][rainuav.radio.sinr]). ``sir_db`` and ``sinr_db`` are
-clipped to
-[-40, 60] dB: -40 where no cell reaches (and the serving cell is -1), 60 where only one cell
-does. ``rss_dbm`` is -250 dBm where a cell does not reach. Cells are computed one after
-another, each march using every core. Maps are cached on disk
-([`rainuav.radio.cache`][rainuav.radio.cache]).
-"""
+centres, and combines the cells ([`rainuav.radio.sinr`][rainuav.radio.sinr]). ``sir_db`` and
+``sinr_db`` are clipped to [-40, 60] dB: -40 where no cell reaches (and the serving cell is -1), 60
+where only one cell does. ``rss_dbm`` is -250 dBm where a cell does not reach. Cells are computed
+one after another, each march using every core. Maps are cached on disk
+([`rainuav.radio.cache`][rainuav.radio.cache])."""
 
 from __future__ import annotations
 
@@ -67,15 +64,14 @@ def build_radio_map(
 def build_radio_map(
     scn: Scenario, *, cache: bool = True, progress: bool = False, times_s: Any = None
 ) -> RadioMap | RadioMapSeries:
-    """Builds (or loads from the cache) the radio map of ``scn`` with its engine (with
-    ``times_s``, the maps of its moving weather at those instants:
+    """Builds (or loads from the cache) the radio map of ``scn`` with its engine (with ``times_s``,
+    the maps of its moving weather at those instants:
     [`rainuav.radio.timemap.build_radio_map_series()`][rainuav.radio.timemap.build_radio_map_series]):
-    ``"pe"`` marches each cell's pattern inside its cone; ``"ray"`` traces two rays per
-    cell and pixel; ``"hybrid"`` lets the PE carry each pattern inside its cone and the rays
-    the rest (the PE needs a ``pec`` ground or none: over a soil the hybrid is
-    the ray engine; a cell whose cone carries under 1% of its power at every pixel is not
-    marched). ``RadioMap.pe_share`` records, per cell and pixel, the share of the
-    power the PE carried."""
+    ``"pe"`` marches each cell's pattern inside its cone; ``"ray"`` traces two rays per cell and
+    pixel; ``"hybrid"`` lets the PE carry each pattern inside its cone and the rays the rest (the PE
+    needs a ``pec`` ground or none: over a soil the hybrid is the ray engine; a cell whose cone
+    carries under 1% of its power at every pixel is not marched). ``RadioMap.pe_share`` records, per
+    cell and pixel, the share of the power the PE carried."""
     if times_s is not None:
         from rainuav.radio.timemap import build_radio_map_series
 
@@ -108,8 +104,7 @@ def build_radio_map(
 
 def map_from_parts(scn: Scenario, parts: EngineParts, t0: float) -> RadioMap:
     """The map of ``scn`` from its engine's parts ([`rainuav.radio.hybrid`][rainuav.radio.hybrid]),
-    its build
-    counted from ``t0`` (``time.perf_counter``)."""
+    its build counted from ``t0`` (``time.perf_counter``)."""
     a = scn.area
     x_m, y_m = a.centres()
     jobs = [(i, site, cell) for i, site in enumerate(scn.sites) for cell in site.cells]

@@ -1,8 +1,7 @@
 """Rain from a file: a NetCDF dataset of rain rates on (time, y, x) in the scenario's metres, read
 with xarray into a moving weather ([`rainuav.radio.weather.Medium`][rainuav.radio.weather.Medium] of
-kind ``'map'`` with
-one map per instant; ``medium.at(t)`` interpolates linearly in time, exact at the file's own
-instants). Georeferenced grids (latitude/longitude, a CRS, dBZ) are read by
+kind ``'map'`` with one map per instant; ``medium.at(t)`` interpolates linearly in time, exact at
+the file's own instants). Georeferenced grids (latitude/longitude, a CRS, dBZ) are read by
 [`rainuav.radio.radar`][rainuav.radio.radar].
 
 The file holds one data variable with dimensions ``(time, y, x)`` (or the one named by
@@ -13,9 +12,7 @@ interpolated bilinearly (xarray's ``interp``) onto the centres of a grid over th
 ``max_cells`` a side, and must be finite, within 0..500 mm/h.
 
 Needs the optional ``weather`` extra (``pip install '.[weather]' from the rainuav clone``: xarray
-and h5netcdf,
-so that both NetCDF-3 and NetCDF-4 files open).
-"""
+and h5netcdf, so that both NetCDF-3 and NetCDF-4 files open)."""
 
 from __future__ import annotations
 

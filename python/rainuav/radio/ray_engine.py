@@ -1,27 +1,23 @@
 """The ray engine: every cell's received power at every pixel from two rays (docs/physics.md
 section 8), the per-pixel work in Rust (``rainuav_core::rays``).
 
-For each cell and pixel: the line-of-sight ray and the ray reflected by the ground, each with
-the cell's antenna gain in its own departure direction ([`rainuav.radio.cell`][rainuav.radio.cell])
-and
-free-space spreading; the ground is PEC, absent, or an ITU-R P.527 soil (Fresnel
-coefficients for the scenario's polarisation); rain attenuation is integrated along each ray
-through the scenario's rain field (homogeneous: ``gamma d``; rain cells and rate maps: a
-raster of ``gamma`` nodes integrated along the ray). Over terrain
-([`rainuav.radio.terrain`][rainuav.radio.terrain])
-and obstacles (buildings, the height map, standing on the terrain), each site-pixel path reads
-its profile: the direct ray gets the Bullington loss of the whole profile (ITU-R P.526-15
-section 4.5.1) with the antenna gain toward the diffracting edge, and the ground reflection
-bounces off the local ground line only where both ends see its specular point
+For each cell and pixel: the line-of-sight ray and the ray reflected by the ground, each with the
+cell's antenna gain in its own departure direction ([`rainuav.radio.cell`][rainuav.radio.cell]) and
+free-space spreading; the ground is PEC, absent, or an ITU-R P.527 soil (Fresnel coefficients for
+the scenario's polarisation); rain attenuation is integrated along each ray through the scenario's
+rain field (homogeneous: ``gamma d``; rain cells and rate maps: a raster of ``gamma`` nodes
+integrated along the ray). Over terrain ([`rainuav.radio.terrain`][rainuav.radio.terrain]) and
+obstacles (buildings, the height map, standing on the terrain), each site-pixel path reads its
+profile: the direct ray gets the Bullington loss of the whole profile (ITU-R P.526-15 section 4.5.1)
+with the antenna gain toward the diffracting edge, and the ground reflection bounces off the local
+ground line only where both ends see its specular point
 ([`departures()`][rainuav.radio.ray_engine.departures]; docs/physics.md section 12). Each pixel
-holds the mean power over its area
-(ground-reflection fringes finer than a pixel are averaged, not aliased).
+holds the mean power over its area (ground-reflection fringes finer than a pixel are averaged, not
+aliased).
 
 With ``weights``, [`ray_power()`][rainuav.radio.ray_engine.ray_power] also returns the power of the
-part of each pattern the
-weights select: what the PE would carry in the hybrid engine
-([`rainuav.radio.radiomap.build_radio_map()`][rainuav.radio.radiomap.build_radio_map]).
-"""
+part of each pattern the weights select: what the PE would carry in the hybrid engine
+([`rainuav.radio.radiomap.build_radio_map()`][rainuav.radio.radiomap.build_radio_map])."""
 
 from __future__ import annotations
 
@@ -228,10 +224,9 @@ ray toward every pixel, degrees."""
 def ray_directions(
     scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
 ) -> Directions:
-    """Each (site, cell)'s azimuth and departure elevations toward every pixel (H, W): the
-    closed forms over flat open ground, else [`departures()`][rainuav.radio.ray_engine.departures]
-    (toward the diffracting edge
-    and the specular point), traced once per site."""
+    """Each (site, cell)'s azimuth and departure elevations toward every pixel (H, W): the closed
+    forms over flat open ground, else [`departures()`][rainuav.radio.ray_engine.departures] (toward
+    the diffracting edge and the specular point), traced once per site."""
     return _paths(scn, jobs, x_m, y_m)[0]
 
 
@@ -239,8 +234,7 @@ def _paths(
     scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
 ) -> tuple[Directions, Paths | None]:
     """[`ray_directions()`][rainuav.radio.ray_engine.ray_directions], and the paths traced for them
-    (None over flat open ground,
-    where the core's closed forms need no tracing)."""
+    (None over flat open ground, where the core's closed forms need no tracing)."""
     paths, index = None, {}
     if not _flat_open(scn):
         unique = list({id(s): s for s, _ in jobs}.values())
@@ -282,15 +276,13 @@ def ray_terms(
     y_m: np.ndarray,
     weights: Sequence[Weight | None] | None = None,
 ) -> np.ndarray:
-    """Everything of a ray map that no weather changes: each cell's clear-air power at every
-    pixel split into direct, reflected and interference parts, and its rays' lengths,
-    (M, H, W, 7): ``[direct, reflect, cross, d1, d2, wall, d3]`` (antenna gains,
-    spreading, ground, pixel means, diffraction, the walls' rays:
-    [`wall_terms()`][rainuav.radio.wall_rays.wall_terms]); with
+    """Everything of a ray map that no weather changes: each cell's clear-air power at every pixel
+    split into direct, reflected and interference parts, and its rays' lengths, (M, H, W, 7):
+    ``[direct, reflect, cross, d1, d2, wall, d3]`` (antenna gains, spreading, ground, pixel means,
+    diffraction, the walls' rays: [`wall_terms()`][rainuav.radio.wall_rays.wall_terms]); with
     ``weights`` (as [`ray_power()`][rainuav.radio.ray_engine.ray_power] takes them), the parts of
-    the whole pattern less those
-    of the weighted part (what the rays keep where the PE carries the rest).
-    [`ray_slicer()`][rainuav.radio.ray_engine.ray_slicer] adds the rain."""
+    the whole pattern less those of the weighted part (what the rays keep where the PE carries the
+    rest). [`ray_slicer()`][rainuav.radio.ray_engine.ray_slicer] adds the rain."""
     dirs, paths = _paths(scn, jobs, x_m, y_m)
     gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)

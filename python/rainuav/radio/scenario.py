@@ -171,8 +171,7 @@ class Scenario:
     origin: Origin | None = None
     """Where (0, 0) lies on the Earth, if the scenario is georeferenced (``[origin]`` with
     ``lat_deg``, ``lon_deg``: [`rainuav.geo.Georef`][rainuav.geo.Georef], an azimuthal equidistant
-    projection
-    on WGS 84); every position then has a latitude and longitude too."""
+    projection on WGS 84); every position then has a latitude and longitude too."""
     terrain: TerrainFile | None = None
     """The terrain (``[terrain] file = "dem.tif"``; needs ``origin``): heights are then above
     it (a site's antenna over the terrain at the site; the UAV over the terrain under it, or
@@ -296,9 +295,8 @@ class Scenario:
         return clean(dataclasses.asdict(self))
 
     def digest(self) -> str:
-        """A hash of every field (two scenarios with the same digest describe the same
-        network, weather and airspace). The radio-map cache keys on it together with the
-        engine's fingerprint
+        """A hash of every field (two scenarios with the same digest describe the same network,
+        weather and airspace). The radio-map cache keys on it together with the engine's fingerprint
         ([`rainuav.radio.cache.engine_fingerprint()`][rainuav.radio.cache.engine_fingerprint])."""
         d = self.to_dict()
         if self.terrain is not None:

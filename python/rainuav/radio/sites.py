@@ -54,8 +54,7 @@ SiteRow = dict[str, Any]
 
 def _field(where: str, name: str, raw: Any) -> Any:
     """One field of a row, checked: a number within [`RANGES`][rainuav.radio.sites.RANGES], an
-    integer for
-    ``rows``, an antenna name, or an id."""
+    integer for ``rows``, an antenna name, or an id."""
     if name == "site_id":
         text = str(raw).strip() if raw is not None else ""
         if not text:

@@ -3,15 +3,15 @@ and a mean rate, carried by one storm velocity and evolving in time (``Medium(ki
 field=StochasticRain(...))``; ``medium.at(t)`` is the rate map at t).
 
 **The field** (the STEPS way of making rain, Seed 2003; the noise from ``pysteps``). A Gaussian
-noise field ``N`` of zero mean and unit variance whose 2-D power spectrum falls as ``|k|^-beta``
-is made by filtering white noise in Fourier space
+noise field ``N`` of zero mean and unit variance whose 2-D power spectrum falls as ``|k|^-beta`` is
+made by filtering white noise in Fourier space
 (``pysteps.noise.fftgenerators.generate_noise_2d_fft_filter``) on a periodic square of side
 ``side_m`` from the origin (default 4 km: twice the presets' area), on a grid of at most
-[`MAX_GRID`][rainuav.radio.stochastic.MAX_GRID] nodes a side (about 10 m). Rain falls
-where ``N > z`` with ``z`` the ``1 - wet_fraction`` quantile of the standard normal; there it
-is log-normal, ``R = c exp(sigma N)`` (``sigma`` = ``log_sd``), with ``c`` set so that the
-expected mean over the area is ``mean_rate_mm_h``:
-``E[exp(sigma N); N > z] = exp(sigma^2 / 2) (1 - Phi(z - sigma))``. Rates are capped at 500 mm/h.
+[`MAX_GRID`][rainuav.radio.stochastic.MAX_GRID] nodes a side (about 10 m). Rain falls where ``N >
+z`` with ``z`` the ``1 - wet_fraction`` quantile of the standard normal; there it is log-normal, ``R
+= c exp(sigma N)`` (``sigma`` = ``log_sd``), with ``c`` set so that the expected mean over the area
+is ``mean_rate_mm_h``: ``E[exp(sigma N); N > z] = exp(sigma^2 / 2) (1 - Phi(z - sigma))``. Rates are
+capped at 500 mm/h.
 
 **In time.** The field moves with the storm velocity ``(vx, vy)``: the square is periodic, so
 the field at t is the field at 0 shifted by ``v t`` exactly (sampled bilinearly, wrapping); it
@@ -26,9 +26,7 @@ every instant and changes it continuously (a Lagrangian decorrelation time of ab
 ``lifetime_s``; convective rain decorrelates in 10-30 minutes).
 
 ``pysteps`` is an optional dependency (``pip install '.[weather]' from the rainuav clone``); without
-it a field
-is refused in one line.
-"""
+it a field is refused in one line."""
 
 from __future__ import annotations
 

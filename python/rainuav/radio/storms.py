@@ -17,9 +17,8 @@ The distribution (every draw from ``numpy.random.default_rng(seed)``, in this or
   its velocity.
 
 Storm seeds at or above [`EVAL_SEEDS_FROM`][rainuav.radio.storms.EVAL_SEEDS_FROM] are reserved for
-evaluation: nothing is trained
-or tuned on them (``check_storm_seed`` refuses them where training asks).
-"""
+evaluation: nothing is trained or tuned on them (``check_storm_seed`` refuses them where training
+asks)."""
 
 from __future__ import annotations
 
@@ -72,12 +71,11 @@ def draw_storm(
     extent_m: tuple[float, float, float, float] = (0.0, 2000.0, 0.0, 2000.0),
     speed_m_s: float | None = None,
 ) -> Medium:
-    """The storm of ``seed`` over the area ``extent_m`` (x0, x1, y0, y1), as a weather whose
-    cells move ([`rainuav.radio.weather.Medium.at()`][rainuav.radio.weather.Medium.at] gives it at
-    any instant; time 0 is the
-    storm's start). The distribution is the module docstring's; ``speed_m_s``, where given,
-    scales every cell's velocity by the factor that makes the storm's speed that (the same
-    draws: 0 keeps each cell at its mid-storm place)."""
+    """The storm of ``seed`` over the area ``extent_m`` (x0, x1, y0, y1), as a weather whose cells
+    move ([`rainuav.radio.weather.Medium.at()`][rainuav.radio.weather.Medium.at] gives it at any
+    instant; time 0 is the storm's start). The distribution is the module docstring's;
+    ``speed_m_s``, where given, scales every cell's velocity by the factor that makes the storm's
+    speed that (the same draws: 0 keeps each cell at its mid-storm place)."""
     rng = np.random.default_rng(check_storm_seed(seed))
     if speed_m_s is not None:
         speed_m_s = check_number("speed_m_s", speed_m_s, 0.0, 100.0, " m/s")

@@ -1,7 +1,6 @@
 """A scenario's ground as the radio layer uses it (docs/physics.md section 12): its terrain on the
 area's nodes ([`rainuav.ground`][rainuav.ground]), the heights the ray engine takes, the flight
-height over
-every pixel and the pixels that are not flyable.
+height over every pixel and the pixels that are not flyable.
 
 - A site's antenna stands ``height_m`` above the terrain at the site; the UAV flies
   ``area.altitude_m`` above the terrain under it (``area.altitude_reference = "ground"``, the
@@ -122,9 +121,9 @@ def not_flyable(scn: Scenario) -> np.ndarray:
 
 def map_mask(scn: Scenario) -> np.ndarray | None:
     """The not-flyable pixels a map of ``scn`` carries:
-    [`not_flyable()`][rainuav.radio.terrain.not_flyable] where anything
-    stands on the ground (terrain, buildings, a height map), None over flat open ground (where
-    every pixel is flyable)."""
+    [`not_flyable()`][rainuav.radio.terrain.not_flyable] where anything stands on the ground
+    (terrain, buildings, a height map), None over flat open ground (where every pixel is
+    flyable)."""
     if (
         scn.terrain is None
         and not scn.buildings

@@ -1,16 +1,16 @@
 """Radio maps in time: a scenario whose weather moves
-([`rainuav.radio.weather.Medium.at()`][rainuav.radio.weather.Medium.at])
-mapped at many instants, and the static map of any instant between them.
+([`rainuav.radio.weather.Medium.at()`][rainuav.radio.weather.Medium.at]) mapped at many instants,
+and the static map of any instant between them.
 
-What does not move is computed once: every cell's rays traced in clear air, their power split
-into direct, reflected and interference parts
-([`rainuav.radio.ray_engine.ray_terms()`][rainuav.radio.ray_engine.ray_terms]).
-Each slice then integrates the rain of its instant once per site, from the site to every pixel
-at once (cumulative integrals along lines fanning out from the site, read between lines:
-``rainuav_core::raytime``), shared by the site's cells and by both rays (the reflection point
-lies on the same horizontal line, and rain fills every column below the flight altitude), and
-attenuates the parts with it. A slice is the static ray-engine map of the frozen weather at
-its instant to within 0.05 dB (tested: the fan of lines replaces a line per pixel).
+What does not move is computed once: every cell's rays traced in clear air, their power split into
+direct, reflected and interference parts
+([`rainuav.radio.ray_engine.ray_terms()`][rainuav.radio.ray_engine.ray_terms]). Each slice then
+integrates the rain of its instant once per site, from the site to every pixel at once (cumulative
+integrals along lines fanning out from the site, read between lines: ``rainuav_core::raytime``),
+shared by the site's cells and by both rays (the reflection point lies on the same horizontal line,
+and rain fills every column below the flight altitude), and attenuates the parts with it. A slice is
+the static ray-engine map of the frozen weather at its instant to within 0.05 dB (tested: the fan of
+lines replaces a line per pixel).
 
 **The hybrid engine in time.** Where the PE carries part of a cell's pattern, it is marched
 once, in clear air, and its power at each pixel is attenuated at every instant like the direct
@@ -107,8 +107,7 @@ class RadioMapSeries:
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> RadioMapSeries:
         """Reads a series written by [`save()`][rainuav.radio.mapdata.RadioMap.save], checked
-        (shapes, ranges, its scenario);
-        bit-exact round trip."""
+        (shapes, ranges, its scenario); bit-exact round trip."""
         return _load(path)
 
     def at(self, t_s: float) -> RadioMap:
@@ -231,13 +230,12 @@ def build_radio_map_series(
     clear_parts: Callable[[], EngineParts] | None = None,
     cache_tag: str = "",
 ) -> RadioMapSeries:
-    """The maps of ``scn`` at the instants ``times_s`` (strictly increasing, s), engine
-    ``"ray"`` (module docstring). Memory is checked before anything is allocated. With
-    ``cache``, a series of the same scenario, instants and engine code is read from the map
-    cache ([`rainuav.radio.cache`][rainuav.radio.cache]) and a new one is kept there.
-    ``clear_parts``: the
-    hybrid's parts in clear air from elsewhere (called only if the series is built), kept in
-    the cache under ``cache_tag`` apart from the series built alone."""
+    """The maps of ``scn`` at the instants ``times_s`` (strictly increasing, s), engine ``"ray"``
+    (module docstring). Memory is checked before anything is allocated. With ``cache``, a series of
+    the same scenario, instants and engine code is read from the map cache
+    ([`rainuav.radio.cache`][rainuav.radio.cache]) and a new one is kept there. ``clear_parts``: the
+    hybrid's parts in clear air from elsewhere (called only if the series is built), kept in the
+    cache under ``cache_tag`` apart from the series built alone."""
     if scn.engine not in ("ray", "hybrid"):
         raise InvalidInputError(
             f"maps in time need engine 'ray' or 'hybrid' (got {scn.engine!r}: a PE march per "

@@ -1,10 +1,10 @@
 """The rays that building walls reflect (docs/physics.md section 12), for the ray engine: each
-site's rays traced once in the core (`rainuav._core.ray_walls`: the image method per
-wall, the specular point within the wall, both legs clear), then each cell's antenna gain
-toward each ray's specular point, the powers added incoherently per pixel
+site's rays traced once in the core (`rainuav._core.ray_walls`: the image method per wall, the
+specular point within the wall, both legs clear), then each cell's antenna gain toward each ray's
+specular point, the powers added incoherently per pixel
 ([`wall_terms()`][rainuav.radio.wall_rays.wall_terms]). Also the obstacles (buildings and the height
-map) as the core's ray
-functions take them ([`obstacle_args()`][rainuav.radio.wall_rays.obstacle_args]).
+map) as the core's ray functions take them
+([`obstacle_args()`][rainuav.radio.wall_rays.obstacle_args]).
 
 **Rain** on a wall's ray is the mean specific attenuation of the site-pixel line times the
 ray's length (the pixel's wall rays together: their power-weighted mean length): exact in
@@ -44,8 +44,7 @@ def _heights(scn: Scenario) -> tuple[np.ndarray | None, tuple[float, float, floa
 
 def obstacle_args(scn: Scenario) -> dict[str, Any]:
     """The buildings (boxes and footprints, [`rainuav.radio.buildings`][rainuav.radio.buildings])
-    and the height
-    map of ``scn`` as the core's ray functions take them."""
+    and the height map of ``scn`` as the core's ray functions take them."""
     b = scenario_buildings(scn)
     heights, h_os = _heights(scn)
     return {

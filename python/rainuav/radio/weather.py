@@ -117,8 +117,8 @@ class Medium:
 
     def at(self, t_s: float) -> Medium:
         """The weather at time ``t_s``, s: every rain cell moved and grown
-        ([`RainCell.at()`][rainuav.radio.weather.RainCell.at]);
-        the rest does not change in time. A weather that does not move returns itself."""
+        ([`RainCell.at()`][rainuav.radio.weather.RainCell.at]); the rest does not change in time. A
+        weather that does not move returns itself."""
         t = _num("t_s", t_s, -1e6, 1e6, " s")
         if self.kind == "map" and self.rate_times_s is not None:
             times = np.asarray(self.rate_times_s, dtype=float)

@@ -1,16 +1,14 @@
 """Checkpoints and policy files that are data, never code.
 
-A run folder is something people hand each other, so loading one must not run anything it
-holds. Files are written by [`save()`][rainuav.rl.checkpoint.save] with tensors and plain types only
-(numbers, strings,
-lists, tuples, dicts, None): a numpy array is stored as ``{"__ndarray__": tensor}`` (a numpy
-scalar as a 0-d one) and restored bit for bit by [`load()`][rainuav.rl.checkpoint.load], which reads
-with
-``torch.load(..., weights_only=True)``: torch's restricted unpickler, which builds tensors and
-plain containers and refuses any other global. A file that needs more (a pickle that would call
-a function, a class, an older checkpoint holding raw numpy objects) or that is not a checkpoint
-at all (empty, truncated, random bytes) is refused with one line naming the file.
-"""
+A run folder is something people hand each other, so loading one must not run anything it holds.
+Files are written by [`save()`][rainuav.rl.checkpoint.save] with tensors and plain types only
+(numbers, strings, lists, tuples, dicts, None): a numpy array is stored as ``{"__ndarray__":
+tensor}`` (a numpy scalar as a 0-d one) and restored bit for bit by
+[`load()`][rainuav.rl.checkpoint.load], which reads with ``torch.load(..., weights_only=True)``:
+torch's restricted unpickler, which builds tensors and plain containers and refuses any other
+global. A file that needs more (a pickle that would call a function, a class, an older checkpoint
+holding raw numpy objects) or that is not a checkpoint at all (empty, truncated, random bytes) is
+refused with one line naming the file."""
 
 from __future__ import annotations
 
@@ -71,11 +69,10 @@ def load(
     path: str | os.PathLike[str], required: tuple[str, ...] = (), what: str = "checkpoint"
 ) -> dict[str, Any]:
     """The dict saved at ``path`` by [`save()`][rainuav.rl.checkpoint.save], read without running
-    code
-    (``weights_only=True``, on the CPU); anything else raises
-    [`InvalidInputError`][rainuav.errors.InvalidInputError]
-    naming the file: missing, unreadable, not a checkpoint, holding more than tensors and
-    plain data, or lacking one of the ``required`` keys."""
+    code (``weights_only=True``, on the CPU); anything else raises
+    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file: missing, unreadable,
+    not a checkpoint, holding more than tensors and plain data, or lacking one of the ``required``
+    keys."""
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"{what} {p}: no such file")

@@ -1,11 +1,10 @@
 """Flying the agent: the UAVs in flight during training ([`Lanes`][rainuav.rl.collect.Lanes]),
-batched greedy
-flights from given starts ([`greedy_rollouts()`][rainuav.rl.collect.greedy_rollouts]), and the two
-calls every flight makes of
+batched greedy flights from given starts
+([`greedy_rollouts()`][rainuav.rl.collect.greedy_rollouts]), and the two calls every flight makes of
 its environment, on one level or among levels ([`observe()`][rainuav.rl.collect.observe],
-[`step()`][rainuav.rl.collect.step]): a UAV's
-state is its start, its offset in moves, its level (0 on one level) and its clock ``t``
-(moves on one level; ticks among levels, [`rainuav.nav.levels`][rainuav.nav.levels])."""
+[`step()`][rainuav.rl.collect.step]): a UAV's state is its start, its offset in moves, its level (0
+on one level) and its clock ``t`` (moves on one level; ticks among levels,
+[`rainuav.nav.levels`][rainuav.nav.levels])."""
 
 from __future__ import annotations
 
@@ -27,8 +26,8 @@ Env = UAVNavEnv | UAVLevelsEnv
 
 
 def observe(env: Env, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None) -> Any:
-    """The env's observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) after ``t`` (N,),
-    heading for ``goal`` (N, 2) in the worlds ``world`` (N,) where the env shows the weather
+    """The env's observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) after ``t`` (N,), heading
+    for ``goal`` (N, 2) in the worlds ``world`` (N,) where the env shows the weather
     ([`UAVNavEnv.observe()`][rainuav.nav.env.UAVNavEnv.observe],
     [`UAVLevelsEnv.observe()`][rainuav.nav.levels.UAVLevelsEnv.observe])."""
     if isinstance(env, UAVLevelsEnv):
@@ -121,9 +120,8 @@ class Lanes:
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         """Restores a [`state_dict()`][rainuav.rl.collect.Lanes.state_dict]; arrays of another shape
-        or
-        type raise ValueError
-        (a checkpoint from before levels has none: every lane on level 0)."""
+        or type raise ValueError (a checkpoint from before levels has none: every lane on level
+        0)."""
         d = {"level": np.zeros_like(self.level), **d}
         for f in dataclasses.fields(self):
             mine, v = getattr(self, f.name), d[f.name]
@@ -164,14 +162,13 @@ def greedy_rollouts(
 ) -> list[dict[str, Any]]:
     """Greedy episodes from every start at once (the batched stepper gives exactly the scalar
     environment's transitions), one dict per start: ``return``, ``steps``, ``path`` (T+1, 2),
-    ``levels`` and ``ticks`` (T+1,: each point's level and clock; zeros and the move count
-    on one level), ``signal`` (T,) along the path, ``reached`` and ``overridden`` (moves
-    where the shield replaced the network's choice). ``shield``: keep to the moves
+    ``levels`` and ``ticks`` (T+1,: each point's level and clock; zeros and the move count on one
+    level), ``signal`` (T,) along the path, ``reached`` and ``overridden`` (moves where the shield
+    replaced the network's choice). ``shield``: keep to the moves
     [`shield_moves()`][rainuav.nav.shield.shield_moves] allows (the plane's; default:
-    ``agent.cfg.shield``). ``goals``
-    (N, 2): each flight's destination (default: the task's). Under training's torch
-    settings (one CPU thread: the networks are tiny, and two threads beside another job spin
-    for the core: 60 ms a one-UAV decision)."""
+    ``agent.cfg.shield``). ``goals`` (N, 2): each flight's destination (default: the task's). Under
+    training's torch settings (one CPU thread: the networks are tiny, and two threads beside another
+    job spin for the core: 60 ms a one-UAV decision)."""
     with torch_settings(agent.device):
         return _rollouts(agent, env, starts, agent.cfg.shield if shield is None else shield, goals)
 

@@ -1,8 +1,7 @@
 """What a training run depends on: the learner's hyperparameters
-([`DQNConfig`][rainuav.rl.config.DQNConfig]) and the
-run's settings ([`TrainConfig`][rainuav.rl.config.TrainConfig]), their checks, their TOML form and
-the random streams
-derived from the run's one seed."""
+([`DQNConfig`][rainuav.rl.config.DQNConfig]) and the run's settings
+([`TrainConfig`][rainuav.rl.config.TrainConfig]), their checks, their TOML form and the random
+streams derived from the run's one seed."""
 
 from __future__ import annotations
 
@@ -96,9 +95,9 @@ class DQNConfig:
     it (arrival, progress toward the destination), into its body and straight into the
     advantage head ([`rainuav.rl.networks.WeatherQNet`][rainuav.rl.networks.WeatherQNet])."""
     goal_maps: bool = False
-    """A weather-reading network also sees the destination drawn on its grids: on the local
-    window how much nearer each point is to it, on the whole area each cell's distance to it
-    and to the UAV (extra input channels of the convolutions;
+    """A weather-reading network also sees the destination drawn on its grids: on the local window
+    how much nearer each point is to it, on the whole area each cell's distance to it and to the UAV
+    (extra input channels of the convolutions;
     [`rainuav.rl.networks.WeatherQNet.goal_channels()`][rainuav.rl.networks.WeatherQNet.goal_channels])."""
     goal_starts: float = 0.25
     """Fraction of the training episodes that start near the destination (uniform in the
@@ -125,15 +124,14 @@ class DQNConfig:
 @dataclass
 class TrainConfig(WorldSpec):
     """Everything a training run depends on: the world's spec
-    ([`rainuav.world.WorldSpec`][rainuav.world.WorldSpec]:
-    scenario, weather, task), the run's settings below and the learner's hyperparameters
-    (``dqn``). One docstring line per field = one CLI flag."""
+    ([`rainuav.world.WorldSpec`][rainuav.world.WorldSpec]: scenario, weather, task), the run's
+    settings below and the learner's hyperparameters (``dqn``). One docstring line per field = one
+    CLI flag."""
 
     preset: str = ""
     """Learner preset: '' (the tuned learner, docs/guide/learning.md) or 'paper' (Algorithm 1 and
     Table I literally: the [dqn] fields are set as docs/guide/learning.md lists, and any given
-    beside
-    it are refused)."""
+    beside it are refused)."""
     seed: int = 0
     """Seed of every random choice (python, numpy, torch, environment)."""
     device: str = "auto"
@@ -249,12 +247,11 @@ STORM_LEARNER: dict[str, Any] = {
     "move_features": True,
     "goal_maps": True,
 }
-"""What ``--storm-seed random`` changes in [dqn] unless given: a larger minibatch, a lower
-learning rate and a slower target for the convolutional network over many storms, and the
-destination drawn on its grids (goal maps) (chosen on validation storms 900 000-900 009 and
-``uma`` at 5 mm/h, with training storms only: docs/guide/learning.md, "One network for every
-storm"); with ``time_budget_s`` = [`STORM_BUDGET_S`][rainuav.rl.config.STORM_BUDGET_S] and
-``calm_share`` =
+"""What ``--storm-seed random`` changes in [dqn] unless given: a larger minibatch, a lower learning
+rate and a slower target for the convolutional network over many storms, and the destination drawn
+on its grids (goal maps) (chosen on validation storms 900 000-900 009 and ``uma`` at 5 mm/h, with
+training storms only: docs/guide/learning.md, "One network for every storm"); with ``time_budget_s``
+= [`STORM_BUDGET_S`][rainuav.rl.config.STORM_BUDGET_S] and ``calm_share`` =
 [`STORM_CALM_SHARE`][rainuav.rl.config.STORM_CALM_SHARE]."""
 
 STORM_LEVELS: dict[str, Any] = {
@@ -311,9 +308,8 @@ given), with a constant learning rate; ``episodes`` (Table I: 3000) may be lower
 
 def apply_preset(cfg: TrainConfig, given: Iterable[str] = ()) -> TrainConfig:
     """``cfg`` with its learner preset applied (``preset = "paper"``:
-    [`PAPER_LEARNER`][rainuav.rl.config.PAPER_LEARNER],
-    constant learning rate). ``given``: the [dqn] fields the user set explicitly; one that
-    the preset fixes is refused, naming it."""
+    [`PAPER_LEARNER`][rainuav.rl.config.PAPER_LEARNER], constant learning rate). ``given``: the
+    [dqn] fields the user set explicitly; one that the preset fixes is refused, naming it."""
     if cfg.preset != "paper":
         return cfg
     clash = sorted(set(given) & set(PAPER_LEARNER))

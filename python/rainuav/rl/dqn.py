@@ -1,11 +1,9 @@
 """The dueling double DQN with multi-step returns (the paper's Algorithm 1), in torch.
 
-Reads top to bottom: the network, the N-step sliding window, the replay memory, the double-Q
-target and the agent (observe, act, learn, sync). Hyperparameters:
+Reads top to bottom: the network, the N-step sliding window, the replay memory, the double-Q target
+and the agent (observe, act, learn, sync). Hyperparameters:
 [`DQNConfig`][rainuav.rl.config.DQNConfig]. Every choice beyond the paper's Table I, and what it
-measured, is in
-``docs/guide/learning.md``.
-"""
+measured, is in ``docs/guide/learning.md``."""
 
 from __future__ import annotations
 
@@ -123,8 +121,8 @@ class Replay:
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         """Restores a [`state_dict()`][rainuav.rl.dqn.Replay.state_dict]; arrays of another shape or
-        type, or counters out of
-        range, raise ValueError (a checkpoint is checked before it is trusted)."""
+        type, or counters out of range, raise ValueError (a checkpoint is checked before it is
+        trusted)."""
         for k in ("obs", "action", "ret", "next_obs", "discount", "done"):
             mine, v = getattr(self, k), d[k]
             if not isinstance(v, np.ndarray) or v.shape != mine.shape or v.dtype != mine.dtype:
@@ -183,10 +181,10 @@ class Agent:
     """Online and target networks, replay, optimiser and the exploration schedule."""
 
     def __init__(self, cfg: DQNConfig, seed: int, device: torch.device, encoder: Encoder) -> None:
-        """``seed``: the run's seed (the network's initial weights; exploration and replay
-        sampling draw from its ``"agent"`` stream,
-        [`rainuav.rl.config.random_streams()`][rainuav.rl.config.random_streams]);
-        ``encoder``: how the env's observations become the network's input, and the network
+        """``seed``: the run's seed (the network's initial weights; exploration and replay sampling
+        draw from its ``"agent"`` stream,
+        [`rainuav.rl.config.random_streams()`][rainuav.rl.config.random_streams]); ``encoder``: how
+        the env's observations become the network's input, and the network
         ([`rainuav.rl.networks`][rainuav.rl.networks])."""
         self.cfg = cfg
         self.device = device
@@ -302,8 +300,8 @@ class Agent:
     @contextmanager
     def reporting(self) -> Iterator[None]:
         """Within: the online network holds
-        [`reported_weights()`][rainuav.rl.dqn.Agent.reported_weights] (for greedy checks);
-        its own weights are restored after."""
+        [`reported_weights()`][rainuav.rl.dqn.Agent.reported_weights] (for greedy checks); its own
+        weights are restored after."""
         if self.average is None:
             yield
             return

@@ -1,11 +1,10 @@
-"""Measuring a policy: the network's greedy flights from fixed starts against the exact
-planner and the baselines ([`rainuav.rl.references`][rainuav.rl.references]: the straight line;
-where the weather
-moves, the plan of the weather at take-off and re-planning; among levels, the plans of one
-altitude), by success and excess cost ([`evaluate()`][rainuav.rl.evaluation.evaluate]), the
-run's evaluation ([`evaluate_run_policy()`][rainuav.rl.evaluation.evaluate_run_policy]) and the
-greedy checks on held-out validation
-starts during training ([`Validation`][rainuav.rl.evaluation.Validation])."""
+"""Measuring a policy: the network's greedy flights from fixed starts against the exact planner and
+the baselines ([`rainuav.rl.references`][rainuav.rl.references]: the straight line; where the
+weather moves, the plan of the weather at take-off and re-planning; among levels, the plans of one
+altitude), by success and excess cost ([`evaluate()`][rainuav.rl.evaluation.evaluate]), the run's
+evaluation ([`evaluate_run_policy()`][rainuav.rl.evaluation.evaluate_run_policy]) and the greedy
+checks on held-out validation starts during training
+([`Validation`][rainuav.rl.evaluation.Validation])."""
 
 from __future__ import annotations
 
@@ -232,19 +231,18 @@ def evaluate_saved_run(
     references: dict[Any, Any] | None = None,
     online: bool = False,
 ) -> tuple[dict[str, Any], list, Any]:
-    """Flies a saved training run's policy (the network the run reports: the final one, the
-    weight average with ``average_from``, or with ``keep_best`` the best on validation). In
-    the run's own world by default; ``world`` (built by the caller, e.g. another scenario,
-    rain rate or storm: [`rainuav.world.build_world()`][rainuav.world.build_world]; or a function of
-    the run's
-    configuration that builds it, called once the run's files are read) or ``radio_map``
-    (another map, with the run's task) fly it elsewhere. ``starts``/``seed``: the number and
-    seed of the fixed starts (default: the run's evaluation starts); ``shield``: report
-    shielded flights beside the network's own; ``online``: fly the last online network
-    instead of the one the run reports (they differ with ``average_from`` < 1 or
-    ``keep_best``; ``metrics["network"]`` says which flew). ``references``: a dict the caller
-    keeps to reuse the exact planner's flights between calls on the same world and task.
-    Returns the metrics, the flights and the environment; writes nothing."""
+    """Flies a saved training run's policy (the network the run reports: the final one, the weight
+    average with ``average_from``, or with ``keep_best`` the best on validation). In the run's own
+    world by default; ``world`` (built by the caller, e.g. another scenario, rain rate or storm:
+    [`rainuav.world.build_world()`][rainuav.world.build_world]; or a function of the run's
+    configuration that builds it, called once the run's files are read) or ``radio_map`` (another
+    map, with the run's task) fly it elsewhere. ``starts``/``seed``: the number and seed of the
+    fixed starts (default: the run's evaluation starts); ``shield``: report shielded flights beside
+    the network's own; ``online``: fly the last online network instead of the one the run reports
+    (they differ with ``average_from`` < 1 or ``keep_best``; ``metrics["network"]`` says which
+    flew). ``references``: a dict the caller keeps to reuse the exact planner's flights between
+    calls on the same world and task. Returns the metrics, the flights and the environment; writes
+    nothing."""
     run = Path(run_dir)
     if starts is not None:
         check_integer("starts", starts, 1, MAX_STARTS)

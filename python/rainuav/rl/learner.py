@@ -2,13 +2,10 @@
 move and where its episodes end.
 
 A share of the training flights starts near the destination
-([`training_start()`][rainuav.rl.learner.training_start]). The
-environment's reward with its SIR part weighted
-([`learning_reward()`][rainuav.rl.learner.learning_reward]), plus
-potential-based shaping by the straight-line value
-([`shaping_term()`][rainuav.rl.learner.shaping_term]). Why each, and what
-it measured: ``docs/guide/learning.md``.
-"""
+([`training_start()`][rainuav.rl.learner.training_start]). The environment's reward with its SIR
+part weighted ([`learning_reward()`][rainuav.rl.learner.learning_reward]), plus potential-based
+shaping by the straight-line value ([`shaping_term()`][rainuav.rl.learner.shaping_term]). Why each,
+and what it measured: ``docs/guide/learning.md``."""
 
 from __future__ import annotations
 
@@ -39,8 +36,7 @@ def training_task(
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """A training flight's (start, destination, world). The env's fixed destination and
     [`training_start()`][rainuav.rl.learner.training_start] where the env observes the position (the
-    draws of the single-map
-    learner, unchanged); where it observes the weather, the env's draw
+    draws of the single-map learner, unchanged); where it observes the weather, the env's draw
     ([`draw_task()`][rainuav.nav.env.UAVNavEnv.draw_task]: a random destination where the env has
     them; the task's own one with probability ``task_goals``), its start then moved near the
     destination with probability ``goal_starts``."""
@@ -56,9 +52,8 @@ def training_task(
 
 def near_goal(env: UAVNavEnv, goal: np.ndarray, rng: np.random.Generator) -> np.ndarray | None:
     """Uniform in the square of half side [`GOAL_START_MOVES`][rainuav.rl.learner.GOAL_START_MOVES]
-    moves around ``goal``
-    (clipped to the area), outside the arrival disc; None where 100 draws found no such
-    point."""
+    moves around ``goal`` (clipped to the area), outside the arrival disc; None where 100 draws
+    found no such point."""
     x0, x1, y0, y1 = env.field.extent
     half = GOAL_START_MOVES * env.cfg.step_m
     for _ in range(100):
@@ -69,11 +64,11 @@ def near_goal(env: UAVNavEnv, goal: np.ndarray, rng: np.random.Generator) -> np.
 
 
 def training_start(env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator) -> np.ndarray:
-    """The start of a training flight: with probability ``goal_starts`` uniform in the square
-    of half side [`GOAL_START_MOVES`][rainuav.rl.learner.GOAL_START_MOVES] moves around the
-    destination (clipped to the area,
-    outside the arrival disc; uniform in the area where 100 draws found no such point, as
-    when the tolerance covers the square), else uniform in the area (``env.sample_start``).
+    """The start of a training flight: with probability ``goal_starts`` uniform in the square of
+    half side [`GOAL_START_MOVES`][rainuav.rl.learner.GOAL_START_MOVES] moves around the destination
+    (clipped to the area, outside the arrival disc; uniform in the area where 100 draws found no
+    such point, as when the tolerance covers the square), else uniform in the area
+    (``env.sample_start``).
 
     Flights from uniform starts reach the destination's neighbourhood once each, at their
     last move, and late in training almost greedily: the moves into the arrival disc from the
@@ -118,14 +113,13 @@ def learning_reward(
 
     The env's reward with its SIR part ``b + 1`` weighted by ``sir_weight``, plus the
     potential-based shaping term (zero potential where
-    [`learner_ends()`][rainuav.rl.learner.learner_ends]). Discounting
-    and the destination reward make the learner value time above the SIR: a move later
-    costs ``(1 - gamma) gamma^k R_des`` of the destination reward on top of its -1, several
-    times the undiscounted price of a move at gamma 0.998. Weighting the SIR part up
-    restores the balance of the undiscounted return the policy is judged by; a position-only
-    policy then loops from a few starts, which the shield breaks (1.25 by default; see
-    ``docs/guide/learning.md``). ``goal`` (N, 2): each UAV's destination (default: the task's).
-    Among levels the shaping's potential is the plane's (the moves still needed on the
+    [`learner_ends()`][rainuav.rl.learner.learner_ends]). Discounting and the destination reward
+    make the learner value time above the SIR: a move later costs ``(1 - gamma) gamma^k R_des`` of
+    the destination reward on top of its -1, several times the undiscounted price of a move at gamma
+    0.998. Weighting the SIR part up restores the balance of the undiscounted return the policy is
+    judged by; a position-only policy then loops from a few starts, which the shield breaks (1.25 by
+    default; see ``docs/guide/learning.md``). ``goal`` (N, 2): each UAV's destination (default: the
+    task's). Among levels the shaping's potential is the plane's (the moves still needed on the
     lattice, whatever the level): a potential of the state, so the optimum is kept."""
     reward = r["reward"]
     if d.sir_weight != 1.0:  # among levels each move's part weighs its duration, as its reward

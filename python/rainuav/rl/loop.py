@@ -1,11 +1,9 @@
 """The training job: Algorithm 1 with several UAVs in flight at once.
 
 [`train()`][rainuav.rl.loop.train] receives a built world ([`rainuav.world`][rainuav.world]: the
-signal and the task), builds
-its environment and the agent, then runs
+signal and the task), builds its environment and the agent, then runs
 [`run_loop()`][rainuav.rl.loop.run_loop], which reads top to bottom: act, step the UAVs, store their
-N-step
-transitions, learn (sample, double-Q target, loss, optimiser step), and per finished episode
+N-step transitions, learn (sample, double-Q target, loss, optimiser step), and per finished episode
 anneal, sync the target, record stages, validate and checkpoint. The run ends with
 [`finish()`][rainuav.rl.loop.finish] (evaluation, ``policy.pt``, ``metrics.json``, figures).
 
@@ -76,8 +74,7 @@ stopped)."""
 # -- setup ------------------------------------------------------------------------------------
 def save_checkpoint(path: Path, state: dict[str, Any]) -> None:
     """Tensors and plain data only ([`rainuav.rl.checkpoint`][rainuav.rl.checkpoint]), to a
-    temporary file, then
-    rename."""
+    temporary file, then rename."""
     checkpoint.save(path, state)
 
 
@@ -90,8 +87,8 @@ CHECKPOINT_KEYS = (
 
 def load_checkpoint(path: Path, cfg: TrainConfig) -> dict[str, Any]:
     """The checkpoint at ``path`` (read as data:
-    [`rainuav.rl.checkpoint.load()`][rainuav.rl.checkpoint.load]), refused
-    if its run's configuration differs from ``cfg`` (the differing fields are named)."""
+    [`rainuav.rl.checkpoint.load()`][rainuav.rl.checkpoint.load]), refused if its run's
+    configuration differs from ``cfg`` (the differing fields are named)."""
     if not path.exists():
         raise InvalidInputError(f"--resume: no checkpoint at {path}")
     state = checkpoint.load(path, CHECKPOINT_KEYS)
@@ -115,16 +112,15 @@ def train(
     stop_after: int | None = None,
     yardstick: bool = False,
 ) -> dict[str, Any]:
-    """Runs the whole job in ``world`` (built by the caller from the configuration's world
-    part, [`rainuav.world.build_world()`][rainuav.world.build_world]; tests hand in small synthetic
-    worlds; its task
-    must be the configuration's) and returns the metrics; the world's signal is saved with
-    the run. ``stop_after`` ends the call, as an
-    interruption would, at the first checkpoint with at least that many finished episodes
-    (``resume=True`` then continues exactly); it returns ``{}``. Sets no process-wide state
-    that outlives the call (torch's thread count and determinism are restored).
-    ``yardstick``: allow an evaluation storm (a per-storm network trained on the very storm
-    a generalist is judged on, as the specialist it is compared with; not on the CLI)."""
+    """Runs the whole job in ``world`` (built by the caller from the configuration's world part,
+    [`rainuav.world.build_world()`][rainuav.world.build_world]; tests hand in small synthetic
+    worlds; its task must be the configuration's) and returns the metrics; the world's signal is
+    saved with the run. ``stop_after`` ends the call, as an interruption would, at the first
+    checkpoint with at least that many finished episodes (``resume=True`` then continues exactly);
+    it returns ``{}``. Sets no process-wide state that outlives the call (torch's thread count and
+    determinism are restored). ``yardstick``: allow an evaluation storm (a per-storm network trained
+    on the very storm a generalist is judged on, as the specialist it is compared with; not on the
+    CLI)."""
     cfg = apply_preset(cfg)
     check_config(cfg)
     if cfg.scenario == "storm" and not cfg.scenario_file and not yardstick:
@@ -162,13 +158,12 @@ def storm_slot(
 ) -> int:
     """The storm of the pool lane ``k``'s next episode flies, counted in ``per_storm``.
 
-    Of the storms that have had ``storm_episodes`` episodes, the one with the fewest UAVs in
-    flight drains: it takes no new episode (unless it is the only storm), so it stays the
-    emptiest, and once no UAV flies it any more it is renewed
-    ([`StormPool.renew()`][rainuav.world.pool.StormPool.renew]); one
-    at a time, so the others keep the UAVs flying.
-    The lane takes the storm with the fewest UAVs in flight (the first on ties), so with as
-    many storms as lanes each UAV has its own."""
+    Of the storms that have had ``storm_episodes`` episodes, the one with the fewest UAVs in flight
+    drains: it takes no new episode (unless it is the only storm), so it stays the emptiest, and
+    once no UAV flies it any more it is renewed
+    ([`StormPool.renew()`][rainuav.world.pool.StormPool.renew]); one at a time, so the others keep
+    the UAVs flying. The lane takes the storm with the fewest UAVs in flight (the first on ties), so
+    with as many storms as lanes each UAV has its own."""
     others = lanes.active.copy()
     others[k] = False
     load = np.bincount(lanes.world[others], minlength=len(per_storm))
@@ -196,13 +191,11 @@ def run_loop(
     ref_env: UAVNavEnv | None = None,
     pool: StormPool | None = None,
 ) -> dict[str, Any]:
-    """Algorithm 1 over ``cfg.dqn.episodes`` episodes, ``lanes`` UAVs at a time; from
-    ``saved`` (a checkpoint's state) when resuming. Returns [`finish()`][rainuav.rl.loop.finish]'s
-    metrics, or
+    """Algorithm 1 over ``cfg.dqn.episodes`` episodes, ``lanes`` UAVs at a time; from ``saved`` (a
+    checkpoint's state) when resuming. Returns [`finish()`][rainuav.rl.loop.finish]'s metrics, or
     ``{}`` when stopped at ``stop_after``. ``pool``: the storms the UAVs fly
     ([`storm_slot()`][rainuav.rl.loop.storm_slot]); validation, stages and the evaluation then fly
-    ``ref_env``
-    (default: ``env``)."""
+    ``ref_env`` (default: ``env``)."""
     d = cfg.dqn
     ref = env if ref_env is None else ref_env
     lanes = Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
@@ -378,8 +371,8 @@ def finish(
 ) -> dict[str, Any]:
     """Evaluates the run
     ([`rainuav.rl.evaluation.evaluate_run_policy()`][rainuav.rl.evaluation.evaluate_run_policy]),
-    saves the
-    evaluated network's weights to ``policy.pt`` and writes ``metrics.json`` and the figures."""
+    saves the evaluated network's weights to ``policy.pt`` and writes ``metrics.json`` and the
+    figures."""
     metrics, rolls = evaluate_run_policy(cfg, agent, env, checks)
     policy = {k: v.detach().cpu() for k, v in agent.online.state_dict().items()}
     save_checkpoint(out / "policy.pt", {"online": policy, "config": to_dict(cfg)})

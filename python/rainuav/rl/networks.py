@@ -1,20 +1,18 @@
-"""The parts a learner is built from: how an environment's observation becomes the network's
-input (an *encoder*), and the network. The DQN ([`rainuav.rl.dqn`][rainuav.rl.dqn]) takes any
-encoder and
+"""The parts a learner is built from: how an environment's observation becomes the network's input
+(an *encoder*), and the network. The DQN ([`rainuav.rl.dqn`][rainuav.rl.dqn]) takes any encoder and
 never looks inside the observation.
 
 - [`PositionEncoder`][rainuav.rl.networks.PositionEncoder] +
-  [`DuelingQNet`][rainuav.rl.networks.DuelingQNet]: the single-map learner. The position (and
-  the time where the signal moves), goal-relative features of the fixed destination, into an
-  MLP with Fourier features.
+  [`DuelingQNet`][rainuav.rl.networks.DuelingQNet]: the single-map learner. The position (and the
+  time where the signal moves), goal-relative features of the fixed destination, into an MLP with
+  Fourier features.
 - [`WeatherEncoder`][rainuav.rl.networks.WeatherEncoder] +
   [`WeatherQNet`][rainuav.rl.networks.WeatherQNet]: the learner that reads the weather
   (``UAVNavEnv(observation="weather")``, or among levels ``UAVLevelsEnv``'s). The ``Dict``
   observation ([`rainuav.nav.views.WeatherView`][rainuav.nav.views.WeatherView]) is flattened in a
-  fixed order for the
-  replay; the network splits it again: two small convolutional stacks read the local window
-  and the whole-area grid (one channel a level among levels), an MLP reads them with the
-  position, the destination, the time (and the level) and goal-relative features.
+  fixed order for the replay; the network splits it again: two small convolutional stacks read the
+  local window and the whole-area grid (one channel a level among levels), an MLP reads them with
+  the position, the destination, the time (and the level) and goal-relative features.
 
 An encoder has ``dim`` (floats per encoded observation), ``__call__(env_obs, t)`` (a batch
 of the env's observations after ``t`` moves -> (N, dim) float32) and ``make_net()``.
@@ -153,15 +151,12 @@ class WeatherQNet(DuelingQNet):
     ``len(goal_scale)`` scales; two hidden ReLU layers of ``hidden``.
 
     With ``moves`` ([`MoveGeometry`][rainuav.rl.networks.MoveGeometry]), for each of the four moves
-    the destination as
-    it would be after it: whether the move arrives, and how much nearer it brings the UAV
-    (in moves, in [-1, 1]). They are functions of the position and the destination the
-    observation holds (nothing the env does not show), fed to the body and, through one
-    weight per feature shared by the moves, straight into the advantage: where destinations
-    are drawn per flight the arrival disc is met at any offset from the lattice, and a
-    network that must find the disc's edge from its other inputs circles it
-    (docs/guide/learning.md).
-    """
+    the destination as it would be after it: whether the move arrives, and how much nearer it brings
+    the UAV (in moves, in [-1, 1]). They are functions of the position and the destination the
+    observation holds (nothing the env does not show), fed to the body and, through one weight per
+    feature shared by the moves, straight into the advantage: where destinations are drawn per
+    flight the arrival disc is met at any offset from the lattice, and a network that must find the
+    disc's edge from its other inputs circles it (docs/guide/learning.md)."""
 
     def __init__(
         self,
@@ -317,8 +312,8 @@ class MoveGeometry:
 class WeatherEncoder:
     """The weather-reading learner's input: the env's ``Dict`` observation flattened
     ([`WeatherView.flat()`][rainuav.nav.views.WeatherView.flat]); the network splits it
-    ([`WeatherQNet`][rainuav.rl.networks.WeatherQNet]).
-    ``n_actions``: 4 on one level, 6 among levels."""
+    ([`WeatherQNet`][rainuav.rl.networks.WeatherQNet]). ``n_actions``: 4 on one level, 6 among
+    levels."""
 
     def __init__(
         self,

@@ -71,9 +71,8 @@ def plot_trajectories(
     heights: Sequence[Any] = (),
 ) -> None:
     """The flights over the map ([`draw_flights()`][rainuav.rl.plots.draw_flights]) with a colour
-    bar, a legend and axes;
-    among levels, beside it each flight's altitude against time (the network's in black,
-    ``heights``: the optimum's (ticks, levels), dashed blue)."""
+    bar, a legend and axes; among levels, beside it each flight's altitude against time (the
+    network's in black, ``heights``: the optimum's (ticks, levels), dashed blue)."""
     from matplotlib.figure import Figure
 
     levels = isinstance(env, UAVLevelsEnv)

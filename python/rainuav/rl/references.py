@@ -1,22 +1,17 @@
 """The yardsticks a policy is measured against: fixed starts
-([`eval_starts()`][rainuav.rl.references.eval_starts]), the
-exact planner's flights and the baselines'
-([`reference_flights()`][rainuav.rl.references.reference_flights]), what a set of flights
+([`eval_starts()`][rainuav.rl.references.eval_starts]), the exact planner's flights and the
+baselines' ([`reference_flights()`][rainuav.rl.references.reference_flights]), what a set of flights
 comes to ([`flights()`][rainuav.rl.references.flights]) and how it compares with the optimum
 ([`summarise()`][rainuav.rl.references.summarise]).
 
-On one level: the exact optimum, the straight line, and where the weather moves the plan of
-the weather at take-off and re-planning ([`rainuav.nav.baselines`][rainuav.nav.baselines]). Among
-levels
+On one level: the exact optimum, the straight line, and where the weather moves the plan of the
+weather at take-off and re-planning ([`rainuav.nav.baselines`][rainuav.nav.baselines]). Among levels
 ([`rainuav.nav.levels.UAVLevelsEnv`][rainuav.nav.levels.UAVLevelsEnv]): the exact optimum among
-levels from the level a
-flight starts at, and the baselines of one altitude (``fixed_altitude``: the exact plan held
-at the level nearest [`PAPER_ALTITUDE_M`][rainuav.rl.references.PAPER_ALTITUDE_M], the paper's;
-``best_single_altitude``: the
-exact plan at each level, the best chosen with hindsight per flight; ``straight_line``: the
-straight line at the fixed level), each flown from the start at its own level (the take-off
-climb is the autopilot's, as in ``fly``).
-"""
+levels from the level a flight starts at, and the baselines of one altitude (``fixed_altitude``: the
+exact plan held at the level nearest [`PAPER_ALTITUDE_M`][rainuav.rl.references.PAPER_ALTITUDE_M],
+the paper's; ``best_single_altitude``: the exact plan at each level, the best chosen with hindsight
+per flight; ``straight_line``: the straight line at the fixed level), each flown from the start at
+its own level (the take-off climb is the autopilot's, as in ``fly``)."""
 
 from __future__ import annotations
 
@@ -80,10 +75,10 @@ def flights(
     ticks: list | None = None,
 ) -> dict[str, Any]:
     """Per flight: ``return``, ``arrived``, ``cost``
-    ([`rainuav.nav.task.flight_cost()`][rainuav.nav.task.flight_cost]),
-    ``steps`` (moves), the signal along the path (every position after the start): its mean
-    and the share of it below ``min_db`` (per move), and the ``paths`` themselves (for
-    figures). Among levels ``levels`` and ``ticks`` give each point's level and clock."""
+    ([`rainuav.nav.task.flight_cost()`][rainuav.nav.task.flight_cost]), ``steps`` (moves), the
+    signal along the path (every position after the start): its mean and the share of it below
+    ``min_db`` (per move), and the ``paths`` themselves (for figures). Among levels ``levels`` and
+    ``ticks`` give each point's level and clock."""
     time_s = env.stepper.time_s  # the instant of each move, for a signal that changes
     if isinstance(env, UAVLevelsEnv):
         if levels is None or ticks is None:
@@ -133,10 +128,9 @@ def reference_flights(
     starts: np.ndarray,
     replan_every: int = baselines.DEFAULT_REPLAN_EVERY,
 ) -> dict[str, dict[str, Any]]:
-    """The exact planner's flights (the yardstick) and the baselines': the straight line, and
-    where the signal changes in time the plan of the weather at take-off (``frozen_plan``) and
-    re-planning every ``replan_every`` moves (``replan``), each flown through the moving
-    weather. Among levels:
+    """The exact planner's flights (the yardstick) and the baselines': the straight line, and where
+    the signal changes in time the plan of the weather at take-off (``frozen_plan``) and re-planning
+    every ``replan_every`` moves (``replan``), each flown through the moving weather. Among levels:
     [`level_reference_flights()`][rainuav.rl.references.level_reference_flights]."""
     if isinstance(env, UAVLevelsEnv):
         return level_reference_flights(env, starts)
@@ -149,8 +143,8 @@ def reference_flights(
 
 
 def optimal_flights(env: UAVNavEnv | UAVLevelsEnv, starts: np.ndarray) -> dict[str, Any]:
-    """The exact planner's flights from ``starts`` (among levels: the plan among levels from
-    the level each flight starts at), as
+    """The exact planner's flights from ``starts`` (among levels: the plan among levels from the
+    level each flight starts at), as
     [`reference_flights()`][rainuav.rl.references.reference_flights] gives ``optimal``: the
     yardstick alone, for the checks during training."""
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
@@ -169,8 +163,7 @@ def optimal_flights(env: UAVNavEnv | UAVLevelsEnv, starts: np.ndarray) -> dict[s
 
 def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
     """[`flights()`][rainuav.rl.references.flights] of planned flights (plans, or among levels level
-    plans, whose
-    levels are kept for the heights flown)."""
+    plans, whose levels are kept for the heights flown)."""
     among = isinstance(env, UAVLevelsEnv)
     levels = [p.levels for p in plans] if among else None
     f = flights(

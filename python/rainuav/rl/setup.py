@@ -39,9 +39,8 @@ def check_fits(cfg: TrainConfig) -> None:
 
 
 def make_agent(cfg: TrainConfig, env: UAVNavEnv | UAVLevelsEnv, device: torch.device) -> Agent:
-    """An agent for ``env``: the time limit, the destination and one move in observation
-    units (refused first if it cannot fit in memory:
-    [`check_fits()`][rainuav.rl.setup.check_fits])."""
+    """An agent for ``env``: the time limit, the destination and one move in observation units
+    (refused first if it cannot fit in memory: [`check_fits()`][rainuav.rl.setup.check_fits])."""
     check_fits(cfg)
     x0, x1, y0, y1 = env.field.extent
     s = env.cfg.step_m
@@ -51,9 +50,9 @@ def make_agent(cfg: TrainConfig, env: UAVNavEnv | UAVLevelsEnv, device: torch.de
 
 def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float, float]) -> Encoder:
     """The encoder (and network) for ``env``'s observation
-    ([`rainuav.rl.networks`][rainuav.rl.networks]):
-    the weather-reading one where the env shows the weather, else the position one (with
-    the env's fixed destination; among levels with the level and six actions)."""
+    ([`rainuav.rl.networks`][rainuav.rl.networks]): the weather-reading one where the env shows the
+    weather, else the position one (with the env's fixed destination; among levels with the level
+    and six actions)."""
     if env.view is not None:
         x0, x1, y0, y1 = env.field.extent
         geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)

@@ -4,11 +4,9 @@ the network alone, the exact optimum (in space-time where the weather moves), th
 take-off plan, re-planning and the straight line from the same fixed starts, then the mean
 over the worlds.
 
-Destinations: the task's fixed one, or with ``random_goals`` one per start, drawn as training
-draws them ([`rainuav.nav.views.sample_goal()`][rainuav.nav.views.sample_goal], the start within
-reach of it), each flight
-then planned and judged against its own destination's optimum.
-"""
+Destinations: the task's fixed one, or with ``random_goals`` one per start, drawn as training draws
+them ([`rainuav.nav.views.sample_goal()`][rainuav.nav.views.sample_goal], the start within reach of
+it), each flight then planned and judged against its own destination's optimum."""
 
 from __future__ import annotations
 
@@ -66,8 +64,7 @@ def _flights(agent: Any, env: UAVNavEnv, pts: np.ndarray, replan_every: int) -> 
 
 def evaluate_storms(run_dir: Path, seeds: list[int], **kw: Any) -> tuple[dict[str, Any], Any]:
     """[`evaluate_worlds()`][rainuav.rl.storm_eval.evaluate_worlds] through the storms ``seeds``
-    (the run's scenario must be the
-    storm's)."""
+    (the run's scenario must be the storm's)."""
     return evaluate_worlds(run_dir, [{"storm_seed": k} for k in seeds], storms=True, **kw)
 
 
@@ -142,8 +139,7 @@ def evaluate_worlds(
 
 def _mean(rows: list[dict[str, Any]], worst: bool) -> dict[str, Any]:
     """The mean of each [`SUMMARY_KEYS`][rainuav.rl.storm_eval.SUMMARY_KEYS] figure over ``rows``
-    (None values left out;
-    ``worst_excess_cost`` the largest)."""
+    (None values left out; ``worst_excess_cost`` the largest)."""
     out: dict[str, Any] = {}
     for key in SUMMARY_KEYS:
         if not any(key in r for r in rows):

@@ -47,9 +47,9 @@ def _fly(
 
 
 def read_result(path: Path) -> dict[str, Any]:
-    """A case's ``result.json`` or ``transfer.json``; one that is not a JSON table (a study
-    folder handed over with a damaged file) raises
-    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming it."""
+    """A case's ``result.json`` or ``transfer.json``; one that is not a JSON table (a study folder
+    handed over with a damaged file) raises [`InvalidInputError`][rainuav.errors.InvalidInputError]
+    naming it."""
     try:
         row = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, ValueError) as err:
@@ -132,8 +132,7 @@ def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, 
 def plot_learned(cases: list[Case], rows: dict[str, dict[str, Any]], out: Path) -> bool:
     """``trajectories.png``: each case's network (first seed of each case) from the same
     [`FIGURE_STARTS`][rainuav.studies.policies.FIGURE_STARTS] starts over its own map, the exact
-    optimum dashed. False (and no
-    file) when no case has a run."""
+    optimum dashed. False (and no file) when no case has a run."""
     import math
 
     from matplotlib.figure import Figure

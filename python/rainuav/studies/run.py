@@ -4,16 +4,14 @@ On a Ray cluster (``ray_address``) each case is a Ray task (not a Tune trial: a 
 fixed computation, with no search or early stopping for Tune to drive, and resuming is the
 folder rule below either way); the maps go to the object store once per scenario.
 
-A case computes what the study asks (``map``, ``optimal``, ``learned``) and writes
-``result.json`` last, atomically: a case folder with ``result.json`` is finished and a rerun
-skips it; anything else in a folder without it is redone. Cases run in spawned worker
-processes (``workers``); maps are built once per distinct scenario through the map cache
+A case computes what the study asks (``map``, ``optimal``, ``learned``) and writes ``result.json``
+last, atomically: a case folder with ``result.json`` is finished and a rerun skips it; anything else
+in a folder without it is redone. Cases run in spawned worker processes (``workers``); maps are
+built once per distinct scenario through the map cache
 ([`rainuav.radio.cache`][rainuav.radio.cache]), before the cases, so parallel cases never build the
-same map
-twice. ``results.csv`` and ``report.md`` are written from the finished cases in case order,
-so they do not depend on the number of workers; ``results.csv`` is the study folder's last
-file (removed when a run starts), so a folder holding it is complete.
-"""
+same map twice. ``results.csv`` and ``report.md`` are written from the finished cases in case order,
+so they do not depend on the number of workers; ``results.csv`` is the study folder's last file
+(removed when a run starts), so a folder holding it is complete."""
 
 from __future__ import annotations
 

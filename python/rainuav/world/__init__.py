@@ -1,23 +1,20 @@
-"""The world a UAV flies: a signal field in time joined to a navigation task, built from one
-spec ([`WorldSpec`][rainuav.world.WorldSpec]) for every entry point:
-``gym.make("rainuav/UAVNav-v0")``,
+"""The world a UAV flies: a signal field in time joined to a navigation task, built from one spec
+([`WorldSpec`][rainuav.world.WorldSpec]) for every entry point: ``gym.make("rainuav/UAVNav-v0")``,
 ``python -m rainuav.train``, ``rainuav.evaluate`` and the studies.
 
 Where things go: a new weather is a [`rainuav.radio.Medium`][rainuav.radio.weather.Medium] kind
-(``radio``); a new task
-rule goes in [`rainuav.nav`][rainuav.nav] (``NavConfig`` and ``UAVNavEnv``); a new learner goes in
-[`rainuav.rl`][rainuav.rl] and receives a built [`World`][rainuav.world.World] (or its env), the way
-Stable-Baselines3's
-``DQN(env).learn()`` does. This module is the only place where a scenario, its weather and a
-task become something to fly; it sits above ``radio`` and ``nav`` and below ``rl``.
+(``radio``); a new task rule goes in [`rainuav.nav`][rainuav.nav] (``NavConfig`` and ``UAVNavEnv``);
+a new learner goes in [`rainuav.rl`][rainuav.rl] and receives a built [`World`][rainuav.world.World]
+(or its env), the way Stable-Baselines3's ``DQN(env).learn()`` does. This module is the only place
+where a scenario, its weather and a task become something to fly; it sits above ``radio`` and
+``nav`` and below ``rl``.
 
 A spec names the scenario (a preset, or a scenario file), its weather (the scenario's own,
-homogeneous rain at ``rain_rate``, or the random storm ``storm_seed`` of the ``storm``
-preset), the propagation engine and the task's fields. A weather that moves is mapped at
-instants ``slice_s`` apart over the task's horizon (``max_steps`` moves of ``step_m /
-speed_m_s`` seconds; [`rainuav.radio.timemap`][rainuav.radio.timemap]), and the UAV flies the series
-([`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]).
-"""
+homogeneous rain at ``rain_rate``, or the random storm ``storm_seed`` of the ``storm`` preset), the
+propagation engine and the task's fields. A weather that moves is mapped at instants ``slice_s``
+apart over the task's horizon (``max_steps`` moves of ``step_m / speed_m_s`` seconds;
+[`rainuav.radio.timemap`][rainuav.radio.timemap]), and the UAV flies the series
+([`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries])."""
 
 from __future__ import annotations
 
@@ -239,8 +236,7 @@ class World:
     """What the signal is read from (saved with a run; None for a storm pool's bank)."""
     field: SignalField | SignalSeries | SignalBank | LevelField
     """The signal the UAV flies through (a [`LevelField`][rainuav.nav.levelfield.LevelField] where
-    altitude is a
-    decision)."""
+    altitude is a decision)."""
     task: NavConfig
     """The navigation task."""
     observation: str = "position"
@@ -276,8 +272,7 @@ class World:
 
     def save(self, folder: Path) -> Path | None:
         """Writes the signal's source into ``folder`` ([`MAP_FILES`][rainuav.world.MAP_FILES]),
-        atomically (a
-        storm pool's storms are not saved: their seeds rebuild them)."""
+        atomically (a storm pool's storms are not saved: their seeds rebuild them)."""
         if self.source is None:
             return None
         kinds = (RadioMap, RadioMapSeries, LevelStack)
@@ -330,13 +325,11 @@ def level_field(
 ) -> tuple[Any, Any]:
     """The signal at every level of ``scn``'s ``area.altitudes_m`` as a
     [`rainuav.nav.levels.LevelField`][rainuav.nav.levelfield.LevelField] (what the flights among
-    levels read), and the maps
-    it came from:
+    levels read), and the maps it came from:
     [`rainuav.radio.levels.build_radio_levels()`][rainuav.radio.levels.build_radio_levels], or where
-    ``times_s`` are
-    given [`build_radio_level_series()`][rainuav.radio.levels.build_radio_level_series] (engine 'pe'
-    then becomes
-    'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown once (a
+    ``times_s`` are given
+    [`build_radio_level_series()`][rainuav.radio.levels.build_radio_level_series] (engine 'pe' then
+    becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown once (a
     storm pool's), not kept in the map cache."""
     from rainuav.nav.levels import LevelField
     from rainuav.radio.levels import build_radio_level_series, build_radio_levels
@@ -384,10 +377,9 @@ def _observed(world: World, spec: Any) -> World:
 
 
 def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: bool = True) -> Any:
-    """The signal's source for the scenario ``scn`` of ``spec``: its map, or where its
-    weather moves its maps at [`series_instants()`][rainuav.world.series_instants] (engine 'pe' then
-    becomes 'hybrid': a
-    march per cell and instant is refused); built, or taken from the cache."""
+    """The signal's source for the scenario ``scn`` of ``spec``: its map, or where its weather moves
+    its maps at [`series_instants()`][rainuav.world.series_instants] (engine 'pe' then becomes
+    'hybrid': a march per cell and instant is refused); built, or taken from the cache."""
     if spec.altitudes:  # every level's maps (in time where the weather moves)
         times = series_instants(spec) if scn.medium.moves else None
         return LevelStack.of(level_field(scn, times, progress=progress, cache=cache)[1], scn)
@@ -400,8 +392,7 @@ def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: boo
 
 def source_key(spec: Any, scn: Scenario) -> str:
     """What identifies the source [`build_source()`][rainuav.world.build_source] gives (the
-    scenario, and for a
-    weather that moves its instants)."""
+    scenario, and for a weather that moves its instants)."""
     if not scn.medium.moves:
         return scn.digest()
     t = series_instants(spec)
@@ -410,8 +401,7 @@ def source_key(spec: Any, scn: Scenario) -> str:
 
 def load_world(folder: Path, spec: Any) -> World | None:
     """The world saved in a run's ``folder`` ([`World.save()`][rainuav.world.World.save]) with the
-    task of
-    ``spec``, or None where the folder holds none."""
+    task of ``spec``, or None where the folder holds none."""
     for name, kind in zip(MAP_FILES, (RadioMap, RadioMapSeries, LevelStack), strict=True):
         if (Path(folder) / name).exists():
             return _observed(world_from(kind.load(Path(folder) / name), task_of(spec)), spec)

@@ -25,12 +25,12 @@ def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any
 
 
 def flight_figure(rm: Any, path: np.ndarray, place: Any, heights: Any = None) -> Any:
-    """The figure of ``flight.png`` (a matplotlib Figure): the path over the SINR at take-off
-    (a series: its first instant), the rain at take-off outlined, the buildings' footprints,
-    the pixels the UAV may not fly (hatched), the waypoints, the sites, the start and the
-    destination; the legend below the map, where it hides nothing.
-    ``heights``: ``(t_s, altitude_m, outage)`` per vertex of a flight among levels, drawn
-    below as its height against time, the moves in outage marked."""
+    """The figure of ``flight.png`` (a matplotlib Figure): the path over the SINR at take-off (a
+    series: its first instant), the rain at take-off outlined, the buildings' footprints, the pixels
+    the UAV may not fly (hatched), the waypoints, the sites, the start and the destination; the
+    legend below the map, where it hides nothing. ``heights``: ``(t_s, altitude_m, outage)`` per
+    vertex of a flight among levels, drawn below as its height against time, the moves in outage
+    marked."""
     from matplotlib.figure import Figure
 
     if heights is None:

@@ -1,11 +1,10 @@
-"""``fly`` with altitude as a decision (``--altitudes``): the place mapped at each flight
-level ([`rainuav.radio.levels`][rainuav.radio.levels]), the exact plan among them
+"""``fly`` with altitude as a decision (``--altitudes``): the place mapped at each flight level
+([`rainuav.radio.levels`][rainuav.radio.levels]), the exact plan among them
 ([`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]: climbs and descents
-weighted by their duration)
-from the take-off level the planner finds best (of those flyable at the start; or the one
-given), and the flight's files with a height on every
-waypoint (relative to home; over a DEM, above sea level, with as many waypoints as keep every
-straight leg, climb or descent the clearance above the ground).
+weighted by their duration) from the take-off level the planner finds best (of those flyable at the
+start; or the one given), and the flight's files with a height on every waypoint (relative to home;
+over a DEM, above sea level, with as many waypoints as keep every straight leg, climb or descent the
+clearance above the ground).
 
 Beside the plan, the summary holds the baselines: the exact plan held at the level nearest
 ``--altitude-m`` (the paper's single altitude) and the best single level for this flight

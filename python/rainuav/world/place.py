@@ -2,15 +2,13 @@
 (``python -m rainuav.fly``).
 
 [`place_scenario()`][rainuav.world.place.place_scenario]: sites from a file
-([`rainuav.radio.sites`][rainuav.radio.sites]), a start and a
-destination in latitude and longitude, the flight altitude, the carrier and homogeneous rain
-become a scenario of the ``uma`` preset's radio settings (bandwidth, noise figure, ground,
-engine) over an area around the start, the destination and the sites with a margin, in metres
-of a [`rainuav.geo.Georef`][rainuav.geo.Georef] centred on that box.
-[`fly_place()`][rainuav.world.place.fly_place] plans the exact
-optimum from the start (``rainuav.nav.planner``) and the straight line, and writes the flight
-([`rainuav.missions`][rainuav.missions]).
-"""
+([`rainuav.radio.sites`][rainuav.radio.sites]), a start and a destination in latitude and longitude,
+the flight altitude, the carrier and homogeneous rain become a scenario of the ``uma`` preset's
+radio settings (bandwidth, noise figure, ground, engine) over an area around the start, the
+destination and the sites with a margin, in metres of a [`rainuav.geo.Georef`][rainuav.geo.Georef]
+centred on that box. [`fly_place()`][rainuav.world.place.fly_place] plans the exact optimum from the
+start (``rainuav.nav.planner``) and the straight line, and writes the flight
+([`rainuav.missions`][rainuav.missions])."""
 
 from __future__ import annotations
 
@@ -100,21 +98,18 @@ def place_scenario(
     engine: str | None = None,
     default_height_m: float | None = None,
 ) -> Place:
-    """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees.
-    ``weather``: a georeferenced rain file ([`rainuav.radio.radar`][rainuav.radio.radar], mm/h or
-    dBZ, one
-    instant or several) in place of homogeneous rain. ``box``: the area as (south latitude,
-    west longitude, north latitude, east longitude), degrees, in place of the box around the
-    start, the destination and the sites; the start and the destination must lie in it.
-    ``terrain``: a DEM GeoTIFF under the place ([`rainuav.ground.dem`][rainuav.ground.dem]), with
-    the flight
-    altitude above the terrain (``altitude_reference="ground"``, the default) or above sea
-    level (``"msl"``). ``footprints``: building footprints in GeoJSON
+    """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees. ``weather``:
+    a georeferenced rain file ([`rainuav.radio.radar`][rainuav.radio.radar], mm/h or dBZ, one
+    instant or several) in place of homogeneous rain. ``box``: the area as (south latitude, west
+    longitude, north latitude, east longitude), degrees, in place of the box around the start, the
+    destination and the sites; the start and the destination must lie in it. ``terrain``: a DEM
+    GeoTIFF under the place ([`rainuav.ground.dem`][rainuav.ground.dem]), with the flight altitude
+    above the terrain (``altitude_reference="ground"``, the default) or above sea level (``"msl"``).
+    ``footprints``: building footprints in GeoJSON
     ([`rainuav.ground.footprints`][rainuav.ground.footprints]) standing on it. ``altitudes``: the
-    flight levels a
-    flight chooses among (``area.altitudes_m``). ``engine``: the maps' engine (default the
-    preset's, hybrid). ``default_height_m``: the roof of a footprint with neither a height nor
-    storeys (``[footprints] default_height_m``, default 10 m)."""
+    flight levels a flight chooses among (``area.altitudes_m``). ``engine``: the maps' engine
+    (default the preset's, hybrid). ``default_height_m``: the roof of a footprint with neither a
+    height nor storeys (``[footprints] default_height_m``, default 10 m)."""
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
@@ -276,15 +271,14 @@ def fly_place(
     flown_by: str = "exact optimum",
     start_altitude_m: float | None = None,
 ) -> dict:
-    """Builds the place's map, plans the exact optimum and the straight line from the start,
-    writes [`FLIGHT_FILES`][rainuav.world.place.FLIGHT_FILES] into ``out`` (each atomically) and
-    returns the summary.
-    ``min_db``: the outage threshold of the SINR (default: the ``uma`` preset's, whose radio
-    settings the place takes). ``flyer``: flies the place's env (with the weather
-    observation) from its start and returns the path and whether it arrived, in place of
-    the exact optimum (which stays the yardstick: ``excess_over_optimum``); ``flown_by``
-    names it in the summary. ``start_altitude_m``: with ``area.altitudes_m``, the level to
-    start at ([`rainuav.world.flylevels.fly_levels()`][rainuav.world.flylevels.fly_levels])."""
+    """Builds the place's map, plans the exact optimum and the straight line from the start, writes
+    [`FLIGHT_FILES`][rainuav.world.place.FLIGHT_FILES] into ``out`` (each atomically) and returns
+    the summary. ``min_db``: the outage threshold of the SINR (default: the ``uma`` preset's, whose
+    radio settings the place takes). ``flyer``: flies the place's env (with the weather observation)
+    from its start and returns the path and whether it arrived, in place of the exact optimum (which
+    stays the yardstick: ``excess_over_optimum``); ``flown_by`` names it in the summary.
+    ``start_altitude_m``: with ``area.altitudes_m``, the level to start at
+    ([`rainuav.world.flylevels.fly_levels()`][rainuav.world.flylevels.fly_levels])."""
     a = place.scenario.area
     if a.altitudes_m:  # altitude as a decision
         if flyer is not None:
@@ -374,13 +368,12 @@ def fly_place(
 
 
 def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, float]:
-    """The mission's waypoints along ``path`` (K, 2: local metres), their heights above mean
-    sea level (None over flat open ground: the flight altitude relative to home) and home's
-    height: over terrain,
-    [`rainuav.missions.terrain_waypoints()`][rainuav.missions.terrain_waypoints] on the path sampled
-    [`rainuav.missions.SAMPLES_PER_MOVE`][rainuav.missions.SAMPLES_PER_MOVE] times a move, with the
-    planned flight height
-    and the highest terrain or obstacle of the pixel under each sample."""
+    """The mission's waypoints along ``path`` (K, 2: local metres), their heights above mean sea
+    level (None over flat open ground: the flight altitude relative to home) and home's height: over
+    terrain, [`rainuav.missions.terrain_waypoints()`][rainuav.missions.terrain_waypoints] on the
+    path sampled [`rainuav.missions.SAMPLES_PER_MOVE`][rainuav.missions.SAMPLES_PER_MOVE] times a
+    move, with the planned flight height and the highest terrain or obstacle of the pixel under each
+    sample."""
     t = scenario_terrain(scn)
     if t is None:
         return path[corners(path)], None, 0.0

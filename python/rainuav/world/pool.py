@@ -1,13 +1,12 @@
 """Storms of the distribution as a training run needs them
-([`StormPool`][rainuav.world.pool.StormPool]): the worlds of
-a network that learns to fly any storm (``python -m rainuav.train --storm-seed random``).
+([`StormPool`][rainuav.world.pool.StormPool]): the worlds of a network that learns to fly any storm
+(``python -m rainuav.train --storm-seed random``).
 
 Seeds: training storms are drawn in [`TRAINING_SEEDS`][rainuav.world.pool.TRAINING_SEEDS];
-[`VALIDATION_SEEDS`][rainuav.world.pool.VALIDATION_SEEDS] are for
-choices made while building a learner; from 1 000 000 the evaluation storms
+[`VALIDATION_SEEDS`][rainuav.world.pool.VALIDATION_SEEDS] are for choices made while building a
+learner; from 1 000 000 the evaluation storms
 ([`rainuav.radio.storms.EVAL_SEEDS_FROM`][rainuav.radio.storms.EVAL_SEEDS_FROM]), never trained or
-tuned on.
-"""
+tuned on."""
 
 from __future__ import annotations
 
@@ -42,8 +41,8 @@ __all__ = ["TRAINING_SEEDS", "VALIDATION_SEEDS", "StormPool", "calm", "is_calm"]
 TRAINING_SEEDS = (0, 900_000)
 """A storm pool draws its storms' seeds uniformly in [lo, hi): the training storms."""
 VALIDATION_SEEDS = (900_000, 1_000_000)
-"""Storms for choices made while building a learner (validation); never drawn for training.
-The evaluation storms start at 1 000 000
+"""Storms for choices made while building a learner (validation); never drawn for training. The
+evaluation storms start at 1 000 000
 ([`rainuav.radio.storms.EVAL_SEEDS_FROM`][rainuav.radio.storms.EVAL_SEEDS_FROM])."""
 
 
@@ -68,23 +67,22 @@ def calm(scn: Scenario) -> Scenario:
 
 
 class StormPool:
-    """Storms of the distribution as a training run needs them: ``spec.storm_pool`` storms in
-    one [`SignalBank`][rainuav.nav.field.SignalBank] (world ``k``'s slot is renewed with
-    [`renew()`][rainuav.world.pool.StormPool.renew]), their seeds
-    drawn from ``numpy.random.default_rng(seed)`` in
-    [`TRAINING_SEEDS`][rainuav.world.pool.TRAINING_SEEDS] (a share
-    ``spec.calm_share`` of them flown calm: [`is_calm()`][rainuav.world.pool.is_calm],
-    [`calm()`][rainuav.world.pool.calm]). The next storm
-    is mapped in a background thread while training goes on (the engine releases the GIL);
-    the maps are not cached on disk (each storm is flown once). ``map_seconds``: the time
-    spent mapping storms, and ``wait_seconds``: the part training waited for; ``flown``: the
-    seeds of the storms put in a slot, in order (not the one being mapped next).
+    """Storms of the distribution as a training run needs them: ``spec.storm_pool`` storms in one
+    [`SignalBank`][rainuav.nav.field.SignalBank] (world ``k``'s slot is renewed with
+    [`renew()`][rainuav.world.pool.StormPool.renew]), their seeds drawn from
+    ``numpy.random.default_rng(seed)`` in [`TRAINING_SEEDS`][rainuav.world.pool.TRAINING_SEEDS] (a
+    share ``spec.calm_share`` of them flown calm: [`is_calm()`][rainuav.world.pool.is_calm],
+    [`calm()`][rainuav.world.pool.calm]). The next storm is mapped in a background thread while
+    training goes on (the engine releases the GIL); the maps are not cached on disk (each storm is
+    flown once). ``map_seconds``: the time spent mapping storms, and ``wait_seconds``: the part
+    training waited for; ``flown``: the seeds of the storms put in a slot, in order (not the one
+    being mapped next).
 
     Among flight levels (``spec.altitudes``) a storm is the maps of every level in time
     ([`rainuav.radio.levels.LevelStack`][rainuav.radio.levels.LevelStack]) and the bank a
     [`rainuav.nav.levelfield.LevelField.bank()`][rainuav.nav.levelfield.LevelField.bank]; the pool's
-    memory (the slots, the
-    storm being mapped and the one being put) is checked once the first storm is mapped."""
+    memory (the slots, the storm being mapped and the one being put) is checked once the first storm
+    is mapped."""
 
     def __init__(self, spec: Any, seed: int, *, progress: bool = False) -> None:
         check_spec(spec)
@@ -166,9 +164,8 @@ class StormPool:
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
         """Restores a [`state_dict()`][rainuav.world.pool.StormPool.state_dict]: maps again the
-        storms of the slots that differ
-        (maps are a function of their seed) and the next one. Anything malformed raises
-        ValueError."""
+        storms of the slots that differ (maps are a function of their seed) and the next one.
+        Anything malformed raises ValueError."""
         seeds, nxt = d["seeds"], d["next_seed"]
         ok = isinstance(seeds, list) and len(seeds) == len(self.seeds)
         if not ok or not all(isinstance(k, int) and 0 <= k < TRAINING_SEEDS[1] for k in seeds):
