@@ -324,9 +324,26 @@ def ray_walls(
     terrain_origin_step: tuple[float, float, float, float] | None = None,
     altitude_msl: bool = False,
     prisms: Prisms | None = None,
-) -> tuple[_I, _I, _F, _F, _F, _F]:
+    prism_eps: _F | None = None,
+) -> tuple[_I, _I, _F, _F, _F, _F, _I]:
     """Every ray the walls (K, 6: ax, ay, bx, by, base, top) reflect from each site to each
-    pixel: (site, pixel, az_deg, el_deg, factor per mW for isotropic antennas, length_m)."""
+    pixel, once or twice: (site, pixel, az_deg, el_deg, factor per mW for isotropic antennas,
+    length_m, kind: 1 one wall, 2 two walls, 3 a corner); with ``prism_eps`` (P, 2), also the
+    rays the prisms' corners diffract into the pixels they hide."""
+
+def utd_wedge(
+    n: float,
+    phi1: float,
+    phi2: _F,
+    *,
+    l_m: float,
+    sin_beta0: float,
+    k: float,
+    r0: complex,
+    rn: complex,
+) -> _C:
+    """The UTD coefficient of a finitely conducting wedge (ITU-R P.526-15 section 6) at each
+    diffraction angle ``phi2`` (rad), sqrt(m)."""
 
 def knife_edge_loss_db(nu: _F) -> _F:
     """ITU-R P.526's knife-edge loss J(nu), dB, of each ``nu``."""

@@ -16,6 +16,7 @@
 //! assert!(gamma / itu > 0.8 && gamma / itu < 1.3, "{}", gamma / itu);
 //! ```
 
+pub mod corners;
 pub mod diffraction;
 pub mod drops;
 pub mod dsd;
@@ -34,6 +35,7 @@ pub mod rays;
 pub mod raytime;
 pub mod sampling;
 pub mod walls;
+pub mod walls2;
 pub mod water;
 
 pub use error::{CoreError, Result};

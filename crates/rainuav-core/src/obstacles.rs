@@ -258,6 +258,15 @@ impl Prisms {
         &self.items
     }
 
+    /// Prism `k`'s rings (its outer ring first, then its holes), each a slice of vertices
+    /// (not closed: the last joins the first).
+    pub fn rings_of(&self, k: usize) -> impl Iterator<Item = &[[f64; 2]]> + '_ {
+        let p = self.items[k];
+        self.rings[p.rings[0]..p.rings[1]]
+            .iter()
+            .map(move |r| &self.xy[r[0]..r[1]])
+    }
+
     fn edges(&self, k: usize) -> impl Iterator<Item = ([f64; 2], [f64; 2])> + '_ {
         let p = self.items[k];
         self.rings[p.rings[0]..p.rings[1]]
@@ -336,6 +345,27 @@ impl Prisms {
         out.retain(|&k| {
             let bb = self.items[k as usize].bbox;
             bb[0] <= hi[0] && bb[1] >= lo[0] && bb[2] <= hi[1] && bb[3] >= lo[1]
+        });
+    }
+
+    /// The prisms whose bounding box meets the box `[x0, x1, y0, y1]`, each once, in index
+    /// order.
+    pub fn near_box(&self, bbox: [f64; 4], out: &mut Vec<u32>) {
+        out.clear();
+        if self.items.is_empty() {
+            return;
+        }
+        let (c0, c1, r0, r1) = self.grid.range(bbox);
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                out.extend_from_slice(self.grid.bucket(r, c));
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out.retain(|&k| {
+            let bb = self.items[k as usize].bbox;
+            bb[0] <= bbox[1] && bb[1] >= bbox[0] && bb[2] <= bbox[3] && bb[3] >= bbox[2]
         });
     }
 
@@ -426,6 +456,16 @@ mod tests {
             p.height_at(25.0 + 50.0 * 3.0 - 20.0, 10.0 + 50.0 * 2.0),
             10.0 + 4.3
         );
+        // A box query finds exactly the boxes a scan of their bounding boxes finds.
+        let q = [120.0, 333.0, 40.0, 260.0];
+        p.near_box(q, &mut near);
+        let scan: Vec<u32> = (0..p.len() as u32)
+            .filter(|&k| {
+                let b = p.items()[k as usize].bbox;
+                b[0] <= q[1] && b[1] >= q[0] && b[2] <= q[3] && b[3] >= q[2]
+            })
+            .collect();
+        assert_eq!(near, scan);
     }
 
     #[test]

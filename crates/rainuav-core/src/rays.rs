@@ -540,6 +540,55 @@ impl RayScene<'_> {
             .all(|&(s, h)| h < z0 + (z1 - z0) * (s - s0) / (s1 - s0))
     }
 
+    /// The diffraction loss (dB) of the direct ray over the profile `prof` of the ground line
+    /// `a -> b` between the ends at `za`, `zb` (m above sea level), and the edge toward which
+    /// the antenna's gain is taken (docs/physics.md section 12). The principal edge (Deygout's:
+    /// largest `nu`) decides the method: on terrain, P.526's Bullington construction with its
+    /// correction for real terrain; on a building or the obstacle raster, Deygout's isolated
+    /// edges without it, plus the correction of the terrain's own Bullington loss where a terrain
+    /// is under the path (0 where the terrain alone clears the path).
+    fn diffraction_loss(
+        &self,
+        prof: &[(f64, f64)],
+        a: [f64; 2],
+        b: [f64; 2],
+        za: f64,
+        zb: f64,
+        lambda: f64,
+    ) -> (f64, Option<(f64, f64)>) {
+        use crate::diffraction::{bullington, deygout};
+        let rho = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let bull = bullington(prof, rho, za, zb, lambda);
+        let obstacles = self.prisms.is_some_and(|p| !p.is_empty()) || self.heights.is_some();
+        if !obstacles {
+            return (bull.loss_db, bull.edge);
+        }
+        let (l_d, edge) = deygout(prof, rho, za, zb, lambda);
+        let Some((de, _)) = edge else {
+            return (bull.loss_db, bull.edge);
+        };
+        let t = de / rho;
+        if self.obstacle_at(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])) <= 0.0 {
+            return (bull.loss_db, bull.edge);
+        }
+        let corr = match &self.terrain {
+            Some(tr) => {
+                let n = ((rho / (0.5 * tr.spacing())).ceil() as usize).max(1);
+                let ground: Vec<(f64, f64)> = (1..n)
+                    .map(|k| {
+                        let t = k as f64 / n as f64;
+                        let (x, y) = (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
+                        (t * rho, self.terrain_at(x, y))
+                    })
+                    .collect();
+                let l_t = bullington(&ground, rho, za, zb, lambda).knife_edge_db;
+                (1.0 - (-l_t / 6.0).exp()) * (10.0 + 0.02 * rho / 1000.0)
+            }
+            None => 0.0,
+        };
+        (l_d + corr, edge)
+    }
+
     /// The geometry of the rays from the transmitter at `tx` (`[x, y, height above the
     /// terrain]`) to the pixel centre `q`; `prof` is scratch space for the profile.
     pub fn path(&self, tx: [f64; 3], q: [f64; 2], prof: &mut Vec<(f64, f64)>) -> PathGeometry {
@@ -565,15 +614,15 @@ impl RayScene<'_> {
         let d1 = (rho * rho + (zq - zs).powi(2)).sqrt().max(1e-3);
         self.profile([xs, ys], q, prof);
         let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
-        let bull = crate::diffraction::bullington(prof, rho, zs, zq, lambda);
-        let el_direct = match bull.edge {
+        let (loss_db, edge) = self.diffraction_loss(prof, [xs, ys], q, zs, zq, lambda);
+        let el_direct = match edge {
             Some((de, he)) => (he - zs).atan2(de),
             None => (zq - zs).atan2(rho),
         };
         let mut g = PathGeometry {
             d1,
             d2: d1,
-            loss_db: bull.loss_db,
+            loss_db,
             el_direct,
             el_reflect: el_direct,
             psi: 0.0,
@@ -1073,11 +1122,11 @@ mod tests {
     }
 
     #[test]
-    fn a_building_on_the_path_costs_its_bullington_loss() {
+    fn a_building_on_the_path_costs_its_two_isolated_edges() {
         // Transmitter at 25 m, receiver at 100 m, 1000 m away; a 200 m tall wall, 10 m thick,
-        // at 500 m. By hand (docs/physics.md section 12): both faces are profile points; beyond
-        // line of sight the steepest line from the transmitter meets the near face (495 m) and
-        // the one from the receiver the far face (505 m); they cross at the Bullington point.
+        // at 500 m. By hand (docs/physics.md section 12): both faces are profile points; the
+        // principal edge is the face of larger nu, the other face diffracts on its sub-path;
+        // their knife-edge losses add, with no terrain correction (a building, flat ground).
         let (x, y) = ([1000.0], [0.0]);
         let mut s = scene(&x, &y, RayGround::None);
         let clear = one(&s, TX);
@@ -1087,14 +1136,16 @@ mod tests {
         let lam = crate::SPEED_OF_LIGHT_M_S / 4.9e9;
         let (d, hts, hrs) = (1000.0_f64, 25.0, 100.0);
         let g = |di: f64| 200.0 + di * (d - di) / (2.0 * 8.5e6);
-        let s_tim = (g(495.0) - hts) / 495.0;
-        let s_rim = (g(505.0) - hrs) / (d - 505.0);
-        let dbp = (hrs - hts + s_rim * d) / (s_tim + s_rim);
-        let hbp = hts + s_tim * dbp;
-        let nu =
-            (hbp - (hts * (d - dbp) + hrs * dbp) / d) * (2.0 * d / (lam * dbp * (d - dbp))).sqrt();
-        let j = knife_edge_loss_db(nu);
-        let want = j + (1.0 - (-j / 6.0).exp()) * (10.0 + 0.02 * d / 1000.0);
+        let nu = |s0: f64, z0: f64, s1: f64, z1: f64, di: f64| {
+            let line = z0 + (z1 - z0) * (di - s0) / (s1 - s0);
+            (g(di) - line) * (2.0 * (s1 - s0) / (lam * (di - s0) * (s1 - di))).sqrt()
+        };
+        let (n1, n2) = (nu(0.0, hts, d, hrs, 495.0), nu(0.0, hts, d, hrs, 505.0));
+        let want = if n1 >= n2 {
+            knife_edge_loss_db(n1) + knife_edge_loss_db(nu(495.0, g(495.0), d, hrs, 505.0))
+        } else {
+            knife_edge_loss_db(n2) + knife_edge_loss_db(nu(0.0, hts, 505.0, g(505.0), 495.0))
+        };
         assert!((loss - want).abs() < 1e-6, "{loss} vs {want}");
     }
 

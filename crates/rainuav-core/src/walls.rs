@@ -61,7 +61,7 @@ pub struct WallRay {
 
 /// How far (m) each leg's visibility check stops short of the specular point: the wall's own
 /// building is not in the way of a ray that touches it.
-const LEG_GAP_M: f64 = 0.05;
+pub(crate) const LEG_GAP_M: f64 = 0.05;
 
 /// `|Gamma|^2` of a wall of permittivity `eps` for an incident unit direction `k` and unit
 /// horizontal normal `n`, the field split between the two polarisations by `pol`.
@@ -87,7 +87,7 @@ pub fn wall_reflectance(eps: Complex64, k: [f64; 3], n: [f64; 2], pol: RayPolari
 }
 
 /// The interval of `x` where every `alpha x + beta >= 0` holds (empty: `lo > hi`).
-fn interval(conds: &[(f64, f64)]) -> (f64, f64) {
+pub(crate) fn interval(conds: &[(f64, f64)]) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
     for &(alpha, beta) in conds {
         if alpha.abs() < 1e-15 {
@@ -178,7 +178,13 @@ impl RayScene<'_> {
 
     /// Whether a wall can reflect anything from the site at all: the site in front of it,
     /// and the wall's heights within those the rays can meet.
-    fn wall_lit(&self, site: [f64; 3], zs: f64, (zq_lo, zq_hi): (f64, f64), w: &Wall) -> bool {
+    pub(crate) fn wall_lit(
+        &self,
+        site: [f64; 3],
+        zs: f64,
+        (zq_lo, zq_hi): (f64, f64),
+        w: &Wall,
+    ) -> bool {
         let Some((n, _)) = normal(w) else {
             return false;
         };
@@ -315,7 +321,7 @@ impl RayScene<'_> {
 }
 
 /// The wall's outward unit normal (right of `a -> b`) and length; None for a point.
-fn normal(w: &Wall) -> Option<([f64; 2], f64)> {
+pub(crate) fn normal(w: &Wall) -> Option<([f64; 2], f64)> {
     let (dx, dy) = (w.b[0] - w.a[0], w.b[1] - w.a[1]);
     let len = dx.hypot(dy);
     (len > 1e-9).then(|| ([dy / len, -dx / len], len))

@@ -355,16 +355,19 @@ fn ray_departures<'py>(
 }
 
 /// Every ray that `walls` reflect from each site to the map's pixels (image method, first
-/// order): `walls` (K, 6) `[ax, ay, bx, by, base, top]` (outward normal on the right of
+/// and second order: `rainuav_core::walls`, `rainuav_core::walls2`): `walls` (K, 6) `[ax, ay, bx, by, base, top]` (outward normal on the right of
 /// `a -> b`; base and top above the terrain), `wall_eps` (K, 2) each wall's complex
 /// permittivity (real, imaginary <= 0), `sites` (S, 3) x, y, height above the terrain.
-/// Returns `(site, pixel, az_deg, el_deg, factor, length_m)`, one entry a ray: its site, its
-/// pixel (row-major), its departure direction toward the specular point, its power per mW
-/// for isotropic antennas and its length.
+/// Returns `(site, pixel, az_deg, el_deg, factor, length_m, kind)`, one entry a ray: its site,
+/// its pixel (row-major), its departure direction toward its first interaction, its power per
+/// mW for isotropic antennas, its length and its kind (1: one wall, 2: two walls, 3: a corner,
+/// alone or after a wall). With `prism_eps` (P, 2: each prism's wall
+/// permittivity), also the rays the prisms' corners diffract into the pixels they hide
+/// (`rainuav_core::corners`), after the wall rays of the same site.
 #[pyfunction]
 #[pyo3(signature = (sites, x_m, y_m, walls, wall_eps, *, altitude_m, freq_hz, polarization,
     buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=None,
-    altitude_msl=false, prisms=None))]
+    altitude_msl=false, prisms=None, prism_eps=None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn ray_walls<'py>(
     py: Python<'py>,
@@ -383,6 +386,7 @@ fn ray_walls<'py>(
     terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
     prisms: Option<Bound<'py, Prisms>>,
+    prism_eps: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<(
     Bound<'py, numpy::PyArray1<i64>>,
     Bound<'py, numpy::PyArray1<i64>>,
@@ -390,6 +394,7 @@ fn ray_walls<'py>(
     Bound<'py, numpy::PyArray1<f64>>,
     Bound<'py, numpy::PyArray1<f64>>,
     Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray1<i64>>,
 )> {
     let sites = parse_sites(&sites)?;
     let polarization = parse_polarization(polarization)?;
@@ -435,17 +440,51 @@ fn ray_walls<'py>(
         terrain: raster(tr, terrain_origin_step),
         altitude_msl,
     };
+    let corner_eps: Option<Vec<Complex64>> = match &prism_eps {
+        None => None,
+        Some(e) => {
+            let e = e.as_array();
+            if e.ncols() != 2 && e.nrows() > 0 {
+                return Err(to_py(CoreError::invalid(
+                    "prism_eps",
+                    "must have shape (P, 2)",
+                    format!("{:?}", e.dim()),
+                )));
+            }
+            Some(
+                e.rows()
+                    .into_iter()
+                    .map(|r| Complex64::new(r[0], r[1]))
+                    .collect(),
+            )
+        }
+    };
     let rays = detached(py, || {
         let mut all = Vec::new();
         for (k, &site) in sites.iter().enumerate() {
-            all.extend(scene.wall_rays(site, &walls)?.into_iter().map(|r| (k, r)));
+            all.extend(
+                scene
+                    .wall_rays(site, &walls)?
+                    .into_iter()
+                    .map(|r| (k, 1, r)),
+            );
+            all.extend(
+                scene
+                    .wall_rays2(site, &walls)?
+                    .into_iter()
+                    .map(|r| (k, 2, r)),
+            );
+            if let Some(eps) = &corner_eps {
+                all.extend(scene.corner_rays(site, eps)?.into_iter().map(|r| (k, 3, r)));
+            }
         }
         Ok(all)
     })?;
-    let site: Vec<i64> = rays.iter().map(|(k, _)| *k as i64).collect();
-    let pixel: Vec<i64> = rays.iter().map(|(_, r)| r.pixel as i64).collect();
+    let site: Vec<i64> = rays.iter().map(|(k, _, _)| *k as i64).collect();
+    let pixel: Vec<i64> = rays.iter().map(|(_, _, r)| r.pixel as i64).collect();
+    let kind: Vec<i64> = rays.iter().map(|(_, t, _)| *t as i64).collect();
     let col = |f: fn(&rainuav_core::walls::WallRay) -> f64| -> Vec<f64> {
-        rays.iter().map(|(_, r)| f(r)).collect()
+        rays.iter().map(|(_, _, r)| f(r)).collect()
     };
     Ok((
         site.into_pyarray(py),
@@ -454,6 +493,7 @@ fn ray_walls<'py>(
         col(|r| r.el_deg).into_pyarray(py),
         col(|r| r.factor).into_pyarray(py),
         col(|r| r.length_m).into_pyarray(py),
+        kind.into_pyarray(py),
     ))
 }
 
@@ -541,6 +581,38 @@ fn knife_edge_loss_db<'py>(
         .into_pyarray(py)
 }
 
+/// The UTD diffraction coefficient of a finitely conducting wedge (ITU-R P.526-15 section 6)
+/// at each `phi2`: exterior angle `n pi`, incidence angle `phi1` and diffraction angles
+/// `phi2` (rad, from face 0), distance parameter `l_m`, `sin_beta0`, wavenumber `k` and the
+/// faces' reflection coefficients `r0`, `rn` (complex, or one a `phi2`); complex, sqrt(m).
+#[pyfunction]
+#[pyo3(signature = (n, phi1, phi2, *, l_m, sin_beta0, k, r0, rn))]
+#[allow(clippy::too_many_arguments)]
+fn utd_wedge<'py>(
+    py: Python<'py>,
+    n: f64,
+    phi1: f64,
+    phi2: PyReadonlyArray1<'py, f64>,
+    l_m: f64,
+    sin_beta0: f64,
+    k: f64,
+    r0: Complex64,
+    rn: Complex64,
+) -> PyResult<Bound<'py, numpy::PyArray1<Complex64>>> {
+    let ok = n > 1.0 && n <= 2.0 && l_m > 0.0 && k > 0.0 && sin_beta0 > 0.0 && sin_beta0 <= 1.0;
+    if !ok || !phi1.is_finite() {
+        return Err(to_py(CoreError::invalid(
+            "utd_wedge",
+            "needs 1 < n <= 2, l_m > 0, k > 0, 0 < sin_beta0 <= 1",
+            format!("n {n}, l_m {l_m}, k {k}, sin_beta0 {sin_beta0}"),
+        )));
+    }
+    Ok(phi2
+        .as_array()
+        .mapv(|p| rainuav_core::diffraction::utd_wedge(n, phi1, p, l_m, sin_beta0, k, r0, rn))
+        .into_pyarray(py))
+}
+
 /// The Bullington loss (P.526-15 section 4.5.1 with its correction) of the profile
 /// `(d_m[i], h_m[i])` between antennas at `h_ts_m` and `h_rs_m` above sea level, `d_total_m`
 /// apart: `(loss_db, knife_edge_db, edge_d_m, edge_h_m)` (the edge NaN where the loss is 0).
@@ -588,6 +660,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ray_power, m)?)?;
     m.add_function(wrap_pyfunction!(ray_departures, m)?)?;
     m.add_function(wrap_pyfunction!(ray_walls, m)?)?;
+    m.add_function(wrap_pyfunction!(utd_wedge, m)?)?;
     m.add_class::<Prisms>()?;
     m.add_function(wrap_pyfunction!(knife_edge_loss_db, m)?)?;
     m.add_function(wrap_pyfunction!(bullington_loss, m)?)?;

@@ -37,6 +37,7 @@ __all__ = [
     "buildings_near_route",
     "default_height_warning",
     "pixels_touched_max",
+    "prism_eps",
     "scenario_buildings",
     "wall_args",
 ]
@@ -251,6 +252,16 @@ def wall_args(scn: Scenario) -> tuple[np.ndarray, np.ndarray]:
     eps = {m: material_permittivity(m, scn.freq_hz) for m in set(b.wall_material)}
     e = np.array([[eps[m].real, eps[m].imag] for m in b.wall_material], dtype=float)
     return np.ascontiguousarray(b.walls), e
+
+
+def prism_eps(scn: Scenario) -> np.ndarray | None:
+    """Each merged building's wall permittivity (P, 2: real, imaginary) at ``scn``'s frequency,
+    in the order of its prisms (what the corners diffract with); None without buildings."""
+    b = scenario_buildings(scn)
+    if b is None or len(b.footprints) == 0:
+        return None
+    eps = [material_permittivity(f.material, scn.freq_hz) for f in b.footprints]
+    return np.array([[e.real, e.imag] for e in eps], dtype=float).reshape(-1, 2)
 
 
 def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> np.ndarray:

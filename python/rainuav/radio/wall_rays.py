@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from rainuav import _core
-from rainuav.radio.buildings import scenario_buildings, wall_args
+from rainuav.radio.buildings import prism_eps, scenario_buildings, wall_args
 from rainuav.radio.cell import Cell, Weight, gain_linear, weight_at
 from rainuav.radio.scenario import Scenario, Site
 from rainuav.radio.terrain import core_args
@@ -56,16 +56,17 @@ def obstacle_args(scn: Scenario) -> dict[str, Any]:
 
 
 WallRays = tuple[np.ndarray, ...]
-"""Per wall ray (`rainuav._core.ray_walls`): its site (index into the distinct sites),
-pixel, departure azimuth and elevation (degrees), power per mW for isotropic antennas, and
-length (m)."""
+"""Per ray off the walls (`rainuav._core.ray_walls`): its site (index into the distinct sites),
+pixel, departure azimuth and elevation (degrees), power per mW for isotropic antennas, length (m)
+and kind (1: one wall, 2: two walls, 3: a corner, alone or after a wall)."""
 
 
 def trace_walls(
     scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
 ) -> tuple[WallRays, dict[int, int]] | None:
     """Every ray the walls of ``scn`` reflect from each distinct site of ``jobs`` to each
-    pixel, and each site's index; None without walls."""
+    pixel, and the rays the buildings' corners diffract into the pixels they hide from it
+    (`rainuav_core::corners`), and each site's index; None without walls."""
     walls, eps = wall_args(scn)
     if walls.shape[0] == 0:
         return None
@@ -80,6 +81,7 @@ def trace_walls(
         altitude_m=scn.area.altitude_m,
         freq_hz=scn.freq_hz,
         polarization=scn.polarization,
+        prism_eps=prism_eps(scn),
         **obstacle_args(scn),
         **core_args(scn),
     )
@@ -102,7 +104,7 @@ def wall_terms(
     traced = trace_walls(scn, jobs, x_m, y_m) if rays is None else rays
     if traced is None:
         return None
-    (site_k, pixel, az, el, factor, length), index = traced
+    (site_k, pixel, az, el, factor, length, _kind), index = traced
     plane = y_m.size * x_m.size
     out = np.zeros((len(jobs), plane, 2))
     for m, (site, cell) in enumerate(jobs):

@@ -1,0 +1,447 @@
+//! Diffraction round the vertical edges of buildings (docs/physics.md section 12): where a
+//! building hides a pixel from a site, each convex corner of the buildings in the way that
+//! sees both ends diffracts a ray to the pixel, with the UTD coefficient of a finitely
+//! conducting wedge (ITU-R P.526-15 section 6, [`crate::diffraction::utd_wedge`]).
+//!
+//! A corner is a footprint vertex whose exterior angle `n pi` exceeds `pi` (a box's corners:
+//! `n = 1.5`); its faces are the two walls that meet there, their material the building's. The
+//! ray leaves the site, meets the vertical edge at the height where the unfolded path is
+//! straight (Keller's law: `z = z_s + (z_q - z_s) r1 / (r1 + r2)` with `r1`, `r2` the horizontal
+//! distances to the edge) and goes on to the pixel; it exists where that point lies on the edge
+//! (between the terrain and the roof) and both legs clear every building and the terrain. The
+//! angles `phi1` (toward the site) and `phi2` (toward the pixel) are measured in the horizontal
+//! plane from face 0, the face nearer the site (the one it lights); `sin(beta0) = r1 / s1`. The
+//! faces' Fresnel coefficients are P.2040's at each face's grazing angle (`phi1` for face 0,
+//! `n pi - phi2` for face n, as the angle between the ray and the face's plane), for the field
+//! along the edge (vertical polarisation: perpendicular to the horizontal plane of incidence) or
+//! across it (horizontal polarisation).
+//!
+//! **A wall reflection, then the corner.** A wall within [`IMAGE_RADIUS_M`] of a corner that
+//! faces both the site and the corner mirrors the site: its image diffracts at the corner as the
+//! site does, the reflection point where the line from the image to the corner crosses the wall
+//! (it exists where that point lies on the wall, between the terrain and the roof, and the legs
+//! site -> wall -> corner -> pixel are clear), with the wall's P.2040 reflectance
+//! ([`crate::walls::wall_reflectance`]). The walls are the prisms' edges. This is how a street
+//! lights its side streets: the site sees the corner at grazing incidence along the street's
+//! wall, its image across the street at a wider angle.
+//!
+//! Each ray's power per mW radiated, isotropic antennas: `|Gamma|^2 (lambda / 4 pi)^2 |D|^2 /
+//! (s1 s2 (s1 + s2))` (`|Gamma|^2 = 1` without a reflection, `s1` the unfolded length to the
+//! edge); the caller applies the antenna gain toward the first interaction. Rays are returned as
+//! [`WallRay`]s (one kind of extra ray: a departure direction, a power factor, a length) and add
+//! incoherently to the rest.
+
+use num_complex::Complex64;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+use crate::diffraction::utd_wedge;
+use crate::error::{CoreError, Result};
+use crate::rays::{RayGround, RayPolarization, RayScene, reflection_coefficient};
+use crate::walls::{WallRay, wall_reflectance};
+
+/// How far (m) outside its corner, along the exterior bisector, a leg's visibility check ends:
+/// the corner's own walls are not in the way of a ray that grazes them; and how far short of a
+/// wall a leg to a reflection point stops.
+const CORNER_GAP_M: f64 = 0.05;
+
+/// The walls that may mirror the site into a corner: those of the buildings whose bounding box
+/// comes within this distance (m) of the corner.
+pub const IMAGE_RADIUS_M: f64 = 150.0;
+
+/// The site mirrored in a wall toward one corner.
+#[derive(Debug, Clone, Copy)]
+struct Image {
+    /// The image, `[x, y]`.
+    at: [f64; 2],
+    /// The reflection point on the wall (horizontal), and its distance from the site.
+    p: [f64; 2],
+    d_sp: f64,
+    /// The wall's outward unit normal, roof above the terrain and permittivity.
+    n: [f64; 2],
+    top: f64,
+    eps: Complex64,
+}
+
+/// One convex corner: position, the unit directions of its two faces (face 0 first, the
+/// exterior counter-clockwise from it), the exterior angle (rad), the prism and its roof.
+#[derive(Debug, Clone, Copy)]
+struct Corner {
+    v: [f64; 2],
+    a0: [f64; 2],
+    ext: f64,
+    top: f64,
+    prism: usize,
+}
+
+/// Counter-clockwise angle from `a` to `b` (unit or not), in `[0, 2 pi)`.
+fn ccw(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let t = (a[0] * b[1] - a[1] * b[0]).atan2(a[0] * b[0] + a[1] * b[1]);
+    if t < 0.0 { t + 2.0 * PI } else { t }
+}
+
+fn unit(d: [f64; 2]) -> Option<[f64; 2]> {
+    let n = d[0].hypot(d[1]);
+    (n > 1e-9).then(|| [d[0] / n, d[1] / n])
+}
+
+impl RayScene<'_> {
+    /// The convex corners of prism `k` (its rings' vertices with an exterior angle above pi).
+    fn corners_of(&self, k: usize, out: &mut Vec<Corner>) {
+        let Some(prisms) = self.prisms else {
+            return;
+        };
+        let top = prisms.items()[k].top;
+        for (r, ring) in prisms.rings_of(k).enumerate() {
+            let m = ring.len();
+            let area: f64 = (0..m)
+                .map(|i| {
+                    let (p, q) = (ring[i], ring[(i + 1) % m]);
+                    p[0] * q[1] - q[0] * p[1]
+                })
+                .sum();
+            // The building's material lies left of the walk on an outer ring walked
+            // counter-clockwise and on a hole walked clockwise.
+            let left = (r == 0) == (area > 0.0);
+            for i in 0..m {
+                let v = ring[i];
+                let (prev, next) = (ring[(i + m - 1) % m], ring[(i + 1) % m]);
+                let (Some(tp), Some(tn)) = (
+                    unit([prev[0] - v[0], prev[1] - v[1]]),
+                    unit([next[0] - v[0], next[1] - v[1]]),
+                ) else {
+                    continue;
+                };
+                let (a0, an) = if left { (tp, tn) } else { (tn, tp) };
+                let ext = ccw(a0, an);
+                if ext > PI + 1e-6 {
+                    out.push(Corner {
+                        v,
+                        a0,
+                        ext,
+                        top,
+                        prism: k,
+                    });
+                }
+            }
+        }
+    }
+
+    /// The images of the site (horizontal position `s`) in the walls near corner `c` that face
+    /// both (module docs), with each wall's permittivity from `eps` (a prism's).
+    fn images_of(
+        &self,
+        s: [f64; 2],
+        c: &Corner,
+        eps: &[Complex64],
+        near: &mut Vec<u32>,
+    ) -> Vec<Image> {
+        let Some(prisms) = self.prisms else {
+            return Vec::new();
+        };
+        let r = IMAGE_RADIUS_M;
+        prisms.near_box([c.v[0] - r, c.v[0] + r, c.v[1] - r, c.v[1] + r], near);
+        let mut out = Vec::new();
+        for &k in near.iter() {
+            let k = k as usize;
+            for (ri, ring) in prisms.rings_of(k).enumerate() {
+                let m = ring.len();
+                let area: f64 = (0..m)
+                    .map(|i| ring[i][0] * ring[(i + 1) % m][1] - ring[(i + 1) % m][0] * ring[i][1])
+                    .sum();
+                let left = (ri == 0) == (area > 0.0);
+                for i in 0..m {
+                    let (a, b) = (ring[i], ring[(i + 1) % m]);
+                    if a == c.v || b == c.v {
+                        continue; // the corner's own faces: the wedge's R0, Rn
+                    }
+                    let Some(t) = unit([b[0] - a[0], b[1] - a[1]]) else {
+                        continue;
+                    };
+                    // Outward: right of a -> b where the material lies on its left.
+                    let n = if left { [t[1], -t[0]] } else { [-t[1], t[0]] };
+                    let ds = (s[0] - a[0]) * n[0] + (s[1] - a[1]) * n[1];
+                    let dc = (c.v[0] - a[0]) * n[0] + (c.v[1] - a[1]) * n[1];
+                    if ds <= 1e-6 || dc <= 1e-6 {
+                        continue;
+                    }
+                    let at = [s[0] - 2.0 * ds * n[0], s[1] - 2.0 * ds * n[1]];
+                    let u = ds / (ds + dc);
+                    let p = [at[0] + u * (c.v[0] - at[0]), at[1] + u * (c.v[1] - at[1])];
+                    let along = (p[0] - a[0]) * t[0] + (p[1] - a[1]) * t[1];
+                    let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+                    if !(0.0..=len).contains(&along) {
+                        continue;
+                    }
+                    out.push(Image {
+                        at,
+                        p,
+                        d_sp: (p[0] - s[0]).hypot(p[1] - s[1]),
+                        n,
+                        top: prisms.items()[k].top,
+                        eps: eps[k],
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// The ray corner `c` diffracts from the site (`zs` m above sea level) to the pixel `q`
+    /// (receiver at `zq`), if both legs are clear.
+    #[allow(clippy::too_many_arguments)]
+    fn corner_ray(
+        &self,
+        site: [f64; 2],
+        zs: f64,
+        q: [f64; 2],
+        zq: f64,
+        c: &Corner,
+        eps: Complex64,
+        image: Option<&Image>,
+        near: &mut Vec<u32>,
+    ) -> Option<(f64, f64, f64, f64)> {
+        let src = image.map_or(site, |m| m.at);
+        let to_s = [src[0] - c.v[0], src[1] - c.v[1]];
+        let to_q = [q[0] - c.v[0], q[1] - c.v[1]];
+        let (r1, r2) = (to_s[0].hypot(to_s[1]), to_q[0].hypot(to_q[1]));
+        if r1 < 1e-6 || r2 < 1e-6 {
+            return None;
+        }
+        let (mut phi1, mut phi2) = (ccw(c.a0, to_s), ccw(c.a0, to_q));
+        if !(phi1 > 0.0 && phi1 < c.ext && phi2 > 0.0 && phi2 < c.ext) {
+            return None;
+        }
+        if phi1 > 0.5 * c.ext {
+            // Face 0 is the face the site lights: measure from the other face.
+            (phi1, phi2) = (c.ext - phi1, c.ext - phi2);
+        }
+        let zv = zs + (zq - zs) * r1 / (r1 + r2);
+        let zt = self.terrain_at(c.v[0], c.v[1]);
+        if zv < zt || zv > zt + c.top {
+            return None;
+        }
+        let (bs, bc) = (0.5 * c.ext).sin_cos();
+        let out = [
+            c.v[0] + CORNER_GAP_M * (c.a0[0] * bc - c.a0[1] * bs),
+            c.v[1] + CORNER_GAP_M * (c.a0[0] * bs + c.a0[1] * bc),
+        ];
+        // The legs: site -> (wall ->) corner -> pixel.
+        let mut reflectance = 1.0;
+        let first = match image {
+            None => {
+                if !self.clear_above(site, zs, out, zv, near) {
+                    return None;
+                }
+                (c.v, zv, r1)
+            }
+            Some(m) => {
+                let zp = zs + (zv - zs) * m.d_sp / r1;
+                let zt = self.terrain_at(m.p[0], m.p[1]);
+                if zp < zt || zp > zt + m.top {
+                    return None;
+                }
+                let g = CORNER_GAP_M;
+                let before = |a: [f64; 2], b: [f64; 2], f: f64| {
+                    [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
+                };
+                let (d1, d2) = (m.d_sp.max(g), (r1 - m.d_sp).max(g));
+                let p1 = before(site, m.p, 1.0 - g / d1);
+                let p2 = before(m.p, out, g / d2);
+                let z_at = |f: f64, za: f64, zb: f64| za + f * (zb - za);
+                if !(self.clear_above(site, zs, p1, z_at(1.0 - g / d1, zs, zp), near)
+                    && self.clear_above(p2, z_at(g / d2, zp, zv), out, zv, near))
+                {
+                    return None;
+                }
+                let k = [m.p[0] - site[0], m.p[1] - site[1], zp - zs];
+                let kn = (k[0] * k[0] + k[1] * k[1] + k[2] * k[2]).sqrt().max(1e-9);
+                reflectance = wall_reflectance(m.eps, k.map(|v| v / kn), m.n, self.polarization);
+                (m.p, zp, m.d_sp)
+            }
+        };
+        if !self.clear_above(out, zv, q, zq, near) {
+            return None;
+        }
+        let s1 = (r1 * r1 + (zv - zs).powi(2)).sqrt();
+        let s2 = (r2 * r2 + (zq - zv).powi(2)).sqrt();
+        let sin_b = r1 / s1;
+        let l = s1 * s2 * sin_b * sin_b / (s1 + s2);
+        // The field along a vertical edge is perpendicular to the horizontal plane of
+        // incidence: the ground's horizontal-polarisation formula, and the other way round.
+        let face = match self.polarization {
+            RayPolarization::V => RayPolarization::H,
+            RayPolarization::H => RayPolarization::V,
+        };
+        let ground = RayGround::Dielectric(eps);
+        // Each face's grazing angle: the angle between the ray and the face's plane.
+        let grazing = |g: f64| g.sin().abs().asin();
+        let r0 = reflection_coefficient(ground, face, grazing(phi1));
+        let rn = reflection_coefficient(ground, face, grazing(c.ext - phi2));
+        let k = crate::wavenumber(self.freq_hz);
+        let d = utd_wedge(c.ext / PI, phi1, phi2, l, sin_b, k, r0, rn);
+        let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
+        let factor =
+            reflectance * (lambda / (4.0 * PI)).powi(2) * d.norm_sqr() / (s1 * s2 * (s1 + s2));
+        let (p, zp, dp) = first;
+        let az = (p[1] - site[1]).atan2(p[0] - site[0]).to_degrees();
+        let el = (zp - zs).atan2(dp).to_degrees();
+        Some((az, el, factor, s1 + s2))
+    }
+
+    /// Every ray that the corners of the buildings diffract from the site `site` (`[x, y,
+    /// height above the terrain]`) to the pixels the buildings hide from it (module docs);
+    /// `eps` is each prism's wall permittivity. Rows run in parallel.
+    pub fn corner_rays(&self, site: [f64; 3], eps: &[Complex64]) -> Result<Vec<WallRay>> {
+        self.check()?;
+        let Some(prisms) = self.prisms else {
+            return Ok(Vec::new());
+        };
+        if eps.len() != prisms.len() {
+            return Err(CoreError::invalid(
+                "prism_eps",
+                format!("must have one permittivity a prism ({})", prisms.len()),
+                eps.len(),
+            ));
+        }
+        if let Some(e) = eps
+            .iter()
+            .find(|e| !(e.re.is_finite() && e.im.is_finite() && e.re >= 1.0 && e.im <= 0.0))
+        {
+            return Err(CoreError::invalid(
+                "prism_eps",
+                "must be finite with Re >= 1 and Im <= 0",
+                e,
+            ));
+        }
+        if !site.iter().all(|v| v.is_finite()) || site[2] <= 0.0 {
+            return Err(CoreError::invalid(
+                "sites",
+                "must be finite, above the ground",
+                format!("{site:?}"),
+            ));
+        }
+        let s = [site[0], site[1]];
+        let zs = self.terrain_at(s[0], s[1]) + site[2];
+        let w = self.x_m.len();
+        Ok((0..self.y_m.len())
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let (mut near, mut hits, mut ts) = (Vec::new(), Vec::new(), Vec::new());
+                let mut corners = Vec::new();
+                let mut rays = Vec::new();
+                // Each corner's images of the site, found once a row.
+                let mut images: std::collections::HashMap<(u64, u64), Vec<Image>> =
+                    std::collections::HashMap::new();
+                let mut scratch = Vec::new();
+                for j in 0..w {
+                    let q = [self.x_m[j], self.y_m[i]];
+                    let zq = self.receiver_height(q);
+                    if self.clear_above(s, zs, q, zq, &mut near) {
+                        continue;
+                    }
+                    // The buildings in the way of the straight line.
+                    prisms.near_segment(s, q, &mut hits);
+                    corners.clear();
+                    let (dx, dy) = (q[0] - s[0], q[1] - s[1]);
+                    for &k in &hits {
+                        ts.clear();
+                        prisms.crossings(k as usize, s, q, &mut ts);
+                        let blocks = ts.iter().any(|&t| {
+                            let (x, y) = (s[0] + t * dx, s[1] + t * dy);
+                            self.terrain_at(x, y) + prisms.items()[k as usize].top
+                                >= zs + (zq - zs) * t
+                        });
+                        if blocks {
+                            self.corners_of(k as usize, &mut corners);
+                        }
+                    }
+                    for c in &corners {
+                        let key = (c.v[0].to_bits(), c.v[1].to_bits());
+                        let imgs = images
+                            .entry(key)
+                            .or_insert_with(|| self.images_of(s, c, eps, &mut scratch));
+                        let sources = std::iter::once(None).chain(imgs.iter().map(Some));
+                        for m in sources {
+                            if let Some((az, el, factor, length)) =
+                                self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut near)
+                            {
+                                rays.push(WallRay {
+                                    pixel: i * w + j,
+                                    az_deg: az,
+                                    el_deg: el,
+                                    factor,
+                                    length_m: length,
+                                });
+                            }
+                        }
+                    }
+                }
+                rays
+            })
+            .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::obstacles::Prisms;
+    use crate::rays::RainField;
+
+    #[test]
+    fn a_corner_seen_from_both_ends_is_the_utd_wedge_and_a_hidden_pixel_gets_one_ray_a_side() {
+        // One 40 m square block, roof 100 m (nothing over the roof); the site west of it, a
+        // pixel due east behind it: the two corners facing the site are hidden from the pixel
+        // and the two at the back from the site; nothing reaches it by one corner. A pixel
+        // north-east of the block, hidden by it, sees the north-west corner: one ray, whose
+        // power is the UTD wedge's by hand.
+        let prisms = Prisms::from_boxes(&[[0.0, 40.0, -20.0, 20.0, 100.0]]).unwrap();
+        let (x, y) = ([80.0], [0.0]);
+        let scene = RayScene {
+            x_m: &x,
+            y_m: &y,
+            altitude_m: 10.0,
+            pixel_m: [0.0, 0.0],
+            freq_hz: 4.9e9,
+            polarization: RayPolarization::V,
+            ground: RayGround::None,
+            rain: RainField::Uniform(0.0),
+            heights: None,
+            terrain: None,
+            altitude_msl: false,
+            prisms: Some(&prisms),
+        };
+        let eps = [Complex64::new(5.24, -0.5)];
+        let site = [-60.0, 0.0, 10.0];
+        assert!(scene.corner_rays(site, &eps).unwrap().is_empty());
+        let (x, y) = ([60.0], [30.0]);
+        let scene = RayScene {
+            x_m: &x,
+            y_m: &y,
+            ..scene
+        };
+        let rays = scene.corner_rays(site, &eps).unwrap();
+        assert_eq!(rays.len(), 1, "{rays:?}"); // one block: no other wall mirrors the site
+        // By hand: corner (0, 20); the site lights the west face, face 0, toward (0, -20)
+        // (south); the exterior 270 degrees clockwise from it to the north face (east).
+        let (r1, r2) = ((60.0f64).hypot(20.0), (60.0f64).hypot(10.0));
+        let phi1 = 1.5 * PI - ccw([1.0, 0.0], [-60.0, -20.0]);
+        let phi2 = 1.5 * PI - ccw([1.0, 0.0], [60.0, 10.0]);
+        let l = r1 * r2 / (r1 + r2);
+        let ground = RayGround::Dielectric(eps[0]);
+        let r0 = reflection_coefficient(ground, RayPolarization::H, phi1.sin().abs().asin());
+        let rn = reflection_coefficient(
+            ground,
+            RayPolarization::H,
+            (1.5 * PI - phi2).sin().abs().asin(),
+        );
+        let k = crate::wavenumber(4.9e9);
+        let d = utd_wedge(1.5, phi1, phi2, l, 1.0, k, r0, rn);
+        let lam = crate::SPEED_OF_LIGHT_M_S / 4.9e9;
+        let want = (lam / (4.0 * PI)).powi(2) * d.norm_sqr() / (r1 * r2 * (r1 + r2));
+        assert!((rays[0].factor / want - 1.0).abs() < 1e-9);
+        assert!((rays[0].length_m - (r1 + r2)).abs() < 1e-9);
+        assert!((rays[0].az_deg - (20.0f64).atan2(60.0).to_degrees()).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,466 @@
+"""Sionna RT, a full ray tracer, as an independent reference for the building physics
+(docs/physics.md section 12).
+
+The same scene in both: a scenario's buildings (boxes and footprints, merged as the ray engine
+reads them) become closed meshes in the tracer; each site radiates from one isotropic antenna of the
+scenario's polarisation, and the map is the path gain at the pixel centres of the scenario's area at
+its flight altitude (the tracer's measurement plane, one cell a pixel). What is compared is the
+**building effect**: the map with the buildings minus the map without them, in dB, each method
+against itself, so that the antennas and the spreading cancel and what remains is what the
+buildings do (shadows, diffraction, wall reflections).
+
+- The tracer's map is a Monte Carlo estimate; it is run twice with half the rays each (two seeds)
+  and their mean is the reference; their difference estimates its noise per pixel.
+- A pixel counts where the tracer covers it (both halves received something, with and without
+  buildings) and the UAV is outside every building.
+- The tracer's settings: specular reflections on the walls up to ``max_depth`` interactions, edge
+  diffraction (Sionna's UTD wedges; one diffraction a path), no transmission through walls (the ray
+  engine's buildings are opaque), no diffuse scattering, no ground (``ground = "none"``). Walls are
+  the ITU-R P.2040 material of the footprints, as in the ray engine.
+
+Needs ``sionna-rt`` (the ``test`` extra). On a machine without a GPU it runs through LLVM: Debian's
+``libllvm19``, found through ``DRJIT_LIBLLVM_PATH`` (set here when unset and the library is where
+Debian puts it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rainuav.radio.area import Area, FootprintsFile
+from rainuav.radio.cell import Cell, Pattern
+from rainuav.radio.scenario import Building, Medium, Origin, Scenario, Site
+
+__all__ = [
+    "FLOOR_DB",
+    "LLVM_PATHS",
+    "MAX_NOISE_DB",
+    "SCENES",
+    "SHADOW_DB",
+    "Agreement",
+    "TracerMap",
+    "agreement",
+    "compare",
+    "engine_gain",
+    "inside_buildings",
+    "isotropic_scenario",
+    "load_sionna",
+    "scene",
+    "tracer_gain",
+]
+
+LLVM_PATHS = (
+    "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1",
+    "/usr/lib/x86_64-linux-gnu/libLLVM-19.so",
+    "/usr/lib/aarch64-linux-gnu/libLLVM.so.19.1",
+    "/usr/lib/llvm-19/lib/libLLVM.so.1",
+)
+"""Where Debian's ``libllvm19`` puts the library Dr.Jit's CPU backend loads."""
+
+SHADOW_DB = -6.0
+"""A pixel is in a building's shadow where the building effect is below this (dB)."""
+
+FLOOR_DB = -60.0
+"""Building effects below this (dB) are compared as this: both maps call such a pixel dark (no
+link budget reaches it), and the tracer's paths there can be vanishing single diffractions whose
+dB value means nothing."""
+
+MAX_NOISE_DB = 3.0
+"""A pixel is compared where the tracer's two halves agree within twice this (dB): its estimate
+is then good to about this."""
+
+
+def load_sionna() -> tuple[Any, Any]:
+    """Imports Mitsuba and Sionna RT on a GPU where one is present, else on the CPU through LLVM:
+    returns ``(mitsuba, sionna.rt)``. Raises ImportError naming what is missing."""
+    if "DRJIT_LIBLLVM_PATH" not in os.environ:
+        for p in LLVM_PATHS:
+            if os.path.exists(p):
+                os.environ["DRJIT_LIBLLVM_PATH"] = p
+                break
+    try:
+        import mitsuba as mi
+    except ImportError as err:  # pragma: no cover - depends on the machine
+        raise ImportError("the tracer needs sionna-rt: pip install '.[test]'") from err
+    if mi.variant() is None:
+        variants = mi.variants()
+        for v in ("cuda_ad_mono_polarized", "llvm_ad_mono_polarized"):
+            if v in variants:
+                try:
+                    mi.set_variant(v)
+                    break
+                except (ImportError, RuntimeError, AttributeError):
+                    continue
+        else:  # pragma: no cover - depends on the machine
+            raise ImportError(
+                "Sionna RT found neither CUDA nor LLVM: install Debian's libllvm19 and set "
+                "DRJIT_LIBLLVM_PATH to its libLLVM.so"
+            )
+    import sionna.rt as rt
+
+    return mi, rt
+
+
+ISOTROPIC = Pattern(
+    azimuth_deg=[-180.0, 180.0], elevation_deg=[-90.0, 90.0], gain_db=[[0.0, 0.0], [0.0, 0.0]]
+)
+"""A pattern of 0 dBi in every direction."""
+
+
+def isotropic_scenario(scn: Scenario, *, buildings: bool = True) -> Scenario:
+    """``scn`` as both methods compare it: each distinct site once, with one isotropic cell of
+    0 dBm; clear air; no ground; the ray engine; with or without its buildings."""
+    sites, seen = [], set()
+    for s in scn.sites:
+        key = (s.x_m, s.y_m, s.height_m)
+        if key not in seen:
+            seen.add(key)
+            cell = Cell(azimuth_deg=0.0, tilt_deg=0.0, pattern=ISOTROPIC, tx_power_dbm=0.0)
+            sites.append(Site(x_m=s.x_m, y_m=s.y_m, height_m=s.height_m, cells=[cell]))
+    out = dataclasses.replace(
+        scn, sites=sites, medium=Medium(kind="clear"), ground="none", engine="ray"
+    )
+    if not buildings:
+        out = dataclasses.replace(out, buildings=[], footprints=None, height_map_m=None)
+    return out
+
+
+def engine_gain(scn: Scenario) -> np.ndarray:
+    """The ray engine's path gain (linear, isotropic antennas) of each site of
+    [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario]'s ``scn`` at every pixel,
+    (S, H, W)."""
+    from rainuav.radio.ray_engine import ray_power
+
+    x, y = scn.area.centres()
+    jobs = [(s, s.cells[0]) for s in scn.sites]
+    power_mw, _ = ray_power(scn, jobs, x, y)
+    return power_mw
+
+
+def _prism_mesh(mi: Any, name: str, polygon: Any, base: float, top: float) -> Any:
+    """A closed mesh of ``polygon`` (holes included) extruded from ``base`` to ``top`` m,
+    faces outward."""
+    import shapely
+
+    tris = shapely.get_parts(shapely.constrained_delaunay_triangles(polygon))
+    verts: list[list[float]] = []
+    faces: list[list[int]] = []
+    for t in tris:
+        c = np.asarray(t.exterior.coords)[:3, :2]
+        e1, e2 = c[1] - c[0], c[2] - c[0]
+        if e1[0] * e2[1] - e1[1] * e2[0] < 0:
+            c = c[::-1]
+        for z, order in ((top, (0, 1, 2)), (base, (0, 2, 1))):
+            n = len(verts)
+            verts += [[*c[k], z] for k in order]
+            faces.append([n, n + 1, n + 2])
+    for ring, outer in [(polygon.exterior, True)] + [(r, False) for r in polygon.interiors]:
+        c = np.asarray(ring.coords)[:, :2]
+        if ring.is_ccw != outer:
+            c = c[::-1]
+        for a, b in itertools.pairwise(c):
+            n = len(verts)
+            verts += [[*a, base], [*b, base], [*b, top], [*a, top]]
+            faces += [[n, n + 1, n + 2], [n, n + 2, n + 3]]
+    v = np.asarray(verts, np.float32)
+    f = np.asarray(faces, np.uint32)
+    mesh = mi.Mesh(name, len(v), len(f))
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = mi.Float(v.ravel())
+    params["faces"] = mi.UInt32(f.ravel())
+    params.update()
+    return mesh
+
+
+@dataclass(frozen=True)
+class TracerMap:
+    """The tracer's path gain (linear) of each site at every pixel, (S, H, W), from two halves of
+    its rays."""
+
+    half_a: np.ndarray
+    half_b: np.ndarray
+
+    @property
+    def gain(self) -> np.ndarray:
+        """The estimate: the mean of the halves."""
+        return 0.5 * (self.half_a + self.half_b)
+
+    @property
+    def covered(self) -> np.ndarray:
+        """Where both halves received something."""
+        return (self.half_a > 0) & (self.half_b > 0)
+
+
+def tracer_gain(
+    scn: Scenario,
+    *,
+    samples: int = 2_000_000,
+    max_depth: int = 2,
+    diffraction: bool = True,
+    seed: int = 0,
+) -> TracerMap:
+    """Sionna RT's path gain of each site of
+    [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario]'s ``scn`` at every pixel
+    (module docstring): ``samples`` rays per site in all, in two halves seeded ``2 seed`` and
+    ``2 seed + 1``."""
+    from rainuav.radio.buildings import scenario_buildings
+
+    mi, rt = load_sionna()
+    scene = rt.load_scene()
+    scene.frequency = scn.freq_hz
+    found = scenario_buildings(scn)
+    objects = []
+    for k, f in enumerate(found.footprints if found is not None else ()):
+        mat = rt.ITURadioMaterial(name=f"wall-{k}", itu_type=f.material, thickness=0.3)
+        mesh = _prism_mesh(mi, f"b{k}", f.polygon, f.min_height_m, f.height_m)
+        objects.append(rt.SceneObject(mi_mesh=mesh, name=f"b{k}", radio_material=mat))
+    if objects:
+        scene.edit(add=objects)
+    pol = scn.polarization.upper()
+    scene.tx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
+    scene.rx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
+    for k, s in enumerate(scn.sites):
+        scene.add(rt.Transmitter(name=f"tx{k}", position=mi.Point3f(s.x_m, s.y_m, s.height_m)))
+    a = scn.area
+    h, w = a.shape
+    res = ((a.x_max_m - a.x_min_m) / w, (a.y_max_m - a.y_min_m) / h)
+    solver = rt.RadioMapSolver()
+    halves = []
+    for half in range(2):
+        rm = solver(
+            scene,
+            center=mi.Point3f(
+                0.5 * (a.x_min_m + a.x_max_m), 0.5 * (a.y_min_m + a.y_max_m), a.altitude_m
+            ),
+            orientation=mi.Point3f(0.0, 0.0, 0.0),
+            size=mi.Point2f(a.x_max_m - a.x_min_m, a.y_max_m - a.y_min_m),
+            cell_size=mi.Point2f(*res),
+            samples_per_tx=max(1, samples // 2),
+            max_depth=max_depth,
+            los=True,
+            specular_reflection=max_depth > 0,
+            diffuse_reflection=False,
+            refraction=False,
+            diffraction=diffraction,
+            edge_diffraction=diffraction,
+            seed=2 * seed + half,
+        )
+        halves.append(np.asarray(rm.path_gain.numpy(), dtype=float).reshape(len(scn.sites), h, w))
+    return TracerMap(halves[0], halves[1])
+
+
+@dataclass(frozen=True)
+class Agreement:
+    """The building effect of the ray engine against the tracer's over the pixels both cover
+    (one value a site, dB unless said)."""
+
+    pixels: np.ndarray
+    """Pixels compared."""
+    noisy: np.ndarray
+    """Pixels the tracer covers but left out: its noise above the tolerance."""
+    shadow_pixels: np.ndarray
+    """Of these, where the tracer sees a shadow (effect below
+    [`SHADOW_DB`][rainuav.radio.tracer.SHADOW_DB])."""
+    shadow_median: np.ndarray
+    """Median of |engine - tracer| in the tracer's shadow."""
+    shadow_p90: np.ndarray
+    """90th percentile of |engine - tracer| there."""
+    shadow_bias: np.ndarray
+    """Median of engine - tracer there (negative: the engine's shadows are deeper)."""
+    light_median: np.ndarray
+    """Median of |engine - tracer| where the tracer sees light."""
+    classes_agree: np.ndarray
+    """Share of pixels on which shadow and light agree."""
+    noise_median: np.ndarray
+    """Median over the shadow of the tracer's own noise, |half a - half b| / 2 in dB."""
+
+    def rows(self) -> list[dict[str, float]]:
+        """One dict a site."""
+        names = [f.name for f in dataclasses.fields(self)]
+        return [{n: float(getattr(self, n)[k]) for n in names} for k in range(len(self.pixels))]
+
+
+def _q(v: np.ndarray, p: float) -> float:
+    return float(np.percentile(v, p)) if v.size else float("nan")
+
+
+def _db(x: np.ndarray) -> np.ndarray:
+    with np.errstate(divide="ignore"):
+        return 10.0 * np.log10(x)
+
+
+def agreement(
+    engine_with: np.ndarray,
+    engine_without: np.ndarray,
+    tracer_with: TracerMap,
+    tracer_without: TracerMap,
+    inside: np.ndarray,
+    max_noise_db: float = MAX_NOISE_DB,
+) -> Agreement:
+    """Compares the building effects (module docstring) site by site; ``inside`` (H, W) marks
+    pixels where the UAV would be inside a building (left out), and pixels where the tracer's
+    halves differ by more than ``2 max_noise_db`` are left out (its own estimate is uncertain
+    there by more than the tolerance; the count is in ``noisy``)."""
+    ours = np.maximum(_db(engine_with) - _db(engine_without), FLOOR_DB)
+    ref = np.maximum(_db(tracer_with.gain) - _db(tracer_without.gain), FLOOR_DB)
+    noise = 0.5 * np.abs(_db(tracer_with.half_a) - _db(tracer_with.half_b))
+    covered = tracer_with.covered & tracer_without.covered & ~inside[None] & np.isfinite(ours)
+    ok = covered & (noise <= max_noise_db)
+    stats: dict[str, list[float]] = {f.name: [] for f in dataclasses.fields(Agreement)}
+    for k in range(ours.shape[0]):
+        o, r, n = ours[k][ok[k]], ref[k][ok[k]], noise[k][ok[k]]
+        dark = r < SHADOW_DB
+        err = o - r
+
+        stats["pixels"].append(float(o.size))
+        stats["noisy"].append(float((covered[k] & ~ok[k]).sum()))
+        stats["shadow_pixels"].append(float(dark.sum()))
+        stats["shadow_median"].append(_q(np.abs(err[dark]), 50))
+        stats["shadow_p90"].append(_q(np.abs(err[dark]), 90))
+        stats["shadow_bias"].append(_q(err[dark], 50))
+        stats["light_median"].append(_q(np.abs(err[~dark]), 50))
+        stats["classes_agree"].append(
+            float(np.mean((o < SHADOW_DB) == dark)) if o.size else float("nan")
+        )
+        stats["noise_median"].append(_q(n[dark], 50))
+    return Agreement(**{k: np.asarray(v) for k, v in stats.items()})
+
+
+def inside_buildings(scn: Scenario) -> np.ndarray:
+    """(H, W): pixels whose centre lies in a building at least as tall as the flight altitude."""
+    from rainuav.radio.buildings import scenario_buildings
+
+    found = scenario_buildings(scn)
+    x, y = scn.area.centres()
+    if found is None:
+        return np.zeros((y.size, x.size), bool)
+    xx, yy = np.meshgrid(x, y)
+    h = found.prisms.height_at(xx.ravel(), yy.ravel()).reshape(xx.shape)
+    return h >= scn.area.altitude_m
+
+
+def compare(
+    scn: Scenario, *, samples: int = 2_000_000, seed: int = 0, max_depth: int = 2
+) -> Agreement:
+    """The building effect of the ray engine against the tracer's on ``scn`` (each site once,
+    isotropic: [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario])."""
+    with_b, without = isotropic_scenario(scn), isotropic_scenario(scn, buildings=False)
+    kw = {"samples": samples, "seed": seed, "max_depth": max_depth}
+    return agreement(
+        engine_gain(with_b),
+        engine_gain(without),
+        tracer_gain(with_b, **kw),
+        tracer_gain(without, **kw),
+        inside_buildings(with_b),
+    )
+
+
+def _area(x0: float, x1: float, y0: float, y1: float, altitude_m: float, res: float) -> Area:
+    return Area(
+        x_min_m=x0, x_max_m=x1, y_min_m=y0, y_max_m=y1, altitude_m=altitude_m, resolution_m=res
+    )
+
+
+def _box(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # One 40 m block, roof 30 m; the site 50 m in front of it.
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(0.0, 240.0, -120.0, 120.0, altitude_m, 4.0),
+        sites=[Site(x_m=10.0, y_m=0.0, height_m=25.0)],
+        buildings=[Building(x0_m=60.0, x1_m=100.0, y0_m=-20.0, y1_m=20.0, height_m=30.0)],
+    )
+
+
+def _thick(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # A deep building (90 m along the path, 50 m across), roof 20 m, seen from a 30 m mast.
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(0.0, 300.0, -150.0, 150.0, altitude_m, 5.0),
+        sites=[Site(x_m=15.0, y_m=-20.0, height_m=30.0)],
+        buildings=[Building(x0_m=80.0, x1_m=170.0, y0_m=-25.0, y1_m=25.0, height_m=20.0)],
+    )
+
+
+def _canyon(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # Two rows of three buildings along a 20 m street; the site in the street.
+    rows = [
+        Building(x0_m=x0, x1_m=x0 + 50.0, y0_m=y0, y1_m=y0 + 30.0, height_m=h)
+        for x0, h in ((40.0, 24.0), (100.0, 30.0), (160.0, 21.0))
+        for y0 in (-40.0, 10.0)
+    ]
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(0.0, 260.0, -100.0, 100.0, altitude_m, 4.0),
+        sites=[Site(x_m=20.0, y_m=0.0, height_m=15.0)],
+        buildings=rows,
+    )
+
+
+def _corner(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # An L-shaped building (six corners, one of them re-entrant) from a footprint file's polygon.
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(-40.0, 200.0, -120.0, 120.0, altitude_m, 4.0),
+        sites=[Site(x_m=-20.0, y_m=-30.0, height_m=25.0)],
+        buildings=[
+            Building(x0_m=40.0, x1_m=70.0, y0_m=-60.0, y1_m=40.0, height_m=28.0),
+            Building(x0_m=70.0, x1_m=130.0, y0_m=-60.0, y1_m=-30.0, height_m=28.0),
+        ],
+    )
+
+
+def _district(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # A 400 m square of the shipped OpenStreetMap-style district, three sites.
+    from pathlib import Path
+
+    file = Path(__file__).resolve().parents[3] / "examples" / "buildings.geojson"
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        origin=Origin(lat_deg=47.3730, lon_deg=8.5470),
+        area=_area(-200.0, 200.0, -200.0, 200.0, altitude_m, 5.0),
+        sites=[
+            Site(x_m=-150.0, y_m=-160.0, height_m=30.0),
+            Site(x_m=120.0, y_m=40.0, height_m=30.0),
+            Site(x_m=-60.0, y_m=150.0, height_m=30.0),
+        ],
+        footprints=FootprintsFile(file=str(file)),
+    )
+
+
+def _urban(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # The urban preset's nine 60 m blocks and its seven sites, the map round the blocks.
+    from rainuav.radio.presets import urban
+
+    scn = urban(0.0, freq_hz, polarization=pol)
+    area = _area(300.0, 1500.0, 300.0, 1500.0, altitude_m, 10.0)
+    sites = [s for s in scn.sites if 300.0 <= s.x_m <= 1500.0 and 300.0 <= s.y_m <= 1500.0]
+    return dataclasses.replace(scn, area=area, sites=sites)
+
+
+SCENES = {
+    "box": _box,
+    "thick": _thick,
+    "canyon": _canyon,
+    "corner": _corner,
+    "district": _district,
+    "urban": _urban,
+}
+"""The comparison's scenes: ``name(freq_hz, altitude_m, polarization) -> Scenario``."""
+
+
+def scene(
+    name: str, freq_hz: float = 4.9e9, altitude_m: float = 20.0, polarization: str = "v"
+) -> Scenario:
+    """The comparison scene ``name`` ([`SCENES`][rainuav.radio.tracer.SCENES])."""
+    return SCENES[name](freq_hz, altitude_m, polarization)
