@@ -12,7 +12,7 @@ PYTHON ?= python
 # their session's map cache); PYTEST_ARGS= runs it in one process.
 PYTEST_ARGS ?= -n 2 --dist loadfile
 
-.PHONY: test build lint test-rust test-python bench fmt validate wheel wheel-check docs figures
+.PHONY: test build llvm lint test-rust test-python bench fmt validate wheel wheel-check docs figures
 
 test: build lint test-rust test-python
 
@@ -33,9 +33,16 @@ test-rust:
 # pycraf (ITU-R P.452, a reference the terrain tests check against) goes in without its
 # declared dependencies: they pull in pytest plugins that break pytest's command line; what it
 # needs at run time (astropy, pyproj, scipy, rasterio) is in the test extra.
-test-python: build
+test-python: build llvm
 	$(PYTHON) -m pip install -q --no-deps 'pycraf>=2.1,<3'
 	$(PYTHON) -m pytest $(PYTEST_ARGS)
+
+# Sionna RT (the test extra's reference ray tracer) runs on the CPU through LLVM 19: Debian's
+# libllvm19, installed here where it is missing (found by rainuav.radio.tracer).
+llvm:
+	@ldconfig -p | grep -q 'libLLVM.so.19\|libLLVM-19.so' || apt-get install -y -q libllvm19 \
+		|| (apt-get update -q && apt-get install -y -q libllvm19) \
+		|| (echo "install Debian's libllvm19 (the tracer's CPU backend)" && false)
 
 bench: build
 	cargo bench -p rainuav-core

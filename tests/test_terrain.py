@@ -103,7 +103,9 @@ def scenario(dem: Path | None, site_x: float = 200.0, **area: object) -> Scenari
         sites=[Site(site_x, 400.0, 25.0, [cell])],
         engine="ray",
         origin=ORIGIN,
-        terrain=None if dem is None else TerrainFile(str(dem)),
+        # No unresolved roughness: the DEM is the ground (these tests check the geometry;
+        # tests/test_ground_roughness.py the roughness).
+        terrain=None if dem is None else TerrainFile(str(dem), roughness_m=0.0),
     )
 
 

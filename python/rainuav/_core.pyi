@@ -36,6 +36,7 @@ __all__ = [
     "ray_walls",
     "sample_slices",
     "terminal_velocity_m_s",
+    "utd_wedge",
     "water_permittivity",
 ]
 
@@ -283,6 +284,7 @@ def ray_power(
     terrain: _F | None = None,
     terrain_origin_step: tuple[float, float, float, float] | None = None,
     altitude_msl: bool = False,
+    terrain_roughness_m: float = 0.0,
     terms_only: bool = False,
     prisms: Prisms | None = None,
     walls: _F | None = None,
@@ -323,6 +325,7 @@ def ray_walls(
     terrain: _F | None = None,
     terrain_origin_step: tuple[float, float, float, float] | None = None,
     altitude_msl: bool = False,
+    terrain_roughness_m: float = 0.0,
     prisms: Prisms | None = None,
     prism_eps: _F | None = None,
 ) -> tuple[_I, _I, _F, _F, _F, _F, _I]:
@@ -373,6 +376,7 @@ def ray_departures(
     terrain: _F | None = None,
     terrain_origin_step: tuple[float, float, float, float] | None = None,
     altitude_msl: bool = False,
+    terrain_roughness_m: float = 0.0,
     prisms: Prisms | None = None,
     full: bool = False,
 ) -> _F:

@@ -86,6 +86,8 @@ def _start(text: str) -> tuple[float, ...]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from rainuav.radio.scenario import GROUNDS
+
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.fly",
         description=_cli.plain_help(__doc__),
@@ -133,6 +135,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--default-height", type=float, default=None, metavar="M",
         help="with --footprints: the roof of a building whose footprint gives neither a height "
         "nor storeys, m (default 10; central-city buildings are often 18-28 m)",
+    )  # fmt: skip
+    ap.add_argument(
+        "--ground", choices=GROUNDS, default=None,
+        help="the ground's material: pec, none, or an ITU-R P.527 soil (default: pec on flat "
+        "ground, medium-dry over a --terrain DEM)",
     )  # fmt: skip
     ap.add_argument(
         "--engine", choices=("hybrid", "ray", "pe"), default=None,
@@ -200,7 +207,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
             box=box, terrain=args.terrain, altitude_reference=args.altitude_reference,
             footprints=args.footprints, altitudes=altitudes, engine=args.engine,
-            default_height_m=args.default_height,
+            default_height_m=args.default_height, ground=args.ground,
         )  # fmt: skip
         if args.footprints is not None:
             from rainuav.radio.buildings import scenario_buildings

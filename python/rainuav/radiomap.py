@@ -32,6 +32,7 @@ from rainuav.errors import InvalidInputError
 
 def build_parser() -> argparse.ArgumentParser:
     from rainuav.radio import presets
+    from rainuav.radio.scenario import GROUNDS
 
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.radiomap", description="Build a radio map and write npz + PNGs."
@@ -88,6 +89,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="a DEM GeoTIFF (any CRS; heights in metres above sea level) under the area: the "
         "scenario needs an [origin] (a --config TOML)",
     )
+    ap.add_argument(
+        "--ground", choices=GROUNDS, default=None,
+        help="the ground's material: pec, none, or an ITU-R P.527 soil (default: the "
+        "scenario's; medium-dry over a --terrain DEM)",
+    )  # fmt: skip
     ap.add_argument(
         "--footprints",
         type=Path,
@@ -169,6 +175,9 @@ def _build(args: argparse.Namespace) -> int:
         if not args.terrain.is_file():
             raise InvalidInputError(f"--terrain {args.terrain}: no such file")
         scn = scn.replace(terrain=TerrainFile(str(args.terrain.resolve())))
+    from rainuav.radio.terrain import ground_over
+
+    scn = scn.replace(ground=ground_over(args.terrain is not None, args.ground, scn.ground))
     if args.footprints is not None:
         from rainuav.radio.scenario import FootprintsFile
 

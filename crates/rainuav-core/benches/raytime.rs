@@ -47,6 +47,7 @@ fn bench(c: &mut Criterion) {
         heights: None,
         terrain: None,
         altitude_msl: false,
+        roughness_m: 0.0,
     };
     let sites: Vec<[f64; 3]> = (0..7)
         .map(|k| {

@@ -410,6 +410,7 @@ mod tests {
             heights: None,
             terrain: None,
             altitude_msl: false,
+            roughness_m: 0.0,
             prisms: Some(&prisms),
         };
         let eps = [Complex64::new(5.24, -0.5)];

@@ -155,6 +155,10 @@ pub struct RayScene<'a> {
     /// Whether `altitude_m` is above sea level (true) or above the terrain under the receiver
     /// (false: terrain-following, the default).
     pub altitude_msl: bool,
+    /// The ground's roughness that the terrain raster does not resolve (standard deviation,
+    /// m), added in quadrature to the terrain's own within the first Fresnel zone of a
+    /// ground reflection (0: the raster is the ground).
+    pub roughness_m: f64,
 }
 
 /// The geometry of one site-pixel path: everything of its rays but the antenna gains, the
@@ -174,13 +178,14 @@ pub struct PathGeometry {
     pub el_reflect: f64,
     /// Grazing angle (rad) on the local ground line at the specular point.
     pub psi: f64,
-    /// Whether the reflected ray exists (a ground, its specular point bare and seen by both
-    /// ends).
-    pub reflect: bool,
+    /// The reflected ray's amplitude factor for the ground's roughness, `exp(-2 (k sigma_h sin
+    /// psi)^2)` (1 over smooth ground), where it exists (a ground, its specular point bare
+    /// and seen by both ends); 0 where it does not.
+    pub reflect: f64,
 }
 
 impl PathGeometry {
-    /// The geometry as a row: `[d1, d2, loss_db, el_direct, el_reflect, psi, reflect (0/1)]`.
+    /// The geometry as a row: `[d1, d2, loss_db, el_direct, el_reflect, psi, reflect]`.
     pub fn to_row(&self) -> [f64; 7] {
         [
             self.d1,
@@ -189,7 +194,7 @@ impl PathGeometry {
             self.el_direct,
             self.el_reflect,
             self.psi,
-            f64::from(u8::from(self.reflect)),
+            self.reflect,
         ]
     }
 
@@ -202,7 +207,7 @@ impl PathGeometry {
             el_direct: r[3],
             el_reflect: r[4],
             psi: r[5],
-            reflect: r[6] > 0.5,
+            reflect: r[6],
         }
     }
 }
@@ -309,6 +314,40 @@ fn db_to_amplitude(loss_db: f64) -> f64 {
     } else {
         10f64.powf(-loss_db / 20.0)
     }
+}
+
+/// The straight line `z = z0 + slope (s - s0)` fitted by least squares to `ground(s)` at 17
+/// points evenly over `s0 - a .. s0 + a`, and the standard deviation of the ground about it:
+/// `(z0, slope, sigma)` (a fixed count: the fit moves smoothly with the window).
+fn fit_line(ground: &impl Fn(f64) -> f64, s0: f64, a: f64) -> (f64, f64, f64) {
+    let n = 17;
+    let (mut sx, mut sz, mut sxx, mut sxz) = (0.0, 0.0, 0.0, 0.0);
+    let pts: Vec<(f64, f64)> = (0..n)
+        .map(|i| {
+            let u = -a + 2.0 * a * i as f64 / (n - 1) as f64;
+            (u, ground(s0 + u))
+        })
+        .collect();
+    for &(u, z) in &pts {
+        sx += u;
+        sz += z;
+        sxx += u * u;
+        sxz += u * z;
+    }
+    let m = n as f64;
+    let den = m * sxx - sx * sx;
+    let slope = if den.abs() > 1e-12 {
+        (m * sxz - sx * sz) / den
+    } else {
+        0.0
+    };
+    let z0 = (sz - slope * sx) / m;
+    let var = pts
+        .iter()
+        .map(|&(u, z)| (z - z0 - slope * u).powi(2))
+        .sum::<f64>()
+        / m;
+    (z0, slope, var.sqrt())
 }
 
 fn sinc(u: f64) -> f64 {
@@ -525,19 +564,28 @@ impl RayScene<'_> {
         true
     }
 
-    /// Whether the straight leg from `(s0, z0)` to `(s1, z1)` (distance along the ground
-    /// line, height above sea level) passes above every profile point between them but those
-    /// within `skip` m of `s_skip` (the specular point, which the leg touches).
-    fn leg_clear(
+    /// The knife-edge loss (dB, ITU-R P.526 eq. (31)) of the profile point of largest `nu` on the
+    /// straight leg from `(s0, z0)` to `(s1, z1)` (distance along the ground line, height above
+    /// sea level), leaving out the points within `skip` m of `s_skip`.
+    fn leg_loss_db(
         prof: &[(f64, f64)],
         (s0, z0): (f64, f64),
         (s1, z1): (f64, f64),
         s_skip: f64,
         skip: f64,
-    ) -> bool {
-        prof.iter()
+        lambda: f64,
+    ) -> f64 {
+        let span = s1 - s0;
+        let nu = prof
+            .iter()
             .filter(|&&(s, _)| s > s0 && s < s1 && (s - s_skip).abs() > skip)
-            .all(|&(s, h)| h < z0 + (z1 - z0) * (s - s0) / (s1 - s0))
+            .map(|&(s, h)| {
+                let (a, b) = (s - s0, s1 - s);
+                let line = z0 + (z1 - z0) * a / span;
+                (h - line) * (2.0 * span / (lambda * a * b)).sqrt()
+            })
+            .fold(f64::NEG_INFINITY, f64::max);
+        knife_edge_loss_db(nu)
     }
 
     /// The diffraction loss (dB) of the direct ray over the profile `prof` of the ground line
@@ -605,7 +653,11 @@ impl RayScene<'_> {
                 el_direct: (hq - hs).atan2(rho),
                 el_reflect: -(hq + hs).atan2(rho),
                 psi: ((hs + hq) / rho.max(1e-9)).atan(),
-                reflect: self.ground != RayGround::None,
+                reflect: if self.ground != RayGround::None {
+                    1.0
+                } else {
+                    0.0
+                },
             };
         }
         let zt_s = self.terrain_at(xs, ys);
@@ -626,16 +678,18 @@ impl RayScene<'_> {
             el_direct,
             el_reflect: el_direct,
             psi: 0.0,
-            reflect: false,
+            reflect: 0.0,
         };
         if self.ground == RayGround::None || rho < 1e-6 {
             return g;
         }
-        // The specular point on the local ground line of the path's vertical plane (distance
-        // s along the ground from the site, height z): start from the flat-ground point of
-        // the heights above the terrain at both ends, then reflect the site in the line
-        // through the terrain at the point with its slope along the path, and move the point
-        // to where the image's line to the receiver crosses it; four rounds.
+        // The specular point on the ground line of the path's vertical plane (distance s along
+        // the ground from the site, height z): start from the flat-ground point of the heights
+        // above the terrain at both ends, then reflect the site in the straight line fitted to
+        // the terrain over the first Fresnel zone round the point (least squares: the
+        // reflecting area, not one facet of the DEM), and move the point to where the image's
+        // line to the receiver crosses it; four rounds. The terrain's standard deviation about
+        // that line is the roughness.
         let (ux, uy) = (ex / rho, ey / rho);
         let ground_at = |s: f64| {
             let (x, y) = (xs + ux * s, ys + uy * s);
@@ -647,10 +701,15 @@ impl RayScene<'_> {
             return g;
         }
         let mut sb = rho * hs_g / (hs_g + hq_g);
-        let (mut image, mut line) = ((0.0, 0.0), (0.0, 0.0, 0.0, 1.0));
+        let mut psi = ((hs_g + hq_g) / rho).atan();
+        let (mut image, mut line) = ((0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0));
         for _ in 0..4 {
-            let zb = ground_at(sb);
-            let slope = (ground_at(sb + h) - ground_at(sb - h)) / (2.0 * h);
+            let a = self.fresnel_half_length(sb, rho - sb, zs, zq, psi, lambda, h);
+            let (zb, slope, sigma) = if self.terrain.is_some() {
+                fit_line(&ground_at, sb, a)
+            } else {
+                (0.0, 0.0, 0.0)
+            };
             let norm = (1.0 + slope * slope).sqrt();
             let (nx, nz) = (-slope / norm, 1.0 / norm);
             let dist_t = nx * (0.0 - sb) + nz * (zs - zb);
@@ -661,23 +720,59 @@ impl RayScene<'_> {
             image = (-2.0 * dist_t * nx, zs - 2.0 * dist_t * nz);
             let t = dist_t / (dist_t + dist_r);
             let s_new = image.0 + t * (rho - image.0);
-            line = (dist_t, dist_r, zb, slope);
+            let d2 = ((rho - image.0).powi(2) + (zq - image.1).powi(2)).sqrt();
+            psi = ((dist_t + dist_r) / d2).clamp(-1.0, 1.0).asin();
+            line = (dist_t, dist_r, zb, sigma, a);
             if !(s_new > 0.0 && s_new < rho) {
                 return g;
             }
             sb = s_new;
         }
-        let (dist_t, dist_r, _, _) = line;
-        let zb = ground_at(sb);
+        let (dist_t, dist_r, zb, sigma, a) = line;
         let d2 = ((rho - image.0).powi(2) + (zq - image.1).powi(2)).sqrt();
         let bare = self.obstacle_at(xs + ux * sb, ys + uy * sb) <= 0.0;
-        let seen = Self::leg_clear(prof, (0.0, zs), (sb, zb), sb, h)
-            && Self::leg_clear(prof, (sb, zb), (rho, zq), sb, h);
+        // Each leg's knife-edge loss over the profile (the reflecting zone left out): a leg
+        // the terrain or a building half hides fades the ray instead of cutting it.
+        let skip = h.max(a);
+        let legs = Self::leg_loss_db(prof, (0.0, zs), (sb, zb), sb, skip, lambda)
+            + Self::leg_loss_db(prof, (sb, zb), (rho, zq), sb, skip, lambda);
         g.d2 = d2;
         g.el_reflect = (zb - zs).atan2(sb);
         g.psi = ((dist_t + dist_r) / d2).clamp(-1.0, 1.0).asin();
-        g.reflect = bare && seen;
+        let k = crate::wavenumber(self.freq_hz);
+        let sigma = if self.terrain.is_some() {
+            sigma.hypot(self.roughness_m)
+        } else {
+            sigma
+        };
+        let rough = (-2.0 * (k * sigma * g.psi.sin()).powi(2)).exp();
+        g.reflect = if bare {
+            rough * db_to_amplitude(legs)
+        } else {
+            0.0
+        };
         g
+    }
+
+    /// Half the length (m) along the path of the first Fresnel zone's footprint on the ground
+    /// round a specular point `s1`, `s2` m (horizontally) from the ends at `zs`, `zq`, seen at
+    /// grazing angle `psi`: the zone's radius `sqrt(lambda d1 d2 / (d1 + d2))` over `sin psi`,
+    /// at least the terrain's spacing `2 h` (what a DEM does not resolve is not smooth: the
+    /// window always spans its neighbouring cells) and at most the shorter leg.
+    #[allow(clippy::too_many_arguments)]
+    fn fresnel_half_length(
+        &self,
+        s1: f64,
+        s2: f64,
+        zs: f64,
+        zq: f64,
+        psi: f64,
+        lambda: f64,
+        h: f64,
+    ) -> f64 {
+        let (d1, d2) = (s1.hypot(zs), s2.hypot(zq));
+        let r = (lambda * d1 * d2 / (d1 + d2).max(1e-9)).sqrt();
+        (r / psi.sin().max(1e-3)).max(2.0 * h).min(s1.min(s2))
     }
 
     /// The clear-air parts of the mean received power over one pixel ([`PixelTerms`]) from
@@ -707,8 +802,9 @@ impl RayScene<'_> {
             wall: 0.0,
             d3: 0.0,
         };
-        if geom.reflect {
-            let gamma_g = reflection_coefficient(self.ground, self.polarization, geom.psi);
+        if geom.reflect > 0.0 {
+            let gamma_g =
+                geom.reflect * reflection_coefficient(self.ground, self.polarization, geom.psi);
             let amp2 = g_reflect.max(0.0).sqrt() / d2;
             let r = gamma_g * amp2;
             t.reflect = scale * r.norm_sqr();
@@ -1042,6 +1138,7 @@ mod tests {
             heights: None,
             terrain: None,
             altitude_msl: false,
+            roughness_m: 0.0,
         }
     }
 
@@ -1182,10 +1279,24 @@ mod tests {
             origin_step: [0.0, 50.0, -50.0, 50.0],
         });
         let geo = s.path(TX.position_m, [1000.0, 0.0], &mut Vec::new());
-        assert!(!geo.reflect);
+        assert!(geo.reflect < 0.01, "{}", geo.reflect); // faded by the ridge: 40 dB or more
         assert!(geo.loss_db > 10.0, "{}", geo.loss_db);
         // The gain is taken toward the ridge's Bullington point: upward, not along the line.
         assert!(geo.el_direct > (75.0_f64).atan2(1000.0));
+    }
+
+    #[test]
+    fn the_fresnel_zone_line_fits_a_plane_exactly_and_measures_a_curve_spread() {
+        // A straight ground: the line itself, no spread. A parabola over -a..a: the fitted
+        // line is its mean (slope 0) and the spread its standard deviation at the 17 points.
+        let (z0, slope, sigma) = fit_line(&|s: f64| 2.0 + 0.1 * s, 50.0, 20.0);
+        assert!((z0 - 7.0).abs() < 1e-12 && (slope - 0.1).abs() < 1e-12 && sigma < 1e-9);
+        let (z0, slope, sigma) = fit_line(&|s: f64| (s - 10.0).powi(2), 10.0, 4.0);
+        let u: Vec<f64> = (0..17).map(|i| -4.0 + 0.5 * i as f64).collect();
+        let mean = u.iter().map(|v| v * v).sum::<f64>() / 17.0;
+        let var = u.iter().map(|v| (v * v - mean).powi(2)).sum::<f64>() / 17.0;
+        assert!((z0 - mean).abs() < 1e-9 && slope.abs() < 1e-9);
+        assert!((sigma - var.sqrt()).abs() < 1e-9);
     }
 
     #[test]

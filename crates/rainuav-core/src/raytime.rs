@@ -408,6 +408,7 @@ mod tests {
             heights: None,
             terrain: None,
             altitude_msl: false,
+            roughness_m: 0.0,
         };
         let sites = [[300.0, 400.0, 25.0], [1300.0, 900.0, 30.0]];
         let site_of = [0, 0, 1];

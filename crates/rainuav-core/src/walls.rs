@@ -346,6 +346,7 @@ mod tests {
             heights: None,
             terrain: None,
             altitude_msl: false,
+            roughness_m: 0.0,
         }
     }
 

@@ -328,6 +328,7 @@ mod tests {
             heights: None,
             terrain: None,
             altitude_msl: false,
+            roughness_m: 0.0,
             prisms: None,
         };
         let rays = scene.wall_rays2([0.0, 0.0, 10.0], &walls).unwrap();

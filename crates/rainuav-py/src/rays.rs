@@ -213,7 +213,7 @@ fn rain_field(raster: Option<&Array2<f64>>, uniform: f64, origin_step: [f64; 4])
 #[pyo3(signature = (tx_m, tx_power_mw, g_direct, g_reflect, x_m, y_m, *, altitude_m, pixel_m,
     freq_hz, ground, eps_ground, polarization, gamma_db_per_m, gamma_raster, gamma_origin_step,
     buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=None,
-    altitude_msl=false, terms_only=false, prisms=None, walls=None, geometry=None,
+    altitude_msl=false, terrain_roughness_m=0.0, terms_only=false, prisms=None, walls=None, geometry=None,
     geometry_sites=None))]
 #[allow(clippy::too_many_arguments)]
 fn ray_power<'py>(
@@ -239,6 +239,7 @@ fn ray_power<'py>(
     terrain: Option<PyReadonlyArray2<'py, f64>>,
     terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
+    terrain_roughness_m: f64,
     terms_only: bool,
     prisms: Option<Bound<'py, Prisms>>,
     walls: Option<PyReadonlyArray4<'py, f64>>,
@@ -285,6 +286,7 @@ fn ray_power<'py>(
         heights: raster(hr.as_ref().map(|v| v.view()), Some(heights_origin_step)),
         terrain: raster(tr, terrain_origin_step),
         altitude_msl,
+        roughness_m: terrain_roughness_m,
     };
     if terms_only {
         let out = detached(py, || scene.terms(&txs, gd, gf, wr, known))?;
@@ -306,6 +308,7 @@ fn ray_power<'py>(
 #[pyfunction]
 #[pyo3(signature = (sites, x_m, y_m, *, altitude_m, freq_hz, ground, buildings, heights,
     heights_origin_step, terrain=None, terrain_origin_step=None, altitude_msl=false,
+    terrain_roughness_m=0.0,
     prisms=None, full=false))]
 #[allow(clippy::too_many_arguments)]
 fn ray_departures<'py>(
@@ -322,6 +325,7 @@ fn ray_departures<'py>(
     terrain: Option<PyReadonlyArray2<'py, f64>>,
     terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
+    terrain_roughness_m: f64,
     prisms: Option<Bound<'py, Prisms>>,
     full: bool,
 ) -> PyResult<Bound<'py, PyArray4<f64>>> {
@@ -345,6 +349,7 @@ fn ray_departures<'py>(
         heights: raster(hr, Some(heights_origin_step)),
         terrain: raster(tr, terrain_origin_step),
         altitude_msl,
+        roughness_m: terrain_roughness_m,
     };
     let out = if full {
         detached(py, || scene.geometry_table(&sites))?
@@ -367,7 +372,7 @@ fn ray_departures<'py>(
 #[pyfunction]
 #[pyo3(signature = (sites, x_m, y_m, walls, wall_eps, *, altitude_m, freq_hz, polarization,
     buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=None,
-    altitude_msl=false, prisms=None, prism_eps=None))]
+    altitude_msl=false, terrain_roughness_m=0.0, prisms=None, prism_eps=None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn ray_walls<'py>(
     py: Python<'py>,
@@ -385,6 +390,7 @@ fn ray_walls<'py>(
     terrain: Option<PyReadonlyArray2<'py, f64>>,
     terrain_origin_step: Option<[f64; 4]>,
     altitude_msl: bool,
+    terrain_roughness_m: f64,
     prisms: Option<Bound<'py, Prisms>>,
     prism_eps: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<(
@@ -439,6 +445,7 @@ fn ray_walls<'py>(
         heights: raster(hr, Some(heights_origin_step)),
         terrain: raster(tr, terrain_origin_step),
         altitude_msl,
+        roughness_m: terrain_roughness_m,
     };
     let corner_eps: Option<Vec<Complex64>> = match &prism_eps {
         None => None,

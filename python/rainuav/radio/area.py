@@ -132,6 +132,11 @@ class Area:
         return x, y
 
 
+DEM_ROUGHNESS_M = 0.3
+"""The default roughness a DEM does not resolve, m: the spread of heights rounded to whole metres
+(1/sqrt(12) = 0.29 m), as SRTM delivers them."""
+
+
 @dataclass
 class TerrainFile:
     """The terrain under the area: a digital elevation model
@@ -140,6 +145,11 @@ class TerrainFile:
     file: str
     """A GeoTIFF of heights above sea level in any CRS (SRTM, Copernicus GLO-30); in a TOML
     file, relative to the TOML's folder."""
+    roughness_m: float = DEM_ROUGHNESS_M
+    """The ground's roughness the DEM does not resolve, m (standard deviation; 0-100), added in
+    quadrature to the terrain's own within a ground reflection's first Fresnel zone
+    (docs/physics.md section 8): heights in whole metres do not know the ground better than
+    1/sqrt(12) m, and trees and clutter are rougher still."""
 
 
 @dataclass

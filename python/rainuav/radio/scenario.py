@@ -204,6 +204,7 @@ class Scenario:
         if self.terrain is not None:
             if not isinstance(self.terrain, TerrainFile) or not isinstance(self.terrain.file, str):
                 raise InvalidInputError("terrain must be a table with file = 'DEM.tif'")
+            _num("terrain.roughness_m", self.terrain.roughness_m, 0.0, 100.0, " m")
             if self.origin is None:
                 raise InvalidInputError(
                     "terrain needs [origin] (lat_deg, lon_deg): where the area lies on the Earth"

@@ -23,10 +23,12 @@ from rainuav.ground import Terrain, file_digest, read_dem
 from rainuav.radio.scenario import Scenario
 
 __all__ = [
+    "DEM_GROUND",
     "core_args",
     "flight_heights",
     "flight_heights_at",
     "floor_m",
+    "ground_over",
     "map_mask",
     "not_flyable",
     "obstacle_pixel_max",
@@ -65,15 +67,30 @@ def scenario_terrain(scn: Scenario) -> Terrain | None:
     )
 
 
+DEM_GROUND = "medium-dry"
+"""The ground under a DEM unless one is named: ITU-R P.527's medium-dry soil (a perfect conductor
+is a mirror no real ground is; its reflection is further weighted by the terrain's roughness)."""
+
+
+def ground_over(terrain: bool, ground: str | None, current: str) -> str:
+    """The ground a map uses: ``ground`` where one is named, else
+    [`DEM_GROUND`][rainuav.radio.terrain.DEM_GROUND] over a DEM (``terrain``), else ``current``."""
+    if ground is not None:
+        return ground
+    return DEM_GROUND if terrain else current
+
+
 def core_args(scn: Scenario) -> dict[str, Any]:
     """The terrain and the altitude reference as the core's ray functions take them."""
     t = scenario_terrain(scn)
     if t is None:
         return {"terrain": None, "altitude_msl": scn.area.msl}
+    assert scn.terrain is not None
     return {
         "terrain": t.heights_m,
         "terrain_origin_step": t.origin_step,
         "altitude_msl": scn.area.msl,
+        "terrain_roughness_m": scn.terrain.roughness_m,
     }
 
 

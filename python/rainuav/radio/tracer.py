@@ -33,15 +33,13 @@ from typing import Any
 
 import numpy as np
 
-from rainuav.radio.area import Area, FootprintsFile
 from rainuav.radio.cell import Cell, Pattern
-from rainuav.radio.scenario import Building, Medium, Origin, Scenario, Site
+from rainuav.radio.scenario import Medium, Scenario, Site
 
 __all__ = [
     "FLOOR_DB",
     "LLVM_PATHS",
     "MAX_NOISE_DB",
-    "SCENES",
     "SHADOW_DB",
     "Agreement",
     "TracerMap",
@@ -51,7 +49,6 @@ __all__ = [
     "inside_buildings",
     "isotropic_scenario",
     "load_sionna",
-    "scene",
     "tracer_gain",
 ]
 
@@ -113,9 +110,10 @@ ISOTROPIC = Pattern(
 """A pattern of 0 dBi in every direction."""
 
 
-def isotropic_scenario(scn: Scenario, *, buildings: bool = True) -> Scenario:
+def isotropic_scenario(scn: Scenario, *, buildings: bool = True, ground: str = "none") -> Scenario:
     """``scn`` as both methods compare it: each distinct site once, with one isotropic cell of
-    0 dBm; clear air; no ground; the ray engine; with or without its buildings."""
+    0 dBm; clear air; no ground or a PEC one (``ground``); the ray engine; with or without its
+    buildings."""
     sites, seen = [], set()
     for s in scn.sites:
         key = (s.x_m, s.y_m, s.height_m)
@@ -124,7 +122,7 @@ def isotropic_scenario(scn: Scenario, *, buildings: bool = True) -> Scenario:
             cell = Cell(azimuth_deg=0.0, tilt_deg=0.0, pattern=ISOTROPIC, tx_power_dbm=0.0)
             sites.append(Site(x_m=s.x_m, y_m=s.y_m, height_m=s.height_m, cells=[cell]))
     out = dataclasses.replace(
-        scn, sites=sites, medium=Medium(kind="clear"), ground="none", engine="ray"
+        scn, sites=sites, medium=Medium(kind="clear"), ground=ground, engine="ray"
     )
     if not buildings:
         out = dataclasses.replace(out, buildings=[], footprints=None, height_map_m=None)
@@ -208,7 +206,13 @@ def tracer_gain(
     """Sionna RT's path gain of each site of
     [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario]'s ``scn`` at every pixel
     (module docstring): ``samples`` rays per site in all, in two halves seeded ``2 seed`` and
-    ``2 seed + 1``."""
+    ``2 seed + 1``. Over a PEC ground (``scn.ground == "pec"``) by the image method: every
+    building extends as deep below the ground as it stands above it, each site has its image
+    below the ground, and a pixel's gain is the sum of both (incoherent: the pixel mean of the
+    ground's fringes, as the ray engine takes it)."""
+    if scn.ground not in ("none", "pec"):
+        raise ValueError(f"the tracer's ground is none or pec (got {scn.ground!r})")
+    pec = scn.ground == "pec"
     from rainuav.radio.buildings import scenario_buildings
 
     mi, rt = load_sionna()
@@ -218,15 +222,19 @@ def tracer_gain(
     objects = []
     for k, f in enumerate(found.footprints if found is not None else ()):
         mat = rt.ITURadioMaterial(name=f"wall-{k}", itu_type=f.material, thickness=0.3)
-        mesh = _prism_mesh(mi, f"b{k}", f.polygon, f.min_height_m, f.height_m)
+        base = -f.height_m if pec else f.min_height_m
+        mesh = _prism_mesh(mi, f"b{k}", f.polygon, base, f.height_m)
         objects.append(rt.SceneObject(mi_mesh=mesh, name=f"b{k}", radio_material=mat))
     if objects:
         scene.edit(add=objects)
     pol = scn.polarization.upper()
     scene.tx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
     scene.rx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
-    for k, s in enumerate(scn.sites):
-        scene.add(rt.Transmitter(name=f"tx{k}", position=mi.Point3f(s.x_m, s.y_m, s.height_m)))
+    images = (1.0, -1.0) if pec else (1.0,)
+    for sign in images:
+        for k, s in enumerate(scn.sites):
+            at = mi.Point3f(s.x_m, s.y_m, sign * s.height_m)
+            scene.add(rt.Transmitter(name=f"tx{k}{'i' if sign < 0 else ''}", position=at))
     a = scn.area
     h, w = a.shape
     res = ((a.x_max_m - a.x_min_m) / w, (a.y_max_m - a.y_min_m) / h)
@@ -251,7 +259,8 @@ def tracer_gain(
             edge_diffraction=diffraction,
             seed=2 * seed + half,
         )
-        halves.append(np.asarray(rm.path_gain.numpy(), dtype=float).reshape(len(scn.sites), h, w))
+        g = np.asarray(rm.path_gain.numpy(), dtype=float).reshape(len(images), len(scn.sites), h, w)
+        halves.append(g.sum(axis=0))
     return TracerMap(halves[0], halves[1])
 
 
@@ -307,6 +316,19 @@ def agreement(
     pixels where the UAV would be inside a building (left out), and pixels where the tracer's
     halves differ by more than ``2 max_noise_db`` are left out (its own estimate is uncertain
     there by more than the tolerance; the count is in ``noisy``)."""
+    with np.errstate(invalid="ignore"):
+        return _agreement(engine_with, engine_without, tracer_with, tracer_without, inside,
+                          max_noise_db)  # fmt: skip
+
+
+def _agreement(
+    engine_with: np.ndarray,
+    engine_without: np.ndarray,
+    tracer_with: TracerMap,
+    tracer_without: TracerMap,
+    inside: np.ndarray,
+    max_noise_db: float,
+) -> Agreement:
     ours = np.maximum(_db(engine_with) - _db(engine_without), FLOOR_DB)
     ref = np.maximum(_db(tracer_with.gain) - _db(tracer_without.gain), FLOOR_DB)
     noise = 0.5 * np.abs(_db(tracer_with.half_a) - _db(tracer_with.half_b))
@@ -346,11 +368,18 @@ def inside_buildings(scn: Scenario) -> np.ndarray:
 
 
 def compare(
-    scn: Scenario, *, samples: int = 2_000_000, seed: int = 0, max_depth: int = 2
+    scn: Scenario,
+    *,
+    samples: int = 2_000_000,
+    seed: int = 0,
+    max_depth: int = 2,
+    ground: str = "none",
 ) -> Agreement:
     """The building effect of the ray engine against the tracer's on ``scn`` (each site once,
-    isotropic: [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario])."""
-    with_b, without = isotropic_scenario(scn), isotropic_scenario(scn, buildings=False)
+    isotropic: [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario]), over no
+    ground or a PEC one."""
+    with_b = isotropic_scenario(scn, ground=ground)
+    without = isotropic_scenario(scn, buildings=False, ground=ground)
     kw = {"samples": samples, "seed": seed, "max_depth": max_depth}
     return agreement(
         engine_gain(with_b),
@@ -359,108 +388,3 @@ def compare(
         tracer_gain(without, **kw),
         inside_buildings(with_b),
     )
-
-
-def _area(x0: float, x1: float, y0: float, y1: float, altitude_m: float, res: float) -> Area:
-    return Area(
-        x_min_m=x0, x_max_m=x1, y_min_m=y0, y_max_m=y1, altitude_m=altitude_m, resolution_m=res
-    )
-
-
-def _box(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
-    # One 40 m block, roof 30 m; the site 50 m in front of it.
-    return Scenario(
-        freq_hz=freq_hz,
-        polarization=pol,
-        area=_area(0.0, 240.0, -120.0, 120.0, altitude_m, 4.0),
-        sites=[Site(x_m=10.0, y_m=0.0, height_m=25.0)],
-        buildings=[Building(x0_m=60.0, x1_m=100.0, y0_m=-20.0, y1_m=20.0, height_m=30.0)],
-    )
-
-
-def _thick(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
-    # A deep building (90 m along the path, 50 m across), roof 20 m, seen from a 30 m mast.
-    return Scenario(
-        freq_hz=freq_hz,
-        polarization=pol,
-        area=_area(0.0, 300.0, -150.0, 150.0, altitude_m, 5.0),
-        sites=[Site(x_m=15.0, y_m=-20.0, height_m=30.0)],
-        buildings=[Building(x0_m=80.0, x1_m=170.0, y0_m=-25.0, y1_m=25.0, height_m=20.0)],
-    )
-
-
-def _canyon(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
-    # Two rows of three buildings along a 20 m street; the site in the street.
-    rows = [
-        Building(x0_m=x0, x1_m=x0 + 50.0, y0_m=y0, y1_m=y0 + 30.0, height_m=h)
-        for x0, h in ((40.0, 24.0), (100.0, 30.0), (160.0, 21.0))
-        for y0 in (-40.0, 10.0)
-    ]
-    return Scenario(
-        freq_hz=freq_hz,
-        polarization=pol,
-        area=_area(0.0, 260.0, -100.0, 100.0, altitude_m, 4.0),
-        sites=[Site(x_m=20.0, y_m=0.0, height_m=15.0)],
-        buildings=rows,
-    )
-
-
-def _corner(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
-    # An L-shaped building (six corners, one of them re-entrant) from a footprint file's polygon.
-    return Scenario(
-        freq_hz=freq_hz,
-        polarization=pol,
-        area=_area(-40.0, 200.0, -120.0, 120.0, altitude_m, 4.0),
-        sites=[Site(x_m=-20.0, y_m=-30.0, height_m=25.0)],
-        buildings=[
-            Building(x0_m=40.0, x1_m=70.0, y0_m=-60.0, y1_m=40.0, height_m=28.0),
-            Building(x0_m=70.0, x1_m=130.0, y0_m=-60.0, y1_m=-30.0, height_m=28.0),
-        ],
-    )
-
-
-def _district(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
-    # A 400 m square of the shipped OpenStreetMap-style district, three sites.
-    from pathlib import Path
-
-    file = Path(__file__).resolve().parents[3] / "examples" / "buildings.geojson"
-    return Scenario(
-        freq_hz=freq_hz,
-        polarization=pol,
-        origin=Origin(lat_deg=47.3730, lon_deg=8.5470),
-        area=_area(-200.0, 200.0, -200.0, 200.0, altitude_m, 5.0),
-        sites=[
-            Site(x_m=-150.0, y_m=-160.0, height_m=30.0),
-            Site(x_m=120.0, y_m=40.0, height_m=30.0),
-            Site(x_m=-60.0, y_m=150.0, height_m=30.0),
-        ],
-        footprints=FootprintsFile(file=str(file)),
-    )
-
-
-def _urban(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
-    # The urban preset's nine 60 m blocks and its seven sites, the map round the blocks.
-    from rainuav.radio.presets import urban
-
-    scn = urban(0.0, freq_hz, polarization=pol)
-    area = _area(300.0, 1500.0, 300.0, 1500.0, altitude_m, 10.0)
-    sites = [s for s in scn.sites if 300.0 <= s.x_m <= 1500.0 and 300.0 <= s.y_m <= 1500.0]
-    return dataclasses.replace(scn, area=area, sites=sites)
-
-
-SCENES = {
-    "box": _box,
-    "thick": _thick,
-    "canyon": _canyon,
-    "corner": _corner,
-    "district": _district,
-    "urban": _urban,
-}
-"""The comparison's scenes: ``name(freq_hz, altitude_m, polarization) -> Scenario``."""
-
-
-def scene(
-    name: str, freq_hz: float = 4.9e9, altitude_m: float = 20.0, polarization: str = "v"
-) -> Scenario:
-    """The comparison scene ``name`` ([`SCENES`][rainuav.radio.tracer.SCENES])."""
-    return SCENES[name](freq_hz, altitude_m, polarization)

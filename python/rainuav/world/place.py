@@ -46,7 +46,12 @@ from rainuav.radio.radar import read_radar_grid
 from rainuav.radio.radiomap import build_radio_map
 from rainuav.radio.scenario import Area, FootprintsFile, Origin, Scenario, TerrainFile
 from rainuav.radio.sites import read_site_rows, sites_from_rows
-from rainuav.radio.terrain import flight_heights_at, obstacle_pixel_max, scenario_terrain
+from rainuav.radio.terrain import (
+    flight_heights_at,
+    ground_over,
+    obstacle_pixel_max,
+    scenario_terrain,
+)
 from rainuav.radio.timemap import build_radio_map_series, series_times
 from rainuav.world import SLICE_S, World, world_from
 from rainuav.world.flightplot import plot_flight
@@ -97,6 +102,7 @@ def place_scenario(
     altitudes: list[float] | None = None,
     engine: str | None = None,
     default_height_m: float | None = None,
+    ground: str | None = None,
 ) -> Place:
     """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees. ``weather``:
     a georeferenced rain file ([`rainuav.radio.radar`][rainuav.radio.radar], mm/h or dBZ, one
@@ -109,7 +115,9 @@ def place_scenario(
     ([`rainuav.ground.footprints`][rainuav.ground.footprints]) standing on it. ``altitudes``: the
     flight levels a flight chooses among (``area.altitudes_m``). ``engine``: the maps' engine
     (default the preset's, hybrid). ``default_height_m``: the roof of a footprint with neither a
-    height nor storeys (``[footprints] default_height_m``, default 10 m)."""
+    height nor storeys (``[footprints] default_height_m``, default 10 m). ``ground``: the ground's
+    material (default: the preset's PEC on flat ground, medium-dry over a DEM:
+    [`ground_over()`][rainuav.radio.terrain.ground_over])."""
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}
@@ -180,6 +188,7 @@ def place_scenario(
             raise InvalidInputError(f"--terrain: no file {terrain}")
         dem = TerrainFile(str(Path(terrain).resolve()))
         scn = dataclasses.replace(scn, terrain=dem)
+    scn = dataclasses.replace(scn, ground=ground_over(terrain is not None, ground, scn.ground))
     if footprints is not None:
         if not Path(footprints).is_file():
             raise InvalidInputError(f"--footprints: no file {footprints}")
