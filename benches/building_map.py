@@ -10,7 +10,11 @@
    ``benches/terrain_map.py``, with 500 footprints (blocks of 80 m): first-order wall
    reflections and
    every path's profile through the buildings; against the same map over the DEM without
-   buildings, and the share of the time the walls' rays take.
+   buildings, and the share of the time the walls' and corners' rays take.
+3. **A ray map among 10 000 footprints**: the ``uma`` network's 21 cells spread over the
+   8.8 km district of step 1 (its sites' layout scaled 4.4 times, each moved to the nearest
+   open ground), 200 x 200 pixels (44 m), flat ground: every mechanism (roofs, corners,
+   walls once and twice).
 
 No cache: every build is computed. Prints the best of ``--repeats`` wall times.
 """
@@ -105,6 +109,32 @@ def main() -> None:
     print(f"uma 21 cells, 200 x 200 over the DEM: {t_dem:.2f} s; with {len(fc['features'])} "
           f"footprints ({b.walls.shape[0]} walls, {n_rays} wall rays): {t_city:.2f} s "
           f"({t_city / t_dem:.1f}x), of which tracing the walls' rays {t_walls:.2f} s")  # fmt: skip
+    # 3. 21 cells among the 10 000 footprints, 200 x 200.
+    from rainuav.radio.scenario import Site
+
+    prisms = bld.scenario_buildings(scn_big).prisms
+    sites = []
+    for s in uma().sites:
+        px, py = (s.x_m - 1000.0) * 4.4, (s.y_m - 1000.0) * 4.4
+        for r in np.arange(0.0, 400.0, 5.0):  # the nearest open ground on a spiral of rings
+            ang = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+            cand = np.column_stack([px + r * np.cos(ang), py + r * np.sin(ang)])
+            free = prisms.height_at(cand[:, 0].copy(), cand[:, 1].copy()) == 0.0
+            if free.any():
+                px, py = cand[np.argmax(free)]
+                break
+        sites.append(Site(x_m=float(px), y_m=float(py), height_m=s.height_m, cells=s.cells))
+    wide = scn_big.replace(
+        sites=sites, area=Area(-4400.0, 4400.0, -4400.0, 4400.0, resolution_m=44.0)
+    )
+    t_wide, _ = best_of(args.repeats, lambda: build_radio_map(wide, cache=False))
+    jobs = [(s, c) for s in wide.sites for c in s.cells]
+    x, y = wide.area.centres()
+    t_rays, traced = best_of(args.repeats, lambda: trace_walls(wide, jobs, x, y))
+    kinds = np.bincount(traced[0][6], minlength=4)
+    print(f"uma 21 cells, 200 x 200 (44 m) among {n_big} footprints: {t_wide:.2f} s, of which "
+          f"the walls' and corners' rays {t_rays:.2f} s ({kinds[1]} one wall, {kinds[2]} two "
+          f"walls, {kinds[3]} corners)")  # fmt: skip
     q = [np.median(strongest), *np.percentile(strongest, [10, 90])]
     nf = m_city.not_flyable.mean()
     print(f"strongest cell changed by the buildings (median, p10, p90 dB): "

@@ -34,6 +34,7 @@
 use num_complex::Complex64;
 use rayon::prelude::*;
 use std::f64::consts::PI;
+use std::sync::OnceLock;
 
 use crate::diffraction::utd_wedge;
 use crate::error::{CoreError, Result};
@@ -324,16 +325,15 @@ impl RayScene<'_> {
         let s = [site[0], site[1]];
         let zs = self.terrain_at(s[0], s[1]) + site[2];
         let w = self.x_m.len();
+        // Each blocking prism's corners and their images of the site, found once (the first
+        // row that needs them) and shared by every row.
+        let cache: Vec<OnceLock<Vec<(Corner, Vec<Image>)>>> =
+            (0..prisms.len()).map(|_| OnceLock::new()).collect();
         Ok((0..self.y_m.len())
             .into_par_iter()
             .flat_map_iter(|i| {
                 let (mut near, mut hits, mut ts) = (Vec::new(), Vec::new(), Vec::new());
-                let mut corners = Vec::new();
                 let mut rays = Vec::new();
-                // Each corner's images of the site, found once a row.
-                let mut images: std::collections::HashMap<(u64, u64), Vec<Image>> =
-                    std::collections::HashMap::new();
-                let mut scratch = Vec::new();
                 for j in 0..w {
                     let q = [self.x_m[j], self.y_m[i]];
                     let zq = self.receiver_height(q);
@@ -342,7 +342,6 @@ impl RayScene<'_> {
                     }
                     // The buildings in the way of the straight line.
                     prisms.near_segment(s, q, &mut hits);
-                    corners.clear();
                     let (dx, dy) = (q[0] - s[0], q[1] - s[1]);
                     for &k in &hits {
                         ts.clear();
@@ -352,27 +351,34 @@ impl RayScene<'_> {
                             self.terrain_at(x, y) + prisms.items()[k as usize].top
                                 >= zs + (zq - zs) * t
                         });
-                        if blocks {
-                            self.corners_of(k as usize, &mut corners);
+                        if !blocks {
+                            continue;
                         }
-                    }
-                    for c in &corners {
-                        let key = (c.v[0].to_bits(), c.v[1].to_bits());
-                        let imgs = images
-                            .entry(key)
-                            .or_insert_with(|| self.images_of(s, c, eps, &mut scratch));
-                        let sources = std::iter::once(None).chain(imgs.iter().map(Some));
-                        for m in sources {
-                            if let Some((az, el, factor, length)) =
-                                self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut near)
-                            {
-                                rays.push(WallRay {
-                                    pixel: i * w + j,
-                                    az_deg: az,
-                                    el_deg: el,
-                                    factor,
-                                    length_m: length,
-                                });
+                        let found = cache[k as usize].get_or_init(|| {
+                            let (mut corners, mut scratch) = (Vec::new(), Vec::new());
+                            self.corners_of(k as usize, &mut corners);
+                            corners
+                                .into_iter()
+                                .map(|c| {
+                                    let imgs = self.images_of(s, &c, eps, &mut scratch);
+                                    (c, imgs)
+                                })
+                                .collect()
+                        });
+                        for (c, imgs) in found {
+                            let sources = std::iter::once(None).chain(imgs.iter().map(Some));
+                            for m in sources {
+                                if let Some((az, el, factor, length)) =
+                                    self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut near)
+                                {
+                                    rays.push(WallRay {
+                                        pixel: i * w + j,
+                                        az_deg: az,
+                                        el_deg: el,
+                                        factor,
+                                        length_m: length,
+                                    });
+                                }
                             }
                         }
                     }
