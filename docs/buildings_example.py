@@ -6,10 +6,10 @@ planned with and without them (the Buildings page's figure and figures).
 The shipped place (``examples/sites.csv``, 28 GHz, clear air, 40 m above the ground) among
 the footprints of ``examples/buildings.geojson`` (ray engine, so the wall rays can be shown
 apart). Prints the share of the area where the walls and corners (reflections once and twice,
-diffraction round the corners) raise the serving cell's power by more than 1 dB and 3 dB, and each plan's cost and outage share on the
-map with the buildings, the plan made without them flown there included. Draws (left) what
-the walls add to the serving cell's power, (right) both flights over the SINR with the
-buildings.
+diffraction round the corners) raise the serving cell's power by more than 1 dB and 3 dB, and
+each plan's cost and outage share on the map with the buildings, the plan made without them
+flown there included. Draws (left) what the walls and corners add to the serving cell's power,
+(right) both flights over the SINR with the buildings.
 """
 
 from __future__ import annotations
@@ -58,9 +58,9 @@ def main() -> None:
     pick = np.take_along_axis(total, serving[None], 0)[0]
     pick_rest = np.take_along_axis(rest, serving[None], 0)[0]
     gain_db = 10 * np.log10(pick / pick_rest)
-    print(f"walls and corners raise the serving cell's power by > 1 dB over {np.mean(gain_db > 1):.1%} of "
-          f"the area, > 3 dB over {np.mean(gain_db > 3):.1%}, > 10 dB over "
-          f"{np.mean(gain_db > 10):.1%}")  # fmt: skip
+    print(f"walls and corners raise the serving cell's power by > 1 dB over "
+          f"{np.mean(gain_db > 1):.1%} of the area, > 3 dB over {np.mean(gain_db > 3):.1%}, "
+          f"> 10 dB over {np.mean(gain_db > 10):.1%}")  # fmt: skip
 
     span = abs(among.goal_m[0] - among.start_m[0]) + abs(among.goal_m[1] - among.start_m[1])
     task = NavConfig(goal_m=among.goal_m, start_m=among.start_m,
