@@ -1,7 +1,8 @@
 """The ray engine's building physics against Sionna RT 2.2, a full ray tracer
 ([`rainuav.radio.tracer`][rainuav.radio.tracer]), on small scenes
 ([`rainuav.radio.tracer_scenes`][rainuav.radio.tracer_scenes]: one block, a thick building, a
-street canyon of two rows, an L-shaped building): the building effect (the map with the buildings
+street canyon of two rows, an L-shaped building, nine buildings from the shipped footprint
+file): the building effect (the map with the buildings
 minus the map without, dB, each method against itself) on the pixels the tracer covers, isotropic
 antennas on both sides, vertical and horizontal polarisation, no ground and a PEC ground by the
 image method. The tracer runs 4 million rays a site on the CPU (LLVM), seeded; its own Monte Carlo
@@ -15,8 +16,9 @@ Tolerances and why:
 - **Shadow**, horizontal polarisation: within 4 dB median and 11 dB at the 90th percentile
   (measured 1.8-3.8 dB and 5.8-10.7 dB: the targets are 3 and 8 dB; the canyon's and the PEC
   ground's cases are the farthest, with 1 dB of margin for the tracer's noise).
-- **Shadow**, vertical polarisation: within 6 dB median (box, thick, corner) and 11 dB (the
-  canyon), 90th percentile within 13 and 19 dB. The engine's shadows are deeper: the field along
+- **Shadow**, vertical polarisation: within 6 dB median (box, thick, corner, the footprints) and
+  11 dB (the canyon), 90th percentile within 13 and 19 dB (measured 1.9-5.5 dB median and
+  5.8-11.2 dB p90; the canyon 8.7 and 14.5 dB). The engine's shadows are deeper: the field along
   a vertical edge is soft, and near a wall the UTD coefficient of ITU-R P.526 vanishes as the exact
   wedge solution does (``tests/test_wedge_exact.py``, 0.1 dB), where the tracer's does not (a
   perfectly conducting block, 1.3 degrees off its wall: the tracer -123.7 dB, the exact soft wedge
@@ -34,7 +36,7 @@ from rainuav.radio.tracer_scenes import TEST_SCENES, scene
 pytestmark = pytest.mark.timeout(600)
 
 SAMPLES = 4_000_000
-ALTITUDE = {"box": 20.0, "thick": 10.0, "canyon": 20.0, "corner": 20.0}
+ALTITUDE = {"box": 20.0, "thick": 10.0, "canyon": 20.0, "corner": 20.0, "block": 8.0}
 CASES = [(s, pol, "none") for s in TEST_SCENES for pol in ("v", "h")] + [
     ("box", "v", "pec"),
     ("canyon", "h", "pec"),
@@ -59,8 +61,8 @@ def test_where_the_tracer_sees_light_the_engine_does(agreements, case) -> None:
 
 
 SHADOW_TOLERANCE = {  # (median, p90), dB: the module docstring says why
-    "h": {"box": (4.0, 11.0), "thick": (4.0, 11.0), "canyon": (4.0, 11.0), "corner": (4.0, 11.0)},
-    "v": {"box": (6.0, 13.0), "thick": (6.0, 13.0), "canyon": (11.0, 19.0), "corner": (6.0, 13.0)},
+    "h": {s: (4.0, 11.0) for s in TEST_SCENES},
+    "v": {**{s: (6.0, 13.0) for s in TEST_SCENES}, "canyon": (11.0, 19.0)},
 }
 
 

@@ -1,6 +1,7 @@
 """The scenes on which the ray engine is compared with Sionna RT
 ([`rainuav.radio.tracer`][rainuav.radio.tracer]): small ones for the tests (one block, a thick
-building, a street canyon of two rows, an L-shaped building) and larger ones held back for the
+building, a street canyon of two rows, an L-shaped building, a corner of the shipped district
+from its footprint file) and larger ones held back for the
 results page (the ``urban`` preset's blocks and sites, a square of the shipped OpenStreetMap-style
 district). Each is ``name(freq_hz, altitude_m, polarization) -> Scenario``; the buildings'
 walls are ITU-R P.2040 concrete.
@@ -74,6 +75,34 @@ def _corner(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
     )
 
 
+def _footprints(
+    freq_hz: float,
+    altitude_m: float,
+    pol: str,
+    bounds: tuple[float, float, float, float],
+    sites: list[Site],
+    res: float,
+) -> Scenario:
+    from pathlib import Path
+
+    file = Path(__file__).resolve().parents[3] / "examples" / "buildings.geojson"
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        origin=Origin(lat_deg=47.3730, lon_deg=8.5470),
+        area=_area(*bounds, altitude_m, res),
+        sites=sites,
+        footprints=FootprintsFile(file=str(file)),
+    )  # fmt: skip
+
+
+def _block(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # A 240 m square of the shipped district (nine buildings of 6-21 m from the footprint
+    # file), the site in a street.
+    site = Site(x_m=262.0, y_m=370.0, height_m=20.0)
+    return _footprints(freq_hz, altitude_m, pol, (250.0, 490.0, 250.0, 490.0), [site], 4.0)
+
+
 def _district(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
     # A 400 m square of the shipped OpenStreetMap-style district, three sites.
     from pathlib import Path
@@ -103,7 +132,7 @@ def _urban(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
     return dataclasses.replace(scn, area=area, sites=sites)
 
 
-TEST_SCENES = ("box", "thick", "canyon", "corner")
+TEST_SCENES = ("box", "thick", "canyon", "corner", "block")
 """The scenes the tests compare on (and the methods' choices were made on)."""
 
 HELD_BACK = ("urban", "district")
@@ -114,6 +143,7 @@ SCENES = {
     "thick": _thick,
     "canyon": _canyon,
     "corner": _corner,
+    "block": _block,
     "district": _district,
     "urban": _urban,
 }
