@@ -50,6 +50,9 @@ const CORNER_GAP_M: f64 = 0.05;
 /// comes within this distance (m) of the corner.
 pub const IMAGE_RADIUS_M: f64 = 150.0;
 
+/// A prism's corners, each with its images of the site.
+type CornersOf = Vec<(Corner, Vec<Image>)>;
+
 /// The site mirrored in a wall toward one corner.
 #[derive(Debug, Clone, Copy)]
 struct Image {
@@ -327,8 +330,7 @@ impl RayScene<'_> {
         let w = self.x_m.len();
         // Each blocking prism's corners and their images of the site, found once (the first
         // row that needs them) and shared by every row.
-        let cache: Vec<OnceLock<Vec<(Corner, Vec<Image>)>>> =
-            (0..prisms.len()).map(|_| OnceLock::new()).collect();
+        let cache: Vec<OnceLock<CornersOf>> = (0..prisms.len()).map(|_| OnceLock::new()).collect();
         Ok((0..self.y_m.len())
             .into_par_iter()
             .flat_map_iter(|i| {
