@@ -7,7 +7,8 @@ For each scene ([`rainuav.radio.tracer_scenes`][rainuav.radio.tracer_scenes]; by
 held-back ones, on which no choice of the methods was made), frequency, UAV altitude and
 polarisation: the building effect (map with buildings minus without, dB) of the ray engine against
 the tracer's, site by site, on the pixels the tracer covers (no ground, isotropic antennas;
-[`rainuav.radio.tracer.compare()`][rainuav.radio.tracer.compare]). Prints one line a site: pixels
+[`rainuav.radio.tracer.compare()`][rainuav.radio.tracer.compare]; ``--engine hybrid``: rainuav's
+hybrid engine, the parabolic equation in each cell's cone). Prints one line a site: pixels
 compared, the tracer's shadow pixels (effect below -6 dB), |engine - tracer| in the shadow (median,
 90th percentile), the median signed difference (negative: the engine's shadow deeper), the median
 |difference| in the light, the share of pixels where shadow and light agree, and the tracer's own
@@ -70,11 +71,16 @@ def main() -> None:
     ap.add_argument("--altitudes", nargs="+", type=float, default=[20.0, 100.0])
     ap.add_argument("--pols", nargs="+", default=["v", "h"], choices=["v", "h"])
     ap.add_argument("--samples", type=float, default=8e6)
+    ap.add_argument(
+        "--engine", default="ray", choices=["ray", "hybrid", "pe"],
+        help="rainuav's engine (hybrid: the parabolic equation in each cell's cone)",
+    )  # fmt: skip
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--figure", type=Path, default=None)
     args = ap.parse_args()
     samples = int(args.samples)
-    print(f"# {platform.processor() or platform.machine()}, {samples:.0e} rays a site")
+    print(f"# {platform.processor() or platform.machine()}, {samples:.0e} rays a site, "
+          f"engine {args.engine}")  # fmt: skip
     head = "scene     GHz  alt pol site pixels shadow  med   p90   bias light agree noise"
     print(head)
     rows = []
@@ -83,7 +89,9 @@ def main() -> None:
             for alt in args.altitudes:
                 for pol in args.pols:
                     t = time.perf_counter()
-                    a = tracer.compare(scene(name, f * 1e9, alt, pol), samples=samples)
+                    a = tracer.compare(
+                        scene(name, f * 1e9, alt, pol), samples=samples, engine=args.engine
+                    )
                     for k, r in enumerate(a.rows()):
                         rows.append({"scene": name, "freq_ghz": f, "altitude_m": alt,
                                      "pol": pol, "site": k, **r})  # fmt: skip

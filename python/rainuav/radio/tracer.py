@@ -129,12 +129,19 @@ def isotropic_scenario(scn: Scenario, *, buildings: bool = True, ground: str = "
     return out
 
 
-def engine_gain(scn: Scenario) -> np.ndarray:
-    """The ray engine's path gain (linear, isotropic antennas) of each site of
+def engine_gain(scn: Scenario, engine: str = "ray") -> np.ndarray:
+    """The path gain (linear, isotropic antennas) of each site of
     [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario]'s ``scn`` at every pixel,
-    (S, H, W)."""
+    (S, H, W), by the ray engine or (``engine`` ``"hybrid"`` or ``"pe"``) by
+    [`build_radio_map()`][rainuav.radio.radiomap.build_radio_map] with that engine (the cells
+    radiate 0 dBm: the map's dBm are the path gain's dB)."""
     from rainuav.radio.ray_engine import ray_power
 
+    if engine != "ray":
+        from rainuav.radio.radiomap import build_radio_map
+
+        rm = build_radio_map(dataclasses.replace(scn, engine=engine), cache=False)
+        return np.asarray(10.0 ** (rm.rss_dbm / 10.0), dtype=float)
     x, y = scn.area.centres()
     jobs = [(s, s.cells[0]) for s in scn.sites]
     power_mw, _ = ray_power(scn, jobs, x, y)
@@ -374,16 +381,18 @@ def compare(
     seed: int = 0,
     max_depth: int = 2,
     ground: str = "none",
+    engine: str = "ray",
 ) -> Agreement:
-    """The building effect of the ray engine against the tracer's on ``scn`` (each site once,
-    isotropic: [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario]), over no
-    ground or a PEC one."""
+    """The building effect of the ray engine (or ``engine``:
+    [`engine_gain()`][rainuav.radio.tracer.engine_gain]) against the tracer's on ``scn`` (each
+    site once, isotropic: [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario]),
+    over no ground or a PEC one."""
     with_b = isotropic_scenario(scn, ground=ground)
     without = isotropic_scenario(scn, buildings=False, ground=ground)
     kw = {"samples": samples, "seed": seed, "max_depth": max_depth}
     return agreement(
-        engine_gain(with_b),
-        engine_gain(without),
+        engine_gain(with_b, engine),
+        engine_gain(without, engine),
         tracer_gain(with_b, **kw),
         tracer_gain(without, **kw),
         inside_buildings(with_b),
