@@ -274,3 +274,20 @@ def test_a_non_finite_gain_table_is_named() -> None:
     bad = Pattern([-10.0, 10.0], [-10.0, 10.0], [[0.0, float("nan")], [0.0, 0.0]])
     with pytest.raises(rainuav.InvalidInputError, match=r"cells\[0\]\.pattern"):
         presets.paper(sites=[Site(x_m=500.0, y_m=500.0, cells=[Cell(pattern=bad)])])
+
+
+def test_an_isotropic_antenna_has_the_widest_cone_and_the_hybrid_maps_it() -> None:
+    # A pattern flat over the whole half-space is all peak: the march takes the widest cone
+    # (sines 0.95) instead of failing on an empty one, and the hybrid map is finite.
+    from rainuav.radio.grid import _dynamic_range_cone
+    from rainuav.radio.tracer import ISOTROPIC
+
+    cell = Cell(azimuth_deg=0.0, tilt_deg=0.0, pattern=ISOTROPIC, tx_power_dbm=0.0)
+    assert _dynamic_range_cone(cell.key(), 0.0, 40.0) == (0.95, 0.95)
+    scn = Scenario(
+        freq_hz=4.9e9, engine="hybrid", medium=Medium(kind="clear"),
+        area=Area(0.0, 200.0, -60.0, 60.0, altitude_m=20.0, resolution_m=10.0),
+        sites=[Site(10.0, 0.0, 25.0, [cell])],
+    )  # fmt: skip
+    rm = build_radio_map(scn, cache=False)
+    assert np.isfinite(rm.rss_dbm).all() and rm.pe_share.max() > 0.5

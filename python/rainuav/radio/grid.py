@@ -97,7 +97,10 @@ def _dynamic_range_cone(key: tuple[Any, ...], tilt_deg: float, dr_db: float) -> 
     el = np.degrees(np.arcsin(sy))
     az = np.degrees(np.arcsin(np.clip(sx / np.sqrt(1 - sy**2), -1, 1)))
     g = pattern.gain_dbi(az, np.clip(el - tilt_deg, -90, 90))
-    # A flat sidelobe floor (the pattern's minimum) is never part of the cone.
+    # A flat sidelobe floor (the pattern's minimum) is never part of the cone; a pattern flat
+    # over the whole half-space (isotropic) is all peak: the widest cone.
+    if g.max() - g.min() < 1e-3:
+        return 0.95, 0.95
     keep = g > max(g.max() - dr_db, g.min() + 1e-3)
     # One sample of margin: the edge sample still lies inside the range.
     step = s[1] - s[0]

@@ -38,6 +38,7 @@ from rainuav.radio.scenario import Medium, Scenario, Site
 
 __all__ = [
     "FLOOR_DB",
+    "ISOTROPIC",
     "LLVM_PATHS",
     "MAX_NOISE_DB",
     "SHADOW_DB",
