@@ -23,11 +23,13 @@
 //! under it, or above sea level ([`RayScene::altitude_msl`]). Over flat open ground (no
 //! terrain, no obstacles) the rays are the closed forms of section 8. Otherwise each
 //! site-pixel path reads its profile from the surface ([`RayScene::profile`]): the direct ray
-//! gets the Bullington loss of the whole profile ([`crate::diffraction`]) and its antenna gain
-//! is taken toward the diffracting edge ([`RayScene::departures`]); the ground-reflected ray
-//! bounces off the local ground line of the path's vertical plane (the terrain's slope along
-//! the path at the specular point, the image construction iterated) and exists only where its
-//! specular point is bare ground seen by both ends.
+//! gets the diffraction loss of the whole profile ([`crate::diffraction`]: the terrain's
+//! Bullington with its correction, or Deygout's isolated edges where a building is the
+//! principal edge) and its antenna gain is taken toward that edge ([`RayScene::departures`]);
+//! the ground-reflected ray bounces off the line fitted to the terrain over its first Fresnel
+//! zone (the image construction iterated), weighted by the Rayleigh factor of the terrain's
+//! roughness there, where its specular point is bare ground, faded by the knife-edge loss of
+//! whatever half hides its legs.
 
 use ndarray::{Array3, Array4, ArrayView2, ArrayView3, ArrayView4, Axis};
 use num_complex::Complex64;

@@ -8,10 +8,13 @@ the scenario's polarisation); rain attenuation is integrated along each ray thro
 rain field (homogeneous: ``gamma d``; rain cells and rate maps: a raster of ``gamma`` nodes
 integrated along the ray). Over terrain ([`rainuav.radio.terrain`][rainuav.radio.terrain]) and
 obstacles (buildings, the height map, standing on the terrain), each site-pixel path reads its
-profile: the direct ray gets the Bullington loss of the whole profile (ITU-R P.526-15 section 4.5.1)
-with the antenna gain toward the diffracting edge, and the ground reflection bounces off the local
-ground line only where both ends see its specular point
-([`departures()`][rainuav.radio.ray_engine.departures]; docs/physics.md section 12). Each pixel
+profile: the direct ray gets the diffraction loss of the whole profile (the terrain's: ITU-R
+P.526-15 section 4.5.1 Bullington with its correction; a building's: Deygout's isolated edges) with
+the antenna gain toward the principal edge, and the ground reflects off the line fitted over its
+first Fresnel zone, weighted by the terrain's roughness, faded where its legs are half hidden
+([`departures()`][rainuav.radio.ray_engine.departures]); the walls reflect once and twice and the
+buildings' corners diffract round them ([`rainuav.radio.wall_rays`][rainuav.radio.wall_rays];
+docs/physics.md sections 8 and 12). Each pixel
 holds the mean power over its area (ground-reflection fringes finer than a pixel are averaged, not
 aliased).
 

@@ -12,11 +12,13 @@ buildings do (shadows, diffraction, wall reflections).
 - The tracer's map is a Monte Carlo estimate; it is run twice with half the rays each (two seeds)
   and their mean is the reference; their difference estimates its noise per pixel.
 - A pixel counts where the tracer covers it (both halves received something, with and without
-  buildings) and the UAV is outside every building.
+  buildings), its halves agree within ``2 MAX_NOISE_DB``, and the UAV is outside every building;
+  building effects below ``FLOOR_DB`` are compared as ``FLOOR_DB``.
 - The tracer's settings: specular reflections on the walls up to ``max_depth`` interactions, edge
   diffraction (Sionna's UTD wedges; one diffraction a path), no transmission through walls (the ray
-  engine's buildings are opaque), no diffuse scattering, no ground (``ground = "none"``). Walls are
-  the ITU-R P.2040 material of the footprints, as in the ray engine.
+  engine's buildings are opaque), no diffuse scattering, and no ground or a PEC one by images
+  ([`tracer_gain()`][rainuav.radio.tracer.tracer_gain]). Walls are the ITU-R P.2040 material of
+  the footprints, as in the ray engine.
 
 Needs ``sionna-rt`` (the ``test`` extra). On a machine without a GPU it runs through LLVM: Debian's
 ``libllvm19``, found through ``DRJIT_LIBLLVM_PATH`` (set here when unset and the library is where
