@@ -84,6 +84,19 @@ fn ccw(a: [f64; 2], b: [f64; 2]) -> f64 {
     if t < 0.0 { t + 2.0 * PI } else { t }
 }
 
+/// Whether a prism's material lies left of the walk along its ring number `r` (0: the outer
+/// ring): on an outer ring walked counter-clockwise and on a hole walked clockwise.
+fn material_left(r: usize, ring: &[[f64; 2]]) -> bool {
+    let m = ring.len();
+    let area: f64 = (0..m)
+        .map(|i| {
+            let (p, q) = (ring[i], ring[(i + 1) % m]);
+            p[0] * q[1] - q[0] * p[1]
+        })
+        .sum();
+    (r == 0) == (area > 0.0)
+}
+
 fn unit(d: [f64; 2]) -> Option<[f64; 2]> {
     let n = d[0].hypot(d[1]);
     (n > 1e-9).then(|| [d[0] / n, d[1] / n])
@@ -98,15 +111,7 @@ impl RayScene<'_> {
         let top = prisms.items()[k].top;
         for (r, ring) in prisms.rings_of(k).enumerate() {
             let m = ring.len();
-            let area: f64 = (0..m)
-                .map(|i| {
-                    let (p, q) = (ring[i], ring[(i + 1) % m]);
-                    p[0] * q[1] - q[0] * p[1]
-                })
-                .sum();
-            // The building's material lies left of the walk on an outer ring walked
-            // counter-clockwise and on a hole walked clockwise.
-            let left = (r == 0) == (area > 0.0);
+            let left = material_left(r, ring);
             for i in 0..m {
                 let v = ring[i];
                 let (prev, next) = (ring[(i + m - 1) % m], ring[(i + 1) % m]);
@@ -150,10 +155,7 @@ impl RayScene<'_> {
             let k = k as usize;
             for (ri, ring) in prisms.rings_of(k).enumerate() {
                 let m = ring.len();
-                let area: f64 = (0..m)
-                    .map(|i| ring[i][0] * ring[(i + 1) % m][1] - ring[(i + 1) % m][0] * ring[i][1])
-                    .sum();
-                let left = (ri == 0) == (area > 0.0);
+                let left = material_left(ri, ring);
                 for i in 0..m {
                     let (a, b) = (ring[i], ring[(i + 1) % m]);
                     if a == c.v || b == c.v {

@@ -322,21 +322,19 @@ fn db_to_amplitude(loss_db: f64) -> f64 {
 /// points evenly over `s0 - a .. s0 + a`, and the standard deviation of the ground about it:
 /// `(z0, slope, sigma)` (a fixed count: the fit moves smoothly with the window).
 fn fit_line(ground: &impl Fn(f64) -> f64, s0: f64, a: f64) -> (f64, f64, f64) {
-    let n = 17;
+    const N: usize = 17;
+    let mut pts = [(0.0, 0.0); N];
     let (mut sx, mut sz, mut sxx, mut sxz) = (0.0, 0.0, 0.0, 0.0);
-    let pts: Vec<(f64, f64)> = (0..n)
-        .map(|i| {
-            let u = -a + 2.0 * a * i as f64 / (n - 1) as f64;
-            (u, ground(s0 + u))
-        })
-        .collect();
-    for &(u, z) in &pts {
+    for (i, p) in pts.iter_mut().enumerate() {
+        let u = -a + 2.0 * a * i as f64 / (N - 1) as f64;
+        let z = ground(s0 + u);
+        *p = (u, z);
         sx += u;
         sz += z;
         sxx += u * u;
         sxz += u * z;
     }
-    let m = n as f64;
+    let m = N as f64;
     let den = m * sxx - sx * sx;
     let slope = if den.abs() > 1e-12 {
         (m * sxz - sx * sz) / den

@@ -86,6 +86,19 @@ pub fn wall_reflectance(eps: Complex64, k: [f64; 3], n: [f64; 2], pol: RayPolari
     perp * f_perp + par * (1.0 - f_perp)
 }
 
+/// The columns `j0..j1` of the pixel centres `x` within `lo..=hi` (all of them where `x` is not
+/// sorted: the caller's tests then decide pixel by pixel).
+pub(crate) fn columns(x: &[f64], lo: f64, hi: f64, sorted: bool) -> (usize, usize) {
+    if sorted {
+        (
+            x.partition_point(|&v| v < lo),
+            x.partition_point(|&v| v <= hi),
+        )
+    } else {
+        (0, x.len())
+    }
+}
+
 /// The interval of `x` where every `alpha x + beta >= 0` holds (empty: `lo > hi`).
 pub(crate) fn interval(conds: &[(f64, f64)]) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
@@ -231,14 +244,7 @@ impl RayScene<'_> {
             if lo.is_nan() || hi.is_nan() || lo > hi || n == [0.0, 0.0] {
                 return None;
             }
-            let (j0, j1) = if sorted {
-                (
-                    x.partition_point(|&v| v < lo),
-                    x.partition_point(|&v| v <= hi),
-                )
-            } else {
-                (0, x.len())
-            };
+            let (j0, j1) = columns(x, lo, hi, sorted);
             (j0 < j1).then_some((i, j0, j1))
         })
     }

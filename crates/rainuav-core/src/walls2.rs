@@ -27,7 +27,7 @@ use std::collections::HashMap;
 
 use crate::error::Result;
 use crate::rays::RayScene;
-use crate::walls::{LEG_GAP_M, Wall, WallRay, interval, normal, wall_reflectance};
+use crate::walls::{LEG_GAP_M, Wall, WallRay, columns, interval, normal, wall_reflectance};
 
 /// The longest twice-reflected ray, m (unfolded length).
 pub const MAX_LENGTH_M: f64 = 1000.0;
@@ -166,14 +166,7 @@ impl RayScene<'_> {
                     if lo.is_nan() || hi.is_nan() || lo > hi {
                         return None;
                     }
-                    let (j0, j1) = if sorted {
-                        (
-                            x.partition_point(|&v| v < lo),
-                            x.partition_point(|&v| v <= hi),
-                        )
-                    } else {
-                        (0, x.len())
-                    };
+                    let (j0, j1) = columns(x, lo, hi, sorted);
                     (j0 < j1).then_some((i, j0, j1))
                 });
                 rows.flat_map(|(i, j0, j1)| (j0..j1).map(move |j| (i, j)))

@@ -105,21 +105,12 @@ def _block(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
 
 def _district(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
     # A 400 m square of the shipped OpenStreetMap-style district, three sites.
-    from pathlib import Path
-
-    file = Path(__file__).resolve().parents[3] / "examples" / "buildings.geojson"
-    return Scenario(
-        freq_hz=freq_hz,
-        polarization=pol,
-        origin=Origin(lat_deg=47.3730, lon_deg=8.5470),
-        area=_area(-200.0, 200.0, -200.0, 200.0, altitude_m, 5.0),
-        sites=[
-            Site(x_m=-150.0, y_m=-160.0, height_m=30.0),
-            Site(x_m=120.0, y_m=40.0, height_m=30.0),
-            Site(x_m=-60.0, y_m=150.0, height_m=30.0),
-        ],
-        footprints=FootprintsFile(file=str(file)),
-    )
+    sites = [
+        Site(x_m=-150.0, y_m=-160.0, height_m=30.0),
+        Site(x_m=120.0, y_m=40.0, height_m=30.0),
+        Site(x_m=-60.0, y_m=150.0, height_m=30.0),
+    ]
+    return _footprints(freq_hz, altitude_m, pol, (-200.0, 200.0, -200.0, 200.0), sites, 5.0)
 
 
 def _urban(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
