@@ -39,6 +39,7 @@ use std::sync::OnceLock;
 use crate::diffraction::utd_wedge;
 use crate::error::{CoreError, Result};
 use crate::rays::{RayGround, RayPolarization, RayScene, reflection_coefficient};
+use crate::sight::Sight;
 use crate::walls::{WallRay, wall_reflectance};
 
 /// How far (m) outside its corner, along the exterior bisector, a leg's visibility check ends:
@@ -205,7 +206,7 @@ impl RayScene<'_> {
         c: &Corner,
         eps: Complex64,
         image: Option<&Image>,
-        near: &mut Vec<u32>,
+        sight: &mut Sight,
     ) -> Option<(f64, f64, f64, f64)> {
         let src = image.map_or(site, |m| m.at);
         let to_s = [src[0] - c.v[0], src[1] - c.v[1]];
@@ -236,7 +237,7 @@ impl RayScene<'_> {
         let mut reflectance = 1.0;
         let first = match image {
             None => {
-                if !self.clear_above(site, zs, out, zv, near) {
+                if !sight.clear(site, zs, out, zv) {
                     return None;
                 }
                 (c.v, zv, r1)
@@ -255,8 +256,8 @@ impl RayScene<'_> {
                 let p1 = before(site, m.p, 1.0 - g / d1);
                 let p2 = before(m.p, out, g / d2);
                 let z_at = |f: f64, za: f64, zb: f64| za + f * (zb - za);
-                if !(self.clear_above(site, zs, p1, z_at(1.0 - g / d1, zs, zp), near)
-                    && self.clear_above(p2, z_at(g / d2, zp, zv), out, zv, near))
+                if !(sight.clear(site, zs, p1, z_at(1.0 - g / d1, zs, zp))
+                    && sight.clear(p2, z_at(g / d2, zp, zv), out, zv))
                 {
                     return None;
                 }
@@ -266,7 +267,7 @@ impl RayScene<'_> {
                 (m.p, zp, m.d_sp)
             }
         };
-        if !self.clear_above(out, zv, q, zq, near) {
+        if !sight.clear(out, zv, q, zq) {
             return None;
         }
         let s1 = (r1 * r1 + (zv - zs).powi(2)).sqrt();
@@ -333,19 +334,21 @@ impl RayScene<'_> {
         // Each blocking prism's corners and their images of the site, found once (the first
         // row that needs them) and shared by every row.
         let cache: Vec<OnceLock<CornersOf>> = (0..prisms.len()).map(|_| OnceLock::new()).collect();
+        let bounds = self.bounds();
         Ok((0..self.y_m.len())
             .into_par_iter()
             .flat_map_iter(|i| {
-                let (mut near, mut hits, mut ts) = (Vec::new(), Vec::new(), Vec::new());
+                let mut sight = self.sight(bounds);
+                let (mut hits, mut ts) = (Vec::new(), Vec::new());
                 let mut rays = Vec::new();
                 for j in 0..w {
                     let q = [self.x_m[j], self.y_m[i]];
                     let zq = self.receiver_height(q);
-                    if self.clear_above(s, zs, q, zq, &mut near) {
+                    if sight.clear(s, zs, q, zq) {
                         continue;
                     }
                     // The buildings in the way of the straight line.
-                    prisms.near_segment(s, q, &mut hits);
+                    prisms.near_segment_under((s, zs), (q, zq), bounds.terrain_top(), &mut hits);
                     let (dx, dy) = (q[0] - s[0], q[1] - s[1]);
                     for &k in &hits {
                         ts.clear();
@@ -373,7 +376,7 @@ impl RayScene<'_> {
                             let sources = std::iter::once(None).chain(imgs.iter().map(Some));
                             for m in sources {
                                 if let Some((az, el, factor, length)) =
-                                    self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut near)
+                                    self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut sight)
                                 {
                                     rays.push(WallRay {
                                         pixel: i * w + j,

@@ -34,6 +34,7 @@ pub mod quadrature;
 pub mod rays;
 pub mod raytime;
 pub mod sampling;
+pub mod sight;
 pub mod walls;
 pub mod walls2;
 pub mod water;

@@ -29,6 +29,8 @@ pub struct Prisms {
     rings: Vec<[usize; 2]>,
     items: Vec<Prism>,
     grid: Buckets,
+    /// The tallest roof above the terrain, m (0: none).
+    top_max: f64,
 }
 
 /// A regular grid of buckets, each listing the prisms whose bounding box overlaps it
@@ -41,6 +43,8 @@ struct Buckets {
     ny: usize,
     starts: Vec<usize>,
     ids: Vec<u32>,
+    /// Each bucket's tallest roof above the terrain, m (0: empty).
+    tops: Vec<f64>,
 }
 
 impl Buckets {
@@ -75,6 +79,7 @@ impl Buckets {
             ny,
             starts: vec![0; nx * ny + 1],
             ids: Vec::new(),
+            tops: vec![0.0; nx * ny],
         };
         let mut counts = vec![0usize; nx * ny];
         for p in items {
@@ -98,6 +103,7 @@ impl Buckets {
                 for c in c0..=c1 {
                     g.ids[fill[r * nx + c]] = k as u32;
                     fill[r * nx + c] += 1;
+                    g.tops[r * nx + c] = g.tops[r * nx + c].max(p.top);
                 }
             }
         }
@@ -198,11 +204,13 @@ impl Prisms {
             })
             .collect();
         let grid = Buckets::build(&items)?;
+        let top_max = items.iter().map(|p| p.top).fold(0.0, f64::max);
         Ok(Prisms {
             xy,
             rings,
             items,
             grid,
+            top_max,
         })
     }
 
@@ -305,24 +313,69 @@ impl Prisms {
             .fold(0.0, f64::max)
     }
 
+    /// The tallest roof above the terrain, m (0: none).
+    pub fn top_max(&self) -> f64 {
+        self.top_max
+    }
+
+    /// The prisms whose bounding box the segment `a -> b` meets where the straight line from
+    /// height `za` over `a` to `zb` over `b` is no higher than their roof plus `lift` (an upper
+    /// bound of the terrain under them), each once, in index order: the only prisms that can
+    /// stand in that line's way.
+    pub fn near_segment_under(
+        &self,
+        (a, za): ([f64; 2], f64),
+        (b, zb): ([f64; 2], f64),
+        lift: f64,
+        out: &mut Vec<u32>,
+    ) {
+        let line = |t: f64| za + (zb - za) * t;
+        self.near_segment_over(a, b, |lo, hi| line(lo).min(line(hi)), lift, out);
+    }
+
     /// The prisms whose bounding box the segment `a -> b` meets, each once, in index order.
     pub fn near_segment(&self, a: [f64; 2], b: [f64; 2], out: &mut Vec<u32>) {
+        self.near_segment_over(a, b, |_, _| f64::NEG_INFINITY, 0.0, out);
+    }
+
+    /// The prisms whose bounding box the segment `a -> b` (points `a + t (b - a)`) meets on
+    /// some `lo..=hi` where their roof plus `lift` reaches `floor(lo, hi)`, each once, in index
+    /// order. `floor(lo, hi)` is the lowest (m above sea level) a prism standing over
+    /// `t in lo..=hi` must reach to matter to the caller, or less: a bucket of the grid whose
+    /// tallest roof stays below it is not read, nor a prism whose box does.
+    pub fn near_segment_over(
+        &self,
+        a: [f64; 2],
+        b: [f64; 2],
+        floor: impl Fn(f64, f64) -> f64,
+        lift: f64,
+        out: &mut Vec<u32>,
+    ) {
         out.clear();
-        if self.items.is_empty() {
+        if self.items.is_empty() || floor(0.0, 1.0) > self.top_max + lift {
             return;
         }
         let g = &self.grid;
+        let d = [b[0] - a[0], b[1] - a[1]];
+        // A micrometre's tolerance along the segment keeps a box it grazes.
+        let tol = 1e-6 / d[0].hypot(d[1]).max(1e-9);
+        // The parameters where the segment is within [v0, v1] along axis `ax`, within lo..=hi.
+        let slab = |ax: usize, v0: f64, v1: f64, lo: f64, hi: f64| {
+            if d[ax].abs() < 1e-12 {
+                let inside = a[ax] >= v0 - 1e-6 && a[ax] <= v1 + 1e-6;
+                return if inside { (lo, hi) } else { (1.0, 0.0) };
+            }
+            let (u, v) = ((v0 - a[ax]) / d[ax], (v1 - a[ax]) / d[ax]);
+            (lo.max(u.min(v) - tol), hi.min(u.max(v) + tol))
+        };
         let (r0, r1) = (g.row(a[1].min(b[1])), g.row(a[1].max(b[1])));
         for r in r0..=r1 {
-            // The part of the segment within the bucket row's band of y.
-            let (y0, y1) = (
-                g.origin[1] + r as f64 * g.size,
-                g.origin[1] + (r + 1) as f64 * g.size,
-            );
+            // The part of the segment within the bucket row's band of y (the outer rows
+            // extend to the grid's edge: their buckets hold what lies beyond it).
+            let y0 = g.origin[1] + r as f64 * g.size;
             let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
-            let dy = b[1] - a[1];
-            if dy.abs() > 1e-12 {
-                let (u, v) = ((y0 - a[1]) / dy, (y1 - a[1]) / dy);
+            if d[1].abs() > 1e-12 {
+                let (u, v) = ((y0 - a[1]) / d[1], (y0 + g.size - a[1]) / d[1]);
                 if r > r0 {
                     t0 = t0.max(u.min(v));
                 }
@@ -330,21 +383,28 @@ impl Prisms {
                     t1 = t1.min(u.max(v));
                 }
             }
-            let (xa, xb) = (a[0] + t0 * (b[0] - a[0]), a[0] + t1 * (b[0] - a[0]));
+            let (xa, xb) = (a[0] + t0 * d[0], a[0] + t1 * d[0]);
             let (c0, c1) = (g.col(xa.min(xb)), g.col(xa.max(xb)));
             for c in c0..=c1 {
+                // Where the segment runs within the bucket (the outer columns extend to
+                // infinity, as the outer rows do).
+                let left = g.origin[0] + c as f64 * g.size;
+                let x0 = if c == 0 { f64::NEG_INFINITY } else { left };
+                let x1 = if c + 1 == g.nx { f64::INFINITY } else { left + g.size };
+                let (lo, hi) = slab(0, x0, x1, t0, t1);
+                if lo > hi || g.tops[r * g.nx + c] + lift < floor(lo.max(0.0), hi.min(1.0)) {
+                    continue;
+                }
                 out.extend_from_slice(g.bucket(r, c));
             }
         }
         out.sort_unstable();
         out.dedup();
-        let (lo, hi) = (
-            [a[0].min(b[0]), a[1].min(b[1])],
-            [a[0].max(b[0]), a[1].max(b[1])],
-        );
         out.retain(|&k| {
             let bb = self.items[k as usize].bbox;
-            bb[0] <= hi[0] && bb[1] >= lo[0] && bb[2] <= hi[1] && bb[3] >= lo[1]
+            let (lo, hi) = slab(0, bb[0], bb[1], 0.0, 1.0);
+            let (lo, hi) = slab(1, bb[2], bb[3], lo, hi);
+            lo <= hi && self.items[k as usize].top + lift >= floor(lo.max(0.0), hi.min(1.0))
         });
     }
 

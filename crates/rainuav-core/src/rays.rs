@@ -36,6 +36,7 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 
 use crate::error::{CoreError, Result};
+use crate::sight::Sight;
 
 /// The ground under the rays.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,7 +89,7 @@ impl Raster<'_> {
 
     /// The value whose cell `x0 + j dx .. x0 + (j + 1) dx` by `y0 + i dy .. y0 + (i + 1) dy`
     /// holds the point (nearest sample); 0 outside the table.
-    fn cell(&self, x: f64, y: f64) -> f64 {
+    pub(crate) fn cell(&self, x: f64, y: f64) -> f64 {
         let [x0, dx, y0, dy] = self.origin_step;
         let (rows, cols) = self.values.dim();
         let j = ((x - x0) / dx).floor();
@@ -184,6 +185,20 @@ pub struct PathGeometry {
     /// psi)^2)` (1 over smooth ground), where it exists (a ground, its specular point bare
     /// and seen by both ends); 0 where it does not.
     pub reflect: f64,
+}
+
+/// Where a path's ground reflection meets the ground ([`RayScene::path`]).
+#[derive(Debug, Clone, Copy)]
+struct Specular {
+    /// Distance along the ground from the site, m, and the fitted ground line's height there.
+    sb: f64,
+    zb: f64,
+    /// The reflected ray's length (m) and grazing angle (rad) on the fitted line.
+    d2: f64,
+    psi: f64,
+    /// The terrain's standard deviation about the fitted line, m, and the fit's half-length.
+    sigma: f64,
+    half: f64,
 }
 
 impl PathGeometry {
@@ -460,8 +475,26 @@ impl RayScene<'_> {
     /// The profile of the surface (terrain + obstacles, m above sea level) along the ground
     /// line `a -> b`, as `(distance from a, height)` strictly between the ends, in order of
     /// distance: the terrain and the obstacle raster every half of their finest spacing, and
-    /// each building where the line enters and leaves its footprint. Written into `out` (cleared first).
+    /// each building where the line enters and leaves its footprint. Written into `out`
+    /// (cleared first).
     pub fn profile(&self, a: [f64; 2], b: [f64; 2], out: &mut Vec<(f64, f64)>) {
+        let mut sight = self.sight(self.bounds());
+        self.profile_over(a, b, |_, _| f64::NEG_INFINITY, &mut sight);
+        std::mem::swap(out, &mut sight.prof);
+    }
+
+    /// [`RayScene::profile`] into `sight.prof`, leaving out the buildings whose roof stays
+    /// below `floor(lo, hi)` (m above sea level) wherever the line `a + t (b - a)`,
+    /// `t in lo..=hi`, passes over their footprint's box: those the caller has shown cannot
+    /// change its answer ([`crate::obstacles::Prisms::near_segment_over`]).
+    pub fn profile_over(
+        &self,
+        a: [f64; 2],
+        b: [f64; 2],
+        floor: impl Fn(f64, f64) -> f64,
+        sight: &mut Sight,
+    ) {
+        let out = &mut sight.prof;
         out.clear();
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
         let rho = dx.hypot(dy);
@@ -486,12 +519,12 @@ impl RayScene<'_> {
             // Each face a building's footprint crosses, read just inside it (a roof is flat, so
             // its faces are where the extremes of the construction lie).
             let eps = 1e-9_f64.max(1e-6 / rho);
-            let (mut near, mut ts) = (Vec::new(), Vec::new());
-            prisms.near_segment(a, b, &mut near);
-            for &k in &near {
+            let (near, ts) = (&mut sight.near, &mut sight.ts);
+            prisms.near_segment_over(a, b, floor, sight.terrain_top, near);
+            for &k in near.iter() {
                 ts.clear();
-                prisms.crossings(k as usize, a, b, &mut ts);
-                for &t0 in &ts {
+                prisms.crossings(k as usize, a, b, ts);
+                for &t0 in ts.iter() {
                     for t in [t0 - eps, t0 + eps] {
                         let (x, y) = (a[0] + t * dx, a[1] + t * dy);
                         if t > 0.0 && t < 1.0 && prisms.contains(k as usize, x, y) {
@@ -504,64 +537,6 @@ impl RayScene<'_> {
         if out.len() > before {
             out.sort_by(|p, q| p.0.total_cmp(&q.0));
         }
-    }
-
-    /// Whether the straight line from `(a, za)` to `(b, zb)` (ground points, heights above
-    /// sea level) passes above every point of the surface's profile between them
-    /// ([`RayScene::profile`]), stopping at the first point in the way: the buildings first
-    /// (each face the line's ground track crosses), then the terrain and the obstacle raster
-    /// every half of their finest spacing. `near` is scratch space.
-    pub fn clear_above(
-        &self,
-        a: [f64; 2],
-        za: f64,
-        b: [f64; 2],
-        zb: f64,
-        near: &mut Vec<u32>,
-    ) -> bool {
-        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-        let rho = dx.hypot(dy);
-        if rho < 1e-9 {
-            return true;
-        }
-        let line = |t: f64| za + (zb - za) * t;
-        let surface = |t: f64| {
-            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
-            self.terrain_at(x, y) + self.heights.as_ref().map_or(0.0, |r| r.cell(x, y))
-        };
-        if let Some(prisms) = self.prisms {
-            let eps = 1e-9_f64.max(1e-6 / rho);
-            prisms.near_segment(a, b, near);
-            let mut ts = Vec::new();
-            for &k in near.iter() {
-                ts.clear();
-                prisms.crossings(k as usize, a, b, &mut ts);
-                for &t0 in &ts {
-                    for t in [t0 - eps, t0 + eps] {
-                        if t > 0.0 && t < 1.0 {
-                            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
-                            let top = self.terrain_at(x, y) + prisms.items()[k as usize].top;
-                            if prisms.contains(k as usize, x, y) && top >= line(t) {
-                                return false;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        let spacing = [self.terrain.as_ref(), self.heights.as_ref()]
-            .into_iter()
-            .flatten()
-            .map(|r| r.spacing())
-            .fold(f64::INFINITY, f64::min);
-        if spacing.is_finite() {
-            let n = ((rho / (0.5 * spacing)).ceil() as usize).max(1);
-            return (1..n).all(|k| {
-                let t = k as f64 / n as f64;
-                surface(t) < line(t)
-            });
-        }
-        true
     }
 
     /// The knife-edge loss (dB, ITU-R P.526 eq. (31)) of the profile point of largest `nu` on the
@@ -638,8 +613,17 @@ impl RayScene<'_> {
     }
 
     /// The geometry of the rays from the transmitter at `tx` (`[x, y, height above the
-    /// terrain]`) to the pixel centre `q`; `prof` is scratch space for the profile.
-    pub fn path(&self, tx: [f64; 3], q: [f64; 2], prof: &mut Vec<(f64, f64)>) -> PathGeometry {
+    /// terrain]`) to the pixel centre `q`; `sight` holds the scene's bounds and scratch space
+    /// ([`RayScene::sight`]).
+    ///
+    /// The profile is read only where it can change the answer: a building is left out where
+    /// its roof stays more than `2 (0.78) sqrt(lambda d / 8)` plus the Earth's bulge below both
+    /// the direct ray and the ground-reflected ray's legs. There every construction that reads
+    /// the profile gives it `nu < -0.78` (no loss): Bullington's and Deygout's (whose
+    /// principal edge, if below the direct ray, is within `0.78 sqrt(lambda d / 8)` of it),
+    /// and each leg's knife edge; and beyond line of sight only the points above the direct
+    /// ray set Bullington's slopes. The geometry is the whole profile's.
+    pub fn path(&self, tx: [f64; 3], q: [f64; 2], sight: &mut Sight) -> PathGeometry {
         let [xs, ys, hs] = tx;
         let (ex, ey) = (q[0] - xs, q[1] - ys);
         let rho = ex.hypot(ey);
@@ -664,8 +648,36 @@ impl RayScene<'_> {
         let zs = zt_s + hs;
         let zq = self.receiver_height(q);
         let d1 = (rho * rho + (zq - zs).powi(2)).sqrt().max(1e-3);
-        self.profile([xs, ys], q, prof);
         let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
+        let spec = if self.ground == RayGround::None || rho < 1e-6 {
+            None
+        } else {
+            self.specular(tx, q, zs, zq, lambda)
+        };
+        // The lowest a building must reach to matter (doc above), over t in lo..=hi.
+        let margin = 1.56 * (lambda * rho / 8.0).sqrt()
+            + rho * rho / (8.0 * crate::diffraction::EFFECTIVE_EARTH_RADIUS_M);
+        let direct = |t: f64| zs + (zq - zs) * t;
+        let floor = |lo: f64, hi: f64| {
+            let mut z = direct(lo).min(direct(hi));
+            if let Some(sp) = &spec {
+                let tb = sp.sb / rho;
+                let legs = |t: f64| {
+                    if t <= tb {
+                        zs + (sp.zb - zs) * t / tb.max(1e-12)
+                    } else {
+                        sp.zb + (zq - sp.zb) * (t - tb) / (1.0 - tb).max(1e-12)
+                    }
+                };
+                z = z.min(legs(lo)).min(legs(hi));
+                if lo <= tb && tb <= hi {
+                    z = z.min(sp.zb);
+                }
+            }
+            z - margin
+        };
+        self.profile_over([xs, ys], q, floor, sight);
+        let prof = &sight.prof;
         let (loss_db, edge) = self.diffraction_loss(prof, [xs, ys], q, zs, zq, lambda);
         let el_direct = match edge {
             Some((de, he)) => (he - zs).atan2(de),
@@ -680,25 +692,76 @@ impl RayScene<'_> {
             psi: 0.0,
             reflect: 0.0,
         };
-        if self.ground == RayGround::None || rho < 1e-6 {
+        let Some(Specular {
+            sb,
+            zb,
+            d2,
+            psi,
+            sigma,
+            half,
+        }) = spec
+        else {
             return g;
-        }
-        // The specular point on the ground line of the path's vertical plane (distance s along
-        // the ground from the site, height z): start from the flat-ground point of the heights
-        // above the terrain at both ends, then reflect the site in the straight line fitted to
-        // the terrain over the first Fresnel zone round the point (least squares: the
-        // reflecting area, not one facet of the DEM), and move the point to where the image's
-        // line to the receiver crosses it; four rounds. The terrain's standard deviation about
-        // that line is the roughness.
+        };
+        let (ux, uy) = (ex / rho, ey / rho);
+        let bare = self.obstacle_at(xs + ux * sb, ys + uy * sb) <= 0.0;
+        // Each leg's knife-edge loss over the profile (the reflecting zone left out): a leg
+        // the terrain or a building half hides fades the ray instead of cutting it.
+        let skip = self.half_spacing().max(half);
+        let legs = Self::leg_loss_db(prof, (0.0, zs), (sb, zb), sb, skip, lambda)
+            + Self::leg_loss_db(prof, (sb, zb), (rho, zq), sb, skip, lambda);
+        g.d2 = d2;
+        g.el_reflect = (zb - zs).atan2(sb);
+        g.psi = psi;
+        let k = crate::wavenumber(self.freq_hz);
+        let sigma = if self.terrain.is_some() {
+            sigma.hypot(self.roughness_m)
+        } else {
+            sigma
+        };
+        let rough = (-2.0 * (k * sigma * g.psi.sin()).powi(2)).exp();
+        g.reflect = if bare {
+            rough * db_to_amplitude(legs)
+        } else {
+            0.0
+        };
+        g
+    }
+
+    /// Half the terrain's spacing, m (1 without a terrain).
+    fn half_spacing(&self) -> f64 {
+        self.terrain.as_ref().map_or(1.0, |t| 0.5 * t.spacing())
+    }
+
+    /// The specular point of the ground reflection from the transmitter `tx` (`[x, y, height
+    /// above the terrain]`, at `zs` m above sea level) to the pixel centre `q` (receiver at
+    /// `zq`), on the ground line of the path's vertical plane; None where there is none.
+    ///
+    /// Start from the flat-ground point of the heights above the terrain at both ends, then
+    /// reflect the site in the straight line fitted to the terrain over the first Fresnel
+    /// zone round the point (least squares: the reflecting area, not one facet of the DEM),
+    /// and move the point to where the image's line to the receiver crosses it; four rounds.
+    /// The terrain's standard deviation about that line is the roughness.
+    fn specular(
+        &self,
+        tx: [f64; 3],
+        q: [f64; 2],
+        zs: f64,
+        zq: f64,
+        lambda: f64,
+    ) -> Option<Specular> {
+        let [xs, ys, hs] = tx;
+        let (ex, ey) = (q[0] - xs, q[1] - ys);
+        let rho = ex.hypot(ey);
         let (ux, uy) = (ex / rho, ey / rho);
         let ground_at = |s: f64| {
             let (x, y) = (xs + ux * s, ys + uy * s);
             self.terrain_at(x, y)
         };
-        let h = self.terrain.as_ref().map_or(1.0, |t| 0.5 * t.spacing());
+        let h = self.half_spacing();
         let (hs_g, hq_g) = (hs, zq - self.terrain_at(q[0], q[1]));
         if hq_g <= 0.0 {
-            return g;
+            return None;
         }
         let mut sb = rho * hs_g / (hs_g + hq_g);
         let mut psi = ((hs_g + hq_g) / rho).atan();
@@ -715,7 +778,7 @@ impl RayScene<'_> {
             let dist_t = nx * (0.0 - sb) + nz * (zs - zb);
             let dist_r = nx * (rho - sb) + nz * (zq - zb);
             if dist_t <= 0.0 || dist_r <= 0.0 {
-                return g;
+                return None;
             }
             image = (-2.0 * dist_t * nx, zs - 2.0 * dist_t * nz);
             let t = dist_t / (dist_t + dist_r);
@@ -724,34 +787,20 @@ impl RayScene<'_> {
             psi = ((dist_t + dist_r) / d2).clamp(-1.0, 1.0).asin();
             line = (dist_t, dist_r, zb, sigma, a);
             if !(s_new > 0.0 && s_new < rho) {
-                return g;
+                return None;
             }
             sb = s_new;
         }
-        let (dist_t, dist_r, zb, sigma, a) = line;
+        let (dist_t, dist_r, zb, sigma, half) = line;
         let d2 = ((rho - image.0).powi(2) + (zq - image.1).powi(2)).sqrt();
-        let bare = self.obstacle_at(xs + ux * sb, ys + uy * sb) <= 0.0;
-        // Each leg's knife-edge loss over the profile (the reflecting zone left out): a leg
-        // the terrain or a building half hides fades the ray instead of cutting it.
-        let skip = h.max(a);
-        let legs = Self::leg_loss_db(prof, (0.0, zs), (sb, zb), sb, skip, lambda)
-            + Self::leg_loss_db(prof, (sb, zb), (rho, zq), sb, skip, lambda);
-        g.d2 = d2;
-        g.el_reflect = (zb - zs).atan2(sb);
-        g.psi = ((dist_t + dist_r) / d2).clamp(-1.0, 1.0).asin();
-        let k = crate::wavenumber(self.freq_hz);
-        let sigma = if self.terrain.is_some() {
-            sigma.hypot(self.roughness_m)
-        } else {
-            sigma
-        };
-        let rough = (-2.0 * (k * sigma * g.psi.sin()).powi(2)).exp();
-        g.reflect = if bare {
-            rough * db_to_amplitude(legs)
-        } else {
-            0.0
-        };
-        g
+        Some(Specular {
+            sb,
+            zb,
+            d2,
+            psi: ((dist_t + dist_r) / d2).clamp(-1.0, 1.0).asin(),
+            sigma,
+            half,
+        })
     }
 
     /// Half the length (m) along the path of the first Fresnel zone's footprint on the ground
@@ -829,7 +878,7 @@ impl RayScene<'_> {
         g_direct: f64,
         g_reflect: f64,
     ) -> PixelTerms {
-        let geom = self.path(tx.position_m, q, &mut Vec::new());
+        let geom = self.path(tx.position_m, q, &mut self.sight(self.bounds()));
         self.terms_of(&geom, tx, q, g_direct, g_reflect)
     }
 
@@ -837,12 +886,13 @@ impl RayScene<'_> {
     /// parallel.
     pub fn geometries(&self, tx: [f64; 3]) -> Vec<PathGeometry> {
         let w = self.x_m.len();
+        let bounds = self.bounds();
         (0..self.y_m.len())
             .into_par_iter()
             .flat_map_iter(|i| {
-                let mut prof = Vec::new();
+                let mut sight = self.sight(bounds);
                 (0..w)
-                    .map(|j| self.path(tx, [self.x_m[j], self.y_m[i]], &mut prof))
+                    .map(|j| self.path(tx, [self.x_m[j], self.y_m[i]], &mut sight))
                     .collect::<Vec<_>>()
             })
             .collect()
@@ -1278,7 +1328,7 @@ mod tests {
             values: dem.view(),
             origin_step: [0.0, 50.0, -50.0, 50.0],
         });
-        let geo = s.path(TX.position_m, [1000.0, 0.0], &mut Vec::new());
+        let geo = s.path(TX.position_m, [1000.0, 0.0], &mut s.sight(s.bounds()));
         assert!(geo.reflect < 0.01, "{}", geo.reflect); // faded by the ridge: 40 dB or more
         assert!(geo.loss_db > 10.0, "{}", geo.loss_db);
         // The gain is taken toward the ridge's Bullington point: upward, not along the line.

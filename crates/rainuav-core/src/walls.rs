@@ -26,6 +26,7 @@ use rayon::prelude::*;
 
 use crate::error::{CoreError, Result};
 use crate::rays::{RayPolarization, RayScene};
+use crate::sight::Sight;
 
 /// A wall: a footprint edge `a -> b` (outward normal on its right), from `base` to `top` m
 /// above the terrain, of complex relative permittivity `eps` (`eps_r - j sigma / (omega
@@ -175,15 +176,16 @@ impl RayScene<'_> {
             "use fewer buildings or a smaller map",
             visits * size_of::<WallRay>(),
         )?;
+        let bounds = self.bounds();
         Ok(walls
             .par_iter()
             .zip(plan.par_iter())
             .filter(|(_, lit)| **lit)
             .flat_map_iter(|(w, _)| {
-                let mut near = Vec::new();
+                let mut sight = self.sight(bounds);
                 self.wall_rows(site, w, sorted)
                     .flat_map(|(i, j0, j1)| (j0..j1).map(move |j| (i, j)))
-                    .filter_map(|(i, j)| self.wall_ray(site, zs, w, i, j, &mut near))
+                    .filter_map(|(i, j)| self.wall_ray(site, zs, w, i, j, &mut sight))
                     .collect::<Vec<_>>()
             })
             .collect())
@@ -257,7 +259,7 @@ impl RayScene<'_> {
         w: &Wall,
         i: usize,
         j: usize,
-        near: &mut Vec<u32>,
+        sight: &mut Sight,
     ) -> Option<WallRay> {
         let (n, len) = normal(w)?;
         let q = [self.x_m[j], self.y_m[i]];
@@ -282,8 +284,8 @@ impl RayScene<'_> {
         }
         let rho = (q[0] - img[0]).hypot(q[1] - img[1]);
         let (rho1, rho2) = (u * rho, (1.0 - u) * rho);
-        if !(self.leg_seen(near, [site[0], site[1]], zs, p, zp, rho1)
-            && self.leg_seen(near, q, zq, p, zp, rho2))
+        if !(leg_seen(sight, [site[0], site[1]], zs, p, zp, rho1)
+            && leg_seen(sight, q, zq, p, zp, rho2))
         {
             return None;
         }
@@ -301,29 +303,21 @@ impl RayScene<'_> {
             length_m: length,
         })
     }
+}
 
-    /// Whether the straight leg from `(from, z_from)` to the specular point `(p, zp)`, `rho`
-    /// apart horizontally, clears the profile (stopping [`LEG_GAP_M`] short of the wall):
-    /// [`RayScene::clear_above`] on the leg.
-    fn leg_seen(
-        &self,
-        near: &mut Vec<u32>,
-        from: [f64; 2],
-        z_from: f64,
-        p: [f64; 2],
-        zp: f64,
-        rho: f64,
-    ) -> bool {
-        if rho <= LEG_GAP_M {
-            return true;
-        }
-        let f = 1.0 - LEG_GAP_M / rho;
-        let end = [
-            from[0] + f * (p[0] - from[0]),
-            from[1] + f * (p[1] - from[1]),
-        ];
-        self.clear_above(from, z_from, end, z_from + (zp - z_from) * f, near)
+/// Whether the straight leg from `(from, z_from)` to the specular point `(p, zp)`, `rho`
+/// apart horizontally, clears the profile (stopping [`LEG_GAP_M`] short of the wall):
+/// [`Sight::clear`] on the leg.
+fn leg_seen(sight: &mut Sight, from: [f64; 2], z_from: f64, p: [f64; 2], zp: f64, rho: f64) -> bool {
+    if rho <= LEG_GAP_M {
+        return true;
     }
+    let f = 1.0 - LEG_GAP_M / rho;
+    let end = [
+        from[0] + f * (p[0] - from[0]),
+        from[1] + f * (p[1] - from[1]),
+    ];
+    sight.clear(from, z_from, end, z_from + (zp - z_from) * f)
 }
 
 /// The wall's outward unit normal (right of `a -> b`) and length; None for a point.

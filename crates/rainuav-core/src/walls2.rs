@@ -27,6 +27,7 @@ use std::collections::HashMap;
 
 use crate::error::Result;
 use crate::rays::RayScene;
+use crate::sight::Sight;
 use crate::walls::{LEG_GAP_M, Wall, WallRay, columns, interval, normal, wall_reflectance};
 
 /// The longest twice-reflected ray, m (unfolded length).
@@ -147,10 +148,11 @@ impl RayScene<'_> {
         let zs = self.terrain_at(site[0], site[1]) + site[2];
         let pairs = self.wall_pairs(site, zs, walls);
         let sorted = self.x_m.windows(2).all(|w| w[0] < w[1]);
+        let bounds = self.bounds();
         Ok(pairs
             .par_iter()
             .flat_map_iter(|&(k1, k2)| {
-                let mut near = Vec::new();
+                let mut sight = self.sight(bounds);
                 let (w1, w2) = (&walls[k1], &walls[k2]);
                 let (n1, _) = normal(w1).unwrap_or(([0.0, 0.0], 0.0));
                 let (n2, _) = normal(w2).unwrap_or(([0.0, 0.0], 0.0));
@@ -171,7 +173,7 @@ impl RayScene<'_> {
                 });
                 rows.flat_map(|(i, j0, j1)| (j0..j1).map(move |j| (i, j)))
                     .filter_map(|(i, j)| {
-                        self.ray2(site, zs, (w1, n1, i1), (w2, n2, i2), i, j, &mut near)
+                        self.ray2(site, zs, (w1, n1, i1), (w2, n2, i2), i, j, &mut sight)
                     })
                     .collect::<Vec<_>>()
             })
@@ -188,7 +190,7 @@ impl RayScene<'_> {
         (w2, n2, i2): (&Wall, [f64; 2], [f64; 2]),
         i: usize,
         j: usize,
-        near: &mut Vec<u32>,
+        sight: &mut Sight,
     ) -> Option<WallRay> {
         let q = [self.x_m[j], self.y_m[i]];
         let s = [site[0], site[1]];
@@ -231,7 +233,7 @@ impl RayScene<'_> {
             }
         }
         // The legs, each stopping LEG_GAP_M short of the walls it touches.
-        let leg = |near: &mut Vec<u32>,
+        let leg = |sight: &mut Sight,
                    a: [f64; 2],
                    za: f64,
                    b: [f64; 2],
@@ -247,17 +249,11 @@ impl RayScene<'_> {
                 if gb { 1.0 - LEG_GAP_M / len } else { 1.0 },
             );
             let at = |f: f64| [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])];
-            self.clear_above(
-                at(fa),
-                za + fa * (zb - za),
-                at(fb),
-                za + fb * (zb - za),
-                near,
-            )
+            sight.clear(at(fa), za + fa * (zb - za), at(fb), za + fb * (zb - za))
         };
-        if !(leg(near, s, zs, p1, z1, h1, false, true)
-            && leg(near, p1, z1, p2, z2, h2, true, true)
-            && leg(near, p2, z2, q, zq, h3, true, false))
+        if !(leg(sight, s, zs, p1, z1, h1, false, true)
+            && leg(sight, p1, z1, p2, z2, h2, true, true)
+            && leg(sight, p2, z2, q, zq, h3, true, false))
         {
             return None;
         }

@@ -1,0 +1,115 @@
+//! Line of sight among buildings, terrain and the obstacle raster (docs/physics.md section 12):
+//! whether a straight leg of a ray clears everything between its ends.
+//!
+//! A [`Sight`] holds the scene's upper bounds (the highest terrain node, the tallest roof and
+//! raster obstacle) found once, and its scratch space, so that the millions of legs a map of
+//! reflected and diffracted rays checks read only the part of each leg low enough to meet
+//! something: above the highest terrain plus the tallest obstacle nothing can stand in a
+//! line's way, and a building whose roof is below the line where it passes under the line's
+//! ground track is skipped without reading its footprint. The answers are those of checking
+//! the whole leg: the bounds are exact upper bounds (bilinear terrain never exceeds its
+//! highest node).
+
+use crate::rays::RayScene;
+
+/// Line-of-sight checks on one scene, with its bounds and scratch space (one per thread).
+pub struct Sight<'s, 'a> {
+    scene: &'s RayScene<'a>,
+    /// The highest terrain node, m above sea level (0 without a terrain).
+    pub(crate) terrain_top: f64,
+    /// The highest the terrain plus the obstacle raster reaches, m above sea level.
+    raster_top: f64,
+    pub(crate) near: Vec<u32>,
+    pub(crate) ts: Vec<f64>,
+    /// A path's profile ([`RayScene::profile_over`]).
+    pub(crate) prof: Vec<(f64, f64)>,
+}
+
+/// The scene's bounds that a [`Sight`] prunes with: `(terrain_top, raster_top)`.
+#[derive(Debug, Clone, Copy)]
+pub struct Bounds(f64, f64);
+
+impl Bounds {
+    /// The highest terrain node, m above sea level (0 without a terrain).
+    pub fn terrain_top(&self) -> f64 {
+        self.0
+    }
+}
+
+impl<'a> RayScene<'a> {
+    /// The scene's upper bounds for [`Sight`]s (a pass over the rasters: find them once a
+    /// map, not once a leg).
+    pub fn bounds(&self) -> Bounds {
+        let top = |r: Option<&crate::rays::Raster>| {
+            r.map_or(0.0, |r| r.values.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+        };
+        let terrain = top(self.terrain.as_ref());
+        Bounds(terrain, terrain + top(self.heights.as_ref()).max(0.0))
+    }
+
+    /// Line-of-sight checks with the bounds `b` ([`RayScene::bounds`]).
+    pub fn sight<'s>(&'s self, b: Bounds) -> Sight<'s, 'a> {
+        Sight {
+            scene: self,
+            terrain_top: b.0,
+            raster_top: b.1,
+            near: Vec::new(),
+            ts: Vec::new(),
+            prof: Vec::new(),
+        }
+    }
+}
+
+impl Sight<'_, '_> {
+    /// Whether the straight line from `(a, za)` to `(b, zb)` (ground points, heights above
+    /// sea level) passes above every point of the surface's profile between them
+    /// ([`RayScene::profile`]): the buildings first (each face the line's ground track
+    /// crosses, read just inside it), then the terrain and the obstacle raster every half of
+    /// their finest spacing, stopping at the first point in the way.
+    pub fn clear(&mut self, a: [f64; 2], za: f64, b: [f64; 2], zb: f64) -> bool {
+        let s = self.scene;
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let rho = dx.hypot(dy);
+        if rho < 1e-9 {
+            return true;
+        }
+        let line = |t: f64| za + (zb - za) * t;
+        if let Some(prisms) = s.prisms {
+            let eps = 1e-9_f64.max(1e-6 / rho);
+            let lift = self.terrain_top;
+            prisms.near_segment_under((a, za), (b, zb), lift, &mut self.near);
+            for &k in &self.near {
+                self.ts.clear();
+                prisms.crossings(k as usize, a, b, &mut self.ts);
+                for &t0 in &self.ts {
+                    for t in [t0 - eps, t0 + eps] {
+                        if t > 0.0 && t < 1.0 {
+                            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+                            let top = s.terrain_at(x, y) + prisms.items()[k as usize].top;
+                            if top >= line(t) && prisms.contains(k as usize, x, y) {
+                                return false;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let spacing = [s.terrain.as_ref(), s.heights.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(|r| r.spacing())
+            .fold(f64::INFINITY, f64::min);
+        if !spacing.is_finite() || za.min(zb) > self.raster_top {
+            return true;
+        }
+        let surface = |t: f64| {
+            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+            s.terrain_at(x, y) + s.heights.as_ref().map_or(0.0, |r| r.cell(x, y))
+        };
+        let n = ((rho / (0.5 * spacing)).ceil() as usize).max(1);
+        (1..n).all(|k| {
+            let t = k as f64 / n as f64;
+            line(t) > self.raster_top || surface(t) < line(t)
+        })
+    }
+}
