@@ -66,6 +66,9 @@ struct Image {
     n: [f64; 2],
     top: f64,
     eps: Complex64,
+    /// The legs site -> wall -> corner are clear exactly where the height at the corner
+    /// exceeds this ([`Sight::lowest`]).
+    z_min: f64,
 }
 
 /// One convex corner: position, the unit directions of its two faces (face 0 first, the
@@ -77,6 +80,8 @@ struct Corner {
     ext: f64,
     top: f64,
     prism: usize,
+    /// The leg from the site is clear exactly where its height at the corner exceeds this.
+    z_min: f64,
 }
 
 /// Counter-clockwise angle from `a` to `b` (unit or not), in `[0, 2 pi)`.
@@ -96,6 +101,18 @@ fn material_left(r: usize, ring: &[[f64; 2]]) -> bool {
         })
         .sum();
     (r == 0) == (area > 0.0)
+}
+
+impl Corner {
+    /// The point [`CORNER_GAP_M`] outside the corner along its exterior bisector, where the
+    /// legs' visibility checks end.
+    fn outside(&self) -> [f64; 2] {
+        let (bs, bc) = (0.5 * self.ext).sin_cos();
+        [
+            self.v[0] + CORNER_GAP_M * (self.a0[0] * bc - self.a0[1] * bs),
+            self.v[1] + CORNER_GAP_M * (self.a0[0] * bs + self.a0[1] * bc),
+        ]
+    }
 }
 
 fn unit(d: [f64; 2]) -> Option<[f64; 2]> {
@@ -131,6 +148,7 @@ impl RayScene<'_> {
                         ext,
                         top,
                         prism: k,
+                        z_min: f64::INFINITY,
                     });
                 }
             }
@@ -187,11 +205,47 @@ impl RayScene<'_> {
                         n,
                         top: prisms.items()[k].top,
                         eps: eps[k],
+                        z_min: f64::INFINITY,
                     });
                 }
             }
         }
         out
+    }
+
+    /// The heights at corner `c` above which the legs from the site (at `zs`) reach it: the
+    /// direct leg into `c.z_min`, and site -> wall -> corner into each image's (module docs).
+    /// They depend on the height at the corner alone (where the unfolded ray meets the edge),
+    /// not on the pixel: found once a corner, each a [`Sight::lowest`].
+    fn first_legs(
+        &self,
+        (site, zs): ([f64; 2], f64),
+        c: &mut Corner,
+        images: &mut [Image],
+        sight: &mut Sight,
+    ) {
+        let out = c.outside();
+        let z_lo = self.terrain_at(c.v[0], c.v[1]);
+        c.z_min = sight.lowest((site, zs, 0.0), (out, 0.0, 1.0), z_lo);
+        for m in images {
+            let r1 = (m.at[0] - c.v[0]).hypot(m.at[1] - c.v[1]);
+            if r1 < 1e-6 {
+                continue;
+            }
+            // The reflection point's height is zs (1 - f) + f z at a height z at the corner.
+            let f = m.d_sp / r1;
+            let g = CORNER_GAP_M;
+            let before = |a: [f64; 2], b: [f64; 2], f: f64| {
+                [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
+            };
+            let (d1, d2) = (m.d_sp.max(g), (r1 - m.d_sp).max(g));
+            let (u1, u2) = (1.0 - g / d1, g / d2);
+            let (p1, p2) = (before(site, m.p, u1), before(m.p, out, u2));
+            let leg1 = sight.lowest((site, zs, 0.0), (p1, zs - u1 * f * zs, u1 * f), z_lo);
+            let at_p2 = ((1.0 - u2) * zs * (1.0 - f), (1.0 - u2) * f + u2);
+            let leg2 = sight.lowest((p2, at_p2.0, at_p2.1), (out, 0.0, 1.0), z_lo);
+            m.z_min = leg1.max(leg2);
+        }
     }
 
     /// The ray corner `c` diffracts from the site (`zs` m above sea level) to the pixel `q`
@@ -228,16 +282,12 @@ impl RayScene<'_> {
         if zv < zt || zv > zt + c.top {
             return None;
         }
-        let (bs, bc) = (0.5 * c.ext).sin_cos();
-        let out = [
-            c.v[0] + CORNER_GAP_M * (c.a0[0] * bc - c.a0[1] * bs),
-            c.v[1] + CORNER_GAP_M * (c.a0[0] * bs + c.a0[1] * bc),
-        ];
+        let out = c.outside();
         // The legs: site -> (wall ->) corner -> pixel.
         let mut reflectance = 1.0;
         let first = match image {
             None => {
-                if !sight.clear(site, zs, out, zv) {
+                if zv <= c.z_min {
                     return None;
                 }
                 (c.v, zv, r1)
@@ -248,17 +298,7 @@ impl RayScene<'_> {
                 if zp < zt || zp > zt + m.top {
                     return None;
                 }
-                let g = CORNER_GAP_M;
-                let before = |a: [f64; 2], b: [f64; 2], f: f64| {
-                    [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
-                };
-                let (d1, d2) = (m.d_sp.max(g), (r1 - m.d_sp).max(g));
-                let p1 = before(site, m.p, 1.0 - g / d1);
-                let p2 = before(m.p, out, g / d2);
-                let z_at = |f: f64, za: f64, zb: f64| za + f * (zb - za);
-                if !(sight.clear(site, zs, p1, z_at(1.0 - g / d1, zs, zp))
-                    && sight.clear(p2, z_at(g / d2, zp, zv), out, zv))
-                {
+                if zv <= m.z_min {
                     return None;
                 }
                 let k = [m.p[0] - site[0], m.p[1] - site[1], zp - zs];
@@ -347,8 +387,9 @@ impl RayScene<'_> {
                     if sight.clear(s, zs, q, zq) {
                         continue;
                     }
-                    // The buildings in the way of the straight line.
-                    prisms.near_segment_under((s, zs), (q, zq), bounds.terrain_top(), &mut hits);
+                    // The buildings in the way of the straight line: among those the check
+                    // just read.
+                    hits.clone_from(&sight.near);
                     let (dx, dy) = (q[0] - s[0], q[1] - s[1]);
                     for &k in &hits {
                         ts.clear();
@@ -366,8 +407,9 @@ impl RayScene<'_> {
                             self.corners_of(k as usize, &mut corners);
                             corners
                                 .into_iter()
-                                .map(|c| {
-                                    let imgs = self.images_of(s, &c, eps, &mut scratch);
+                                .map(|mut c| {
+                                    let mut imgs = self.images_of(s, &c, eps, &mut scratch);
+                                    self.first_legs((s, zs), &mut c, &mut imgs, &mut sight);
                                     (c, imgs)
                                 })
                                 .collect()

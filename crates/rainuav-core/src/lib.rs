@@ -16,6 +16,7 @@
 //! assert!(gamma / itu > 0.8 && gamma / itu < 1.3, "{}", gamma / itu);
 //! ```
 
+mod bvh;
 pub mod corners;
 pub mod diffraction;
 pub mod drops;

@@ -5,6 +5,7 @@
 //! A bucket grid over the footprints' bounding boxes finds the prisms near a point or along
 //! a segment, so a path's profile reads only the buildings it can cross.
 
+use crate::bvh::Bvh;
 use crate::error::{CoreError, Result};
 
 /// A box-shaped building: `[x0, x1, y0, y1, height]`, metres.
@@ -29,6 +30,7 @@ pub struct Prisms {
     rings: Vec<[usize; 2]>,
     items: Vec<Prism>,
     grid: Buckets,
+    bvh: Bvh,
     /// The tallest roof above the terrain, m (0: none).
     top_max: f64,
 }
@@ -43,8 +45,6 @@ struct Buckets {
     ny: usize,
     starts: Vec<usize>,
     ids: Vec<u32>,
-    /// Each bucket's tallest roof above the terrain, m (0: empty).
-    tops: Vec<f64>,
 }
 
 impl Buckets {
@@ -79,7 +79,6 @@ impl Buckets {
             ny,
             starts: vec![0; nx * ny + 1],
             ids: Vec::new(),
-            tops: vec![0.0; nx * ny],
         };
         let mut counts = vec![0usize; nx * ny];
         for p in items {
@@ -103,7 +102,6 @@ impl Buckets {
                 for c in c0..=c1 {
                     g.ids[fill[r * nx + c]] = k as u32;
                     fill[r * nx + c] += 1;
-                    g.tops[r * nx + c] = g.tops[r * nx + c].max(p.top);
                 }
             }
         }
@@ -205,11 +203,15 @@ impl Prisms {
             .collect();
         let grid = Buckets::build(&items)?;
         let top_max = items.iter().map(|p| p.top).fold(0.0, f64::max);
+        let boxes: Vec<[f64; 4]> = items.iter().map(|p| p.bbox).collect();
+        let tops: Vec<f64> = items.iter().map(|p| p.top).collect();
+        let bvh = Bvh::build(&boxes, &tops);
         Ok(Prisms {
             xy,
             rings,
             items,
             grid,
+            bvh,
             top_max,
         })
     }
@@ -355,57 +357,30 @@ impl Prisms {
         if self.items.is_empty() || floor(0.0, 1.0) > self.top_max + lift {
             return;
         }
-        let g = &self.grid;
         let d = [b[0] - a[0], b[1] - a[1]];
         // A micrometre's tolerance along the segment keeps a box it grazes.
         let tol = 1e-6 / d[0].hypot(d[1]).max(1e-9);
-        // The parameters where the segment is within [v0, v1] along axis `ax`, within lo..=hi.
-        let slab = |ax: usize, v0: f64, v1: f64, lo: f64, hi: f64| {
-            if d[ax].abs() < 1e-12 {
-                let inside = a[ax] >= v0 - 1e-6 && a[ax] <= v1 + 1e-6;
-                return if inside { (lo, hi) } else { (1.0, 0.0) };
+        let inv = d.map(|v| if v.abs() < 1e-12 { f64::INFINITY } else { 1.0 / v });
+        // The parameters in 0..=1 where the segment is within the box.
+        let inside = |bb: &[f64; 4]| {
+            let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+            for ax in 0..2 {
+                let (v0, v1) = (bb[2 * ax], bb[2 * ax + 1]);
+                if inv[ax].is_infinite() {
+                    if a[ax] < v0 - 1e-6 || a[ax] > v1 + 1e-6 {
+                        return None;
+                    }
+                } else {
+                    let (u, v) = ((v0 - a[ax]) * inv[ax], (v1 - a[ax]) * inv[ax]);
+                    lo = lo.max(u.min(v) - tol);
+                    hi = hi.min(u.max(v) + tol);
+                }
             }
-            let (u, v) = ((v0 - a[ax]) / d[ax], (v1 - a[ax]) / d[ax]);
-            (lo.max(u.min(v) - tol), hi.min(u.max(v) + tol))
+            (lo <= hi).then_some((lo.max(0.0), hi.min(1.0)))
         };
-        let (r0, r1) = (g.row(a[1].min(b[1])), g.row(a[1].max(b[1])));
-        for r in r0..=r1 {
-            // The part of the segment within the bucket row's band of y (the outer rows
-            // extend to the grid's edge: their buckets hold what lies beyond it).
-            let y0 = g.origin[1] + r as f64 * g.size;
-            let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
-            if d[1].abs() > 1e-12 {
-                let (u, v) = ((y0 - a[1]) / d[1], (y0 + g.size - a[1]) / d[1]);
-                if r > r0 {
-                    t0 = t0.max(u.min(v));
-                }
-                if r < r1 {
-                    t1 = t1.min(u.max(v));
-                }
-            }
-            let (xa, xb) = (a[0] + t0 * d[0], a[0] + t1 * d[0]);
-            let (c0, c1) = (g.col(xa.min(xb)), g.col(xa.max(xb)));
-            for c in c0..=c1 {
-                // Where the segment runs within the bucket (the outer columns extend to
-                // infinity, as the outer rows do).
-                let left = g.origin[0] + c as f64 * g.size;
-                let x0 = if c == 0 { f64::NEG_INFINITY } else { left };
-                let x1 = if c + 1 == g.nx { f64::INFINITY } else { left + g.size };
-                let (lo, hi) = slab(0, x0, x1, t0, t1);
-                if lo > hi || g.tops[r * g.nx + c] + lift < floor(lo.max(0.0), hi.min(1.0)) {
-                    continue;
-                }
-                out.extend_from_slice(g.bucket(r, c));
-            }
-        }
+        let item = |k: u32| (self.items[k as usize].bbox, self.items[k as usize].top);
+        self.bvh.along(inside, floor, item, lift, out);
         out.sort_unstable();
-        out.dedup();
-        out.retain(|&k| {
-            let bb = self.items[k as usize].bbox;
-            let (lo, hi) = slab(0, bb[0], bb[1], 0.0, 1.0);
-            let (lo, hi) = slab(1, bb[2], bb[3], lo, hi);
-            lo <= hi && self.items[k as usize].top + lift >= floor(lo.max(0.0), hi.min(1.0))
-        });
     }
 
     /// The prisms whose bounding box meets the box `[x0, x1, y0, y1]`, each once, in index

@@ -65,7 +65,8 @@ impl Sight<'_, '_> {
     /// sea level) passes above every point of the surface's profile between them
     /// ([`RayScene::profile`]): the buildings first (each face the line's ground track
     /// crosses, read just inside it), then the terrain and the obstacle raster every half of
-    /// their finest spacing, stopping at the first point in the way.
+    /// their finest spacing, stopping at the first point in the way. Afterwards `near` holds
+    /// the buildings that could be in the way.
     pub fn clear(&mut self, a: [f64; 2], za: f64, b: [f64; 2], zb: f64) -> bool {
         let s = self.scene;
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -111,5 +112,72 @@ impl Sight<'_, '_> {
             let t = k as f64 / n as f64;
             line(t) > self.raster_top || surface(t) < line(t)
         })
+    }
+}
+
+impl Sight<'_, '_> {
+    /// The height `m` that splits the lines from `(a, pa + qa z)` to `(b, pb + qb z)` (ground
+    /// points; heights above sea level linear in `z`, `qa, qb >= 0`, not both 0): for every
+    /// `z >= z_lo`, [`Sight::clear`] holds for the line at `z` exactly where `z > m`
+    /// (`-inf`: nothing in the way). Raising `z` raises the line everywhere between the ends,
+    /// so each point of the profile asks for a least `z`; `m` is the largest such ask. What
+    /// the line at `z_lo` already clears is not read.
+    pub fn lowest(
+        &mut self,
+        (a, pa, qa): ([f64; 2], f64, f64),
+        (b, pb, qb): ([f64; 2], f64, f64),
+        z_lo: f64,
+    ) -> f64 {
+        let s = self.scene;
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let rho = dx.hypot(dy);
+        if rho < 1e-9 {
+            return f64::NEG_INFINITY;
+        }
+        // The line at z is p(t) + q(t) z; the least z over a point of height h is (h - p) / q.
+        let ask = |t: f64, h: f64| {
+            let (p, q) = (pa + (pb - pa) * t, qa + (qb - qa) * t);
+            (h - p) / q
+        };
+        let (za, zb) = (pa + qa * z_lo, pb + qb * z_lo);
+        let low = |t: f64| za + (zb - za) * t;
+        let mut m = f64::NEG_INFINITY;
+        if let Some(prisms) = s.prisms {
+            let eps = 1e-9_f64.max(1e-6 / rho);
+            let lift = self.terrain_top;
+            prisms.near_segment_under((a, za), (b, zb), lift, &mut self.near);
+            for &k in &self.near {
+                self.ts.clear();
+                prisms.crossings(k as usize, a, b, &mut self.ts);
+                for &t0 in &self.ts {
+                    for t in [t0 - eps, t0 + eps] {
+                        if t > 0.0 && t < 1.0 {
+                            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+                            let top = s.terrain_at(x, y) + prisms.items()[k as usize].top;
+                            if ask(t, top) > m && prisms.contains(k as usize, x, y) {
+                                m = ask(t, top);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let spacing = [s.terrain.as_ref(), s.heights.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(|r| r.spacing())
+            .fold(f64::INFINITY, f64::min);
+        if spacing.is_finite() && za.min(zb) <= self.raster_top {
+            let n = ((rho / (0.5 * spacing)).ceil() as usize).max(1);
+            for k in 1..n {
+                let t = k as f64 / n as f64;
+                if low(t) <= self.raster_top {
+                    let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+                    let h = s.terrain_at(x, y) + s.heights.as_ref().map_or(0.0, |r| r.cell(x, y));
+                    m = m.max(ask(t, h));
+                }
+            }
+        }
+        m
     }
 }
