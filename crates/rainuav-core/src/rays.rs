@@ -75,8 +75,9 @@ impl Raster<'_> {
         let (rows, cols) = self.values.dim();
         let fx = ((x - x0) / dx).clamp(0.0, (cols - 1) as f64);
         let fy = ((y - y0) / dy).clamp(0.0, (rows - 1) as f64);
-        let j = (fx.floor() as usize).min(cols.saturating_sub(2));
-        let i = (fy.floor() as usize).min(rows.saturating_sub(2));
+        // Truncation is the floor of these non-negative numbers (and no call into libm).
+        let j = (fx as usize).min(cols.saturating_sub(2));
+        let i = (fy as usize).min(rows.saturating_sub(2));
         let (tx, ty) = (fx - j as f64, fy - i as f64);
         let j1 = (j + 1).min(cols - 1);
         let i1 = (i + 1).min(rows - 1);
@@ -505,30 +506,77 @@ impl RayScene<'_> {
             let (x, y) = (a[0] + t * dx, a[1] + t * dy);
             (t * rho, self.terrain_at(x, y) + self.obstacle_at(x, y))
         };
+        // The samples: the terrain and the obstacle raster (the buildings' roofs over them
+        // below), and the terrain alone on the terrain's own grid.
+        let ground = &mut sight.ground;
+        ground.clear();
         let spacing = [self.terrain.as_ref(), self.heights.as_ref()]
             .into_iter()
             .flatten()
             .map(|r| r.spacing())
             .fold(f64::INFINITY, f64::min);
-        if spacing.is_finite() {
-            let n = ((rho / (0.5 * spacing)).ceil() as usize).max(1);
-            out.extend((1..n).map(|k| at(k as f64 / n as f64)));
+        let n = if spacing.is_finite() {
+            ((rho / (0.5 * spacing)).ceil() as usize).max(1)
+        } else {
+            0
+        };
+        for k in 1..n {
+            let t = k as f64 / n as f64;
+            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+            let z = self.terrain_at(x, y);
+            ground.push((t * rho, z));
+            out.push((t * rho, z + self.heights.as_ref().map_or(0.0, |r| r.cell(x, y))));
+        }
+        if let Some(tr) = &self.terrain
+            && ((rho / (0.5 * tr.spacing())).ceil() as usize).max(1) != n
+        {
+            let m = ((rho / (0.5 * tr.spacing())).ceil() as usize).max(1);
+            ground.clear();
+            ground.extend((1..m).map(|k| {
+                let t = k as f64 / m as f64;
+                (t * rho, self.terrain_at(a[0] + t * dx, a[1] + t * dy))
+            }));
         }
         let before = out.len();
         if let Some(prisms) = self.prisms {
             // Each face a building's footprint crosses, read just inside it (a roof is flat, so
-            // its faces are where the extremes of the construction lie).
+            // its faces are where the extremes of the construction lie); the samples within
+            // its footprint (between crossings, inside at the middle) rise to its roof.
             let eps = 1e-9_f64.max(1e-6 / rho);
             let (near, ts) = (&mut sight.near, &mut sight.ts);
             prisms.near_segment_over(a, b, floor, sight.terrain_top, near);
             for &k in near.iter() {
+                let (k, top) = (k as usize, prisms.items()[k as usize].top);
                 ts.clear();
-                prisms.crossings(k as usize, a, b, ts);
+                prisms.crossings(k, a, b, ts);
                 for &t0 in ts.iter() {
                     for t in [t0 - eps, t0 + eps] {
                         let (x, y) = (a[0] + t * dx, a[1] + t * dy);
-                        if t > 0.0 && t < 1.0 && prisms.contains(k as usize, x, y) {
+                        if t > 0.0 && t < 1.0 && prisms.contains(k, x, y) {
                             out.push(at(t));
+                        }
+                    }
+                }
+                if n < 2 {
+                    continue;
+                }
+                ts.sort_by(f64::total_cmp);
+                ts.insert(0, 0.0);
+                ts.push(1.0);
+                for w in ts.windows(2) {
+                    let (t0, t1) = (w[0], w[1]);
+                    let mid = 0.5 * (t0 + t1);
+                    if t1 <= t0 || !prisms.contains(k, a[0] + mid * dx, a[1] + mid * dy) {
+                        continue;
+                    }
+                    // The samples i / n strictly between t0 and t1 (i in 1..n).
+                    let (lo, hi) = ((t0 * n as f64) as usize + 1, (t1 * n as f64).ceil() as usize);
+                    for i in lo..hi.min(n) {
+                        let t = i as f64 / n as f64;
+                        if t > t0 && t < t1 {
+                            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+                            let roof = self.terrain_at(x, y) + top;
+                            out[i - 1].1 = out[i - 1].1.max(roof);
                         }
                     }
                 }
@@ -569,10 +617,13 @@ impl RayScene<'_> {
     /// largest `nu`) decides the method: on terrain, P.526's Bullington construction with its
     /// correction for real terrain; on a building or the obstacle raster, Deygout's isolated
     /// edges without it, plus the correction of the terrain's own Bullington loss where a terrain
-    /// is under the path (0 where the terrain alone clears the path).
+    /// is under the path (0 where the terrain alone clears the path), over `ground`, the
+    /// terrain alone every half of its spacing.
+    #[allow(clippy::too_many_arguments)]
     fn diffraction_loss(
         &self,
         prof: &[(f64, f64)],
+        ground: &[(f64, f64)],
         a: [f64; 2],
         b: [f64; 2],
         za: f64,
@@ -594,20 +645,11 @@ impl RayScene<'_> {
         if self.obstacle_at(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])) <= 0.0 {
             return (bull.loss_db, bull.edge);
         }
-        let corr = match &self.terrain {
-            Some(tr) => {
-                let n = ((rho / (0.5 * tr.spacing())).ceil() as usize).max(1);
-                let ground: Vec<(f64, f64)> = (1..n)
-                    .map(|k| {
-                        let t = k as f64 / n as f64;
-                        let (x, y) = (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
-                        (t * rho, self.terrain_at(x, y))
-                    })
-                    .collect();
-                let l_t = bullington(&ground, rho, za, zb, lambda).knife_edge_db;
-                (1.0 - (-l_t / 6.0).exp()) * (10.0 + 0.02 * rho / 1000.0)
-            }
-            None => 0.0,
+        let corr = if self.terrain.is_some() {
+            let l_t = bullington(ground, rho, za, zb, lambda).knife_edge_db;
+            (1.0 - (-l_t / 6.0).exp()) * (10.0 + 0.02 * rho / 1000.0)
+        } else {
+            0.0
         };
         (l_d + corr, edge)
     }
@@ -678,7 +720,8 @@ impl RayScene<'_> {
         };
         self.profile_over([xs, ys], q, floor, sight);
         let prof = &sight.prof;
-        let (loss_db, edge) = self.diffraction_loss(prof, [xs, ys], q, zs, zq, lambda);
+        let (loss_db, edge) =
+            self.diffraction_loss(prof, &sight.ground, [xs, ys], q, zs, zq, lambda);
         let el_direct = match edge {
             Some((de, he)) => (he - zs).atan2(de),
             None => (zq - zs).atan2(rho),

@@ -23,6 +23,8 @@ pub struct Sight<'s, 'a> {
     pub(crate) ts: Vec<f64>,
     /// A path's profile ([`RayScene::profile_over`]).
     pub(crate) prof: Vec<(f64, f64)>,
+    /// The terrain alone along it, on the terrain's grid.
+    pub(crate) ground: Vec<(f64, f64)>,
 }
 
 /// The scene's bounds that a [`Sight`] prunes with: `(terrain_top, raster_top)`.
@@ -56,6 +58,7 @@ impl<'a> RayScene<'a> {
             near: Vec::new(),
             ts: Vec::new(),
             prof: Vec::new(),
+            ground: Vec::new(),
         }
     }
 }
