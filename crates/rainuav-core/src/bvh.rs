@@ -107,9 +107,8 @@ impl Bvh {
         if self.nodes.is_empty() {
             return;
         }
-        let reaches = |b: &[f64; 4], top: f64| {
-            inside(b).is_some_and(|(lo, hi)| top + lift >= floor(lo, hi))
-        };
+        let reaches =
+            |b: &[f64; 4], top: f64| inside(b).is_some_and(|(lo, hi)| top + lift >= floor(lo, hi));
         // Depth-first; the tree's depth is at most 2 log2(n), so 128 entries always suffice.
         let (mut stack, mut len) = ([0u32; 128], 1usize);
         while len > 0 {
@@ -130,5 +129,98 @@ impl Bvh {
                 }));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::obstacles::{Building, Prisms};
+
+    #[test]
+    fn segment_queries_find_what_a_scan_finds() {
+        // 2 000 boxes 3-80 m tall, overlapping at random; 400 segments, some vertical or
+        // horizontal. near_segment: every box the segment meets (a scan of all of them);
+        // near_segment_under: every box with a crossing point at or above the line (the only
+        // ones in its way), and no box whose roof stays below the line over its box.
+        let mut s = 5_u64;
+        let mut u = move || {
+            s = s
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let boxes: Vec<Building> = (0..2000)
+            .map(|_| {
+                let (x, y) = (3000.0 * u(), 3000.0 * u());
+                [
+                    x,
+                    x + 5.0 + 60.0 * u(),
+                    y,
+                    y + 5.0 + 60.0 * u(),
+                    3.0 + 77.0 * u(),
+                ]
+            })
+            .collect();
+        let p = Prisms::from_boxes(&boxes).unwrap();
+        let (mut near, mut t) = (Vec::new(), Vec::new());
+        let mut found = 0;
+        for n in 0..400 {
+            let a = [3000.0 * u(), 3000.0 * u()];
+            let mut b = [3000.0 * u(), 3000.0 * u()];
+            match n % 10 {
+                0 => b[0] = a[0],
+                1 => b[1] = a[1],
+                _ => {}
+            }
+            let (za, zb) = (60.0 * u(), 120.0 * u());
+            let line = |t: f64| za + (zb - za) * t;
+            // Where the segment is within a box (Liang-Barsky; lo > hi: it misses it).
+            let clip = |bb: &[f64; 5]| {
+                let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+                for (o, d, v0, v1) in [
+                    (a[0], b[0] - a[0], bb[0], bb[1]),
+                    (a[1], b[1] - a[1], bb[2], bb[3]),
+                ] {
+                    if d == 0.0 {
+                        if o < v0 || o > v1 {
+                            (lo, hi) = (1.0, 0.0);
+                        }
+                    } else {
+                        let (t0, t1) = ((v0 - o) / d, (v1 - o) / d);
+                        (lo, hi) = (lo.max(t0.min(t1)), hi.min(t0.max(t1)));
+                    }
+                }
+                (lo, hi)
+            };
+            p.near_segment(a, b, &mut near);
+            for (k, bb) in boxes.iter().enumerate() {
+                let (lo, hi) = clip(bb);
+                if lo <= hi {
+                    assert!(near.contains(&(k as u32)), "box {k} missed on {a:?}->{b:?}");
+                }
+            }
+            assert!(
+                near.windows(2).all(|w| w[0] < w[1]),
+                "in index order, each once"
+            );
+            p.near_segment_under((a, za), (b, zb), 0.0, &mut near);
+            for k in 0..p.len() {
+                t.clear();
+                p.crossings(k, a, b, &mut t);
+                let in_way = t.iter().any(|&t| boxes[k][4] >= line(t));
+                if in_way {
+                    assert!(near.contains(&(k as u32)), "box {k} in the way, missed");
+                    found += 1;
+                }
+                // Above its roof by a millimetre wherever the segment is within its box: never
+                // in the way.
+                let (lo, hi) = clip(&boxes[k]);
+                let over = lo > hi + 1e-6 || line(lo).min(line(hi)) > boxes[k][4] + 1e-3;
+                if over {
+                    assert!(!near.contains(&(k as u32)), "box {k} below the line, read");
+                }
+            }
+        }
+        assert!(found > 200, "{found} boxes in the way");
     }
 }

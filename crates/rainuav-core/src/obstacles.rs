@@ -360,7 +360,13 @@ impl Prisms {
         let d = [b[0] - a[0], b[1] - a[1]];
         // A micrometre's tolerance along the segment keeps a box it grazes.
         let tol = 1e-6 / d[0].hypot(d[1]).max(1e-9);
-        let inv = d.map(|v| if v.abs() < 1e-12 { f64::INFINITY } else { 1.0 / v });
+        let inv = d.map(|v| {
+            if v.abs() < 1e-12 {
+                f64::INFINITY
+            } else {
+                1.0 / v
+            }
+        });
         // The parameters in 0..=1 where the segment is within the box.
         let inside = |bb: &[f64; 4]| {
             let (mut lo, mut hi) = (0.0_f64, 1.0_f64);

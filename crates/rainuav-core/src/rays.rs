@@ -502,10 +502,6 @@ impl RayScene<'_> {
         if rho < 1e-9 {
             return;
         }
-        let at = |t: f64| {
-            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
-            (t * rho, self.terrain_at(x, y) + self.obstacle_at(x, y))
-        };
         // The samples: the terrain and the obstacle raster (the buildings' roofs over them
         // below), and the terrain alone on the terrain's own grid.
         let ground = &mut sight.ground;
@@ -525,7 +521,10 @@ impl RayScene<'_> {
             let (x, y) = (a[0] + t * dx, a[1] + t * dy);
             let z = self.terrain_at(x, y);
             ground.push((t * rho, z));
-            out.push((t * rho, z + self.heights.as_ref().map_or(0.0, |r| r.cell(x, y))));
+            out.push((
+                t * rho,
+                z + self.heights.as_ref().map_or(0.0, |r| r.cell(x, y)),
+            ));
         }
         if let Some(tr) = &self.terrain
             && ((rho / (0.5 * tr.spacing())).ceil() as usize).max(1) != n
@@ -539,9 +538,10 @@ impl RayScene<'_> {
         }
         let before = out.len();
         if let Some(prisms) = self.prisms {
-            // Each face a building's footprint crosses, read just inside it (a roof is flat, so
-            // its faces are where the extremes of the construction lie); the samples within
-            // its footprint (between crossings, inside at the middle) rise to its roof.
+            // Each face a building's footprint crosses, read just inside it at its roof (a roof
+            // is flat, so its faces are where the extremes of the construction lie); the
+            // samples within its footprint (between crossings, inside at the middle) rise to
+            // its roof.
             let eps = 1e-9_f64.max(1e-6 / rho);
             let (near, ts) = (&mut sight.near, &mut sight.ts);
             prisms.near_segment_over(a, b, floor, sight.terrain_top, near);
@@ -553,7 +553,7 @@ impl RayScene<'_> {
                     for t in [t0 - eps, t0 + eps] {
                         let (x, y) = (a[0] + t * dx, a[1] + t * dy);
                         if t > 0.0 && t < 1.0 && prisms.contains(k, x, y) {
-                            out.push(at(t));
+                            out.push((t * rho, self.terrain_at(x, y) + top));
                         }
                     }
                 }
@@ -570,7 +570,10 @@ impl RayScene<'_> {
                         continue;
                     }
                     // The samples i / n strictly between t0 and t1 (i in 1..n).
-                    let (lo, hi) = ((t0 * n as f64) as usize + 1, (t1 * n as f64).ceil() as usize);
+                    let (lo, hi) = (
+                        (t0 * n as f64) as usize + 1,
+                        (t1 * n as f64).ceil() as usize,
+                    );
                     for i in lo..hi.min(n) {
                         let t = i as f64 / n as f64;
                         if t > t0 && t < t1 {
@@ -666,6 +669,18 @@ impl RayScene<'_> {
     /// and each leg's knife edge; and beyond line of sight only the points above the direct
     /// ray set Bullington's slopes. The geometry is the whole profile's.
     pub fn path(&self, tx: [f64; 3], q: [f64; 2], sight: &mut Sight) -> PathGeometry {
+        self.path_over(tx, q, sight, true)
+    }
+
+    /// [`RayScene::path`], reading the whole profile where `prune` is false (the check that
+    /// what it leaves out changes nothing).
+    pub(crate) fn path_over(
+        &self,
+        tx: [f64; 3],
+        q: [f64; 2],
+        sight: &mut Sight,
+        prune: bool,
+    ) -> PathGeometry {
         let [xs, ys, hs] = tx;
         let (ex, ey) = (q[0] - xs, q[1] - ys);
         let rho = ex.hypot(ey);
@@ -701,6 +716,9 @@ impl RayScene<'_> {
             + rho * rho / (8.0 * crate::diffraction::EFFECTIVE_EARTH_RADIUS_M);
         let direct = |t: f64| zs + (zq - zs) * t;
         let floor = |lo: f64, hi: f64| {
+            if !prune {
+                return f64::NEG_INFINITY;
+            }
             let mut z = direct(lo).min(direct(hi));
             if let Some(sp) = &spec {
                 let tb = sp.sb / rho;

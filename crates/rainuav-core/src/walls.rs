@@ -308,7 +308,14 @@ impl RayScene<'_> {
 /// Whether the straight leg from `(from, z_from)` to the specular point `(p, zp)`, `rho`
 /// apart horizontally, clears the profile (stopping [`LEG_GAP_M`] short of the wall):
 /// [`Sight::clear`] on the leg.
-fn leg_seen(sight: &mut Sight, from: [f64; 2], z_from: f64, p: [f64; 2], zp: f64, rho: f64) -> bool {
+fn leg_seen(
+    sight: &mut Sight,
+    from: [f64; 2],
+    z_from: f64,
+    p: [f64; 2],
+    zp: f64,
+    rho: f64,
+) -> bool {
     if rho <= LEG_GAP_M {
         return true;
     }
