@@ -1,5 +1,6 @@
 # One entry point for everything a developer (and CI) runs.
 #   make test   build the extension, lint everything, run the Rust and Python tests
+#   make test-fast  the Python tests not marked slow (the edit-test loop, under a minute)
 #   make bench  criterion benches (cargo bench) and pytest-benchmark comparisons
 #   make wheel  one abi3 wheel (CPython 3.10+) in target/wheels
 #   make wheel-check  install that wheel into a fresh venv away from the source and run it
@@ -12,7 +13,7 @@ PYTHON ?= python
 # their session's map cache); PYTEST_ARGS= runs it in one process.
 PYTEST_ARGS ?= -n 2 --dist loadfile
 
-.PHONY: test build llvm lint test-rust test-python bench fmt validate wheel wheel-check docs figures
+.PHONY: test test-fast build llvm lint test-rust test-python bench fmt validate wheel wheel-check docs figures
 
 test: build lint test-rust test-python
 
@@ -36,6 +37,9 @@ test-rust:
 test-python: build llvm
 	$(PYTHON) -m pip install -q --no-deps 'pycraf>=2.1,<3'
 	$(PYTHON) -m pytest $(PYTEST_ARGS)
+
+test-fast: build
+	$(PYTHON) -m pytest $(PYTEST_ARGS) -m "not slow"
 
 # Sionna RT (the test extra's reference ray tracer) runs on the CPU through LLVM 19: Debian's
 # libllvm19, installed here where it is missing (found by rainuav.radio.tracer).

@@ -4,17 +4,12 @@ writes into the user's own cache)."""
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-import torch
 from hypothesis import settings
-
-# The tests' networks are tiny: one torch thread is several times faster than two (no
-# synchronisation; the tests that fly untrained networks took 15-20 s with two threads on a
-# busy 2-core machine against under 1 s with one) and keeps results bit-reproducible.
-# (rainuav.rl.loop.train sets this itself for a run and restores it afterwards.)
-torch.set_num_threads(1)
 
 # Property tests call into Rust: keep them deterministic and quick in CI.
 settings.register_profile("rainuav", max_examples=60, deadline=None, derandomize=True)
@@ -30,3 +25,22 @@ def session_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture(autouse=True)
 def _session_cache_dir(session_cache: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("RAINUAV_CACHE_DIR", str(session_cache))
+
+
+@pytest.fixture(autouse=True)
+def _one_torch_thread() -> Iterator[None]:
+    """The tests' networks are tiny: one torch thread is several times faster than two (no
+    synchronisation; the tests that fly untrained networks took 15-20 s with two threads on a
+    busy 2-core machine against under 1 s with one) and keeps results bit-reproducible.
+    (rainuav.rl.loop.train sets this itself for a run and restores it afterwards.) Only where a
+    test module has imported torch (before each test, and after it for a test that imported it
+    itself): the physics tests run without it."""
+
+    def one() -> None:
+        torch = sys.modules.get("torch")
+        if torch is not None and torch.get_num_threads() != 1:
+            torch.set_num_threads(1)
+
+    one()
+    yield
+    one()

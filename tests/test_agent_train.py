@@ -241,6 +241,7 @@ def test_training_starts_near_the_goal_at_the_given_rate() -> None:
         assert np.hypot(*(p - goal)) > 160.0
 
 
+@pytest.mark.slow
 def test_goal_features_and_time() -> None:
     env = _env()
     cfg = small_cfg(Path("unused"), 1)
@@ -257,6 +258,7 @@ def test_goal_features_and_time() -> None:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shield", [False, True])
 def test_batched_greedy_rollouts_equal_the_scalar_env(shield: bool) -> None:
     env = _env()
@@ -285,6 +287,7 @@ def test_batched_greedy_rollouts_equal_the_scalar_env(shield: bool) -> None:
         np.testing.assert_array_equal(roll["path"], np.array(path))
 
 
+@pytest.mark.slow
 def test_training_smoke_on_a_synthetic_map(tmp_path: Path) -> None:
     # 300 episodes on a 40 x 40 map take ~7 s here; the greedy network alone must reach the
     # goal from most of 50 seeded starts and fly closer to the exact optimum's cost than the
@@ -329,6 +332,7 @@ def _assert_policy_gives(run: Path, cfg: TrainConfig, m: dict) -> None:
     assert metrics["mean_return"] == m["mean_return"]
 
 
+@pytest.mark.slow
 def test_keep_best_evaluates_the_best_network_on_validation(tmp_path: Path) -> None:
     cfg = small_cfg(tmp_path, 100)
     cfg.validate_every, cfg.keep_best = 10, True
@@ -342,6 +346,7 @@ def test_keep_best_evaluates_the_best_network_on_validation(tmp_path: Path) -> N
     _assert_policy_gives(tmp_path, cfg, m)
 
 
+@pytest.mark.slow
 def test_without_validation_checks(tmp_path: Path) -> None:
     cfg = small_cfg(tmp_path, 20)
     cfg.validate_every, cfg.keep_best = 0, True  # nothing to select from: the final network
@@ -370,6 +375,7 @@ def test_weight_average_is_the_running_mean() -> None:
     assert all(torch.equal(v, own[n]) for n, v in agent.online.state_dict().items())
 
 
+@pytest.mark.slow
 def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_path: Path) -> None:
     plain, averaged = small_cfg(tmp_path / "plain", 120), small_cfg(tmp_path / "avg", 120)
     plain.dqn.average_from, averaged.dqn.average_from = 1.0, 0.5
@@ -399,6 +405,7 @@ def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_pat
     assert own["mean_return"] == p["mean_return"] and own["network"] == "last online"
 
 
+@pytest.mark.slow
 def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
     """Interrupted at a checkpoint, or stopped by its budget and resumed with a larger one,
     a run ends as the run that never stopped."""
@@ -434,6 +441,7 @@ def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
     assert all(torch.equal(a[k], c[k]) for k in a)
 
 
+@pytest.mark.slow
 def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path, capsys) -> None:
     from rainuav.radio.scenario import Area, Cell, Scenario, Site
 
@@ -650,6 +658,7 @@ def test_optimal_flights_never_revisit_a_position() -> None:
         assert len(cells) == len(p.path_m)
 
 
+@pytest.mark.slow
 def test_resume_refuses_a_different_config(tmp_path: Path) -> None:
     # --resume with other settings than the checkpoint's would silently mix two runs; it is
     # refused and the differing fields are named.
@@ -671,6 +680,7 @@ def test_resume_refuses_a_different_config(tmp_path: Path) -> None:
     assert train(*saved_world(same), resume=True, progress=False)["episodes"] == 40
 
 
+@pytest.mark.slow
 def test_train_leaves_no_process_wide_state(tmp_path: Path) -> None:
     # train() used to leave torch on one thread and switch matplotlib's backend for the whole
     # process.

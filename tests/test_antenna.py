@@ -94,6 +94,7 @@ def test_uniform_array_steering_nulls_sidelobes_and_width() -> None:
     assert hp.max() - hp.min() == pytest.approx(want, abs=0.4)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "kwargs",
     [

@@ -250,6 +250,7 @@ def _urban_footprints(path: Path, boxes: list[Building], order=None, split: int 
     return write(path, feats)
 
 
+@pytest.mark.slow
 def test_urban_boxes_as_footprints_in_any_order_or_split_give_the_same_map(
     tmp_path: Path,
 ) -> None:
@@ -466,6 +467,7 @@ def test_what_is_skipped_repaired_or_clipped_is_counted(tmp_path: Path) -> None:
     assert "1 repaired" in fp.summary() and "1 outside" in fp.summary()
 
 
+@pytest.mark.slow
 def test_too_many_features_are_refused_before_building_them(tmp_path: Path) -> None:
     # A million features and one (null geometries: 50 MB of JSON) are refused in one line
     # before any geometry is built.
@@ -481,6 +483,7 @@ def test_too_many_features_are_refused_before_building_them(tmp_path: Path) -> N
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
+@pytest.mark.slow
 def test_fly_among_buildings_keeps_clear_and_refuses_a_start_in_a_tower(
     tmp_path: Path, capsys
 ) -> None:

@@ -50,6 +50,7 @@ def test_wrongly_typed_config_field_is_named(tmp_path: Path, capsys) -> None:
     assert err.count("\n") == 1 and "seed" in err, err
 
 
+@pytest.mark.slow
 def test_python_dash_m_prints_no_traceback(tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "rainuav.train", "--config", str(tmp_path / "missing.toml")],

@@ -42,6 +42,7 @@ def pe_and_rays() -> tuple[rainuav.radio.RadioMap, rainuav.radio.RadioMap]:
     return build_radio_map(scn, cache=False), build_radio_map(scn.replace(engine="ray"))
 
 
+@pytest.mark.slow
 def test_pe_and_rays_agree_inside_the_cone(pe_and_rays) -> None:
     # Two independent methods: the split-step march of the cell's pattern and two rays over
     # the same PEC ground. Tolerance: 1 dB on 95% of the pixels the PE carries alone (the
@@ -56,6 +57,7 @@ def test_pe_and_rays_agree_inside_the_cone(pe_and_rays) -> None:
         assert abs(np.median(d)) < 0.2
 
 
+@pytest.mark.slow
 def test_hybrid_is_continuous_across_the_seam(pe_and_rays) -> None:
     # Along the seam (where the PE's share passes from 1 to 0) the hybrid map must not jump:
     # neighbouring pixels differ by no more than they do in the ray map plus 1 dB (95% of
@@ -83,6 +85,7 @@ def test_engine_record_and_cone_report(pe_and_rays) -> None:
     assert np.allclose(hyb.pe_cone_deg, [[7.9, 12.9]] * 2, atol=0.3)
 
 
+@pytest.mark.slow
 def test_raising_the_pe_budget_changes_little() -> None:
     # Convergence in the cone: a cone narrowed by a small budget against the full 40 dB cone.
     # SINR within 0.5 dB on 95% of the pixels.
@@ -160,6 +163,7 @@ def test_ray_rain_through_a_rain_cell_is_the_path_integral() -> None:
         assert abs(got - want) < 0.01, (i, j, got, want)
 
 
+@pytest.mark.slow
 def test_pe_rain_agrees_with_the_rays_inside_the_cone() -> None:
     # The PE's attenuation (an effective complex index in the march) against the rays' gamma
     # x length at pixels the PE carries alone: within 0.1 dB (the issue's tolerance).
@@ -185,6 +189,7 @@ def test_pe_rain_agrees_with_the_rays_inside_the_cone() -> None:
     assert np.percentile(np.abs(a_pe - a_ray), 95) < 0.1
 
 
+@pytest.mark.slow
 def test_rain_raises_sinr_where_interference_limited() -> None:
     # uma at 100 m sees every sector in line of sight: interference-limited (noise far below
     # the interference), so rain suppresses the distant interferers more than the near
@@ -276,6 +281,7 @@ def test_a_non_finite_gain_table_is_named() -> None:
         presets.paper(sites=[Site(x_m=500.0, y_m=500.0, cells=[Cell(pattern=bad)])])
 
 
+@pytest.mark.slow
 def test_an_isotropic_antenna_has_the_widest_cone_and_the_hybrid_maps_it() -> None:
     # A pattern flat over the whole half-space is all peak: the march takes the widest cone
     # (sines 0.95) instead of failing on an empty one, and the hybrid map is finite.

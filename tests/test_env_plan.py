@@ -108,6 +108,7 @@ def brute_force(e: UAVNavEnv, start: np.ndarray, horizon: int) -> float:
     return best
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("reward", ["shortfall", "outage", "linear"])
 def test_planner_against_brute_force(reward: str) -> None:
     # 6 moves, 4^6 sequences: the DP optimum must equal the best enumerated return.

@@ -179,6 +179,7 @@ def test_bad_geotiffs_are_refused_in_one_line(tmp_path, kind: str, match: str) -
     assert "\n" not in str(err.value)
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(120)
 def test_fly_takes_a_geotiff(tmp_path) -> None:
     """``fly --weather FILE.tif``: the shipped radar example written as GeoTIFF (EPSG:4326,

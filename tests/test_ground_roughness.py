@@ -70,6 +70,7 @@ def _jumps(rss_dbm: np.ndarray) -> tuple[float, float]:
     return float(np.percentile(j, 90)), float(np.mean(j > 6.0))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("freq_ghz", [28.0, 3.5])
 def test_a_real_dem_has_no_facet_seams(tmp_path: Path, freq_ghz: float) -> None:
     # The uma network over 2 km x 2 km of the Jacksboro DEM (3 arc-second cells of wooded hills)

@@ -127,6 +127,7 @@ def _plant_hostile(run: Path, marker: Path) -> None:
     torch.save(state, run / "checkpoint.pt")
 
 
+@pytest.mark.slow
 def test_hostile_checkpoint_is_refused_by_evaluate(run_copy: Path, tmp_path: Path, capsys) -> None:
     marker = tmp_path / "PWNED"
     _plant_hostile(run_copy, marker)
@@ -168,6 +169,7 @@ def study_cases(spec: Path) -> list[str]:
     return [c.id for c in load_study(spec).cases()]
 
 
+@pytest.mark.slow
 def test_python_dash_m_evaluate_refuses_a_hostile_checkpoint(run_copy, tmp_path) -> None:
     marker = tmp_path / "PWNED"
     _plant_hostile(run_copy, marker)
@@ -236,6 +238,7 @@ def test_out_that_is_a_file_is_refused_before_any_work(run_copy, tmp_path, capsy
     assert target.read_text() == "keep me"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where", ["a file", "/proc", "radiomaps is a file"])
 def test_unwritable_cache_is_a_warning_and_the_map_is_kept(tmp_path, monkeypatch, capsys, where):
     cache = {
@@ -391,6 +394,7 @@ def test_evaluate_bounds_its_starts(run_copy: Path, tmp_path: Path, capsys) -> N
 
 
 # -- 4. Wrong results that were given without a word -----------------------------------------
+@pytest.mark.slow
 def test_resume_cuts_the_log_back_to_the_checkpoint_even_in_a_moved_folder(tmp_path) -> None:
     first, moved = tmp_path / "first", tmp_path / "moved"
     stopped = train_run(
@@ -649,6 +653,7 @@ def _sites_at(tmp_path: Path, lat0: float, lon0: float) -> Path:
     return f
 
 
+@pytest.mark.slow
 def test_fly_takes_southern_and_western_coordinates_as_typed(tmp_path, capsys) -> None:
     # Sydney: a minus sign first, typed as a separate value and with "=".
     from rainuav import fly
@@ -777,6 +782,7 @@ def _tool_argv(cli: str, run_copy: Path, tmp_path: Path, out: Path) -> tuple[Any
     }[cli]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cli", sorted(COMPLETION_FILES))
 def test_the_completion_file_is_written_last(run_copy, tmp_path, capsys, monkeypatch, cli):
     landed = _record_writes(monkeypatch)
@@ -797,6 +803,7 @@ def test_a_folder_where_the_completion_file_is_a_folder_is_refused(run_copy, tmp
     assert (out / COMPLETION_FILES[cli] / "inside").is_dir()  # nothing of the user's lost
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cli", sorted(COMPLETION_FILES))
 def test_a_run_killed_before_its_last_file_does_not_look_finished(
     run_copy, tmp_path, capsys, monkeypatch, cli
@@ -864,6 +871,7 @@ def test_bad_footprint_files_are_refused_by_radiomap_in_one_line(tmp_path, capsy
         assert not (out / "radiomap.npz").exists()
 
 
+@pytest.mark.slow
 def test_a_cached_map_never_reaches_for_the_dem_it_was_made_from(tmp_path, capsys) -> None:
     # fly --terrain A/dem.tif, the DEM moved to B/ and A/ deleted: the next fly --terrain
     # B/dem.tif (the same contents: a cache hit) plans without reaching for A/dem.tif.

@@ -224,3 +224,44 @@ def test_importing_the_physics_does_not_import_gymnasium_or_torch() -> None:
     code = "import rainuav, gymnasium as gym; print('rainuav/UAVNav-v0' in gym.registry)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.stdout.strip() == "True", out.stderr
+
+
+# The physics' tests: the rain medium, propagation, maps and the ground (no learner).
+PHYSICS_TESTS = (
+    "test_antenna.py",
+    "test_buildings.py",
+    "test_engines.py",
+    "test_geotiff.py",
+    "test_ground_roughness.py",
+    "test_medium_errors.py",
+    "test_medium_properties.py",
+    "test_medium_reference.py",
+    "test_osm_exports.py",
+    "test_pwe.py",
+    "test_pwe_errors.py",
+    "test_radiomap.py",
+    "test_rategrid.py",
+    "test_sampling.py",
+    "test_terrain.py",
+    "test_timemap.py",
+    "test_tracer.py",
+    "test_wedge_exact.py",
+)
+
+
+@pytest.mark.slow
+def test_the_physics_tests_do_not_need_torch() -> None:
+    """With torch unimportable, the physics' test modules (and the shared conftest) import and
+    collect: a checkout without the learner's dependency can run them."""
+    tests = Path(__file__).resolve().parent
+    files = [str(tests / f) for f in PHYSICS_TESTS]
+    code = (
+        "import sys; sys.modules['torch'] = None; import pytest; "
+        f"sys.exit(pytest.main(['--collect-only', '-q', '-p', 'no:cacheprovider', *{files!r}]))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=240, cwd=tests.parent
+    )
+    # 0: every module collected (a module that imports torch is a collection error, exit 2).
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
+    assert "tests collected" in out.stdout, out.stdout[-3000:]

@@ -39,6 +39,7 @@ def test_one_level_is_the_plane() -> None:
         assert np.array_equal(a.actions, b.actions) and np.all(b.levels == 0)
 
 
+@pytest.mark.slow
 def test_against_a_brute_force_over_every_move_sequence() -> None:
     # Three levels 15 m apart (climb 5 m/s: 3 moves' time; descent 3 m/s: 5), a horizon of 6
     # ticks of the flight's clock: the best of every move sequence until the clock reaches
@@ -117,6 +118,7 @@ def test_maps_at_several_heights_are_each_level_s_map() -> None:
     assert not np.allclose(stack.sinr_db[0], stack.sinr_db[1])
 
 
+@pytest.mark.slow
 def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) -> None:
     # A 40 m wall across the whole place between the start and the destination: at 30 m it
     # is not flyable (its 10 m clearance), at 60 m it is. `fly --altitudes 30:60:30` started
@@ -219,6 +221,7 @@ def test_bad_altitude_bands_are_refused_in_one_line(tmp_path, capsys) -> None:
         assert not (out / "summary.json").exists()
 
 
+@pytest.mark.slow
 def test_one_level_band_flies_todays_plan_and_a_start_altitude_is_a_level(tmp_path, capsys) -> None:
     # `--altitudes 100:100:1` is today's flight at 100 m: the same cost and moves (the same
     # map, from the cache). A start altitude must be one of the levels (one line, exit 2).
@@ -242,6 +245,7 @@ def test_one_level_band_flies_todays_plan_and_a_start_altitude_is_a_level(tmp_pa
     assert rc == 2 and len(err) == 1 and "one of --altitudes" in err[0], err
 
 
+@pytest.mark.slow
 def test_fly_a_band_of_heights_over_terrain_writes_heights_above_sea_level(tmp_path) -> None:
     # Over the ridge DEM of the terrain tests, `--altitudes 60:120:60` above the ground: the
     # mission's waypoints (pymavlink) are MAV_FRAME_GLOBAL heights, each the terrain under it
@@ -287,6 +291,7 @@ def test_maps_in_time_at_several_heights() -> None:
     assert series.not_flyable.shape == (2, 40, 40) and not series.not_flyable.any()
 
 
+@pytest.mark.slow
 def test_one_march_reads_every_level() -> None:
     # The hybrid engine marches each cell once for every level. One height recorded by the
     # levels' march is the single-height march bit for bit; the maps of the one march agree
@@ -374,6 +379,7 @@ def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
         assert not (bad / "radiomap_levels.json").exists()
 
 
+@pytest.mark.slow
 def test_maps_in_time_read_every_level_from_one_clear_air_march(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

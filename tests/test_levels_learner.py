@@ -154,6 +154,7 @@ def test_the_yardsticks_among_levels_are_the_planners() -> None:
 EPISODES = 600
 
 
+@pytest.mark.slow
 def test_learning_among_levels_end_to_end(tmp_path: Path) -> None:
     # 600 episodes on the 40 x 40 stack take about 10 s here. Measured on this build for
     # seeds 0-4 (this test runs seed 0), 30 evaluation starts: success 1.00 / 0.33 / 0.53 /
@@ -217,6 +218,7 @@ def test_bad_levels_configurations_are_refused_in_one_line(tmp_path: Path) -> No
             check_config(dataclasses.replace(base, **kw))
 
 
+@pytest.mark.slow
 def test_learning_among_levels_in_time(tmp_path: Path) -> None:
     # Among levels through a signal that moves: the observation carries the clock, the
     # yardsticks plan in space and time, the run is saved in time and read back. A short run
@@ -251,6 +253,7 @@ def test_the_memory_check_counts_the_levels_network() -> None:
     assert agent.online.advantage.out_features == 6
 
 
+@pytest.mark.slow
 def test_a_run_among_levels_resumes_as_if_never_stopped(tmp_path: Path) -> None:
     # Interrupted at its checkpoint with UAVs in flight on several levels, resumed from the
     # run folder (its world read back from radiolevels.npz): the same network, bit for bit.

@@ -211,6 +211,7 @@ def pool_cfg(out: Path, **kw: object) -> object:
     return TrainConfig(**{**fields, **kw})
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_storm_pool_among_levels_is_seeded_resumes_exactly_and_is_evaluated(
     tmp_path: Path,
@@ -255,6 +256,7 @@ def test_storm_pool_among_levels_is_seeded_resumes_exactly_and_is_evaluated(
     assert (ev / "evaluation_trajectories.png").stat().st_size > 0
 
 
+@pytest.mark.slow
 def test_a_pool_that_cannot_fit_is_refused(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """The pool's memory is checked once its first storm is mapped, naming storm_pool (here
     one storm's levels need 0.04 GB to map and 1 MB to keep: 64 of them do not fit in 0.1

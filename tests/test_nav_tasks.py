@@ -237,6 +237,7 @@ def test_train_cli_sets_every_task_field_and_refuses_preset_clashes(
     assert "min_db" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_paper_preset_trains_and_records_its_choices(tmp_path: Path) -> None:
     import tomllib
     from rainuav.rl.loop import train

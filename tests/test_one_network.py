@@ -209,6 +209,7 @@ def pool_cfg(out: object, **kw: object) -> object:
     return TrainConfig(**{**fields, **kw})
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_storm_pool_run_is_seeded_resumes_exactly_and_never_flies_reserved_storms(
     tmp_path,
@@ -291,6 +292,7 @@ def test_gym_make_gives_the_weather_observation() -> None:
         )  # fmt: skip
 
 
+@pytest.mark.slow
 def test_move_features_tell_what_each_move_does() -> None:
     """The weather network's move features (``move_features``) against the env itself: for
     300 (start, destination) pairs, a third of them a few moves from the destination, the
@@ -439,6 +441,7 @@ def test_task_goals_mix_the_tasks_destination_into_training() -> None:
         check_config(TrainConfig(dqn=DQNConfig(task_goals=1.5)))
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_calm_pool_storms_are_the_background_alone() -> None:
     """``calm_share`` picks calm storms by their seed alone (20 000 seeds: the share within 3

@@ -200,6 +200,7 @@ def test_a_real_helsinki_extract_reads_whole(tmp_path: Path) -> None:
     assert kept.area == pytest.approx(every.area, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_fly_warns_when_most_buildings_near_the_route_are_a_guess(tmp_path: Path, capsys) -> None:
     # Untagged buildings beside the route: fly counts them in summary.json and warns in one
     # line that their clearance is a guess; with heights given, no warning.
@@ -242,6 +243,7 @@ def test_fly_warns_when_most_buildings_near_the_route_are_a_guess(tmp_path: Path
             assert "2 of the 2 buildings" in lines[0] and "--default-height" in lines[0]
 
 
+@pytest.mark.slow
 def test_the_flight_figure_draws_buildings_and_not_flyable_pixels_and_hides_nothing() -> None:
     # flight.png among the shipped district at 40 m (its towers within the clearance): every
     # building drawn, the not-flyable pixels hatched and in the legend, and the legend below

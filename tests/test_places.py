@@ -218,6 +218,7 @@ def test_bad_geojson_sites_are_refused(tmp_path, text: str, match: str) -> None:
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "sites.csv"
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(120)
 def test_fly_cli_writes_files_real_clients_load(tmp_path) -> None:
     """``python -m rainuav.fly`` on the shipped example: the mission loads in pymavlink with
@@ -378,6 +379,7 @@ def test_bad_radar_grids_are_refused(tmp_path) -> None:
         read_radar_grid(f, Area(-500, 500, -500, 500), g)
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(120)
 def test_fly_through_the_shipped_radar_file(tmp_path) -> None:
     """``--weather examples/radar.nc`` (dBZ on lat/lon, 13 scans): a weather that moves, the
@@ -417,6 +419,7 @@ def test_a_scenario_carries_its_origin(tmp_path) -> None:
         Scenario.from_toml_string(plain.replace(origin=Origin(89.5, 0.0)).to_toml_string())
 
 
+@pytest.mark.slow
 def test_fly_area_box(tmp_path, capsys) -> None:
     """``--area S,W,N,E``: the map covers that box; a start outside it is one line."""
     from rainuav.fly import main

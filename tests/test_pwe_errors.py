@@ -84,6 +84,7 @@ def test_gaussian_beam_bad_input() -> None:
         )
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_a_long_march_within_a_second() -> None:
     # The child is started with SIGINT ignored, as a job started in the background by a
     # non-interactive shell is (it inherits SIG_IGN); it must install Python's handler itself

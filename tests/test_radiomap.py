@@ -88,6 +88,7 @@ def test_friis_on_boresight() -> None:
     assert err.max() < 0.5, err.max()
 
 
+@pytest.mark.slow
 def test_homogeneous_rain_on_boresight() -> None:
     # Rain minus clear along boresight equals -gamma * r within 0.1 dB (28 GHz, 25 mm/h:
     # 4.8 dB/km, so up to 2.4 dB at 500 m); and rain never adds power anywhere (one beam:
@@ -106,6 +107,7 @@ def test_homogeneous_rain_on_boresight() -> None:
     assert np.all(rain.rss_dbm[strong] <= clear.rss_dbm[strong] + 1e-6)
 
 
+@pytest.mark.slow
 def test_rain_cell_loss_is_the_path_integral() -> None:
     # A gaussian rain cell straddling the beam at 250 m: the loss at 500 m equals the
     # integral of the specific attenuation of the local rate along the path within 5%.
@@ -153,6 +155,7 @@ def test_sir_by_hand() -> None:
     assert np.isfinite(sir).all() and np.isfinite(sinr).all()
 
 
+@pytest.mark.slow
 def test_mirror_symmetric_scenario_gives_mirror_symmetric_map() -> None:
     area = Area(x_min_m=0, x_max_m=1000, y_min_m=0, y_max_m=600, altitude_m=100, resolution_m=20)
     sites = [
@@ -170,6 +173,7 @@ def test_mirror_symmetric_scenario_gives_mirror_symmetric_map() -> None:
     assert np.abs(sir - sir[:, ::-1])[both].max() < 0.1
 
 
+@pytest.mark.slow
 def test_paper_preset_has_good_and_weak_regions(session_cache, monkeypatch) -> None:
     # The session's cache: the README's example reuses this map.
     monkeypatch.setenv("RAINUAV_CACHE_DIR", str(session_cache))
@@ -267,6 +271,7 @@ def test_unknown_toml_field_and_budget_too_small_for_any_cone(tmp_path: Path) ->
         build_radio_map(huge, cache=False)
 
 
+@pytest.mark.slow
 def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
     cfg = beam_line(length=200.0, res=10.0).to_toml(tmp_path / "tiny.toml")
     out = tmp_path / "maps"
@@ -295,6 +300,7 @@ def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
 def test_height_map_equals_box_building() -> None:
     # The same slab as a height map (5 m pixels over the 600 m x 105 m area) and as a box.
     slab = Building(x0_m=200.0, x1_m=220.0, y0_m=447.5, y1_m=552.5, height_m=150.0)
@@ -315,6 +321,7 @@ def test_height_map_equals_box_building() -> None:
     np.testing.assert_allclose(rh[x < 190], rb[x < 190], atol=1e-6)
 
 
+@pytest.mark.slow
 def test_rate_map_equals_homogeneous_rain() -> None:
     # A uniform rate map is homogeneous rain: same boresight power to f32 rounding.
     kw = {"freq_hz": 28e9, "bw": 2.0, "length": 300.0}

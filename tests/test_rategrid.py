@@ -88,6 +88,7 @@ def test_a_bad_file_is_refused_in_one_line(tmp_path) -> None:
         read_rate_grid(tmp_path / "missing.nc", AREA)
 
 
+@pytest.mark.slow
 def test_the_radiomap_cli_maps_a_rain_file_in_time(tmp_path, monkeypatch, capsys) -> None:
     from rainuav import radiomap
 

@@ -46,6 +46,7 @@ def brute_force(env: UAVNavEnv, start: np.ndarray) -> float:
     return best
 
 
+@pytest.mark.slow
 def test_space_time_optimum_equals_brute_force_through_the_env() -> None:
     # Tolerance 1e-9: the planner reads the signal operation for operation as the env does.
     # Five moves of 2 s cross the slices at 3, 6 and 9 s: the best path depends on timing.
@@ -181,6 +182,7 @@ def test_flights_in_time_are_drawn_over_the_signal_at_take_off(tmp_path) -> None
     assert (tmp_path / "f.png").stat().st_size > 1000
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_train_on_one_storm_and_evaluate_on_another_from_the_cli(tmp_path, capsys) -> None:
     import json

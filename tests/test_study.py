@@ -53,6 +53,7 @@ def reference(tmp_path_factory: pytest.TempPathFactory, session_cache: Path) -> 
     return out, rows
 
 
+@pytest.mark.slow
 def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(
     tmp_path: Path, reference: tuple[Path, list]
 ) -> None:
@@ -97,6 +98,7 @@ def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(
     assert (reference[0] / "results.csv").read_text() == csv
 
 
+@pytest.mark.slow
 def test_a_study_killed_mid_case_reruns_to_the_same_results(
     tmp_path: Path, reference: tuple[Path, list]
 ) -> None:
@@ -168,6 +170,7 @@ def test_built_in_studies_load_and_name_their_cases() -> None:
         load_study("no_such_study.toml")
 
 
+@pytest.mark.slow
 def test_ray_gives_the_local_results(tmp_path: Path, reference: tuple[Path, list]) -> None:
     # The same tiny study as Ray tasks on a local instance (2 CPUs): the same results.csv as
     # in a local process, and every case's files in the driver's folder.
@@ -193,6 +196,7 @@ def test_ray_gives_the_local_results(tmp_path: Path, reference: tuple[Path, list
             assert (tmp_path / "ray" / "cases" / c.id / name).exists(), (c.id, name)
 
 
+@pytest.mark.slow
 def test_the_storms_study_grids_speeds_and_storms_and_reports_the_baselines(tmp_path) -> None:
     storms = load_study("storms")
     cases = storms.cases()

@@ -402,6 +402,7 @@ def low_ridge(tmp_path_factory: pytest.TempPathFactory) -> Path:
     )
 
 
+@pytest.mark.slow
 def test_the_march_over_a_flat_dem_is_the_flat_march(dems: dict[str, Path]) -> None:
     # The hybrid engine over a flat DEM at 437 m: the march's floor is the DEM, nothing stands
     # on it, the receiver rows are the flat ones: the same map as without a DEM (1e-3 dB; the
@@ -415,6 +416,7 @@ def test_the_march_over_a_flat_dem_is_the_flat_march(dems: dict[str, Path]) -> N
     assert np.max(np.abs(dem.rss_dbm - flat.rss_dbm)[live]) < 1e-3
 
 
+@pytest.mark.slow
 def test_the_march_over_a_smooth_ridge_against_the_rays(low_ridge: Path) -> None:
     # Where the PE carries the whole pattern (its share of the hybrid map above 0.9): in front
     # of the ridge (x <= 450 m) the march and the rays agree within 1 dB (median; measured
@@ -436,6 +438,7 @@ def test_the_march_over_a_smooth_ridge_against_the_rays(low_ridge: Path) -> None
     assert -12.0 < np.median(d[shadow]) < 0.0
 
 
+@pytest.mark.slow
 def test_radiomap_cli_over_a_dem(tmp_path: Path, dems: dict[str, Path], capsys) -> None:
     # The command line: a good DEM maps (radiomap.npz written last); a bad one is one line on
     # stderr and exit 2, nothing written.
@@ -569,6 +572,7 @@ def _zurich_hill_dem(path: Path, ridge: bool = False) -> Path:
                      dtype="int16", nodata=-32768)  # fmt: skip
 
 
+@pytest.mark.slow
 def test_fly_over_terrain_writes_heights_above_sea_level(tmp_path: Path) -> None:
     # Terrain-following at 100 m over the hill: the mission (read back through pymavlink)
     # flies MAV_FRAME_GLOBAL heights, each waypoint the terrain under it plus 100 m (0.5 m:
@@ -627,6 +631,7 @@ def test_fly_over_terrain_writes_heights_above_sea_level(tmp_path: Path) -> None
     assert worst <= HOLD_M + 1.0, worst
 
 
+@pytest.mark.slow
 def test_fly_refuses_a_start_where_it_may_not_fly(tmp_path: Path, capsys) -> None:
     # 480 m above sea level: the hill's top (550 m) is not flyable; a start on it is refused
     # in one line, exit 2, nothing written; a flight round it is planned.
@@ -658,6 +663,7 @@ def test_fly_refuses_a_start_where_it_may_not_fly(tmp_path: Path, capsys) -> Non
 # -- maps out as GeoTIFF ---------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_maps_out_as_geotiff_read_back_at_the_right_place(tmp_path: Path) -> None:
     # A georeferenced map written by `radiomap` (the walled height map, so some pixels are not
     # flyable): rasterio reads every band back at the place each pixel stands (a pixel's

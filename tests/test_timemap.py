@@ -234,6 +234,7 @@ def test_bad_durations_and_steps_are_named(duration, step, needle) -> None:
     assert np.array_equal(series_times(300.0, 5.0), np.arange(61) * 5.0)
 
 
+@pytest.mark.slow
 def test_the_radiomap_cli_writes_a_series_and_its_gif(tmp_path, monkeypatch, capsys) -> None:
     from PIL import Image
     from rainuav import radiomap
@@ -259,6 +260,7 @@ def test_the_radiomap_cli_writes_a_series_and_its_gif(tmp_path, monkeypatch, cap
         assert needle in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_the_hybrid_in_time_against_static_hybrid_builds() -> None:
     # The paper's network at 4.9 GHz, where the PE carries part of the power, under two moving
     # cells: the series marches the PE once in clear air and attenuates it like the direct

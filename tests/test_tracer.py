@@ -33,7 +33,7 @@ import pytest
 from rainuav.radio.tracer import compare
 from rainuav.radio.tracer_scenes import TEST_SCENES, scene
 
-pytestmark = pytest.mark.timeout(600)
+pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]
 
 SAMPLES = 4_000_000
 ALTITUDE = {"box": 20.0, "thick": 10.0, "canyon": 20.0, "corner": 20.0, "block": 8.0}

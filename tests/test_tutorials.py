@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 TUTORIALS = ROOT / "docs" / "tutorials"
 
@@ -23,12 +25,14 @@ def _run(script: str, *args: str, timeout: int) -> str:
     return proc.stdout
 
 
+@pytest.mark.slow
 def test_a_radio_map_of_your_network_in_rain(tmp_path: Path) -> None:
     out = _run("radiomap_in_rain.py", "--out", str(tmp_path), timeout=240)
     assert (tmp_path / "radiomap_in_rain.png").stat().st_size > 10_000
     assert "clear air: SINR median" in out and "50 mm/h: SINR median" in out
 
 
+@pytest.mark.slow
 def test_train_evaluate_and_fly_a_policy(tmp_path: Path) -> None:
     _run("train_evaluate_fly.py", "--out", str(tmp_path), timeout=290)
     storms = tmp_path / "storms"

@@ -8,9 +8,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from rainuav import medium
 
 
+@pytest.mark.slow
 def test_validate_rain_cli(tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "rainuav.validate", "rain", "--out", str(tmp_path)],
