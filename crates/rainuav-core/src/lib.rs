@@ -27,6 +27,7 @@ pub mod memory;
 pub mod mie;
 pub mod obstacles;
 pub mod p838;
+pub mod path;
 pub mod planlevels;
 pub mod planner;
 pub mod plantime;
