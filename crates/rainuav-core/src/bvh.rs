@@ -142,13 +142,7 @@ mod tests {
         // horizontal. near_segment: every box the segment meets (a scan of all of them);
         // near_segment_under: every box with a crossing point at or above the line (the only
         // ones in its way), and no box whose roof stays below the line over its box.
-        let mut s = 5_u64;
-        let mut u = move || {
-            s = s
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut u = crate::test_stream(5);
         let boxes: Vec<Building> = (0..2000)
             .map(|_| {
                 let (x, y) = (3000.0 * u(), 3000.0 * u());

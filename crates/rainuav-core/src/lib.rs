@@ -50,3 +50,16 @@ pub const SPEED_OF_LIGHT_M_S: f64 = 299_792_458.0;
 pub fn wavenumber(freq_hz: f64) -> f64 {
     2.0 * std::f64::consts::PI * freq_hz / SPEED_OF_LIGHT_M_S
 }
+
+/// A seeded uniform stream in `0..1` for the tests' random cases: a 64-bit linear
+/// congruential generator (Knuth's MMIX constants), its top 53 bits.
+#[cfg(test)]
+pub(crate) fn test_stream(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}

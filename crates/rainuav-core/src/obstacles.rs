@@ -2,8 +2,9 @@
 //! included, even-odd rule) extruded from the terrain to a flat roof `top` metres above it.
 //! Boxes are the four-cornered case ([`Prisms::from_boxes`]).
 //!
-//! A bucket grid over the footprints' bounding boxes finds the prisms near a point or along
-//! a segment, so a path's profile reads only the buildings it can cross.
+//! A bucket grid over the footprints' bounding boxes finds the prisms near a point or in a box;
+//! a hierarchy of the boxes with each node's tallest roof ([`crate::bvh`]) finds those along
+//! a segment, so a path reads only the buildings it can cross and that reach its rays.
 
 use crate::bvh::Bvh;
 use crate::error::{CoreError, Result};
@@ -315,11 +316,6 @@ impl Prisms {
             .fold(0.0, f64::max)
     }
 
-    /// The tallest roof above the terrain, m (0: none).
-    pub fn top_max(&self) -> f64 {
-        self.top_max
-    }
-
     /// The prisms whose bounding box the segment `a -> b` meets where the straight line from
     /// height `za` over `a` to `zb` over `b` is no higher than their roof plus `lift` (an upper
     /// bound of the terrain under them), each once, in index order: the only prisms that can
@@ -343,8 +339,8 @@ impl Prisms {
     /// The prisms whose bounding box the segment `a -> b` (points `a + t (b - a)`) meets on
     /// some `lo..=hi` where their roof plus `lift` reaches `floor(lo, hi)`, each once, in index
     /// order. `floor(lo, hi)` is the lowest (m above sea level) a prism standing over
-    /// `t in lo..=hi` must reach to matter to the caller, or less: a bucket of the grid whose
-    /// tallest roof stays below it is not read, nor a prism whose box does.
+    /// `t in lo..=hi` must reach to matter to the caller, or less: a node of the hierarchy
+    /// whose tallest roof stays below it is not read, nor a prism whose box does.
     pub fn near_segment_over(
         &self,
         a: [f64; 2],

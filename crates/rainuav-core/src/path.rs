@@ -103,7 +103,9 @@ impl RayScene<'_> {
             let t = k as f64 / n as f64;
             let (x, y) = (a[0] + t * dx, a[1] + t * dy);
             let z = self.terrain_at(x, y);
-            ground.push((t * rho, z));
+            if self.terrain.is_some() {
+                ground.push((t * rho, z));
+            }
             out.push((
                 t * rho,
                 z + self.heights.as_ref().map_or(0.0, |r| r.cell(x, y)),

@@ -174,13 +174,7 @@ mod tests {
         // the weights once for both slices: the same operations, so the same bits.
         let s = Array3::from_shape_fn((3, 7, 9), |(k, i, j)| ((k * 31 + i * 7 + j) as f64).sin());
         let e = [-3.0, 8.0, 1.0, 5.5];
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::test_stream(12345);
         for _ in 0..2000 {
             let (x, y, f) = (-5.0 + 15.0 * next(), 0.0 + 7.0 * next(), next());
             let (k0, k1) = ((3.0 * next()) as i64, (3.0 * next()) as i64);

@@ -31,13 +31,6 @@ pub struct Sight<'s, 'a> {
 #[derive(Debug, Clone, Copy)]
 pub struct Bounds(f64, f64);
 
-impl Bounds {
-    /// The highest terrain node, m above sea level (0 without a terrain).
-    pub fn terrain_top(&self) -> f64 {
-        self.0
-    }
-}
-
 impl<'a> RayScene<'a> {
     /// The scene's upper bounds for [`Sight`]s (a pass over the rasters: find them once a
     /// map, not once a leg).
@@ -73,6 +66,41 @@ impl Sight<'_, '_> {
     /// their finest spacing, stopping at the first point in the way. Afterwards `near` holds
     /// the buildings that could be in the way.
     pub fn clear(&mut self, a: [f64; 2], za: f64, b: [f64; 2], zb: f64) -> bool {
+        self.walk((a, za), (b, zb), |_, _| false)
+    }
+
+    /// The height `m` that splits the lines from `(a, pa + qa z)` to `(b, pb + qb z)` (ground
+    /// points; heights above sea level linear in `z`, `qa, qb >= 0`, not both 0): for every
+    /// `z >= z_lo`, [`Sight::clear`] holds for the line at `z` exactly where `z > m`
+    /// (`-inf`: nothing in the way). Raising `z` raises the line everywhere between the ends,
+    /// so each point of the profile asks for a least `z`; `m` is the largest such ask. What
+    /// the line at `z_lo` already clears is not read.
+    pub fn lowest(
+        &mut self,
+        (a, pa, qa): ([f64; 2], f64, f64),
+        (b, pb, qb): ([f64; 2], f64, f64),
+        z_lo: f64,
+    ) -> f64 {
+        // The line at z is p(t) + q(t) z; the least z over a point of height h is (h - p) / q.
+        let mut m = f64::NEG_INFINITY;
+        self.walk((a, pa + qa * z_lo), (b, pb + qb * z_lo), |t, h| {
+            let (p, q) = (pa + (pb - pa) * t, qa + (qb - qa) * t);
+            m = m.max((h - p) / q);
+            true
+        });
+        m
+    }
+
+    /// Every point of the surface's profile between `a` and `b` (as [`Sight::clear`] reads
+    /// them) at or above the line from `(a, za)` to `(b, zb)`, handed to `seen(t, height)`
+    /// until it returns false; whether it never did. What the bounds show to be below the
+    /// line is not read.
+    fn walk(
+        &mut self,
+        (a, za): ([f64; 2], f64),
+        (b, zb): ([f64; 2], f64),
+        mut seen: impl FnMut(f64, f64) -> bool,
+    ) -> bool {
         let s = self.scene;
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
         let rho = dx.hypot(dy);
@@ -82,8 +110,7 @@ impl Sight<'_, '_> {
         let line = |t: f64| za + (zb - za) * t;
         if let Some(prisms) = s.prisms {
             let eps = 1e-9_f64.max(1e-6 / rho);
-            let lift = self.terrain_top;
-            prisms.near_segment_under((a, za), (b, zb), lift, &mut self.near);
+            prisms.near_segment_under((a, za), (b, zb), self.terrain_top, &mut self.near);
             for &k in &self.near {
                 self.ts.clear();
                 prisms.crossings(k as usize, a, b, &mut self.ts);
@@ -92,7 +119,8 @@ impl Sight<'_, '_> {
                         if t > 0.0 && t < 1.0 {
                             let (x, y) = (a[0] + t * dx, a[1] + t * dy);
                             let top = s.terrain_at(x, y) + prisms.items()[k as usize].top;
-                            if top >= line(t) && prisms.contains(k as usize, x, y) {
+                            if top >= line(t) && prisms.contains(k as usize, x, y) && !seen(t, top)
+                            {
                                 return false;
                             }
                         }
@@ -108,82 +136,19 @@ impl Sight<'_, '_> {
         if !spacing.is_finite() || za.min(zb) > self.raster_top {
             return true;
         }
-        let surface = |t: f64| {
-            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
-            s.terrain_at(x, y) + s.heights.as_ref().map_or(0.0, |r| r.cell(x, y))
-        };
         let n = ((rho / (0.5 * spacing)).ceil() as usize).max(1);
-        (1..n).all(|k| {
+        for k in 1..n {
             let t = k as f64 / n as f64;
-            line(t) > self.raster_top || surface(t) < line(t)
-        })
-    }
-}
-
-impl Sight<'_, '_> {
-    /// The height `m` that splits the lines from `(a, pa + qa z)` to `(b, pb + qb z)` (ground
-    /// points; heights above sea level linear in `z`, `qa, qb >= 0`, not both 0): for every
-    /// `z >= z_lo`, [`Sight::clear`] holds for the line at `z` exactly where `z > m`
-    /// (`-inf`: nothing in the way). Raising `z` raises the line everywhere between the ends,
-    /// so each point of the profile asks for a least `z`; `m` is the largest such ask. What
-    /// the line at `z_lo` already clears is not read.
-    pub fn lowest(
-        &mut self,
-        (a, pa, qa): ([f64; 2], f64, f64),
-        (b, pb, qb): ([f64; 2], f64, f64),
-        z_lo: f64,
-    ) -> f64 {
-        let s = self.scene;
-        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-        let rho = dx.hypot(dy);
-        if rho < 1e-9 {
-            return f64::NEG_INFINITY;
-        }
-        // The line at z is p(t) + q(t) z; the least z over a point of height h is (h - p) / q.
-        let ask = |t: f64, h: f64| {
-            let (p, q) = (pa + (pb - pa) * t, qa + (qb - qa) * t);
-            (h - p) / q
-        };
-        let (za, zb) = (pa + qa * z_lo, pb + qb * z_lo);
-        let low = |t: f64| za + (zb - za) * t;
-        let mut m = f64::NEG_INFINITY;
-        if let Some(prisms) = s.prisms {
-            let eps = 1e-9_f64.max(1e-6 / rho);
-            let lift = self.terrain_top;
-            prisms.near_segment_under((a, za), (b, zb), lift, &mut self.near);
-            for &k in &self.near {
-                self.ts.clear();
-                prisms.crossings(k as usize, a, b, &mut self.ts);
-                for &t0 in &self.ts {
-                    for t in [t0 - eps, t0 + eps] {
-                        if t > 0.0 && t < 1.0 {
-                            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
-                            let top = s.terrain_at(x, y) + prisms.items()[k as usize].top;
-                            if ask(t, top) > m && prisms.contains(k as usize, x, y) {
-                                m = ask(t, top);
-                            }
-                        }
-                    }
-                }
+            if line(t) > self.raster_top {
+                continue;
+            }
+            let (x, y) = (a[0] + t * dx, a[1] + t * dy);
+            let h = s.terrain_at(x, y) + s.heights.as_ref().map_or(0.0, |r| r.cell(x, y));
+            if h >= line(t) && !seen(t, h) {
+                return false;
             }
         }
-        let spacing = [s.terrain.as_ref(), s.heights.as_ref()]
-            .into_iter()
-            .flatten()
-            .map(|r| r.spacing())
-            .fold(f64::INFINITY, f64::min);
-        if spacing.is_finite() && za.min(zb) <= self.raster_top {
-            let n = ((rho / (0.5 * spacing)).ceil() as usize).max(1);
-            for k in 1..n {
-                let t = k as f64 / n as f64;
-                if low(t) <= self.raster_top {
-                    let (x, y) = (a[0] + t * dx, a[1] + t * dy);
-                    let h = s.terrain_at(x, y) + s.heights.as_ref().map_or(0.0, |r| r.cell(x, y));
-                    m = m.max(ask(t, h));
-                }
-            }
-        }
-        m
+        true
     }
 }
 
@@ -195,20 +160,9 @@ mod tests {
     use ndarray::Array2;
     use num_complex::Complex64;
 
-    /// A seeded uniform stream in 0..1 (a 64-bit LCG's top bits).
-    fn stream(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed;
-        move || {
-            s = s
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
-
     /// 300 boxes 5-60 m tall over 2 km of hills (20 m spacing, 0-40 m), a dielectric ground.
     fn city(dem: &Array2<f64>) -> (Prisms, Raster<'_>) {
-        let mut u = stream(7);
+        let mut u = crate::test_stream(7);
         let boxes: Vec<[f64; 5]> = (0..300)
             .map(|_| {
                 let (x, y) = (2000.0 * u(), 2000.0 * u());
@@ -260,7 +214,7 @@ mod tests {
         // hills and over flat ground (where the bounds are tight).
         let dem = hills();
         let (prisms, terrain) = city(&dem);
-        let mut u = stream(11);
+        let mut u = crate::test_stream(11);
         for (altitude, ground) in [10.0, 40.0, 120.0]
             .into_iter()
             .flat_map(|a| [(a, Some(terrain)), (a, None)])
@@ -287,7 +241,7 @@ mod tests {
         let (prisms, terrain) = city(&dem);
         let s = scene(&prisms, Some(terrain), 30.0);
         let mut sight = s.sight(s.bounds());
-        let mut u = stream(3);
+        let mut u = crate::test_stream(3);
         let (mut blocked, mut clear) = (0, 0);
         for _ in 0..300 {
             let (a, b) = ([2000.0 * u(), 2000.0 * u()], [2000.0 * u(), 2000.0 * u()]);
