@@ -1,6 +1,6 @@
 """Which bits this CPU gives: a fingerprint of one forward and backward pass of the storm
-learner's network (``STORM_LEARNER``, seed 0) on a fixed batch of 128 observations, one torch
-thread. The same seed gives the same training run on one machine; across machines the run
+learner's network (the ``storms`` preset's, seed 0) on a fixed batch of 128 observations, one
+torch thread. The same seed gives the same training run on one machine; across machines the run
 repeats only where this fingerprint is the same, because oneDNN and MKL choose their kernels
 (and so the order of their sums) by the CPU's vector instructions.
 

@@ -1,5 +1,5 @@
 """One decision for 64 UAVs by the weather-reading network, on the CPU (the aim: at
-most 1 ms): the storm learner's network (``STORM_LEARNER``: 8/16 channels, move features), the
+most 1 ms): the storm learner's network (the ``storms`` preset's: 8/16 channels, move features), the
 first one (16/32 channels), and the single-map network doing the same decision in the same
 run.
 
@@ -24,7 +24,7 @@ import numpy as np
 import torch
 from rainuav.nav import UAVNavEnv
 from rainuav.nav.field import SignalSeries
-from rainuav.rl.config import STORM_LEARNER, DQNConfig
+from rainuav.rl.config import DQNConfig, preset_learner
 from rainuav.rl.dqn import Agent
 from rainuav.rl.setup import make_encoder
 
@@ -54,9 +54,9 @@ def storm_and_fleet(n: int = N) -> tuple[SignalSeries, np.ndarray, np.ndarray, n
 
 
 def storm_network() -> DQNConfig:
-    """The storm learner's network (``STORM_LEARNER``'s architecture, default training)."""
+    """The storm learner's network (the ``storms`` preset's architecture, default training)."""
     keys = ("conv", "move_features", "goal_maps")
-    return DQNConfig(**{k: v for k, v in STORM_LEARNER.items() if k in keys})
+    return DQNConfig(**{k: v for k, v in preset_learner("storms").items() if k in keys})
 
 
 def make_agent(d: DQNConfig, observation: str, field: SignalSeries) -> tuple[UAVNavEnv, Agent]:

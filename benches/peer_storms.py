@@ -7,7 +7,7 @@ same wall-clock budget, all measured the same way on held-out storms.
 
 The env: ``UAVNavEnv(observation="weather")`` (the task's fixed destination) over a pool of 16
 training storms (:class:`rainuav.world.pool.StormPool`, the pool ``python -m rainuav.train
---storm-seed random`` trains on), one drawn per episode, a storm renewed every 32 episodes.
+--preset storms`` trains on), one drawn per episode, a storm renewed every 32 episodes.
 rainuav's learner trains first with ``time_budget_s`` = the budget (``--skip-rainuav RUN``: take
 a run already trained, e.g. the README's, and its training time as the budget;
 ``--peers-only``: the peers alone, for ``--budget-s``, each peer in its own process with
@@ -30,7 +30,7 @@ import gymnasium as gym
 import numpy as np
 from peer import policy_flights, run_sb3
 from rainuav.nav.env import UAVNavEnv
-from rainuav.rl.config import STORM_LEARNER, DQNConfig, TrainConfig, load_config
+from rainuav.rl.config import DQNConfig, TrainConfig, load_config, preset_learner
 from rainuav.rl.evaluation import eval_starts, reference_flights, summarise
 from rainuav.rl.loop import train
 from rainuav.rl.storm_eval import SUMMARY_KEYS
@@ -117,13 +117,13 @@ def main(argv: list[str] | None = None) -> int:
     from rainuav.rl.storm_eval import evaluate_storms
 
     torch.set_num_threads(1)
-    # The storm learner (what --storm-seed random trains), its episodes scaled to the budget
+    # The storm learner (what --preset storms trains), its episodes scaled to the budget
     # at the 4.0 episodes/s of the README's run (9000 in 2256 s), the budget a cap.
     episodes = max(100, int(args.budget_s * 9000 / 2256))
     cfg = TrainConfig(
         scenario="storm", observation="weather", storm_pool=16, seed=args.seed,
         out=str(args.out / "rainuav"), time_budget_s=args.budget_s, validate_every=0,
-        eval_starts=20, dqn=DQNConfig(**{**STORM_LEARNER, "episodes": episodes}),
+        eval_starts=20, dqn=DQNConfig(**{**preset_learner("storms"), "episodes": episodes}),
     )  # fmt: skip
     seeds = list(range(1_000_000, 1_000_000 + args.storms))
     report: dict[str, Any] = {"budget_s": args.budget_s, "storms": seeds}

@@ -22,7 +22,7 @@ runs=$(mktemp -d)
 export PYTHONUNBUFFERED=1
 [[ $devices != *cuda* ]] || $py -c "import torch; assert torch.cuda.is_available(), 'no CUDA device'; print(torch.__version__, torch.cuda.get_device_name(0))"
 for dev in $devices; do
-    $py -m rainuav.train --scenario storm --storm-seed random --episodes "$episodes" \
+    $py -m rainuav.train --preset storms --dqn.episodes "$episodes" \
         --device "$dev" --out "$runs/$dev" --eval-starts "$starts" >"$out/train_$dev.log" 2>&1 &
 done
 wait

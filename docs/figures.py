@@ -50,7 +50,7 @@ def run(args: list[str]) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--storm-run", type=Path, default=None,
-                    help="a run of python -m rainuav.train --scenario storm --storm-seed random, "
+                    help="a run of python -m rainuav.train --preset storms, "
                     "evaluated with --storm-seeds 1000000-1000049")  # fmt: skip
     args = ap.parse_args()
     FIGURES.mkdir(parents=True, exist_ok=True)

@@ -542,7 +542,7 @@ def test_bad_train_config(tmp_path: Path) -> None:
         check_config(TrainConfig(dqn=DQNConfig(gamma=1.5)))
     with pytest.raises(InvalidInputError, match="device"):
         check_config(TrainConfig(device="tpu"))
-    with pytest.raises(InvalidInputError, match=r"lr_final must be > 0 \(got nan\)"):
+    with pytest.raises(InvalidInputError, match=r"lr_final must be >= 0 \(0: lr .*\(got nan\)"):
         check_config(TrainConfig(dqn=DQNConfig(lr_final=float("nan"))))
     with pytest.raises(InvalidInputError, match=r"average_from must be in \[0, 1\] \(got 1.5\)"):
         check_config(TrainConfig(dqn=DQNConfig(average_from=1.5)))

@@ -274,23 +274,3 @@ def test_a_pool_that_cannot_fit_is_refused(monkeypatch: pytest.MonkeyPatch, tmp_
     pool.close()
     cached = tmp_path / "cache"
     assert len(pool.flown) == 2 and not (cached.exists() and any(cached.rglob("*.npz")))
-
-
-def test_storm_seed_random_among_levels_sets_its_pool_and_engine() -> None:
-    """``--storm-seed random --altitudes``: 8 storms renewed every 48 episodes, mapped by the
-    rays, 4000 episodes, the storm learner otherwise; each unless given."""
-    from rainuav.rl.config import STORM_LEARNER, STORM_LEVELS, STORM_LEVELS_EPISODES
-    from rainuav.train import build_parser, config_from_args
-
-    argv = ["--scenario", "storm", "--storm-seed", "random", "--altitudes", "25:115:15"]
-    cfg = config_from_args(build_parser().parse_args(argv))
-    assert all(getattr(cfg, k) == v for k, v in STORM_LEVELS.items())
-    assert cfg.dqn.episodes == STORM_LEVELS_EPISODES and cfg.observation == "weather"
-    assert all(getattr(cfg.dqn, k) == v for k, v in STORM_LEARNER.items() if k != "episodes")
-    given = ["--engine", "hybrid", "--storm-pool", "4", "--episodes", "100"]
-    cfg = config_from_args(build_parser().parse_args([*argv, *given]))
-    assert (cfg.engine, cfg.storm_pool, cfg.dqn.episodes, cfg.storm_episodes) == (
-        "hybrid", 4, 100, 48,
-    )  # fmt: skip
-    cfg = config_from_args(build_parser().parse_args(argv[:4]))
-    assert (cfg.storm_pool, cfg.engine, cfg.dqn.episodes) == (16, "", 9000)  # one level

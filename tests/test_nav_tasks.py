@@ -4,7 +4,6 @@ Gymnasium's own ``SyncVectorEnv`` of scalar envs, the cost metrics and the learn
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import gymnasium as gym
@@ -18,7 +17,7 @@ from rainuav.nav import UAVNavEnv, flight_cost, planner
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio.radiomap import RadioMap
 from rainuav.radio.scenario import Area, Scenario, Site
-from rainuav.rl.config import PAPER_LEARNER, DQNConfig, TrainConfig, apply_preset
+from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.evaluation import flights, reference_flights, summarise
 from rainuav.world import in_world
 
@@ -201,19 +200,7 @@ def test_flight_cost_and_excess_cost_by_hand() -> None:
     assert f["outage_sum"][0] == np.sum(sig < c.min_db)
 
 
-# -- the learner preset -------------------------------------------------------------------------
-def test_paper_preset_sets_algorithm_1_and_refuses_changes_to_it() -> None:
-    cfg = apply_preset(TrainConfig(preset="paper", dqn=DQNConfig(lr=5e-4, episodes=10)))
-    for k, v in PAPER_LEARNER.items():
-        assert getattr(cfg.dqn, k) == v, k
-    assert cfg.dqn.lr == cfg.dqn.lr_final == 5e-4  # constant learning rate (paper silent)
-    assert cfg.dqn.episodes == 10
-    assert apply_preset(dataclasses.replace(cfg, preset="")) is not cfg  # no preset: as given
-    with pytest.raises(InvalidInputError, match=r"dqn\.lanes"):
-        apply_preset(TrainConfig(preset="paper"), given={"lanes"})
-
-
-def test_train_cli_sets_every_task_field_and_refuses_preset_clashes(
+def test_train_cli_sets_every_task_field_and_refuses_bad_values(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     from rainuav.train import build_parser, config_from_args, main
@@ -231,27 +218,8 @@ def test_train_cli_sets_every_task_field_and_refuses_preset_clashes(
     assert (cfg.signal, cfg.min_db, cfg.goal_x_m, cfg.goal_y_m, cfg.max_steps) == (
         "sir", 3.0, 100.0, 200.0, 50,
     )  # fmt: skip
-    assert main(["--preset", "paper", "--lanes", "4", "--out", str(tmp_path)]) == 2
-    assert "dqn.lanes" in capsys.readouterr().err
     assert main(["--min-db", "nan", "--out", str(tmp_path)]) == 2
     assert "min_db" in capsys.readouterr().err
-
-
-@pytest.mark.slow
-def test_paper_preset_trains_and_records_its_choices(tmp_path: Path) -> None:
-    import tomllib
-    from rainuav.rl.loop import train
-
-    cfg = TrainConfig(
-        preset="paper", out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=60,
-        eval_starts=5, validate_every=0, checkpoint_every=2, dqn=DQNConfig(episodes=4),
-    )  # fmt: skip
-    m = train(*in_world(cfg, _map()), progress=False)
-    assert m["episodes"] == 4 and "shielded_success_rate" not in m
-    saved = tomllib.loads((tmp_path / "config.toml").read_text())
-    assert saved["preset"] == "paper"
-    for k, v in PAPER_LEARNER.items():
-        assert saved["dqn"][k] == v, k
 
 
 def test_time_budget_ends_training_early(tmp_path: Path) -> None:

@@ -379,38 +379,6 @@ def test_runs_without_move_features_keep_their_network() -> None:
     assert new.local[2].out_channels == 16 and new.move_gain.weight.shape == (1, 2)
 
 
-def test_storm_seed_random_sets_the_storm_learner() -> None:
-    """``--storm-seed random``: the pool, the weather observation, random destinations, the
-    storm learner's [dqn] fields and the budget, each unless given beside it."""
-    from rainuav.rl.config import STORM_BUDGET_S, STORM_CALM_SHARE, STORM_LEARNER
-    from rainuav.train import build_parser, config_from_args
-
-    cfg = config_from_args(
-        build_parser().parse_args(["--scenario", "storm", "--storm-seed", "random"])
-    )
-    assert (cfg.storm_pool, cfg.observation, cfg.random_goal) == (16, "weather", True)
-    assert (cfg.time_budget_s, cfg.calm_share) == (STORM_BUDGET_S, STORM_CALM_SHARE)
-    assert cfg.dqn.goal_maps and 0 < cfg.calm_share < 1
-    assert all(getattr(cfg.dqn, k) == v for k, v in STORM_LEARNER.items())
-    argv = [
-        "--scenario",
-        "storm",
-        "--storm-seed",
-        "random",
-        "--random-goal",
-        "false",
-        "--conv",
-        "4",
-        "--calm-share",
-        "0",
-        "--goal-maps",
-        "false",
-    ]
-    cfg = config_from_args(build_parser().parse_args(argv))
-    assert (cfg.random_goal, cfg.dqn.conv, cfg.dqn.move_features) == (False, 4, True)
-    assert (cfg.calm_share, cfg.dqn.goal_maps) == (0.0, False)
-
-
 def test_task_goals_mix_the_tasks_destination_into_training() -> None:
     """With ``task_goals = 0.3`` a drawn-destination env's training flights go to the task's
     own destination 30% of the time (4000 draws: within 3 standard errors), the rest to drawn

@@ -3,10 +3,12 @@
 With no arguments: the paper's scenario in its own weather (25 mm/h; radio map built or taken from
 the cache), the default learner (the paper's Algorithm 1 with measured departures from its Table I,
 each listed on the Learning page; ``--preset paper`` runs Algorithm 1 and Table I literally), seed
-0, results in ``runs/paper``. Every flag is a field of
-[`rainuav.rl.config.TrainConfig`][rainuav.rl.config.TrainConfig] or
-[`rainuav.rl.config.DQNConfig`][rainuav.rl.config.DQNConfig] (``--help`` lists them); ``--config
-run.toml`` reads them from a file, and flags given beside it win. ``--resume`` continues an
+0, results in ``runs/paper``. ``--preset NAME|FILE`` starts from a preset (a TOML file of fields:
+``paper``, ``storms``, ``storm-levels`` ship with the package); every field of
+[`rainuav.rl.config.TrainConfig`][rainuav.rl.config.TrainConfig] is a flag ``--name`` and every
+field of [`rainuav.rl.config.DQNConfig`][rainuav.rl.config.DQNConfig] a flag ``--dqn.name``
+(``--help`` lists the run's own, ``--help-all`` all); ``--config run.toml`` reads fields from a
+file; flags win over the file, the file over the preset. ``--resume`` continues an
 interrupted run from its checkpoint (same configuration). The world (map or maps in time, and the
 task) is built here from the configuration's world part
 ([`rainuav.world.build_world()`][rainuav.world.build_world]) and handed to the job,
@@ -18,6 +20,7 @@ import argparse
 import dataclasses
 import itertools
 import sys
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -55,12 +58,15 @@ def _parse_bool(text: str) -> bool:
     raise argparse.ArgumentTypeError(f"expected true or false (got {text!r})")
 
 
-DEFAULT_POOL = 16
-"""Storms flown at once by ``--storm-seed random`` (one per UAV of the default 16 in flight)."""
+SHOWN = (
+    "preset", "scenario", "scenario_file", "rain_rate", "freq_ghz", "engine", "altitudes",
+    "storm_seed", "seed", "out", "device", "time_budget_s", "eval_starts", "dqn.episodes",
+)  # fmt: skip
+"""The run's own flags, the ones ``--help`` lists (``--help-all``: every field)."""
 
 
 def _storm_seed(text: str) -> int | str:
-    """A storm seed, or 'random': the storm distribution (a pool of training storms)."""
+    """A storm seed, or 'random': the storm distribution (the ``storms`` preset)."""
     if text == "random":
         return text
     try:
@@ -70,86 +76,82 @@ def _storm_seed(text: str) -> int | str:
         raise argparse.ArgumentTypeError(msg) from None
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """CLI flags generated from TrainConfig and DQNConfig (one per field)."""
+def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
+    """CLI flags generated from TrainConfig (``--name``) and DQNConfig (``--dqn.name``), one per
+    field; ``--help`` lists the run's own ([`SHOWN`][rainuav.train.SHOWN]), ``--help-all`` every
+    one."""
     from rainuav._checks import field_kind
-    from rainuav.rl.config import DQNConfig, TrainConfig
+    from rainuav.rl.config import DQNConfig, TrainConfig, preset_names
 
     flag_types = {"int": int, "float": float, "str": str, "bool": _parse_bool}
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.train",
         description=_cli.plain_help(__doc__),
+        epilog=textwrap.fill(
+            f"Presets shipped: {', '.join(preset_names())} (rainuav/rl/preset_files). Every "
+            "field of the run is a flag: --NAME for the run's (e.g. --max-steps 80), --dqn.NAME "
+            "for the learner's (e.g. --dqn.lr 1e-4); --help-all lists them with their defaults.",
+            width=79,
+        ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    ap.add_argument("--config", type=Path, help="a TOML file of TrainConfig fields")
+    ap.add_argument("--help-all", action="store_true", help="list every field's flag and exit")
+    ap.add_argument("--config", type=Path, help="a TOML file of the run's fields (config.toml)")
     ap.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
-    for cls in (TrainConfig, DQNConfig):
+    for cls, prefix in ((TrainConfig, ""), (DQNConfig, "dqn.")):
         docs = _field_docs(cls)
         for f in dataclasses.fields(cls):
             if f.name == "dqn":
                 continue
+            name = prefix + f.name
             default = "unset" if f.default is None else f.default
             kind = _storm_seed if f.name == "storm_seed" else flag_types.get(field_kind(f)[0], str)
             more = (
-                " Or 'random': one network over the storm distribution (--storm-pool "
-                f"{DEFAULT_POOL}, --observation weather, --random-goal true, the storm "
-                "learner's [dqn] fields and a 55-minute budget unless given; with "
-                "--altitudes also --storm-pool 8, --storm-episodes 48, --engine ray and "
-                "--episodes 4000)"
+                " Or 'random': --preset storms (with --altitudes: --preset storm-levels)"
                 if f.name == "storm_seed"
                 else ""
             )
+            text = _cli.plain_help(f"{docs.get(f.name, '')}{more} (default {default})")
+            shown = show_all or name in SHOWN
+            flags = [f"--{prefix}{f.name.replace('_', '-')}"]
             ap.add_argument(
-                f"--{f.name.replace('_', '-')}",
-                dest=f.name,
-                type=kind,
-                default=None,
-                help=_cli.plain_help(f"{docs.get(f.name, '')}{more} (default {default})"),
-            )
+                *flags, dest=name, type=kind, default=None,
+                help=text if shown else argparse.SUPPRESS,
+            )  # fmt: skip
+            if prefix:  # the learner's fields also as --name, as before the dotted form
+                alias = f"--{f.name.replace('_', '-')}"
+                ap.add_argument(alias, dest=name, type=kind, default=None, help=argparse.SUPPRESS)
     return ap
 
 
 def config_from_args(args: argparse.Namespace) -> Any:
-    """The run's TrainConfig: the ``--config`` file's fields, overridden by the flags given."""
-    from rainuav.rl.config import (
-        STORM_BUDGET_S,
-        STORM_CALM_SHARE,
-        STORM_LEARNER,
-        STORM_LEVELS,
-        STORM_LEVELS_EPISODES,
-        DQNConfig,
-        TrainConfig,
-        apply_preset,
-        read_config,
-    )
+    """The run's TrainConfig: its preset, then the ``--config`` file's fields, then the flags
+    given ([`rainuav.rl.config.resolve_config()`][rainuav.rl.config.resolve_config]). ``--storm-seed
+    random`` is ``--preset storms`` (``storm-levels`` with ``--altitudes``)."""
+    from rainuav.rl.config import DQNConfig, TrainConfig, preset_fields, read_config, resolve_config
 
-    base: dict[str, Any] = {}
-    dqn_kw: dict[str, Any] = {}
+    fields: dict[str, Any] = {}
     if args.config is not None:
-        base, dqn_kw = read_config(args.config)
-    for f in dataclasses.fields(DQNConfig):
-        if getattr(args, f.name, None) is not None:
-            dqn_kw[f.name] = getattr(args, f.name)
-    for f in dataclasses.fields(TrainConfig):
-        if f.name != "dqn" and getattr(args, f.name, None) is not None:
-            base[f.name] = getattr(args, f.name)
-    if base.get("storm_seed") == "random":  # the storm distribution: a pool of storms
-        base["storm_seed"] = 0
-        if base.get("altitudes"):  # among levels: fewer storms at once, mapped by the rays
-            for k, v in STORM_LEVELS.items():
-                base.setdefault(k, v)
-            dqn_kw.setdefault("episodes", STORM_LEVELS_EPISODES)
-        base.setdefault("storm_pool", DEFAULT_POOL)
-        base.setdefault("observation", "weather")
-        base.setdefault("random_goal", True)
-        base.setdefault("time_budget_s", STORM_BUDGET_S)
-        base.setdefault("calm_share", STORM_CALM_SHARE)
-        for k, v in STORM_LEARNER.items():
-            dqn_kw.setdefault(k, v)
-    cfg = TrainConfig(**base, dqn=DQNConfig(**dqn_kw))
-    # A run's own config.toml (--resume) holds the preset's values already: not a clash.
-    given = set(dqn_kw) if not (args.resume and args.config is None) else set()
-    return apply_preset(cfg, given - {"episodes"} if cfg.preset else given)
+        top, dqn = read_config(args.config)
+        fields.update(top)
+        fields.update({f"dqn.{k}": v for k, v in dqn.items()})
+    flags = {}
+    for cls, prefix in ((TrainConfig, ""), (DQNConfig, "dqn.")):
+        for f in dataclasses.fields(cls):
+            value = getattr(args, prefix + f.name, None)
+            if f.name != "dqn" and value is not None:
+                flags[prefix + f.name] = value
+    fields.update(flags)
+    if fields.get("storm_seed") == "random":  # the storm distribution: a preset
+        del fields["storm_seed"], flags["storm_seed"]
+        fields.setdefault("preset", "storm-levels" if fields.get("altitudes") else "storms")
+    if fields.get("preset") and not args.resume:
+        preset = preset_fields(fields["preset"])
+        for k in sorted(set(flags) & set(preset)):
+            if flags[k] != preset[k]:
+                print(f"note: --{k.replace('_', '-')} {flags[k]} in place of the preset "
+                      f"{fields['preset']!r}'s {preset[k]}", file=sys.stderr)  # fmt: skip
+    return resolve_config(fields)
 
 
 def summary(metrics: dict[str, Any], out: Path) -> str:
@@ -203,6 +205,10 @@ def budget_note(done: int, planned: int, budget_s: float, out: Path) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if "--help-all" in argv:
+        build_parser(show_all=True).print_help()
+        return 0
     args = build_parser().parse_args(argv)
     out: list[Path] = []  # the run's folder, once its configuration is known
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -20,20 +19,19 @@ from rainuav.errors import InvalidInputError
 from rainuav.world import WorldSpec, check_spec
 
 __all__ = [
-    "PAPER_LEARNER",
-    "STORM_BUDGET_S",
-    "STORM_CALM_SHARE",
-    "STORM_LEARNER",
-    "STORM_LEVELS",
-    "STORM_LEVELS_EPISODES",
+    "PRESET_DIR",
     "DQNConfig",
     "TrainConfig",
-    "apply_preset",
     "check_config",
     "config_diff",
+    "flat",
     "load_config",
+    "preset_fields",
+    "preset_learner",
+    "preset_names",
     "random_streams",
     "read_config",
+    "resolve_config",
     "to_dict",
 ]
 
@@ -61,7 +59,8 @@ class DQNConfig:
     lr: float = 1e-3
     """Adam learning rate at the start."""
     lr_final: float = 3e-5
-    """Learning rate after the last episode (cosine decay from lr over the episodes)."""
+    """Learning rate after the last episode (cosine decay from lr over the episodes; 0: a
+    constant learning rate, lr throughout)."""
     average_from: float = 0.8
     """Fraction of the episodes after which the reported network is the running mean of the
     online weights, one sample per finished episode (weight averaging); 1: the final online
@@ -129,9 +128,10 @@ class TrainConfig(WorldSpec):
     CLI flag."""
 
     preset: str = ""
-    """Learner preset: '' (the tuned learner, docs/guide/learning.md) or 'paper' (Algorithm 1 and
-    Table I literally: the [dqn] fields are set as docs/guide/learning.md lists, and any given
-    beside it are refused)."""
+    """The preset the run starts from: '' (the defaults: the tuned learner, docs/guide/learning.md),
+    a preset shipped with the package ('paper': Algorithm 1 and Table I literally; 'storms';
+    'storm-levels') or a TOML file of fields; the fields given beside it win
+    ([`resolve_config()`][rainuav.rl.config.resolve_config])."""
     seed: int = 0
     """Seed of every random choice (python, numpy, torch, environment)."""
     device: str = "auto"
@@ -197,7 +197,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("gamma", 0 < d.gamma <= 1, "in (0, 1]"),
         ("n_step", d.n_step >= 1, ">= 1"),
         ("lr", 0 < d.lr < math.inf, "> 0"),
-        ("lr_final", 0 < d.lr_final < math.inf, "> 0"),
+        ("lr_final", 0 <= d.lr_final < math.inf, ">= 0 (0: lr throughout)"),
         ("average_from", 0 <= d.average_from <= 1, "in [0, 1]"),
         ("hidden", d.hidden >= 1, ">= 1"),
         ("fourier", d.fourier >= 0, ">= 0"),
@@ -214,7 +214,11 @@ def check_config(cfg: TrainConfig) -> None:
         ("reward_scale", 0 < d.reward_scale < math.inf, "> 0"),
         ("grad_clip", 0 <= d.grad_clip < math.inf, ">= 0 and finite"),
         ("loss", d.loss in ("huber", "mse"), "'huber' or 'mse'"),
-        ("preset", cfg.preset in ("", "paper"), "'' or 'paper'"),
+        (
+            "preset",
+            cfg.preset in ("", *preset_names()) or Path(cfg.preset).is_file(),
+            f"'', one of {preset_names()} or a TOML file",
+        ),
         ("step_m", 0 < cfg.step_m < math.inf, "> 0 and finite"),
         ("tol_m", 0 < cfg.tol_m < math.inf, "> 0 and finite"),
         ("goal_reward", math.isfinite(cfg.goal_reward), "finite"),
@@ -238,88 +242,79 @@ def check_config(cfg: TrainConfig) -> None:
     check_spec(cfg)
 
 
-STORM_LEARNER: dict[str, Any] = {
-    "episodes": 9000,
-    "batch_size": 64,
-    "lr": 3e-4,
-    "target_sync_episodes": 25,
-    "conv": 8,
-    "move_features": True,
-    "goal_maps": True,
-}
-"""What ``--storm-seed random`` changes in [dqn] unless given: a larger minibatch, a lower learning
-rate and a slower target for the convolutional network over many storms, and the destination drawn
-on its grids (goal maps) (chosen on validation storms 900 000-900 009 and ``uma`` at 5 mm/h, with
-training storms only: docs/guide/learning.md, "One network for every storm"); with ``time_budget_s``
-= [`STORM_BUDGET_S`][rainuav.rl.config.STORM_BUDGET_S] and ``calm_share`` =
-[`STORM_CALM_SHARE`][rainuav.rl.config.STORM_CALM_SHARE]."""
-
-STORM_LEVELS: dict[str, Any] = {
-    "storm_pool": 8,
-    "storm_episodes": 48,
-    "engine": "ray",
-}
-"""What ``--storm-seed random`` with ``--altitudes`` changes besides, unless given: a storm among
-seven levels takes 19 s to map with the ray engine, against 2.9 s on one level (the hybrid
-marches every cell for the low levels: 44-55 s for a network's first storm, 14 s for the next
-with the march shared); 8 storms at once, each renewed after 48 episodes, keep the mapping
-thread nearly ahead of training (docs/guide/altitude.md, "One network for every storm among
-levels", where the network trained so is measured); with [dqn] ``episodes`` =
-[`STORM_LEVELS_EPISODES`][rainuav.rl.config.STORM_LEVELS_EPISODES]."""
-STORM_LEVELS_EPISODES = 4000
-"""The episodes of ``--storm-seed random`` with ``--altitudes`` unless given."""
-
-STORM_CALM_SHARE = 0.15
-"""The share of the pool's storms ``--storm-seed random`` flies calm unless given (selected on
-validation with the goal maps: docs/guide/learning.md, "Goal maps with calm weather")."""
-STORM_BUDGET_S = 3300.0
-"""The wall-clock budget of ``--storm-seed random`` unless given: 55 minutes (the issue's
-ceiling is 60)."""
+PRESET_DIR = Path(__file__).with_name("preset_files")
+"""Where the presets shipped with the package live, one TOML file each (``NAME.toml``)."""
 
 
-PAPER_LEARNER: dict[str, Any] = {
-    # Table I.
-    "target_sync_episodes": 5,
-    "eps0": 0.5,
-    "eps_decay": 0.998,
-    "replay_capacity": 100_000,
-    "batch_size": 16,
-    # Algorithm 1: one gradient step per move once |D| >= B, squared loss, one UAV at a
-    # time, the position as the only input, the env's rewards as they are, no safety layer.
-    "learning_starts": 16,
-    "train_every": 1,
-    "loss": "mse",
-    "lanes": 1,
-    "fourier": 0,
-    "goal_features": 0,
-    "time_aware": False,
-    "goal_starts": 0.0,
-    "shaping": 0.0,
-    "sir_weight": 1.0,
-    "reward_scale": 1.0,
-    "grad_clip": 0.0,
-    "average_from": 1.0,
-    "shield": False,
-}
-"""The [dqn] fields ``preset = "paper"`` fixes (Algorithm 1 and Table I). The paper is silent
-on ``gamma``, ``n_step``, ``lr`` and ``hidden``: they keep their values (the defaults unless
-given), with a constant learning rate; ``episodes`` (Table I: 3000) may be lowered."""
+def preset_names() -> list[str]:
+    """The presets shipped with the package (``paper``, ``storms``, ``storm-levels``)."""
+    return sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
 
 
-def apply_preset(cfg: TrainConfig, given: Iterable[str] = ()) -> TrainConfig:
-    """``cfg`` with its learner preset applied (``preset = "paper"``:
-    [`PAPER_LEARNER`][rainuav.rl.config.PAPER_LEARNER], constant learning rate). ``given``: the
-    [dqn] fields the user set explicitly; one that the preset fixes is refused, naming it."""
-    if cfg.preset != "paper":
-        return cfg
-    clash = sorted(set(given) & set(PAPER_LEARNER))
-    if clash:
+def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict[str, Any]:
+    """The fields a preset sets, flat (``"scenario"``, ``"dqn.lr"``): a shipped preset by name
+    ([`preset_names()`][rainuav.rl.config.preset_names]) or a TOML file of the form of a run's
+    ``config.toml`` (some fields only), which may start from another preset (``extends =
+    "NAME"``, its own fields winning). An unknown name or a bad file raises InvalidInputError."""
+    text = str(name_or_path)
+    path = PRESET_DIR / f"{text}.toml" if text in preset_names() else Path(text)
+    if not path.is_file():
         raise InvalidInputError(
-            f"preset 'paper' fixes dqn.{clash[0]} (Algorithm 1 and Table I); drop the flag or "
-            "the preset"
+            f"preset must be one of {preset_names()} or a TOML file (got {text!r}: no such file)"
         )
-    dqn = dataclasses.replace(cfg.dqn, **PAPER_LEARNER, lr_final=cfg.dqn.lr)
-    return dataclasses.replace(cfg, dqn=dqn)
+    data = read_toml(path, "preset")
+    base = data.pop("extends", None)
+    if base is not None and (not isinstance(base, str) or base in (*_seen, text)):
+        raise InvalidInputError(f"preset {path}: extends must name another preset (got {base!r})")
+    fields = {} if base is None else preset_fields(base, (*_seen, text))
+    top, dqn = _split(data, f"preset {path}")
+    return {**fields, **top, **{f"dqn.{k}": v for k, v in dqn.items()}}
+
+
+def preset_learner(name_or_path: str | Path) -> dict[str, Any]:
+    """The [dqn] fields a preset sets (names without ``dqn.``)."""
+    return {k[4:]: v for k, v in preset_fields(name_or_path).items() if k.startswith("dqn.")}
+
+
+def resolve_config(fields: dict[str, Any]) -> TrainConfig:
+    """The run's configuration from flat ``fields`` (TrainConfig names, ``dqn.<name>`` for the
+    learner's): the defaults, then the preset that ``fields["preset"]`` names
+    ([`preset_fields()`][rainuav.rl.config.preset_fields]), then ``fields`` themselves. The one
+    place where a preset and overrides meet (the ``train`` command, studies, a run's
+    ``config.toml`` read back); the result records the preset's name."""
+    given = dict(fields)
+    preset = given.get("preset") or ""
+    merged = {**(preset_fields(preset) if preset else {}), **given}
+    top = {k: v for k, v in merged.items() if not k.startswith("dqn.")}
+    dqn = {k[4:]: v for k, v in merged.items() if k.startswith("dqn.")}
+    _split({**top, "dqn": dqn}, "configuration")
+    try:
+        return TrainConfig(**top, dqn=DQNConfig(**dqn))
+    except TypeError as err:
+        raise InvalidInputError(f"configuration: {err}") from err
+
+
+def flat(cfg: TrainConfig) -> dict[str, Any]:
+    """The fields of ``cfg`` flat (``dqn.<name>`` for the learner's), as
+    [`resolve_config()`][rainuav.rl.config.resolve_config] takes them."""
+    d = to_dict(cfg)
+    dqn = d.pop("dqn")
+    return {**d, **{f"dqn.{k}": v for k, v in dqn.items()}}
+
+
+def _split(data: dict[str, Any], where: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The TrainConfig fields and the [dqn] fields of a TOML table; unknown names raise
+    InvalidInputError naming ``where``."""
+    data = dict(data)
+    dqn = data.pop("dqn", {})
+    if not isinstance(dqn, dict):
+        raise InvalidInputError(f"{where}: [dqn] must be a table")
+    unknown = sorted(set(data) - {f.name for f in dataclasses.fields(TrainConfig)}) + sorted(
+        f"dqn.{k}" for k in set(dqn) - {f.name for f in dataclasses.fields(DQNConfig)}
+    )
+    if unknown:
+        raise InvalidInputError(f"{where}: unknown field(s) {unknown}")
+    return data, dict(dqn)
 
 
 def to_dict(cfg: TrainConfig) -> dict[str, Any]:
@@ -330,25 +325,13 @@ def to_dict(cfg: TrainConfig) -> dict[str, Any]:
 def read_config(path: str | Path) -> tuple[dict[str, Any], dict[str, Any]]:
     """The TrainConfig fields and the [dqn] fields of a TOML file; a missing or malformed file
     and unknown names raise InvalidInputError naming the file."""
-    data = read_toml(path, "config file")
-    dqn = data.pop("dqn", {})
-    if not isinstance(dqn, dict):
-        raise InvalidInputError(f"config file {path}: [dqn] must be a table")
-    unknown = sorted(set(data) - {f.name for f in dataclasses.fields(TrainConfig)}) + sorted(
-        f"dqn.{k}" for k in set(dqn) - {f.name for f in dataclasses.fields(DQNConfig)}
-    )
-    if unknown:
-        raise InvalidInputError(f"{path}: unknown field(s) {unknown}")
-    return data, dict(dqn)
+    return _split(read_toml(path, "config file"), f"config file {path}")
 
 
 def load_config(path: str | Path) -> TrainConfig:
-    """A TrainConfig from a TOML file (a run's ``config.toml``)."""
-    data, dqn = read_config(path)
-    try:
-        return TrainConfig(**data, dqn=DQNConfig(**dqn))
-    except TypeError as err:
-        raise InvalidInputError(f"config file {path}: {err}") from err
+    """A TrainConfig from a TOML file (a run's ``config.toml``): its fields over its preset's."""
+    top, dqn = read_config(path)
+    return resolve_config({**top, **{f"dqn.{k}": v for k, v in dqn.items()}})
 
 
 def config_diff(saved: dict[str, Any], cfg: TrainConfig, ignore: tuple[str, ...] = ()) -> list[str]:

@@ -272,10 +272,11 @@ class Agent:
 
     def anneal(self, finished: int) -> None:
         """Sets the learning rate for ``finished`` episodes done: cosine from ``lr`` to
-        ``lr_final`` over the run."""
+        ``lr_final`` over the run (``lr_final = 0``: ``lr`` throughout)."""
         c = self.cfg
+        final = c.lr_final or c.lr
         frac = min(finished / c.episodes, 1.0)
-        lr = c.lr_final + (c.lr - c.lr_final) * 0.5 * (1.0 + math.cos(math.pi * frac))
+        lr = final + (c.lr - final) * 0.5 * (1.0 + math.cos(math.pi * frac))
         for group in self.opt.param_groups:
             group["lr"] = lr
 

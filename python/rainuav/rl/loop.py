@@ -41,7 +41,6 @@ from rainuav.rl.collect import (
 )
 from rainuav.rl.config import (
     TrainConfig,
-    apply_preset,
     check_config,
     config_diff,
     random_streams,
@@ -121,7 +120,6 @@ def train(
     determinism are restored). ``yardstick``: allow an evaluation storm (a per-storm network trained
     on the very storm a generalist is judged on, as the specialist it is compared with; not on the
     CLI)."""
-    cfg = apply_preset(cfg)
     check_config(cfg)
     if cfg.scenario == "storm" and not cfg.scenario_file and not yardstick:
         check_storm_seed(cfg.storm_seed, training=True)

@@ -40,7 +40,7 @@ from rainuav._io import read_toml
 from rainuav.errors import InvalidInputError
 from rainuav.radio import presets
 from rainuav.radio.scenario import Scenario
-from rainuav.rl.config import MAX_STARTS, DQNConfig, TrainConfig, check_config
+from rainuav.rl.config import MAX_STARTS, DQNConfig, TrainConfig, check_config, resolve_config
 from rainuav.world import make_scenario
 
 __all__ = ["BUILT_IN", "COMPUTE", "SCENARIO_FIELDS", "Case", "Study", "load_study"]
@@ -131,10 +131,10 @@ class Study:
 
 
 def train_config(fields: dict[str, Any], seed: int, out: str) -> TrainConfig:
-    """The TrainConfig of a case (scenario overrides left out)."""
-    top = {k: v for k, v in fields.items() if "." not in k and k not in SCENARIO_FIELDS}
-    dqn = {k.split(".", 1)[1]: v for k, v in fields.items() if k.startswith("dqn.")}
-    return TrainConfig(**top, seed=seed, out=out, dqn=DQNConfig(**dqn))
+    """The TrainConfig of a case (scenario overrides left out): its preset, if it names one,
+    then its fields ([`rainuav.rl.config.resolve_config()`][rainuav.rl.config.resolve_config])."""
+    kept = {k: v for k, v in fields.items() if k not in SCENARIO_FIELDS}
+    return resolve_config({**kept, "seed": seed, "out": out})
 
 
 def case_scenario(fields: dict[str, Any], cfg: TrainConfig) -> Scenario:
@@ -176,7 +176,7 @@ def _check_case(where: str, fields: dict[str, Any]) -> None:
     of TrainConfig and Scenario runs, naming the field."""
     try:
         cfg = train_config(fields, 0, "unused")
-    except TypeError as err:
+    except (TypeError, InvalidInputError) as err:
         raise InvalidInputError(f"{where}: {err}") from err
     check_config(cfg)
     f = fields.get("freq_ghz")

@@ -130,10 +130,10 @@ class WorldSpec:
     rainuav.nav.views)."""
     random_goal: bool = False
     """A destination drawn per episode (rainuav.nav.views.sample_goal; needs --observation
-    weather) in place of the fixed one (--storm-seed random sets it)."""
+    weather) in place of the fixed one (the storms presets set it)."""
     storm_pool: int = 0
     """Train over the storm distribution: this many storms flown at once, each renewed with
-    a new training storm as training goes (--storm-seed random sets 16; needs --scenario storm
+    a new training storm as training goes (the storms preset sets 16; needs --scenario storm
     and --observation weather); 0: the one storm of storm_seed."""
     calm_share: float = 0.0
     """Of a storm pool's storms, the share flown calm: the storm's uniform background rain

@@ -1,6 +1,6 @@
 """Storms of the distribution as a training run needs them
 ([`StormPool`][rainuav.world.pool.StormPool]): the worlds of a network that learns to fly any storm
-(``python -m rainuav.train --storm-seed random``).
+(``python -m rainuav.train --preset storms``).
 
 Seeds: training storms are drawn in [`TRAINING_SEEDS`][rainuav.world.pool.TRAINING_SEEDS];
 [`VALIDATION_SEEDS`][rainuav.world.pool.VALIDATION_SEEDS] are for choices made while building a

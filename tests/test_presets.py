@@ -1,0 +1,175 @@
+"""Presets are files: the TOML presets shipped with the package hold the configurations the
+training command set in code before (``--preset paper``, ``--storm-seed random`` with and
+without ``--altitudes``), one function lays a preset, a run file and flags over each other, and
+the same configuration gives the same run bit for bit however it was reached."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from rainuav.errors import InvalidInputError
+from rainuav.rl.config import (
+    DQNConfig,
+    TrainConfig,
+    check_config,
+    load_config,
+    preset_fields,
+    preset_names,
+    resolve_config,
+)
+from rainuav.train import build_parser, config_from_args, main
+
+# What the training command set in code before the presets were files (its PAPER_LEARNER,
+# STORM_LEARNER, STORM_LEVELS and budget constants), copied here as the configurations the
+# files must reproduce.
+PAPER_BEFORE: dict[str, Any] = {
+    "target_sync_episodes": 5, "eps0": 0.5, "eps_decay": 0.998, "replay_capacity": 100_000,
+    "batch_size": 16, "learning_starts": 16, "train_every": 1, "loss": "mse", "lanes": 1,
+    "fourier": 0, "goal_features": 0, "time_aware": False, "goal_starts": 0.0, "shaping": 0.0,
+    "sir_weight": 1.0, "reward_scale": 1.0, "grad_clip": 0.0, "average_from": 1.0,
+    "shield": False,
+}  # fmt: skip
+STORM_LEARNER_BEFORE: dict[str, Any] = {
+    "episodes": 9000, "batch_size": 64, "lr": 3e-4, "target_sync_episodes": 25, "conv": 8,
+    "move_features": True, "goal_maps": True,
+}  # fmt: skip
+STORMS_BEFORE: dict[str, Any] = {
+    "storm_seed": 0, "storm_pool": 16, "observation": "weather", "random_goal": True,
+    "time_budget_s": 3300.0, "calm_share": 0.15,
+}  # fmt: skip
+
+
+def _cli(*argv: str) -> TrainConfig:
+    return config_from_args(build_parser().parse_args(list(argv)))
+
+
+def test_the_shipped_presets_are_the_configurations_the_code_set() -> None:
+    assert preset_names() == ["paper", "storm-levels", "storms"]
+    paper = resolve_config({"preset": "paper"})
+    assert {k: getattr(paper.dqn, k) for k in PAPER_BEFORE} == PAPER_BEFORE
+    # The rest is the default learner, with a constant learning rate (lr_final 0: lr throughout).
+    rest = {f.name for f in dataclasses.fields(DQNConfig)} - set(PAPER_BEFORE) - {"lr_final"}
+    assert all(getattr(paper.dqn, k) == getattr(DQNConfig(), k) for k in rest)
+    assert paper.dqn.lr_final == 0.0 and paper.preset == "paper"
+    storms = resolve_config({"preset": "storms"})
+    assert storms.scenario == "storm"
+    assert {k: getattr(storms, k) for k in STORMS_BEFORE} == STORMS_BEFORE
+    assert {k: getattr(storms.dqn, k) for k in STORM_LEARNER_BEFORE} == STORM_LEARNER_BEFORE
+    levels = resolve_config({"preset": "storm-levels"})
+    want = {**dataclasses.asdict(storms), "preset": "storm-levels", "altitudes": "25:115:15"}
+    want.update(storm_pool=8, storm_episodes=48, engine="ray")
+    want["dqn"] = {**want["dqn"], "episodes": 4000}
+    assert dataclasses.asdict(levels) == want
+    for cfg in (paper, storms, levels):
+        check_config(cfg)
+
+
+def test_storm_seed_random_is_the_storms_preset_and_flags_win() -> None:
+    assert _cli("--scenario", "storm", "--storm-seed", "random") == _cli("--preset", "storms")
+    levels = ["--storm-seed", "random", "--altitudes", "25:115:15"]
+    assert _cli(*levels) == _cli("--preset", "storm-levels")
+    cfg = _cli(*levels, "--engine", "hybrid", "--storm-pool", "4", "--dqn.episodes", "100")
+    assert (cfg.engine, cfg.storm_pool, cfg.dqn.episodes, cfg.storm_episodes) == (
+        "hybrid", 4, 100, 48,
+    )  # fmt: skip
+    cfg = _cli("--preset", "storms", "--random-goal", "false", "--conv", "4", "--calm-share", "0")
+    assert (cfg.random_goal, cfg.dqn.conv, cfg.dqn.move_features, cfg.calm_share) == (
+        False, 4, True, 0.0,
+    )  # fmt: skip
+
+
+def test_a_preset_then_the_run_file_then_the_flags(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = tmp_path / "run.toml"
+    run.write_text('preset = "paper"\nmax_steps = 70\n[dqn]\nlanes = 2\nlr = 5e-4\n')
+    cfg = _cli("--config", str(run), "--dqn.lanes", "3", "--max-steps", "80")
+    # The flags over the file, the file over the preset, the preset over the defaults.
+    assert (cfg.dqn.lanes, cfg.max_steps, cfg.dqn.lr, cfg.dqn.loss) == (3, 80, 5e-4, "mse")
+    assert load_config(run).dqn.lanes == 2 and load_config(run).dqn.loss == "mse"
+    # The dotted flag and the learner's plain one are the same field; an override of a field
+    # the preset sets is said in one line.
+    plain, dotted = ("--lanes", "4"), ("--dqn.lanes", "4")
+    assert _cli("--preset", "paper", *plain) == _cli("--preset", "paper", *dotted)
+    assert "--dqn.lanes 4 in place of the preset 'paper''s 1" in capsys.readouterr().err
+    # A preset of one's own: a file, which may start from a shipped one.
+    mine = tmp_path / "mine.toml"
+    mine.write_text('extends = "paper"\nseed = 7\n[dqn]\nhidden = 64\n')
+    cfg = _cli("--preset", str(mine))
+    assert (cfg.seed, cfg.dqn.hidden, cfg.dqn.loss, cfg.preset) == (7, 64, "mse", str(mine))
+
+
+def test_bad_presets_are_refused_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["--preset", "papr", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "preset must be one of ['paper'" in err
+    loop = tmp_path / "loop.toml"
+    loop.write_text(f'extends = "{loop}"\n')
+    with pytest.raises(InvalidInputError, match="extends must name another preset"):
+        preset_fields(loop)
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[dqn]\nlearning_rate = 1e-4\n")
+    with pytest.raises(InvalidInputError, match=r"unknown field\(s\) \['dqn.learning_rate'\]"):
+        resolve_config({"preset": str(bad)})
+    with pytest.raises(InvalidInputError, match="preset must be ''"):
+        check_config(TrainConfig(preset="nothing-here"))
+
+
+def test_help_lists_the_runs_own_flags_and_help_all_every_field(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["--help"])
+    short = capsys.readouterr().out
+    shown = {w.split()[0] for w in short.split("\n  --")[1:]}
+    assert 12 <= len(shown) <= 20, shown
+    assert "dqn.lr" not in shown and "--dqn.NAME" in short and "storm-levels" in short
+    assert main(["--help-all"]) == 0
+    full = capsys.readouterr().out
+    fields = [f.name for f in dataclasses.fields(TrainConfig) if f.name != "dqn"]
+    fields += [f"dqn.{f.name}" for f in dataclasses.fields(DQNConfig)]
+    assert all(f"--{k.replace('_', '-')} " in full for k in fields)
+
+
+def test_a_study_case_starts_from_its_preset() -> None:
+    from rainuav.studies.spec import train_config
+
+    cfg = train_config({"preset": "paper", "dqn.episodes": 10}, 3, "out")
+    assert (cfg.dqn.loss, cfg.dqn.lanes, cfg.dqn.episodes, cfg.seed) == ("mse", 1, 10, 3)
+
+
+@pytest.mark.slow
+def test_same_configuration_same_run_bit_for_bit(tmp_path: Path) -> None:
+    """A short run of ``--preset paper`` against the same run configured field by field as the
+    code set it before (``lr_final`` then equal to ``lr``): the same metrics and weights."""
+    import torch
+    from rainuav.rl.loop import train
+    from rainuav.world import in_world
+    from test_nav_tasks import _map
+
+    task = {"goal_x_m": 300.0, "goal_y_m": 350.0, "max_steps": 40, "eval_starts": 4}
+    task |= {"validate_every": 0, "checkpoint_every": 2}
+    by_preset = resolve_config(
+        {"preset": "paper", "out": str(tmp_path / "a"), "dqn.episodes": 3, **task}
+    )
+    by_hand = TrainConfig(
+        out=str(tmp_path / "b"), **task,
+        dqn=DQNConfig(episodes=3, lr_final=DQNConfig().lr, **PAPER_BEFORE),
+    )  # fmt: skip
+    runs = []
+    for cfg in (by_preset, by_hand):
+        m = train(*in_world(cfg, _map()), progress=False)
+        runs.append({k: v for k, v in m.items() if "seconds" not in k and "_s" not in k[-2:]})
+    assert runs[0] == runs[1]
+    weights = [
+        torch.load(Path(c.out) / "policy.pt", weights_only=True) for c in (by_preset, by_hand)
+    ]
+    a, b = (w["online"] for w in weights)
+    assert a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
+    assert np.isclose(runs[0]["episodes"], 3)
