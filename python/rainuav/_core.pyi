@@ -28,8 +28,6 @@ __all__ = [
     "itu_p838",
     "knife_edge_loss_db",
     "mie_forward",
-    "plan_optimal",
-    "plan_optimal_in_time",
     "plan_optimal_levels",
     "ray_departures",
     "ray_power",
@@ -183,24 +181,6 @@ def check_memory(bytes: int) -> None:
 def available_memory_bytes() -> int | None:
     """Memory this machine reports as available (Linux ``MemAvailable``), bytes."""
 
-def plan_optimal(
-    sir_db: _F,
-    extent_m: tuple[float, float, float, float],
-    goal_m: tuple[float, float],
-    starts_m: _F,
-    *,
-    step_m: float,
-    tol_m: float,
-    max_steps: int,
-    mu: float,
-    reward: str,
-    sir_min_db: float,
-    goal_reward: float,
-    out_of_bounds_penalty: float,
-    blocked: npt.NDArray[np.uint8] | None = None,
-) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
-    """Exact optimal plans from many starts: (return, actions, path) each."""
-
 def sample_slices(
     slices: _F,
     extent_m: tuple[float, float, float, float],
@@ -214,27 +194,6 @@ def sample_slices(
     space, linear in time (``(1 - f) v0 + f v1``; ``v0`` where ``k0 == k1``). The 1-D arrays
     are contiguous; ``x`` and ``y`` of one length N, ``k0``, ``k1`` and ``f`` one value per row
     of consecutive points: N of them, or a divisor R of N (point n reads row n // (N / R))."""
-
-def plan_optimal_in_time(
-    sinr_db: _F,
-    t_s: _F,
-    extent_m: tuple[float, float, float, float],
-    goal_m: tuple[float, float],
-    starts_m: _F,
-    *,
-    t0_s: float,
-    dt_s: float,
-    step_m: float,
-    tol_m: float,
-    max_steps: int,
-    mu: float,
-    reward: str,
-    sir_min_db: float,
-    goal_reward: float,
-    out_of_bounds_penalty: float,
-    blocked: npt.NDArray[np.uint8] | None = None,
-) -> list[tuple[float, npt.NDArray[np.uint8], _F]]:
-    """Exact space-time plans from many starts, the signal (K, H, W) at the instants t_s."""
 
 def plan_optimal_levels(
     sinr_db: _F,

@@ -1,14 +1,13 @@
 //! Criterion benchmarks of the exact planner among flight levels: one plan on seven levels of
 //! a 200 x 200 map (10 m moves, a 300-tick horizon, climbs of 3 and descents of 5 ticks), on
-//! maps and in time (61 slices), against the plane's space-time planner on one level's
-//! slices (the reference doing one level's work in the same run).
+//! maps and in time (61 slices), against the same programme on one level's slices (the plane:
+//! the reference doing one level's work in the same run).
 #![allow(missing_docs)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use ndarray::{Array3, Array4, Axis};
+use ndarray::{Array4, Axis};
 use rainuav_core::planlevels::{LevelTask, LevelTimeline};
 use rainuav_core::planner::{NavTask, RewardKind};
-use rainuav_core::plantime::Timeline;
 
 const LEVELS: usize = 7;
 const SLICES: usize = 61;
@@ -57,14 +56,18 @@ fn bench(c: &mut Criterion) {
         t0_s: 0.0,
         dt_s: 1.0,
     };
-    let one: Array3<f64> = sig.index_axis(Axis(1), 3).to_owned();
-    let flat = Timeline {
+    let one: Array4<f64> = sig.slice(ndarray::s![.., 3..4, .., ..]).to_owned();
+    let flat = LevelTimeline {
         slices: one.view(),
         t_s: &times,
         t0_s: 0.0,
         dt_s: 1.0,
     };
-    let plane = task(first.index_axis(Axis(0), 3));
+    let plane = LevelTask {
+        levels: vec![task(first.index_axis(Axis(0), 3))],
+        climb: vec![],
+        descend: vec![],
+    };
     let start = [305.0, 255.0];
     let mut g = c.benchmark_group("one_plan_200x200_300_ticks");
     g.sample_size(10);
@@ -75,7 +78,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| plan.optimal_in_time(&tl, start, 0).expect("plans"))
     });
     g.bench_function("plane_61_slices_reference", |b| {
-        b.iter(|| plane.optimal_in_time(&flat, start).expect("plans"))
+        b.iter(|| plane.optimal_in_time(&flat, start, 0).expect("plans"))
     });
     g.finish();
 }

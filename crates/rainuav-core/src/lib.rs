@@ -30,7 +30,6 @@ pub mod p838;
 pub mod path;
 pub mod planlevels;
 pub mod planner;
-pub mod plantime;
 pub mod pwe;
 pub mod quadrature;
 pub mod rays;

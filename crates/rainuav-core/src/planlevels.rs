@@ -8,7 +8,7 @@
 //! numbers (the caller rounds the gap over the vertical speed up to whole moves). A move that
 //! starts at tick `tau` and lasts `d` ticks lands at tick `tau + d`, and reads the signal at
 //! that instant (`t0_s + (tau + d) dt_s`; between two slices linear in time, as
-//! [`crate::plantime`]). The horizon `max_steps` is in ticks: the flight is cut when its
+//! [`crate::planner::bracket`]). The horizon `max_steps` is in ticks: the flight is cut when its
 //! clock reaches it (one level: `max_steps` moves, the plane's horizon).
 //!
 //! **Costs.** A move's reward is its duration in ticks times the base reward of the level,
@@ -28,8 +28,7 @@
 
 use crate::error::{CoreError, Result};
 use crate::memory::check_memory_for;
-use crate::planner::{NavTask, Tap, bilinear, bilinear_taps};
-use crate::plantime::{blend, bracket, check_clock};
+use crate::planner::{NavTask, Tap, bilinear, bilinear_taps, blend, bracket, check_clock};
 use ndarray::{ArrayView4, Axis};
 
 const MEMORY_HINT: &str = "use fewer levels, fewer max_steps, a larger step_m or a smaller area";
@@ -674,7 +673,6 @@ impl Sampler {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plantime::Timeline;
     use ndarray::{Array2, Array4};
 
     fn level(s: &Array2<f64>, max_steps: usize) -> NavTask<'_> {
@@ -796,7 +794,7 @@ mod tests {
     }
 
     #[test]
-    fn one_slice_is_the_static_plan_and_one_level_the_plane_in_time() {
+    fn one_slice_is_the_static_plan() {
         let maps = maps(3);
         let levels: Vec<NavTask<'_>> = maps.iter().map(|m| level(m, 8)).collect();
         let task = LevelTask {
@@ -815,37 +813,6 @@ mod tests {
             let a = task.optimal(start, 1).unwrap();
             let b = task.optimal_in_time(&tl, start, 1).unwrap();
             assert_eq!(a, b);
-        }
-        // One level moving in time: the plane's space-time planner (same return, same moves).
-        let slices = ndarray::Array3::from_shape_fn((3, 3, 4), |(k, i, j)| {
-            ((i * 5 + j * 3 + 2 * k) % 7) as f64 * 3.0
-        });
-        let one = slices.clone().insert_axis(Axis(1));
-        let times = [0.0, 2.0, 5.0];
-        let s0 = slices.index_axis(Axis(0), 0).to_owned();
-        let plane = level(&s0, 9);
-        let flat = Timeline {
-            slices: slices.view(),
-            t_s: &times,
-            t0_s: 0.0,
-            dt_s: 1.0,
-        };
-        let tl = LevelTimeline {
-            slices: one.view(),
-            t_s: &times,
-            t0_s: 0.0,
-            dt_s: 1.0,
-        };
-        let task = LevelTask {
-            levels: vec![plane.clone()],
-            climb: vec![],
-            descend: vec![],
-        };
-        for start in [[0.0, 0.0], [17.0, 12.0]] {
-            let a = plane.optimal_in_time(&flat, start).unwrap();
-            let b = task.optimal_in_time(&tl, start, 0).unwrap();
-            assert!((a.return_ - b.return_).abs() < 1e-9);
-            assert_eq!(a.actions, b.actions);
         }
     }
 
@@ -867,23 +834,107 @@ mod tests {
         }
     }
 
+    /// The plane (one level), static and in time: brute force over every sequence of the
+    /// four moves of the plane, each move's signal read at its landing instant, for horizons
+    /// shorter and longer than the area is wide (the table cut at the horizon), from corners
+    /// and inside. A vertical move leaves the band: never better than the plane's moves.
     #[test]
-    fn one_level_is_the_plane() {
-        // The same return as the planner in the plane (a vertical move leaves the band).
-        let s = Array2::from_shape_fn((3, 4), |(i, j)| ((i * 5 + j * 3) % 7) as f64 * 3.0);
-        let plane = level(&s, 9);
-        let task = LevelTask {
-            levels: vec![plane.clone()],
-            climb: vec![],
-            descend: vec![],
-        };
-        for start in [[0.0, 0.0], [17.0, 12.0]] {
-            let a = plane.optimal(start).unwrap();
-            let b = task.optimal(start, 0).unwrap();
-            assert!((a.return_ - b.return_).abs() < 1e-9);
-            assert_eq!(a.actions, b.actions);
-            assert_eq!(b.ticks, (0..=b.actions.len()).collect::<Vec<_>>());
+    fn one_level_is_the_plane_static_and_in_time() {
+        fn plane(
+            t: &NavTask<'_>,
+            sig: &dyn Fn(f64, f64, usize) -> f64,
+            start: [f64; 2],
+            i: i64,
+            j: i64,
+            tick: usize,
+        ) -> f64 {
+            if tick == t.max_steps {
+                return 0.0;
+            }
+            (0..4)
+                .map(|a| {
+                    let (r, term, (ti, tj), _) =
+                        t.transition_with(start, i, j, a, |x, y| sig(x, y, tick + 1));
+                    r + if term {
+                        0.0
+                    } else {
+                        plane(t, sig, start, ti, tj, tick + 1)
+                    }
+                })
+                .fold(f64::NEG_INFINITY, f64::max)
         }
+        let slices = ndarray::Array3::from_shape_fn((3, 3, 4), |(k, i, j)| {
+            ((i * 5 + j * 3 + 2 * k) % 7) as f64 * 3.0
+        });
+        let one = slices.clone().insert_axis(Axis(1));
+        let s0 = slices.index_axis(Axis(0), 0).to_owned();
+        let times = [0.0, 1.5, 4.0];
+        for (t0, dt) in [(0.0, 1.0), (0.7, 0.6), (-1.0, 2.0)] {
+            let tl = LevelTimeline {
+                slices: one.view(),
+                t_s: &times,
+                t0_s: t0,
+                dt_s: dt,
+            };
+            let src = Source::Time(&tl, [0.0, 40.0, 0.0, 30.0]);
+            for max_steps in 1..=7 {
+                let flat = level(&s0, max_steps);
+                let task = LevelTask {
+                    levels: vec![flat.clone()],
+                    climb: vec![],
+                    descend: vec![],
+                };
+                for start in [[0.0, 0.0], [40.0, 30.0], [17.0, 12.0], [3.0, 28.0]] {
+                    let still = |x: f64, y: f64, _: usize| flat.sir_at(x, y);
+                    let moving = |x: f64, y: f64, tick: usize| src.signal(0, x, y, tick);
+                    let a = task.optimal(start, 0).unwrap();
+                    let want = plane(&flat, &still, start, 0, 0, 0);
+                    assert!((a.return_ - want).abs() < 1e-9, "{} vs {want}", a.return_);
+                    assert!(a.actions.iter().all(|&m| m < 4) && a.actions.len() <= max_steps);
+                    assert_eq!(a.ticks, (0..=a.actions.len()).collect::<Vec<_>>());
+                    let b = task.optimal_in_time(&tl, start, 0).unwrap();
+                    let want = plane(&flat, &moving, start, 0, 0, 0);
+                    assert!(
+                        (b.return_ - want).abs() < 1e-9,
+                        "t0 {t0} dt {dt}: {} vs {want}",
+                        b.return_
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn never_enters_a_blocked_pixel_and_goes_round_a_wall() {
+        // A wall of not-flyable pixels across column 2 (x 20..30) but for the top row: the
+        // shortest way from (5, 5) to (35, 5) is 3 moves east through the wall; the plan goes
+        // up to the gap, across and back down, never through.
+        let s = Array2::from_elem((4, 4), 20.0);
+        let mut wall = Array2::<u8>::zeros((4, 4));
+        for i in 0..3 {
+            wall[(i, 2)] = 1;
+        }
+        let mut t = level(&s, 30);
+        t.extent = [0.0, 40.0, 0.0, 40.0];
+        t.goal = [35.0, 5.0];
+        t.blocked = Some(wall.view());
+        fn one<'a>(t: &NavTask<'a>) -> LevelTask<'a> {
+            LevelTask {
+                levels: vec![t.clone()],
+                climb: vec![],
+                descend: vec![],
+            }
+        }
+        let plan = one(&t).optimal([5.0, 5.0], 0).unwrap();
+        assert!(plan.return_ > 0.0, "arrives: {}", plan.return_);
+        for p in &plan.path {
+            assert!(!t.blocked_at(p[0], p[1]), "entered {p:?}");
+        }
+        // Up three rows to the gap, across, down three rows: 3 + 3 + 3 = 9 moves.
+        assert_eq!(plan.actions.len(), 9);
+        // Without the wall, three moves east.
+        t.blocked = None;
+        assert_eq!(one(&t).optimal([5.0, 5.0], 0).unwrap().actions.len(), 3);
     }
 
     #[test]

@@ -1,18 +1,15 @@
-//! Exact planner for the UAV navigation MDP (docs/physics.md section 6, `rainuav.nav`).
+//! The exact planner's task (docs/physics.md section 6, `rainuav.nav`): the map, the geometry,
+//! the rewards and the one move rule, and the clock of a signal that changes in time. The
+//! programme itself, over (tick, level, lattice point), is [`crate::planlevels`]: the plane (one
+//! level, its signal static or in time) is its case.
 //!
-//! Moves are deterministic on the lattice `start + step (i, j)`, so the finite-horizon
-//! optimum is a backward dynamic programme over (steps left, lattice point): `V_T = 0`,
-//! `V_t(s) = max_a [r(s, a) + (terminal ? 0 : V_{t+1}(s'))]`. Rewards, the SIR interpolation,
+//! Moves are deterministic on the lattice `start + step (i, j)`. Rewards, the SIR interpolation,
 //! leaving the area and arriving follow `rainuav.env` operation for operation, so a plan
 //! replayed in the environment earns the same return.
 
 use crate::error::{CoreError, Result, check_range};
-use crate::memory::check_memory_for;
 use ndarray::ArrayView2;
 use std::str::FromStr;
-
-const PLAN_MEMORY_HINT: &str = "each plan keeps max_steps bytes per lattice point; use fewer max_steps, a larger step_m \
-     or a smaller area";
 
 /// Base reward kinds (see `rainuav.env`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -69,17 +66,6 @@ pub struct NavTask<'a> {
     /// Pixels a UAV may not enter (non-zero), (H', W') over `extent` (terrain or obstacles
     /// within the clearance of the flight height): a move into one is a move out of the area.
     pub blocked: Option<ArrayView2<'a, u8>>,
-}
-
-/// An optimal plan.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Plan {
-    /// Optimal undiscounted return.
-    pub return_: f64,
-    /// Actions (0 = +x, 1 = +y, 2 = -x, 3 = -y).
-    pub actions: Vec<u8>,
-    /// Positions visited, starting at the start (the last one clamped if the plan leaves).
-    pub path: Vec<[f64; 2]>,
 }
 
 pub(crate) const MOVES: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
@@ -234,20 +220,9 @@ impl NavTask<'_> {
         }
     }
 
-    /// The transition from lattice offset `(i, j)` of `start` by action `a`:
-    /// `(reward, terminal, new offset, position after the move (clamped if it left))`.
-    pub fn transition(
-        &self,
-        start: [f64; 2],
-        i: i64,
-        j: i64,
-        a: usize,
-    ) -> (f64, bool, (i64, i64), [f64; 2]) {
-        self.transition_with(start, i, j, a, |x, y| self.sir_at(x, y))
-    }
-
-    /// `transition` with the signal read by `signal(x, y)` at the (clamped) new position:
-    /// the one move rule the static and the space-time planners share.
+    /// The transition from lattice offset `(i, j)` of `start` by action `a`, the signal read by
+    /// `signal(x, y)` at the (clamped) new position: `(reward, terminal, new offset, position
+    /// after the move (clamped if it left))`. The one move rule of the plane.
     pub(crate) fn transition_with(
         &self,
         start: [f64; 2],
@@ -270,40 +245,6 @@ impl NavTask<'_> {
             return (b + self.goal_reward, true, (ni, nj), [qx, qy]);
         }
         (b, false, (ni, nj), [qx, qy])
-    }
-
-    /// The plan a backward programme's `policy` (`t_max` rows of `n` lattice states, indexed
-    /// by `idx`) gives from `start`: its actions, path and return, each move's reward from
-    /// `step(t, i, j, a)` summed as the environment does.
-    pub(crate) fn replay(
-        &self,
-        start: [f64; 2],
-        policy: &[u8],
-        n: usize,
-        idx: impl Fn(i64, i64) -> usize,
-        step: impl Fn(usize, i64, i64, usize) -> (f64, bool, (i64, i64), [f64; 2]),
-    ) -> Plan {
-        let (mut i, mut j) = (0i64, 0i64);
-        let mut actions = Vec::new();
-        let mut path = vec![start];
-        let mut ret = 0.0;
-        for t in 0..policy.len() / n {
-            let a = policy[t * n + idx(i, j)] as usize;
-            let (r, term, (ti, tj), pos) = step(t, i, j, a);
-            actions.push(a as u8);
-            path.push(pos);
-            ret += r;
-            if term {
-                break;
-            }
-            i = ti;
-            j = tj;
-        }
-        Plan {
-            return_: ret,
-            actions,
-            path,
-        }
     }
 
     /// Lattice offsets `(i_lo, i_hi, j_lo, j_hi)` the plan from `start` tabulates: those
@@ -335,35 +276,6 @@ impl NavTask<'_> {
         Ok(n)
     }
 
-    /// Bytes the plan from `start` allocates: per lattice point the transition table (four
-    /// rewards, four successors), the inside flag and two value arrays, and the policy,
-    /// `max_steps` bytes per point.
-    pub fn plan_bytes(&self, start: [f64; 2]) -> Result<usize> {
-        let n = self.lattice_points(start)?;
-        let per_point = 4 * size_of::<f64>() + 4 * size_of::<usize>() + 1 + 2 * size_of::<f64>();
-        Ok(n.saturating_mul(per_point.saturating_add(self.max_steps)))
-    }
-
-    /// Exact optimal plans from many starts, computed in parallel (rayon). Refuses, before
-    /// allocating anything, a batch whose plans in flight at once (one per worker thread)
-    /// would need more than 80% of the available memory.
-    pub fn optimal_many(&self, starts: &[[f64; 2]]) -> Result<Vec<Plan>> {
-        use rayon::prelude::*;
-        self.validate()?;
-        let mut largest = 0usize;
-        for &p in starts {
-            self.check_start(p)?;
-            largest = largest.max(self.plan_bytes(p)?);
-        }
-        let at_once = rayon::current_num_threads().min(starts.len()).max(1);
-        check_memory_for(
-            "max_steps",
-            PLAN_MEMORY_HINT,
-            largest.saturating_mul(at_once),
-        )?;
-        starts.par_iter().map(|&p| self.optimal(p)).collect()
-    }
-
     pub(crate) fn check_start(&self, start: [f64; 2]) -> Result<()> {
         let [x0, x1, y0, y1] = self.extent;
         if !(start[0] >= x0 && start[0] <= x1 && start[1] >= y0 && start[1] <= y1) {
@@ -374,98 +286,6 @@ impl NavTask<'_> {
             ));
         }
         Ok(())
-    }
-
-    /// The exact optimum from `start` (inside the area).
-    pub fn optimal(&self, start: [f64; 2]) -> Result<Plan> {
-        self.validate()?;
-        let [x0, x1, y0, y1] = self.extent;
-        if !(start[0] >= x0 && start[0] <= x1 && start[1] >= y0 && start[1] <= y1) {
-            return Err(CoreError::invalid(
-                "start_m",
-                "must lie inside the area",
-                format!("{start:?}"),
-            ));
-        }
-        // Lattice offsets inside the area (and reachable within the horizon): the bounds of
-        // `lattice()`, computed here in line. Calling `lattice()` and `lattice_points()` instead
-        // made the whole plan 15-20% slower (200 starts on the paper map: 6.6-7.3 s against
-        // 5.7 s, alternating builds): the optimiser then handled the table loops worse.
-        let reach = self.max_steps as i64;
-        let lo = |s: f64, a: f64| (((a - s) / self.step_m).ceil() as i64).max(-reach) - 1;
-        let hi = |s: f64, b: f64| (((b - s) / self.step_m).floor() as i64).min(reach) + 1;
-        let (i_lo, i_hi) = (lo(start[0], x0), hi(start[0], x1));
-        let (j_lo, j_hi) = (lo(start[1], y0), hi(start[1], y1));
-        let ni = (i_hi - i_lo + 1) as usize;
-        let nj = (j_hi - j_lo + 1) as usize;
-        let n = ni * nj;
-        if n > 50_000_000 {
-            return Err(CoreError::invalid(
-                "step_m",
-                "gives too many lattice points for the planner",
-                n,
-            ));
-        }
-        check_memory_for("max_steps", PLAN_MEMORY_HINT, self.plan_bytes(start)?)?;
-        let idx = |i: i64, j: i64| ((i - i_lo) as usize) * nj + (j - j_lo) as usize;
-        // Transition table: per state and action, reward and next state (usize::MAX = terminal).
-        let mut rew = vec![0.0f64; n * 4];
-        let mut next = vec![usize::MAX; n * 4];
-        let mut inside = vec![false; n];
-        for i in i_lo..=i_hi {
-            for j in j_lo..=j_hi {
-                let qx = start[0] + self.step_m * i as f64;
-                let qy = start[1] + self.step_m * j as f64;
-                let s = idx(i, j);
-                inside[s] = !(qx < x0 || qx > x1 || qy < y0 || qy > y1);
-                if !inside[s] {
-                    continue;
-                }
-                for a in 0..4 {
-                    let (r, term, (ti, tj), _) = self.transition(start, i, j, a);
-                    if term {
-                        rew[s * 4 + a] = r;
-                    } else if (i_lo..=i_hi).contains(&ti) && (j_lo..=j_hi).contains(&tj) {
-                        rew[s * 4 + a] = r;
-                        next[s * 4 + a] = idx(ti, tj);
-                    } else {
-                        // Beyond the table, which the horizon cut: only states farther out
-                        // than any step count allows lead there, so their values (now
-                        // -inf) never reach a state the UAV can be in at that time.
-                        rew[s * 4 + a] = f64::NEG_INFINITY;
-                    }
-                }
-            }
-        }
-        // Backward induction; policy[t][s] for path extraction.
-        let t_max = self.max_steps;
-        let mut v_next = vec![0.0f64; n];
-        let mut v = vec![0.0f64; n];
-        let mut policy = vec![0u8; t_max * n];
-        for t in (0..t_max).rev() {
-            for s in 0..n {
-                if !inside[s] {
-                    continue;
-                }
-                let mut best = f64::NEG_INFINITY;
-                let mut best_a = 0u8;
-                for a in 0..4 {
-                    let nx = next[s * 4 + a];
-                    let val = rew[s * 4 + a] + if nx == usize::MAX { 0.0 } else { v_next[nx] };
-                    if val > best {
-                        best = val;
-                        best_a = a as u8;
-                    }
-                }
-                v[s] = best;
-                policy[t * n + s] = best_a;
-            }
-            std::mem::swap(&mut v, &mut v_next);
-        }
-        // Replay the policy to get the actions, path and return (summed as the env does).
-        Ok(self.replay(start, &policy, n, idx, |_, i, j, a| {
-            self.transition(start, i, j, a)
-        }))
     }
 }
 
@@ -489,84 +309,59 @@ pub(crate) fn test_task(s: &ndarray::Array2<f64>, max_steps: usize) -> NavTask<'
     }
 }
 
+/// Checks a clock: instants finite and strictly increasing, a finite take-off, a move's
+/// duration finite and > 0.
+pub(crate) fn check_clock(t_s: &[f64], t0_s: f64, dt_s: f64) -> Result<()> {
+    let increasing = t_s.windows(2).all(|p| p[1] > p[0]);
+    if !increasing || t_s.iter().any(|v| !v.is_finite()) {
+        return Err(CoreError::invalid(
+            "t_s",
+            "must be finite and strictly increasing",
+            format!("{} instants", t_s.len()),
+        ));
+    }
+    if !t0_s.is_finite() || t0_s.abs() > 1e12 {
+        return Err(CoreError::invalid("t0_s", "must be finite", t0_s));
+    }
+    if !(dt_s.is_finite() && dt_s > 0.0 && dt_s < 1e9) {
+        return Err(CoreError::invalid("dt_s", "must be finite and > 0", dt_s));
+    }
+    Ok(())
+}
+
+/// The slices of the instants `t` (increasing) around `tau` and the weight of the later one:
+/// `(k0, k1, f)`, `k0 == k1` at a slice's own instant and beyond the first or the last.
+pub(crate) fn bracket(t: &[f64], tau: f64) -> (usize, usize, f64) {
+    let k = t.partition_point(|&v| v < tau);
+    if k < t.len() && t[k] == tau {
+        return (k, k, 0.0);
+    }
+    if k == 0 {
+        return (0, 0, 0.0);
+    }
+    if k == t.len() {
+        return (k - 1, k - 1, 0.0);
+    }
+    (k - 1, k, (tau - t[k - 1]) / (t[k] - t[k - 1]))
+}
+
+/// Linear in time between two slices' values.
+pub(crate) fn blend(v0: f64, v1: f64, f: f64) -> f64 {
+    (1.0 - f) * v0 + f * v1
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ndarray::Array2;
-
-    fn task(s: &Array2<f64>, max_steps: usize) -> NavTask<'_> {
-        test_task(s, max_steps)
-    }
 
     #[test]
-    fn never_enters_a_blocked_pixel_and_goes_round_a_wall() {
-        // A wall of not-flyable pixels across column 2 (x 20..30) but for the top row: the
-        // shortest way from (5, 5) to (35, 5) is 3 moves east through the wall; the plan goes
-        // up to the gap, across and back down, never through.
-        let s = Array2::from_elem((4, 4), 20.0);
-        let mut wall = Array2::<u8>::zeros((4, 4));
-        for i in 0..3 {
-            wall[(i, 2)] = 1;
-        }
-        let mut t = task(&s, 30);
-        t.extent = [0.0, 40.0, 0.0, 40.0];
-        t.goal = [35.0, 5.0];
-        t.blocked = Some(wall.view());
-        let plan = t.optimal([5.0, 5.0]).unwrap();
-        assert!(plan.return_ > 0.0, "arrives: {}", plan.return_);
-        for p in &plan.path {
-            assert!(!t.blocked_at(p[0], p[1]), "entered {p:?}");
-        }
-        // Up three rows to the gap, across, down three rows: 3 + 3 + 3 = 9 moves.
-        assert_eq!(plan.actions.len(), 9);
-        // Without the wall, three moves east.
-        t.blocked = None;
-        assert_eq!(t.optimal([5.0, 5.0]).unwrap().actions.len(), 3);
-    }
-
-    /// Brute force over every action sequence of length <= 7 on a tiny map.
-    #[test]
-    fn matches_brute_force() {
-        let s = Array2::from_shape_fn((3, 4), |(i, j)| ((i * 7 + j * 3) % 11) as f64 * 2.0);
-        let t = task(&s, 7);
-        let start = [0.0, 0.0];
-        fn best(t: &NavTask<'_>, start: [f64; 2], i: i64, j: i64, left: usize) -> f64 {
-            if left == 0 {
-                return 0.0;
-            }
-            (0..4)
-                .map(|a| {
-                    let (r, term, (ti, tj), _) = t.transition(start, i, j, a);
-                    r + if term {
-                        0.0
-                    } else {
-                        best(t, start, ti, tj, left - 1)
-                    }
-                })
-                .fold(f64::NEG_INFINITY, f64::max)
-        }
-        let want = best(&t, start, 0, 0, 7);
-        let plan = t.optimal(start).unwrap();
-        assert!(
-            (plan.return_ - want).abs() < 1e-9,
-            "{} vs {want}",
-            plan.return_
-        );
-        assert!(plan.return_ > 0.0, "the goal is reachable in 5 moves");
-        // Horizons shorter than the area is wide: the planner's table is cut at the
-        // horizon (the edge once indexed past the table), from corners and inside.
-        for max_steps in 1..=4 {
-            let t = task(&s, max_steps);
-            for start in [[0.0, 0.0], [40.0, 30.0], [17.0, 12.0], [3.0, 28.0]] {
-                let want = best(&t, start, 0, 0, max_steps);
-                let plan = t.optimal(start).unwrap();
-                assert!(
-                    (plan.return_ - want).abs() < 1e-9,
-                    "max_steps {max_steps}, start {start:?}: {} vs {want}",
-                    plan.return_
-                );
-                assert!(plan.actions.len() <= max_steps);
-            }
-        }
+    fn bracket_holds_the_ends_and_hits_instants() {
+        let times = [0.0, 1.0, 3.0];
+        assert_eq!(bracket(&times, -1.0), (0, 0, 0.0));
+        assert_eq!(bracket(&times, 1.0), (1, 1, 0.0));
+        assert_eq!(bracket(&times, 2.0), (1, 2, 0.5));
+        assert_eq!(bracket(&times, 9.0), (2, 2, 0.0));
+        assert!(check_clock(&[0.0, 0.0, 1.0], 0.0, 1.0).is_err());
+        assert!(check_clock(&times, 0.0, 0.0).is_err());
     }
 }

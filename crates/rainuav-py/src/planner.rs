@@ -1,4 +1,5 @@
-//! Bindings of the exact navigation planner (`rainuav.nav.planner` drives them) and of the
+//! Bindings of the exact navigation planner (`rainuav.nav.planner` drives it: the plane is its
+//! case of one level) and of the
 //! sampler the environment reads its signal in time with (`rainuav._sampling.in_time`).
 
 use crate::{detached, to_py};
@@ -10,51 +11,7 @@ use numpy::{
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
 use rainuav_core::planlevels::{LevelTask, LevelTimeline};
-use rainuav_core::planner::{NavTask, Plan};
-use rainuav_core::plantime::Timeline;
-
-/// One plan handed to Python: (return, actions, path).
-type PlanOut<'py> = (f64, Bound<'py, PyArray1<u8>>, Bound<'py, PyArray2<f64>>);
-
-/// Exact optimal plans from many starts: a list of (return, actions (T,) u8, path (T+1, 2)).
-#[pyfunction]
-#[pyo3(signature = (sir_db, extent_m, goal_m, starts_m, *, step_m, tol_m, max_steps, mu, reward,
-    sir_min_db, goal_reward, out_of_bounds_penalty, blocked=None))]
-#[allow(clippy::too_many_arguments)]
-fn plan_optimal<'py>(
-    py: Python<'py>,
-    sir_db: PyReadonlyArray2<'py, f64>,
-    extent_m: [f64; 4],
-    goal_m: [f64; 2],
-    starts_m: PyReadonlyArray2<'py, f64>,
-    step_m: f64,
-    tol_m: f64,
-    max_steps: usize,
-    mu: f64,
-    reward: &str,
-    sir_min_db: f64,
-    goal_reward: f64,
-    out_of_bounds_penalty: f64,
-    blocked: Option<PyReadonlyArray2<'py, u8>>,
-) -> PyResult<Vec<PlanOut<'py>>> {
-    let task = NavTask {
-        sir_db: sir_db.as_array(),
-        extent: extent_m,
-        goal: goal_m,
-        step_m,
-        tol_m,
-        max_steps,
-        mu,
-        reward: reward.parse().map_err(to_py)?,
-        sir_min_db,
-        goal_reward,
-        out_of_bounds_penalty,
-        blocked: blocked.as_ref().map(|b| b.as_array()),
-    };
-    let pts = start_points(&starts_m)?;
-    let plans = detached(py, || task.optimal_many(&pts))?;
-    Ok(plans_out(py, plans))
-}
+use rainuav_core::planner::NavTask;
 
 /// The instants of a signal in time, a contiguous 1-D array.
 fn instants<'a>(t_s: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
@@ -65,94 +22,6 @@ fn instants<'a>(t_s: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
             "strided",
         ))
     })
-}
-
-/// The (N, 2) starts as points.
-fn start_points(starts_m: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; 2]>> {
-    let starts = starts_m.as_array();
-    if starts.ncols() != 2 {
-        return Err(to_py(CoreError::invalid(
-            "starts_m",
-            "must have shape (N, 2)",
-            format!("{:?}", starts.dim()),
-        )));
-    }
-    Ok(starts.rows().into_iter().map(|r| [r[0], r[1]]).collect())
-}
-
-fn plans_out(py: Python<'_>, plans: Vec<Plan>) -> Vec<PlanOut<'_>> {
-    plans
-        .into_iter()
-        .map(|p| {
-            let n = p.path.len();
-            let path = ndarray::Array2::from_shape_fn((n, 2), |(i, k)| p.path[i][k]);
-            (
-                p.return_,
-                Array1::from(p.actions).into_pyarray(py),
-                path.into_pyarray(py),
-            )
-        })
-        .collect()
-}
-
-/// Exact space-time plans from many starts when the signal changes in time: `sinr_db`
-/// (K, H, W) at the instants `t_s` (K,), take-off at `t0_s`, each move `dt_s` long; the
-/// signal between slices is linear in time (`rainuav_core::plantime`).
-#[pyfunction]
-#[pyo3(signature = (sinr_db, t_s, extent_m, goal_m, starts_m, *, t0_s, dt_s, step_m, tol_m,
-    max_steps, mu, reward, sir_min_db, goal_reward, out_of_bounds_penalty, blocked=None))]
-#[allow(clippy::too_many_arguments)]
-fn plan_optimal_in_time<'py>(
-    py: Python<'py>,
-    sinr_db: PyReadonlyArray3<'py, f64>,
-    t_s: PyReadonlyArray1<'py, f64>,
-    extent_m: [f64; 4],
-    goal_m: [f64; 2],
-    starts_m: PyReadonlyArray2<'py, f64>,
-    t0_s: f64,
-    dt_s: f64,
-    step_m: f64,
-    tol_m: f64,
-    max_steps: usize,
-    mu: f64,
-    reward: &str,
-    sir_min_db: f64,
-    goal_reward: f64,
-    out_of_bounds_penalty: f64,
-    blocked: Option<PyReadonlyArray2<'py, u8>>,
-) -> PyResult<Vec<PlanOut<'py>>> {
-    let slices = sinr_db.as_array();
-    if slices.shape()[0] == 0 {
-        return Err(to_py(CoreError::invalid(
-            "sinr_db",
-            "must hold at least one slice",
-            "0",
-        )));
-    }
-    let times = instants(&t_s)?;
-    let task = NavTask {
-        sir_db: slices.index_axis(ndarray::Axis(0), 0),
-        extent: extent_m,
-        goal: goal_m,
-        step_m,
-        tol_m,
-        max_steps,
-        mu,
-        reward: reward.parse().map_err(to_py)?,
-        sir_min_db,
-        goal_reward,
-        out_of_bounds_penalty,
-        blocked: blocked.as_ref().map(|b| b.as_array()),
-    };
-    let tl = Timeline {
-        slices,
-        t_s: times,
-        t0_s,
-        dt_s,
-    };
-    let pts = start_points(&starts_m)?;
-    let plans = detached(py, || task.optimal_many_in_time(&tl, &pts))?;
-    Ok(plans_out(py, plans))
 }
 
 /// The signal at many points, each between two slices of a stack (S, H, W): bilinear in
@@ -329,7 +198,5 @@ fn plan_optimal_levels<'py>(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(plan_optimal_levels, m)?)?;
     m.add_function(wrap_pyfunction!(sample_slices, m)?)?;
-    m.add_function(wrap_pyfunction!(plan_optimal, m)?)?;
-    m.add_function(wrap_pyfunction!(plan_optimal_in_time, m)?)?;
     Ok(())
 }

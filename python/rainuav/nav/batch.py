@@ -76,8 +76,8 @@ class BatchStepper:
         }
 
     def time_s(self, t: np.ndarray) -> np.ndarray:
-        """The instant, s, after ``t`` moves (``rainuav_core::plantime``'s ``time_of_move``:
-        ``0 + t * move_s``, operation for operation)."""
+        """The instant, s, after ``t`` moves (the exact planner's clock,
+        ``rainuav_core::planlevels``: ``0 + t * move_s``, operation for operation)."""
         return 0.0 + np.asarray(t).astype(np.float64) * self.cfg.move_s
 
     def moves_to_goal(self, position: np.ndarray, goal: np.ndarray | None = None) -> np.ndarray:

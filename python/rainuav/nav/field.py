@@ -5,8 +5,8 @@ nearest pixel when the map names one.
 Two kinds, one interface (``field(x, y, t_s)``, ``field.serving_cell(x, y, t_s)``,
 ``field.varies``): [`SignalField`][rainuav.nav.field.SignalField], one map (time is ignored), and
 [`SignalSeries`][rainuav.nav.field.SignalSeries], maps at instants ``t_s`` (a storm that moves),
-linear in time between them. The exact planner in space-time (``rainuav_core::plantime``) reads the
-series operation for operation as ``SignalSeries.__call__`` does."""
+linear in time between them. The exact planner in space-time (``rainuav_core::planlevels``) reads
+the series operation for operation as ``SignalSeries.__call__`` does."""
 
 from __future__ import annotations
 
@@ -166,7 +166,7 @@ class SignalSeries:
     """Maps ``values_db`` (K, H, W) in dB at the instants ``t_s`` (K,), s, strictly
     increasing, over ``extent_m``: bilinear in space within a slice, linear in time between the
     two slices around an instant, held before the first and after the last
-    (``rainuav_core::plantime::Timeline::signal_at``, operation for operation).
+    (``rainuav_core::planlevels``' signal in time, operation for operation).
     ``serving_cell`` (K, H, W), optional, is read at the nearest pixel of the latest slice at
     or before the instant."""
 

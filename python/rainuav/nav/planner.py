@@ -4,10 +4,11 @@ The moves are deterministic on the start's lattice, so the exact finite-horizon 
 undiscounted return is a dynamic programme (in Rust; many starts run in parallel). It is the
 yardstick for learned policies. Where the signal changes in time (a
 [`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]) the programme's rewards depend
-on the step: it is then the exact optimum on the space-time lattice, the storm's motion known
-(``rainuav_core::plantime``). The baselines a user would try instead (the plan of the weather at
-take-off, re-planning on the weather of the moment) are in
-[`rainuav.nav.baselines`][rainuav.nav.baselines]."""
+on the step: it is then the exact optimum on the space-time lattice, the storm's motion known.
+One programme in Rust (``rainuav_core::planlevels``) solves every case: the plane in space, in
+space and time, and among flight levels (the plane is its case of one level). The baselines a
+user would try instead (the plan of the weather at take-off, re-planning on the weather of the
+moment) are in [`rainuav.nav.baselines`][rainuav.nav.baselines]."""
 
 from __future__ import annotations
 
@@ -75,17 +76,26 @@ def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
         "goal_reward": float(cfg.goal_reward),
         "out_of_bounds_penalty": float(cfg.out_of_bounds_penalty),
     }
+    # The plane is the programme among levels with one level: (K, 1, H, W) slices (one slice
+    # for a signal that does not change), every start on level 0, no climbs.
     mask = getattr(field, "not_flyable", None)
     if mask is not None:
-        task["blocked"] = np.ascontiguousarray(mask, dtype=np.uint8)
+        task["blocked"] = np.ascontiguousarray(np.asarray(mask, dtype=np.uint8)[None])
     goal = (float(cfg.goal_m[0]), float(cfg.goal_m[1]))
     if isinstance(field, SignalField):
-        raw = _core.plan_optimal(field.db, field.extent, goal, starts, **task)
+        slices, times = field.db[None, None], np.zeros(1)
     else:
-        raw = _core.plan_optimal_in_time(
-            field.db, field.t_s, field.extent, goal, starts, t0_s=0.0, dt_s=cfg.move_s, **task
-        )
-    return [Plan(float(r), np.asarray(path), np.asarray(a, dtype=np.int64)) for r, a, path in raw]
+        slices, times = field.db[:, None], np.asarray(field.t_s, dtype=np.float64)
+    raw = _core.plan_optimal_levels(
+        np.ascontiguousarray(slices, dtype=np.float64), np.ascontiguousarray(times),
+        tuple(float(v) for v in field.extent), goal,  # type: ignore[arg-type]
+        np.ascontiguousarray(np.column_stack([starts, np.zeros(len(starts))])),
+        t0_s=0.0, dt_s=float(cfg.move_s), climb=[], descend=[], **task,
+    )  # fmt: skip
+    return [
+        Plan(float(r), np.ascontiguousarray(np.asarray(path)[:, :2]), np.asarray(a, dtype=np.int64))
+        for r, a, path, _ in raw
+    ]
 
 
 def optimal(env: UAVNavEnv, start_m: npt.ArrayLike) -> Plan:
