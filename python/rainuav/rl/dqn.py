@@ -270,6 +270,16 @@ class Agent:
         self.updates += 1
         return float(loss.detach())
 
+    def schedule(self, finished: int) -> None:
+        """The schedules after ``finished`` episodes: the learning rate
+        ([`anneal()`][rainuav.rl.dqn.Agent.anneal]), the target network's sync every
+        ``target_sync_episodes``, and the running mean of the weights past ``average_from``."""
+        self.anneal(finished)
+        if finished % self.cfg.target_sync_episodes == 0:
+            self.sync()
+        if finished > self.cfg.average_from * self.cfg.episodes:
+            self.accumulate_average()
+
     def anneal(self, finished: int) -> None:
         """Sets the learning rate for ``finished`` episodes done: cosine from ``lr`` to
         ``lr_final`` over the run (``lr_final = 0``: ``lr`` throughout)."""

@@ -2,9 +2,13 @@
 
 [`train()`][rainuav.rl.loop.train] receives a built world ([`rainuav.world`][rainuav.world]: the
 signal and the task), builds its environment and the agent, then runs
-[`run_loop()`][rainuav.rl.loop.run_loop], which reads top to bottom: act, step the UAVs, store their
-N-step transitions, learn (sample, double-Q target, loss, optimiser step), and per finished episode
-anneal, sync the target, record stages, validate and checkpoint. The run ends with
+[`run_loop()`][rainuav.rl.loop.run_loop], which reads top to bottom: collect (act, step the UAVs,
+store their N-step transitions), update (sample, double-Q target, loss, optimiser step), and per
+finished episode the agent's schedules (learning rate, target sync, weight averaging) and the
+callbacks ([`rainuav.rl.callbacks`][rainuav.rl.callbacks]: log, stages, validation, then the
+checkpoint and the wall-clock budget); the run's state is one object,
+[`RunState`][rainuav.rl.callbacks.RunState], which the checkpoint saves and a resumed run
+restores. The run ends with
 [`finish()`][rainuav.rl.loop.finish] (evaluation, ``policy.pt``, ``metrics.json``, figures).
 
 Outputs in ``cfg.out``: ``config.toml``, the world's signal (``radiomap.npz``, or
@@ -20,25 +24,28 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import tomli_w
-import torch
 
 from rainuav._io import FolderLock, check_out_dir, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.radio.storms import check_storm_seed
 from rainuav.rl import checkpoint
-from rainuav.rl.collect import (
-    Lanes,
-    exploration_moves,
-    greedy_rollouts,
-    observe,
-    step,
+from rainuav.rl.callbacks import (
+    Callback,
+    Checkpoint,
+    EpisodeLog,
+    RunState,
+    Stages,
+    TimeBudget,
+    ValidationChecks,
 )
+from rainuav.rl.collect import Lanes, exploration_moves, observe, step
 from rainuav.rl.config import (
     TrainConfig,
     check_config,
@@ -60,7 +67,16 @@ from rainuav.rl.setup import check_fits, make_agent, pick_device, torch_settings
 from rainuav.world import World, build_world, task_of
 from rainuav.world.pool import VALIDATION_SEEDS, StormPool
 
-__all__ = ["finish", "load_checkpoint", "run_loop", "save_checkpoint", "storm_slot", "train"]
+__all__ = [
+    "collect",
+    "finish",
+    "load_checkpoint",
+    "run_loop",
+    "save_checkpoint",
+    "storm_slot",
+    "train",
+    "update",
+]
 
 RESUME_MAY_DIFFER = ("device", "out", "time_budget_s")
 """Fields a resumed run may change (the rest must equal the checkpoint's): the device, the
@@ -110,6 +126,7 @@ def train(
     progress: bool = True,
     stop_after: int | None = None,
     yardstick: bool = False,
+    callbacks: Sequence[Callback] = (),
 ) -> dict[str, Any]:
     """Runs the whole job in ``world`` (built by the caller from the configuration's world part,
     [`rainuav.world.build_world()`][rainuav.world.build_world]; tests hand in small synthetic
@@ -119,7 +136,9 @@ def train(
     it returns ``{}``. Sets no process-wide state that outlives the call (torch's thread count and
     determinism are restored). ``yardstick``: allow an evaluation storm (a per-storm network trained
     on the very storm a generalist is judged on, as the specialist it is compared with; not on the
-    CLI)."""
+    CLI). ``callbacks``: more [`Callback`][rainuav.rl.callbacks.Callback]s, called after the run's
+    own (one whose ``on_step`` returns True ends training, which then finishes as at its last
+    episode)."""
     check_config(cfg)
     if cfg.scenario == "storm" and not cfg.scenario_file and not yardstick:
         check_storm_seed(cfg.storm_seed, training=True)
@@ -148,7 +167,9 @@ def train(
         with torch_settings(device):
             agent = make_agent(cfg, env, device)  # seeds torch with cfg.seed
             env.np_random = np.random.default_rng(random_streams(cfg.seed)["env"])
-            return run_loop(cfg, agent, env, out, saved, progress, stop_after, ref_env, world.pool)
+            return run_loop(
+                cfg, agent, env, out, saved, progress, stop_after, ref_env, world.pool, callbacks
+            )
 
 
 def storm_slot(
@@ -188,172 +209,118 @@ def run_loop(
     stop_after: int | None,
     ref_env: UAVNavEnv | None = None,
     pool: StormPool | None = None,
+    callbacks: Sequence[Callback] = (),
 ) -> dict[str, Any]:
     """Algorithm 1 over ``cfg.dqn.episodes`` episodes, ``lanes`` UAVs at a time; from ``saved`` (a
-    checkpoint's state) when resuming. Returns [`finish()`][rainuav.rl.loop.finish]'s metrics, or
-    ``{}`` when stopped at ``stop_after``. ``pool``: the storms the UAVs fly
-    ([`storm_slot()`][rainuav.rl.loop.storm_slot]); validation, stages and the evaluation then fly
-    ``ref_env`` (default: ``env``)."""
+    checkpoint's state) when resuming. Each pass collects a move of every UAV in flight
+    ([`collect()`][rainuav.rl.loop.collect]), learns ([`update()`][rainuav.rl.loop.update]), and
+    per finished episode updates the agent's schedules, calls the callbacks
+    ([`rainuav.rl.callbacks`][rainuav.rl.callbacks]: log, stages, validation) and relaunches the
+    lane; after a pass that finished some, the log, the budget and the checkpoint. Returns
+    [`finish()`][rainuav.rl.loop.finish]'s metrics, or ``{}`` when stopped at ``stop_after``.
+    ``pool``: the storms the UAVs fly ([`storm_slot()`][rainuav.rl.loop.storm_slot]); validation,
+    stages and the evaluation then fly ``ref_env`` (default: ``env``)."""
     d = cfg.dqn
     ref = env if ref_env is None else ref_env
-    lanes = Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma)
     n_val = cfg.validate_starts if cfg.validate_every else 0
     val_starts = eval_starts(ref, n_val, cfg.eval_seed + 2)
-    checks = Validation(val_starts, optimal_flights(ref, val_starts))
-    stage_every = max(1, d.episodes // max(cfg.stages, 1))
-    stage_starts = eval_starts(ref, 5, cfg.eval_seed + 1)
-    weather = env.view is not None
-    per_storm = np.zeros(pool.bank.worlds if pool else 1, dtype=np.int64)
+    run = RunState(
+        agent=agent,
+        env=env,
+        lanes=Lanes.empty(min(d.lanes, d.episodes), d.n_step, d.gamma),
+        checks=Validation(val_starts, optimal_flights(ref, val_starts)),
+        pool=pool,
+        per_storm=np.zeros(pool.bank.worlds if pool else 1, dtype=np.int64),
+    )
+    stages = Stages(
+        max(1, d.episodes // max(cfg.stages, 1)), ref, eval_starts(ref, 5, cfg.eval_seed + 1)
+    )
 
-    def launch(k: int, episode: int) -> None:
+    def launch(k: int) -> None:
         start, goal, world = training_task(env, d, env.np_random)
         if pool is not None:
-            world = storm_slot(pool, lanes, k, per_storm, cfg.storm_episodes)
-        lanes.launch(k, start, episode, goal, world, training_level(env, d, start, env.np_random))
+            world = storm_slot(pool, run.lanes, k, run.per_storm, cfg.storm_episodes)
+        level = training_level(env, d, start, env.np_random)
+        run.lanes.launch(k, start, run.started, goal, world, level)
+        run.started += 1
 
-    started, returns, successes, stages = 0, [], [], []
-    train_seconds, pending = 0.0, 0  # pending: transitions not yet paid for by a gradient step
     if saved is not None:
-        try:
-            agent.load_state_dict(saved["agent"])
-            env.np_random.bit_generator.state = saved["env_rng"]
-            lanes.load_state_dict(saved["lanes"])
-            checks.load_state_dict(saved["validation"])
-            torch.set_rng_state(saved["torch_rng"])
-            started, pending, stages = int(saved["started"]), int(saved["pending"]), saved["stages"]
-            returns, successes = list(saved["returns"]), list(saved["successes"])
-            train_seconds = float(saved["train_seconds"])
-            if pool is not None:
-                pool.load_state_dict(saved["pool"]["pool"])
-                per_storm[:] = np.asarray(saved["pool"]["per_storm"], dtype=np.int64)
-        except (KeyError, TypeError, ValueError, RuntimeError, AttributeError, IndexError) as err:
-            raise InvalidInputError(
-                f"checkpoint {out / 'checkpoint.pt'}: refused (does not fit this run: "
-                f"{type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''})"
-            ) from err
-        if not (0 <= len(returns) <= started <= d.episodes and len(successes) == len(returns)):
-            raise InvalidInputError(
-                f"checkpoint {out / 'checkpoint.pt'}: refused (its episode counts are inconsistent)"
-            )
+        run.load_state_dict(saved, out / "checkpoint.pt", d.episodes)
     else:
-        for k in range(len(lanes.t)):
-            launch(k, started)
-            started += 1
-    log = RunLog(out, saved is not None, d.episodes, len(returns), progress)
-    t0 = time.perf_counter()
-    losses: list[float] = []
+        for k in range(len(run.lanes.t)):
+            launch(k)
+    log = RunLog(out, saved is not None, d.episodes, run.done, progress)
+    ckpt = Checkpoint(out / "checkpoint.pt", cfg, log, stop_after)
+    per_episode = [EpisodeLog(log), stages, ValidationChecks(cfg.validate_every, ref, log)]
+    per_episode += callbacks
+    per_step = [per_episode[0], TimeBudget(cfg.time_budget_s), *callbacks]
+    run.t0 = time.perf_counter()
     try:
-        while lanes.active.any():
-            # Act and step every UAV in flight.
-            idx = np.flatnonzero(lanes.active)
-            pos = lanes.start[idx] + env.cfg.step_m * lanes.offset[idx]
-            goal = lanes.goal[idx] if weather else None  # each UAV's destination and world
-            world = lanes.world[idx] if pool is not None else None
-            level, t = lanes.level[idx], lanes.t[idx]
-            obs = agent.observe(observe(env, pos, level, t, goal, world), t)
-            act = agent.act(obs, lanes.episode[idx], exploration_moves(env, level))
-            r = step(env, lanes.start[idx], lanes.offset[idx], level, t, act, goal, world)
-            lanes.offset[idx], lanes.level[idx], lanes.t[idx] = r["offset"], r["level"], r["t"]
-            lanes.ret[idx] += r["reward"]
-            # Store: each UAV's N-step window hands finished transitions to the replay.
-            nobs = agent.observe(observe(env, r["position"], r["level"], r["t"], goal, world),
-                                 r["t"])  # fmt: skip
-            stop = learner_ends(d, r)
-            learn_r = learning_reward(env, d, pos, r, goal)
-            for j, k in enumerate(idx):
-                for tr in lanes.windows[k].push(
-                    obs[j], int(act[j]), float(learn_r[j]), nobs[j], bool(stop[j]),
-                    bool(r["truncated"][j]),
-                ):  # fmt: skip
-                    agent.replay.add(*tr)
-            # Learn: one gradient step (sample, double-Q target, loss, step) per train_every.
-            pending += len(idx)
-            for _ in range(pending // d.train_every):
-                loss = agent.learn()
-                if loss is not None:
-                    losses.append(loss)
-            pending %= d.train_every
-            # Finished episodes: log, anneal, sync, stages, validate, relaunch the lane.
-            finished_before = len(returns)
+        while run.lanes.active.any():
+            idx, r = collect(run, cfg)
+            update(run, len(idx))
+            before = run.done
             for j in np.flatnonzero(r["terminated"] | r["truncated"]):
                 k = idx[j]
-                returns.append(float(lanes.ret[k]))
-                successes.append(bool(r["arrived"][j]))
-                n_done = len(returns)
-                seconds = time.perf_counter() - t0 + train_seconds
-                eps = float(agent.epsilon(lanes.episode[k]))
-                row = (int(lanes.episode[k]), float(lanes.ret[k]), int(lanes.t[k]))
-                log.episode(n_done, (*row, successes[-1], eps, seconds))
-                agent.anneal(n_done)
-                if n_done % d.target_sync_episodes == 0:
-                    agent.sync()
-                if n_done > d.average_from * d.episodes:
-                    agent.accumulate_average()
-                if n_done % stage_every == 0:
-                    # Greedy rollouts from given starts draw nothing from the training rng;
-                    # they and the checks fly the network the run reports.
-                    with agent.reporting():
-                        stages.append((n_done, greedy_rollouts(agent, ref, stage_starts)))
-                if cfg.validate_every and n_done % cfg.validate_every == 0:
-                    with agent.reporting():
-                        success, excess = checks.check(agent, ref, n_done)
-                    log.tb.add_scalar("validation/success", success, n_done)
-                    log.tb.add_scalar("validation/mean_excess_cost", excess, n_done)
-                if started < d.episodes:
-                    launch(k, started)
-                    started += 1
+                run.returns.append(float(run.lanes.ret[k]))
+                run.successes.append(bool(r["arrived"][j]))
+                agent.schedule(run.done)
+                for cb in per_episode:
+                    cb.on_episode(run, k)
+                if run.started < d.episodes:
+                    launch(k)
                 else:
-                    lanes.active[k] = False
-            n_done = len(returns)
-            if n_done == finished_before:
+                    run.lanes.active[k] = False
+            if run.done == before:
                 continue
-            if losses:
-                log.tb.add_scalar("loss", float(np.mean(losses)), n_done)
-                losses.clear()
-            if log.bar is not None:
-                log.bar.set_postfix(
-                    ret=f"{np.mean(returns[-100:]):.0f}",
-                    success=f"{np.mean(successes[-100:]):.2f}",
-                    eps=f"{agent.epsilon(started - 1):.3f}",
-                )
-                log.bar.update(n_done - finished_before)
-            # Checkpoint at every checkpoint_every finished episodes and at the end.
-            crossed = n_done // cfg.checkpoint_every > finished_before // cfg.checkpoint_every
-            # A wall-clock budget ends training at the first finished episode past it.
-            spent = time.perf_counter() - t0 + train_seconds
-            over_budget = bool(cfg.time_budget_s) and spent >= cfg.time_budget_s
-            if crossed or n_done == d.episodes or over_budget:
-                log.fh.flush()
-                save_checkpoint(
-                    out / "checkpoint.pt",
-                    {
-                        "agent": agent.state_dict(),
-                        "env_rng": env.np_random.bit_generator.state,
-                        "lanes": lanes.state_dict(),
-                        "started": started,
-                        "returns": returns,
-                        "successes": successes,
-                        "stages": stages,
-                        "pending": pending,
-                        "validation": checks.state_dict(),
-                        "train_seconds": time.perf_counter() - t0 + train_seconds,
-                        "torch_rng": torch.get_rng_state(),
-                        "config": to_dict(cfg),
-                        "pool": None
-                        if pool is None
-                        else {"pool": pool.state_dict(), "per_storm": per_storm.copy()},
-                    },
-                )
-                if stop_after is not None and stop_after <= n_done < d.episodes:
-                    return {}
-            if over_budget:
+            stopping = any([cb.on_step(run, before) for cb in per_step])  # each one, in order
+            if ckpt.after(run, before, stopping):
+                return {}
+            if stopping:
                 break
     finally:
         log.close()
-    train_seconds += time.perf_counter() - t0
     if pool is not None:
         pool.close()
-    return finish(cfg, agent, ref, returns, stages, train_seconds, out, checks, pool)
+    return finish(cfg, agent, ref, run.returns, run.stages, run.seconds(), out, run.checks, pool)
+
+
+def collect(run: RunState, cfg: TrainConfig) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """One move of every UAV in flight: observe, act (epsilon-greedy), step, and hand each UAV's
+    finished N-step transitions to the replay. Returns the lanes that moved and the step's
+    results."""
+    env, agent, lanes, d = run.env, run.agent, run.lanes, cfg.dqn
+    idx = np.flatnonzero(lanes.active)
+    pos = lanes.start[idx] + env.cfg.step_m * lanes.offset[idx]
+    goal = lanes.goal[idx] if env.view is not None else None  # each UAV's destination and world
+    world = lanes.world[idx] if run.pool is not None else None
+    level, t = lanes.level[idx], lanes.t[idx]
+    obs = agent.observe(observe(env, pos, level, t, goal, world), t)
+    act = agent.act(obs, lanes.episode[idx], exploration_moves(env, level))
+    r = step(env, lanes.start[idx], lanes.offset[idx], level, t, act, goal, world)
+    lanes.offset[idx], lanes.level[idx], lanes.t[idx] = r["offset"], r["level"], r["t"]
+    lanes.ret[idx] += r["reward"]
+    nobs = agent.observe(observe(env, r["position"], r["level"], r["t"], goal, world), r["t"])
+    stop = learner_ends(d, r)
+    learn_r = learning_reward(env, d, pos, r, goal)
+    for j, k in enumerate(idx):
+        for tr in lanes.windows[k].push(
+            obs[j], int(act[j]), float(learn_r[j]), nobs[j], bool(stop[j]), bool(r["truncated"][j])
+        ):
+            agent.replay.add(*tr)
+    return idx, r
+
+
+def update(run: RunState, moves: int) -> None:
+    """The gradient steps ``moves`` new transitions pay for: one (sample, double-Q target, loss,
+    optimiser step) per ``train_every``."""
+    every = run.agent.cfg.train_every
+    run.pending += moves
+    for _ in range(run.pending // every):
+        loss = run.agent.learn()
+        if loss is not None:
+            run.losses.append(loss)
+    run.pending %= every
 
 
 def finish(
