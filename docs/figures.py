@@ -71,7 +71,7 @@ def main() -> None:
     ev = args.storm_run / "eval_storms_1000000-1000049"
     stamp(ev / "evaluation_storm_flights.png", FIGURES / "storm_network_1000000.png",
           "python -m rainuav.evaluate RUN --storm-seeds 1000000-1000049")  # fmt: skip
-    cmd = run(["benches/worst_flights.py", str(args.storm_run), str(ev)])
+    cmd = run(["experiments/worst_flights.py", str(args.storm_run), str(ev)])
     # The run's folder is the user's own: the stamp names it RUN.
     cmd = cmd.replace(str(ev), "RUN/eval_storms_1000000-1000049").replace(
         str(args.storm_run), "RUN"

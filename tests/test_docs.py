@@ -44,7 +44,8 @@ def _texts() -> list[tuple[Path, str]]:
     out = []
     for pattern in ("python/**/*.py", "python/**/*.pyi", "python/**/*.toml", "crates/**/*.rs",
                     "docs/**/*.md", "docs/**/*.py", "examples/**/*.py", "tests/**/*.py",
-                    "benches/**/*.py", "*.md", "mkdocs.yml", "pyproject.toml"):  # fmt: skip
+                    "benches/**/*.py", "experiments/**/*.py", "*.md", "mkdocs.yml",
+                    "pyproject.toml"):  # fmt: skip
         for p in ROOT.glob(pattern):
             if "target" not in p.parts and p.name != "test_docs.py":
                 out.append((p, p.read_text(errors="replace")))

@@ -76,7 +76,7 @@ def test_a_real_dem_has_no_facet_seams(tmp_path: Path, freq_ghz: float) -> None:
     # The uma network over 2 km x 2 km of the Jacksboro DEM (3 arc-second cells of wooded hills)
     # at 20 m, 100 m up, ray engine. Against the same map without a ground reflection: the 90th
     # percentile of the jumps between neighbouring pixels within 0.5 dB and the share of jumps
-    # over 6 dB within 1.15 times (the targets; benches/ground_seams.py measures the 10 m map).
+    # over 6 dB within 1.15 times (the targets; experiments/ground_seams.py measures the 10 m map).
     # A DEM taken as a mirror-smooth ground (roughness 0) shows its facets at 28 GHz: the
     # check would see them.
     dem = _jacksboro(tmp_path / "jacksboro.tif")

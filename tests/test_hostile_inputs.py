@@ -188,7 +188,7 @@ def test_no_torch_load_without_weights_only() -> None:
     root = Path(__file__).parents[1]
     call = re.compile(r"^[^#\"']*\btorch\.load\(")  # a call, not a comment or a string
     calls = 0
-    for folder in ("python", "benches", "tests"):
+    for folder in ("python", "benches", "experiments", "tests"):
         for f in (root / folder).rglob("*.py"):
             for line in f.read_text().splitlines():
                 if call.search(line):

@@ -265,3 +265,31 @@ def test_the_physics_tests_do_not_need_torch() -> None:
     # 0: every module collected (a module that imports torch is a collection error, exit 2).
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
     assert "tests collected" in out.stdout, out.stdout[-3000:]
+
+
+REPO = ROOT.parents[1]
+PAGES = ["README.md", "BENCHMARKS.md", "CONTRIBUTING.md", "docs/**/*.md"]
+
+
+def test_every_benchmark_and_experiment_is_cited_and_every_cited_one_exists() -> None:
+    """``benches/`` holds speed (the pytest-benchmark comparisons ``make bench`` runs, and timing
+    scripts), ``experiments/`` the runs behind published figures: a script that no page names is
+    removed, and a command a page gives names a script that exists."""
+    text = "\n".join(
+        p.read_text() for pattern in PAGES for p in REPO.glob(pattern) if "api" not in p.parts
+    )
+    scripts = [
+        p
+        for folder in ("benches", "experiments")
+        for p in sorted((REPO / folder).glob("*"))
+        if p.suffix in (".py", ".sh") and p.name != "conftest.py"
+        and not p.name.startswith("test_")  # pytest-benchmark files: `make bench` runs them
+    ]  # fmt: skip
+    assert len(scripts) >= 20
+    uncited = [str(p.relative_to(REPO)) for p in scripts if p.name not in text]
+    assert not uncited, f"no page cites {uncited}: remove them or cite them with their command"
+    import re
+
+    cited = set(re.findall(r"\b((?:benches|experiments)/[A-Za-z0-9_]+\.(?:py|sh))\b", text))
+    missing = sorted(c for c in cited if not (REPO / c).exists())
+    assert not missing, f"pages cite scripts that do not exist: {missing}"

@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-WHERE = ["python", "crates", "docs", "benches", "README.md", "BENCHMARKS.md", "CONTRIBUTING.md",
-         "CHANGELOG.md"]  # fmt: skip
+WHERE = ["python", "crates", "docs", "benches", "experiments", "README.md", "BENCHMARKS.md",
+         "CONTRIBUTING.md", "CHANGELOG.md"]  # fmt: skip
 SUFFIXES = {".py", ".pyi", ".rs", ".md", ".toml", ".sh", ".txt", ".cff", ".yml"}
 PROCESS_WORDS = re.compile(r"\bsessions?\b", re.IGNORECASE)
 ISSUE = re.compile(r"\b(issues?|tickets?|PRs?|pull requests?)\s*#?\d+|(?<![\w&/])#\d{1,4}\b",

@@ -1,6 +1,6 @@
 """Which height to fly, measured on one network (BENCHMARKS.md, "Altitude as a decision"):
 
-    python benches/altitude_plans.py [--starts 100] [--freq-ghz 28] [--seed 0]
+    python experiments/altitude_plans.py [--starts 100] [--freq-ghz 28] [--seed 0]
 
 The `uma` network (21 cells) in clear air, ray engine, at six flight altitudes (25-150 m
 every 25 m). Prints the share of the area in outage (SINR below -2 dB) at each, then for

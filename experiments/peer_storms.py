@@ -3,7 +3,7 @@
 same wall-clock budget, all measured the same way on held-out storms.
 
     pip install 'rainuav[peer]'
-    python benches/peer_storms.py --budget-s 900 --storms 10 --out runs/peer_storms
+    python experiments/peer_storms.py --budget-s 900 --storms 10 --out runs/peer_storms
 
 The env: ``UAVNavEnv(observation="weather")`` (the task's fixed destination) over a pool of 16
 training storms (:class:`rainuav.world.pool.StormPool`, the pool ``python -m rainuav.train

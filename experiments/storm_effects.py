@@ -1,7 +1,7 @@
 """What a moving storm does to the radio map and to a flight planned before it moved (README,
 "What a moving storm does"):
 
-    python benches/storm_effects.py [--seeds 0-9] [--starts 20]
+    python experiments/storm_effects.py [--seeds 0-9] [--starts 20]
 
 For each `storm` (28 GHz, ray engine, 10 m pixels, SINR outage below -2 dB) over 300 s in 5 s
 slices: the share of the area whose outage state changes at least once; how fast SINR at a

@@ -1,6 +1,6 @@
 """The ray engine's buildings against Sionna RT 2.2, scene by scene (the results page's table).
 
-    python benches/tracer_compare.py [--scenes urban district] [--freqs-ghz 3.5 4.9 28]
+    python experiments/tracer_compare.py [--scenes urban district] [--freqs-ghz 3.5 4.9 28]
         [--altitudes 20 100] [--pols v h] [--samples 8e6] [--json FILE] [--figure FILE]
 
 For each scene ([`rainuav.radio.tracer_scenes`][rainuav.radio.tracer_scenes]; by default the

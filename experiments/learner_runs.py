@@ -1,7 +1,7 @@
 """The learner's headline figures: default runs on several maps and seeds, each evaluated on the
 network alone from the run's 200 fixed evaluation starts, tabulated.
 
-    python benches/learner_runs.py --scenarios paper uma rain_cell --seeds 0 1 2 --out runs/m
+    python experiments/learner_runs.py --scenarios paper uma rain_cell --seeds 0 1 2 --out runs/m
 
 Each run is ``python -m rainuav.train --scenario S --seed K`` (nothing else changed) in
 ``OUT/S_sK``; a run whose ``metrics.json`` exists is not repeated. Prints a Markdown table

@@ -3,7 +3,7 @@ today's learner (the position and the flight time as input) trained on one held-
 alone and flown on that very storm, from the same 20 fixed starts as the generalist's
 evaluation (``python -m rainuav.evaluate RUN --storm-seeds A-B``, the run's ``eval_seed``).
 
-    python benches/specialists.py --seeds 1000000-1000002 --out runs/specialists
+    python experiments/specialists.py --seeds 1000000-1000002 --out runs/specialists
 
 Evaluation storms are refused for training everywhere else; here each specialist is the
 best a single-storm network does on its storm, not a result of ours, so it trains on it

@@ -4,7 +4,7 @@ network gets wrong: in the storm of the evaluation where its mean excess cost wa
 the 20 where it paid most over the optimum (or did not arrive), drawn over the SINR at three
 instants beside the frozen take-off plan's and the optimum's flights.
 
-    python benches/worst_flights.py runs/storms runs/storms/eval_storms_1000000-1000049
+    python experiments/worst_flights.py runs/storms runs/storms/eval_storms_1000000-1000049
 
 Writes ``worst_flights.png`` into the evaluation folder and prints, per flight drawn, its
 storm, start, excess cost (or "did not arrive") and moves.

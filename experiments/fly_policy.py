@@ -2,7 +2,7 @@
 place, against the exact plan the command makes by default: arrival share and
 excess cost over it, for seeded (start, destination) pairs the network has never seen.
 
-    python benches/fly_policy.py RUN [--pairs 20] [--seed 0]
+    python experiments/fly_policy.py RUN [--pairs 20] [--seed 0]
 
 The place: ``examples/sites.csv`` around Zurich, the area fixed to the box below, at the
 flight altitude of 100 m, 28 GHz. Three weathers: clear air, 25 mm/h, and the moving radar

@@ -2,7 +2,7 @@
 seeds, each evaluated on the network alone from the run's 200 fixed evaluation starts against
 the exact plan among levels, beside the plans of one altitude, tabulated.
 
-    python benches/learner_levels.py --seeds 0 1 2 --out runs/levels
+    python experiments/learner_levels.py --seeds 0 1 2 --out runs/levels
 
 Each run is ``python -m rainuav.train --scenario uma --freq-ghz 28 --rain-rate 0 --altitudes
 25:115:15 --seed K`` (the defaults otherwise; ``--altitudes``, ``--scenario``... given here

@@ -4,7 +4,7 @@ budget, measured the same way (the network alone, greedy, from the run's 200 fix
 starts, against the exact planner).
 
     pip install 'rainuav[peer]'
-    python benches/peer.py --scenario paper --seed 0 --out runs/peer_paper_s0
+    python experiments/peer.py --scenario paper --seed 0 --out runs/peer_paper_s0
 
 First trains rainuav's default learner (``rainuav.rl.loop.train``, its own folder under
 ``--out``), then the literal preset (``time_budget_s``) and SB3's DQN for as many seconds as

@@ -1,6 +1,6 @@
 """Seams in a map over a real DEM: the ground reflection against no ground, in one run.
 
-    python benches/ground_seams.py [--ground medium-dry] [--freq-ghz 28] [--out DIR]
+    python experiments/ground_seams.py [--ground medium-dry] [--freq-ghz 28] [--out DIR]
 
 The Jacksboro fault sample that matplotlib ships (a 3 arc-second DEM of rough, wooded hills in
 Tennessee, about 90 m cells) written as a GeoTIFF; the ``uma`` network's 21 cells at 28 GHz over a
