@@ -53,8 +53,8 @@ def main() -> None:
     args = ap.parse_args()
     from rainuav.geo import Georef
     from rainuav.radio import buildings as bld
+    from rainuav.radio.maps import build_radio_map
     from rainuav.radio.presets import uma
-    from rainuav.radio.radiomap import build_radio_map
     from rainuav.radio.scenario import Area, FootprintsFile, Origin, TerrainFile
     from rainuav.radio.terrain import not_flyable
     from rainuav.radio.wall_rays import trace_walls

@@ -28,8 +28,8 @@ def main() -> None:
     ap.add_argument("--freq-ghz", type=float, default=28.0)
     args = ap.parse_args()
     from rainuav.radio import presets
-    from rainuav.radio.levels import build_radio_levels, level_scenario
-    from rainuav.radio.radiomap import build_radio_map
+    from rainuav.radio.levelmaps import build_radio_levels, level_scenario
+    from rainuav.radio.maps import build_radio_map
     from rainuav.radio.scenario import Area
 
     lo, hi, step = (float(v) for v in args.levels.split(":"))

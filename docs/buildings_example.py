@@ -38,7 +38,7 @@ def main() -> None:
     from rainuav.nav import planner
     from rainuav.nav.task import NavConfig
     from rainuav.radio import presets
-    from rainuav.radio.radiomap import build_radio_map
+    from rainuav.radio.maps import build_radio_map
     from rainuav.radio.ray_engine import ray_terms
     from rainuav.world import world_from
     from rainuav.world.place import place_scenario

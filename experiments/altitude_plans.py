@@ -32,7 +32,7 @@ def main() -> None:
     from rainuav.nav.field import SignalField
     from rainuav.nav.task import NavConfig
     from rainuav.radio import presets
-    from rainuav.radio.levels import build_radio_levels, sample_levels
+    from rainuav.radio.levelmaps import build_radio_levels, sample_levels
     from rainuav.radio.scenario import Area
 
     levels = [25.0, 50.0, 75.0, 100.0, 125.0, 150.0]

@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 from rainuav.radio.area import Area
+from rainuav.radio.maps import build_radio_map
 from rainuav.radio.presets import uma
-from rainuav.radio.radiomap import build_radio_map
 from rainuav.radio.scenario import Origin, TerrainFile
 
 

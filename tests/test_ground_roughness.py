@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rainuav.radio.area import Area
+from rainuav.radio.maps import build_radio_map
 from rainuav.radio.presets import uma
-from rainuav.radio.radiomap import build_radio_map
 from rainuav.radio.ray_engine import ray_terms
 from rainuav.radio.scenario import Origin, TerrainFile
 from rainuav.radio.terrain import DEM_GROUND, ground_over

@@ -9,7 +9,7 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav import planner
 from rainuav.nav.field import SignalField
 from rainuav.nav.task import NavConfig
-from rainuav.radio.levels import build_radio_levels
+from rainuav.radio.levelmaps import build_radio_levels
 from rainuav.radio.presets import uma
 from rainuav.radio.scenario import Area
 
@@ -105,8 +105,8 @@ def test_bad_altitude_sets_are_refused_in_one_line() -> None:
 
 def test_maps_at_several_heights_are_each_level_s_map() -> None:
     # The stack holds, at each level, the map of the scenario flying at that altitude.
-    from rainuav.radio.levels import level_scenario
-    from rainuav.radio.radiomap import build_radio_map
+    from rainuav.radio.levelmaps import level_scenario
+    from rainuav.radio.maps import build_radio_map
 
     area = Area(resolution_m=50.0, altitudes_m=[40.0, 100.0])
     scn = uma(engine="ray").replace(area=area)
@@ -192,8 +192,8 @@ def test_the_altitude_study_and_its_figures() -> None:
     assert row["levels_optimal_mean_cost"] <= row["best_fixed_mean_cost"] + 1e-9
     assert row["fixed_100m_excess_cost"] >= -1e-9 and row["best_single_excess_cost"] >= -1e-9
     # With the case's environment at 100 m, the straight line there beside them.
-    from rainuav.radio.levels import level_scenario
-    from rainuav.radio.radiomap import build_radio_map
+    from rainuav.radio.levelmaps import level_scenario
+    from rainuav.radio.maps import build_radio_map
     from rainuav.world import world_from
 
     cfg = NavConfig(min_db=-2.0, step_m=40.0, tol_m=40.0)
@@ -275,7 +275,7 @@ def test_fly_a_band_of_heights_over_terrain_writes_heights_above_sea_level(tmp_p
 
 def test_maps_in_time_at_several_heights() -> None:
     # (time, altitude, H, W): each level's slice is that level's own series.
-    from rainuav.radio.levels import build_radio_level_series, level_scenario
+    from rainuav.radio.levelmaps import build_radio_level_series, level_scenario
     from rainuav.radio.presets import storm
     from rainuav.radio.timemap import build_radio_map_series
 
@@ -300,7 +300,7 @@ def test_one_march_reads_every_level() -> None:
     # 0.14 dB at 60 m here, 0.44 dB on `uma` at 28 GHz, 20 m pixels, 30 m), and within
     # 0.05 dB at the highest level, whose grid it is (PE budget cut to 0.02 for speed).
     from rainuav.radio.grid import march_grid
-    from rainuav.radio.levels import level_scenario, shares_a_march
+    from rainuav.radio.levelmaps import level_scenario, shares_a_march
     from rainuav.radio.pe_engine import march_cell, march_cell_levels
     from rainuav.radio.presets import paper
     from rainuav.radio.scenario import PESettings
@@ -324,7 +324,7 @@ def test_more_levels_than_fit_in_memory_are_refused_before_building() -> None:
     # 64 levels of `uma`'s 21 cells at 0.5 m pixels (16 million a level) need about 100 GB:
     # refused in one line naming area.altitudes_m, before the first level is built (as are
     # the maps in time).
-    from rainuav.radio.levels import build_radio_level_series
+    from rainuav.radio.levelmaps import build_radio_level_series
 
     scn = uma(0.0, 28e9, engine="ray").replace(
         area=Area(resolution_m=0.5, altitudes_m=[20.0 + 10.0 * k for k in range(64)])
@@ -343,9 +343,9 @@ def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
     import json
 
     import rasterio
-    from rainuav.radio.levels import level_scenario
+    from rainuav.radio.levelmaps import level_scenario
     from rainuav.radio.mapdata import RadioMap
-    from rainuav.radio.radiomap import build_radio_map
+    from rainuav.radio.maps import build_radio_map
     from rainuav.radio.scenario import Origin
     from rainuav.radiomap import main
 
@@ -386,7 +386,7 @@ def test_maps_in_time_read_every_level_from_one_clear_air_march(
     # The hybrid series in time at two levels through moving rain cells: the PE's clear-air
     # march once a cell for both levels, against each level's own series: SINR within 0.5 dB
     # at the lower level and 0.05 dB at the highest (as the static maps), at every instant.
-    from rainuav.radio.levels import build_radio_level_series
+    from rainuav.radio.levelmaps import build_radio_level_series
     from rainuav.radio.presets import paper
     from rainuav.radio.scenario import PESettings
     from rainuav.radio.weather import Medium, RainCell

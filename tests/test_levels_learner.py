@@ -15,7 +15,7 @@ from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import base_reward
-from rainuav.radio.levels import LevelStack
+from rainuav.radio.levelmaps import LevelStack
 from rainuav.radio.scenario import Area, Scenario, Site
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts, step

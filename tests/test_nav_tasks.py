@@ -15,7 +15,7 @@ from gymnasium.vector import AutoresetMode, SyncVectorEnv
 from rainuav.errors import InvalidInputError
 from rainuav.nav import UAVNavEnv, flight_cost, planner
 from rainuav.nav.vector import UAVNavVectorEnv
-from rainuav.radio.radiomap import RadioMap
+from rainuav.radio.maps import RadioMap
 from rainuav.radio.scenario import Area, Scenario, Site
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.evaluation import flights, reference_flights, summarise
@@ -269,7 +269,7 @@ def test_a_saved_policy_flies_on_another_map_object_with_shared_references(
     # What studies use for the paper's case (f): a run's network flown on a map given as an
     # object. Flying it on its own saved map gives the run's own numbers; reusing the exact
     # planner's flights (references) changes nothing; a map and a world at once is refused.
-    from rainuav.radio.radiomap import RadioMap
+    from rainuav.radio.maps import RadioMap
     from rainuav.rl.evaluation import evaluate_saved_run
     from rainuav.rl.loop import train
 

@@ -16,8 +16,8 @@ from rainuav import medium
 from rainuav.errors import InvalidInputError
 from rainuav.radio import build_radio_map, cache, presets
 from rainuav.radio import sinr as sinr_mod
+from rainuav.radio.maps import RadioMap
 from rainuav.radio.pe_engine import rain_rate_at
-from rainuav.radio.radiomap import RadioMap
 from rainuav.radio.scenario import (
     Area,
     Building,

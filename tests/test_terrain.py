@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from rainuav import _core
 from rainuav.errors import InvalidInputError
-from rainuav.radio.radiomap import build_radio_map
+from rainuav.radio.maps import build_radio_map
 from rainuav.radio.scenario import Area, Cell, Origin, Scenario, Site, TerrainFile
 from rainuav.radio.terrain import flight_heights, not_flyable, scenario_terrain
 

@@ -35,7 +35,7 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import NavConfig, make_config
 from rainuav.nav.vector import UAVNavVectorEnv, check_num_envs
-from rainuav.radio.radiomap import RadioMap
+from rainuav.radio.maps import RadioMap
 from rainuav.radio.scenario import Scenario
 from rainuav.world import WorldSpec, build_world
 

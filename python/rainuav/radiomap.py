@@ -116,7 +116,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument(
         "--altitudes", default=None, metavar="LOW:HIGH:STEP",
         help="map a band of flight altitudes, m (e.g. 30:120:15): one map a level "
-        "(rainuav.radio.levels)",
+        "(rainuav.radio.levelmaps)",
     )  # fmt: skip
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
@@ -255,7 +255,7 @@ def _build_levels(args: argparse.Namespace, scn: Any) -> int:
     import numpy as np
 
     from rainuav._io import begin_folder, write_atomic
-    from rainuav.radio.levels import build_radio_levels
+    from rainuav.radio.levelmaps import build_radio_levels
     from rainuav.radio.plot import save_map_png
 
     stack = build_radio_levels(scn, cache=not args.no_cache, progress=True)

@@ -6,7 +6,7 @@ Modules, bottom up: [`cell`][rainuav.radio.cell] (a cell and its antenna),
 [`presets`][rainuav.radio.presets] (the paper's and our scenarios), [`grid`][rainuav.radio.grid]
 (one cell's PE grid and cone), [`pe_engine`][rainuav.radio.pe_engine] (the march per cell),
 [`ray_engine`][rainuav.radio.ray_engine] (two rays per cell and pixel, in Rust),
-[`sinr`][rainuav.radio.sinr], [`radiomap`][rainuav.radio.radiomap] (the map and its builder),
+[`sinr`][rainuav.radio.sinr], [`radiomap`][rainuav.radio.maps] (the map and its builder),
 [`weather`][rainuav.radio.weather], [`storms`][rainuav.radio.storms],
 [`rategrid`][rainuav.radio.rategrid] and [`stochastic`][rainuav.radio.stochastic] (weather in time),
 [`timemap`][rainuav.radio.timemap] (maps of a moving weather at many instants),
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from rainuav.radio import presets
 from rainuav.radio.cache import cache_dir, clear_cache
-from rainuav.radio.radiomap import RadioMap, build_radio_map
+from rainuav.radio.maps import RadioMap, build_radio_map
 from rainuav.radio.scenario import (
     Area,
     Building,

@@ -44,7 +44,7 @@ class Area:
     altitudes_m: list[float] | None = None
     """The flight altitudes a UAV may choose among (m, increasing, in the altitude reference
     of ``altitude_reference``), e.g. 30 to 120 every 15; None: ``altitude_m`` alone
-    ([`rainuav.radio.levels.build_radio_levels()`][rainuav.radio.levels.build_radio_levels] maps
+    ([`rainuav.radio.levelmaps.build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels] maps
     each)."""
 
     def check(self, where: str = "area") -> None:

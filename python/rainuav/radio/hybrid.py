@@ -1,7 +1,7 @@
 """What the engines compute before their powers are combined
 ([`engine_parts()`][rainuav.radio.hybrid.engine_parts]): every cell's power by the rays, the part of
 it the PE would carry, and the PE's power inside its cone.
-[`rainuav.radio.radiomap.build_radio_map()`][rainuav.radio.radiomap.build_radio_map] combines them
+[`rainuav.radio.maps.build_radio_map()`][rainuav.radio.maps.build_radio_map] combines them
 into a map; the maps in time ([`rainuav.radio.timemap`][rainuav.radio.timemap]) reuse the PE's part
 from clear air at every instant."""
 

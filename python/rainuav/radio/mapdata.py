@@ -1,6 +1,6 @@
 """A radio map as data: [`RadioMap`][rainuav.radio.mapdata.RadioMap] (received power per cell,
 serving cell, SIR and SINR at the flight altitude), its .npz form, the checks a map file must pass,
-and keeping a map in the cache. [`rainuav.radio.radiomap`][rainuav.radio.radiomap] builds maps;
+and keeping a map in the cache. [`rainuav.radio.maps`][rainuav.radio.maps] builds maps;
 [`rainuav.radio.timemap`][rainuav.radio.timemap] builds them in time."""
 
 from __future__ import annotations
@@ -250,7 +250,7 @@ def check_arrays(
 
 
 def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
-    """A map's arrays as [`build_radio_map()`][rainuav.radio.radiomap.build_radio_map] writes them,
+    """A map's arrays as [`build_radio_map()`][rainuav.radio.maps.build_radio_map] writes them,
     or [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file and the array: shapes
     from the scenario, types, and values finite and in their physical ranges (SIR and SINR within
     [SIR_FLOOR_DB, SIR_CEIL_DB], RSS within [RSS_FLOOR_DBM, 100] dBm, serving cells and sites that

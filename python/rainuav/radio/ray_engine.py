@@ -20,7 +20,7 @@ aliased).
 
 With ``weights``, [`ray_power()`][rainuav.radio.ray_engine.ray_power] also returns the power of the
 part of each pattern the weights select: what the PE would carry in the hybrid engine
-([`rainuav.radio.radiomap.build_radio_map()`][rainuav.radio.radiomap.build_radio_map])."""
+([`rainuav.radio.maps.build_radio_map()`][rainuav.radio.maps.build_radio_map])."""
 
 from __future__ import annotations
 

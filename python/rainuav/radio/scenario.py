@@ -41,7 +41,7 @@ THERMAL_NOISE_DBM_HZ = -174.0
 """Thermal noise density at 290 K, dBm/Hz."""
 
 ENGINES = ("hybrid", "ray", "pe")
-"""Propagation engines ([`rainuav.radio.radiomap`][rainuav.radio.radiomap])."""
+"""Propagation engines ([`rainuav.radio.maps`][rainuav.radio.maps])."""
 GROUNDS = ("pec", "none", "very-dry", "medium-dry", "wet")
 """Grounds: perfectly conducting, none (free space), or ITU-R P.527 dielectric soils."""
 

@@ -207,7 +207,7 @@ def _hybrid_terms(
     soil, or no cell marched): the rays' terms less the part inside each PE cone, plus the
     PE's power marched once in clear air as a direct ray's (module docstring).
     ``clear_parts``: the engine's parts in clear air where the caller has them (every level
-    from one march, [`rainuav.radio.levels`][rainuav.radio.levels])."""
+    from one march, [`rainuav.radio.levelmaps`][rainuav.radio.levelmaps])."""
     if scn.engine != "hybrid":
         return None
     if clear_parts is not None:

@@ -136,12 +136,12 @@ def engine_gain(scn: Scenario, engine: str = "ray") -> np.ndarray:
     """The path gain (linear, isotropic antennas) of each site of
     [`isotropic_scenario()`][rainuav.radio.tracer.isotropic_scenario]'s ``scn`` at every pixel,
     (S, H, W), by the ray engine or (``engine`` ``"hybrid"`` or ``"pe"``) by
-    [`build_radio_map()`][rainuav.radio.radiomap.build_radio_map] with that engine (the cells
+    [`build_radio_map()`][rainuav.radio.maps.build_radio_map] with that engine (the cells
     radiate 0 dBm: the map's dBm are the path gain's dB)."""
     from rainuav.radio.ray_engine import ray_power
 
     if engine != "ray":
-        from rainuav.radio.radiomap import build_radio_map
+        from rainuav.radio.maps import build_radio_map
 
         rm = build_radio_map(dataclasses.replace(scn, engine=engine), cache=False)
         return np.asarray(10.0 ** (rm.rss_dbm / 10.0), dtype=float)

@@ -2,7 +2,7 @@
 fly on the case's network and weather.
 
 The case's scenario is mapped at each of its ``altitudes_m``
-([`rainuav.radio.levels`][rainuav.radio.levels]); for the evaluation starts (seeded from the case's
+([`rainuav.radio.levelmaps`][rainuav.radio.levelmaps]); for the evaluation starts (seeded from the case's
 seed) the exact plan held at each level (the planner in the plane), the best single level of each
 flight (chosen with hindsight) and the exact plan among the levels (free to climb at 5 m/s and
 descend at 3 m/s, its start level chosen:
@@ -21,7 +21,7 @@ import numpy as np
 from rainuav.nav import planner
 from rainuav.nav.field import SignalField
 from rainuav.nav.task import NavConfig
-from rainuav.radio.levels import build_radio_levels, sample_levels
+from rainuav.radio.levelmaps import build_radio_levels, sample_levels
 from rainuav.radio.scenario import Scenario
 
 __all__ = ["ALTITUDE_COLUMNS", "altitude_row"]

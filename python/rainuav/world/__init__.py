@@ -35,9 +35,9 @@ from rainuav.nav.levels import LevelField, UAVLevelsEnv
 from rainuav.nav.task import NavConfig
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio import presets
-from rainuav.radio.levels import LevelStack
+from rainuav.radio.levelmaps import LevelStack
 from rainuav.radio.mapdata import RadioMap
-from rainuav.radio.radiomap import build_radio_map
+from rainuav.radio.maps import build_radio_map
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.storms import check_storm_seed
 from rainuav.radio.terrain import map_mask
@@ -64,7 +64,7 @@ __all__ = [
 
 MAP_FILES = ("radiomap.npz", "radiomap_series.npz", "radiolevels.npz")
 """The files a world's signal is saved in: a single map, maps in time, or the maps of every
-flight level ([`rainuav.radio.levels.LevelStack`][rainuav.radio.levels.LevelStack])."""
+flight level ([`rainuav.radio.levelmaps.LevelStack`][rainuav.radio.levelmaps.LevelStack])."""
 ENGINES = ("", "hybrid", "ray", "pe")
 MAX_POOL = 64
 """The most storms flown at once (each holds its maps in time: about 20 MB)."""
@@ -326,13 +326,13 @@ def level_field(
     """The signal at every level of ``scn``'s ``area.altitudes_m`` as a
     [`rainuav.nav.levels.LevelField`][rainuav.nav.levelfield.LevelField] (what the flights among
     levels read), and the maps it came from:
-    [`rainuav.radio.levels.build_radio_levels()`][rainuav.radio.levels.build_radio_levels], or where
+    [`rainuav.radio.levelmaps.build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels], or where
     ``times_s`` are given
-    [`build_radio_level_series()`][rainuav.radio.levels.build_radio_level_series] (engine 'pe' then
+    [`build_radio_level_series()`][rainuav.radio.levelmaps.build_radio_level_series] (engine 'pe' then
     becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown once (a
     storm pool's), not kept in the map cache."""
     from rainuav.nav.levels import LevelField
-    from rainuav.radio.levels import build_radio_level_series, build_radio_levels
+    from rainuav.radio.levelmaps import build_radio_level_series, build_radio_levels
 
     if times_s is None:
         stack = build_radio_levels(scn, progress=progress, cache=cache)

@@ -1,5 +1,5 @@
 """``fly`` with altitude as a decision (``--altitudes``): the place mapped at each flight level
-([`rainuav.radio.levels`][rainuav.radio.levels]), the exact plan among them
+([`rainuav.radio.levelmaps`][rainuav.radio.levelmaps]), the exact plan among them
 ([`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]: climbs and descents
 weighted by their duration) from the take-off level the planner finds best (of those flyable at the
 start; or the one given), and the flight's files with a height on every waypoint (relative to home;

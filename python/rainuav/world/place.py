@@ -41,9 +41,9 @@ from rainuav.nav.field import blocked_at, pixel_index
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio import presets
 from rainuav.radio.buildings import buildings_near_route
+from rainuav.radio.maps import build_radio_map
 from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.radar import read_radar_grid
-from rainuav.radio.radiomap import build_radio_map
 from rainuav.radio.scenario import Area, FootprintsFile, Origin, Scenario, TerrainFile
 from rainuav.radio.sites import read_site_rows, sites_from_rows
 from rainuav.radio.terrain import (

@@ -21,7 +21,7 @@ from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.nav.field import SignalBank, SignalSeries
 from rainuav.nav.levelfield import LevelField
-from rainuav.radio.levels import LevelStack
+from rainuav.radio.levelmaps import LevelStack
 from rainuav.radio.scenario import Scenario
 from rainuav.radio.timemap import build_radio_map_series
 from rainuav.world import (
@@ -79,7 +79,7 @@ class StormPool:
     being mapped next).
 
     Among flight levels (``spec.altitudes``) a storm is the maps of every level in time
-    ([`rainuav.radio.levels.LevelStack`][rainuav.radio.levels.LevelStack]) and the bank a
+    ([`rainuav.radio.levelmaps.LevelStack`][rainuav.radio.levelmaps.LevelStack]) and the bank a
     [`rainuav.nav.levelfield.LevelField.bank()`][rainuav.nav.levelfield.LevelField.bank]; the pool's
     memory (the slots, the storm being mapped and the one being put) is checked once the first storm
     is mapped."""

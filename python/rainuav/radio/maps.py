@@ -1,6 +1,6 @@
 """Radio maps: received power per cell, the serving cell, SIR and SINR over the flight altitude.
 
-[`build_radio_map()`][rainuav.radio.radiomap.build_radio_map] grids every cell
+[`build_radio_map()`][rainuav.radio.maps.build_radio_map] grids every cell
 ([`rainuav.radio.grid`][rainuav.radio.grid]), marches it
 ([`rainuav.radio.pe_engine`][rainuav.radio.pe_engine]), resamples its power onto the map's pixel
 centres, and combines the cells ([`rainuav.radio.sinr`][rainuav.radio.sinr]). ``sir_db`` and

@@ -7,7 +7,7 @@ ray engine traces every level; the hybrid engine over flat ground marches each c
 every level from that march (its grid the highest level's, so its cone may be narrower than a lower
 level's own: the rays carry the rest); the PE engine, and the hybrid over terrain, march once per
 level. Memory is checked for the whole stack before the first level is built. Weather that moves:
-[`build_radio_level_series()`][rainuav.radio.levels.build_radio_level_series], the maps in time of
+[`build_radio_level_series()`][rainuav.radio.levelmaps.build_radio_level_series], the maps in time of
 every level, (time, altitude, H, W) (the hybrid's clear-air march once a cell for every level,
 likewise)."""
 
@@ -85,9 +85,9 @@ def build_radio_levels(
     """The maps of ``scn`` at each of ``area.levels`` (module docstring). ``one_march``: the
     hybrid engine over flat ground marches each cell once for every level
     ([`rainuav.radio.hybrid.engine_parts_levels()`][rainuav.radio.hybrid.engine_parts_levels],
-    [`shares_a_march()`][rainuav.radio.levels.shares_a_march]); False: once
+    [`shares_a_march()`][rainuav.radio.levelmaps.shares_a_march]); False: once
     per level."""
-    from rainuav.radio.radiomap import build_radio_map
+    from rainuav.radio.maps import build_radio_map
 
     levels = scn.area.levels
     h, w = scn.area.shape
@@ -132,7 +132,7 @@ def _levels_from_one_march(scn: Scenario, *, cache: bool, progress: bool) -> Rad
     from rainuav.radio.cache import map_path
     from rainuav.radio.hybrid import engine_parts_levels
     from rainuav.radio.mapdata import store
-    from rainuav.radio.radiomap import cached_map, map_from_parts
+    from rainuav.radio.maps import cached_map, map_from_parts
 
     levels = scn.area.levels
     scns = [level_scenario(scn, a) for a in levels]
@@ -192,8 +192,8 @@ def build_radio_level_series(
     """The maps in time of ``scn`` at each of ``area.levels``
     ([`build_radio_map_series()`][rainuav.radio.timemap.build_radio_map_series] per level), memory
     checked for the whole stack first. ``one_march``: the hybrid over flat ground marches each cell
-    once in clear air for every level ([`shares_a_march()`][rainuav.radio.levels.shares_a_march]),
-    as [`build_radio_levels()`][rainuav.radio.levels.build_radio_levels] does."""
+    once in clear air for every level ([`shares_a_march()`][rainuav.radio.levelmaps.shares_a_march]),
+    as [`build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels] does."""
     from rainuav._checks import as_real_array
     from rainuav.radio.terrain import map_mask
     from rainuav.radio.timemap import build_radio_map_series
@@ -275,7 +275,7 @@ def sample_levels(
 
 
 STACK_VERSION = 1
-"""Format of a saved [`LevelStack`][rainuav.radio.levels.LevelStack]."""
+"""Format of a saved [`LevelStack`][rainuav.radio.levelmaps.LevelStack]."""
 
 
 @dataclass(frozen=True)
@@ -297,8 +297,8 @@ class LevelStack:
     @classmethod
     def of(cls, source: RadioLevels | RadioLevelSeries, scn: Scenario) -> LevelStack:
         """The stack of built levels
-        ([`build_radio_levels()`][rainuav.radio.levels.build_radio_levels] or
-        [`build_radio_level_series()`][rainuav.radio.levels.build_radio_level_series]) of
+        ([`build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels] or
+        [`build_radio_level_series()`][rainuav.radio.levelmaps.build_radio_level_series]) of
         ``scn``."""
         if isinstance(source, RadioLevels):
             serving = np.stack([m.serving_cell for m in source.maps]).astype(np.int16)
