@@ -44,8 +44,8 @@ class Area:
     altitudes_m: list[float] | None = None
     """The flight altitudes a UAV may choose among (m, increasing, in the altitude reference
     of ``altitude_reference``), e.g. 30 to 120 every 15; None: ``altitude_m`` alone
-    ([`rainuav.radio.levelmaps.build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels] maps
-    each)."""
+    ([`rainuav.radio.levelmaps.build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels]
+    maps each)."""
 
     def check(self, where: str = "area") -> None:
         for k in ("x_min_m", "x_max_m", "y_min_m", "y_max_m"):

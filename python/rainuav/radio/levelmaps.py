@@ -7,8 +7,8 @@ ray engine traces every level; the hybrid engine over flat ground marches each c
 every level from that march (its grid the highest level's, so its cone may be narrower than a lower
 level's own: the rays carry the rest); the PE engine, and the hybrid over terrain, march once per
 level. Memory is checked for the whole stack before the first level is built. Weather that moves:
-[`build_radio_level_series()`][rainuav.radio.levelmaps.build_radio_level_series], the maps in time of
-every level, (time, altitude, H, W) (the hybrid's clear-air march once a cell for every level,
+[`build_radio_level_series()`][rainuav.radio.levelmaps.build_radio_level_series], the maps in time
+of every level, (time, altitude, H, W) (the hybrid's clear-air march once a cell for every level,
 likewise)."""
 
 from __future__ import annotations
@@ -192,8 +192,8 @@ def build_radio_level_series(
     """The maps in time of ``scn`` at each of ``area.levels``
     ([`build_radio_map_series()`][rainuav.radio.timemap.build_radio_map_series] per level), memory
     checked for the whole stack first. ``one_march``: the hybrid over flat ground marches each cell
-    once in clear air for every level ([`shares_a_march()`][rainuav.radio.levelmaps.shares_a_march]),
-    as [`build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels] does."""
+    once in clear air for every level
+    ([`shares_a_march()`][rainuav.radio.levelmaps.shares_a_march]), as [`build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels] does."""
     from rainuav._checks import as_real_array
     from rainuav.radio.terrain import map_mask
     from rainuav.radio.timemap import build_radio_map_series

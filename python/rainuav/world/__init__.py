@@ -326,10 +326,10 @@ def level_field(
     """The signal at every level of ``scn``'s ``area.altitudes_m`` as a
     [`rainuav.nav.levels.LevelField`][rainuav.nav.levelfield.LevelField] (what the flights among
     levels read), and the maps it came from:
-    [`rainuav.radio.levelmaps.build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels], or where
-    ``times_s`` are given
-    [`build_radio_level_series()`][rainuav.radio.levelmaps.build_radio_level_series] (engine 'pe' then
-    becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown once (a
+    [`rainuav.radio.levelmaps.build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels],
+    or where ``times_s`` are given
+    [`build_radio_level_series()`][rainuav.radio.levelmaps.build_radio_level_series] (engine 'pe'
+    then becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown once (a
     storm pool's), not kept in the map cache."""
     from rainuav.nav.levels import LevelField
     from rainuav.radio.levelmaps import build_radio_level_series, build_radio_levels
