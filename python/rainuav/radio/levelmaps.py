@@ -193,7 +193,8 @@ def build_radio_level_series(
     ([`build_radio_map_series()`][rainuav.radio.timemap.build_radio_map_series] per level), memory
     checked for the whole stack first. ``one_march``: the hybrid over flat ground marches each cell
     once in clear air for every level
-    ([`shares_a_march()`][rainuav.radio.levelmaps.shares_a_march]), as [`build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels] does."""
+    ([`shares_a_march()`][rainuav.radio.levelmaps.shares_a_march]), as
+    [`build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels] does."""
     from rainuav._checks import as_real_array
     from rainuav.radio.terrain import map_mask
     from rainuav.radio.timemap import build_radio_map_series

@@ -329,8 +329,8 @@ def level_field(
     [`rainuav.radio.levelmaps.build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels],
     or where ``times_s`` are given
     [`build_radio_level_series()`][rainuav.radio.levelmaps.build_radio_level_series] (engine 'pe'
-    then becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown once (a
-    storm pool's), not kept in the map cache."""
+    then becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown
+    once (a storm pool's), not kept in the map cache."""
     from rainuav.nav.levels import LevelField
     from rainuav.radio.levelmaps import build_radio_level_series, build_radio_levels
 
