@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 from rainuav.errors import InvalidInputError
 from rainuav.fly import _policy
-from rainuav.world.place import fly_place, place_scenario
+from rainuav.fly.plan import fly_place
+from rainuav.world.place import place_scenario
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 BOX = (47.3590, 8.5290, 47.3830, 8.5600)

@@ -404,7 +404,7 @@ def test_maps_in_time_read_every_level_from_one_clear_air_march(
     assert not np.array_equal(shared.sinr_db[0, 0], shared.sinr_db[1, 0])  # the rain moves
     # Another weather over the same network (a storm pool's next storm) marches nothing: the
     # clear-air march is the last one's, and the series is the one a fresh march gives.
-    from rainuav.radio import hybrid, levels
+    from rainuav.radio import hybrid, levelmaps
 
     other = scn.replace(medium=Medium(kind="cells", rain_rate_mm_h=20.0, cells=cells))
     marches = []
@@ -417,7 +417,7 @@ def test_maps_in_time_read_every_level_from_one_clear_air_march(
     monkeypatch.setattr(hybrid, "engine_parts_levels", counted)
     again = build_radio_level_series(other, [0.0, 60.0], cache=False)
     assert marches == []
-    levels._CLEAR_PARTS.clear()
+    levelmaps._CLEAR_PARTS.clear()
     fresh = build_radio_level_series(other, [0.0, 60.0], cache=False)
     assert marches == [1]
     np.testing.assert_array_equal(again.sinr_db, fresh.sinr_db)

@@ -440,8 +440,9 @@ def test_fly_area_box(tmp_path, capsys) -> None:
 def test_a_flyer_flies_the_place_and_is_judged_against_the_optimum(tmp_path) -> None:
     """``fly_place(flyer=...)`` writes the flyer's path; flying the exact plan itself costs
     the optimum to 1e-9 (the cost is charged as the task charges it)."""
+    from rainuav.fly.plan import fly_place
     from rainuav.nav import planner
-    from rainuav.world.place import fly_place, place_scenario
+    from rainuav.world.place import place_scenario
 
     place = place_scenario(EXAMPLE, (47.3660, 8.5380), (47.3700, 8.5420))
 

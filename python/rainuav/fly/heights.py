@@ -21,6 +21,7 @@ import numpy as np
 
 from rainuav._io import begin_folder, write_atomic
 from rainuav.errors import InvalidInputError
+from rainuav.fly.figure import plot_flight
 from rainuav.geo import latlon_text
 from rainuav.missions import (
     corners,
@@ -41,7 +42,6 @@ from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.terrain import obstacle_pixel_max, scenario_terrain
 from rainuav.radio.timemap import series_times
 from rainuav.world import SLICE_S, level_field
-from rainuav.world.flightplot import plot_flight
 
 __all__ = ["fly_levels"]
 

@@ -163,7 +163,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     def body() -> int:
         from rainuav._checks import check_number
         from rainuav._io import check_out_dir
-        from rainuav.world.place import fly_place, place_scenario
+        from rainuav.fly.plan import fly_place
+        from rainuav.world.place import place_scenario
 
         if args.altitude_reference == "msl":
             check_number("--altitude-m", args.altitude_m, -500.0, 9000.0, " m above sea level")
@@ -233,7 +234,36 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"wrote {out.resolve()}", file=sys.stderr)
         return 0
 
-    return _cli.run(body)
+    def flagged() -> int:
+        try:
+            return body()
+        except InvalidInputError as err:  # the library names arguments, the command its flags
+            raise InvalidInputError(as_flags(str(err))) from err
+
+    return _cli.run(flagged)
+
+
+FLAGS = {
+    "`box`": "--area",
+    "`start`": "--start",
+    "`goal`": "--goal",
+    "`terrain`": "--terrain",
+    "`footprints`": "--footprints",
+    "`default_height_m`": "--default-height",
+    "`freq_ghz`": "--freq-ghz",
+    "a place maps at most": "fly maps at most",
+}
+"""The names of the arguments of
+[`rainuav.world.place.place_scenario()`][rainuav.world.place.place_scenario], as its messages
+write them, and this command's flags."""
+
+
+def as_flags(message: str) -> str:
+    """A library message with its argument names as this command's flags
+    ([`FLAGS`][rainuav.fly.FLAGS])."""
+    for name, flag in FLAGS.items():
+        message = message.replace(name, flag)
+    return message
 
 
 def _check_policy_run(run: Path) -> None:
@@ -262,7 +292,7 @@ def _check_policy_run(run: Path) -> None:
 
 
 def _policy(run: Path) -> tuple[object, str]:
-    """A flyer for [`rainuav.world.place.fly_place()`][rainuav.world.place.fly_place]: the network
+    """A flyer for [`rainuav.fly.plan.fly_place()`][rainuav.fly.plan.fly_place]: the network
     the run ``run`` reports, flown greedily from the place's start (read as data, refused in one
     line if it does not read the weather: ``_check_policy_run`` is the one place that says so)."""
     from rainuav.rl import checkpoint
@@ -282,7 +312,3 @@ def _policy(run: Path) -> tuple[object, str]:
         return roll["path"], bool(roll["reached"])
 
     return fly, f"network {run}"
-
-
-if __name__ == "__main__":
-    sys.exit(main())

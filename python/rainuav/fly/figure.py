@@ -18,7 +18,7 @@ __all__ = ["flight_figure", "plot_flight"]
 
 
 def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any = None) -> None:
-    """Writes ``flight.png`` ([`flight_figure()`][rainuav.world.flightplot.flight_figure]) to
+    """Writes ``flight.png`` ([`flight_figure()`][rainuav.fly.figure.flight_figure]) to
     ``where``, atomically."""
     fig = flight_figure(rm, path, place, heights)
     write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
