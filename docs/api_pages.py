@@ -20,6 +20,7 @@ GROUPS = {
     "world": "Worlds",
     "rl": "Learning",
     "studies": "Studies",
+    "fly": "The fly command",
 }
 """The API's sections, by subpackage (top-level modules go in "The package")."""
 ENTRY_POINTS = ("evaluate", "fly", "radiomap", "study", "train", "validate")

@@ -317,3 +317,32 @@ def test_rust_files_keep_the_size_discipline() -> None:
     assert not over, f"Rust files over {MAX_LINES} lines (or past their cap): {over}"
     stale = {f: (RUST_OVER[f], sizes.get(f)) for f in RUST_OVER if sizes.get(f, 0) <= MAX_LINES}
     assert not stale, f"take these off RUST_OVER (split, or gone): {stale}"
+
+
+def test_engines_are_asked_what_they_do_not_their_names() -> None:
+    """The propagation engines are known by name in one place
+    ([`rainuav.radio.engines`][rainuav.radio.engines]); elsewhere code asks an engine what it
+    does (``engine_of(scn).traces``), never compares its name."""
+    import re
+
+    from rainuav.radio.engines import ENGINES, engine_of
+    from rainuav.radio.scenario import ENGINES as SCENARIO_ENGINES
+
+    named = re.compile(r"""engine\w*\s*(==|!=|not in|in)\s*[("']+(hybrid|ray|pe)\b""")
+    hits = [
+        f"{name}:{i + 1}"
+        for name, path in modules().items()
+        if name != "rainuav.radio.engines"
+        for i, line in enumerate(path.read_text().splitlines())
+        if named.search(line)
+    ]
+    assert not hits, f"engine names compared at {hits}: ask rainuav.radio.engines.engine_of()"
+    assert tuple(ENGINES) == SCENARIO_ENGINES == ("hybrid", "ray", "pe")
+    # What each does: the hybrid both, the rays no march, the PE no rays (so no soil and no maps
+    # in time: a request in time goes to the hybrid).
+    assert [(e.marches, e.traces, e.in_time) for e in ENGINES.values()] == [
+        (True, True, "hybrid"), (False, True, "ray"), (True, False, "hybrid"),
+    ]  # fmt: skip
+    from rainuav.radio.presets import paper
+
+    assert engine_of("ray") is ENGINES["ray"] and engine_of(paper()) is ENGINES["hybrid"]

@@ -288,6 +288,7 @@ def _build_series(args: argparse.Namespace, scn: Any) -> int:
     import numpy as np
 
     from rainuav._io import begin_folder
+    from rainuav.radio.engines import engine_of
     from rainuav.radio.plot import save_series_gif
     from rainuav.radio.timemap import build_radio_map_series, series_times
 
@@ -295,10 +296,10 @@ def _build_series(args: argparse.Namespace, scn: Any) -> int:
         raise InvalidInputError("--slice-s: only with --duration-s")
     if args.at_s is not None:
         raise InvalidInputError("--at-s: not with --duration-s (the series starts at 0 s)")
-    if scn.engine == "pe":
+    if not engine_of(scn).traces:
         raise InvalidInputError(
-            "--engine pe: maps in time use the ray or the hybrid engine (a PE march per cell "
-            "and instant is not offered)"
+            f"--engine {scn.engine}: maps in time use the ray or the hybrid engine (a PE march "
+            "per cell and instant is not offered)"
         )
     times = series_times(args.duration_s, 5.0 if args.slice_s is None else args.slice_s)
     series = build_radio_map_series(scn, times, cache=not args.no_cache, progress=True)

@@ -15,6 +15,7 @@ import numpy as np
 
 from rainuav import _core
 from rainuav.radio.cell import Cell
+from rainuav.radio.engines import engine_of
 from rainuav.radio.grid import MarchGrid, cone_weight, march_grid
 from rainuav.radio.pe_engine import march_cell, march_cell_levels, resample
 from rainuav.radio.ray_engine import SOILS, Weight, ray_power
@@ -63,12 +64,12 @@ def engine_parts(
     for engines 'pe' and 'hybrid' over a 'pec' ground or none; the hybrid does not march a
     cell whose cone carries under 1% of its power at every pixel."""
     h, w = y_m.size, x_m.size
-    use_pe = scn.engine in ("pe", "hybrid") and scn.ground not in SOILS
+    use_pe = engine_of(scn).marches and scn.ground not in SOILS
     grids = [march_grid(scn, site, cell) if use_pe else None for site, cell in cells]
     timings: dict[str, float] = {}
     power = np.zeros((len(cells), h, w))
     carried = np.zeros_like(power)
-    if scn.engine != "pe":
+    if engine_of(scn).traces:
         t_r = time.perf_counter()
         # What the PE would carry, by the rays: a cell whose cone carries under 1% of its
         # power at every pixel (the UAV above a down-tilted sector's cone) is not marched.
@@ -132,7 +133,7 @@ def engine_parts_levels(
     for scn in scns:
         power = np.zeros((len(cells), h, w))
         carried = np.zeros_like(power)
-        if top.engine != "pe":
+        if engine_of(top).traces:
             t_r = time.perf_counter()
             power, in_cone = ray_power(scn, cells, x_m, y_m, weights)
             carried = np.zeros_like(power) if in_cone is None else in_cone

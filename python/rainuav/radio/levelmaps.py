@@ -27,6 +27,7 @@ import numpy as np
 from rainuav._checks import check_fits
 from rainuav._sampling import bilinear
 from rainuav.errors import InvalidInputError
+from rainuav.radio.engines import engine_of
 from rainuav.radio.mapdata import RadioMap, read_npz, write_npz
 from rainuav.radio.scenario import Scenario
 
@@ -118,7 +119,7 @@ def shares_a_march(scn: Scenario) -> bool:
 
     return (
         len(scn.area.levels) > 1
-        and scn.engine == "hybrid"
+        and engine_of(scn).combines
         and scn.ground not in SOILS
         and scn.terrain is None
     )

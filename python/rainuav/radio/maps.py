@@ -21,6 +21,7 @@ import numpy as np
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cache import map_path
+from rainuav.radio.engines import engine_of
 from rainuav.radio.hybrid import EngineParts, engine_parts
 from rainuav.radio.mapdata import FORMAT_VERSION, RadioMap, store
 from rainuav.radio.ray_engine import SOILS
@@ -78,7 +79,7 @@ def build_radio_map(
         return build_radio_map_series(scn, times_s, cache=cache, progress=progress)
     if cache and (hit := cached_map(scn)) is not None:
         return hit
-    if scn.engine == "pe" and scn.ground in SOILS:
+    if not engine_of(scn).traces and scn.ground in SOILS:
         raise InvalidInputError(
             f"engine 'pe' needs ground 'pec' or 'none' (got {scn.ground!r}: the PE's ground "
             "is a perfect conductor); use engine 'ray' or 'hybrid'"
@@ -110,7 +111,7 @@ def map_from_parts(scn: Scenario, parts: EngineParts, t0: float) -> RadioMap:
     jobs = [(i, site, cell) for i, site in enumerate(scn.sites) for cell in site.cells]
     power, carried, pe_power, grids = parts.power, parts.carried, parts.pe_power, parts.grids
     timings = parts.timings
-    if scn.engine == "pe":
+    if not engine_of(scn).traces:
         power = pe_power
         pe_share = (pe_power > 0).astype(np.float32)
     else:

@@ -34,14 +34,15 @@ from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef
 from rainuav.radio.area import DEFAULT_MIN_CLEARANCE_M, Area, FootprintsFile, TerrainFile
 from rainuav.radio.cell import Cell, Pattern
+from rainuav.radio.engines import ENGINES as _ENGINES
 from rainuav.radio.stochastic import StochasticRain
 from rainuav.radio.weather import Medium, RainCell
 
 THERMAL_NOISE_DBM_HZ = -174.0
 """Thermal noise density at 290 K, dBm/Hz."""
 
-ENGINES = ("hybrid", "ray", "pe")
-"""Propagation engines ([`rainuav.radio.maps`][rainuav.radio.maps])."""
+ENGINES = tuple(_ENGINES)
+"""Propagation engines ([`rainuav.radio.engines`][rainuav.radio.engines])."""
 GROUNDS = ("pec", "none", "very-dry", "medium-dry", "wet")
 """Grounds: perfectly conducting, none (free space), or ITU-R P.527 dielectric soils."""
 
@@ -209,7 +210,7 @@ class Scenario:
                 raise InvalidInputError(
                     "terrain needs [origin] (lat_deg, lon_deg): where the area lies on the Earth"
                 )
-            if self.engine != "ray" and self.ground == "none":
+            if _ENGINES[self.engine].marches and self.ground == "none":
                 raise InvalidInputError(
                     f"engine {self.engine!r} over terrain needs a ground (the march's floor): "
                     "ground = 'pec', or engine = 'ray'"

@@ -39,6 +39,7 @@ import numpy.typing as npt
 from rainuav._checks import as_real_array, as_real_scalar, check_fits, check_number
 from rainuav.errors import InvalidInputError
 from rainuav.radio.cache import map_path
+from rainuav.radio.engines import engine_of
 from rainuav.radio.hybrid import EngineParts, engine_parts
 from rainuav.radio.mapdata import (
     RadioMap,
@@ -208,7 +209,7 @@ def _hybrid_terms(
     PE's power marched once in clear air as a direct ray's (module docstring).
     ``clear_parts``: the engine's parts in clear air where the caller has them (every level
     from one march, [`rainuav.radio.levelmaps`][rainuav.radio.levelmaps])."""
-    if scn.engine != "hybrid":
+    if not engine_of(scn).combines:
         return None
     if clear_parts is not None:
         parts = clear_parts()
@@ -236,7 +237,7 @@ def build_radio_map_series(
     ([`rainuav.radio.cache`][rainuav.radio.cache]) and a new one is kept there. ``clear_parts``: the
     hybrid's parts in clear air from elsewhere (called only if the series is built), kept in the
     cache under ``cache_tag`` apart from the series built alone."""
-    if scn.engine not in ("ray", "hybrid"):
+    if not engine_of(scn).traces:
         raise InvalidInputError(
             f"maps in time need engine 'ray' or 'hybrid' (got {scn.engine!r}: a PE march per "
             "cell and instant); use scn.replace(engine='hybrid')"

@@ -138,9 +138,10 @@ def engine_gain(scn: Scenario, engine: str = "ray") -> np.ndarray:
     (S, H, W), by the ray engine or (``engine`` ``"hybrid"`` or ``"pe"``) by
     [`build_radio_map()`][rainuav.radio.maps.build_radio_map] with that engine (the cells
     radiate 0 dBm: the map's dBm are the path gain's dB)."""
+    from rainuav.radio.engines import engine_of
     from rainuav.radio.ray_engine import ray_power
 
-    if engine != "ray":
+    if engine_of(engine).marches:  # the map with the march in it
         from rainuav.radio.maps import build_radio_map
 
         rm = build_radio_map(dataclasses.replace(scn, engine=engine), cache=False)

@@ -35,6 +35,8 @@ from rainuav.nav.levels import LevelField, UAVLevelsEnv
 from rainuav.nav.task import NavConfig
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio import presets
+from rainuav.radio.engines import ENGINES as RADIO_ENGINES
+from rainuav.radio.engines import engine_of
 from rainuav.radio.levelmaps import LevelStack
 from rainuav.radio.mapdata import RadioMap
 from rainuav.radio.maps import build_radio_map
@@ -65,7 +67,7 @@ __all__ = [
 MAP_FILES = ("radiomap.npz", "radiomap_series.npz", "radiolevels.npz")
 """The files a world's signal is saved in: a single map, maps in time, or the maps of every
 flight level ([`rainuav.radio.levelmaps.LevelStack`][rainuav.radio.levelmaps.LevelStack])."""
-ENGINES = ("", "hybrid", "ray", "pe")
+ENGINES = ("", *RADIO_ENGINES)
 MAX_POOL = 64
 """The most storms flown at once (each holds its maps in time: about 20 MB)."""
 SLICE_S = 5.0
@@ -345,8 +347,7 @@ def level_field(
             serving_cell=serving,
         )
         return field, stack
-    if scn.engine == "pe":
-        scn = dataclasses.replace(scn, engine="hybrid")
+    scn = dataclasses.replace(scn, engine=engine_of(scn).in_time)
     series = build_radio_level_series(scn, times_s, progress=progress, cache=cache)
     field = LevelField.from_stack(series.sinr_db, series.altitudes_m, series.extent,
                                   t_s=series.t_s, not_flyable=series.not_flyable,
@@ -384,8 +385,7 @@ def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: boo
         times = series_instants(spec) if scn.medium.moves else None
         return LevelStack.of(level_field(scn, times, progress=progress, cache=cache)[1], scn)
     if scn.medium.moves:
-        if scn.engine == "pe":
-            scn = dataclasses.replace(scn, engine="hybrid")
+        scn = dataclasses.replace(scn, engine=engine_of(scn).in_time)
         return build_radio_map_series(scn, series_instants(spec), progress=progress, cache=cache)
     return build_radio_map(scn, progress=progress)
 
