@@ -209,6 +209,34 @@ class UAVNavEnv(gym.Env):
         self._pos = np.zeros(2)
         self._ready = False  # reset() starts the first episode
 
+    # -- many UAVs at once: the interface both environments share with the learner ---------
+    def observe_batch(
+        self, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None
+    ) -> Any:
+        """The observation of UAVs at ``pos`` (N, 2) after ``t`` (N,) moves (``level`` is 0 on
+        the plane), heading for ``goal`` in the worlds ``world`` where the env shows the weather
+        ([`observe()`][rainuav.nav.env.UAVNavEnv.observe])."""
+        return self.observe(pos, t, goal, world)
+
+    def step_batch(
+        self, start: Any, offset: Any, level: Any, t: Any, action: Any, goal: Any = None,
+        world: Any = None,
+    ) -> dict[str, np.ndarray]:  # fmt: skip
+        """One move of every UAV (the batched stepper's result, ``t`` the new clock, ``level``
+        unchanged and ``duration`` 1 a move)."""
+        r = self.stepper.step(start, offset, t, action, goal, world)
+        r["level"] = np.asarray(level, dtype=np.int64)
+        r["duration"] = np.ones(len(r["t"]), dtype=np.int64)
+        return r
+
+    def exploration_moves(self, level: Any) -> np.ndarray | None:
+        """The moves an exploring UAV draws from: None, every move (the plane's four)."""
+        return None
+
+    def start_level_at(self, p: Any) -> int:
+        """The level a flight from ``p`` takes off at: 0, the plane's one."""
+        return 0
+
     # -- helpers ----------------------------------------------------------------------------
     def observe(self, pos: np.ndarray, t: Any = 0, goal: Any = None, world: Any = None) -> Any:
         """The observation at ``pos`` after ``t`` moves. Position observation: the position scaled

@@ -214,6 +214,34 @@ class UAVLevelsEnv(gym.Env):
             f"from the destination in the area {self.field.extent}"
         )
 
+    def observe_batch(
+        self, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None
+    ) -> Any:
+        """The observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) at tick ``t`` (N,),
+        heading for ``goal`` in the worlds ``world``
+        ([`observe()`][rainuav.nav.levels.UAVLevelsEnv.observe])."""
+        return self.observe(pos, level, t, goal, world)
+
+    def step_batch(
+        self, start: Any, offset: Any, level: Any, t: Any, action: Any, goal: Any = None,
+        world: Any = None,
+    ) -> dict[str, np.ndarray]:  # fmt: skip
+        """One move of every UAV (the batched stepper's result, ``t`` the new clock in ticks)."""
+        r = self.stepper.step(start, offset, level, t, action, goal, world)
+        r["t"] = r.pop("tick")
+        return r
+
+    def exploration_moves(self, level: Any) -> np.ndarray | None:
+        """(N, 6) bool: the moves an exploring UAV among levels draws from: every move but a
+        climb from the highest level and a descent from the lowest (each would end the flight
+        at once: random moves would end a sixth of the early flights at the lowest level, before
+        they learn anything; the network's own choices are never restricted)."""
+        level = np.asarray(level)
+        ok = np.ones((len(level), 6), dtype=bool)
+        ok[:, 4] = level < self.field.levels - 1
+        ok[:, 5] = level > 0
+        return ok
+
     def start_level_at(self, p: Any) -> int:
         """The level a flight from ``p`` starts at: ``start_level`` where given, else the
         lowest flyable there."""

@@ -27,12 +27,9 @@ Env = UAVNavEnv | UAVLevelsEnv
 
 def observe(env: Env, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None) -> Any:
     """The env's observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) after ``t`` (N,), heading
-    for ``goal`` (N, 2) in the worlds ``world`` (N,) where the env shows the weather
-    ([`UAVNavEnv.observe()`][rainuav.nav.env.UAVNavEnv.observe],
-    [`UAVLevelsEnv.observe()`][rainuav.nav.levels.UAVLevelsEnv.observe])."""
-    if isinstance(env, UAVLevelsEnv):
-        return env.observe(pos, level, t, goal, world)
-    return env.observe(pos, t, goal, world)
+    for ``goal`` (N, 2) in the worlds ``world`` (N,) where the env shows the weather (the env's
+    ``observe_batch``)."""
+    return env.observe_batch(pos, level, t, goal, world)
 
 
 def step(
@@ -46,34 +43,20 @@ def step(
     world: Any = None,
 ) -> dict[str, np.ndarray]:
     """One move of every UAV: the env's batched stepper's result, with ``t`` the new clock,
-    ``level`` the new level and ``duration`` each move's ticks (1 on one level)."""
-    if isinstance(env, UAVLevelsEnv):
-        r = env.stepper.step(start, offset, level, t, action, goal, world)
-        r["t"] = r.pop("tick")
-        return r
-    r = env.stepper.step(start, offset, t, action, goal, world)
-    r["level"] = np.asarray(level, dtype=np.int64)
-    r["duration"] = np.ones(len(r["t"]), dtype=np.int64)
-    return r
+    ``level`` the new level and ``duration`` each move's ticks (1 on one level; the env's
+    ``step_batch``)."""
+    return env.step_batch(start, offset, level, t, action, goal, world)
 
 
 def exploration_moves(env: Env, level: np.ndarray) -> np.ndarray | None:
-    """(N, 6) bool: the moves an exploring UAV among levels draws from: every move but a
-    climb from the highest level and a descent from the lowest (each would end the flight
-    at once: random moves would end a sixth of the early flights at the lowest level, before
-    they learn anything; the network's own choices are never restricted). None on one level
-    (every move)."""
-    if not isinstance(env, UAVLevelsEnv):
-        return None
-    ok = np.ones((len(level), 6), dtype=bool)
-    ok[:, 4] = level < env.field.levels - 1
-    ok[:, 5] = level > 0
-    return ok
+    """The moves an exploring UAV draws from, (N, 6) bool among levels; None (every move) on
+    one level (the env's ``exploration_moves``)."""
+    return env.exploration_moves(level)
 
 
 def start_level(env: Env, start: np.ndarray) -> int:
     """The level a flight from ``start`` takes off at (0 on one level)."""
-    return env.start_level_at(start) if isinstance(env, UAVLevelsEnv) else 0
+    return env.start_level_at(start)
 
 
 @dataclass

@@ -56,7 +56,7 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float,
     if env.view is not None:
         x0, x1, y0, y1 = env.field.extent
         geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
-        n = 6 if isinstance(env, UAVLevelsEnv) else 4
+        n = int(env.action_space.n)  # type: ignore[union-attr]
         return WeatherEncoder(d, env.view, step, geometry, n)
     if isinstance(env, UAVLevelsEnv):
         x0, x1, y0, y1 = env.field.extent
