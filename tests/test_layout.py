@@ -346,3 +346,20 @@ def test_engines_are_asked_what_they_do_not_their_names() -> None:
     from rainuav.radio.presets import paper
 
     assert engine_of("ray") is ENGINES["ray"] and engine_of(paper()) is ENGINES["hybrid"]
+
+
+def test_the_learner_never_tests_environment_classes() -> None:
+    """Outside the environments' own package (``rainuav.nav``), code flies an environment through
+    the interface both share (``observe_batch``, ``step_batch``, ``exploration_moves``,
+    ``start_level_at``, ``altitudes_m``, the spaces), never by testing its class."""
+    import re
+
+    tested = re.compile(r"isinstance\([^)]*\b(UAVNavEnv|UAVLevelsEnv|UAVNavVectorEnv)\b")
+    hits = [
+        f"{name}:{i + 1}"
+        for name, path in modules().items()
+        if not name.startswith("rainuav.nav")
+        for i, line in enumerate(path.read_text().splitlines())
+        if tested.search(line)
+    ]
+    assert not hits, f"environment classes tested at {hits}"

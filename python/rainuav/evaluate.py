@@ -108,7 +108,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from rainuav.nav.levels import UAVLevelsEnv
     from rainuav.rl.config import MAX_SEED, MAX_STARTS
     from rainuav.rl.evaluation import evaluate_saved_run
     from rainuav.rl.plots import plot_policy, plot_storm_flights
@@ -132,7 +131,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     text = json.dumps(metrics, indent=2)
     begin_folder(out, "evaluation.json")
     plot_policy(env, metrics, rolls[:40], out / "evaluation_trajectories.png")
-    if env.field.varies and not isinstance(env, UAVLevelsEnv):  # (among levels: the heights)
+    if env.field.varies and env.altitudes_m is None:  # (among levels: the heights)
         plot_storm_flights(env, rolls[:6], out / "evaluation_storm_flights.png")
     write_atomic(out / "evaluation.json", lambda t: t.write_text(text + "\n"))  # last
     print(text)
@@ -145,7 +144,6 @@ def _evaluate_storms(args: argparse.Namespace) -> int:
     flags give):
     [`rainuav.rl.storm_eval.evaluate_worlds()`][rainuav.rl.storm_eval.evaluate_worlds]."""
     from rainuav.errors import InvalidInputError
-    from rainuav.nav.levels import UAVLevelsEnv
     from rainuav.rl.plots import plot_policy, plot_storm_flights
     from rainuav.rl.storm_eval import evaluate_worlds, parse_seeds
 
@@ -179,7 +177,7 @@ def _evaluate_storms(args: argparse.Namespace) -> int:
     )
     text = json.dumps(result, indent=2)
     begin_folder(out, "evaluation.json")
-    if first is not None and isinstance(first[0], UAVLevelsEnv):  # the flights and heights
+    if first is not None and first[0].altitudes_m is not None:  # the flights and heights
         plot_policy(first[0], result["worlds"][0], first[1], out / "evaluation_trajectories.png")
     elif first is not None and first[0].field.varies:
         plot_storm_flights(first[0], first[1], out / "evaluation_storm_flights.png")

@@ -210,6 +210,9 @@ class UAVNavEnv(gym.Env):
         self._ready = False  # reset() starts the first episode
 
     # -- many UAVs at once: the interface both environments share with the learner ---------
+    altitudes_m: np.ndarray | None = None
+    """The flight levels' altitudes, m (the altitude axis); None: the plane, one altitude."""
+
     def observe_batch(
         self, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None
     ) -> Any:

@@ -214,6 +214,11 @@ class UAVLevelsEnv(gym.Env):
             f"from the destination in the area {self.field.extent}"
         )
 
+    @property
+    def altitudes_m(self) -> np.ndarray:
+        """The flight levels' altitudes, m, lowest first (the altitude axis)."""
+        return self.field.altitudes_m
+
     def observe_batch(
         self, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None
     ) -> Any:

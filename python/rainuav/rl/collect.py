@@ -180,7 +180,7 @@ def _rollouts(
         g = None if goal is None else goal[idx]
         q = agent.q_values(agent.observe(observe(env, pos, lv[idx], t[idx], g), t[idx]))
         a = best_action(q)
-        if shield and isinstance(env, UAVNavEnv):
+        if shield and env.altitudes_m is None:  # the shield is the plane's
             allowed = shield_moves(env, pos, t[idx], off[idx], [visited[k] for k in idx], g)
             free, a = a, best_action(q, allowed)
             overridden[idx] += a != free

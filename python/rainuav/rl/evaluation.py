@@ -95,7 +95,7 @@ def evaluate(
         keys = ("success_rate", "mean_excess_cost", "worst_excess_cost")
         metrics.update({f"shielded_{k}": s[k] for k in keys})
         metrics["shielded_flights"] = float(np.mean([r["overridden"] > 0 for r in rolls_s]))
-    if isinstance(env, UAVLevelsEnv):  # the heights the network flies at
+    if env.altitudes_m is not None:  # the heights the network flies at
         alts = env.field.altitudes_m
         metrics["altitudes_m"] = alts.tolist()
         for name, levels in (("", [r["levels"] for r in rolls]),

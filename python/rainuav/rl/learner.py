@@ -88,7 +88,7 @@ def training_level(
     """The level a training flight from ``start`` takes off at: among levels, with
     probability ``level_starts`` uniform among the levels flyable there, else the lowest
     (the task's own start); 0 on one level. Draws nothing where ``level_starts`` is 0."""
-    if not isinstance(env, UAVLevelsEnv):
+    if env.altitudes_m is None:
         return 0
     if d.level_starts == 0.0 or rng.random() >= d.level_starts:
         return env.start_level_at(start)

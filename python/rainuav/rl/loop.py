@@ -353,7 +353,7 @@ def finish(
     write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
     plot_returns(returns, out / "returns.png", checks.history)
     plot_policy(env, metrics, rolls[:40], out / "trajectories.png")
-    if env.field.varies and isinstance(env, UAVNavEnv):  # (among levels: trajectories.png)
+    if env.field.varies and env.altitudes_m is None:  # (among levels: trajectories.png)
         plot_storm_flights(env, rolls[:6], out / "storm_flights.png")
     if stages:
         plot_stages(env, stages, out / "stages.png")

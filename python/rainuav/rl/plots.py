@@ -31,7 +31,7 @@ def map_image(ax: Any, env: UAVNavEnv | UAVLevelsEnv) -> Any:
     the lowest level's), its colour scale centred on the outage threshold."""
     x0, x1, y0, y1 = env.field.extent
     lo = float(env.cfg.min_db if env.cfg.min_db is not None else 0.0)
-    field = env.field.fields[0] if isinstance(env, UAVLevelsEnv) else env.field
+    field = env.field.fields[0] if env.altitudes_m is not None else env.field
     return ax.imshow(
         field.frozen(0.0).db,
         origin="lower",
@@ -75,7 +75,7 @@ def plot_trajectories(
     network's in black, ``heights``: the optimum's (ticks, levels), dashed blue)."""
     from matplotlib.figure import Figure
 
-    levels = isinstance(env, UAVLevelsEnv)
+    levels = env.altitudes_m is not None
     fig = Figure(figsize=(11.4 if levels else 6.4, 5.4))
     ax, *side = fig.subplots(1, 2 if levels else 1, squeeze=False)[0]
     im = draw_flights(ax, env, rolls, optimal)
@@ -113,8 +113,8 @@ def optimal_plans(env: UAVNavEnv | UAVLevelsEnv, rolls: list) -> list:
     from rainuav.nav import planner
 
     starts = np.array([r["path"][0] for r in rolls]).reshape(-1, 2)
-    if isinstance(env, UAVLevelsEnv):
-        return planner.optimal_among_levels(env, starts)
+    if env.altitudes_m is not None:
+        return planner.optimal_among_levels(env, starts)  # type: ignore[arg-type]
     return planner.optimal_many(env, starts)
 
 
@@ -124,7 +124,7 @@ def plot_policy(
     """The network's flights beside the exact optimum from the same starts, titled with its
     success and mean excess cost (among levels, with the heights flown)."""
     plans = optimal_plans(env, rolls)
-    heights = [(p.ticks, p.levels) for p in plans] if isinstance(env, UAVLevelsEnv) else []
+    heights = [(p.ticks, p.levels) for p in plans] if env.altitudes_m is not None else []  # type: ignore[union-attr]
     excess = metrics.get("mean_excess_cost")
     cost = "n/a" if excess is None else f"{100 * excess:.1f}%"
     title = f"network alone: success {100 * metrics['success_rate']:.0f}%, excess cost {cost}"

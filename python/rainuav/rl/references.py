@@ -80,7 +80,7 @@ def flights(
     ``min_db`` (per move), and the ``paths`` themselves (for figures). Among levels ``levels`` and
     ``ticks`` give each point's level and clock."""
     time_s = env.stepper.time_s  # the instant of each move, for a signal that changes
-    if isinstance(env, UAVLevelsEnv):
+    if env.altitudes_m is not None:
         if levels is None or ticks is None:
             raise InvalidInputError("flights among levels need their levels and ticks")
         signal = [env.field(p[1:, 0], p[1:, 1], time_s(t[1:]), lv[1:])
@@ -132,8 +132,8 @@ def reference_flights(
     the signal changes in time the plan of the weather at take-off (``frozen_plan``) and re-planning
     every ``replan_every`` moves (``replan``), each flown through the moving weather. Among levels:
     [`level_reference_flights()`][rainuav.rl.references.level_reference_flights]."""
-    if isinstance(env, UAVLevelsEnv):
-        return level_reference_flights(env, starts)
+    if env.altitudes_m is not None:
+        return level_reference_flights(env, starts)  # type: ignore[arg-type]
     flown = {"straight_line": [planner.straight_line(env, s) for s in starts]}
     if env.field.varies:
         flown["frozen_plan"] = baselines.frozen_plans(env, starts)
@@ -148,8 +148,8 @@ def optimal_flights(env: UAVNavEnv | UAVLevelsEnv, starts: np.ndarray) -> dict[s
     [`reference_flights()`][rainuav.rl.references.reference_flights] gives ``optimal``: the
     yardstick alone, for the checks during training."""
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
-    if isinstance(env, UAVLevelsEnv):
-        return _plans(planner.optimal_among_levels(env, starts), env)
+    if env.altitudes_m is not None:
+        return _plans(planner.optimal_among_levels(env, starts), env)  # type: ignore[arg-type]
     plans = []
     chunks = range(0, len(starts), PLAN_CHUNK)
     if len(starts) > PLAN_CHUNK:  # a long evaluation shows its progress
@@ -164,7 +164,7 @@ def optimal_flights(env: UAVNavEnv | UAVLevelsEnv, starts: np.ndarray) -> dict[s
 def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
     """[`flights()`][rainuav.rl.references.flights] of planned flights (plans, or among levels level
     plans, whose levels are kept for the heights flown)."""
-    among = isinstance(env, UAVLevelsEnv)
+    among = env.altitudes_m is not None
     levels = [p.levels for p in plans] if among else None
     f = flights(
         env,

@@ -58,7 +58,7 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float,
         geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
         n = int(env.action_space.n)  # type: ignore[union-attr]
         return WeatherEncoder(d, env.view, step, geometry, n)
-    if isinstance(env, UAVLevelsEnv):
+    if env.altitudes_m is not None:  # among levels: the level in the input, six actions
         x0, x1, y0, y1 = env.field.extent
         gx, gy = env.cfg.goal_m
         goal = ((gx - x0) / (x1 - x0), (gy - y0) / (y1 - y0))
