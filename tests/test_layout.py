@@ -346,6 +346,10 @@ def test_engines_are_asked_what_they_do_not_their_names() -> None:
     from rainuav.radio.presets import paper
 
     assert engine_of("ray") is ENGINES["ray"] and engine_of(paper()) is ENGINES["hybrid"]
+    from rainuav.radio.engines import for_time
+
+    scn = paper()
+    assert for_time(scn) is scn and for_time(scn.replace(engine="pe")).engine == "hybrid"
 
 
 def test_the_learner_never_tests_environment_classes() -> None:

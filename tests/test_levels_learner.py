@@ -18,7 +18,7 @@ from rainuav.nav.task import base_reward
 from rainuav.radio.levelmaps import LevelStack
 from rainuav.radio.scenario import Area, Scenario, Site
 from rainuav.rl import checkpoint
-from rainuav.rl.collect import greedy_rollouts, step
+from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import DQNConfig, TrainConfig, check_config
 from rainuav.rl.evaluation import eval_starts, evaluate, evaluate_saved_run
 from rainuav.rl.learner import learning_reward
@@ -92,7 +92,7 @@ def test_a_stack_of_levels_is_saved_and_read_back_exactly(tmp_path: Path) -> Non
 
 
 def test_the_learners_step_is_the_environments() -> None:
-    # The learner's batched step among levels (rl.collect.step) against the scalar
+    # The learner's batched step among levels (env.step_batch) against the scalar
     # environment, for random move sequences (climbs and descents taken): the same rewards,
     # ends, levels and clocks, exactly (the same stepper).
     env = world(small_cfg(Path("."), 10)).env()
@@ -103,7 +103,7 @@ def test_the_learners_step_is_the_environments() -> None:
         off, t = np.zeros((1, 2), np.int64), np.zeros(1, np.int64)
         lv = np.array([env.start_level_at(start)])
         for a in rng.integers(6, size=30):
-            r = step(env, start[None], off, lv, t, np.array([a]))
+            r = env.step_batch(start[None], off, lv, t, np.array([a]))
             _, reward, term, trunc, info = env.step(int(a))
             assert float(r["reward"][0]) == reward and bool(r["terminated"][0]) == term
             assert int(r["level"][0]) == info["level"]
@@ -119,7 +119,7 @@ def test_the_sir_weight_of_a_climb_counts_its_duration() -> None:
     env = world(small_cfg(Path("."), 10)).env()
     d = DQNConfig(sir_weight=1.25, shaping=0.0)
     start = np.array([[55.0, 55.0]])
-    r = step(env, start, np.zeros((1, 2), np.int64), np.zeros(1, np.int64),
+    r = env.step_batch(start, np.zeros((1, 2), np.int64), np.zeros(1, np.int64),
              np.zeros(1, np.int64), np.array([4]))  # fmt: skip
     assert int(r["duration"][0]) == env.climb[0] == 3  # 15 m at 5 m/s, moves of 1 s
     b = base_reward(r["signal_db"], env.cfg)

@@ -20,7 +20,6 @@ from rainuav.nav.levelfield import LevelField
 from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import NavConfig
 from rainuav.nav.views import WeatherView
-from rainuav.rl.collect import observe, step
 from rainuav.rl.config import DQNConfig
 from rainuav.rl.dqn import memory_needed
 from rainuav.rl.networks import MoveGeometry, WeatherEncoder
@@ -103,7 +102,7 @@ def test_level_bank_reads_each_world_as_its_own_levels() -> None:
 
 def test_batched_steps_with_destinations_and_storms_match_the_env() -> None:
     """UAVs among levels with their own destinations and storms, stepped at once (as
-    training steps them: rl.collect.step and observe), get exactly the rewards, levels,
+    training steps them: env.step_batch and observe_batch), get exactly the rewards, levels,
     clocks and observations of scalar environments reset to those tasks, over random
     sequences of the six moves."""
     env = bank_env(random_goal=True)
@@ -128,10 +127,10 @@ def test_batched_steps_with_destinations_and_storms_match_the_env() -> None:
             break
         a = rng.integers(0, 6, len(idx))
         a[lv[idx] == 0] = rng.choice([0, 1, 2, 3, 4], (lv[idx] == 0).sum())  # few at once out
-        r = step(env, starts[idx], off[idx], lv[idx], t[idx], a, goals[idx], worlds[idx])
+        r = env.step_batch(starts[idx], off[idx], lv[idx], t[idx], a, goals[idx], worlds[idx])
         climbed += int((r["level"] > 0).sum())
         off[idx], lv[idx], t[idx] = r["offset"], r["level"], r["t"]
-        batch = observe(env, r["position"], r["level"], r["t"], goals[idx], worlds[idx])
+        batch = env.observe_batch(r["position"], r["level"], r["t"], goals[idx], worlds[idx])
         for j, k in enumerate(idx):
             o, rew, term, trunc, info = singles[k].step(int(a[j]))
             assert rew == r["reward"][j] and info["level"] == r["level"][j]

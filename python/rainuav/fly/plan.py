@@ -36,7 +36,7 @@ from rainuav.nav.field import blocked_at, pixel_index
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio import presets
 from rainuav.radio.buildings import buildings_near_route
-from rainuav.radio.engines import engine_of
+from rainuav.radio.engines import for_time
 from rainuav.radio.maps import build_radio_map
 from rainuav.radio.maptiff import write_map_geotiff
 from rainuav.radio.scenario import Scenario
@@ -89,7 +89,7 @@ def fly_place(
     scn = place.scenario
     if scn.medium.moves:  # the weather of a file with several instants: maps every 5 s
         horizon = math.ceil(steps * 10.0 / speed_m_s / SLICE_S) * SLICE_S
-        scn = dataclasses.replace(scn, engine=engine_of(scn).in_time)
+        scn = for_time(scn)
         rm: Any = build_radio_map_series(scn, series_times(horizon, SLICE_S), progress=progress)
     else:
         rm = build_radio_map(scn, progress=progress)

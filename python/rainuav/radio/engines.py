@@ -13,10 +13,11 @@ Code asks an [`Engine`][rainuav.radio.engines.Engine] what it does
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["ENGINES", "Engine", "engine_of"]
+__all__ = ["ENGINES", "Engine", "engine_of", "for_time"]
 
 
 @dataclass(frozen=True)
@@ -58,3 +59,11 @@ def engine_of(scn: Any) -> Engine:
     """The [`Engine`][rainuav.radio.engines.Engine] of a scenario (anything with an ``engine``
     name; a name itself)."""
     return ENGINES[scn if isinstance(scn, str) else scn.engine]
+
+
+def for_time(scn: Any) -> Any:
+    """``scn`` as it is mapped in time: itself where its engine traces rays, else with the
+    engine that maps its requests in time
+    ([`Engine.in_time`][rainuav.radio.engines.Engine.in_time])."""
+    e = engine_of(scn)
+    return scn if e.traces else dataclasses.replace(scn, engine=e.in_time)

@@ -1,9 +1,9 @@
 """Flying the agent: the UAVs in flight during training ([`Lanes`][rainuav.rl.collect.Lanes]),
 batched greedy flights from given starts
-([`greedy_rollouts()`][rainuav.rl.collect.greedy_rollouts]), and the two calls every flight makes of
-its environment, on one level or among levels ([`observe()`][rainuav.rl.collect.observe],
-[`step()`][rainuav.rl.collect.step]): a UAV's state is its start, its offset in moves, its level (0
-on one level) and its clock ``t`` (moves on one level; ticks among levels,
+([`greedy_rollouts()`][rainuav.rl.collect.greedy_rollouts]). Every flight goes through the
+interface both environments share (``observe_batch``, ``step_batch``, ``exploration_moves``,
+``start_level_at``): a UAV's state is its start, its offset in moves, its level (0 on one level)
+and its clock ``t`` (moves on one level; ticks among levels,
 [`rainuav.nav.levels`][rainuav.nav.levels])."""
 
 from __future__ import annotations
@@ -20,43 +20,9 @@ from rainuav.nav.shield import shield_moves
 from rainuav.rl.dqn import Agent, NStepWindow, best_action
 from rainuav.rl.setup import torch_settings
 
-__all__ = ["Lanes", "exploration_moves", "greedy_rollouts", "observe", "start_level", "step"]
+__all__ = ["Lanes", "greedy_rollouts"]
 
 Env = UAVNavEnv | UAVLevelsEnv
-
-
-def observe(env: Env, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None) -> Any:
-    """The env's observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) after ``t`` (N,), heading
-    for ``goal`` (N, 2) in the worlds ``world`` (N,) where the env shows the weather (the env's
-    ``observe_batch``)."""
-    return env.observe_batch(pos, level, t, goal, world)
-
-
-def step(
-    env: Env,
-    start: np.ndarray,
-    offset: np.ndarray,
-    level: np.ndarray,
-    t: np.ndarray,
-    action: np.ndarray,
-    goal: Any = None,
-    world: Any = None,
-) -> dict[str, np.ndarray]:
-    """One move of every UAV: the env's batched stepper's result, with ``t`` the new clock,
-    ``level`` the new level and ``duration`` each move's ticks (1 on one level; the env's
-    ``step_batch``)."""
-    return env.step_batch(start, offset, level, t, action, goal, world)
-
-
-def exploration_moves(env: Env, level: np.ndarray) -> np.ndarray | None:
-    """The moves an exploring UAV draws from, (N, 6) bool among levels; None (every move) on
-    one level (the env's ``exploration_moves``)."""
-    return env.exploration_moves(level)
-
-
-def start_level(env: Env, start: np.ndarray) -> int:
-    """The level a flight from ``start`` takes off at (0 on one level)."""
-    return env.start_level_at(start)
 
 
 @dataclass
@@ -163,7 +129,7 @@ def _rollouts(
     n = len(starts)
     goal = None if goals is None else np.asarray(goals, dtype=np.float64).reshape(n, 2)
     off = np.zeros((n, 2), dtype=np.int64)
-    lv = np.array([start_level(env, s) for s in starts], dtype=np.int64)
+    lv = np.array([env.start_level_at(s) for s in starts], dtype=np.int64)
     levels: list[list[int]] = [[int(v)] for v in lv]
     ticks: list[list[int]] = [[0] for _ in range(n)]
     visited: list[set[tuple[int, int]]] = [{(0, 0)} for _ in range(n)]  # lattice offsets
@@ -178,13 +144,13 @@ def _rollouts(
         idx = np.flatnonzero(live)
         pos = starts[idx] + env.cfg.step_m * off[idx]
         g = None if goal is None else goal[idx]
-        q = agent.q_values(agent.observe(observe(env, pos, lv[idx], t[idx], g), t[idx]))
+        q = agent.q_values(agent.observe(env.observe_batch(pos, lv[idx], t[idx], g), t[idx]))
         a = best_action(q)
         if shield and env.altitudes_m is None:  # the shield is the plane's
             allowed = shield_moves(env, pos, t[idx], off[idx], [visited[k] for k in idx], g)
             free, a = a, best_action(q, allowed)
             overridden[idx] += a != free
-        r = step(env, starts[idx], off[idx], lv[idx], t[idx], a, g)
+        r = env.step_batch(starts[idx], off[idx], lv[idx], t[idx], a, g)
         off[idx], lv[idx], t[idx] = r["offset"], r["level"], r["t"]
         ret[idx] += r["reward"]
         for j, k in enumerate(idx):

@@ -45,7 +45,7 @@ from rainuav.rl.callbacks import (
     TimeBudget,
     ValidationChecks,
 )
-from rainuav.rl.collect import Lanes, exploration_moves, observe, step
+from rainuav.rl.collect import Lanes
 from rainuav.rl.config import (
     TrainConfig,
     check_config,
@@ -295,12 +295,12 @@ def collect(run: RunState, cfg: TrainConfig) -> tuple[np.ndarray, dict[str, np.n
     goal = lanes.goal[idx] if env.view is not None else None  # each UAV's destination and world
     world = lanes.world[idx] if run.pool is not None else None
     level, t = lanes.level[idx], lanes.t[idx]
-    obs = agent.observe(observe(env, pos, level, t, goal, world), t)
-    act = agent.act(obs, lanes.episode[idx], exploration_moves(env, level))
-    r = step(env, lanes.start[idx], lanes.offset[idx], level, t, act, goal, world)
+    obs = agent.observe(env.observe_batch(pos, level, t, goal, world), t)
+    act = agent.act(obs, lanes.episode[idx], env.exploration_moves(level))
+    r = env.step_batch(lanes.start[idx], lanes.offset[idx], level, t, act, goal, world)
     lanes.offset[idx], lanes.level[idx], lanes.t[idx] = r["offset"], r["level"], r["t"]
     lanes.ret[idx] += r["reward"]
-    nobs = agent.observe(observe(env, r["position"], r["level"], r["t"], goal, world), r["t"])
+    nobs = agent.observe(env.observe_batch(r["position"], r["level"], r["t"], goal, world), r["t"])
     stop = learner_ends(d, r)
     learn_r = learning_reward(env, d, pos, r, goal)
     for j, k in enumerate(idx):

@@ -36,7 +36,7 @@ from rainuav.nav.task import NavConfig
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio import presets
 from rainuav.radio.engines import ENGINES as RADIO_ENGINES
-from rainuav.radio.engines import engine_of
+from rainuav.radio.engines import for_time
 from rainuav.radio.levelmaps import LevelStack
 from rainuav.radio.mapdata import RadioMap
 from rainuav.radio.maps import build_radio_map
@@ -347,7 +347,7 @@ def level_field(
             serving_cell=serving,
         )
         return field, stack
-    scn = dataclasses.replace(scn, engine=engine_of(scn).in_time)
+    scn = for_time(scn)
     series = build_radio_level_series(scn, times_s, progress=progress, cache=cache)
     field = LevelField.from_stack(series.sinr_db, series.altitudes_m, series.extent,
                                   t_s=series.t_s, not_flyable=series.not_flyable,
@@ -385,7 +385,7 @@ def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: boo
         times = series_instants(spec) if scn.medium.moves else None
         return LevelStack.of(level_field(scn, times, progress=progress, cache=cache)[1], scn)
     if scn.medium.moves:
-        scn = dataclasses.replace(scn, engine=engine_of(scn).in_time)
+        scn = for_time(scn)
         return build_radio_map_series(scn, series_instants(spec), progress=progress, cache=cache)
     return build_radio_map(scn, progress=progress)
 
