@@ -15,10 +15,13 @@ buildings do (shadows, diffraction, wall reflections).
   buildings), its halves agree within ``2 MAX_NOISE_DB``, and the UAV is outside every building;
   building effects below ``FLOOR_DB`` are compared as ``FLOOR_DB``.
 - The tracer's settings: specular reflections on the walls up to ``max_depth`` interactions, edge
-  diffraction (Sionna's UTD wedges; one diffraction a path), no transmission through walls (the ray
-  engine's buildings are opaque), no diffuse scattering, and no ground or a PEC one by images
-  ([`tracer_gain()`][rainuav.radio.tracer.tracer_gain]). Walls are the ITU-R P.2040 material of
-  the footprints, as in the ray engine.
+  diffraction (one diffraction a path, at the wedges where the buildings' faces meet, with the
+  coefficient of ITU-R P.526-15 section 6 in place of Sionna RT's own:
+  [`rainuav.radio.tracer_wedge`][rainuav.radio.tracer_wedge] says why), no transmission
+  through walls (the ray engine's buildings are opaque), no diffuse scattering, and no ground or
+  a PEC one by images ([`tracer_gain()`][rainuav.radio.tracer.tracer_gain]). Walls are the
+  ITU-R P.2040 material of the footprints, as in the ray engine; the buildings are closed
+  meshes whose faces share their edges ([`prism_arrays()`][rainuav.radio.tracer.prism_arrays]).
 
 Needs ``sionna-rt`` (the ``test`` extra). On a machine without a GPU it runs through LLVM: Debian's
 ``libllvm19``, found through ``DRJIT_LIBLLVM_PATH`` (set here when unset and the library is where
@@ -52,7 +55,9 @@ __all__ = [
     "inside_buildings",
     "isotropic_scenario",
     "load_sionna",
+    "prism_arrays",
     "tracer_gain",
+    "tracer_scene",
 ]
 
 LLVM_PATHS = (
@@ -77,8 +82,9 @@ is then good to about this."""
 
 
 def load_sionna() -> tuple[Any, Any]:
-    """Imports Mitsuba and Sionna RT on a GPU where one is present, else on the CPU through LLVM:
-    returns ``(mitsuba, sionna.rt)``. Raises ImportError naming what is missing."""
+    """Imports Mitsuba and Sionna RT on a GPU where one is present, else on the CPU through LLVM,
+    with the wedge coefficient of [`tracer_wedge`][rainuav.radio.tracer_wedge]: returns
+    ``(mitsuba, sionna.rt)``. Raises ImportError naming what is missing."""
     if "DRJIT_LIBLLVM_PATH" not in os.environ:
         for p in LLVM_PATHS:
             if os.path.exists(p):
@@ -104,6 +110,9 @@ def load_sionna() -> tuple[Any, Any]:
             )
     import sionna.rt as rt
 
+    from rainuav.radio.tracer_wedge import install
+
+    install()
     return mi, rt
 
 
@@ -152,37 +161,45 @@ def engine_gain(scn: Scenario, engine: str = "ray") -> np.ndarray:
     return power_mw
 
 
-def _prism_mesh(mi: Any, name: str, polygon: Any, base: float, top: float) -> Any:
-    """A closed mesh of ``polygon`` (holes included) extruded from ``base`` to ``top`` m,
-    faces outward."""
+def prism_arrays(polygon: Any, base: float, top: float) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices (V, 3) and triangles (F, 3) of ``polygon`` (holes included) extruded from
+    ``base`` to ``top`` m: a closed mesh, faces outward (counter-clockwise seen from outside),
+    and faces that meet share their vertices. The tracer finds a wedge where two faces share an
+    edge and takes an edge of one face alone for a free edge (a half-plane): a mesh whose faces
+    did not share their vertices would make every corner two half-planes and every seam between
+    two triangles of a wall or a roof a diffracting edge."""
     import shapely
 
-    tris = shapely.get_parts(shapely.constrained_delaunay_triangles(polygon))
-    verts: list[list[float]] = []
+    index: dict[tuple[float, float, float], int] = {}
+
+    def vertex(x: float, y: float, z: float) -> int:
+        return index.setdefault((round(float(x), 6), round(float(y), 6), float(z)), len(index))
+
     faces: list[list[int]] = []
-    for t in tris:
+    for t in shapely.get_parts(shapely.constrained_delaunay_triangles(polygon)):
         c = np.asarray(t.exterior.coords)[:3, :2]
         e1, e2 = c[1] - c[0], c[2] - c[0]
         if e1[0] * e2[1] - e1[1] * e2[0] < 0:
             c = c[::-1]
-        for z, order in ((top, (0, 1, 2)), (base, (0, 2, 1))):
-            n = len(verts)
-            verts += [[*c[k], z] for k in order]
-            faces.append([n, n + 1, n + 2])
+        faces.append([vertex(*c[k], top) for k in (0, 1, 2)])
+        faces.append([vertex(*c[k], base) for k in (0, 2, 1)])
     for ring, outer in [(polygon.exterior, True)] + [(r, False) for r in polygon.interiors]:
         c = np.asarray(ring.coords)[:, :2]
         if ring.is_ccw != outer:
             c = c[::-1]
         for a, b in itertools.pairwise(c):
-            n = len(verts)
-            verts += [[*a, base], [*b, base], [*b, top], [*a, top]]
-            faces += [[n, n + 1, n + 2], [n, n + 2, n + 3]]
-    v = np.asarray(verts, np.float32)
-    f = np.asarray(faces, np.uint32)
+            q = [vertex(*a, base), vertex(*b, base), vertex(*b, top), vertex(*a, top)]
+            faces += [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+    return np.asarray(list(index), float), np.asarray(faces, np.int64)
+
+
+def _prism_mesh(mi: Any, name: str, polygon: Any, base: float, top: float) -> Any:
+    """[`prism_arrays()`][rainuav.radio.tracer.prism_arrays] as a Mitsuba mesh."""
+    v, f = prism_arrays(polygon, base, top)
     mesh = mi.Mesh(name, len(v), len(f))
     params = mi.traverse(mesh)
-    params["vertex_positions"] = mi.Float(v.ravel())
-    params["faces"] = mi.UInt32(f.ravel())
+    params["vertex_positions"] = mi.Float(v.astype(np.float32).ravel())
+    params["faces"] = mi.UInt32(f.astype(np.uint32).ravel())
     params.update()
     return mesh
 
@@ -206,6 +223,34 @@ class TracerMap:
         return (self.half_a > 0) & (self.half_b > 0)
 
 
+def tracer_scene(scn: Scenario, material: str | None = None) -> Any:
+    """Sionna RT's scene of ``scn``: its buildings as closed meshes of their footprints' P.2040
+    material (``material``, an ITU material name, for all of them where given; 0.3 m thick
+    walls), and one isotropic antenna of the scenario's polarisation on each side, without
+    transmitters. Over a PEC ground (``scn.ground == "pec"``) every building extends as deep
+    below the ground as it stands above it (the image method)."""
+    if scn.ground not in ("none", "pec"):
+        raise ValueError(f"the tracer's ground is none or pec (got {scn.ground!r})")
+    from rainuav.radio.buildings import scenario_buildings
+
+    mi, rt = load_sionna()
+    scene = rt.load_scene()
+    scene.frequency = scn.freq_hz
+    found = scenario_buildings(scn)
+    objects = []
+    for k, f in enumerate(found.footprints if found is not None else ()):
+        mat = rt.ITURadioMaterial(name=f"wall-{k}", itu_type=material or f.material, thickness=0.3)
+        base = -f.height_m if scn.ground == "pec" else f.min_height_m
+        mesh = _prism_mesh(mi, f"b{k}", f.polygon, base, f.height_m)
+        objects.append(rt.SceneObject(mi_mesh=mesh, name=f"b{k}", radio_material=mat))
+    if objects:
+        scene.edit(add=objects)
+    pol = scn.polarization.upper()
+    scene.tx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
+    scene.rx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
+    return scene
+
+
 def tracer_gain(
     scn: Scenario,
     *,
@@ -221,26 +266,9 @@ def tracer_gain(
     building extends as deep below the ground as it stands above it, each site has its image
     below the ground, and a pixel's gain is the sum of both (incoherent: the pixel mean of the
     ground's fringes, as the ray engine takes it)."""
-    if scn.ground not in ("none", "pec"):
-        raise ValueError(f"the tracer's ground is none or pec (got {scn.ground!r})")
     pec = scn.ground == "pec"
-    from rainuav.radio.buildings import scenario_buildings
-
     mi, rt = load_sionna()
-    scene = rt.load_scene()
-    scene.frequency = scn.freq_hz
-    found = scenario_buildings(scn)
-    objects = []
-    for k, f in enumerate(found.footprints if found is not None else ()):
-        mat = rt.ITURadioMaterial(name=f"wall-{k}", itu_type=f.material, thickness=0.3)
-        base = -f.height_m if pec else f.min_height_m
-        mesh = _prism_mesh(mi, f"b{k}", f.polygon, base, f.height_m)
-        objects.append(rt.SceneObject(mi_mesh=mesh, name=f"b{k}", radio_material=mat))
-    if objects:
-        scene.edit(add=objects)
-    pol = scn.polarization.upper()
-    scene.tx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
-    scene.rx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
+    scene = tracer_scene(scn)
     images = (1.0, -1.0) if pec else (1.0,)
     for sign in images:
         for k, s in enumerate(scn.sites):
