@@ -1,7 +1,12 @@
 //! Diffraction round the vertical edges of buildings (docs/physics.md section 12): where a
-//! building hides a pixel from a site, each convex corner of the buildings in the way that
-//! sees both ends diffracts a ray to the pixel, with the UTD coefficient of a finitely
-//! conducting wedge (ITU-R P.526-15 section 6, [`crate::diffraction::utd_wedge`]).
+//! building hides a pixel from a site, each convex corner that sees both ends diffracts a ray
+//! to the pixel, with the UTD coefficient of a finitely conducting wedge (ITU-R P.526-15
+//! section 6, [`crate::diffraction::utd_wedge`]). The corners looked at: those of the
+//! buildings in the way, and those the site lights (its line to the edge clear somewhere
+//! between the terrain and the roof) among the buildings within [`LIT_RADIUS_M`] of it, where
+//! the pixel's line to the site passes within [`CORRIDOR_M`] of the corner: a building across
+//! the street from those in the way, whose corner the site sees down the street. The two
+//! limits bound the work; the test scenes lie within both.
 //!
 //! A corner is a footprint vertex whose exterior angle `n pi` exceeds `pi` (a box's corners:
 //! `n = 1.5`); its faces are the two walls that meet there, their material the building's. The
@@ -16,7 +21,8 @@
 //! along the edge (vertical polarisation: perpendicular to the horizontal plane of incidence) or
 //! across it (horizontal polarisation).
 //!
-//! **A wall reflection, then the corner.** A wall within [`IMAGE_RADIUS_M`] of a corner that
+//! **A wall reflection, then the corner** (at the corners of the buildings in the way). A wall
+//! within [`IMAGE_RADIUS_M`] of a corner that
 //! faces both the site and the corner mirrors the site: its image diffracts at the corner as the
 //! site does, the reflection point where the line from the image to the corner crosses the wall
 //! (it exists where that point lies on the wall, between the terrain and the roof, and the legs
@@ -41,6 +47,7 @@ use crate::error::{CoreError, Result};
 use crate::rays::{RayGround, RayPolarization, RayScene, reflection_coefficient};
 use crate::sight::Sight;
 use crate::walls::{WallRay, wall_reflectance};
+use sources::to_segment;
 
 /// How far (m) outside its corner, along the exterior bisector, a leg's visibility check ends:
 /// the corner's own walls are not in the way of a ray that grazes them; and how far short of a
@@ -50,6 +57,15 @@ const CORNER_GAP_M: f64 = 0.05;
 /// The walls that may mirror the site into a corner: those of the buildings whose bounding box
 /// comes within this distance (m) of the corner.
 pub const IMAGE_RADIUS_M: f64 = 150.0;
+
+/// The corners the site lights (module docs) are looked for among the buildings whose bounding
+/// box comes within this distance (m) of the site: a city's streets show a site a few blocks
+/// each way.
+pub const LIT_RADIUS_M: f64 = 500.0;
+
+/// A corner the site lights diffracts to the pixels it hides whose straight line to the site
+/// passes within this distance (m) of it.
+pub const CORRIDOR_M: f64 = 100.0;
 
 /// A prism's corners, each with its images of the site.
 type CornersOf = Vec<(Corner, Vec<Image>)>;
@@ -152,99 +168,6 @@ impl RayScene<'_> {
                     });
                 }
             }
-        }
-    }
-
-    /// The images of the site (horizontal position `s`) in the walls near corner `c` that face
-    /// both (module docs), with each wall's permittivity from `eps` (a prism's).
-    fn images_of(
-        &self,
-        s: [f64; 2],
-        c: &Corner,
-        eps: &[Complex64],
-        near: &mut Vec<u32>,
-    ) -> Vec<Image> {
-        let Some(prisms) = self.prisms else {
-            return Vec::new();
-        };
-        let r = IMAGE_RADIUS_M;
-        prisms.near_box([c.v[0] - r, c.v[0] + r, c.v[1] - r, c.v[1] + r], near);
-        let mut out = Vec::new();
-        for &k in near.iter() {
-            let k = k as usize;
-            for (ri, ring) in prisms.rings_of(k).enumerate() {
-                let m = ring.len();
-                let left = material_left(ri, ring);
-                for i in 0..m {
-                    let (a, b) = (ring[i], ring[(i + 1) % m]);
-                    if a == c.v || b == c.v {
-                        continue; // the corner's own faces: the wedge's R0, Rn
-                    }
-                    let Some(t) = unit([b[0] - a[0], b[1] - a[1]]) else {
-                        continue;
-                    };
-                    // Outward: right of a -> b where the material lies on its left.
-                    let n = if left { [t[1], -t[0]] } else { [-t[1], t[0]] };
-                    let ds = (s[0] - a[0]) * n[0] + (s[1] - a[1]) * n[1];
-                    let dc = (c.v[0] - a[0]) * n[0] + (c.v[1] - a[1]) * n[1];
-                    if ds <= 1e-6 || dc <= 1e-6 {
-                        continue;
-                    }
-                    let at = [s[0] - 2.0 * ds * n[0], s[1] - 2.0 * ds * n[1]];
-                    let u = ds / (ds + dc);
-                    let p = [at[0] + u * (c.v[0] - at[0]), at[1] + u * (c.v[1] - at[1])];
-                    let along = (p[0] - a[0]) * t[0] + (p[1] - a[1]) * t[1];
-                    let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-                    if !(0.0..=len).contains(&along) {
-                        continue;
-                    }
-                    out.push(Image {
-                        at,
-                        p,
-                        d_sp: (p[0] - s[0]).hypot(p[1] - s[1]),
-                        n,
-                        top: prisms.items()[k].top,
-                        eps: eps[k],
-                        z_min: f64::INFINITY,
-                    });
-                }
-            }
-        }
-        out
-    }
-
-    /// The heights at corner `c` above which the legs from the site (at `zs`) reach it: the
-    /// direct leg into `c.z_min`, and site -> wall -> corner into each image's (module docs).
-    /// They depend on the height at the corner alone (where the unfolded ray meets the edge),
-    /// not on the pixel: found once a corner, each a [`Sight::lowest`].
-    fn first_legs(
-        &self,
-        (site, zs): ([f64; 2], f64),
-        c: &mut Corner,
-        images: &mut [Image],
-        sight: &mut Sight,
-    ) {
-        let out = c.outside();
-        let z_lo = self.terrain_at(c.v[0], c.v[1]);
-        c.z_min = sight.lowest((site, zs, 0.0), (out, 0.0, 1.0), z_lo);
-        for m in images {
-            let r1 = (m.at[0] - c.v[0]).hypot(m.at[1] - c.v[1]);
-            if r1 < 1e-6 {
-                continue;
-            }
-            // The reflection point's height is zs (1 - f) + f z at a height z at the corner.
-            let f = m.d_sp / r1;
-            let g = CORNER_GAP_M;
-            let before = |a: [f64; 2], b: [f64; 2], f: f64| {
-                [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
-            };
-            let (d1, d2) = (m.d_sp.max(g), (r1 - m.d_sp).max(g));
-            let (u1, u2) = (1.0 - g / d1, g / d2);
-            let (p1, p2) = (before(site, m.p, u1), before(m.p, out, u2));
-            let leg1 = sight.lowest((site, zs, 0.0), (p1, zs - u1 * f * zs, u1 * f), z_lo);
-            let at_p2 = ((1.0 - u2) * zs * (1.0 - f), (1.0 - u2) * f + u2);
-            let leg2 = sight.lowest((p2, at_p2.0, at_p2.1), (out, 0.0, 1.0), z_lo);
-            m.z_min = leg1.max(leg2);
         }
     }
 
@@ -375,6 +298,7 @@ impl RayScene<'_> {
         // row that needs them) and shared by every row.
         let cache: Vec<OnceLock<CornersOf>> = (0..prisms.len()).map(|_| OnceLock::new()).collect();
         let bounds = self.bounds();
+        let lit = self.lit_corners((s, zs), bounds);
         Ok((0..self.y_m.len())
             .into_par_iter()
             .flat_map_iter(|i| {
@@ -391,17 +315,16 @@ impl RayScene<'_> {
                     // just read.
                     hits.clone_from(&sight.near);
                     let (dx, dy) = (q[0] - s[0], q[1] - s[1]);
-                    for &k in &hits {
+                    hits.retain(|&k| {
                         ts.clear();
                         prisms.crossings(k as usize, s, q, &mut ts);
-                        let blocks = ts.iter().any(|&t| {
+                        ts.iter().any(|&t| {
                             let (x, y) = (s[0] + t * dx, s[1] + t * dy);
                             self.terrain_at(x, y) + prisms.items()[k as usize].top
                                 >= zs + (zq - zs) * t
-                        });
-                        if !blocks {
-                            continue;
-                        }
+                        })
+                    });
+                    for &k in &hits {
                         let found = cache[k as usize].get_or_init(|| {
                             let (mut corners, mut scratch) = (Vec::new(), Vec::new());
                             self.corners_of(k as usize, &mut corners);
@@ -431,6 +354,26 @@ impl RayScene<'_> {
                             }
                         }
                     }
+                    // The corners the site lights beside the line (their buildings not in the
+                    // way; `hits` is sorted).
+                    for c in &lit {
+                        if hits.binary_search(&(c.prism as u32)).is_ok()
+                            || to_segment(c.v, s, q) > CORRIDOR_M
+                        {
+                            continue;
+                        }
+                        if let Some((az, el, factor, length)) =
+                            self.corner_ray(s, zs, q, zq, c, eps[c.prism], None, &mut sight)
+                        {
+                            rays.push(WallRay {
+                                pixel: i * w + j,
+                                az_deg: az,
+                                el_deg: el,
+                                factor,
+                                length_m: length,
+                            });
+                        }
+                    }
                 }
                 rays
             })
@@ -438,5 +381,6 @@ impl RayScene<'_> {
     }
 }
 
+mod sources;
 #[cfg(test)]
 mod tests;

@@ -60,3 +60,67 @@ fn a_corner_seen_from_both_ends_is_the_utd_wedge_and_a_hidden_pixel_gets_one_ray
     assert!((rays[0].length_m - (r1 + r2)).abs() < 1e-9);
     assert!((rays[0].az_deg - (20.0f64).atan2(60.0).to_degrees()).abs() < 1e-9);
 }
+
+#[test]
+fn a_corner_across_the_street_from_the_building_in_the_way_diffracts_too() {
+    // Block A (x 0..40, y -30..10) hides the pixel (200, -5) from the site (-100, 0); block B
+    // (x 0..40, y 30..70) stands across a 20 m street, beside the line. The site sees B's
+    // south-east corner (40, 30) down the street and the corner sees the pixel: one ray, the
+    // UTD wedge's by hand, though B is not in the way. A's corners reach nothing (each is
+    // hidden from one end by A itself).
+    let prisms = Prisms::from_boxes(&[
+        [0.0, 40.0, -30.0, 10.0, 100.0],
+        [0.0, 40.0, 30.0, 70.0, 100.0],
+    ])
+    .unwrap();
+    let (x, y) = ([200.0], [-5.0]);
+    let scene = RayScene {
+        x_m: &x,
+        y_m: &y,
+        altitude_m: 10.0,
+        pixel_m: [0.0, 0.0],
+        freq_hz: 4.9e9,
+        polarization: RayPolarization::V,
+        ground: RayGround::None,
+        rain: RainField::Uniform(0.0),
+        heights: None,
+        terrain: None,
+        altitude_msl: false,
+        roughness_m: 0.0,
+        prisms: Some(&prisms),
+    };
+    let eps = [Complex64::new(5.24, -0.5); 2];
+    let rays = scene.corner_rays([-100.0, 0.0, 10.0], &eps).unwrap();
+    assert_eq!(rays.len(), 2, "{rays:?}");
+    let az = |x: f64, y: f64| y.atan2(x).to_degrees();
+    assert!(
+        rays.iter()
+            .any(|r| (r.az_deg - az(100.0, 30.0)).abs() < 1e-9)
+    ); // (0, 30)
+    let ray = rays
+        .iter()
+        .find(|r| (r.az_deg - az(140.0, 30.0)).abs() < 1e-9)
+        .unwrap();
+    // Face 0 is B's south wall, from the corner toward -x; the exterior runs counter-clockwise
+    // through south and east to the east wall.
+    let (to_s, to_q) = ([-140.0, -30.0], [160.0, -35.0]);
+    let (phi1, phi2) = (ccw([-1.0, 0.0], to_s), ccw([-1.0, 0.0], to_q));
+    let (r1, r2) = (140.0f64.hypot(30.0), 160.0f64.hypot(35.0));
+    let ground = RayGround::Dielectric(eps[1]);
+    let r0 = reflection_coefficient(ground, RayPolarization::H, phi1.sin().abs().asin());
+    let rn = reflection_coefficient(
+        ground,
+        RayPolarization::H,
+        (1.5 * PI - phi2).sin().abs().asin(),
+    );
+    let k = crate::wavenumber(4.9e9);
+    let d = utd_wedge(1.5, phi1, phi2, r1 * r2 / (r1 + r2), 1.0, k, r0, rn);
+    let lam = crate::SPEED_OF_LIGHT_M_S / 4.9e9;
+    let want = (lam / (4.0 * PI)).powi(2) * d.norm_sqr() / (r1 * r2 * (r1 + r2));
+    assert!(
+        (ray.factor / want - 1.0).abs() < 1e-9,
+        "{} {want}",
+        ray.factor
+    );
+    assert!((ray.length_m - (r1 + r2)).abs() < 1e-9);
+}

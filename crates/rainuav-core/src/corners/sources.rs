@@ -1,0 +1,151 @@
+//! Where the corners' rays come from (module docs of [`super`]): the images of the site in the
+//! walls near a corner, the heights at which the legs from the site reach a corner, and the
+//! corners the site lights.
+
+use num_complex::Complex64;
+use rayon::prelude::*;
+
+use super::{CORNER_GAP_M, Corner, IMAGE_RADIUS_M, Image, LIT_RADIUS_M, material_left, unit};
+use crate::rays::RayScene;
+use crate::sight::Sight;
+
+/// The distance (m) from `p` to the segment `a -> b`.
+pub(super) fn to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let dd = d[0] * d[0] + d[1] * d[1];
+    let t = if dd > 0.0 {
+        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / dd).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * d[0]).hypot(p[1] - a[1] - t * d[1])
+}
+
+impl RayScene<'_> {
+    /// The images of the site (horizontal position `s`) in the walls near corner `c` that face
+    /// both (module docs), with each wall's permittivity from `eps` (a prism's).
+    pub(super) fn images_of(
+        &self,
+        s: [f64; 2],
+        c: &Corner,
+        eps: &[Complex64],
+        near: &mut Vec<u32>,
+    ) -> Vec<Image> {
+        let Some(prisms) = self.prisms else {
+            return Vec::new();
+        };
+        let r = IMAGE_RADIUS_M;
+        prisms.near_box([c.v[0] - r, c.v[0] + r, c.v[1] - r, c.v[1] + r], near);
+        let mut out = Vec::new();
+        for &k in near.iter() {
+            let k = k as usize;
+            for (ri, ring) in prisms.rings_of(k).enumerate() {
+                let m = ring.len();
+                let left = material_left(ri, ring);
+                for i in 0..m {
+                    let (a, b) = (ring[i], ring[(i + 1) % m]);
+                    if a == c.v || b == c.v {
+                        continue; // the corner's own faces: the wedge's R0, Rn
+                    }
+                    let Some(t) = unit([b[0] - a[0], b[1] - a[1]]) else {
+                        continue;
+                    };
+                    // Outward: right of a -> b where the material lies on its left.
+                    let n = if left { [t[1], -t[0]] } else { [-t[1], t[0]] };
+                    let ds = (s[0] - a[0]) * n[0] + (s[1] - a[1]) * n[1];
+                    let dc = (c.v[0] - a[0]) * n[0] + (c.v[1] - a[1]) * n[1];
+                    if ds <= 1e-6 || dc <= 1e-6 {
+                        continue;
+                    }
+                    let at = [s[0] - 2.0 * ds * n[0], s[1] - 2.0 * ds * n[1]];
+                    let u = ds / (ds + dc);
+                    let p = [at[0] + u * (c.v[0] - at[0]), at[1] + u * (c.v[1] - at[1])];
+                    let along = (p[0] - a[0]) * t[0] + (p[1] - a[1]) * t[1];
+                    let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+                    if !(0.0..=len).contains(&along) {
+                        continue;
+                    }
+                    out.push(Image {
+                        at,
+                        p,
+                        d_sp: (p[0] - s[0]).hypot(p[1] - s[1]),
+                        n,
+                        top: prisms.items()[k].top,
+                        eps: eps[k],
+                        z_min: f64::INFINITY,
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// The corners of the buildings within [`LIT_RADIUS_M`] of the site (at `zs`) whose edge it
+    /// sees somewhere between the terrain and the roof, each with its `z_min`.
+    pub(super) fn lit_corners(
+        &self,
+        (site, zs): ([f64; 2], f64),
+        bounds: crate::sight::Bounds,
+    ) -> Vec<Corner> {
+        let Some(prisms) = self.prisms else {
+            return Vec::new();
+        };
+        let r = LIT_RADIUS_M;
+        let mut near = Vec::new();
+        prisms.near_box(
+            [site[0] - r, site[0] + r, site[1] - r, site[1] + r],
+            &mut near,
+        );
+        near.par_iter()
+            .flat_map_iter(|&k| {
+                let mut sight = self.sight(bounds);
+                let mut corners = Vec::new();
+                self.corners_of(k as usize, &mut corners);
+                corners.retain_mut(|c| {
+                    if (c.v[0] - site[0]).hypot(c.v[1] - site[1]) > r {
+                        return false;
+                    }
+                    let z_lo = self.terrain_at(c.v[0], c.v[1]);
+                    c.z_min = sight.lowest((site, zs, 0.0), (c.outside(), 0.0, 1.0), z_lo);
+                    c.z_min < z_lo + c.top
+                });
+                corners
+            })
+            .collect()
+    }
+
+    /// The heights at corner `c` above which the legs from the site (at `zs`) reach it: the
+    /// direct leg into `c.z_min`, and site -> wall -> corner into each image's (module docs).
+    /// They depend on the height at the corner alone (where the unfolded ray meets the edge),
+    /// not on the pixel: found once a corner, each a [`Sight::lowest`].
+    pub(super) fn first_legs(
+        &self,
+        (site, zs): ([f64; 2], f64),
+        c: &mut Corner,
+        images: &mut [Image],
+        sight: &mut Sight,
+    ) {
+        let out = c.outside();
+        let z_lo = self.terrain_at(c.v[0], c.v[1]);
+        c.z_min = sight.lowest((site, zs, 0.0), (out, 0.0, 1.0), z_lo);
+        for m in images {
+            let r1 = (m.at[0] - c.v[0]).hypot(m.at[1] - c.v[1]);
+            if r1 < 1e-6 {
+                continue;
+            }
+            // The reflection point's height is zs (1 - f) + f z at a height z at the corner.
+            let f = m.d_sp / r1;
+            let g = CORNER_GAP_M;
+            let before = |a: [f64; 2], b: [f64; 2], f: f64| {
+                [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
+            };
+            let (d1, d2) = (m.d_sp.max(g), (r1 - m.d_sp).max(g));
+            let (u1, u2) = (1.0 - g / d1, g / d2);
+            let (p1, p2) = (before(site, m.p, u1), before(m.p, out, u2));
+            let leg1 = sight.lowest((site, zs, 0.0), (p1, zs - u1 * f * zs, u1 * f), z_lo);
+            let at_p2 = ((1.0 - u2) * zs * (1.0 - f), (1.0 - u2) * f + u2);
+            let leg2 = sight.lowest((p2, at_p2.0, at_p2.1), (out, 0.0, 1.0), z_lo);
+            m.z_min = leg1.max(leg2);
+        }
+    }
+}
