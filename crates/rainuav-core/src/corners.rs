@@ -311,6 +311,13 @@ impl RayScene<'_> {
                     if sight.clear(s, zs, q, zq) {
                         continue;
                     }
+                    let to_ray = |(az_deg, el_deg, factor, length_m)| WallRay {
+                        pixel: i * w + j,
+                        az_deg,
+                        el_deg,
+                        factor,
+                        length_m,
+                    };
                     // The buildings in the way of the straight line: among those the check
                     // just read.
                     hits.clone_from(&sight.near);
@@ -340,17 +347,9 @@ impl RayScene<'_> {
                         for (c, imgs) in found {
                             let sources = std::iter::once(None).chain(imgs.iter().map(Some));
                             for m in sources {
-                                if let Some((az, el, factor, length)) =
-                                    self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut sight)
-                                {
-                                    rays.push(WallRay {
-                                        pixel: i * w + j,
-                                        az_deg: az,
-                                        el_deg: el,
-                                        factor,
-                                        length_m: length,
-                                    });
-                                }
+                                let ray =
+                                    self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut sight);
+                                rays.extend(ray.map(to_ray));
                             }
                         }
                     }
@@ -362,17 +361,8 @@ impl RayScene<'_> {
                         {
                             continue;
                         }
-                        if let Some((az, el, factor, length)) =
-                            self.corner_ray(s, zs, q, zq, c, eps[c.prism], None, &mut sight)
-                        {
-                            rays.push(WallRay {
-                                pixel: i * w + j,
-                                az_deg: az,
-                                el_deg: el,
-                                factor,
-                                length_m: length,
-                            });
-                        }
+                        let ray = self.corner_ray(s, zs, q, zq, c, eps[c.prism], None, &mut sight);
+                        rays.extend(ray.map(to_ray));
                     }
                 }
                 rays

@@ -4,18 +4,12 @@ use super::*;
 use crate::obstacles::Prisms;
 use crate::rays::RainField;
 
-#[test]
-fn a_corner_seen_from_both_ends_is_the_utd_wedge_and_a_hidden_pixel_gets_one_ray_a_side() {
-    // One 40 m square block, roof 100 m (nothing over the roof); the site west of it, a
-    // pixel due east behind it: the two corners facing the site are hidden from the pixel
-    // and the two at the back from the site; nothing reaches it by one corner. A pixel
-    // north-east of the block, hidden by it, sees the north-west corner: one ray, whose
-    // power is the UTD wedge's by hand.
-    let prisms = Prisms::from_boxes(&[[0.0, 40.0, -20.0, 20.0, 100.0]]).unwrap();
-    let (x, y) = ([80.0], [0.0]);
-    let scene = RayScene {
-        x_m: &x,
-        y_m: &y,
+/// Pixels at `x` x `y` 10 m up among `prisms`, 4.9 GHz, vertical polarisation, no ground or
+/// rain.
+fn flat_scene<'a>(x: &'a [f64], y: &'a [f64], prisms: &'a Prisms) -> RayScene<'a> {
+    RayScene {
+        x_m: x,
+        y_m: y,
         altitude_m: 10.0,
         pixel_m: [0.0, 0.0],
         freq_hz: 4.9e9,
@@ -26,8 +20,20 @@ fn a_corner_seen_from_both_ends_is_the_utd_wedge_and_a_hidden_pixel_gets_one_ray
         terrain: None,
         altitude_msl: false,
         roughness_m: 0.0,
-        prisms: Some(&prisms),
-    };
+        prisms: Some(prisms),
+    }
+}
+
+#[test]
+fn a_corner_seen_from_both_ends_is_the_utd_wedge_and_a_hidden_pixel_gets_one_ray_a_side() {
+    // One 40 m square block, roof 100 m (nothing over the roof); the site west of it, a
+    // pixel due east behind it: the two corners facing the site are hidden from the pixel
+    // and the two at the back from the site; nothing reaches it by one corner. A pixel
+    // north-east of the block, hidden by it, sees the north-west corner: one ray, whose
+    // power is the UTD wedge's by hand.
+    let prisms = Prisms::from_boxes(&[[0.0, 40.0, -20.0, 20.0, 100.0]]).unwrap();
+    let (x, y) = ([80.0], [0.0]);
+    let scene = flat_scene(&x, &y, &prisms);
     let eps = [Complex64::new(5.24, -0.5)];
     let site = [-60.0, 0.0, 10.0];
     assert!(scene.corner_rays(site, &eps).unwrap().is_empty());
@@ -74,21 +80,7 @@ fn a_corner_across_the_street_from_the_building_in_the_way_diffracts_too() {
     ])
     .unwrap();
     let (x, y) = ([200.0], [-5.0]);
-    let scene = RayScene {
-        x_m: &x,
-        y_m: &y,
-        altitude_m: 10.0,
-        pixel_m: [0.0, 0.0],
-        freq_hz: 4.9e9,
-        polarization: RayPolarization::V,
-        ground: RayGround::None,
-        rain: RainField::Uniform(0.0),
-        heights: None,
-        terrain: None,
-        altitude_msl: false,
-        roughness_m: 0.0,
-        prisms: Some(&prisms),
-    };
+    let scene = flat_scene(&x, &y, &prisms);
     let eps = [Complex64::new(5.24, -0.5); 2];
     let rays = scene.corner_rays([-100.0, 0.0, 10.0], &eps).unwrap();
     assert_eq!(rays.len(), 2, "{rays:?}");
