@@ -92,20 +92,20 @@ impl Bvh {
         Bvh { nodes, order }
     }
 
-    /// Appends to `out` (unsorted) every prism `i` (its box and roof `item(i)`) whose box
-    /// `inside(box)` says the segment meets, as `Some((lo, hi))` (the parameters along the
-    /// segment), and whose roof plus `lift` reaches `floor(lo, hi)`; nodes are left by the
-    /// same two tests.
+    /// Hands `visit` (until it returns false) every prism `i` (its box and roof `item(i)`)
+    /// whose box `inside(box)` says the segment meets, as `Some((lo, hi))` (the parameters
+    /// along the segment), and whose roof plus `lift` reaches `floor(lo, hi)`, in no set
+    /// order; nodes are left by the same two tests. Whether `visit` never returned false.
     pub(crate) fn along(
         &self,
         inside: impl Fn(&[f64; 4]) -> Option<(f64, f64)>,
         floor: impl Fn(f64, f64) -> f64,
         item: impl Fn(u32) -> ([f64; 4], f64),
         lift: f64,
-        out: &mut Vec<u32>,
-    ) {
+        mut visit: impl FnMut(u32) -> bool,
+    ) -> bool {
         if self.nodes.is_empty() {
-            return;
+            return true;
         }
         let reaches =
             |b: &[f64; 4], top: f64| inside(b).is_some_and(|(lo, hi)| top + lift >= floor(lo, hi));
@@ -122,13 +122,15 @@ impl Bvh {
                 stack[len + 1] = n.first + 1;
                 len += 2;
             } else {
-                let ids = &self.order[n.first as usize..(n.first + n.count) as usize];
-                out.extend(ids.iter().copied().filter(|&i| {
+                for &i in &self.order[n.first as usize..(n.first + n.count) as usize] {
                     let (b, top) = item(i);
-                    reaches(&b, top)
-                }));
+                    if reaches(&b, top) && !visit(i) {
+                        return false;
+                    }
+                }
             }
         }
+        true
     }
 }
 

@@ -132,7 +132,7 @@ impl Corner {
 }
 
 fn unit(d: [f64; 2]) -> Option<[f64; 2]> {
-    let n = d[0].hypot(d[1]);
+    let n = crate::norm(d[0], d[1]);
     (n > 1e-9).then(|| [d[0] / n, d[1] / n])
 }
 
@@ -188,7 +188,7 @@ impl RayScene<'_> {
         let src = image.map_or(site, |m| m.at);
         let to_s = [src[0] - c.v[0], src[1] - c.v[1]];
         let to_q = [q[0] - c.v[0], q[1] - c.v[1]];
-        let (r1, r2) = (to_s[0].hypot(to_s[1]), to_q[0].hypot(to_q[1]));
+        let (r1, r2) = (crate::norm(to_s[0], to_s[1]), crate::norm(to_q[0], to_q[1]));
         if r1 < 1e-6 || r2 < 1e-6 {
             return None;
         }
@@ -308,7 +308,7 @@ impl RayScene<'_> {
                 for j in 0..w {
                     let q = [self.x_m[j], self.y_m[i]];
                     let zq = self.receiver_height(q);
-                    if sight.clear(s, zs, q, zq) {
+                    if sight.clear_listing(s, zs, q, zq) {
                         continue;
                     }
                     let to_ray = |(az_deg, el_deg, factor, length_m)| WallRay {

@@ -45,6 +45,13 @@ pub use error::{CoreError, Result};
 /// Speed of light in vacuum, m/s.
 pub const SPEED_OF_LIGHT_M_S: f64 = 299_792_458.0;
 
+/// The length of the vector `(x, y)`: `sqrt(x^2 + y^2)`, without the overflow guard of
+/// `f64::hypot` (several times slower, and lengths in metres never come near it).
+#[inline]
+pub(crate) fn norm(x: f64, y: f64) -> f64 {
+    (x * x + y * y).sqrt()
+}
+
 /// Free-space wavenumber `k0 = 2 pi f / c`, rad/m.
 pub fn wavenumber(freq_hz: f64) -> f64 {
     2.0 * std::f64::consts::PI * freq_hz / SPEED_OF_LIGHT_M_S

@@ -327,8 +327,26 @@ impl Prisms {
         lift: f64,
         out: &mut Vec<u32>,
     ) {
+        out.clear();
+        self.each_under((a, za), (b, zb), lift, |k| {
+            out.push(k);
+            true
+        });
+        out.sort_unstable();
+    }
+
+    /// The prisms [`Prisms::near_segment_under`] finds, handed to `visit` in no set order
+    /// until it returns false; whether it never did (a line of sight stops at the first
+    /// building in its way without listing the rest).
+    pub fn each_under(
+        &self,
+        (a, za): ([f64; 2], f64),
+        (b, zb): ([f64; 2], f64),
+        lift: f64,
+        visit: impl FnMut(u32) -> bool,
+    ) -> bool {
         let line = |t: f64| za + (zb - za) * t;
-        self.near_segment_over(a, b, |lo, hi| line(lo).min(line(hi)), lift, out);
+        self.each_over(a, b, |lo, hi| line(lo).min(line(hi)), lift, visit)
     }
 
     /// The prisms whose bounding box the segment `a -> b` meets, each once, in index order.
@@ -350,12 +368,29 @@ impl Prisms {
         out: &mut Vec<u32>,
     ) {
         out.clear();
+        self.each_over(a, b, floor, lift, |k| {
+            out.push(k);
+            true
+        });
+        out.sort_unstable();
+    }
+
+    /// The prisms [`Prisms::near_segment_over`] finds, handed to `visit` in no set order until
+    /// it returns false; whether it never did.
+    fn each_over(
+        &self,
+        a: [f64; 2],
+        b: [f64; 2],
+        floor: impl Fn(f64, f64) -> f64,
+        lift: f64,
+        visit: impl FnMut(u32) -> bool,
+    ) -> bool {
         if self.items.is_empty() || floor(0.0, 1.0) > self.top_max + lift {
-            return;
+            return true;
         }
         let d = [b[0] - a[0], b[1] - a[1]];
         // A micrometre's tolerance along the segment keeps a box it grazes.
-        let tol = 1e-6 / d[0].hypot(d[1]).max(1e-9);
+        let tol = 1e-6 / (d[0] * d[0] + d[1] * d[1]).sqrt().max(1e-9);
         let inv = d.map(|v| {
             if v.abs() < 1e-12 {
                 f64::INFINITY
@@ -381,8 +416,7 @@ impl Prisms {
             (lo <= hi).then_some((lo.max(0.0), hi.min(1.0)))
         };
         let item = |k: u32| (self.items[k as usize].bbox, self.items[k as usize].top);
-        self.bvh.along(inside, floor, item, lift, out);
-        out.sort_unstable();
+        self.bvh.along(inside, floor, item, lift, visit)
     }
 
     /// The prisms whose bounding box meets the box `[x0, x1, y0, y1]`, each once, in index

@@ -81,7 +81,7 @@ impl RayScene<'_> {
         let out = &mut sight.prof;
         out.clear();
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-        let rho = dx.hypot(dy);
+        let rho = crate::norm(dx, dy);
         if rho < 1e-9 {
             return;
         }
@@ -219,7 +219,7 @@ impl RayScene<'_> {
         lambda: f64,
     ) -> (f64, Option<(f64, f64)>) {
         use crate::diffraction::{bullington, deygout};
-        let rho = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let rho = crate::norm(b[0] - a[0], b[1] - a[1]);
         let bull = bullington(prof, rho, za, zb, lambda);
         let obstacles = self.prisms.is_some_and(|p| !p.is_empty()) || self.heights.is_some();
         if !obstacles {
@@ -268,7 +268,7 @@ impl RayScene<'_> {
     ) -> PathGeometry {
         let [xs, ys, hs] = tx;
         let (ex, ey) = (q[0] - xs, q[1] - ys);
-        let rho = ex.hypot(ey);
+        let rho = crate::norm(ex, ey);
         if self.flat_open() {
             let hq = self.altitude_m;
             let (d1, d2) = ray_lengths(rho, hs, hq);
@@ -361,7 +361,7 @@ impl RayScene<'_> {
         g.psi = psi;
         let k = crate::wavenumber(self.freq_hz);
         let sigma = if self.terrain.is_some() {
-            sigma.hypot(self.roughness_m)
+            crate::norm(sigma, self.roughness_m)
         } else {
             sigma
         };
@@ -398,7 +398,7 @@ impl RayScene<'_> {
     ) -> Option<Specular> {
         let [xs, ys, hs] = tx;
         let (ex, ey) = (q[0] - xs, q[1] - ys);
-        let rho = ex.hypot(ey);
+        let rho = crate::norm(ex, ey);
         let (ux, uy) = (ex / rho, ey / rho);
         let ground_at = |s: f64| {
             let (x, y) = (xs + ux * s, ys + uy * s);
@@ -465,7 +465,7 @@ impl RayScene<'_> {
         lambda: f64,
         h: f64,
     ) -> f64 {
-        let (d1, d2) = (s1.hypot(zs), s2.hypot(zq));
+        let (d1, d2) = (crate::norm(s1, zs), crate::norm(s2, zq));
         let r = (lambda * d1 * d2 / (d1 + d2).max(1e-9)).sqrt();
         (r / psi.sin().max(1e-3)).max(2.0 * h).min(s1.min(s2))
     }

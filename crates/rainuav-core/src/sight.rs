@@ -63,10 +63,15 @@ impl Sight<'_, '_> {
     /// sea level) passes above every point of the surface's profile between them
     /// ([`RayScene::profile`]): the buildings first (each face the line's ground track
     /// crosses, read just inside it), then the terrain and the obstacle raster every half of
-    /// their finest spacing, stopping at the first point in the way. Afterwards `near` holds
-    /// the buildings that could be in the way.
+    /// their finest spacing, stopping at the first point in the way.
     pub fn clear(&mut self, a: [f64; 2], za: f64, b: [f64; 2], zb: f64) -> bool {
-        self.walk((a, za), (b, zb), |_, _| false)
+        self.walk((a, za), (b, zb), false, |_, _| false)
+    }
+
+    /// [`Sight::clear`], and afterwards `near` holds every building that could be in the way
+    /// (in index order), read whole even where the first already blocks the line.
+    pub fn clear_listing(&mut self, a: [f64; 2], za: f64, b: [f64; 2], zb: f64) -> bool {
+        self.walk((a, za), (b, zb), true, |_, _| false)
     }
 
     /// The height `m` that splits the lines from `(a, pa + qa z)` to `(b, pb + qb z)` (ground
@@ -83,7 +88,7 @@ impl Sight<'_, '_> {
     ) -> f64 {
         // The line at z is p(t) + q(t) z; the least z over a point of height h is (h - p) / q.
         let mut m = f64::NEG_INFINITY;
-        self.walk((a, pa + qa * z_lo), (b, pb + qb * z_lo), |t, h| {
+        self.walk((a, pa + qa * z_lo), (b, pb + qb * z_lo), false, |t, h| {
             let (p, q) = (pa + (pb - pa) * t, qa + (qb - qa) * t);
             m = m.max((h - p) / q);
             true
@@ -94,27 +99,29 @@ impl Sight<'_, '_> {
     /// Every point of the surface's profile between `a` and `b` (as [`Sight::clear`] reads
     /// them) at or above the line from `(a, za)` to `(b, zb)`, handed to `seen(t, height)`
     /// until it returns false; whether it never did. What the bounds show to be below the
-    /// line is not read.
+    /// line is not read. `list`: `near` holds every building that could be in the way.
     fn walk(
         &mut self,
         (a, za): ([f64; 2], f64),
         (b, zb): ([f64; 2], f64),
+        list: bool,
         mut seen: impl FnMut(f64, f64) -> bool,
     ) -> bool {
         let s = self.scene;
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-        let rho = dx.hypot(dy);
+        let rho = (dx * dx + dy * dy).sqrt();
         if rho < 1e-9 {
             return true;
         }
         let line = |t: f64| za + (zb - za) * t;
         if let Some(prisms) = s.prisms {
             let eps = 1e-9_f64.max(1e-6 / rho);
-            prisms.near_segment_under((a, za), (b, zb), self.terrain_top, &mut self.near);
-            for &k in &self.near {
-                self.ts.clear();
-                prisms.crossings(k as usize, a, b, &mut self.ts);
-                for &t0 in &self.ts {
+            let ts = &mut self.ts;
+            // Whether building k leaves the line clear (every point of it in the way seen).
+            let mut passes = |k: u32| {
+                ts.clear();
+                prisms.crossings(k as usize, a, b, ts);
+                for &t0 in ts.iter() {
                     for t in [t0 - eps, t0 + eps] {
                         if t > 0.0 && t < 1.0 {
                             let (x, y) = (a[0] + t * dx, a[1] + t * dy);
@@ -126,6 +133,16 @@ impl Sight<'_, '_> {
                         }
                     }
                 }
+                true
+            };
+            let open = if list {
+                prisms.near_segment_under((a, za), (b, zb), self.terrain_top, &mut self.near);
+                self.near.iter().all(|&k| passes(k))
+            } else {
+                prisms.each_under((a, za), (b, zb), self.terrain_top, &mut passes)
+            };
+            if !open {
+                return false;
             }
         }
         let spacing = [s.terrain.as_ref(), s.heights.as_ref()]

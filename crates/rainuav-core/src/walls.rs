@@ -75,7 +75,7 @@ pub fn wall_reflectance(eps: Complex64, k: [f64; 3], n: [f64; 2], pol: RayPolari
     // The perpendicular direction k x n (n horizontal), and the site's field direction.
     let s = [-k[2] * n[1], k[2] * n[0], k[0] * n[1] - k[1] * n[0]];
     let s_len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
-    let kh = k[0].hypot(k[1]);
+    let kh = crate::norm(k[0], k[1]);
     if s_len < 1e-12 || kh < 1e-12 {
         return 0.5 * (perp + par);
     }
@@ -282,7 +282,7 @@ impl RayScene<'_> {
         if zp < zt + w.base || zp > zt + w.top {
             return None;
         }
-        let rho = (q[0] - img[0]).hypot(q[1] - img[1]);
+        let rho = crate::norm(q[0] - img[0], q[1] - img[1]);
         let (rho1, rho2) = (u * rho, (1.0 - u) * rho);
         if !(leg_seen(sight, [site[0], site[1]], zs, p, zp, rho1)
             && leg_seen(sight, q, zq, p, zp, rho2))
@@ -330,7 +330,7 @@ fn leg_seen(
 /// The wall's outward unit normal (right of `a -> b`) and length; None for a point.
 pub(crate) fn normal(w: &Wall) -> Option<([f64; 2], f64)> {
     let (dx, dy) = (w.b[0] - w.a[0], w.b[1] - w.a[1]);
-    let len = dx.hypot(dy);
+    let len = crate::norm(dx, dy);
     (len > 1e-9).then(|| ([dy / len, -dx / len], len))
 }
 

@@ -69,7 +69,7 @@ fn seg_distance(w: &Wall, p: [f64; 2]) -> f64 {
     let d = [w.b[0] - w.a[0], w.b[1] - w.a[1]];
     let l2 = (d[0] * d[0] + d[1] * d[1]).max(1e-18);
     let t = (((p[0] - w.a[0]) * d[0] + (p[1] - w.a[1]) * d[1]) / l2).clamp(0.0, 1.0);
-    (p[0] - w.a[0] - t * d[0]).hypot(p[1] - w.a[1] - t * d[1])
+    crate::norm(p[0] - w.a[0] - t * d[0], p[1] - w.a[1] - t * d[1])
 }
 
 impl RayScene<'_> {
@@ -97,7 +97,7 @@ impl RayScene<'_> {
         let mut longest: f64 = 0.0;
         for (k, w) in walls.iter().enumerate() {
             grid.entry(key(w)).or_default().push(k);
-            longest = longest.max((w.b[0] - w.a[0]).hypot(w.b[1] - w.a[1]));
+            longest = longest.max(crate::norm(w.b[0] - w.a[0], w.b[1] - w.a[1]));
         }
         let reach = 1 + (longest / cell).ceil() as i64;
         let first: Vec<usize> = (0..walls.len())
@@ -125,7 +125,7 @@ impl RayScene<'_> {
                             };
                             let m1 = [0.5 * (w1.a[0] + w1.b[0]), 0.5 * (w1.a[1] + w1.b[1])];
                             let m2 = [0.5 * (w2.a[0] + w2.b[0]), 0.5 * (w2.a[1] + w2.b[1])];
-                            let near = (m1[0] - m2[0]).hypot(m1[1] - m2[1]) - 0.5 * (l1 + l2);
+                            let near = crate::norm(m1[0] - m2[0], m1[1] - m2[1]) - 0.5 * (l1 + l2);
                             let facing = side(img, w2.a, n2) > 1e-6
                                 && (side(w2.a, w1.a, n1) > 1e-6 || side(w2.b, w1.a, n1) > 1e-6)
                                 && (side(w1.a, w2.a, n2) > 1e-6 || side(w1.b, w2.a, n2) > 1e-6);
@@ -215,9 +215,9 @@ impl RayScene<'_> {
         if !on(w1, p1) {
             return None;
         }
-        let h1 = (p1[0] - s[0]).hypot(p1[1] - s[1]);
-        let h2 = (p2[0] - p1[0]).hypot(p2[1] - p1[1]);
-        let h3 = (q[0] - p2[0]).hypot(q[1] - p2[1]);
+        let h1 = crate::norm(p1[0] - s[0], p1[1] - s[1]);
+        let h2 = crate::norm(p2[0] - p1[0], p2[1] - p1[1]);
+        let h3 = crate::norm(q[0] - p2[0], q[1] - p2[1]);
         let rho = h1 + h2 + h3;
         let zq = self.receiver_height(q);
         let length = (rho * rho + (zq - zs).powi(2)).sqrt().max(1e-3);
@@ -323,8 +323,8 @@ mod tests {
         let rays = scene.wall_rays2([0.0, 0.0, 10.0], &walls).unwrap();
         // A then B, and B then A (images (0, -20), then (0, 40)).
         assert_eq!(rays.len(), 2, "{rays:?}");
-        let d_ab = (100.0f64).hypot(44.0);
-        let d_ba = (100.0f64).hypot(36.0);
+        let d_ab = 100.0f64.hypot(44.0);
+        let d_ba = 100.0f64.hypot(36.0);
         let mut lengths: Vec<f64> = rays.iter().map(|r| r.length_m).collect();
         lengths.sort_by(f64::total_cmp);
         assert!((lengths[0] - d_ba).abs() < 1e-9 && (lengths[1] - d_ab).abs() < 1e-9);

@@ -18,7 +18,7 @@ pub(super) fn to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     } else {
         0.0
     };
-    (p[0] - a[0] - t * d[0]).hypot(p[1] - a[1] - t * d[1])
+    crate::norm(p[0] - a[0] - t * d[0], p[1] - a[1] - t * d[1])
 }
 
 impl RayScene<'_> {
@@ -61,14 +61,14 @@ impl RayScene<'_> {
                     let u = ds / (ds + dc);
                     let p = [at[0] + u * (c.v[0] - at[0]), at[1] + u * (c.v[1] - at[1])];
                     let along = (p[0] - a[0]) * t[0] + (p[1] - a[1]) * t[1];
-                    let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+                    let len = crate::norm(b[0] - a[0], b[1] - a[1]);
                     if !(0.0..=len).contains(&along) {
                         continue;
                     }
                     out.push(Image {
                         at,
                         p,
-                        d_sp: (p[0] - s[0]).hypot(p[1] - s[1]),
+                        d_sp: crate::norm(p[0] - s[0], p[1] - s[1]),
                         n,
                         top: prisms.items()[k].top,
                         eps: eps[k],
@@ -102,7 +102,7 @@ impl RayScene<'_> {
                 let mut corners = Vec::new();
                 self.corners_of(k as usize, &mut corners);
                 corners.retain_mut(|c| {
-                    if (c.v[0] - site[0]).hypot(c.v[1] - site[1]) > r {
+                    if crate::norm(c.v[0] - site[0], c.v[1] - site[1]) > r {
                         return false;
                     }
                     let z_lo = self.terrain_at(c.v[0], c.v[1]);
@@ -129,7 +129,7 @@ impl RayScene<'_> {
         let z_lo = self.terrain_at(c.v[0], c.v[1]);
         c.z_min = sight.lowest((site, zs, 0.0), (out, 0.0, 1.0), z_lo);
         for m in images {
-            let r1 = (m.at[0] - c.v[0]).hypot(m.at[1] - c.v[1]);
+            let r1 = crate::norm(m.at[0] - c.v[0], m.at[1] - c.v[1]);
             if r1 < 1e-6 {
                 continue;
             }
