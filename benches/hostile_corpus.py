@@ -31,7 +31,7 @@ engine = "ray"
 validate_every = 0
 checkpoint_every = 50
 [axes]
-rain_rate = [50.0, 100.0]
+rain_rate_mm_h = [50.0, 100.0]
 """
 
 

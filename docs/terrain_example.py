@@ -43,9 +43,9 @@ def main() -> None:
 
     sites, dem = ROOT / "examples" / "sites.csv", ROOT / "examples" / "dem.tif"
     flat = place_scenario(
-        sites, START, GOAL, rain_rate=RAIN_MM_H, altitude_m=ALTITUDE_MSL_M - 410.0
+        sites, START, GOAL, rain_rate_mm_h=RAIN_MM_H, altitude_m=ALTITUDE_MSL_M - 410.0
     )
-    hilly = place_scenario(sites, START, GOAL, rain_rate=RAIN_MM_H, terrain=dem,
+    hilly = place_scenario(sites, START, GOAL, rain_rate_mm_h=RAIN_MM_H, terrain=dem,
                            altitude_m=ALTITUDE_MSL_M, altitude_reference="msl")  # fmt: skip
     span = abs(flat.goal_m[0] - flat.start_m[0]) + abs(flat.goal_m[1] - flat.start_m[1])
     task = NavConfig(goal_m=flat.goal_m, start_m=flat.start_m,

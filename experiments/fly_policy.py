@@ -55,7 +55,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
     flyer, by = _policy(args.run)
-    weathers = {"clear": {"rain_rate": 0.0}, "25 mm/h": {"rain_rate": 25.0},
+    weathers = {"clear": {"rain_rate_mm_h": 0.0}, "25 mm/h": {"rain_rate_mm_h": 25.0},
                 "radar cell": {"weather": EXAMPLES / "radar.nc"}}  # fmt: skip
     report = {}
     with tempfile.TemporaryDirectory() as tmp:

@@ -13,6 +13,7 @@ import pytest
 import torch
 from rainuav.nav import MOVES, UAVNavEnv, planner
 from rainuav.nav.shield import shield_moves
+from rainuav.nav.task import NavConfig
 from rainuav.radio import RadioMap
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
@@ -113,9 +114,7 @@ def synthetic_map() -> RadioMap:
 def small_cfg(out: Path, episodes: int) -> TrainConfig:
     return TrainConfig(
         out=str(out),
-        goal_x_m=300.0,
-        goal_y_m=350.0,
-        max_steps=100,
+        task=NavConfig(goal_m=(300.0, 350.0), max_steps=100),
         eval_starts=50,
         checkpoint_every=50,
         stages=2,
@@ -507,11 +506,11 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path, capsys) -> None:
     from rainuav import evaluate as evaluate_cli
     from rainuav import train as train_cli
 
-    argv = [str(out), "--rain-rate", "40", "--starts", "3", "--seed", "4", "--shield"]
+    argv = [str(out), "--rain-rate-mm-h", "40", "--starts", "3", "--seed", "4", "--shield"]
     assert evaluate_cli.main(argv) == 0
     other = json.loads((out / "eval_same_40mmh" / "evaluation.json").read_text())
     assert other["eval_starts"] == 3 and other["rain_rate_mm_h"] == 40.0
-    assert other["trained_on"]["rain_rate"] == 5.0 and "shielded_success_rate" in other
+    assert other["trained_on"]["rain_rate_mm_h"] == 5.0 and "shielded_success_rate" in other
     assert (out / "eval_same_40mmh" / "evaluation_trajectories.png").exists()
     # The last online network (the run reports the average of the last episodes' weights):
     # its own folder, so the reported network's evaluation.json stays.
@@ -671,9 +670,12 @@ def test_resume_refuses_a_different_config(tmp_path: Path) -> None:
 
     assert train(*in_world(cfg40(), synthetic_map()), progress=False, stop_after=20) == {}
     other = cfg40()
-    other.mu, other.dqn.gamma = 0.5, 0.99
-    with pytest.raises(InvalidInputError, match=r"dqn.gamma: 0.998 -> 0.99; mu: .* -> 0.5"):
+    other.task.mu, other.dqn.gamma = 0.5, 0.99
+    with pytest.raises(InvalidInputError, match=r"dqn.gamma: 0.998 -> 0.99; task.mu: .* -> 0.5"):
         train(*saved_world(other), resume=True, progress=False)
+    # A task field set on the run itself would be lost: refused, naming where it lives.
+    with pytest.raises(AttributeError, match=r"no field 'mu': the task's, .task.mu"):
+        other.mu = 0.5  # type: ignore[attr-defined]
     # Only the device may change.
     same = cfg40()
     same.device = "cpu"
@@ -746,7 +748,7 @@ def test_scenario_file_weather_is_used_as_written(tmp_path: Path) -> None:
     )
     path = scn.to_toml(tmp_path / "cells.toml")
     assert make_scenario(TrainConfig(scenario_file=str(path))).medium == cells
-    rained = make_scenario(TrainConfig(scenario_file=str(path), rain_rate=5.0)).medium
+    rained = make_scenario(TrainConfig(scenario_file=str(path), rain_rate_mm_h=5.0)).medium
     assert (rained.kind, rained.rain_rate_mm_h, rained.dsd) == ("homogeneous", 5.0, cells.dsd)
     # The paper preset keeps its own 25 mm/h by default.
     assert make_scenario(TrainConfig()).medium.rain_rate_mm_h == 25.0

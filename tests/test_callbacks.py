@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from rainuav.nav.task import NavConfig
 from rainuav.rl.callbacks import Callback, RunState
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.loop import CHECKPOINT_KEYS, train
@@ -15,7 +16,7 @@ from test_nav_tasks import _map
 
 def _cfg(out: Path, episodes: int = 9) -> TrainConfig:
     return TrainConfig(
-        out=str(out), goal_x_m=300.0, goal_y_m=350.0, max_steps=30, eval_starts=3,
+        out=str(out), task=NavConfig(goal_m=(300.0, 350.0), max_steps=30), eval_starts=3,
         validate_every=0, checkpoint_every=3,
         dqn=DQNConfig(episodes=episodes, lanes=2, learning_starts=16, batch_size=8),
     )  # fmt: skip

@@ -1,4 +1,4 @@
-"""The single-map learner with altitude as a decision (``TrainConfig.altitudes``): the world
+"""The single-map learner with altitude as a decision (``TrainConfig.altitudes_m``): the world
 among levels (saved and read back), the learner's pieces against the environment, the
 yardsticks against the planners, and the job end to end on a small stack of maps."""
 
@@ -14,7 +14,7 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.levels import UAVLevelsEnv
-from rainuav.nav.task import base_reward
+from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio.levelmaps import LevelStack
 from rainuav.radio.scenario import Area, Scenario, Site
 from rainuav.rl import checkpoint
@@ -60,9 +60,9 @@ def moving_stack() -> LevelStack:
 
 def small_cfg(out: Path, episodes: int, **kw) -> TrainConfig:
     return TrainConfig(
-        out=str(out), goal_x_m=300.0, goal_y_m=350.0, max_steps=100, eval_starts=50,
+        out=str(out), task=NavConfig(goal_m=(300.0, 350.0), max_steps=100), eval_starts=50,
         checkpoint_every=50, stages=2, validate_every=50, validate_starts=30,
-        altitudes="30:100:35",  # the spec's band; the world handed in carries its own levels
+        altitudes_m="30:100:35",  # the spec's band; the world handed in carries its own levels
         dqn=DQNConfig(episodes=episodes, learning_starts=200, eps_decay=0.99,
                       target_sync_episodes=2, lr=1e-3),
         **kw,
@@ -206,12 +206,12 @@ def test_greedy_flights_among_levels_replay_in_the_environment() -> None:
 def test_bad_levels_configurations_are_refused_in_one_line(tmp_path: Path) -> None:
     base = small_cfg(tmp_path, 10)
     for kw, match in (
-        ({"altitudes": "100:30:15"}, "--altitudes must have LOW <= HIGH"),
-        ({"altitudes": "thirty"}, "--altitudes must be LOW:HIGH:STEP"),
-        ({"signal": "sir"}, "altitudes must be '' unless signal = 'sinr'"),
+        ({"altitudes_m": "100:30:15"}, "altitudes_m must have LOW <= HIGH"),
+        ({"altitudes_m": "thirty"}, "altitudes_m must be LOW:HIGH:STEP"),
+        ({"task": NavConfig(signal="sir")}, "altitudes_m must be '' unless task.signal = 'sinr'"),
         (
             {"dqn": dataclasses.replace(base.dqn, shield=True)},
-            "shield must be false with altitudes",
+            "shield must be false with altitudes_m",
         ),
     ):
         with pytest.raises(InvalidInputError, match=match):

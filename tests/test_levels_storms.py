@@ -201,9 +201,9 @@ def pool_cfg(out: Path, **kw: object) -> object:
 
     fields = {
         "scenario": "storm", "observation": "weather", "random_goal": True, "storm_pool": 2,
-        "storm_episodes": 3, "max_steps": 40, "out": str(out), "eval_starts": 3,
-        "validate_every": 0, "stages": 1, "checkpoint_every": 1000, "engine": "ray",
-        "altitudes": "50:110:60", "calm_share": 0.5,
+        "storm_episodes": 3, "task": NavConfig(max_steps=40), "out": str(out),
+        "eval_starts": 3, "validate_every": 0, "stages": 1, "checkpoint_every": 1000,
+        "engine": "ray", "altitudes_m": "50:110:60", "calm_share": 0.5,
         "dqn": DQNConfig(episodes=12, lanes=4, learning_starts=50, replay_capacity=1000,
                          hidden=16, conv=4),
     }  # fmt: skip
@@ -265,7 +265,8 @@ def test_a_pool_that_cannot_fit_is_refused(monkeypatch: pytest.MonkeyPatch, tmp_
 
     monkeypatch.setattr(_core, "available_memory_bytes", lambda: 10**8)
     monkeypatch.setenv("RAINUAV_CACHE_DIR", str(tmp_path / "cache"))
-    cfg = dataclasses.replace(pool_cfg(tmp_path), max_steps=10)
+    cfg = pool_cfg(tmp_path)
+    cfg = dataclasses.replace(cfg, task=dataclasses.replace(cfg.task, max_steps=10))
     with pytest.raises(InvalidInputError, match="storm_pool = 64 needs"):
         StormPool(dataclasses.replace(cfg, storm_pool=64), 0)
     pool = StormPool(dataclasses.replace(cfg, storm_pool=1), 0)

@@ -14,6 +14,7 @@ from gymnasium.utils.env_checker import check_env
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 from rainuav.errors import InvalidInputError
 from rainuav.nav import UAVNavEnv, flight_cost, planner
+from rainuav.nav.task import NavConfig
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio.maps import RadioMap
 from rainuav.radio.scenario import Area, Scenario, Site
@@ -212,12 +213,14 @@ def test_train_cli_sets_every_task_field_and_refuses_bad_values(
     }  # fmt: skip
     args = build_parser().parse_args([x for kv in flags.items() for x in kv])
     cfg = config_from_args(args)
-    assert (cfg.step_m, cfg.tol_m, cfg.goal_reward, cfg.out_of_bounds_penalty) == (
-        20.0, 15.0, 500.0, 900.0,
-    )  # fmt: skip
-    assert (cfg.signal, cfg.min_db, cfg.goal_x_m, cfg.goal_y_m, cfg.max_steps) == (
-        "sir", 3.0, 100.0, 200.0, 50,
-    )  # fmt: skip
+    t = cfg.task
+    assert (t.step_m, t.tol_m, t.goal_reward, t.out_of_bounds_penalty) == (20.0, 15.0, 500.0, 900.0)
+    assert (t.signal, t.min_db, t.goal_m, t.max_steps) == ("sir", 3.0, (100.0, 200.0), 50)
+    # The same under the task's own flags, the destination as one point.
+    dotted = {k.replace("--", "--task.", 1): v for k, v in flags.items() if "goal" not in k}
+    dotted |= {"--task.goal-m": "100,200", "--task.goal-reward": "500"}
+    args = build_parser().parse_args([x for kv in dotted.items() for x in kv])
+    assert config_from_args(args).task == t
     assert main(["--min-db", "nan", "--out", str(tmp_path)]) == 2
     assert "min_db" in capsys.readouterr().err
 
@@ -227,7 +230,7 @@ def test_time_budget_ends_training_early(tmp_path: Path) -> None:
     from rainuav.train import budget_note
 
     cfg = TrainConfig(
-        out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=60, eval_starts=5,
+        out=str(tmp_path), task=NavConfig(goal_m=(300.0, 350.0), max_steps=60), eval_starts=5,
         validate_every=0, time_budget_s=1e-9, dqn=DQNConfig(episodes=500, lanes=4),
     )  # fmt: skip
     m = train(*in_world(cfg, _map()), progress=False)
@@ -247,7 +250,7 @@ def test_evaluate_refuses_a_run_from_an_incompatible_version(
     from rainuav.rl.loop import train
 
     cfg = TrainConfig(
-        out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=30, eval_starts=3,
+        out=str(tmp_path), task=NavConfig(goal_m=(300.0, 350.0), max_steps=30), eval_starts=3,
         validate_every=0, dqn=DQNConfig(episodes=2, lanes=2),
     )  # fmt: skip
     train(*in_world(cfg, _map()), progress=False)
@@ -274,7 +277,7 @@ def test_a_saved_policy_flies_on_another_map_object_with_shared_references(
     from rainuav.rl.loop import train
 
     cfg = TrainConfig(
-        out=str(tmp_path), goal_x_m=300.0, goal_y_m=350.0, max_steps=30, eval_starts=5,
+        out=str(tmp_path), task=NavConfig(goal_m=(300.0, 350.0), max_steps=30), eval_starts=5,
         validate_every=0, dqn=DQNConfig(episodes=2, lanes=2),
     )  # fmt: skip
     own = train(*in_world(cfg, _map()), progress=False)

@@ -201,8 +201,8 @@ def pool_cfg(out: object, **kw: object) -> object:
 
     fields = {
         "scenario": "storm", "observation": "weather", "random_goal": True, "storm_pool": 2,
-        "storm_episodes": 3, "max_steps": 40, "out": str(out), "eval_starts": 3,
-        "validate_every": 0, "stages": 1, "checkpoint_every": 1000,
+        "storm_episodes": 3, "task": NavConfig(max_steps=40), "out": str(out),
+        "eval_starts": 3, "validate_every": 0, "stages": 1, "checkpoint_every": 1000,
         "dqn": DQNConfig(episodes=16, lanes=4, learning_starts=50, replay_capacity=2000,
                          hidden=16),
     }  # fmt: skip

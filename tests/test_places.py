@@ -472,7 +472,7 @@ def test_fly_policy_must_read_the_weather(tmp_path, capsys) -> None:
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "fly a network that reads the weather" in err[0]
     # A network that chooses among flight levels does not fly one altitude.
-    levels = TrainConfig(out=str(run), observation="weather", altitudes="25:115:15")
+    levels = TrainConfig(out=str(run), observation="weather", altitudes_m="25:115:15")
     (run / "config.toml").write_text(tomli_w.dumps(to_dict(levels)))
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 from rainuav.errors import InvalidInputError
+from rainuav.nav.task import NavConfig
 from rainuav.rl.config import (
     DQNConfig,
     TrainConfig,
@@ -60,7 +61,7 @@ def test_the_shipped_presets_are_the_configurations_the_code_set() -> None:
     assert {k: getattr(storms, k) for k in STORMS_BEFORE} == STORMS_BEFORE
     assert {k: getattr(storms.dqn, k) for k in STORM_LEARNER_BEFORE} == STORM_LEARNER_BEFORE
     levels = resolve_config({"preset": "storm-levels"})
-    want = {**dataclasses.asdict(storms), "preset": "storm-levels", "altitudes": "25:115:15"}
+    want = {**dataclasses.asdict(storms), "preset": "storm-levels", "altitudes_m": "25:115:15"}
     want.update(storm_pool=8, storm_episodes=48, engine="ray")
     want["dqn"] = {**want["dqn"], "episodes": 4000}
     assert dataclasses.asdict(levels) == want
@@ -89,7 +90,11 @@ def test_a_preset_then_the_run_file_then_the_flags(
     run.write_text('preset = "paper"\nmax_steps = 70\n[dqn]\nlanes = 2\nlr = 5e-4\n')
     cfg = _cli("--config", str(run), "--dqn.lanes", "3", "--max-steps", "80")
     # The flags over the file, the file over the preset, the preset over the defaults.
-    assert (cfg.dqn.lanes, cfg.max_steps, cfg.dqn.lr, cfg.dqn.loss) == (3, 80, 5e-4, "mse")
+    assert (cfg.dqn.lanes, cfg.task.max_steps, cfg.dqn.lr, cfg.dqn.loss) == (3, 80, 5e-4, "mse")
+    # A task field at the top of a file, and its plain flag, are the [task] table's and the
+    # dotted flag's.
+    assert load_config(run).task.max_steps == 70
+    assert _cli("--config", str(run), "--dqn.lanes", "3", "--task.max-steps", "80") == cfg
     assert load_config(run).dqn.lanes == 2 and load_config(run).dqn.loss == "mse"
     # The dotted flag and the learner's plain one are the same field; an override of a field
     # the preset sets is said in one line.
@@ -132,8 +137,9 @@ def test_help_lists_the_runs_own_flags_and_help_all_every_field(
     assert "dqn.lr" not in shown and "--dqn.NAME" in short and "storm-levels" in short
     assert main(["--help-all"]) == 0
     full = capsys.readouterr().out
-    fields = [f.name for f in dataclasses.fields(TrainConfig) if f.name != "dqn"]
+    fields = [f.name for f in dataclasses.fields(TrainConfig) if f.name not in ("dqn", "task")]
     fields += [f"dqn.{f.name}" for f in dataclasses.fields(DQNConfig)]
+    fields += [f"task.{f.name}" for f in dataclasses.fields(NavConfig)]
     assert all(f"--{k.replace('_', '-')} " in full for k in fields)
 
 
@@ -153,13 +159,13 @@ def test_same_configuration_same_run_bit_for_bit(tmp_path: Path) -> None:
     from rainuav.world import in_world
     from test_nav_tasks import _map
 
-    task = {"goal_x_m": 300.0, "goal_y_m": 350.0, "max_steps": 40, "eval_starts": 4}
-    task |= {"validate_every": 0, "checkpoint_every": 2}
+    run = {"eval_starts": 4, "validate_every": 0, "checkpoint_every": 2}
+    task = {"task.goal_m": (300.0, 350.0), "task.max_steps": 40}
     by_preset = resolve_config(
-        {"preset": "paper", "out": str(tmp_path / "a"), "dqn.episodes": 3, **task}
+        {"preset": "paper", "out": str(tmp_path / "a"), "dqn.episodes": 3, **run, **task}
     )
     by_hand = TrainConfig(
-        out=str(tmp_path / "b"), **task,
+        out=str(tmp_path / "b"), **run, task=NavConfig(goal_m=(300.0, 350.0), max_steps=40),
         dqn=DQNConfig(episodes=3, lr_final=DQNConfig().lr, **PAPER_BEFORE),
     )  # fmt: skip
     runs = []

@@ -13,6 +13,7 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav import UAVNavEnv, planner
 from rainuav.nav.baselines import fly_actions, frozen_plans, replans
 from rainuav.nav.field import SignalField, SignalSeries
+from rainuav.nav.task import NavConfig
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.world import WorldSpec, build_world
 
@@ -153,7 +154,9 @@ def test_frozen_field_and_bad_series_are_refused_cleanly() -> None:
 
 @pytest.mark.timeout(240)
 def test_a_storm_world_from_a_spec_for_gym_make_train_and_evaluate() -> None:
-    spec = WorldSpec(scenario="storm", storm_seed=2, engine="ray", max_steps=60, slice_s=10.0)
+    spec = WorldSpec(
+        scenario="storm", storm_seed=2, engine="ray", slice_s=10.0, task=NavConfig(max_steps=60)
+    )
     world = build_world(spec)
     assert world.varies and world.field.db.shape[0] == 7  # 60 moves of 1 s: 0..60 s
     env = world.env()
@@ -167,7 +170,9 @@ def test_a_storm_world_from_a_spec_for_gym_make_train_and_evaluate() -> None:
     from rainuav.rl.config import TrainConfig
     from rainuav.rl.loop import train
 
-    cfg = TrainConfig(scenario="storm", storm_seed=1_000_001, max_steps=60, slice_s=10.0)
+    cfg = TrainConfig(
+        scenario="storm", storm_seed=1_000_001, slice_s=10.0, task=NavConfig(max_steps=60)
+    )
     with pytest.raises(InvalidInputError, match="evaluation storm"):
         train(cfg, world)
 
@@ -204,7 +209,7 @@ def test_train_on_one_storm_and_evaluate_on_another_from_the_cli(tmp_path, capsy
     rc = evaluate.main([str(run), "--scenario", "storm", "--storm-seed", "1", "--out", str(out)])
     assert rc == 0
     flown = json.loads((out / "evaluation.json").read_text())
-    assert flown["trained_on"] == {"scenario": "storm", "rain_rate": None, "storm_seed": 0}
+    assert flown["trained_on"] == {"scenario": "storm", "rain_rate_mm_h": None, "storm_seed": 0}
     assert "replan_mean_return" in flown and flown["eval_starts"] == 4
     assert (out / "evaluation_storm_flights.png").stat().st_size > 1000
     capsys.readouterr()

@@ -29,7 +29,7 @@ validate_every = 0
 checkpoint_every = 2
 
 [axes]
-rain_rate = [50.0]
+rain_rate_mm_h = [50.0]
 """
 
 
@@ -62,7 +62,7 @@ def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(
     out = tmp_path / "a"
     assert main([str(study), "--out", str(out), "--workers", "2"]) == 0
     cases = sorted(p.name for p in (out / "cases").iterdir())
-    assert cases == ["000_base_s0", "001_rain_rate=50_s0"]
+    assert cases == ["000_base_s0", "001_rain_rate_mm_h=50_s0"]
     for c in cases:
         for name in ("result.json", "optimal.png", "run/metrics.json", "run/policy.pt"):
             assert (out / "cases" / c / name).exists(), (c, name)
@@ -70,12 +70,12 @@ def test_tiny_study_end_to_end_resumes_and_does_not_depend_on_workers(
     lines = csv.splitlines()
     assert len(lines) == 3 and lines[0].startswith("case,axis,value,seed")
     report = (out / "report.md").read_text()
-    assert "rain_rate | 50" in report and "optimal.png" in report and "maps.png" in report
+    assert "rain_rate_mm_h | 50" in report and "optimal.png" in report and "maps.png" in report
     for png in (
         "maps.png",
         "rss.png",
         "trajectories.png",
-        "cases/001_rain_rate=50_s0/transfer.png",
+        "cases/001_rain_rate_mm_h=50_s0/transfer.png",
     ):
         assert (out / png).read_bytes()[:4] == b"\x89PNG", png
     # Case (f): the rain case's network flown on the clear base map and the base's network
@@ -108,7 +108,7 @@ def test_a_study_killed_mid_case_reruns_to_the_same_results(
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "rainuav.study", str(study), "--out", str(out), "--workers", "1"]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    second = out / "cases" / "001_rain_rate=50_s0"
+    second = out / "cases" / "001_rain_rate_mm_h=50_s0"
     deadline = time.monotonic() + 240
     try:
         while not (second / "run").exists():  # the second case has started training
@@ -129,15 +129,18 @@ def test_a_study_killed_mid_case_reruns_to_the_same_results(
     ("change", "needle"),
     [
         (("[axes]", "[axes]\nbogus = [1]"), "bogus"),
-        (("rain_rate = [50.0]", "rain_rate = []"), "rain_rate"),
-        (("rain_rate = [50.0]", "rain_rate = [50.0, 900.0]"), "rain_rate"),
+        (("rain_rate_mm_h = [50.0]", "rain_rate_mm_h = []"), "rain_rate"),
+        (("rain_rate_mm_h = [50.0]", "rain_rate_mm_h = [50.0, 900.0]"), "rain_rate"),
         (('scenario = "uma"', 'scenario = "nowhere"'), "scenario"),
         (("eval_starts = 4", "eval_starts = 0"), "eval_starts"),
         (('name = "tiny"', 'name = "tiny"\nextra = 1'), "extra"),
         (('"dqn.episodes" = 3', '"dqn.episodes" = -3'), "episodes"),
-        (("rain_rate = [50.0]", "rain_rate = [{ bogus = 1.0 }]"), "bogus"),
-        (("rain_rate = [50.0]", "rain_rate = [50.0, { wind_m_s = 2.0 }]"), "rain_rate"),
-        (("rain_rate = [50.0]", 'w = [{ wind_m_s = 2.0, wind_model = "gale" }]'), "wind_model"),
+        (("rain_rate_mm_h = [50.0]", "rain_rate = [{ bogus = 1.0 }]"), "bogus"),
+        (("rain_rate_mm_h = [50.0]", "rain_rate = [50.0, { wind_m_s = 2.0 }]"), "rain_rate"),
+        (
+            ("rain_rate_mm_h = [50.0]", 'w = [{ wind_m_s = 2.0, wind_model = "gale" }]'),
+            "wind_model",
+        ),
     ],
 )
 def test_bad_study_files_are_refused_before_any_work(
@@ -156,9 +159,9 @@ def test_built_in_studies_load_and_name_their_cases() -> None:
     ids = [c.id for c in paper.cases()]
     assert ids[0] == "000_base_s0" and len(ids) == len(set(ids))
     axes = {c.axis for c in paper.cases()}
-    assert axes == {"base", "rain_rate", "mu", "wind_m_s", "paper_wind"}
+    assert axes == {"base", "rain_rate_mm_h", "mu", "wind_m_s", "paper_wind"}
     mmwave = {c.axis for c in load_study("mmwave").cases()}
-    assert mmwave == {"base", "rain_rate", "freq_ghz", "scenario"}
+    assert mmwave == {"base", "rain_rate_mm_h", "freq_ghz", "scenario"}
     # A compound axis sets several fields at once: the paper's wind factor at 2 and 5 m/s.
     paper_wind = [c for c in paper.cases() if c.axis == "paper_wind"]
     assert [c.id for c in paper_wind] == ["008_paper_wind=2-paper_s0", "009_paper_wind=5-paper_s0"]

@@ -4,6 +4,7 @@ and renamed), and warnings are one line each."""
 
 from __future__ import annotations
 
+import argparse
 import math
 import re
 import sys
@@ -13,7 +14,7 @@ from typing import Any
 
 from rainuav.errors import CacheWarning, InvalidInputError, WriteError
 
-__all__ = ["altitude_band", "attach_negative_values", "plain_help", "run"]
+__all__ = ["altitude_band", "attach_negative_values", "earlier_name", "plain_help", "run"]
 
 _NUMBERS = re.compile(r"^-(\d|\.\d)[\d.eE+\-]*(,\s*[+\-]?(\d|\.\d)[\d.eE+\-]*)*$")
 """A value that starts with a minus sign and is a number or a comma-separated list of them
@@ -91,18 +92,24 @@ def plain_help(text: str | None) -> str:
     return out.replace("\\\\", "\\")
 
 
-def altitude_band(text: str) -> list[float]:
-    """``--altitudes LOW:HIGH:STEP`` (m) as the levels LOW, LOW + STEP, ... up to HIGH (at
-    most 64), else one line naming the flag."""
+def earlier_name(ap: argparse.ArgumentParser, flag: str, dest: str, kind: Any = str) -> None:
+    """Reads ``flag``, a flag's earlier name (``--rain-rate`` for ``--rain-rate-mm-h``), into
+    ``dest`` without listing it."""
+    ap.add_argument(flag, dest=dest, type=kind, default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+
+
+def altitude_band(text: str, name: str = "--altitudes-m") -> list[float]:
+    """``LOW:HIGH:STEP`` (m) as the levels LOW, LOW + STEP, ... up to HIGH (at most 64), else
+    one line naming ``name`` (the flag or field)."""
     try:
         lo, hi, step = (float(v) for v in text.split(":"))
     except ValueError:
         raise InvalidInputError(
-            f"--altitudes must be LOW:HIGH:STEP in metres, e.g. 30:120:15 (got {text!r})"
+            f"{name} must be LOW:HIGH:STEP in metres, e.g. 30:120:15 (got {text!r})"
         ) from None
     if not (math.isfinite(lo) and math.isfinite(hi) and step > 0 and hi >= lo):
-        raise InvalidInputError(f"--altitudes must have LOW <= HIGH and STEP > 0 (got {text!r})")
+        raise InvalidInputError(f"{name} must have LOW <= HIGH and STEP > 0 (got {text!r})")
     n = math.floor((hi - lo) / step + 1e-9) + 1
     if n > 64:
-        raise InvalidInputError(f"--altitudes gives {n} levels (at most 64)")
+        raise InvalidInputError(f"{name} gives {n} levels (at most 64)")
     return [lo + k * step for k in range(n)]

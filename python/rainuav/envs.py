@@ -45,19 +45,17 @@ __all__ = ["make_levels_env", "make_nav_env", "make_nav_vector_env"]
 def _spec(
     scenario: str | Scenario, weather: dict[str, Any], task: dict[str, Any]
 ) -> tuple[WorldSpec, NavConfig]:
-    """The world spec of a scenario with these weather keywords and the task's fields (those
-    that are also the spec's go to both; ``observation`` and ``random_goal`` to the spec
-    alone), and the task."""
+    """The world spec of a scenario with these weather keywords and the task's fields (its
+    ``task``; ``observation`` and ``random_goal`` are the spec's own), and the task."""
     if not isinstance(scenario, str | Scenario):
         raise InvalidInputError(
             f"scenario must be a preset name or a Scenario (got {type(scenario).__name__})"
         )
     shown = {k: task.pop(k) for k in ("observation", "random_goal") if k in task}
     nav = make_config(**task)
-    shared = {f.name for f in dataclasses.fields(WorldSpec)} & set(task) - {"goal_m"}
     freq = weather["freq_hz"]
     given = {
-        "rain_rate": weather["rain_rate_mm_h"],
+        "rain_rate_mm_h": weather["rain_rate_mm_h"],
         "engine": weather["engine"],
         "freq_ghz": None if freq is None else check_number("freq_hz", freq, 1e9, 100e9) / 1e9,
         "storm_seed": weather["storm_seed"],
@@ -68,8 +66,8 @@ def _spec(
     spec = WorldSpec(
         scenario=scenario if isinstance(scenario, str) else "paper",
         **{k: v for k, v in given.items() if v is not None},
-        **{k: task[k] for k in shared},
         **shown,
+        task=nav,
     )
     return spec, nav
 

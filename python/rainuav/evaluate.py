@@ -1,7 +1,7 @@
 """``python -m rainuav.evaluate RUN_DIR``: fly a trained policy, on its own map or another.
 
     python -m rainuav.evaluate runs/paper                          # its own map and starts
-    python -m rainuav.evaluate runs/paper --rain-rate 50            # the same network in rain
+    python -m rainuav.evaluate runs/paper --rain-rate-mm-h 50            # the same network in rain
     python -m rainuav.evaluate runs/uma --scenario rain_cell --starts 100 --seed 7 --shield
     python -m rainuav.evaluate runs/storm0 --scenario storm --storm-seed 1000003
     python -m rainuav.evaluate runs/storms --storm-seeds 1000000-1000049 --starts 20
@@ -16,7 +16,7 @@ weight average of the last episodes, the final one with ``average_from = 1``, or
 the best on validation; ``--online``: the last online network) from fixed starts, against the exact
 optimum of the map flown and the straight line
 ([`rainuav.rl.evaluation.evaluate_saved_run()`][rainuav.rl.evaluation.evaluate_saved_run]).
-``--scenario``, ``--rain-rate``, ``--engine`` and ``--storm-seed`` fly it in another world (the
+``--scenario``, ``--rain-rate-mm-h``, ``--engine`` and ``--storm-seed`` fly it in another world (the
 run's spec with those changed, built or taken from the cache:
 [`rainuav.world.build_world()`][rainuav.world.build_world]): the paper's central comparison, a
 policy trained in clear air flown in rain against one trained in rain, or a network trained on one
@@ -39,7 +39,7 @@ from rainuav import _cli
 from rainuav._checks import check_integer
 from rainuav._io import begin_folder, check_out_dir, write_atomic
 
-OTHER_WORLD = ("scenario", "rain_rate", "engine", "storm_seed", "freq_ghz")
+OTHER_WORLD = ("scenario", "rain_rate_mm_h", "engine", "storm_seed", "freq_ghz")
 """The flags that fly the run in another world."""
 
 
@@ -48,7 +48,7 @@ def _out_dir(args: argparse.Namespace) -> Path:
         return args.out
     if all(getattr(args, k) is None for k in OTHER_WORLD):
         return args.run_dir / "eval_online" if args.online else args.run_dir
-    rain = "own" if args.rain_rate is None else f"{args.rain_rate:g}"
+    rain = "own" if args.rain_rate_mm_h is None else f"{args.rain_rate_mm_h:g}"
     storm = "" if args.storm_seed is None else f"_storm{args.storm_seed}"
     suffix = "_online" if args.online else ""
     return args.run_dir / f"eval_{args.scenario or 'same'}_{rain}mmh{storm}{suffix}"
@@ -66,7 +66,7 @@ def _world(args: argparse.Namespace) -> object:
     changes = {k: getattr(args, k) for k in OTHER_WORLD if getattr(args, k) is not None}
     if args.scenario is not None:
         changes["scenario_file"] = ""  # another preset comes in its own weather
-        changes.setdefault("rain_rate", None)
+        changes.setdefault("rain_rate_mm_h", None)
     changes["storm_pool"] = 0  # one world: a run over the storm distribution flown in it
 
     def build(cfg: object) -> object:
@@ -83,7 +83,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     ap.add_argument("run_dir", type=Path)
     ap.add_argument("--scenario", default=None, help="fly on this preset's map")
-    ap.add_argument("--rain-rate", type=float, default=None, help="homogeneous rain, mm/h")
+    ap.add_argument("--rain-rate-mm-h", type=float, default=None, help="homogeneous rain, mm/h")
+    _cli.earlier_name(ap, "--rain-rate", "rain_rate_mm_h", float)
     ap.add_argument("--engine", default=None, choices=("hybrid", "ray", "pe"))
     ap.add_argument("--storm-seed", type=int, default=None, help="fly through this storm")
     ap.add_argument("--freq-ghz", type=float, default=None, help="carrier frequency, GHz")
@@ -160,7 +161,7 @@ def _evaluate_storms(args: argparse.Namespace) -> int:
     else:
         if not given:
             raise InvalidInputError(
-                "--random-goals: name the world (--scenario, --rain-rate, --storm-seed, ...)"
+                "--random-goals: name the world (--scenario, --rain-rate-mm-h, --storm-seed, ...)"
             )
         worlds = [given]
         name = "eval_" + "_".join(f"{k}{v}" for k, v in given.items()) + goals

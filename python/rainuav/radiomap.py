@@ -1,19 +1,19 @@
 """``python -m rainuav.radiomap``: build a radio map and write it as .npz and PNGs.
 
-    python -m rainuav.radiomap --scenario paper --rain-rate 25 --out maps/
-    python -m rainuav.radiomap --scenario uma --freq-ghz 28 --rain-rate 50 --engine hybrid
+    python -m rainuav.radiomap --scenario paper --rain-rate-mm-h 25 --out maps/
+    python -m rainuav.radiomap --scenario uma --freq-ghz 28 --rain-rate-mm-h 50 --engine hybrid
     python -m rainuav.radiomap --config my_scenario.toml --out maps/
     python -m rainuav.radiomap --config my_place.toml --terrain dem.tif --out maps/
     python -m rainuav.radiomap --config my_place.toml --footprints city.geojson --out maps/
     python -m rainuav.radiomap --scenario storm --storm-seed 3 --duration-s 300 --slice-s 5
-    python -m rainuav.radiomap --scenario uma --engine ray --altitudes 30:120:15 --out maps/
+    python -m rainuav.radiomap --scenario uma --engine ray --altitudes-m 30:120:15 --out maps/
     python -m rainuav.radiomap --clear-cache
 
 Writes the PNGs first (and, for a georeferenced scenario, ``radiomap.tif``: SINR, the serving cell's
 power, the serving cell and the not-flyable pixels for a GIS,
 [`rainuav.radio.maptiff`][rainuav.radio.maptiff]) and ``radiomap.npz`` (``radiomap_series.npz`` for
 maps in time) last: a folder holding it is complete (an earlier run's copy is removed before the new
-files are written). At several heights (``--altitudes``, or a scenario with ``area.altitudes_m``):
+files are written). At several heights (``--altitudes-m``, or a scenario with ``area.altitudes_m``):
 per level ``sinr_<A>m.png``, ``radiomap_<A>m.npz`` and for a georeferenced scenario
 ``radiomap_<A>m.tif``, then ``radiomap_levels.json`` (the levels, their files and outage shares)
 last. The library lives in [`rainuav.radio`][rainuav.radio]."""
@@ -40,12 +40,13 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--scenario", choices=sorted(presets.PRESETS), default="paper")
     ap.add_argument("--config", type=Path, help="a scenario TOML file (overrides --scenario)")
     ap.add_argument(
-        "--rain-rate",
+        "--rain-rate-mm-h",
         type=float,
         default=None,
         help="homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the "
         "scenario's rain model, drop sizes, shape, temperature and wind are kept)",
     )
+    _cli.earlier_name(ap, "--rain-rate", "rain_rate_mm_h", float)
     ap.add_argument(
         "--rain-file",
         type=Path,
@@ -114,10 +115,11 @@ def build_parser() -> argparse.ArgumentParser:
         "above mean sea level (msl)",
     )
     ap.add_argument(
-        "--altitudes", default=None, metavar="LOW:HIGH:STEP",
+        "--altitudes-m", default=None, metavar="LOW:HIGH:STEP",
         help="map a band of flight altitudes, m (e.g. 30:120:15): one map a level "
         "(rainuav.radio.levelmaps)",
     )  # fmt: skip
+    _cli.earlier_name(ap, "--altitudes", "altitudes_m")
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
     ap.add_argument(
@@ -160,13 +162,13 @@ def _build(args: argparse.Namespace) -> int:
     if args.rain_file is not None:
         from rainuav.radio.rategrid import read_rate_grid
 
-        if args.rain_rate is not None:
-            raise InvalidInputError("--rain-rate: not with --rain-file (which rain?)")
+        if args.rain_rate_mm_h is not None:
+            raise InvalidInputError("--rain-rate-mm-h: not with --rain-file (which rain?)")
         scn = scn.replace(medium=read_rate_grid(args.rain_file, scn.area, base=scn.medium))
     if args.at_s is not None:
         scn = scn.replace(medium=scn.medium.at(args.at_s))
-    if args.rain_rate is not None:
-        scn = presets.with_rain(scn, args.rain_rate)
+    if args.rain_rate_mm_h is not None:
+        scn = presets.with_rain(scn, args.rain_rate_mm_h)
     if args.freq_ghz is not None:
         scn = scn.replace(freq_hz=args.freq_ghz * 1e9)
     if args.terrain is not None:
@@ -204,15 +206,15 @@ def _build(args: argparse.Namespace) -> int:
 
         # Read (or refused) before anything is built; what was left out, said.
         print(scenario_buildings(scn).summary, file=sys.stderr)  # type: ignore[union-attr]
-    if args.altitudes is not None:
+    if args.altitudes_m is not None:
         import dataclasses
 
-        band = _cli.altitude_band(args.altitudes)
+        band = _cli.altitude_band(args.altitudes_m)
         scn = scn.replace(area=dataclasses.replace(scn.area, altitudes_m=band))
         scn.area.check()
     if scn.area.altitudes_m:
         if args.duration_s is not None or args.slice_s is not None:
-            raise InvalidInputError("--altitudes: maps in time at several heights are not "
+            raise InvalidInputError("--altitudes-m: maps in time at several heights are not "
                                     "written by this command (use one of the two)")  # fmt: skip
         return _build_levels(args, scn)
     if args.duration_s is not None or args.slice_s is not None:

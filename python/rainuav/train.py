@@ -6,7 +6,9 @@ each listed on the Learning page; ``--preset paper`` runs Algorithm 1 and Table 
 0, results in ``runs/paper``. ``--preset NAME|FILE`` starts from a preset (a TOML file of fields:
 ``paper``, ``storms``, ``storm-levels`` ship with the package); every field of
 [`rainuav.rl.config.TrainConfig`][rainuav.rl.config.TrainConfig] is a flag ``--name`` and every
-field of [`rainuav.rl.config.DQNConfig`][rainuav.rl.config.DQNConfig] a flag ``--dqn.name``
+field of its task, [`rainuav.nav.task.NavConfig`][rainuav.nav.task.NavConfig], a flag
+``--task.name`` and every field of
+[`rainuav.rl.config.DQNConfig`][rainuav.rl.config.DQNConfig] a flag ``--dqn.name``
 (``--help`` lists the run's own, ``--help-all`` all); ``--config run.toml`` reads fields from a
 file; flags win over the file, the file over the preset. ``--resume`` continues an
 interrupted run from its checkpoint (same configuration). The world (map or maps in time, and the
@@ -59,7 +61,7 @@ def _parse_bool(text: str) -> bool:
 
 
 SHOWN = (
-    "preset", "scenario", "scenario_file", "rain_rate", "freq_ghz", "engine", "altitudes",
+    "preset", "scenario", "scenario_file", "rain_rate_mm_h", "freq_ghz", "engine", "altitudes_m",
     "storm_seed", "seed", "out", "device", "time_budget_s", "eval_starts", "dqn.episodes",
 )  # fmt: skip
 """The run's own flags, the ones ``--help`` lists (``--help-all``: every field)."""
@@ -76,12 +78,29 @@ def _storm_seed(text: str) -> int | str:
         raise argparse.ArgumentTypeError(msg) from None
 
 
+def _point(text: str) -> tuple[float, float]:
+    """A point ``X,Y`` in metres."""
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y in metres (got {text!r})") from None
+    return (x, y)
+
+
+def _flag(name: str) -> str:
+    return f"--{name.replace('_', '-')}"
+
+
 def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
-    """CLI flags generated from TrainConfig (``--name``) and DQNConfig (``--dqn.name``), one per
-    field; ``--help`` lists the run's own ([`SHOWN`][rainuav.train.SHOWN]), ``--help-all`` every
-    one."""
+    """CLI flags generated from TrainConfig (``--name``), its task
+    ([`rainuav.nav.task.NavConfig`][rainuav.nav.task.NavConfig], ``--task.name``) and
+    DQNConfig (``--dqn.name``), one per field; ``--help`` lists the run's own
+    ([`SHOWN`][rainuav.train.SHOWN]), ``--help-all`` every one. Also read, unlisted: the task's
+    and the learner's fields without their prefix (``--max-steps``, ``--lr``), the fields'
+    earlier names ([`rainuav.rl.config.RENAMED`][rainuav.rl.config.RENAMED]) and
+    ``--goal-x-m`` / ``--goal-y-m``."""
     from rainuav._checks import field_kind
-    from rainuav.rl.config import DQNConfig, TrainConfig, preset_names
+    from rainuav.rl.config import RENAMED, SECTIONS, TrainConfig, preset_names
 
     flag_types = {"int": int, "float": float, "str": str, "bool": _parse_bool}
     ap = argparse.ArgumentParser(
@@ -89,8 +108,9 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
         description=_cli.plain_help(__doc__),
         epilog=textwrap.fill(
             f"Presets shipped: {', '.join(preset_names())} (rainuav/rl/preset_files). Every "
-            "field of the run is a flag: --NAME for the run's (e.g. --max-steps 80), --dqn.NAME "
-            "for the learner's (e.g. --dqn.lr 1e-4); --help-all lists them with their defaults.",
+            "field of the run is a flag: --NAME for the run's (e.g. --storm-pool 8), "
+            "--task.NAME for the task's (e.g. --task.max-steps 80), --dqn.NAME for the "
+            "learner's (e.g. --dqn.lr 1e-4); --help-all lists them with their defaults.",
             width=79,
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -98,58 +118,70 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
     ap.add_argument("--help-all", action="store_true", help="list every field's flag and exit")
     ap.add_argument("--config", type=Path, help="a TOML file of the run's fields (config.toml)")
     ap.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
-    for cls, prefix in ((TrainConfig, ""), (DQNConfig, "dqn.")):
+    hidden = {"help": argparse.SUPPRESS, "default": None}
+    for cls, prefix in ((TrainConfig, ""), *((c, f"{n}.") for n, c in SECTIONS.items())):
         docs = _field_docs(cls)
         for f in dataclasses.fields(cls):
-            if f.name == "dqn":
+            if f.name in SECTIONS:
                 continue
             name = prefix + f.name
             default = "unset" if f.default is None else f.default
-            kind = _storm_seed if f.name == "storm_seed" else flag_types.get(field_kind(f)[0], str)
-            more = (
-                " Or 'random': --preset storms (with --altitudes: --preset storm-levels)"
-                if f.name == "storm_seed"
-                else ""
-            )
+            if f.name == "storm_seed":
+                kind: Any = _storm_seed
+            elif f.name in ("goal_m", "start_m"):
+                kind = _point
+            else:
+                kind = flag_types.get(field_kind(f)[0], str)
+            more = {
+                "storm_seed": " Or 'random': --preset storms (with --altitudes-m: --preset "
+                "storm-levels)",
+                "goal_m": " As X,Y.",
+                "start_m": " As X,Y.",
+            }.get(f.name, "")
             text = _cli.plain_help(f"{docs.get(f.name, '')}{more} (default {default})")
             shown = show_all or name in SHOWN
-            flags = [f"--{prefix}{f.name.replace('_', '-')}"]
-            ap.add_argument(
-                *flags, dest=name, type=kind, default=None,
-                help=text if shown else argparse.SUPPRESS,
-            )  # fmt: skip
-            if prefix:  # the learner's fields also as --name, as before the dotted form
-                alias = f"--{f.name.replace('_', '-')}"
-                ap.add_argument(alias, dest=name, type=kind, default=None, help=argparse.SUPPRESS)
+            ap.add_argument(_flag(prefix + f.name), dest=name, type=kind, default=None,
+                            help=text if shown else argparse.SUPPRESS)  # fmt: skip
+            if prefix:  # the task's and the learner's fields also as --name
+                ap.add_argument(_flag(f.name), dest=name, type=kind, **hidden)
+    for old, new in RENAMED.items():
+        ap.add_argument(_flag(old), dest=new, type=str if "altitudes" in old else float, **hidden)
+    for old in ("goal_x_m", "goal_y_m"):
+        ap.add_argument(_flag(old), dest=old, type=float, **hidden)
     return ap
 
 
 def config_from_args(args: argparse.Namespace) -> Any:
     """The run's TrainConfig: its preset, then the ``--config`` file's fields, then the flags
     given ([`rainuav.rl.config.resolve_config()`][rainuav.rl.config.resolve_config]). ``--storm-seed
-    random`` is ``--preset storms`` (``storm-levels`` with ``--altitudes``)."""
-    from rainuav.rl.config import DQNConfig, TrainConfig, preset_fields, read_config, resolve_config
+    random`` is ``--preset storms`` (``storm-levels`` with ``--altitudes-m``)."""
+    from rainuav.nav.task import NavConfig
+    from rainuav.rl.config import SECTIONS, TrainConfig, preset_fields, read_config, resolve_config
 
     fields: dict[str, Any] = {}
     if args.config is not None:
-        top, dqn = read_config(args.config)
-        fields.update(top)
-        fields.update({f"dqn.{k}": v for k, v in dqn.items()})
+        fields.update(read_config(args.config))
     flags = {}
-    for cls, prefix in ((TrainConfig, ""), (DQNConfig, "dqn.")):
+    for cls, prefix in ((TrainConfig, ""), *((c, f"{n}.") for n, c in SECTIONS.items())):
         for f in dataclasses.fields(cls):
             value = getattr(args, prefix + f.name, None)
-            if f.name != "dqn" and value is not None:
+            if f.name not in SECTIONS and value is not None:
                 flags[prefix + f.name] = value
     fields.update(flags)
     if fields.get("storm_seed") == "random":  # the storm distribution: a preset
         del fields["storm_seed"], flags["storm_seed"]
-        fields.setdefault("preset", "storm-levels" if fields.get("altitudes") else "storms")
-    if fields.get("preset") and not args.resume:
-        preset = preset_fields(fields["preset"])
+        fields.setdefault("preset", "storm-levels" if fields.get("altitudes_m") else "storms")
+    preset = preset_fields(fields["preset"]) if fields.get("preset") else {}
+    goal = [getattr(args, "goal_x_m", None), getattr(args, "goal_y_m", None)]
+    if goal != [None, None]:  # the destination's coordinates one at a time, as before
+        base = fields.get("task.goal_m", preset.get("task.goal_m", NavConfig().goal_m))
+        flags["task.goal_m"] = fields["task.goal_m"] = tuple(
+            b if g is None else g for g, b in zip(goal, base, strict=True)
+        )
+    if preset and not args.resume:
         for k in sorted(set(flags) & set(preset)):
             if flags[k] != preset[k]:
-                print(f"note: --{k.replace('_', '-')} {flags[k]} in place of the preset "
+                print(f"note: {_flag(k)} {flags[k]} in place of the preset "
                       f"{fields['preset']!r}'s {preset[k]}", file=sys.stderr)  # fmt: skip
     return resolve_config(fields)
 

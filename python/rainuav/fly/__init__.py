@@ -1,7 +1,7 @@
 """``python -m rainuav.fly``: a flight plan for a real place, in files an autopilot loads.
 
     python -m rainuav.fly --sites examples/sites.csv --start 47.3700,8.5400 \\
-        --goal 47.3830,8.5570 --rain-rate 25 --out runs/flight
+        --goal 47.3830,8.5570 --rain-rate-mm-h 25 --out runs/flight
     python -m rainuav.fly --sites examples/sites.csv --start 47.3700,8.5400 \\
         --goal 47.3830,8.5570 --terrain dem.tif --out runs/flight
 
@@ -10,12 +10,13 @@ electrical_tilt_deg, tx_power_dbm``, optional ``antenna, rows, mechanical_tilt_d
 azimuths clockwise from north, tilts positive down, as operators give them:
 [`rainuav.radio.sites`][rainuav.radio.sites]), the start and destination as ``LAT,LON`` (degrees,
 WGS 84; south and west negative), the flight altitude, the carrier and homogeneous rain
-(``--rain-rate``) or a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with one band per
-instant or a folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several instants give a
-weather that moves and the exact plan in space-time: [`rainuav.radio.radar`][rainuav.radio.radar]).
-The area is the box around the start, the destination and the sites with a 300 m margin (at most 10
-km x 10 km), in metres of an azimuthal equidistant projection centred on it
-([`rainuav.geo`][rainuav.geo]). Plans the exact optimum (``rainuav.nav.planner``) and writes into
+(``--rain-rate-mm-h``) or a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with one
+band per instant or a folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several instants
+give a weather that moves and the exact plan in space-time:
+[`rainuav.radio.radar`][rainuav.radio.radar]). The area is the box around the start, the destination
+and the sites with a 300 m margin (at most 10 km x 10 km), in metres of an azimuthal equidistant
+projection centred on it ([`rainuav.geo`][rainuav.geo]). Plans the exact optimum
+(``rainuav.nav.planner``) and writes into
 ``--out``:
 
 - ``flight.geojson`` (the path, WGS 84, with per-vertex time, SINR, serving cell and outage;
@@ -73,14 +74,14 @@ def _latlon(text: str) -> tuple[float, float]:
 
 
 def _start(text: str) -> tuple[float, ...]:
-    """``LAT,LON`` or ``LAT,LON,ALTITUDE`` (the altitude: one of ``--altitudes``)."""
+    """``LAT,LON`` or ``LAT,LON,ALTITUDE`` (the altitude: one of ``--altitudes-m``)."""
     try:
         vals = tuple(float(v) for v in text.split(","))
     except ValueError:
         vals = ()
     if len(vals) not in (2, 3):
         raise argparse.ArgumentTypeError(
-            f"expected LAT,LON in degrees, or LAT,LON,ALTITUDE with --altitudes (got {text!r})"
+            f"expected LAT,LON in degrees, or LAT,LON,ALTITUDE with --altitudes-m (got {text!r})"
         )
     return vals
 
@@ -97,7 +98,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument(
         "--start", type=_start, required=True,
         help="take-off point LAT,LON in degrees, south and west negative (--start -33.87,151.21 "
-        "and --start=-33.87,151.21 both work); with --altitudes, LAT,LON,ALTITUDE starts at "
+        "and --start=-33.87,151.21 both work); with --altitudes-m, LAT,LON,ALTITUDE starts at "
         "that level (default: the exact planner chooses the take-off level, and the summary says "
         "which)",
     )  # fmt: skip
@@ -109,7 +110,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     )  # fmt: skip
     ap.add_argument("--altitude-m", type=float, default=100.0, help="flight altitude above ground")
     ap.add_argument("--freq-ghz", type=float, default=28.0, help="carrier frequency, GHz")
-    ap.add_argument("--rain-rate", type=float, default=0.0, help="homogeneous rain, mm/h")
+    ap.add_argument("--rain-rate-mm-h", type=float, default=0.0, help="homogeneous rain, mm/h")
+    _cli.earlier_name(ap, "--rain-rate", "rain_rate_mm_h", float)
     ap.add_argument(
         "--weather", type=Path, default=None,
         help="a georeferenced rain file (NetCDF on lat/lon or x/y with a CRS, a GeoTIFF with "
@@ -147,7 +149,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "rays outside; ray: rays alone, seconds instead of minutes)",
     )  # fmt: skip
     ap.add_argument(
-        "--altitudes", default=None, metavar="LOW:HIGH:STEP",
+        "--altitudes-m", default=None, metavar="LOW:HIGH:STEP",
         help="fly a band of heights, m above the ground (e.g. 30:120:15): the flight chooses "
         "its height, climbing at 5 m/s and descending at 3 m/s; --altitude-m is then the "
         "single height it is compared with",
@@ -171,9 +173,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         else:
             check_number("--altitude-m", args.altitude_m, 0.5, 3000.0, " m")
         check_number("--freq-ghz", args.freq_ghz, 1.0, 100.0, " GHz")
-        check_number("--rain-rate", args.rain_rate, 0.0, 500.0, " mm/h")
-        if args.weather is not None and args.rain_rate:
-            raise InvalidInputError("give --rain-rate or --weather, not both")
+        check_number("--rain-rate-mm-h", args.rain_rate_mm_h, 0.0, 500.0, " mm/h")
+        if args.weather is not None and args.rain_rate_mm_h:
+            raise InvalidInputError("give --rain-rate-mm-h or --weather, not both")
         check_number("--speed-m-s", args.speed_m_s, 0.1, 100.0, " m/s")
         if args.default_height is not None:
             check_number("--default-height", args.default_height, 0.5, 1000.0, " m")
@@ -185,15 +187,15 @@ def main(argv: Sequence[str] | None = None) -> int:
                 box = ()
             if len(box) != 4:
                 raise InvalidInputError(f"--area must be S,W,N,E in degrees (got {args.area!r})")
-        altitudes = None if args.altitudes is None else _cli.altitude_band(args.altitudes)
+        altitudes = None if args.altitudes_m is None else _cli.altitude_band(args.altitudes_m)
         start_alt = args.start[2] if len(args.start) == 3 else None
         if start_alt is not None and altitudes is None:
             raise InvalidInputError(
-                "--start LAT,LON,ALTITUDE needs --altitudes (a band to start in)"
+                "--start LAT,LON,ALTITUDE needs --altitudes-m (a band to start in)"
             )
         if start_alt is not None and not any(abs(start_alt - a) < 1e-6 for a in altitudes):
             raise InvalidInputError(
-                f"--start altitude {start_alt:g} m must be one of --altitudes "
+                f"--start altitude {start_alt:g} m must be one of --altitudes-m "
                 f"{[round(a, 3) for a in altitudes]}"
             )
         out = check_out_dir(args.out, "--out")
@@ -202,12 +204,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.policy is not None:  # before any map or torch: seconds and memory
             _check_policy_run(args.policy)
             if altitudes is not None:
-                raise InvalidInputError("--policy flies one altitude: not with --altitudes")
+                raise InvalidInputError("--policy flies one altitude: not with --altitudes-m")
         place = place_scenario(
             args.sites, args.start[:2], args.goal, altitude_m=args.altitude_m,
-            freq_ghz=args.freq_ghz, rain_rate=args.rain_rate, weather=args.weather,
+            freq_ghz=args.freq_ghz, rain_rate_mm_h=args.rain_rate_mm_h, weather=args.weather,
             box=box, terrain=args.terrain, altitude_reference=args.altitude_reference,
-            footprints=args.footprints, altitudes=altitudes, engine=args.engine,
+            footprints=args.footprints, altitudes_m=altitudes, engine=args.engine,
             default_height_m=args.default_height, ground=args.ground,
         )  # fmt: skip
         if args.footprints is not None:
@@ -283,9 +285,10 @@ def _check_policy_run(run: Path) -> None:
             f"--policy {run}: its network sees only its own map (trained with observation = "
             f"{observation!r}); fly a network that reads the weather (--observation weather)"
         )
-    if cfg.get("altitudes"):
+    levels = cfg.get("altitudes_m") or cfg.get("altitudes")  # (its earlier name)
+    if levels:
         raise InvalidInputError(
-            f"--policy {run}: its network chooses among the flight levels {cfg['altitudes']} m, "
+            f"--policy {run}: its network chooses among the flight levels {levels} m, "
             "and --policy flies one altitude; fly it with rainuav.evaluate, or give a run "
             "trained on one altitude"
         )

@@ -1,4 +1,4 @@
-"""``fly`` with altitude as a decision (``--altitudes``): the place mapped at each flight level
+"""``fly`` with altitude as a decision (``--altitudes-m``): the place mapped at each flight level
 ([`rainuav.radio.levelmaps`][rainuav.radio.levelmaps]), the exact plan among them
 ([`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]: climbs and descents
 weighted by their duration) from the take-off level the planner finds best (of those flyable at the
@@ -56,7 +56,7 @@ def fly_levels(
     scn = place.scenario
     if scn.area.msl and scn.terrain is not None:
         raise InvalidInputError(
-            "--altitudes over --terrain are above the ground: not with --altitude-reference msl"
+            "--altitudes-m over --terrain are above the ground: not with --altitude-reference msl"
         )
     alts = np.asarray(scn.area.levels, dtype=float)
     probe = NavConfig(speed_m_s=speed_m_s)
@@ -80,7 +80,7 @@ def fly_levels(
             lat, lon = place.georef.to_latlon(x, y)
             raise InvalidInputError(
                 f"{name} {latlon_text(float(lat), float(lon))} lies where the UAV may not fly "
-                f"at any of --altitudes: obstacles within {scn.area.clearance_m:g} m"
+                f"at any of --altitudes-m: obstacles within {scn.area.clearance_m:g} m"
             )
     start_level = -1  # the exact planner's choice: the level whose optimum is best
     if start_altitude_m is not None:

@@ -79,7 +79,7 @@ def fly_place(
     a = place.scenario.area
     if a.altitudes_m:  # altitude as a decision
         if flyer is not None:
-            raise InvalidInputError("--policy flies one altitude: not with --altitudes")
+            raise InvalidInputError("--policy flies one altitude: not with --altitudes-m")
         from rainuav.fly.heights import fly_levels
 
         return fly_levels(place, out, speed_m_s=speed_m_s, min_db=min_db, progress=progress,

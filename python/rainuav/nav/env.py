@@ -38,7 +38,7 @@ from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
 from rainuav.nav.field import SignalBank, SignalField, SignalSeries, blocked_at
-from rainuav.nav.task import SIGNALS, LoiteringWarning, NavConfig, check_config
+from rainuav.nav.task import SIGNALS, LoiteringWarning, NavConfig, check_config, make_config
 from rainuav.nav.views import WeatherView, sample_goal, sample_start_for
 
 __all__ = ["DEFAULT_MIN_DB", "OBSERVATIONS", "UAVNavEnv", "check_action", "signal_field"]
@@ -112,42 +112,23 @@ class UAVNavEnv(gym.Env):
         *,
         signal: str | None = None,
         min_db: float | None = None,
-        goal_m: tuple[float, float] = (1400.0, 1600.0),
-        step_m: float = 10.0,
-        tol_m: float = 10.0,
-        max_steps: int = 300,
-        mu: float = 10.0 / 43.0,
-        reward: str = "shortfall",
-        goal_reward: float = 2000.0,
-        out_of_bounds_penalty: float = 10000.0,
-        start_m: tuple[float, float] | None = None,
-        speed_m_s: float = 10.0,
         config: NavConfig | None = None,
         field: SignalField | SignalSeries | SignalBank | None = None,
         observation: str = "position",
         view: WeatherView | None = None,
         random_goal: bool = False,
+        **task: Any,
     ) -> None:
         """A map (``radio_map``, one raw array with ``extent_m``, or a built ``field``: a signal in
-        time, or a bank of worlds, one drawn per episode) and the task: its fields as keywords, or a
-        whole ``config`` (then ``signal`` and ``min_db`` given here win). ``observation``:
-        [`OBSERVATIONS`][rainuav.nav.env.OBSERVATIONS] (``view`` sets the weather's grids);
-        ``random_goal``: a destination per episode
+        time, or a bank of worlds, one drawn per episode) and the task: a whole ``config``
+        ([`NavConfig`][rainuav.nav.task.NavConfig]), its fields as keywords (``goal_m``,
+        ``max_steps``, ...: over ``config``'s where both are given), and ``signal`` and ``min_db``
+        (which win over both). ``observation``: [`OBSERVATIONS`][rainuav.nav.env.OBSERVATIONS]
+        (``view`` sets the weather's grids); ``random_goal``: a destination per episode
         ([`rainuav.nav.views.sample_goal()`][rainuav.nav.views.sample_goal]; needs the weather
         observation, which shows it)."""
         super().__init__()
-        cfg = config or NavConfig(
-            goal_m=tuple(goal_m),
-            step_m=step_m,
-            tol_m=tol_m,
-            max_steps=max_steps,
-            mu=mu,
-            reward=reward,
-            goal_reward=goal_reward,
-            out_of_bounds_penalty=out_of_bounds_penalty,
-            start_m=None if start_m is None else tuple(start_m),
-            speed_m_s=speed_m_s,
-        )
+        cfg = make_config(config, **task)
         if radio_map is not None:
             signal = signal or cfg.signal
         if field is not None:

@@ -36,6 +36,7 @@ __all__ = [
     "NavConfig",
     "base_reward",
     "check_config",
+    "check_task",
     "flight_cost",
     "make_config",
 ]
@@ -52,7 +53,9 @@ class LoiteringWarning(UserWarning):
 
 @dataclass
 class NavConfig:
-    """The navigation task (defaults: the paper's Table I and docs/physics.md section 6)."""
+    """The navigation task (defaults: the paper's Table I and docs/physics.md section 6): the one
+    place its settings live. The environment owns it; a world spec holds it as ``task`` (the
+    ``[task]`` table of a run's ``config.toml``, the flags ``--task.NAME`` of ``rainuav.train``)."""
 
     goal_m: tuple[float, float] = (1400.0, 1600.0)
     """Destination, m."""
@@ -80,40 +83,64 @@ class NavConfig:
     speed_m_s: float = 10.0
     """Ground speed, m/s: a move takes step_m / speed_m_s seconds."""
 
+    def __post_init__(self) -> None:
+        # A point read from a file or a flag comes as a list: held as a tuple of floats, so that
+        # tasks compare equal whatever they were read from (a bad value is left for the checks).
+        for name in ("goal_m", "start_m"):
+            v = getattr(self, name)
+            if isinstance(v, list | tuple | np.ndarray) and all(
+                isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool)
+                for x in v
+            ):
+                setattr(self, name, tuple(float(x) for x in v))
+
     @property
     def move_s(self) -> float:
         """Duration of one move, s."""
         return self.step_m / self.speed_m_s
 
 
-def check_config(cfg: NavConfig, extent: tuple[float, float, float, float]) -> None:
-    """Raises InvalidInputError naming the first field of ``cfg`` out of range for a map over
-    ``extent``."""
-    x0, x1, y0, y1 = extent
-    g = np.asarray(cfg.goal_m, dtype=float)
-    if g.shape != (2,) or not np.all(np.isfinite(g)):
-        raise InvalidInputError(f"goal_m must be two finite numbers (got {cfg.goal_m!r})")
-    if not (x0 <= g[0] <= x1 and y0 <= g[1] <= y1):
-        raise InvalidInputError(f"goal_m must lie inside the area {extent} (got {cfg.goal_m!r})")
+def check_task(cfg: NavConfig, prefix: str = "") -> None:
+    """Raises InvalidInputError naming (after ``prefix``) the first field of ``cfg`` of the
+    wrong kind or out of its range, whatever the map (the area's bounds:
+    [`check_config()`][rainuav.nav.task.check_config])."""
+    for name in ("goal_m", "start_m"):
+        v = getattr(cfg, name)
+        if name == "start_m" and v is None:
+            continue
+        if not (isinstance(v, tuple) and len(v) == 2 and all(math.isfinite(x) for x in v)):
+            raise InvalidInputError(f"{prefix}{name} must be two finite numbers, m (got {v!r})")
     for name in ("step_m", "tol_m", "speed_m_s"):
         v = getattr(cfg, name)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise InvalidInputError(f"{name} must be finite and > 0 (got {v!r})")
+            raise InvalidInputError(f"{prefix}{name} must be finite and > 0 (got {v!r})")
     if not (isinstance(cfg.max_steps, (int, np.integer)) and cfg.max_steps >= 1):
-        raise InvalidInputError(f"max_steps must be an integer >= 1 (got {cfg.max_steps!r})")
+        v = cfg.max_steps
+        raise InvalidInputError(f"{prefix}max_steps must be an integer >= 1 (got {v!r})")
     for name in ("mu", "min_db", "goal_reward", "out_of_bounds_penalty"):
         v = getattr(cfg, name)
         if name == "min_db" and v is None:
             continue
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)):
-            raise InvalidInputError(f"{name} must be a finite number (got {v!r})")
+            raise InvalidInputError(f"{prefix}{name} must be a finite number (got {v!r})")
     if cfg.reward not in REWARDS:
-        raise InvalidInputError(f"reward must be one of {REWARDS} (got {cfg.reward!r})")
+        raise InvalidInputError(f"{prefix}reward must be one of {REWARDS} (got {cfg.reward!r})")
     if cfg.signal not in SIGNALS:
-        raise InvalidInputError(f"signal must be one of {SIGNALS} (got {cfg.signal!r})")
+        raise InvalidInputError(f"{prefix}signal must be one of {SIGNALS} (got {cfg.signal!r})")
+
+
+def check_config(cfg: NavConfig, extent: tuple[float, float, float, float]) -> None:
+    """Raises InvalidInputError naming the first field of ``cfg`` out of range for a map over
+    ``extent`` ([`check_task()`][rainuav.nav.task.check_task], then the points inside the
+    area)."""
+    x0, x1, y0, y1 = extent
+    check_task(cfg)
+    g = cfg.goal_m
+    if not (x0 <= g[0] <= x1 and y0 <= g[1] <= y1):
+        raise InvalidInputError(f"goal_m must lie inside the area {extent} (got {cfg.goal_m!r})")
     if cfg.start_m is not None:
-        s = np.asarray(cfg.start_m, dtype=float)
-        if s.shape != (2,) or not (x0 <= s[0] <= x1 and y0 <= s[1] <= y1):
+        s = cfg.start_m
+        if not (x0 <= s[0] <= x1 and y0 <= s[1] <= y1):
             raise InvalidInputError(f"start_m must lie inside the area (got {cfg.start_m!r})")
 
 
@@ -136,10 +163,11 @@ def flight_cost(returns: Any, arrived: Any, cfg: NavConfig) -> Any:
     return -(np.asarray(returns, dtype=np.float64) - cfg.goal_reward * np.asarray(arrived))
 
 
-def make_config(**kw: Any) -> NavConfig:
-    """A NavConfig from keywords (unknown names are errors)."""
+def make_config(base: NavConfig | None = None, **kw: Any) -> NavConfig:
+    """A NavConfig from keywords, over ``base``'s fields where given (else the defaults);
+    unknown names are errors."""
     names = {f.name for f in dataclasses.fields(NavConfig)}
     bad = set(kw) - names
     if bad:
         raise InvalidInputError(f"unknown NavConfig field(s) {sorted(bad)}")
-    return NavConfig(**kw)
+    return dataclasses.replace(base if base is not None else NavConfig(), **kw)

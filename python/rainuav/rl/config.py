@@ -16,15 +16,19 @@ import numpy as np
 from rainuav._checks import check_field_kinds
 from rainuav._io import read_toml
 from rainuav.errors import InvalidInputError
+from rainuav.nav.task import NavConfig
 from rainuav.world import WorldSpec, check_spec
 
 __all__ = [
     "PRESET_DIR",
+    "RENAMED",
+    "SECTIONS",
     "DQNConfig",
     "TrainConfig",
     "check_config",
     "config_diff",
     "flat",
+    "flat_fields",
     "load_config",
     "preset_fields",
     "preset_learner",
@@ -219,10 +223,6 @@ def check_config(cfg: TrainConfig) -> None:
             cfg.preset in ("", *preset_names()) or Path(cfg.preset).is_file(),
             f"'', one of {preset_names()} or a TOML file",
         ),
-        ("step_m", 0 < cfg.step_m < math.inf, "> 0 and finite"),
-        ("tol_m", 0 < cfg.tol_m < math.inf, "> 0 and finite"),
-        ("goal_reward", math.isfinite(cfg.goal_reward), "finite"),
-        ("out_of_bounds_penalty", math.isfinite(cfg.out_of_bounds_penalty), "finite"),
         ("seed", 0 <= cfg.seed <= MAX_SEED, f"in 0..{MAX_SEED} (2^63 - 1)"),
         ("eval_seed", 0 <= cfg.eval_seed <= MAX_SEED, f"in 0..{MAX_SEED} (2^63 - 1)"),
         ("eval_starts", 1 <= cfg.eval_starts <= MAX_STARTS, f"in 1..{MAX_STARTS}"),
@@ -233,7 +233,7 @@ def check_config(cfg: TrainConfig) -> None:
         ("device", cfg.device in ("auto", "cpu", "cuda"), "'auto', 'cpu' or 'cuda'"),
         ("replan_every", cfg.replan_every >= 1, ">= 1"),
         ("storm_episodes", cfg.storm_episodes >= 1, ">= 1"),
-        ("shield", not (d.shield and cfg.altitudes), "false with altitudes (the plane's)"),
+        ("shield", not (d.shield and cfg.altitudes_m), "false with altitudes_m (the plane's)"),
     ]
     for name, ok, allowed in checks:
         if not ok:
@@ -249,6 +249,64 @@ PRESET_DIR = Path(__file__).with_name("preset_files")
 def preset_names() -> list[str]:
     """The presets shipped with the package (``paper``, ``storms``, ``storm-levels``)."""
     return sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
+
+
+SECTIONS: dict[str, type] = {"task": NavConfig, "dqn": DQNConfig}
+"""The tables of a run's fields (``[task]``, ``[dqn]`` in its file; ``task.NAME``, ``dqn.NAME``
+flat and on the command line)."""
+RENAMED = {"rain_rate": "rain_rate_mm_h", "altitudes": "altitudes_m"}
+"""Fields read under their earlier names (run files and checkpoints written before the rename,
+and the flags' short forms)."""
+
+
+def _names(cls: type) -> set[str]:
+    return {f.name for f in dataclasses.fields(cls)}
+
+
+def flat_fields(data: dict[str, Any], where: str) -> dict[str, Any]:
+    """The fields of a run's TOML table (``[task]`` and ``[dqn]`` sub-tables, or names already
+    flat) as flat names (``scenario``, ``task.max_steps``, ``dqn.lr``). Earlier forms are read
+    too: the [`RENAMED`][rainuav.rl.config.RENAMED] fields, a task field at the top
+    (``max_steps``) and the destination as ``goal_x_m`` / ``goal_y_m``. Unknown names, and a
+    field given twice, raise InvalidInputError naming ``where``."""
+    out: dict[str, Any] = {}
+
+    def put(key: str, value: Any) -> None:
+        if key in out:
+            raise InvalidInputError(f"{where}: {key} is given twice (under two names)")
+        out[key] = value
+
+    goal: dict[int, Any] = {}
+    task_names = _names(NavConfig)
+    for key, value in data.items():
+        if key in SECTIONS:
+            if not isinstance(value, dict):
+                raise InvalidInputError(f"{where}: [{key}] must be a table")
+            for k, v in value.items():
+                put(f"{key}.{k}", v)
+        elif key in ("goal_x_m", "goal_y_m"):
+            goal[key == "goal_y_m"] = value
+        elif key in task_names:
+            put(f"task.{key}", value)
+        else:
+            put(RENAMED.get(key, key), value)
+    if goal:
+        default = NavConfig().goal_m
+        put("task.goal_m", (goal.get(0, default[0]), goal.get(1, default[1])))
+    unknown = []
+    for key in out:
+        section, _, name = key.rpartition(".")
+        known = (
+            _names(SECTIONS[section])
+            if section in SECTIONS
+            else _names(TrainConfig) - set(SECTIONS)
+        )
+        if name not in known or (section and section not in SECTIONS):
+            unknown.append(key)
+    if unknown:
+        unknown.sort(key=lambda k: ("." in k, k))  # the run's own first, then the tables'
+        raise InvalidInputError(f"{where}: unknown field(s) {unknown}")
+    return out
 
 
 def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict[str, Any]:
@@ -267,8 +325,7 @@ def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict
     if base is not None and (not isinstance(base, str) or base in (*_seen, text)):
         raise InvalidInputError(f"preset {path}: extends must name another preset (got {base!r})")
     fields = {} if base is None else preset_fields(base, (*_seen, text))
-    top, dqn = _split(data, f"preset {path}")
-    return {**fields, **top, **{f"dqn.{k}": v for k, v in dqn.items()}}
+    return {**fields, **flat_fields(data, f"preset {path}")}
 
 
 def preset_learner(name_or_path: str | Path) -> dict[str, Any]:
@@ -277,82 +334,74 @@ def preset_learner(name_or_path: str | Path) -> dict[str, Any]:
 
 
 def resolve_config(fields: dict[str, Any]) -> TrainConfig:
-    """The run's configuration from flat ``fields`` (TrainConfig names, ``dqn.<name>`` for the
-    learner's): the defaults, then the preset that ``fields["preset"]`` names
-    ([`preset_fields()`][rainuav.rl.config.preset_fields]), then ``fields`` themselves. The one
-    place where a preset and overrides meet (the ``train`` command, studies, a run's
-    ``config.toml`` read back); the result records the preset's name."""
-    given = dict(fields)
+    """The run's configuration from flat ``fields`` (TrainConfig names, ``task.<name>`` and
+    ``dqn.<name>`` for the task's and the learner's; the earlier forms that
+    [`flat_fields()`][rainuav.rl.config.flat_fields] reads too): the defaults, then the preset
+    that ``fields["preset"]`` names ([`preset_fields()`][rainuav.rl.config.preset_fields]),
+    then ``fields`` themselves. The one place where a preset and overrides meet (the ``train``
+    command, studies, a run's ``config.toml`` read back); the result records the preset's
+    name."""
+    given = flat_fields(fields, "configuration")
     preset = given.get("preset") or ""
     merged = {**(preset_fields(preset) if preset else {}), **given}
-    top = {k: v for k, v in merged.items() if not k.startswith("dqn.")}
-    dqn = {k[4:]: v for k, v in merged.items() if k.startswith("dqn.")}
-    _split({**top, "dqn": dqn}, "configuration")
+    tables: dict[str, dict[str, Any]] = {name: {} for name in SECTIONS}
+    top = {}
+    for key, value in merged.items():
+        section, _, name = key.rpartition(".")
+        if section:
+            tables[section][name] = value
+        else:
+            top[key] = value
     try:
-        return TrainConfig(**top, dqn=DQNConfig(**dqn))
+        made = {name: cls(**tables[name]) for name, cls in SECTIONS.items()}
+        return TrainConfig(**top, **made)
     except TypeError as err:
         raise InvalidInputError(f"configuration: {err}") from err
 
 
 def flat(cfg: TrainConfig) -> dict[str, Any]:
-    """The fields of ``cfg`` flat (``dqn.<name>`` for the learner's), as
-    [`resolve_config()`][rainuav.rl.config.resolve_config] takes them."""
-    d = to_dict(cfg)
-    dqn = d.pop("dqn")
-    return {**d, **{f"dqn.{k}": v for k, v in dqn.items()}}
-
-
-def _split(data: dict[str, Any], where: str) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The TrainConfig fields and the [dqn] fields of a TOML table; unknown names raise
-    InvalidInputError naming ``where``."""
-    data = dict(data)
-    dqn = data.pop("dqn", {})
-    if not isinstance(dqn, dict):
-        raise InvalidInputError(f"{where}: [dqn] must be a table")
-    unknown = sorted(set(data) - {f.name for f in dataclasses.fields(TrainConfig)}) + sorted(
-        f"dqn.{k}" for k in set(dqn) - {f.name for f in dataclasses.fields(DQNConfig)}
-    )
-    if unknown:
-        raise InvalidInputError(f"{where}: unknown field(s) {unknown}")
-    return data, dict(dqn)
+    """The fields of ``cfg`` flat (``task.<name>``, ``dqn.<name>``), as
+    [`resolve_config()`][rainuav.rl.config.resolve_config] takes them (unset fields left
+    out)."""
+    return flat_fields(to_dict(cfg), "configuration")
 
 
 def to_dict(cfg: TrainConfig) -> dict[str, Any]:
-    """A plain dict of the run (TOML-ready: unset fields are left out)."""
-    return {k: v for k, v in dataclasses.asdict(cfg).items() if v is not None}
+    """A plain dict of the run, its ``task`` and ``dqn`` as tables (TOML-ready: unset fields are
+    left out)."""
+
+    def kept(d: dict[str, Any]) -> dict[str, Any]:
+        return {k: kept(v) if isinstance(v, dict) else v for k, v in d.items() if v is not None}
+
+    return kept(dataclasses.asdict(cfg))
 
 
-def read_config(path: str | Path) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The TrainConfig fields and the [dqn] fields of a TOML file; a missing or malformed file
-    and unknown names raise InvalidInputError naming the file."""
-    return _split(read_toml(path, "config file"), f"config file {path}")
+def read_config(path: str | Path) -> dict[str, Any]:
+    """The fields of a TOML file, flat ([`flat_fields()`][rainuav.rl.config.flat_fields]); a
+    missing or malformed file and unknown names raise InvalidInputError naming the file."""
+    return flat_fields(read_toml(path, "config file"), f"config file {path}")
 
 
 def load_config(path: str | Path) -> TrainConfig:
     """A TrainConfig from a TOML file (a run's ``config.toml``): its fields over its preset's."""
-    top, dqn = read_config(path)
-    return resolve_config({**top, **{f"dqn.{k}": v for k, v in dqn.items()}})
+    return resolve_config(read_config(path))
 
 
 def config_diff(saved: dict[str, Any], cfg: TrainConfig, ignore: tuple[str, ...] = ()) -> list[str]:
-    """The fields (``dqn.x`` for the learner's) where ``cfg`` differs from the ``saved`` dict
-    of a run, as ``"name: saved -> given"``; ``ignore`` names fields allowed to differ."""
-    given = to_dict(cfg)
-    out = []
-    for key in sorted(set(saved) | set(given)):
-        if key in ignore:
-            continue
-        a, b = saved.get(key), given.get(key)
-        if key == "dqn":
-            a, b = a or {}, b or {}
-            out += [
-                f"dqn.{k}: {a.get(k)!r} -> {b.get(k)!r}"
-                for k in sorted(set(a) | set(b))
-                if a.get(k) != b.get(k)
-            ]
-        elif a != b:
-            out.append(f"{key}: {a!r} -> {b!r}")
-    return out
+    """The fields (``task.x``, ``dqn.x`` for the task's and the learner's) where ``cfg`` differs
+    from the ``saved`` dict of a run (in any form [`flat_fields()`][rainuav.rl.config.flat_fields]
+    reads), as ``"name: saved -> given"``; ``ignore`` names fields allowed to differ."""
+
+    def same_form(d: dict[str, Any]) -> dict[str, Any]:  # a point read back is a list
+        return {k: tuple(v) if isinstance(v, list) else v for k, v in d.items()}
+
+    old = same_form(flat_fields(saved, "saved configuration"))
+    new = same_form(flat(cfg))
+    return [
+        f"{key}: {old.get(key)!r} -> {new.get(key)!r}"
+        for key in sorted(set(old) | set(new))
+        if key not in ignore and old.get(key) != new.get(key)
+    ]
 
 
 def random_streams(seed: int) -> dict[str, np.random.SeedSequence]:

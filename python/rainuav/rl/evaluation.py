@@ -296,9 +296,9 @@ def evaluate_saved_run(
     metrics["rain_rate_mm_h"] = scn.medium.rain_rate_mm_h
     metrics["trained_on"] = {
         "scenario": cfg.scenario,
-        "rain_rate": cfg.rain_rate,
+        "rain_rate_mm_h": cfg.rain_rate_mm_h,
         **({"storm_seed": cfg.storm_seed} if cfg.scenario == "storm" else {}),
-        **({"altitudes": cfg.altitudes} if cfg.altitudes else {}),
+        **({"altitudes_m": cfg.altitudes_m} if cfg.altitudes_m else {}),
     }
     metrics["network"] = "last online" if online else "reported"
     metrics["episodes"] = episodes

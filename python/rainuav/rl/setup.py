@@ -11,7 +11,6 @@ import numpy as np
 import torch
 
 from rainuav._checks import check_fits as check_fits_memory
-from rainuav._cli import altitude_band
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.levels import UAVLevelsEnv
@@ -19,6 +18,7 @@ from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.dqn import Agent, Encoder, memory_needed
 from rainuav.rl.networks import MoveGeometry, PositionEncoder, WeatherEncoder
+from rainuav.world import levels_of
 
 __all__ = ["check_fits", "make_agent", "make_encoder", "pick_device", "torch_settings"]
 
@@ -27,9 +27,9 @@ def check_fits(cfg: TrainConfig) -> None:
     """Refuses a run whose agent cannot fit in memory, naming the field and the GB
     ([`rainuav.rl.dqn.memory_needed()`][rainuav.rl.dqn.memory_needed]); called before any map is
     built."""
-    layers = len(altitude_band(cfg.altitudes)) if cfg.altitudes else 1
+    layers = len(levels_of(cfg)) if cfg.altitudes_m else 1
     view = WeatherView(layers=layers) if cfg.observation == "weather" else None
-    need = memory_needed(cfg.dqn, view, levels=bool(cfg.altitudes))
+    need = memory_needed(cfg.dqn, view, levels=bool(cfg.altitudes_m))
     biggest = max(need, key=lambda k: need[k])
     check_fits_memory(
         f"{biggest} = {getattr(cfg.dqn, biggest.split('.')[1])}",

@@ -82,7 +82,7 @@ def evaluate_worlds(
 ) -> tuple[dict[str, Any], Any]:
     """Flies the network run ``run_dir`` reports in each world (the run's spec with the
     changes of ``worlds[i]``, e.g. ``{"storm_seed": K}`` or ``{"scenario": "uma",
-    "rain_rate": 0.0}``) from ``starts`` fixed starts (seeded by ``seed``, default the run's
+    "rain_rate_mm_h": 0.0}``) from ``starts`` fixed starts (seeded by ``seed``, default the run's
     ``eval_seed``; the same in every world); ``online``: its last online network in place
     of the one it reports. Returns ``{"mean": ..., "worlds": [...]}`` (rows
     with their changes) and, for figures, the first world's (env, flights)."""
@@ -105,7 +105,7 @@ def evaluate_worlds(
         it = tqdm(worlds, desc="worlds", unit="world")
     for changes in it:
         if "scenario" in changes:  # another preset comes in its own weather unless given
-            changes = {"scenario_file": "", "rain_rate": None, **changes}
+            changes = {"scenario_file": "", "rain_rate_mm_h": None, **changes}
         world = build_world(dataclasses.replace(base, **changes), cache=not storms)
         env = world.env()
         if agent is None:

@@ -26,7 +26,7 @@ from rainuav.studies.spec import Case, Study
 __all__ = ["MAP_AXES", "TRANSFER_COLUMNS", "plot_learned", "read_result", "transfer"]
 
 MAP_AXES = (
-    "rain_rate", "freq_ghz", "wind_m_s", "wind_model", "scenario", "scenario_file", "engine",
+    "rain_rate_mm_h", "freq_ghz", "wind_m_s", "wind_model", "scenario", "scenario_file", "engine",
 )  # fmt: skip
 """Fields that change the map and not the task: an axis that sets only these can fly a policy
 on the other's map."""

@@ -8,12 +8,12 @@
     compute = ["map", "optimal", "learned"]
     eval_starts = 200
 
-    [base]                      # any rainuav.rl.config.TrainConfig field, "dqn.<field>",
-    scenario = "paper"          # or a scenario override: freq_ghz, wind_m_s, wind_model, engine
-    rain_rate = 25.0
+    [base]                      # any rainuav.rl.config.TrainConfig field, "task.<field>"
+    scenario = "paper"          # (or the task field's name alone), "dqn.<field>", or a
+    rain_rate_mm_h = 25.0       # scenario override: freq_ghz, wind_m_s, wind_model, engine
 
     [axes]                      # each axis: a list of values for one field,
-    rain_rate = [0.0, 25.0, 50.0, 100.0]
+    rain_rate_mm_h = [0.0, 25.0, 50.0, 100.0]
     mu = [0.1, 0.2326, 10.0]    # or, under a name of its own, of tables of fields set together
     paper_wind = [{wind_m_s = 2.0, wind_model = "paper"}, {wind_m_s = 5.0, wind_model = "paper"}]
 
@@ -40,14 +40,16 @@ from rainuav._io import read_toml
 from rainuav.errors import InvalidInputError
 from rainuav.radio import presets
 from rainuav.radio.scenario import Scenario
-from rainuav.rl.config import MAX_STARTS, DQNConfig, TrainConfig, check_config, resolve_config
+from rainuav.rl.config import MAX_STARTS, TrainConfig, check_config, flat_fields, resolve_config
 from rainuav.world import make_scenario
 
 __all__ = ["BUILT_IN", "COMPUTE", "SCENARIO_FIELDS", "Case", "Study", "load_study"]
 
 COMPUTE = ("map", "optimal", "learned", "altitudes")
 SCENARIO_FIELDS = ("freq_ghz", "wind_m_s", "wind_model", "engine", "altitudes_m")
-"""Fields of a case that change the scenario rather than the run."""
+"""Fields of a case that change the scenario rather than the run (``altitudes_m``: the levels
+its ``altitudes`` figures map and plan among, the case's own map staying at the scenario's
+altitude)."""
 BUILT_IN = ("paper", "mmwave", "storms", "altitude")
 MAX_CASES = 10_000
 """The most cases a study may have (axes x seeds): every case is at least a map and a plan."""
@@ -159,15 +161,17 @@ def case_scenario(fields: dict[str, Any], cfg: TrainConfig) -> Scenario:
 
 
 def _check_fields(where: str, fields: dict[str, Any]) -> None:
-    names = {f.name for f in dataclasses.fields(TrainConfig)} - {"dqn", "seed", "out"}
-    dqn_names = {f.name for f in dataclasses.fields(DQNConfig)}
     for k in fields:
-        ok = k in names or k in SCENARIO_FIELDS
-        ok = ok or (k.startswith("dqn.") and k.split(".", 1)[1] in dqn_names)
+        if k in SCENARIO_FIELDS:
+            continue
+        try:
+            ok = k not in ("seed", "out", "dqn", "task") and bool(flat_fields({k: 0}, where))
+        except InvalidInputError:
+            ok = False
         if not ok:
             raise InvalidInputError(
-                f"{where}: unknown field {k!r} (a TrainConfig field, 'dqn.<field>' or one of "
-                f"{list(SCENARIO_FIELDS)})"
+                f"{where}: unknown field {k!r} (a TrainConfig field, 'task.<field>', "
+                f"'dqn.<field>' or one of {list(SCENARIO_FIELDS)})"
             )
 
 

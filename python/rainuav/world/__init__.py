@@ -10,11 +10,12 @@ where a scenario, its weather and a task become something to fly; it sits above 
 ``nav`` and below ``rl``.
 
 A spec names the scenario (a preset, or a scenario file), its weather (the scenario's own,
-homogeneous rain at ``rain_rate``, or the random storm ``storm_seed`` of the ``storm`` preset), the
-propagation engine and the task's fields. A weather that moves is mapped at instants ``slice_s``
-apart over the task's horizon (``max_steps`` moves of ``step_m / speed_m_s`` seconds;
-[`rainuav.radio.timemap`][rainuav.radio.timemap]), and the UAV flies the series
-([`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries])."""
+homogeneous rain at ``rain_rate_mm_h``, or the random storm ``storm_seed`` of the ``storm``
+preset), the propagation engine, the flight levels and the task
+([`NavConfig`][rainuav.nav.task.NavConfig], its ``task``). A weather that moves is mapped at
+instants ``slice_s`` apart over the task's horizon (``max_steps`` moves of ``step_m /
+speed_m_s`` seconds; [`rainuav.radio.timemap`][rainuav.radio.timemap]), and the UAV flies the
+series ([`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries])"""
 
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalBank, SignalField, SignalSeries
 from rainuav.nav.levels import LevelField, UAVLevelsEnv
-from rainuav.nav.task import NavConfig
+from rainuav.nav.task import NavConfig, check_task
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio import presets
 from rainuav.radio.engines import ENGINES as RADIO_ENGINES
@@ -55,6 +56,7 @@ __all__ = [
     "check_spec",
     "in_world",
     "level_field",
+    "levels_of",
     "load_world",
     "make_scenario",
     "saved_world",
@@ -84,7 +86,7 @@ class WorldSpec:
     --scenario-file."""
     scenario_file: str = ""
     """A scenario TOML file (overrides --scenario)."""
-    rain_rate: float | None = None
+    rain_rate_mm_h: float | None = None
     """Homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the rain
     model, drop sizes, shape, temperature and wind stay the scenario's; for 'storm', the
     storm's background rate); unset: the scenario's own weather (the paper preset rains
@@ -101,31 +103,6 @@ class WorldSpec:
     scaled alike; 0: cells stay put and only grow or decay); unset: as drawn."""
     slice_s: float = 5.0
     """Time between the maps of a weather that moves, s (the signal is linear in between)."""
-    signal: str = "sinr"
-    """The map the task flies on: 'sinr' or 'sir' (the paper's)."""
-    min_db: float | None = None
-    """Outage threshold of the signal, dB; unset: the preset's documented SINR threshold
-    (10 dB for SIR and for scenario files of no preset)."""
-    mu: float = 10.0 / 43.0
-    """Weight of the signal term in the reward."""
-    reward: str = "shortfall"
-    """Reward form: 'shortfall', 'outage' or 'linear'."""
-    max_steps: int = 300
-    """Steps per episode, the horizon (Table I)."""
-    step_m: float = 10.0
-    """Length of one move, m."""
-    tol_m: float = 10.0
-    """Arrival tolerance D_tol, m (Table I)."""
-    goal_reward: float = 2000.0
-    """Arrival reward R_des (Table I)."""
-    out_of_bounds_penalty: float = 10000.0
-    """Penalty P_ob for leaving the area (Table I)."""
-    goal_x_m: float = 1400.0
-    """Destination, east coordinate, m."""
-    goal_y_m: float = 1600.0
-    """Destination, north coordinate, m."""
-    speed_m_s: float = 10.0
-    """Ground speed, m/s: a move takes step_m / speed_m_s seconds."""
     observation: str = "position"
     """What the UAV observes: 'position' (and the time where the weather moves) or 'weather'
     (the SINR around it and over the area, its position, time and destination:
@@ -140,11 +117,25 @@ class WorldSpec:
     calm_share: float = 0.0
     """Of a storm pool's storms, the share flown calm: the storm's uniform background rain
     alone, its cells left out (rainuav.world.pool.is_calm says which seeds)."""
-    altitudes: str = ""
-    """Flight levels LOW:HIGH:STEP, m (e.g. 25:115:15): altitude as a decision, six moves
-    (rainuav.nav.levels: climb and descend one level, each lasting its duration), flights
-    starting at the lowest level (the weather observation then shows every level); '' the
-    scenario's one altitude."""
+    altitudes_m: tuple[float, ...] | str = ""
+    """Flight levels, m: LOW:HIGH:STEP (e.g. 25:115:15) or a list of heights; altitude as a
+    decision, six moves (rainuav.nav.levels: climb and descend one level, each lasting its
+    duration), flights starting at the lowest level (the weather observation then shows every
+    level); '' the scenario's one altitude."""
+    task: NavConfig = dataclasses.field(default_factory=NavConfig)
+    """The navigation task (rainuav.nav.task.NavConfig: destination, moves, reward, outage
+    threshold, horizon), the [task] table of a run's file and the flags --task.NAME."""
+
+    def __post_init__(self) -> None:
+        if isinstance(self.altitudes_m, list):  # as read from a file: a tuple, so specs compare
+            self.altitudes_m = tuple(self.altitudes_m)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        # A field of the task, or a misspelt one, set here would be silently ignored.
+        if name not in self.__dataclass_fields__:
+            hint = f": the task's, .task.{name}" if name in NavConfig.__dataclass_fields__ else ""
+            raise AttributeError(f"{type(self).__name__} has no field {name!r}{hint}")
+        super().__setattr__(name, value)
 
 
 def spec_of(obj: Any) -> WorldSpec:
@@ -153,28 +144,40 @@ def spec_of(obj: Any) -> WorldSpec:
 
 
 def task_of(spec: WorldSpec) -> NavConfig:
-    """The navigation task a spec names: every NavConfig field of the same name, and the
-    destination from ``goal_x_m`` and ``goal_y_m``."""
-    names = {f.name for f in dataclasses.fields(NavConfig)} & {
-        f.name for f in dataclasses.fields(WorldSpec)
-    }
-    fields = {name: getattr(spec, name) for name in names}
-    return NavConfig(goal_m=(spec.goal_x_m, spec.goal_y_m), **fields)
+    """The navigation task a spec names (its ``task``)."""
+    return spec.task
+
+
+def levels_of(spec: Any) -> list[float]:
+    """The flight levels a spec names, m (``altitudes_m``: a LOW:HIGH:STEP band or a list of
+    heights; [] for none), else one line naming the field."""
+    v = spec.altitudes_m
+    if isinstance(v, str):
+        return altitude_band(v, "altitudes_m") if v else []
+    if (
+        isinstance(v, list | tuple)
+        and v
+        and all(
+            isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) for x in v
+        )
+    ):
+        return [float(x) for x in v]
+    raise InvalidInputError(
+        f"altitudes_m must be LOW:HIGH:STEP or a non-empty list of heights, m (got {v!r})"
+    )
 
 
 def check_spec(spec: Any) -> None:
     """Raises InvalidInputError naming the first field of the spec of the wrong kind or
-    outside its range."""
+    outside its range (the task's as ``task.NAME``)."""
     check_field_kinds(spec, only=WorldSpec)  # the kinds first: a caller can hand in anything
+    if not isinstance(spec.task, NavConfig):
+        raise InvalidInputError(f"task must be a NavConfig (got {type(spec.task).__name__})")
+    check_field_kinds(spec.task, "task.")
+    check_task(spec.task, "task.")
     checks = [
         ("engine", spec.engine in ENGINES, "'', 'hybrid', 'ray' or 'pe'"),
         ("freq_ghz", spec.freq_ghz is None or 1 <= spec.freq_ghz <= 100, "unset or in [1, 100]"),
-        ("signal", spec.signal in ("sinr", "sir"), "'sinr' or 'sir'"),
-        ("min_db", spec.min_db is None or math.isfinite(spec.min_db), "unset or finite"),
-        ("max_steps", spec.max_steps >= 1, ">= 1"),
-        ("step_m", 0 < spec.step_m < math.inf, "> 0 and finite"),
-        ("tol_m", 0 < spec.tol_m < math.inf, "> 0 and finite"),
-        ("speed_m_s", 0 < spec.speed_m_s < math.inf, "> 0 and finite"),
         ("storm_speed_m_s", spec.storm_speed_m_s is None or 0 <= spec.storm_speed_m_s <= 100,
          "unset or in [0, 100] m/s"),
         ("slice_s", 0.001 <= spec.slice_s <= 1e6, "in [0.001, 1e6] s"),
@@ -186,23 +189,21 @@ def check_spec(spec: Any) -> None:
          and not spec.scenario_file and spec.observation == "weather"),
          "0 unless scenario = 'storm' and observation = 'weather'"),
         ("calm_share", 0 <= spec.calm_share <= 1, "in [0, 1] (read by a storm pool alone)"),
-        ("goal_reward", math.isfinite(spec.goal_reward), "finite"),
-        ("out_of_bounds_penalty", math.isfinite(spec.out_of_bounds_penalty), "finite"),
-        ("rain_rate", spec.rain_rate is None or 0 <= spec.rain_rate <= 500,
+        ("rain_rate_mm_h", spec.rain_rate_mm_h is None or 0 <= spec.rain_rate_mm_h <= 500,
          "unset or in [0, 500] mm/h"),
-        ("altitudes", not spec.altitudes or spec.signal == "sinr", "'' unless signal = 'sinr'"),
+        ("altitudes_m", not spec.altitudes_m or spec.task.signal == "sinr",
+         "'' unless task.signal = 'sinr'"),
     ]  # fmt: skip
     for name, ok, allowed in checks:
         if not ok:
             raise InvalidInputError(f"{name} must be {allowed} (got {getattr(spec, name)!r})")
     check_storm_seed(spec.storm_seed)
-    if spec.altitudes:
-        altitude_band(spec.altitudes)
+    levels_of(spec)
 
 
 def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
     """The scenario of a spec: the preset (the storm of ``storm_seed`` for 'storm') or the
-    file, or ``scenario`` where given, with ``rain_rate``, ``freq_ghz`` and ``engine`` applied
+    file, or ``scenario`` where given, with ``rain_rate_mm_h``, ``freq_ghz`` and ``engine`` applied
     if set."""
     if scenario is not None:
         scn = scenario
@@ -210,7 +211,9 @@ def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
         scn = Scenario.from_toml(spec.scenario_file)
     elif spec.scenario == "storm":
         scn = presets.storm(
-            spec.rain_rate, seed=check_storm_seed(spec.storm_seed), speed_m_s=spec.storm_speed_m_s
+            spec.rain_rate_mm_h,
+            seed=check_storm_seed(spec.storm_seed),
+            speed_m_s=spec.storm_speed_m_s,
         )
     elif spec.scenario in presets.PRESETS:
         scn = presets.PRESETS[spec.scenario]()
@@ -218,14 +221,15 @@ def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
         raise InvalidInputError(
             f"scenario must be one of {sorted(presets.PRESETS)} (got {spec.scenario!r})"
         )
-    if spec.rain_rate is not None and (scenario is not None or spec.scenario != "storm"):
-        scn = presets.with_rain(scn, spec.rain_rate)
+    if spec.rain_rate_mm_h is not None and (scenario is not None or spec.scenario != "storm"):
+        scn = presets.with_rain(scn, spec.rain_rate_mm_h)
     if spec.freq_ghz is not None:
         scn = dataclasses.replace(scn, freq_hz=spec.freq_ghz * 1e9)
     if spec.engine:
         scn = dataclasses.replace(scn, engine=spec.engine)
-    if spec.altitudes:
-        area = dataclasses.replace(scn.area, altitudes_m=altitude_band(spec.altitudes))
+    if spec.altitudes_m:
+        area = dataclasses.replace(scn.area, altitudes_m=levels_of(spec))
+        area.check("altitudes_m")
         scn = scn.replace(area=area)
     return scn
 
@@ -318,7 +322,8 @@ def world_from(source: Any, task: NavConfig) -> World:
 def series_instants(spec: Any) -> Any:
     """The instants a moving weather is mapped at: every ``slice_s`` from 0 over the task's
     horizon (rounded up to a whole slice)."""
-    horizon = spec.max_steps * spec.step_m / spec.speed_m_s
+    task = spec.task
+    horizon = task.max_steps * task.step_m / task.speed_m_s
     return series_times(math.ceil(horizon / spec.slice_s - 1e-9) * spec.slice_s, spec.slice_s)
 
 
@@ -381,7 +386,7 @@ def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: boo
     """The signal's source for the scenario ``scn`` of ``spec``: its map, or where its weather moves
     its maps at [`series_instants()`][rainuav.world.series_instants] (engine 'pe' then becomes
     'hybrid': a march per cell and instant is refused); built, or taken from the cache."""
-    if spec.altitudes:  # every level's maps (in time where the weather moves)
+    if spec.altitudes_m:  # every level's maps (in time where the weather moves)
         times = series_instants(spec) if scn.medium.moves else None
         return LevelStack.of(level_field(scn, times, progress=progress, cache=cache)[1], scn)
     if scn.medium.moves:

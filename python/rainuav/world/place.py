@@ -63,14 +63,14 @@ def place_scenario(
     *,
     altitude_m: float = 100.0,
     freq_ghz: float = 28.0,
-    rain_rate: float = 0.0,
+    rain_rate_mm_h: float = 0.0,
     weather: str | Path | None = None,
     resolution_m: float = 10.0,
     box: tuple[float, float, float, float] | None = None,
     terrain: str | Path | None = None,
     altitude_reference: str | None = None,
     footprints: str | Path | None = None,
-    altitudes: list[float] | None = None,
+    altitudes_m: list[float] | None = None,
     engine: str | None = None,
     default_height_m: float | None = None,
     ground: str | None = None,
@@ -85,7 +85,7 @@ def place_scenario(
     GeoTIFF under the place ([`rainuav.ground.dem`][rainuav.ground.dem]), with the flight altitude
     above the terrain (``altitude_reference="ground"``, the default) or above sea level (``"msl"``).
     ``footprints``: building footprints in GeoJSON
-    ([`rainuav.ground.footprints`][rainuav.ground.footprints]) standing on it. ``altitudes``: the
+    ([`rainuav.ground.footprints`][rainuav.ground.footprints]) standing on it. ``altitudes_m``: the
     flight levels a flight chooses among (``area.altitudes_m``). ``engine``: the maps' engine
     (default the preset's, hybrid). ``default_height_m``: the roof of a footprint with neither a
     height nor storeys (``[footprints] default_height_m``, default 10 m). ``ground``: the ground's
@@ -146,9 +146,9 @@ def place_scenario(
         x_min_m=edge(min(xs) - margin, False), x_max_m=edge(max(xs) + margin, True),
         y_min_m=edge(min(ys) - margin, False), y_max_m=edge(max(ys) + margin, True),
         altitude_m=altitude_m, resolution_m=resolution_m, altitude_reference=altitude_reference,
-        altitudes_m=None if altitudes is None else [float(v) for v in altitudes],
+        altitudes_m=None if altitudes_m is None else [float(v) for v in altitudes_m],
     )  # fmt: skip
-    base = presets.uma(rain_rate, freq_ghz * 1e9)
+    base = presets.uma(rain_rate_mm_h, freq_ghz * 1e9)
     if weather is not None:
         medium = read_radar_grid(weather, area, geo, base=base.medium)
         base = dataclasses.replace(base, medium=medium)

@@ -78,7 +78,7 @@ class StormPool:
     training waited for; ``flown``: the seeds of the storms put in a slot, in order (not the one
     being mapped next).
 
-    Among flight levels (``spec.altitudes``) a storm is the maps of every level in time
+    Among flight levels (``spec.altitudes_m``) a storm is the maps of every level in time
     ([`rainuav.radio.levelmaps.LevelStack`][rainuav.radio.levelmaps.LevelStack]) and the bank a
     [`rainuav.nav.levelfield.LevelField.bank()`][rainuav.nav.levelfield.LevelField.bank]; the pool's
     memory (the slots, the storm being mapped and the one being put) is checked once the first storm
@@ -123,7 +123,7 @@ class StormPool:
         scn = make_scenario(spec)
         if is_calm(storm_seed, self.spec.calm_share):
             scn = calm(scn)
-        if spec.altitudes:  # in time even where calm: every slot holds one instants' series
+        if spec.altitudes_m:  # in time even where calm: every slot holds one instants' series
             source = LevelStack.of(level_field(scn, series_instants(spec), cache=False)[1], scn)
         else:
             source = build_radio_map_series(scn, series_instants(spec), cache=False)
