@@ -2,12 +2,16 @@
 //! in as read-only views, owned arrays out without copying, core errors onto the
 //! `rainuav.RainuavError` hierarchy, and long work without the GIL. Broadcasting, defaults
 //! and docs live in `python/rainuav`. One file per layer of the core (`medium`, `pwe`,
-//! `planner`, `rays`); this file holds what they share and registers them.
+//! `planner`, `rays`, `walls`, `raytime`, `diffraction`); this file holds what they share and
+//! registers them.
 
+mod diffraction;
 mod medium;
 mod planner;
 mod pwe;
 mod rays;
+mod raytime;
+mod walls;
 
 use ndarray::ArrayView1;
 use pyo3::prelude::*;
@@ -83,6 +87,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     pwe::register(m)?;
     planner::register(m)?;
     rays::register(m)?;
+    walls::register(m)?;
+    raytime::register(m)?;
+    diffraction::register(m)?;
     m.add_function(wrap_pyfunction!(check_memory, m)?)?;
     m.add_function(wrap_pyfunction!(available_memory_bytes, m)?)?;
     Ok(())

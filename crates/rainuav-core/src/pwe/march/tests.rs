@@ -1,5 +1,6 @@
 //! Unit tests of [`super`].
 
+use super::rows::forward_row;
 use super::*;
 
 /// The sine transform against its definition, summed in f64 (an independent brute-force
