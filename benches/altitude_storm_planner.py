@@ -30,7 +30,7 @@ def main() -> None:
     args = ap.parse_args()
     from rainuav.nav import planner
     from rainuav.nav.field import SignalSeries
-    from rainuav.radio.levelmaps import build_radio_level_series
+    from rainuav.radio.outputs.levelmaps import build_radio_level_series
     from rainuav.rl.evaluation import eval_starts
     from rainuav.world import WorldSpec, build_world, make_scenario, series_instants
 

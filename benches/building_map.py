@@ -52,12 +52,12 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
     from rainuav.geo import Georef
-    from rainuav.radio import buildings as bld
-    from rainuav.radio.maps import build_radio_map
-    from rainuav.radio.presets import uma
-    from rainuav.radio.scenario import Area, FootprintsFile, Origin, TerrainFile
-    from rainuav.radio.terrain import not_flyable
-    from rainuav.radio.wall_rays import trace_walls
+    from rainuav.radio.engines.wall_rays import trace_walls
+    from rainuav.radio.outputs.maps import build_radio_map
+    from rainuav.radio.scene import buildings as bld
+    from rainuav.radio.scene.presets import uma
+    from rainuav.radio.scene.scenario import Area, FootprintsFile, Origin, TerrainFile
+    from rainuav.radio.scene.terrain import not_flyable
 
     print(f"machine: {platform.processor() or platform.machine()}")
     tmp = Path(tempfile.mkdtemp())
@@ -110,7 +110,7 @@ def main() -> None:
           f"footprints ({b.walls.shape[0]} walls, {n_rays} wall rays): {t_city:.2f} s "
           f"({t_city / t_dem:.1f}x), of which tracing the walls' rays {t_walls:.2f} s")  # fmt: skip
     # 3. 21 cells among the 10 000 footprints, 200 x 200.
-    from rainuav.radio.scenario import Site
+    from rainuav.radio.scene.scenario import Site
 
     prisms = bld.scenario_buildings(scn_big).prisms
     sites = []

@@ -18,8 +18,8 @@ import time
 
 import numpy as np
 from rainuav.radio import Area, build_radio_map, presets
-from rainuav.radio.scenario import PESettings
-from rainuav.radio.weather import Medium, RainCell
+from rainuav.radio.scene.scenario import PESettings
+from rainuav.radio.scene.weather import Medium, RainCell
 
 CELLS = [RainCell(700.0, 900.0, 500.0, 150.0, vx_m_s=12.0),
          RainCell(1300.0, 1300.0, 400.0, 120.0, vy_m_s=-10.0)]  # fmt: skip

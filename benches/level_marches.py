@@ -27,10 +27,10 @@ def main() -> None:
     ap.add_argument("--resolution-m", type=float, default=10.0)
     ap.add_argument("--freq-ghz", type=float, default=28.0)
     args = ap.parse_args()
-    from rainuav.radio import presets
-    from rainuav.radio.levelmaps import build_radio_levels, level_scenario
-    from rainuav.radio.maps import build_radio_map
-    from rainuav.radio.scenario import Area
+    from rainuav.radio.outputs.levelmaps import build_radio_levels, level_scenario
+    from rainuav.radio.outputs.maps import build_radio_map
+    from rainuav.radio.scene import presets
+    from rainuav.radio.scene.scenario import Area
 
     lo, hi, step = (float(v) for v in args.levels.split(":"))
     levels = [float(v) for v in np.arange(lo, hi + step / 2, step)]
@@ -51,8 +51,8 @@ def main() -> None:
     print(f"(b) {len(levels)} levels from one march a cell: {t_one:.1f} s "
           f"({t_one / t_top:.2f}x one map)")  # fmt: skip
     print(f"(c) {len(levels)} levels marched apart: {t_apart:.1f} s ({t_apart / t_one:.2f}x (b))")
-    from rainuav.radio.grid import march_grid
-    from rainuav.radio.pe_engine import march_cell, march_cell_levels
+    from rainuav.radio.engines.grid import march_grid
+    from rainuav.radio.engines.pe_engine import march_cell, march_cell_levels
 
     top = level_scenario(scn, levels[-1])
     m = next(i for i, g in enumerate(shared.maps[0].pe_cone_deg) if g[0] > 0)

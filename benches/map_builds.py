@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 from rainuav.radio import build_radio_map, presets
-from rainuav.radio.scenario import Scenario
+from rainuav.radio.scene.scenario import Scenario
 
 ROWS = (
     ("paper", 4.9e9, 0.0),

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 from rainuav.radio import build_radio_map, presets
-from rainuav.radio.timemap import build_radio_map_series
+from rainuav.radio.outputs.timemap import build_radio_map_series
 
 
 def main() -> None:
@@ -37,7 +37,7 @@ def main() -> None:
     here = Path(__file__).resolve().parent
     sys.path.insert(0, str(here))
     sys.path.insert(0, str(here.parent / "examples"))
-    from rainuav.radio.scenario import FootprintsFile, Origin, TerrainFile
+    from rainuav.radio.scene.scenario import FootprintsFile, Origin, TerrainFile
     from terrain_map import ORIGIN
 
     if args.terrain:

@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 from rainuav.geo import Georef
-from rainuav.radio.maps import build_radio_map
-from rainuav.radio.presets import uma
-from rainuav.radio.scenario import Origin, TerrainFile
+from rainuav.radio.outputs.maps import build_radio_map
+from rainuav.radio.scene.presets import uma
+from rainuav.radio.scene.scenario import Origin, TerrainFile
 
 ORIGIN = (47.30, 8.50)
 

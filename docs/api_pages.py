@@ -16,6 +16,10 @@ GROUPS = {
     "": "The package",
     "ground": "The ground",
     "radio": "Radio maps",
+    "radio.scene": "Radio maps, the scene",
+    "radio.engines": "Radio maps, the engines",
+    "radio.outputs": "Radio maps, the outputs",
+    "radio.reference": "Radio maps, the reference tracer",
     "nav": "Navigation",
     "world": "Worlds",
     "rl": "Learning",
@@ -43,6 +47,8 @@ def public_modules() -> list[str]:
 
 def group(name: str) -> str:
     parts = name.split(".")
+    if len(parts) > 2 and f"{parts[1]}.{parts[2]}" in GROUPS:  # rainuav.radio's parts
+        return f"{parts[1]}.{parts[2]}"
     return parts[1] if len(parts) > 2 or (len(parts) == 2 and parts[1] in GROUPS) else ""
 
 

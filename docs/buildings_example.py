@@ -37,9 +37,9 @@ def main() -> None:
     from matplotlib.patches import Patch
     from rainuav.nav import planner
     from rainuav.nav.task import NavConfig
-    from rainuav.radio import presets
-    from rainuav.radio.maps import build_radio_map
-    from rainuav.radio.ray_engine import ray_terms
+    from rainuav.radio.engines.ray_engine import ray_terms
+    from rainuav.radio.outputs.maps import build_radio_map
+    from rainuav.radio.scene import presets
     from rainuav.world import world_from
     from rainuav.world.place import place_scenario
 
@@ -105,7 +105,7 @@ def main() -> None:
                       vmax=20)  # fmt: skip
     fig.colorbar(im, ax=right, label="SINR among the buildings, dB")
     blocked = np.ma.masked_where(~rm.not_flyable, np.ones(rm.not_flyable.shape))
-    from rainuav.radio.buildings import scenario_buildings
+    from rainuav.radio.scene.buildings import scenario_buildings
 
     outlines = scenario_buildings(scn)
     for ax in (left, right):

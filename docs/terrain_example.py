@@ -35,9 +35,9 @@ def main() -> None:
     from matplotlib.figure import Figure
     from rainuav.nav import planner
     from rainuav.nav.task import NavConfig
-    from rainuav.radio import presets
-    from rainuav.radio.maps import build_radio_map
-    from rainuav.radio.terrain import scenario_terrain
+    from rainuav.radio.outputs.maps import build_radio_map
+    from rainuav.radio.scene import presets
+    from rainuav.radio.scene.terrain import scenario_terrain
     from rainuav.world import world_from
     from rainuav.world.place import place_scenario
 

@@ -31,9 +31,9 @@ def main() -> None:
     from rainuav.nav import planner
     from rainuav.nav.field import SignalField
     from rainuav.nav.task import NavConfig
-    from rainuav.radio import presets
-    from rainuav.radio.levelmaps import build_radio_levels, sample_levels
-    from rainuav.radio.scenario import Area
+    from rainuav.radio.outputs.levelmaps import build_radio_levels, sample_levels
+    from rainuav.radio.scene import presets
+    from rainuav.radio.scene.scenario import Area
 
     levels = [25.0, 50.0, 75.0, 100.0, 125.0, 150.0]
     scn = presets.uma(0.0, args.freq_ghz * 1e9, engine="ray").replace(area=Area(altitudes_m=levels))

@@ -25,10 +25,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-from rainuav.radio.area import Area
-from rainuav.radio.maps import build_radio_map
-from rainuav.radio.presets import uma
-from rainuav.radio.scenario import Origin, TerrainFile
+from rainuav.radio.outputs.maps import build_radio_map
+from rainuav.radio.scene.area import Area
+from rainuav.radio.scene.presets import uma
+from rainuav.radio.scene.scenario import Origin, TerrainFile
 
 
 def jacksboro_tif(path: Path) -> Path:

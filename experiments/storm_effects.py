@@ -20,9 +20,9 @@ import numpy as np
 from rainuav.nav import UAVNavEnv
 from rainuav.nav.field import SignalField
 from rainuav.nav.planner import optimal_many
-from rainuav.radio import presets
-from rainuav.radio.presets import SINR_THRESHOLDS_DB
-from rainuav.radio.timemap import build_radio_map_series, series_times
+from rainuav.radio.outputs.timemap import build_radio_map_series, series_times
+from rainuav.radio.scene import presets
+from rainuav.radio.scene.presets import SINR_THRESHOLDS_DB
 
 SPEED_M_S = 10.0
 

@@ -3,18 +3,18 @@
     python experiments/tracer_compare.py [--scenes urban district] [--freqs-ghz 3.5 4.9 28]
         [--altitudes 20 100] [--pols v h] [--samples 8e6] [--json FILE] [--figure FILE]
 
-For each scene ([`rainuav.radio.tracer_scenes`][rainuav.radio.tracer_scenes]; by default the
-held-back ones, on which no choice of the methods was made), frequency, UAV altitude and
+For each scene ([`rainuav.radio.reference.tracer_scenes`][rainuav.radio.reference.tracer_scenes]; by
+default the held-back ones, on which no choice of the methods was made), frequency, UAV altitude and
 polarisation: the building effect (map with buildings minus without, dB) of the ray engine against
 the tracer's, site by site, on the pixels the tracer covers (no ground, isotropic antennas;
-[`rainuav.radio.tracer.compare()`][rainuav.radio.tracer.compare]; ``--engine hybrid``: rainuav's
-hybrid engine, the parabolic equation in each cell's cone). Prints one line a site: pixels
-compared, the tracer's shadow pixels (effect below -6 dB), |engine - tracer| in the shadow (median,
-90th percentile), the median signed difference (negative: the engine's shadow deeper), the median
-|difference| in the light, the share of pixels where shadow and light agree, and the tracer's own
-noise (median, from two halves of its rays). The targets: shadow within 3 dB median and 8 dB p90,
-light within 0.5 dB, 95% agreement. ``--figure``: the building effect of both and their difference
-for the first case's first site.
+[`rainuav.radio.reference.tracer.compare()`][rainuav.radio.reference.tracer.compare]; ``--engine
+hybrid``: rainuav's hybrid engine, the parabolic equation in each cell's cone). Prints one line a
+site: pixels compared, the tracer's shadow pixels (effect below -6 dB), |engine - tracer| in the
+shadow (median, 90th percentile), the median signed difference (negative: the engine's shadow
+deeper), the median |difference| in the light, the share of pixels where shadow and light agree, and
+the tracer's own noise (median, from two halves of its rays). The targets: shadow within 3 dB median
+and 8 dB p90, light within 0.5 dB, 95% agreement. ``--figure``: the building effect of both and
+their difference for the first case's first site.
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from rainuav.radio import tracer
-from rainuav.radio.tracer_scenes import HELD_BACK, SCENES, scene
+from rainuav.radio.reference import tracer
+from rainuav.radio.reference.tracer_scenes import HELD_BACK, SCENES, scene
 
 
 def _figure(path: Path, scn, samples: int) -> None:

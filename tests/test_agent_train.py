@@ -84,7 +84,7 @@ def test_replay_wraps_around() -> None:
 
 
 def _tiny_scenario():
-    from rainuav.radio.scenario import Area, Scenario, Site
+    from rainuav.radio.scene.scenario import Area, Scenario, Site
 
     area = Area(x_min_m=0, x_max_m=400, y_min_m=0, y_max_m=400, resolution_m=10)
     return Scenario(name="synthetic", area=area, sites=[Site(x_m=200.0, y_m=200.0)])
@@ -442,7 +442,7 @@ def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path, capsys) -> None:
-    from rainuav.radio.scenario import Area, Cell, Scenario, Site
+    from rainuav.radio.scene.scenario import Area, Cell, Scenario, Site
 
     scn = Scenario(
         name="tiny",
@@ -731,7 +731,7 @@ def test_agent_and_start_streams_are_independent(tmp_path: Path) -> None:
 def test_scenario_file_weather_is_used_as_written(tmp_path: Path) -> None:
     # A scenario file's rain cells survive unless a rain-rate flag says otherwise: no
     # sentinel default replaces them.
-    from rainuav.radio.scenario import Area, Cell, Medium, RainCell, Scenario, Site
+    from rainuav.radio.scene.scenario import Area, Cell, Medium, RainCell, Scenario, Site
     from rainuav.world import make_scenario
 
     cells = Medium(

@@ -20,10 +20,11 @@ from rainuav.ground.footprints import (
     parse_length,
     read_footprints,
 )
-from rainuav.radio import presets
-from rainuav.radio.buildings import scenario_buildings
-from rainuav.radio.ray_engine import ray_power, ray_terms
-from rainuav.radio.scenario import (
+from rainuav.radio.engines.ray_engine import ray_power, ray_terms
+from rainuav.radio.engines.wall_rays import trace_walls
+from rainuav.radio.scene import presets
+from rainuav.radio.scene.buildings import scenario_buildings
+from rainuav.radio.scene.scenario import (
     Area,
     Building,
     Cell,
@@ -33,8 +34,7 @@ from rainuav.radio.scenario import (
     Scenario,
     Site,
 )
-from rainuav.radio.terrain import not_flyable
-from rainuav.radio.wall_rays import trace_walls
+from rainuav.radio.scene.terrain import not_flyable
 
 pytest.importorskip("shapely")
 
@@ -328,7 +328,7 @@ def test_reciprocity_swapping_the_site_and_the_point(tmp_path: Path) -> None:
 
 
 def _walls_eps(scn: Scenario):
-    from rainuav.radio.buildings import wall_args
+    from rainuav.radio.scene.buildings import wall_args
 
     return wall_args(scn)
 

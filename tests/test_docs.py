@@ -28,8 +28,8 @@ def _load(name: str):
 def test_every_public_module_has_an_api_page_in_the_navigation() -> None:
     api = _load("api_pages")
     names = api.public_modules()
-    assert {"rainuav.radio.cell", "rainuav.radio.storms", "rainuav.radio.radar",
-            "rainuav.radio.rategrid", "rainuav.nav.views", "rainuav.rl.networks",
+    assert {"rainuav.radio.scene.cell", "rainuav.radio.scene.storms", "rainuav.radio.scene.radar",
+            "rainuav.radio.scene.rategrid", "rainuav.nav.views", "rainuav.rl.networks",
             "rainuav.world.pool"} <= set(names)  # fmt: skip
     pages = {p.stem for p in (DOCS / "api").glob("*.md")}
     assert pages == set(names), "run python docs/api_pages.py"

@@ -16,8 +16,8 @@ import pytest
 import rainuav
 from rainuav import medium
 from rainuav.radio import build_radio_map, presets
-from rainuav.radio.ray_engine import ground_permittivity
-from rainuav.radio.scenario import Area, Cell, Medium, PESettings, RainCell, Scenario, Site
+from rainuav.radio.engines.ray_engine import ground_permittivity
+from rainuav.radio.scene.scenario import Area, Cell, Medium, PESettings, RainCell, Scenario, Site
 from scipy.integrate import quad
 
 pytestmark = pytest.mark.timeout(300)
@@ -274,7 +274,7 @@ def test_bad_antenna_and_engine_fields_are_named(change, needle) -> None:
 
 
 def test_a_non_finite_gain_table_is_named() -> None:
-    from rainuav.radio.cell import Pattern
+    from rainuav.radio.scene.cell import Pattern
 
     bad = Pattern([-10.0, 10.0], [-10.0, 10.0], [[0.0, float("nan")], [0.0, 0.0]])
     with pytest.raises(rainuav.InvalidInputError, match=r"cells\[0\]\.pattern"):
@@ -285,8 +285,8 @@ def test_a_non_finite_gain_table_is_named() -> None:
 def test_an_isotropic_antenna_has_the_widest_cone_and_the_hybrid_maps_it() -> None:
     # A pattern flat over the whole half-space is all peak: the march takes the widest cone
     # (sines 0.95) instead of failing on an empty one, and the hybrid map is finite.
-    from rainuav.radio.grid import _dynamic_range_cone
-    from rainuav.radio.tracer import ISOTROPIC
+    from rainuav.radio.engines.grid import _dynamic_range_cone
+    from rainuav.radio.reference.tracer import ISOTROPIC
 
     cell = Cell(azimuth_deg=0.0, tilt_deg=0.0, pattern=ISOTROPIC, tx_power_dbm=0.0)
     assert _dynamic_range_cone(cell.key(), 0.0, 40.0) == (0.95, 0.95)

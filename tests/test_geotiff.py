@@ -14,8 +14,8 @@ from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef
 
 rasterio = pytest.importorskip("rasterio")  # a test dependency: skipped only outside [test]
-from rainuav.radio.radar import read_radar_grid  # noqa: E402
-from rainuav.radio.scenario import Area  # noqa: E402
+from rainuav.radio.scene.radar import read_radar_grid  # noqa: E402
+from rainuav.radio.scene.scenario import Area  # noqa: E402
 from rasterio.transform import Affine  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rainuav.radio.area import Area
-from rainuav.radio.maps import build_radio_map
-from rainuav.radio.presets import uma
-from rainuav.radio.ray_engine import ray_terms
-from rainuav.radio.scenario import Origin, TerrainFile
-from rainuav.radio.terrain import DEM_GROUND, ground_over
+from rainuav.radio.engines.ray_engine import ray_terms
+from rainuav.radio.outputs.maps import build_radio_map
+from rainuav.radio.scene.area import Area
+from rainuav.radio.scene.presets import uma
+from rainuav.radio.scene.scenario import Origin, TerrainFile
+from rainuav.radio.scene.terrain import DEM_GROUND, ground_over
 
 rasterio = pytest.importorskip("rasterio")
 from test_terrain import dem_4326, from_origin, scenario  # noqa: E402

@@ -37,8 +37,8 @@ from rainuav.errors import CacheWarning
 from rainuav.nav import UAVNavEnv
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio import RadioMap, build_radio_map
-from rainuav.radio.cache import map_path
-from rainuav.radio.scenario import Area, Cell, Scenario, Site
+from rainuav.radio.outputs.cache import map_path
+from rainuav.radio.scene.scenario import Area, Cell, Scenario, Site
 from rainuav.rl import checkpoint
 from rainuav.rl.loop import train as train_run
 from rainuav.world import in_world, saved_world
@@ -967,8 +967,8 @@ def test_train_help_agrees_with_the_learning_page(capsys) -> None:
 
 
 def test_out_of_reach_pixels_are_named_in_the_rss_figure() -> None:
-    from rainuav.radio.plot import plot_map
-    from rainuav.radio.sinr import RSS_FLOOR_DBM
+    from rainuav.radio.outputs.plot import plot_map
+    from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
 
     rm = build_radio_map(tiny_scenario(), cache=False)
     rm.rss_dbm[0, :3, :3] = RSS_FLOOR_DBM

@@ -98,7 +98,7 @@ def imports(path: Path, known: set[str]) -> tuple[set[str], set[str]]:
 
     def add(name: str) -> None:
         if name == "rainuav" or name.startswith("rainuav."):
-            # `from rainuav.radio import presets` names the module rainuav.radio.presets.
+            # `from rainuav.radio import presets` names the module rainuav.radio.scene.presets.
             while name not in known and "." in name:
                 name = name.rsplit(".", 1)[0]
             ours.add(name)
@@ -137,11 +137,35 @@ def graph() -> tuple[dict[str, set[str]], dict[str, set[str]]]:
 def test_the_walker_sees_the_packages_modules() -> None:
     ours, theirs = graph()
     # A check on the checker: known arrows, including a function-level import.
-    assert "rainuav.radio.scenario" in ours["rainuav.radio.presets"]
+    assert "rainuav.radio.scene.scenario" in ours["rainuav.radio.scene.presets"]
     assert "rainuav.nav.env" in ours["rainuav.nav.planner"]
     assert "rainuav.rl.loop" in ours["rainuav.train"]  # imported inside main()
     assert "torch" in theirs["rainuav.rl.dqn"]
     assert {"rainuav.radio", "rainuav.nav", "rainuav.rl"} <= set(ours)
+
+
+RADIO_PARTS = ("scene", "engines", "outputs", "reference")
+"""``rainuav.radio``'s sub-packages, bottom up: what is there, how the field gets there, what
+comes out, and what the engines are measured against."""
+
+
+def test_radio_is_scene_engines_outputs_and_reference() -> None:
+    """Every module of ``rainuav.radio`` lives in one of its four parts, and a part imports only
+    the parts below it (the scene may read the engines' registry, the package itself, to know
+    the names a scenario may give)."""
+    ours, _ = graph()
+    radio = [m for m in ours if m.startswith("rainuav.radio.")]
+    loose = [m for m in radio if m.split(".")[2] not in RADIO_PARTS]
+    assert not loose, f"modules outside rainuav.radio's parts: {loose}"
+    upward = []
+    for src in radio:
+        rank = RADIO_PARTS.index(src.split(".")[2])
+        for dst in ours[src]:
+            if not dst.startswith("rainuav.radio.") or dst == "rainuav.radio.engines":
+                continue
+            if RADIO_PARTS.index(dst.split(".")[2]) > rank:
+                upward.append(f"{src} -> {dst}")
+    assert not upward, f"rainuav.radio's parts import upward: {upward}"
 
 
 def test_every_arrow_points_down() -> None:
@@ -205,7 +229,7 @@ def test_new_paths_and_entry_points_do_not_warn() -> None:
             assert callable(importlib.import_module(name).main)
         import rainuav
 
-        assert rainuav.radio.Scenario is rainuav.radio.scenario.Scenario
+        assert rainuav.radio.Scenario is rainuav.radio.scene.scenario.Scenario
         assert rainuav.nav.UAVNavEnv is rainuav.nav.env.UAVNavEnv
     for old in ("env", "plan", "agent", "scenario", "scenarios", "_deprecated"):
         with pytest.raises(ModuleNotFoundError):  # the 0.1 shims are gone
@@ -319,7 +343,7 @@ def test_engines_are_asked_what_they_do_not_their_names() -> None:
     import re
 
     from rainuav.radio.engines import ENGINES, engine_of
-    from rainuav.radio.scenario import ENGINES as SCENARIO_ENGINES
+    from rainuav.radio.scene.scenario import ENGINES as SCENARIO_ENGINES
 
     named = re.compile(r"""engine\w*\s*(==|!=|not in|in)\s*[("']+(hybrid|ray|pe)\b""")
     hits = [
@@ -336,7 +360,7 @@ def test_engines_are_asked_what_they_do_not_their_names() -> None:
     assert [(e.marches, e.traces, e.in_time) for e in ENGINES.values()] == [
         (True, True, "hybrid"), (False, True, "ray"), (True, False, "hybrid"),
     ]  # fmt: skip
-    from rainuav.radio.presets import paper
+    from rainuav.radio.scene.presets import paper
 
     assert engine_of("ray") is ENGINES["ray"] and engine_of(paper()) is ENGINES["hybrid"]
     from rainuav.radio.engines import for_time

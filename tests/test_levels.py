@@ -9,9 +9,9 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav import planner
 from rainuav.nav.field import SignalField
 from rainuav.nav.task import NavConfig
-from rainuav.radio.levelmaps import build_radio_levels
-from rainuav.radio.presets import uma
-from rainuav.radio.scenario import Area
+from rainuav.radio.outputs.levelmaps import build_radio_levels
+from rainuav.radio.scene.presets import uma
+from rainuav.radio.scene.scenario import Area
 
 EXTENT = (0.0, 60.0, 0.0, 40.0)
 
@@ -105,8 +105,8 @@ def test_bad_altitude_sets_are_refused_in_one_line() -> None:
 
 def test_maps_at_several_heights_are_each_level_s_map() -> None:
     # The stack holds, at each level, the map of the scenario flying at that altitude.
-    from rainuav.radio.levelmaps import level_scenario
-    from rainuav.radio.maps import build_radio_map
+    from rainuav.radio.outputs.levelmaps import level_scenario
+    from rainuav.radio.outputs.maps import build_radio_map
 
     area = Area(resolution_m=50.0, altitudes_m=[40.0, 100.0])
     scn = uma(engine="ray").replace(area=area)
@@ -192,8 +192,8 @@ def test_the_altitude_study_and_its_figures() -> None:
     assert row["levels_optimal_mean_cost"] <= row["best_fixed_mean_cost"] + 1e-9
     assert row["fixed_100m_excess_cost"] >= -1e-9 and row["best_single_excess_cost"] >= -1e-9
     # With the case's environment at 100 m, the straight line there beside them.
-    from rainuav.radio.levelmaps import level_scenario
-    from rainuav.radio.maps import build_radio_map
+    from rainuav.radio.outputs.levelmaps import level_scenario
+    from rainuav.radio.outputs.maps import build_radio_map
     from rainuav.world import world_from
 
     cfg = NavConfig(min_db=-2.0, step_m=40.0, tol_m=40.0)
@@ -275,9 +275,9 @@ def test_fly_a_band_of_heights_over_terrain_writes_heights_above_sea_level(tmp_p
 
 def test_maps_in_time_at_several_heights() -> None:
     # (time, altitude, H, W): each level's slice is that level's own series.
-    from rainuav.radio.levelmaps import build_radio_level_series, level_scenario
-    from rainuav.radio.presets import storm
-    from rainuav.radio.timemap import build_radio_map_series
+    from rainuav.radio.outputs.levelmaps import build_radio_level_series, level_scenario
+    from rainuav.radio.outputs.timemap import build_radio_map_series
+    from rainuav.radio.scene.presets import storm
 
     scn = storm(seed=0, engine="ray")
     scn = scn.replace(area=Area(resolution_m=50.0, altitudes_m=[50.0, 100.0]))
@@ -299,11 +299,11 @@ def test_one_march_reads_every_level() -> None:
     # (the cone of the highest level's grid is narrower; the rays carry the rest: measured
     # 0.14 dB at 60 m here, 0.44 dB on `uma` at 28 GHz, 20 m pixels, 30 m), and within
     # 0.05 dB at the highest level, whose grid it is (PE budget cut to 0.02 for speed).
-    from rainuav.radio.grid import march_grid
-    from rainuav.radio.levelmaps import level_scenario, shares_a_march
-    from rainuav.radio.pe_engine import march_cell, march_cell_levels
-    from rainuav.radio.presets import paper
-    from rainuav.radio.scenario import PESettings
+    from rainuav.radio.engines.grid import march_grid
+    from rainuav.radio.engines.pe_engine import march_cell, march_cell_levels
+    from rainuav.radio.outputs.levelmaps import level_scenario, shares_a_march
+    from rainuav.radio.scene.presets import paper
+    from rainuav.radio.scene.scenario import PESettings
 
     scn = paper().replace(area=Area(resolution_m=50.0, altitudes_m=[60.0, 100.0]),
                           pe=PESettings(budget_gpoints=0.02), engine="hybrid")  # fmt: skip
@@ -324,7 +324,7 @@ def test_more_levels_than_fit_in_memory_are_refused_before_building() -> None:
     # 64 levels of `uma`'s 21 cells at 0.5 m pixels (16 million a level) need about 100 GB:
     # refused in one line naming area.altitudes_m, before the first level is built (as are
     # the maps in time).
-    from rainuav.radio.levelmaps import build_radio_level_series
+    from rainuav.radio.outputs.levelmaps import build_radio_level_series
 
     scn = uma(0.0, 28e9, engine="ray").replace(
         area=Area(resolution_m=0.5, altitudes_m=[20.0 + 10.0 * k for k in range(64)])
@@ -343,10 +343,10 @@ def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
     import json
 
     import rasterio
-    from rainuav.radio.levelmaps import level_scenario
-    from rainuav.radio.mapdata import RadioMap
-    from rainuav.radio.maps import build_radio_map
-    from rainuav.radio.scenario import Origin
+    from rainuav.radio.outputs.levelmaps import level_scenario
+    from rainuav.radio.outputs.mapdata import RadioMap
+    from rainuav.radio.outputs.maps import build_radio_map
+    from rainuav.radio.scene.scenario import Origin
     from rainuav.radiomap import main
 
     # A scenario of its own name (a place's): the outage counted at the uma preset's -2 dB,
@@ -386,10 +386,10 @@ def test_maps_in_time_read_every_level_from_one_clear_air_march(
     # The hybrid series in time at two levels through moving rain cells: the PE's clear-air
     # march once a cell for both levels, against each level's own series: SINR within 0.5 dB
     # at the lower level and 0.05 dB at the highest (as the static maps), at every instant.
-    from rainuav.radio.levelmaps import build_radio_level_series
-    from rainuav.radio.presets import paper
-    from rainuav.radio.scenario import PESettings
-    from rainuav.radio.weather import Medium, RainCell
+    from rainuav.radio.outputs.levelmaps import build_radio_level_series
+    from rainuav.radio.scene.presets import paper
+    from rainuav.radio.scene.scenario import PESettings
+    from rainuav.radio.scene.weather import Medium, RainCell
 
     cells = [RainCell(700.0, 900.0, 500.0, 150.0, vx_m_s=12.0)]
     scn = paper().replace(
@@ -404,7 +404,8 @@ def test_maps_in_time_read_every_level_from_one_clear_air_march(
     assert not np.array_equal(shared.sinr_db[0, 0], shared.sinr_db[1, 0])  # the rain moves
     # Another weather over the same network (a storm pool's next storm) marches nothing: the
     # clear-air march is the last one's, and the series is the one a fresh march gives.
-    from rainuav.radio import hybrid, levelmaps
+    from rainuav.radio.engines import hybrid
+    from rainuav.radio.outputs import levelmaps
 
     other = scn.replace(medium=Medium(kind="cells", rain_rate_mm_h=20.0, cells=cells))
     marches = []

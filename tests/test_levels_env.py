@@ -157,8 +157,8 @@ def test_gym_make_builds_the_levels_of_a_scenario() -> None:
     # SINR threshold, a climb of 30 m lasting 6 moves; the weather observation shows both
     # levels; the signal is the SINR (another is refused in one line).
     import rainuav  # noqa: F401 - registers the environments
-    from rainuav.radio.presets import SINR_THRESHOLDS_DB, uma
-    from rainuav.radio.scenario import Area
+    from rainuav.radio.scene.presets import SINR_THRESHOLDS_DB, uma
+    from rainuav.radio.scene.scenario import Area
 
     scn = uma(0.0, 28e9, engine="ray").replace(area=Area(resolution_m=50.0))
     env = gym.make("rainuav/UAVLevels-v0", scenario=scn, altitudes_m=[30.0, 60.0])

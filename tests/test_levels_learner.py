@@ -15,8 +15,8 @@ from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import NavConfig, base_reward
-from rainuav.radio.levelmaps import LevelStack
-from rainuav.radio.scenario import Area, Scenario, Site
+from rainuav.radio.outputs.levelmaps import LevelStack
+from rainuav.radio.scene.scenario import Area, Scenario, Site
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import DQNConfig, TrainConfig, check_config

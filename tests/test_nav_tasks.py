@@ -16,8 +16,8 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav import UAVNavEnv, flight_cost, planner
 from rainuav.nav.task import NavConfig
 from rainuav.nav.vector import UAVNavVectorEnv
-from rainuav.radio.maps import RadioMap
-from rainuav.radio.scenario import Area, Scenario, Site
+from rainuav.radio.outputs.maps import RadioMap
+from rainuav.radio.scene.scenario import Area, Scenario, Site
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.evaluation import flights, reference_flights, summarise
 from rainuav.world import in_world
@@ -272,7 +272,7 @@ def test_a_saved_policy_flies_on_another_map_object_with_shared_references(
     # What studies use for the paper's case (f): a run's network flown on a map given as an
     # object. Flying it on its own saved map gives the run's own numbers; reusing the exact
     # planner's flights (references) changes nothing; a map and a world at once is refused.
-    from rainuav.radio.maps import RadioMap
+    from rainuav.radio.outputs.maps import RadioMap
     from rainuav.rl.evaluation import evaluate_saved_run
     from rainuav.rl.loop import train
 

@@ -416,8 +416,8 @@ def test_calm_pool_storms_are_the_background_alone() -> None:
     standard errors; 0 never); a calm storm's maps do not change in time and equal the map
     series of the same storm with its cells taken out by hand (the uniform background alone,
     through the preset's homogeneous-rain path), to float32 rounding."""
-    from rainuav.radio import presets
-    from rainuav.radio.timemap import build_radio_map_series
+    from rainuav.radio.outputs.timemap import build_radio_map_series
+    from rainuav.radio.scene import presets
     from rainuav.world import series_instants
     from rainuav.world.pool import StormPool, is_calm
 

@@ -250,7 +250,7 @@ def test_the_flight_figure_draws_buildings_and_not_flyable_pixels_and_hides_noth
     # the map, where it cannot hide the destination.
     from rainuav.fly.figure import flight_figure
     from rainuav.radio import build_radio_map
-    from rainuav.radio.buildings import scenario_buildings
+    from rainuav.radio.scene.buildings import scenario_buildings
     from rainuav.world.place import place_scenario
 
     examples = Path(__file__).resolve().parents[1] / "examples"

@@ -150,7 +150,7 @@ def test_sites_from_csv_and_geojson(tmp_path) -> None:
     """One row per sector: masts at their projected positions, compass azimuths (clockwise
     from north) turned into rainuav's (counter-clockwise from east), downtilts into upward
     tilts; the GeoJSON form of the same list gives the same sites."""
-    from rainuav.radio.sites import read_site_rows, sites_from_rows
+    from rainuav.radio.scene.sites import read_site_rows, sites_from_rows
 
     g = Georef(47.376, 8.548)
     f = tmp_path / "sites.csv"
@@ -192,7 +192,7 @@ def test_sites_from_csv_and_geojson(tmp_path) -> None:
     ],
 )  # fmt: skip
 def test_bad_sites_files_are_refused_naming_row_and_column(tmp_path, text: str, match: str) -> None:
-    from rainuav.radio.sites import read_site_rows, sites_from_rows
+    from rainuav.radio.scene.sites import read_site_rows, sites_from_rows
 
     f = tmp_path / "sites.csv"
     f.write_text(text)
@@ -207,7 +207,7 @@ def test_bad_sites_files_are_refused_naming_row_and_column(tmp_path, text: str, 
       "feature 0: geometry must be a Point")],
 )  # fmt: skip
 def test_bad_geojson_sites_are_refused(tmp_path, text: str, match: str) -> None:
-    from rainuav.radio.sites import read_site_rows
+    from rainuav.radio.scene.sites import read_site_rows
 
     f = tmp_path / "sites.geojson"
     f.write_text(text)
@@ -312,8 +312,8 @@ def blob(x: np.ndarray, y: np.ndarray, x0: float, y0: float, peak: float) -> np.
 def test_reflectivity_becomes_rain_by_marshall_palmer(tmp_path) -> None:
     """A uniform 30 dBZ field is 5^(1/1.6) = 2.7344 mm/h everywhere (Z = 200 R^1.6); below
     0 dBZ no rain."""
-    from rainuav.radio.radar import dbz_to_rate, read_radar_grid
-    from rainuav.radio.scenario import Area
+    from rainuav.radio.scene.radar import dbz_to_rate, read_radar_grid
+    from rainuav.radio.scene.scenario import Area
 
     assert dbz_to_rate(30.0) == pytest.approx(2.7344, rel=1e-4)
     assert dbz_to_rate(-5.0) == 0.0
@@ -331,8 +331,8 @@ def test_a_grid_moved_by_one_pixel_moves_the_rain_by_one_pixel(tmp_path) -> None
     sample grid) a storm shifted one pixel east in the file is the same rain one sample
     east in the scenario (interior, 1e-9); on a lat/lon grid its centroid moves by the pixel's
     ground width (within 1%)."""
-    from rainuav.radio.radar import read_radar_grid
-    from rainuav.radio.scenario import Area
+    from rainuav.radio.scene.radar import read_radar_grid
+    from rainuav.radio.scene.scenario import Area
 
     g = Georef(47.376, 8.548)
     area = Area(-500.0, 500.0, -500.0, 500.0, resolution_m=10.0)
@@ -364,8 +364,8 @@ def test_a_grid_moved_by_one_pixel_moves_the_rain_by_one_pixel(tmp_path) -> None
 
 
 def test_bad_radar_grids_are_refused(tmp_path) -> None:
-    from rainuav.radio.radar import read_radar_grid
-    from rainuav.radio.scenario import Area
+    from rainuav.radio.scene.radar import read_radar_grid
+    from rainuav.radio.scene.scenario import Area
 
     g = Georef(47.376, 8.548)
     x = np.arange(-800.0, 800.0, 10.0)
@@ -405,8 +405,8 @@ def test_fly_through_the_shipped_radar_file(tmp_path) -> None:
 def test_a_scenario_carries_its_origin(tmp_path) -> None:
     """``[origin]`` round-trips through TOML and gives the georeference; a scenario without
     one keeps its old form (so its digest, and the map cache, are unchanged)."""
-    from rainuav.radio import presets
-    from rainuav.radio.scenario import Origin, Scenario
+    from rainuav.radio.scene import presets
+    from rainuav.radio.scene.scenario import Origin, Scenario
 
     plain = presets.uma()
     assert "origin" not in plain.to_dict()
@@ -484,7 +484,7 @@ def test_the_largest_place_fits_the_pe_march_from_a_corner(tmp_path) -> None:
     large, pointing along its edges and across its diagonal with no tilt (the longest
     marches), all fit the ``uma`` settings' PE budget, so no place ``fly`` accepts ends in the
     engine's budget error."""
-    from rainuav.radio.grid import march_grid
+    from rainuav.radio.engines.grid import march_grid
     from rainuav.world.place import MARGIN_M, MAX_SIDE_M, place_scenario
 
     g = Georef(47.0, 8.0)

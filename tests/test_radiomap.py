@@ -14,11 +14,12 @@ import pytest
 import rainuav
 from rainuav import medium
 from rainuav.errors import InvalidInputError
-from rainuav.radio import build_radio_map, cache, presets
-from rainuav.radio import sinr as sinr_mod
-from rainuav.radio.maps import RadioMap
-from rainuav.radio.pe_engine import rain_rate_at
-from rainuav.radio.scenario import (
+from rainuav.radio import build_radio_map, presets
+from rainuav.radio.engines.pe_engine import rain_rate_at
+from rainuav.radio.outputs import cache
+from rainuav.radio.outputs import sinr as sinr_mod
+from rainuav.radio.outputs.maps import RadioMap
+from rainuav.radio.scene.scenario import (
     Area,
     Building,
     Cell,

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from rainuav import InvalidInputError
 from rainuav.radio import build_radio_map, presets
-from rainuav.radio.rategrid import read_rate_grid
-from rainuav.radio.scenario import Area
+from rainuav.radio.scene.rategrid import read_rate_grid
+from rainuav.radio.scene.scenario import Area
 
 xr = pytest.importorskip("xarray")  # the 'weather' extra; installed with the test extra
 

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from rainuav import InvalidInputError
 from rainuav.radio import build_radio_map, presets
-from rainuav.radio.scenario import Area, Scenario
-from rainuav.radio.stochastic import StochasticRain, field_rates, nodes, noise_field
-from rainuav.radio.weather import Medium
+from rainuav.radio.scene.scenario import Area, Scenario
+from rainuav.radio.scene.stochastic import StochasticRain, field_rates, nodes, noise_field
+from rainuav.radio.scene.weather import Medium
 
 pytest.importorskip("pysteps")  # the 'weather' extra; installed with the test extra
 

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from rainuav import _core
 from rainuav.errors import InvalidInputError
-from rainuav.radio.maps import build_radio_map
-from rainuav.radio.scenario import Area, Cell, Origin, Scenario, Site, TerrainFile
-from rainuav.radio.terrain import flight_heights, not_flyable, scenario_terrain
+from rainuav.radio.outputs.maps import build_radio_map
+from rainuav.radio.scene.scenario import Area, Cell, Origin, Scenario, Site, TerrainFile
+from rainuav.radio.scene.terrain import flight_heights, not_flyable, scenario_terrain
 
 rasterio = pytest.importorskip("rasterio")
 from rasterio.transform import Affine  # noqa: E402
@@ -466,9 +466,9 @@ def test_obstacles_count_wherever_they_touch_a_pixel() -> None:
     # The height map's cells against each pixel by brute force (every cell overlapping the
     # pixel's square), on grids finer and coarser than the map; boxes over the pixels they
     # touch.
-    from rainuav.radio.presets import uma
-    from rainuav.radio.scenario import Building
-    from rainuav.radio.terrain import obstacle_pixel_max
+    from rainuav.radio.scene.presets import uma
+    from rainuav.radio.scene.scenario import Building
+    from rainuav.radio.scene.terrain import obstacle_pixel_max
 
     rng = np.random.default_rng(0)
     for rows, cols in [(7, 13), (450, 333), (3, 1)]:
@@ -507,7 +507,7 @@ def test_flights_never_enter_what_is_not_flyable(tmp_path: Path) -> None:
     # reported as not arriving; the planner's return is the environment's along its path.
     from rainuav.nav.env import UAVNavEnv
     from rainuav.nav.planner import optimal, straight_line
-    from rainuav.radio.mapdata import RadioMap
+    from rainuav.radio.outputs.mapdata import RadioMap
 
     _, rm = _walled_map(tmp_path)
     assert rm.not_flyable is not None
@@ -675,7 +675,7 @@ def test_maps_out_as_geotiff_read_back_at_the_right_place(tmp_path: Path) -> Non
 
     from rainuav import radiomap
     from rainuav.geo import Georef
-    from rainuav.radio.maptiff import NODATA
+    from rainuav.radio.outputs.maptiff import NODATA
 
     hm = np.zeros((40, 60))
     hm[:35, 35] = 100.0
@@ -722,8 +722,8 @@ def test_storms_over_terrain_every_slice_is_its_static_map(dems: dict[str, Path]
     # time (the rays traced once over the terrain, the rain added per instant along a fan of
     # lines from each site) against a static build over the same DEM of the weather frozen at
     # that instant. Tolerance 0.05 dB at every pixel (the rain integral's, as on flat ground).
-    from rainuav.radio.timemap import build_radio_map_series
-    from rainuav.radio.weather import Medium, RainCell
+    from rainuav.radio.outputs.timemap import build_radio_map_series
+    from rainuav.radio.scene.weather import Medium, RainCell
 
     cell = RainCell(300.0, 400.0, 200.0, 100.0, vx_m_s=12.0)
     scn = scenario(dems["ridge_4326"]).replace(

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from rainuav import InvalidInputError
 from rainuav.radio import build_radio_map, presets
-from rainuav.radio.ray_engine import rain_args
-from rainuav.radio.scenario import Area
-from rainuav.radio.timemap import build_radio_map_series
-from rainuav.radio.weather import Medium, RainCell
+from rainuav.radio.engines.ray_engine import rain_args
+from rainuav.radio.outputs.timemap import build_radio_map_series
+from rainuav.radio.scene.scenario import Area
+from rainuav.radio.scene.weather import Medium, RainCell
 
 TIMES = np.array([0.0, 100.0, 200.0, 300.0])
 
@@ -181,7 +181,7 @@ def test_a_series_saves_loads_and_is_cached(series, tmp_path, monkeypatch) -> No
     # The cache entry carries its scenario's digest: a hit under that digest is the caller's
     # scenario, its TOML not parsed again (seconds for a radar weather); a file read on its
     # own is parsed and checked as before.
-    from rainuav.radio import scenario as scenario_module
+    from rainuav.radio.scene import scenario as scenario_module
 
     def no_parse(*_: object) -> None:
         raise AssertionError("the cached scenario's TOML was parsed")
@@ -227,7 +227,7 @@ def test_a_bad_series_file_is_refused_in_one_line(series, tmp_path) -> None:
     ],
 )
 def test_bad_durations_and_steps_are_named(duration, step, needle) -> None:
-    from rainuav.radio.timemap import series_times
+    from rainuav.radio.outputs.timemap import series_times
 
     with pytest.raises(InvalidInputError, match=needle):
         series_times(duration, step)
@@ -268,7 +268,7 @@ def test_the_hybrid_in_time_against_static_hybrid_builds() -> None:
     # issue's) in SINR everywhere and in the power where the PE carries over half; measured
     # 0.0045 dB (PE budget cut to 0.05 for speed; at the default budget, 198 such
     # cell-pixels with up to 0.72 dB of rain loss agree to 0.0099 dB: benches/hybrid_in_time.py).
-    from rainuav.radio.scenario import PESettings
+    from rainuav.radio.scene.scenario import PESettings
 
     cells = [RainCell(700.0, 900.0, 500.0, 150.0, vx_m_s=12.0),
              RainCell(1300.0, 1300.0, 400.0, 120.0, vy_m_s=-10.0)]  # fmt: skip
@@ -296,7 +296,7 @@ def test_a_rate_grid_path_integral_against_brute_force_quadrature() -> None:
     # site against gamma(R(x, y)) of the grid itself (its own bilinear reading) summed at 1 m
     # steps along each line, 200 random pixels. Tolerance 0.01 dB (the issue's): the rays read
     # gamma at 10 m nodes of the grid's rates; measured at most 0.0004 dB.
-    from rainuav.radio.pe_engine import rain_rate_at
+    from rainuav.radio.engines.pe_engine import rain_rate_at
 
     yy, xx = np.mgrid[0:21, 0:21] / 20.0
     rates = 40.0 + 35.0 * np.sin(3.0 * xx + 1.0) * np.cos(2.0 * yy) + 20.0 * xx * yy

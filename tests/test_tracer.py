@@ -1,13 +1,13 @@
 """The ray engine's building physics against Sionna RT 2.2, a full ray tracer
-([`rainuav.radio.tracer`][rainuav.radio.tracer]), on small scenes
-([`rainuav.radio.tracer_scenes`][rainuav.radio.tracer_scenes]: one block, a thick building, a
-street canyon of two rows, an L-shaped building, nine buildings from the shipped footprint
-file): the building effect (the map with the buildings
-minus the map without, dB, each method against itself) on the pixels the tracer covers, isotropic
-antennas on both sides, vertical and horizontal polarisation, no ground and a PEC ground by the
-image method. The tracer runs 4 million rays a site on the CPU (LLVM), seeded; its own Monte Carlo
-noise, from two halves of its rays, is 0.2-1.0 dB (median over the shadows), and pixels where its
-halves differ by more than 6 dB are left out.
+([`rainuav.radio.reference.tracer`][rainuav.radio.reference.tracer]), on small scenes
+([`rainuav.radio.reference.tracer_scenes`][rainuav.radio.reference.tracer_scenes]: one block, a
+thick building, a street canyon of two rows, an L-shaped building, nine buildings from the shipped
+footprint file): the building effect (the map with the buildings minus the map without, dB, each
+method against itself) on the pixels the tracer covers, isotropic antennas on both sides, vertical
+and horizontal polarisation, no ground and a PEC ground by the image method. The tracer runs 4
+million rays a site on the CPU (LLVM), seeded; its own Monte Carlo noise, from two halves of its
+rays, is 0.2-1.0 dB (median over the shadows), and pixels where its halves differ by more than 6 dB
+are left out.
 
 Tolerances and why:
 
@@ -26,8 +26,8 @@ Tolerances and why:
 from __future__ import annotations
 
 import pytest
-from rainuav.radio.tracer import compare
-from rainuav.radio.tracer_scenes import TEST_SCENES, scene
+from rainuav.radio.reference.tracer import compare
+from rainuav.radio.reference.tracer_scenes import TEST_SCENES, scene
 
 pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]
 

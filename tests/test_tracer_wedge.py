@@ -1,5 +1,6 @@
-"""The tracer as a reference at building corners ([`rainuav.radio.tracer`][rainuav.radio.tracer],
-[`rainuav.radio.tracer_wedge`][rainuav.radio.tracer_wedge]).
+"""The tracer as a reference at building corners
+([`rainuav.radio.reference.tracer`][rainuav.radio.reference.tracer],
+[`rainuav.radio.reference.tracer_wedge`][rainuav.radio.reference.tracer_wedge]).
 
 - Its buildings are closed meshes whose faces share their edges: the tracer diffracts at a
   wedge only where two faces share an edge (an edge of one face alone is a half-plane). Checked
@@ -24,7 +25,7 @@ import numpy as np
 import pytest
 import shapely
 from rainuav import _core
-from rainuav.radio.tracer import prism_arrays
+from rainuav.radio.reference.tracer import prism_arrays
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -87,8 +88,8 @@ def _utd_gain_db(q: tuple[float, ...], soft: bool, eps: complex | None) -> float
 
 def _tracer_gain_db(q: tuple[float, ...], pol: str, material: str) -> list[float]:
     """Each path the tracer finds from the site to ``q`` (the box scene), dB re free space."""
-    from rainuav.radio.tracer import isotropic_scenario, load_sionna, tracer_scene
-    from rainuav.radio.tracer_scenes import scene
+    from rainuav.radio.reference.tracer import isotropic_scenario, load_sionna, tracer_scene
+    from rainuav.radio.reference.tracer_scenes import scene
 
     mi, rt = load_sionna()
     sc = tracer_scene(isotropic_scenario(scene("box", FREQ, 20.0, pol)), material=material)

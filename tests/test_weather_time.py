@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 from rainuav import InvalidInputError
 from rainuav.radio import Scenario, build_radio_map, presets
-from rainuav.radio.scenario import Area
-from rainuav.radio.storms import (
+from rainuav.radio.scene.scenario import Area
+from rainuav.radio.scene.storms import (
     CELL_SPREAD_M_S,
     EVAL_SEEDS_FROM,
     STORM_DURATION_S,
     check_storm_seed,
     draw_storm,
 )
-from rainuav.radio.weather import Medium, RainCell
+from rainuav.radio.scene.weather import Medium, RainCell
 
 
 def _cell(**kw: float) -> RainCell:
@@ -143,7 +143,7 @@ def test_maps_of_varying_rain_outline_it() -> None:
     # The map figure outlines the rain (10/30/100 mm/h) where it varies over the area: here
     # the storm's cells at 150 s; a homogeneous map draws no outline.
     from matplotlib.figure import Figure
-    from rainuav.radio.plot import plot_map
+    from rainuav.radio.outputs.plot import plot_map
 
     scn = presets.storm(seed=5, area=Area(resolution_m=50.0), engine="ray")
     for weather, outlined in ((scn.medium.at(150.0), True), (Medium(rain_rate_mm_h=25.0), False)):

@@ -316,7 +316,7 @@ def tabulated(
     azimuth_deg: Any, elevation_deg: Any, gain_db: Any, *, normalise: bool = True
 ) -> TabulatedPattern:
     """A pattern from a table ``gain_db[i][j]`` at ``(azimuth_deg[i], elevation_deg[j])``
-    (the form of [`rainuav.radio.scenario.Pattern`][rainuav.radio.cell.Pattern])."""
+    (the form of [`rainuav.radio.scene.scenario.Pattern`][rainuav.radio.scene.cell.Pattern])."""
 
     g = as_real_array("gain_db", gain_db)
     if g.ndim != 2:

@@ -6,9 +6,9 @@ a Gymnasium environment, and ``rainuav/UAVLevels-v0``, the same with altitude as
 ``gym.make_vec("rainuav/UAVNav-v0", num_envs=N, vectorization_mode="vector_entry_point")``
 calls [`make_nav_vector_env()`][rainuav.envs.make_nav_vector_env]. Either takes one signal source:
 
-- ``radio_map=`` a [`rainuav.radio.RadioMap`][rainuav.radio.mapdata.RadioMap];
+- ``radio_map=`` a [`rainuav.radio.RadioMap`][rainuav.radio.outputs.mapdata.RadioMap];
 - ``scenario=`` a preset name (``"paper"``, ``"uma"``, ``"rain_cell"``, ``"urban"``, ``"storm"``) or
-  a [`rainuav.radio.Scenario`][rainuav.radio.scenario.Scenario], with ``rain_rate_mm_h``
+  a [`rainuav.radio.Scenario`][rainuav.radio.scene.scenario.Scenario], with ``rain_rate_mm_h``
   (homogeneous rain in place of its weather), ``freq_hz``, ``engine``, ``storm_seed`` (the ``storm``
   preset's storm) and ``slice_s`` (time between the maps of a weather that moves) optional: the
   world is built ([`rainuav.world.build_world()`][rainuav.world.build_world]), or taken from the
@@ -21,7 +21,7 @@ and the task's fields as keywords ([`rainuav.nav.task.NavConfig`][rainuav.nav.ta
 (a ``Dict`` of the SINR around the UAV and over the area, its position, time and destination:
 [`rainuav.nav.views`][rainuav.nav.views]) and ``random_goal=True`` (a destination per episode)
 optional. Without ``min_db`` a preset's map uses the preset's documented SINR threshold
-(``rainuav.radio.presets.SINR_THRESHOLDS_DB``)."""
+(``rainuav.radio.scene.presets.SINR_THRESHOLDS_DB``)."""
 
 from __future__ import annotations
 
@@ -35,8 +35,8 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import NavConfig, make_config
 from rainuav.nav.vector import UAVNavVectorEnv, check_num_envs
-from rainuav.radio.maps import RadioMap
-from rainuav.radio.scenario import Scenario
+from rainuav.radio.outputs.maps import RadioMap
+from rainuav.radio.scene.scenario import Scenario
 from rainuav.world import WorldSpec, build_world
 
 __all__ = ["make_levels_env", "make_nav_env", "make_nav_vector_env"]
@@ -152,7 +152,7 @@ def make_levels_env(
     ([`rainuav.nav.views.WeatherView`][rainuav.nav.views.WeatherView], one layer a level) and
     ``random_goal`` draws a destination per episode."""
     from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, UAVLevelsEnv
-    from rainuav.radio.presets import SINR_THRESHOLDS_DB
+    from rainuav.radio.scene.presets import SINR_THRESHOLDS_DB
     from rainuav.world import level_field, make_scenario, series_instants
 
     if "signal" in task:

@@ -11,12 +11,12 @@
 
 Writes the PNGs first (and, for a georeferenced scenario, ``radiomap.tif``: SINR, the serving cell's
 power, the serving cell and the not-flyable pixels for a GIS,
-[`rainuav.radio.maptiff`][rainuav.radio.maptiff]) and ``radiomap.npz`` (``radiomap_series.npz`` for
-maps in time) last: a folder holding it is complete (an earlier run's copy is removed before the new
-files are written). At several heights (``--altitudes-m``, or a scenario with ``area.altitudes_m``):
-per level ``sinr_<A>m.png``, ``radiomap_<A>m.npz`` and for a georeferenced scenario
-``radiomap_<A>m.tif``, then ``radiomap_levels.json`` (the levels, their files and outage shares)
-last. The library lives in [`rainuav.radio`][rainuav.radio]."""
+[`rainuav.radio.outputs.maptiff`][rainuav.radio.outputs.maptiff]) and ``radiomap.npz``
+(``radiomap_series.npz`` for maps in time) last: a folder holding it is complete (an earlier run's
+copy is removed before the new files are written). At several heights (``--altitudes-m``, or a
+scenario with ``area.altitudes_m``): per level ``sinr_<A>m.png``, ``radiomap_<A>m.npz`` and for a
+georeferenced scenario ``radiomap_<A>m.tif``, then ``radiomap_levels.json`` (the levels, their files
+and outage shares) last. The library lives in [`rainuav.radio`][rainuav.radio]."""
 
 from __future__ import annotations
 
@@ -31,8 +31,8 @@ from rainuav.errors import InvalidInputError
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from rainuav.radio import presets
-    from rainuav.radio.scenario import GROUNDS
+    from rainuav.radio.scene import presets
+    from rainuav.radio.scene.scenario import GROUNDS
 
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.radiomap", description="Build a radio map and write npz + PNGs."
@@ -52,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=Path,
         default=None,
         help="rain rates in time from a NetCDF file, (time, y, x) in mm/h on the area's metres "
-        "(rainuav.radio.rategrid; needs the 'weather' extra)",
+        "(rainuav.radio.scene.rategrid; needs the 'weather' extra)",
     )
     ap.add_argument("--freq-ghz", type=float, default=None, help="carrier frequency, GHz (1-100)")
     ap.add_argument(
@@ -117,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument(
         "--altitudes-m", default=None, metavar="LOW:HIGH:STEP",
         help="map a band of flight altitudes, m (e.g. 30:120:15): one map a level "
-        "(rainuav.radio.levelmaps)",
+        "(rainuav.radio.outputs.levelmaps)",
     )  # fmt: skip
     _cli.earlier_name(ap, "--altitudes", "altitudes_m")
     ap.add_argument("--out", type=Path, default=Path("maps"))
@@ -148,7 +148,7 @@ def _build(args: argparse.Namespace) -> int:
     from rainuav._checks import check_number
     from rainuav._io import begin_folder, check_out_dir
     from rainuav.radio import Scenario, build_radio_map, presets
-    from rainuav.radio.plot import save_map_png
+    from rainuav.radio.outputs.plot import save_map_png
 
     check_out_dir(args.out)  # before any work
     if args.storm_seed is not None and (args.config is not None or args.scenario != "storm"):
@@ -160,7 +160,7 @@ def _build(args: argparse.Namespace) -> int:
     else:
         scn = presets.PRESETS[args.scenario]()
     if args.rain_file is not None:
-        from rainuav.radio.rategrid import read_rate_grid
+        from rainuav.radio.scene.rategrid import read_rate_grid
 
         if args.rain_rate_mm_h is not None:
             raise InvalidInputError("--rain-rate-mm-h: not with --rain-file (which rain?)")
@@ -172,16 +172,16 @@ def _build(args: argparse.Namespace) -> int:
     if args.freq_ghz is not None:
         scn = scn.replace(freq_hz=args.freq_ghz * 1e9)
     if args.terrain is not None:
-        from rainuav.radio.scenario import TerrainFile
+        from rainuav.radio.scene.scenario import TerrainFile
 
         if not args.terrain.is_file():
             raise InvalidInputError(f"--terrain {args.terrain}: no such file")
         scn = scn.replace(terrain=TerrainFile(str(args.terrain.resolve())))
-    from rainuav.radio.terrain import ground_over
+    from rainuav.radio.scene.terrain import ground_over
 
     scn = scn.replace(ground=ground_over(args.terrain is not None, args.ground, scn.ground))
     if args.footprints is not None:
-        from rainuav.radio.scenario import FootprintsFile
+        from rainuav.radio.scene.scenario import FootprintsFile
 
         if not args.footprints.is_file():
             raise InvalidInputError(f"--footprints {args.footprints}: no such file")
@@ -202,7 +202,7 @@ def _build(args: argparse.Namespace) -> int:
         area = dataclasses.replace(scn.area, altitude_reference=args.altitude_reference)
         scn = scn.replace(area=area)
     if scn.footprints is not None:
-        from rainuav.radio.buildings import scenario_buildings
+        from rainuav.radio.scene.buildings import scenario_buildings
 
         # Read (or refused) before anything is built; what was left out, said.
         print(scenario_buildings(scn).summary, file=sys.stderr)  # type: ignore[union-attr]
@@ -224,7 +224,7 @@ def _build(args: argparse.Namespace) -> int:
     kinds = ("sinr", "sir", "serving", "rss")
     pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in kinds]
     if scn.origin is not None:  # georeferenced: the map for a GIS too
-        from rainuav.radio.maptiff import write_map_geotiff
+        from rainuav.radio.outputs.maptiff import write_map_geotiff
 
         pngs.append(write_map_geotiff(rm, args.out / "radiomap.tif"))
     npz = rm.save(args.out / "radiomap.npz")  # last: the folder is complete
@@ -244,7 +244,7 @@ def _threshold(args: argparse.Namespace, scn: Any) -> float:
     """The SINR counted as outage, dB: ``--min-db``, else the preset's navigation threshold,
     else (a scenario file, a place) the ``uma`` preset's, the one ``fly`` uses."""
     from rainuav._checks import check_number
-    from rainuav.radio.presets import SINR_THRESHOLDS_DB
+    from rainuav.radio.scene.presets import SINR_THRESHOLDS_DB
 
     if args.min_db is not None:
         return check_number("--min-db", args.min_db, -40.0, 60.0, " dB")
@@ -257,8 +257,8 @@ def _build_levels(args: argparse.Namespace, scn: Any) -> int:
     import numpy as np
 
     from rainuav._io import begin_folder, write_atomic
-    from rainuav.radio.levelmaps import build_radio_levels
-    from rainuav.radio.plot import save_map_png
+    from rainuav.radio.outputs.levelmaps import build_radio_levels
+    from rainuav.radio.outputs.plot import save_map_png
 
     stack = build_radio_levels(scn, cache=not args.no_cache, progress=True)
     threshold = _threshold(args, scn)
@@ -268,7 +268,7 @@ def _build_levels(args: argparse.Namespace, scn: Any) -> int:
         name = f"{a:g}m"
         written.append(save_map_png(rm, "sinr", args.out / f"sinr_{name}.png"))
         if scn.origin is not None:
-            from rainuav.radio.maptiff import write_map_geotiff
+            from rainuav.radio.outputs.maptiff import write_map_geotiff
 
             written.append(write_map_geotiff(rm, args.out / f"radiomap_{name}.tif"))
         written.append(rm.save(args.out / f"radiomap_{name}.npz"))
@@ -291,8 +291,8 @@ def _build_series(args: argparse.Namespace, scn: Any) -> int:
 
     from rainuav._io import begin_folder
     from rainuav.radio.engines import engine_of
-    from rainuav.radio.plot import save_series_gif
-    from rainuav.radio.timemap import build_radio_map_series, series_times
+    from rainuav.radio.outputs.plot import save_series_gif
+    from rainuav.radio.outputs.timemap import build_radio_map_series, series_times
 
     if args.duration_s is None:
         raise InvalidInputError("--slice-s: only with --duration-s")

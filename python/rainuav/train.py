@@ -252,7 +252,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     def body() -> int:
         from rainuav._io import check_out_dir
-        from rainuav.radio.storms import check_storm_seed
+        from rainuav.radio.scene.storms import check_storm_seed
         from rainuav.rl.config import check_config
         from rainuav.rl.loop import train
         from rainuav.rl.setup import check_fits

@@ -8,16 +8,15 @@
 Sites from a CSV or GeoJSON file (one row per sector: ``site_id, lat, lon, height_m, azimuth_deg,
 electrical_tilt_deg, tx_power_dbm``, optional ``antenna, rows, mechanical_tilt_deg, freq_ghz``;
 azimuths clockwise from north, tilts positive down, as operators give them:
-[`rainuav.radio.sites`][rainuav.radio.sites]), the start and destination as ``LAT,LON`` (degrees,
-WGS 84; south and west negative), the flight altitude, the carrier and homogeneous rain
-(``--rain-rate-mm-h``) or a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with one
-band per instant or a folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several instants
-give a weather that moves and the exact plan in space-time:
-[`rainuav.radio.radar`][rainuav.radio.radar]). The area is the box around the start, the destination
-and the sites with a 300 m margin (at most 10 km x 10 km), in metres of an azimuthal equidistant
-projection centred on it ([`rainuav.geo`][rainuav.geo]). Plans the exact optimum
-(``rainuav.nav.planner``) and writes into
-``--out``:
+[`rainuav.radio.scene.sites`][rainuav.radio.scene.sites]), the start and destination as ``LAT,LON``
+(degrees, WGS 84; south and west negative), the flight altitude, the carrier and homogeneous rain
+(``--rain-rate-mm-h``) or a georeferenced rain file (``--weather``: NetCDF, a GeoTIFF with one band
+per instant or a folder of GeoTIFF scans, in mm/h or dBZ, Marshall-Palmer; several instants give a
+weather that moves and the exact plan in space-time:
+[`rainuav.radio.scene.radar`][rainuav.radio.scene.radar]). The area is the box around the start, the
+destination and the sites with a 300 m margin (at most 10 km x 10 km), in metres of an azimuthal
+equidistant projection centred on it ([`rainuav.geo`][rainuav.geo]). Plans the exact optimum
+(``rainuav.nav.planner``) and writes into ``--out``:
 
 - ``flight.geojson`` (the path, WGS 84, with per-vertex time, SINR, serving cell and outage;
   the sites as points), ``flight.kml`` (Google Earth, altitude above the ground);
@@ -87,7 +86,7 @@ def _start(text: str) -> tuple[float, ...]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from rainuav.radio.scenario import GROUNDS
+    from rainuav.radio.scene.scenario import GROUNDS
 
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.fly",
@@ -213,7 +212,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             default_height_m=args.default_height, ground=args.ground,
         )  # fmt: skip
         if args.footprints is not None:
-            from rainuav.radio.buildings import scenario_buildings
+            from rainuav.radio.scene.buildings import scenario_buildings
 
             print(scenario_buildings(place.scenario).summary, file=sys.stderr)  # type: ignore[union-attr]
         flyer, by = (None, "exact optimum") if args.policy is None else _policy(args.policy)
@@ -228,7 +227,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         print(json.dumps(summary, indent=2))
         if place.scenario.footprints is not None:
-            from rainuav.radio.buildings import default_height_warning
+            from rainuav.radio.scene.buildings import default_height_warning
 
             warn = default_height_warning(summary, place.scenario.footprints.default_height_m)
             if warn:

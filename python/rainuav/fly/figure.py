@@ -12,7 +12,7 @@ import numpy as np
 from rainuav._io import write_atomic
 from rainuav.geo import latlon_text
 from rainuav.missions import corners
-from rainuav.radio import presets
+from rainuav.radio.scene import presets
 
 __all__ = ["flight_figure", "plot_flight"]
 
@@ -52,7 +52,7 @@ def flight_figure(rm: Any, path: np.ndarray, place: Any, heights: Any = None) ->
     sinr = rm.sinr_db if rm.sinr_db.ndim == 2 else rm.sinr_db[0]  # a series: at take-off
     im = ax.imshow(sinr, origin="lower", extent=(x0, x1, y0, y1), cmap="RdYlGn",
                    vmin=lo - 15, vmax=lo + 15)  # fmt: skip
-    from rainuav.radio.pe_engine import rain_rate_at
+    from rainuav.radio.engines.pe_engine import rain_rate_at
 
     scn = place.scenario
     if scn.medium.varies:  # the rain at take-off, outlined
@@ -109,7 +109,7 @@ def _obstacles(
             proxies.append(Patch(facecolor="none", edgecolor="0.2", hatch="xxxx", lw=0.5,
                                  label="not flyable"))  # fmt: skip
     if scn.buildings or scn.footprints is not None:
-        from rainuav.radio.buildings import scenario_buildings
+        from rainuav.radio.scene.buildings import scenario_buildings
 
         b = scenario_buildings(scn)
         for k, f in enumerate(() if b is None else b.footprints):

@@ -1,5 +1,5 @@
 """``fly`` with altitude as a decision (``--altitudes-m``): the place mapped at each flight level
-([`rainuav.radio.levelmaps`][rainuav.radio.levelmaps]), the exact plan among them
+([`rainuav.radio.outputs.levelmaps`][rainuav.radio.outputs.levelmaps]), the exact plan among them
 ([`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]: climbs and descents
 weighted by their duration) from the take-off level the planner finds best (of those flyable at the
 start; or the one given), and the flight's files with a height on every waypoint (relative to home;
@@ -36,11 +36,11 @@ from rainuav.missions import (
 from rainuav.nav import planner
 from rainuav.nav.field import pixel_index
 from rainuav.nav.task import NavConfig
-from rainuav.radio import presets
-from rainuav.radio.buildings import buildings_near_route
-from rainuav.radio.maptiff import write_map_geotiff
-from rainuav.radio.terrain import obstacle_pixel_max, scenario_terrain
-from rainuav.radio.timemap import series_times
+from rainuav.radio.outputs.maptiff import write_map_geotiff
+from rainuav.radio.outputs.timemap import series_times
+from rainuav.radio.scene import presets
+from rainuav.radio.scene.buildings import buildings_near_route
+from rainuav.radio.scene.terrain import obstacle_pixel_max, scenario_terrain
 from rainuav.world import SLICE_S, level_field
 
 __all__ = ["fly_levels"]

@@ -34,18 +34,18 @@ from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import blocked_at, pixel_index
 from rainuav.nav.task import NavConfig, base_reward
-from rainuav.radio import presets
-from rainuav.radio.buildings import buildings_near_route
 from rainuav.radio.engines import for_time
-from rainuav.radio.maps import build_radio_map
-from rainuav.radio.maptiff import write_map_geotiff
-from rainuav.radio.scenario import Scenario
-from rainuav.radio.terrain import (
+from rainuav.radio.outputs.maps import build_radio_map
+from rainuav.radio.outputs.maptiff import write_map_geotiff
+from rainuav.radio.outputs.timemap import build_radio_map_series, series_times
+from rainuav.radio.scene import presets
+from rainuav.radio.scene.buildings import buildings_near_route
+from rainuav.radio.scene.scenario import Scenario
+from rainuav.radio.scene.terrain import (
     flight_heights_at,
     obstacle_pixel_max,
     scenario_terrain,
 )
-from rainuav.radio.timemap import build_radio_map_series, series_times
 from rainuav.world import SLICE_S, World, world_from
 from rainuav.world.place import Place
 

@@ -1,25 +1,43 @@
 """Radio maps: a scenario (network, weather, airspace) in, every cell's received power, the
-serving cell, SIR and SINR at the flight altitude out.
+serving cell, SIR and SINR at the flight altitude out. Four sub-packages, each depending only on
+those before it:
 
-Modules, bottom up: [`cell`][rainuav.radio.cell] (a cell and its antenna),
-[`scenario`][rainuav.radio.scenario] (the dataclasses and their TOML form),
-[`presets`][rainuav.radio.presets] (the paper's and our scenarios), [`grid`][rainuav.radio.grid]
-(one cell's PE grid and cone), [`pe_engine`][rainuav.radio.pe_engine] (the march per cell),
-[`ray_engine`][rainuav.radio.ray_engine] (two rays per cell and pixel, in Rust),
-[`sinr`][rainuav.radio.sinr], [`radiomap`][rainuav.radio.maps] (the map and its builder),
-[`weather`][rainuav.radio.weather], [`storms`][rainuav.radio.storms],
-[`rategrid`][rainuav.radio.rategrid] and [`stochastic`][rainuav.radio.stochastic] (weather in time),
-[`timemap`][rainuav.radio.timemap] (maps of a moving weather at many instants),
-[`cache`][rainuav.radio.cache] and [`plot`][rainuav.radio.plot]. Depends on
-[`rainuav.medium`][rainuav.medium], [`rainuav.antenna`][rainuav.antenna] and
-[`rainuav.pwe`][rainuav.pwe] only; nothing here knows about navigation or learning."""
+- [`scene`][rainuav.radio.scene]: what is there. The scenario and its TOML form
+  ([`scenario`][rainuav.radio.scene.scenario], [`area`][rainuav.radio.scene.area],
+  [`cell`][rainuav.radio.scene.cell], [`presets`][rainuav.radio.scene.presets],
+  [`sites`][rainuav.radio.scene.sites]), the ground ([`terrain`][rainuav.radio.scene.terrain],
+  [`buildings`][rainuav.radio.scene.buildings]) and the weather
+  ([`weather`][rainuav.radio.scene.weather], [`storms`][rainuav.radio.scene.storms],
+  [`stochastic`][rainuav.radio.scene.stochastic], [`rategrid`][rainuav.radio.scene.rategrid],
+  [`radar`][rainuav.radio.scene.radar], [`geotiff`][rainuav.radio.scene.geotiff]).
+- [`engines`][rainuav.radio.engines]: how the field gets there. The registry (what each engine
+  does), the PE march per cell ([`grid`][rainuav.radio.engines.grid],
+  [`pe_engine`][rainuav.radio.engines.pe_engine]), the rays
+  ([`ray_engine`][rainuav.radio.engines.ray_engine],
+  [`wall_rays`][rainuav.radio.engines.wall_rays]), the two together
+  ([`hybrid`][rainuav.radio.engines.hybrid]).
+- [`outputs`][rainuav.radio.outputs]: what comes out. A map and its builder
+  ([`maps`][rainuav.radio.outputs.maps], [`mapdata`][rainuav.radio.outputs.mapdata],
+  [`sinr`][rainuav.radio.outputs.sinr]), maps in time and at several levels
+  ([`timemap`][rainuav.radio.outputs.timemap], [`levelmaps`][rainuav.radio.outputs.levelmaps]),
+  GeoTIFF ([`maptiff`][rainuav.radio.outputs.maptiff]), figures
+  ([`plot`][rainuav.radio.outputs.plot]) and the map cache
+  ([`cache`][rainuav.radio.outputs.cache]).
+- [`reference`][rainuav.radio.reference]: what the engines are measured against, a full ray
+  tracer on the same scene ([`tracer`][rainuav.radio.reference.tracer]).
+
+Depends on [`rainuav.medium`][rainuav.medium], [`rainuav.antenna`][rainuav.antenna],
+[`rainuav.pwe`][rainuav.pwe] and [`rainuav.ground`][rainuav.ground] only; nothing here knows
+about navigation or learning."""
 
 from __future__ import annotations
 
-from rainuav.radio import presets
-from rainuav.radio.cache import cache_dir, clear_cache
-from rainuav.radio.maps import RadioMap, build_radio_map
-from rainuav.radio.scenario import (
+from rainuav.radio.outputs.cache import cache_dir, clear_cache
+from rainuav.radio.outputs.maps import RadioMap, build_radio_map
+from rainuav.radio.outputs.sinr import sir_from_power
+from rainuav.radio.outputs.timemap import RadioMapSeries, build_radio_map_series
+from rainuav.radio.scene import presets
+from rainuav.radio.scene.scenario import (
     Area,
     Building,
     Cell,
@@ -30,8 +48,6 @@ from rainuav.radio.scenario import (
     Scenario,
     Site,
 )
-from rainuav.radio.sinr import sir_from_power
-from rainuav.radio.timemap import RadioMapSeries, build_radio_map_series
 
 __all__ = [
     "Area",

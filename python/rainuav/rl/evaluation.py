@@ -21,7 +21,7 @@ from rainuav._checks import check_integer
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.levels import UAVLevelsEnv
-from rainuav.radio.maps import RadioMap
+from rainuav.radio.outputs.maps import RadioMap
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import (

@@ -34,7 +34,7 @@ import tomli_w
 from rainuav._io import FolderLock, check_out_dir, write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.radio.storms import check_storm_seed
+from rainuav.radio.scene.storms import check_storm_seed
 from rainuav.rl import checkpoint
 from rainuav.rl.callbacks import (
     Callback,

@@ -20,7 +20,7 @@ from rainuav._checks import check_integer
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.views import sample_goal, sample_start_for
-from rainuav.radio.storms import EVAL_SEEDS_FROM, MAX_STORM_SEED
+from rainuav.radio.scene.storms import EVAL_SEEDS_FROM, MAX_STORM_SEED
 from rainuav.rl import checkpoint
 from rainuav.rl.config import check_config, load_config
 from rainuav.rl.evaluation import eval_starts, evaluate, load_agent, reference_flights

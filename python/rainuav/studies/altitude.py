@@ -2,10 +2,10 @@
 fly on the case's network and weather.
 
 The case's scenario is mapped at each of its ``altitudes_m``
-([`rainuav.radio.levelmaps`][rainuav.radio.levelmaps]); for the evaluation starts (seeded from the
-case's seed) the exact plan held at each level (the planner in the plane), the best single level of
-each flight (chosen with hindsight) and the exact plan among the levels (free to climb at 5 m/s and
-descend at 3 m/s, its start level chosen:
+([`rainuav.radio.outputs.levelmaps`][rainuav.radio.outputs.levelmaps]); for the evaluation starts
+(seeded from the case's seed) the exact plan held at each level (the planner in the plane), the best
+single level of each flight (chosen with hindsight) and the exact plan among the levels (free to
+climb at 5 m/s and descend at 3 m/s, its start level chosen:
 [`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]) are computed, each as
 mean cost (the task's: time plus the outage penalty; ``cost_by_altitude`` gives each level's mean
 over the flights that arrive and, in brackets, their share: a start inside a building a low level
@@ -21,8 +21,8 @@ import numpy as np
 from rainuav.nav import planner
 from rainuav.nav.field import SignalField
 from rainuav.nav.task import NavConfig
-from rainuav.radio.levelmaps import build_radio_levels, sample_levels
-from rainuav.radio.scenario import Scenario
+from rainuav.radio.outputs.levelmaps import build_radio_levels, sample_levels
+from rainuav.radio.scene.scenario import Scenario
 
 __all__ = ["ALTITUDE_COLUMNS", "altitude_row"]
 

@@ -28,7 +28,7 @@ def plot_maps(cases: list[Case], path: Path, quantity: str = "sinr") -> bool:
     there is only one map (nothing to compare)."""
     from matplotlib.figure import Figure
 
-    from rainuav.radio.maps import build_radio_map
+    from rainuav.radio.outputs.maps import build_radio_map
 
     maps: list[tuple[str, Any]] = []
     seen: set[str] = set()

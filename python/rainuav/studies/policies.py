@@ -73,7 +73,7 @@ def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, 
     ``{case id: its transfer figures}`` for every case that has them."""
     from matplotlib.figure import Figure
 
-    from rainuav.radio.maps import RadioMap
+    from rainuav.radio.outputs.maps import RadioMap
     from rainuav.rl.plots import draw_flights, optimal_paths
 
     if study.sweep != "one_at_a_time" or "learned" not in study.compute:

@@ -8,10 +8,10 @@ A case computes what the study asks (``map``, ``optimal``, ``learned``) and writ
 last, atomically: a case folder with ``result.json`` is finished and a rerun skips it; anything else
 in a folder without it is redone. Cases run in spawned worker processes (``workers``); maps are
 built once per distinct scenario through the map cache
-([`rainuav.radio.cache`][rainuav.radio.cache]), before the cases, so parallel cases never build the
-same map twice. ``results.csv`` and ``report.md`` are written from the finished cases in case order,
-so they do not depend on the number of workers; ``results.csv`` is the study folder's last file
-(removed when a run starts), so a folder holding it is complete."""
+([`rainuav.radio.outputs.cache`][rainuav.radio.outputs.cache]), before the cases, so parallel cases
+never build the same map twice. ``results.csv`` and ``report.md`` are written from the finished
+cases in case order, so they do not depend on the number of workers; ``results.csv`` is the study
+folder's last file (removed when a run starts), so a folder holding it is complete."""
 
 from __future__ import annotations
 

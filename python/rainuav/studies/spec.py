@@ -38,8 +38,8 @@ from typing import Any
 
 from rainuav._io import read_toml
 from rainuav.errors import InvalidInputError
-from rainuav.radio import presets
-from rainuav.radio.scenario import Scenario
+from rainuav.radio.scene import presets
+from rainuav.radio.scene.scenario import Scenario
 from rainuav.rl.config import MAX_STARTS, TrainConfig, check_config, flat_fields, resolve_config
 from rainuav.world import make_scenario
 

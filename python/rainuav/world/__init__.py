@@ -2,20 +2,20 @@
 ([`WorldSpec`][rainuav.world.WorldSpec]) for every entry point: ``gym.make("rainuav/UAVNav-v0")``,
 ``python -m rainuav.train``, ``rainuav.evaluate`` and the studies.
 
-Where things go: a new weather is a [`rainuav.radio.Medium`][rainuav.radio.weather.Medium] kind
-(``radio``); a new task rule goes in [`rainuav.nav`][rainuav.nav] (``NavConfig`` and ``UAVNavEnv``);
-a new learner goes in [`rainuav.rl`][rainuav.rl] and receives a built [`World`][rainuav.world.World]
-(or its env), the way Stable-Baselines3's ``DQN(env).learn()`` does. This module is the only place
-where a scenario, its weather and a task become something to fly; it sits above ``radio`` and
-``nav`` and below ``rl``.
+Where things go: a new weather is a [`rainuav.radio.Medium`][rainuav.radio.scene.weather.Medium]
+kind (``radio``); a new task rule goes in [`rainuav.nav`][rainuav.nav] (``NavConfig`` and
+``UAVNavEnv``); a new learner goes in [`rainuav.rl`][rainuav.rl] and receives a built
+[`World`][rainuav.world.World] (or its env), the way Stable-Baselines3's ``DQN(env).learn()`` does.
+This module is the only place where a scenario, its weather and a task become something to fly; it
+sits above ``radio`` and ``nav`` and below ``rl``.
 
 A spec names the scenario (a preset, or a scenario file), its weather (the scenario's own,
 homogeneous rain at ``rain_rate_mm_h``, or the random storm ``storm_seed`` of the ``storm``
 preset), the propagation engine, the flight levels and the task
 ([`NavConfig`][rainuav.nav.task.NavConfig], its ``task``). A weather that moves is mapped at
 instants ``slice_s`` apart over the task's horizon (``max_steps`` moves of ``step_m /
-speed_m_s`` seconds; [`rainuav.radio.timemap`][rainuav.radio.timemap]), and the UAV flies the
-series ([`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries])"""
+speed_m_s`` seconds; [`rainuav.radio.outputs.timemap`][rainuav.radio.outputs.timemap]), and the UAV
+flies the series ([`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries])"""
 
 from __future__ import annotations
 
@@ -35,16 +35,16 @@ from rainuav.nav.field import SignalBank, SignalField, SignalSeries
 from rainuav.nav.levels import LevelField, UAVLevelsEnv
 from rainuav.nav.task import NavConfig, check_task
 from rainuav.nav.vector import UAVNavVectorEnv
-from rainuav.radio import presets
 from rainuav.radio.engines import ENGINES as RADIO_ENGINES
 from rainuav.radio.engines import for_time
-from rainuav.radio.levelmaps import LevelStack
-from rainuav.radio.mapdata import RadioMap
-from rainuav.radio.maps import build_radio_map
-from rainuav.radio.scenario import Scenario
-from rainuav.radio.storms import check_storm_seed
-from rainuav.radio.terrain import map_mask
-from rainuav.radio.timemap import RadioMapSeries, build_radio_map_series, series_times
+from rainuav.radio.outputs.levelmaps import LevelStack
+from rainuav.radio.outputs.mapdata import RadioMap
+from rainuav.radio.outputs.maps import build_radio_map
+from rainuav.radio.outputs.timemap import RadioMapSeries, build_radio_map_series, series_times
+from rainuav.radio.scene import presets
+from rainuav.radio.scene.scenario import Scenario
+from rainuav.radio.scene.storms import check_storm_seed
+from rainuav.radio.scene.terrain import map_mask
 
 __all__ = [
     "MAP_FILES",
@@ -68,7 +68,8 @@ __all__ = [
 
 MAP_FILES = ("radiomap.npz", "radiomap_series.npz", "radiolevels.npz")
 """The files a world's signal is saved in: a single map, maps in time, or the maps of every
-flight level ([`rainuav.radio.levelmaps.LevelStack`][rainuav.radio.levelmaps.LevelStack])."""
+flight level
+([`rainuav.radio.outputs.levelmaps.LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack])."""
 ENGINES = ("", *RADIO_ENGINES)
 MAX_POOL = 64
 """The most storms flown at once (each holds its maps in time: about 20 MB)."""
@@ -333,13 +334,13 @@ def level_field(
     """The signal at every level of ``scn``'s ``area.altitudes_m`` as a
     [`rainuav.nav.levels.LevelField`][rainuav.nav.levelfield.LevelField] (what the flights among
     levels read), and the maps it came from:
-    [`rainuav.radio.levelmaps.build_radio_levels()`][rainuav.radio.levelmaps.build_radio_levels],
+    [`rainuav.radio.outputs.levelmaps.build_radio_levels()`][rainuav.radio.outputs.levelmaps.build_radio_levels],
     or where ``times_s`` are given
-    [`build_radio_level_series()`][rainuav.radio.levelmaps.build_radio_level_series] (engine 'pe'
-    then becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps flown
-    once (a storm pool's), not kept in the map cache."""
+    [`build_radio_level_series()`][rainuav.radio.outputs.levelmaps.build_radio_level_series] (engine
+    'pe' then becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps
+    flown once (a storm pool's), not kept in the map cache."""
     from rainuav.nav.levels import LevelField
-    from rainuav.radio.levelmaps import build_radio_level_series, build_radio_levels
+    from rainuav.radio.outputs.levelmaps import build_radio_level_series, build_radio_levels
 
     if times_s is None:
         stack = build_radio_levels(scn, progress=progress, cache=cache)

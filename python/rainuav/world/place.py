@@ -2,12 +2,13 @@
 (``python -m rainuav.fly``).
 
 [`place_scenario()`][rainuav.world.place.place_scenario]: sites from a file
-([`rainuav.radio.sites`][rainuav.radio.sites]), a start and a destination in latitude and longitude,
-the flight altitude, the carrier and homogeneous rain become a scenario of the ``uma`` preset's
-radio settings (bandwidth, noise figure, ground, engine) over an area around the start, the
-destination and the sites with a margin, in metres of a [`rainuav.geo.Georef`][rainuav.geo.Georef]
-centred on that box. [`fly_place()`][rainuav.fly.plan.fly_place] plans the exact optimum from the
-start (``rainuav.nav.planner``) and the straight line, and writes the flight
+([`rainuav.radio.scene.sites`][rainuav.radio.scene.sites]), a start and a destination in latitude
+and longitude, the flight altitude, the carrier and homogeneous rain become a scenario of the
+``uma`` preset's radio settings (bandwidth, noise figure, ground, engine) over an area around the
+start, the destination and the sites with a margin, in metres of a
+[`rainuav.geo.Georef`][rainuav.geo.Georef] centred on that box.
+[`fly_place()`][rainuav.fly.plan.fly_place] plans the exact optimum from the start
+(``rainuav.nav.planner``) and the straight line, and writes the flight
 ([`rainuav.missions`][rainuav.missions])."""
 
 from __future__ import annotations
@@ -23,11 +24,11 @@ import numpy as np
 from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef, latlon_text
 from rainuav.nav.task import NavConfig
-from rainuav.radio import presets
-from rainuav.radio.radar import read_radar_grid
-from rainuav.radio.scenario import Area, FootprintsFile, Origin, Scenario, TerrainFile
-from rainuav.radio.sites import read_site_rows, sites_from_rows
-from rainuav.radio.terrain import (
+from rainuav.radio.scene import presets
+from rainuav.radio.scene.radar import read_radar_grid
+from rainuav.radio.scene.scenario import Area, FootprintsFile, Origin, Scenario, TerrainFile
+from rainuav.radio.scene.sites import read_site_rows, sites_from_rows
+from rainuav.radio.scene.terrain import (
     ground_over,
 )
 
@@ -78,10 +79,10 @@ def place_scenario(
     """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees. Bad input
     is refused in one line naming the argument in backticks (`` `box` ``), as the ``fly`` command
     translates it into its flag (``--area``). ``weather``:
-    a georeferenced rain file ([`rainuav.radio.radar`][rainuav.radio.radar], mm/h or dBZ, one
-    instant or several) in place of homogeneous rain. ``box``: the area as (south latitude, west
-    longitude, north latitude, east longitude), degrees, in place of the box around the start, the
-    destination and the sites; the start and the destination must lie in it. ``terrain``: a DEM
+    a georeferenced rain file ([`rainuav.radio.scene.radar`][rainuav.radio.scene.radar], mm/h or
+    dBZ, one instant or several) in place of homogeneous rain. ``box``: the area as (south latitude,
+    west longitude, north latitude, east longitude), degrees, in place of the box around the start,
+    the destination and the sites; the start and the destination must lie in it. ``terrain``: a DEM
     GeoTIFF under the place ([`rainuav.ground.dem`][rainuav.ground.dem]), with the flight altitude
     above the terrain (``altitude_reference="ground"``, the default) or above sea level (``"msl"``).
     ``footprints``: building footprints in GeoJSON
@@ -90,7 +91,7 @@ def place_scenario(
     (default the preset's, hybrid). ``default_height_m``: the roof of a footprint with neither a
     height nor storeys (``[footprints] default_height_m``, default 10 m). ``ground``: the ground's
     material (default: the preset's PEC on flat ground, medium-dry over a DEM:
-    [`ground_over()`][rainuav.radio.terrain.ground_over])."""
+    [`ground_over()`][rainuav.radio.scene.terrain.ground_over])."""
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}

@@ -5,8 +5,8 @@
 Seeds: training storms are drawn in [`TRAINING_SEEDS`][rainuav.world.pool.TRAINING_SEEDS];
 [`VALIDATION_SEEDS`][rainuav.world.pool.VALIDATION_SEEDS] are for choices made while building a
 learner; from 1 000 000 the evaluation storms
-([`rainuav.radio.storms.EVAL_SEEDS_FROM`][rainuav.radio.storms.EVAL_SEEDS_FROM]), never trained or
-tuned on."""
+([`rainuav.radio.scene.storms.EVAL_SEEDS_FROM`][rainuav.radio.scene.storms.EVAL_SEEDS_FROM]), never
+trained or tuned on."""
 
 from __future__ import annotations
 
@@ -21,9 +21,9 @@ from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.nav.field import SignalBank, SignalSeries
 from rainuav.nav.levelfield import LevelField
-from rainuav.radio.levelmaps import LevelStack
-from rainuav.radio.scenario import Scenario
-from rainuav.radio.timemap import build_radio_map_series
+from rainuav.radio.outputs.levelmaps import LevelStack
+from rainuav.radio.outputs.timemap import build_radio_map_series
+from rainuav.radio.scene.scenario import Scenario
 from rainuav.world import (
     World,
     check_spec,
@@ -43,7 +43,7 @@ TRAINING_SEEDS = (0, 900_000)
 VALIDATION_SEEDS = (900_000, 1_000_000)
 """Storms for choices made while building a learner (validation); never drawn for training. The
 evaluation storms start at 1 000 000
-([`rainuav.radio.storms.EVAL_SEEDS_FROM`][rainuav.radio.storms.EVAL_SEEDS_FROM])."""
+([`rainuav.radio.scene.storms.EVAL_SEEDS_FROM`][rainuav.radio.scene.storms.EVAL_SEEDS_FROM])."""
 
 
 CALM_STREAM = 0xCA1A
@@ -79,10 +79,10 @@ class StormPool:
     being mapped next).
 
     Among flight levels (``spec.altitudes_m``) a storm is the maps of every level in time
-    ([`rainuav.radio.levelmaps.LevelStack`][rainuav.radio.levelmaps.LevelStack]) and the bank a
-    [`rainuav.nav.levelfield.LevelField.bank()`][rainuav.nav.levelfield.LevelField.bank]; the pool's
-    memory (the slots, the storm being mapped and the one being put) is checked once the first storm
-    is mapped."""
+    ([`rainuav.radio.outputs.levelmaps.LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack]) and
+    the bank a [`rainuav.nav.levelfield.LevelField.bank()`][rainuav.nav.levelfield.LevelField.bank];
+    the pool's memory (the slots, the storm being mapped and the one being put) is checked once the
+    first storm is mapped."""
 
     def __init__(self, spec: Any, seed: int, *, progress: bool = False) -> None:
         check_spec(spec)

@@ -1,0 +1,383 @@
+"""The ray engine: every cell's received power at every pixel from two rays (docs/physics.md
+section 8), the per-pixel work in Rust (``rainuav_core::rays``).
+
+For each cell and pixel: the line-of-sight ray and the ray reflected by the ground, each with the
+cell's antenna gain in its own departure direction
+([`rainuav.radio.scene.cell`][rainuav.radio.scene.cell]) and free-space spreading; the ground is
+PEC, absent, or an ITU-R P.527 soil (Fresnel coefficients for the scenario's polarisation); rain
+attenuation is integrated along each ray through the scenario's rain field (homogeneous: ``gamma
+d``; rain cells and rate maps: a raster of ``gamma`` nodes integrated along the ray). Over terrain
+([`rainuav.radio.scene.terrain`][rainuav.radio.scene.terrain]) and obstacles (buildings, the height
+map, standing on the terrain), each site-pixel path reads its profile: the direct ray gets the
+diffraction loss of the whole profile (the terrain's: ITU-R P.526-15 section 4.5.1 Bullington with
+its correction; a building's: Deygout's isolated edges) with the antenna gain toward the principal
+edge, and the ground reflects off the line fitted over its first Fresnel zone, weighted by the
+terrain's roughness, faded where its legs are half hidden
+([`departures()`][rainuav.radio.engines.ray_engine.departures]); the walls reflect once and twice
+and the buildings' corners diffract round them
+([`rainuav.radio.engines.wall_rays`][rainuav.radio.engines.wall_rays]; docs/physics.md sections 8
+and 12). Each pixel holds the mean power over its area (ground-reflection fringes finer than a pixel
+are averaged, not aliased).
+
+With ``weights``, [`ray_power()`][rainuav.radio.engines.ray_engine.ray_power] also returns the power
+of the part of each pattern the weights select: what the PE would carry in the hybrid engine
+([`rainuav.radio.outputs.maps.build_radio_map()`][rainuav.radio.outputs.maps.build_radio_map])."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from rainuav import _core
+from rainuav.radio.engines.grid import C0_M_S
+from rainuav.radio.engines.pe_engine import rain_rate_at
+from rainuav.radio.engines.wall_rays import obstacle_args, trace_walls, wall_terms
+from rainuav.radio.scene.cell import Cell, Weight, gain_linear, weight_at
+from rainuav.radio.scene.scenario import Scenario, Site
+from rainuav.radio.scene.terrain import core_args
+
+__all__ = [
+    "SOILS",
+    "departures",
+    "gamma_field",
+    "gamma_table",
+    "ground_permittivity",
+    "rain_args",
+    "ray_directions",
+    "ray_gains",
+    "ray_power",
+    "ray_slicer",
+    "ray_terms",
+]
+
+SOILS: dict[str, tuple[float, float, float, float]] = {
+    "very-dry": (3.0, 0.0, 0.00015, 2.52),
+    "medium-dry": (15.0, -0.1, 0.035, 1.63),
+    "wet": (30.0, -0.4, 0.15, 1.30),
+}
+"""ITU-R P.527 soils as the curve fits of ITU-R P.2040 Table 3: ``eps_r = a f^b``,
+``sigma = c f^d`` S/m with f in GHz (fitted over 1-10 GHz; held as they are above)."""
+
+
+def ground_permittivity(kind: str, freq_hz: float) -> complex:
+    """Complex relative permittivity ``eps_r - j 60 lambda sigma`` of a P.527 soil."""
+    a, b, c, d = SOILS[kind]
+    f_ghz = freq_hz / 1e9
+    lam = C0_M_S / freq_hz
+    return complex(a * f_ghz**b, -60.0 * lam * c * f_ghz**d)
+
+
+def gamma_table(scn: Scenario, max_rate_mm_h: float) -> tuple[np.ndarray, np.ndarray]:
+    """The rain's specific attenuation (dB/km) of ``scn``'s weather tabulated against the rain
+    rate over 0..``max_rate_mm_h`` at 513 points: smooth in the rate, so interpolating it
+    errs far below 1e-4 relative."""
+    rm = scn.medium.rain_medium(scn.freq_hz, scn.polarization)
+    table_r = np.linspace(0.0, max(max_rate_mm_h, 1e-3), 513)
+    return table_r, np.asarray(rm.specific_attenuation(table_r), dtype=float)
+
+
+def _node_spacing(scn: Scenario) -> float:
+    """The spacing of the rain's nodes for the rays: the pixel, at most 10 m."""
+    return min(scn.area.resolution_m, 10.0)
+
+
+def gamma_field(
+    scn: Scenario,
+    spacing_m: float | None = None,
+    table: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[float, np.ndarray | None, tuple[float, float, float, float]]:
+    """The rain's specific attenuation for the rays: (uniform dB/m, raster of nodes in dB/m
+    or None, (x0, dx, y0, dy) of the raster). Rain cells and rate maps are sampled at nodes
+    ``spacing_m`` apart (default: the pixel, at most 10 m) over the area; ``table``
+    ([`gamma_table()`][rainuav.radio.engines.ray_engine.gamma_table], covering the field's rates)
+    saves tabulating gamma again."""
+    m = scn.medium
+    if m.kind == "clear":
+        return 0.0, None, (0.0, 1.0, 0.0, 1.0)
+    if m.kind == "homogeneous":
+        rm = m.rain_medium(scn.freq_hz, scn.polarization)
+        return float(rm.specific_attenuation(m.rain_rate_mm_h)) / 1000.0, None, (0, 1, 0, 1)
+    a = scn.area
+    step = spacing_m or _node_spacing(scn)
+    nx = math.ceil((a.x_max_m - a.x_min_m) / step) + 1
+    ny = math.ceil((a.y_max_m - a.y_min_m) / step) + 1
+    xs = a.x_min_m + np.arange(nx) * step
+    ys = a.y_min_m + np.arange(ny) * step
+    rates = rain_rate_at(scn, xs[None, :], ys[:, None])
+    if table is None or table[0][-1] < rates.max():
+        table = gamma_table(scn, float(rates.max()))
+    gamma = np.interp(rates, *table) / 1000.0
+    return 0.0, np.ascontiguousarray(gamma), (a.x_min_m, step, a.y_min_m, step)
+
+
+def _directions(
+    scn: Scenario, site: Site, x_m: np.ndarray, y_m: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Global azimuth (H, W) and the elevations of the direct and the reflected ray, degrees,
+    from ``site`` toward every pixel."""
+    ex = x_m[None, :] - site.x_m
+    ey = y_m[:, None] - site.y_m
+    rho = np.hypot(ex, ey)
+    h_s, h_q = site.height_m, scn.area.altitude_m
+    az = np.degrees(np.arctan2(ey, ex))
+    return az, np.degrees(np.arctan2(h_q - h_s, rho)), np.degrees(-np.arctan2(h_q + h_s, rho))
+
+
+def _flat_open(scn: Scenario) -> bool:
+    return (
+        scn.terrain is None
+        and not scn.buildings
+        and scn.footprints is None
+        and scn.height_map_m is None
+    )
+
+
+def departures(
+    scn: Scenario, sites: Sequence[Site], x_m: np.ndarray, y_m: np.ndarray
+) -> np.ndarray:
+    """The departure elevations (degrees) toward which each site's antenna gains are taken,
+    (S, H, W, 2): the direct ray's (the diffracting edge where the profile costs a loss, else
+    the pixel) and the reflected ray's (the specular point). Over flat open ground these are
+    the closed forms of ``_directions``."""
+    return np.degrees(_path_table(scn, sites, x_m, y_m)[1][..., 3:5])
+
+
+Paths = tuple[np.ndarray, np.ndarray]
+"""Every path of some sites traced once: the sites (S, 3: x, y, height) and the geometry of
+each path (S, H, W, 7: ``[d1, d2, loss_db, el_direct, el_reflect, psi, reflect]``, elevations
+in radians), as `rainuav._core.ray_power` takes them back."""
+
+
+def _path_table(scn: Scenario, sites: Sequence[Site], x_m: np.ndarray, y_m: np.ndarray) -> Paths:
+    a = scn.area
+    xyz = np.array([[s.x_m, s.y_m, s.height_m] for s in sites], dtype=float).reshape(-1, 3)
+    table = _core.ray_departures(
+        xyz,
+        np.ascontiguousarray(x_m, dtype=float),
+        np.ascontiguousarray(y_m, dtype=float),
+        altitude_m=a.altitude_m,
+        freq_hz=scn.freq_hz,
+        ground="none" if scn.ground == "none" else "pec",
+        full=True,
+        **obstacle_args(scn),
+        **core_args(scn),
+    )
+    return xyz, table
+
+
+def _trace(
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    gains: tuple[np.ndarray, np.ndarray],
+    medium_args: dict[str, Any],
+    terms_only: bool = False,
+    walls: np.ndarray | None = None,
+    paths: Paths | None = None,
+) -> np.ndarray:
+    a = scn.area
+    tx = np.array([[s.x_m, s.y_m, s.height_m] for s, _ in jobs], dtype=float).reshape(-1, 3)
+    pw = np.array([10 ** (c.tx_power_dbm / 10) for _, c in jobs], dtype=float)
+    px = ((a.x_max_m - a.x_min_m) / x_m.size, (a.y_max_m - a.y_min_m) / y_m.size)
+    return _core.ray_power(
+        tx,
+        pw,
+        np.ascontiguousarray(gains[0]),
+        np.ascontiguousarray(gains[1]),
+        np.ascontiguousarray(x_m, dtype=float),
+        np.ascontiguousarray(y_m, dtype=float),
+        altitude_m=a.altitude_m,
+        pixel_m=px,
+        freq_hz=scn.freq_hz,
+        polarization=scn.polarization,
+        terms_only=terms_only,
+        walls=walls,
+        geometry=None if paths is None else paths[1],
+        geometry_sites=None if paths is None else paths[0],
+        **medium_args,
+    )
+
+
+def _medium_args(scn: Scenario) -> dict[str, Any]:
+    """The ground, rain and obstacles of ``scn`` as the core takes them."""
+    g_uniform, g_raster, g_os = gamma_field(scn)
+    if scn.ground in SOILS:
+        ground, eps = "dielectric", ground_permittivity(scn.ground, scn.freq_hz)
+    else:
+        ground, eps = scn.ground, 1.0 + 0j
+    return {
+        "ground": ground,
+        "eps_ground": (eps.real, eps.imag),
+        "gamma_db_per_m": g_uniform,
+        "gamma_raster": g_raster,
+        "gamma_origin_step": g_os,
+        **obstacle_args(scn),
+        **core_args(scn),
+    }
+
+
+Directions = list[tuple[np.ndarray, np.ndarray, np.ndarray]]
+"""Per (site, cell): the azimuth and the departure elevations of the direct and the reflected
+ray toward every pixel, degrees."""
+
+
+def ray_directions(
+    scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
+) -> Directions:
+    """Each (site, cell)'s azimuth and departure elevations toward every pixel (H, W): the closed
+    forms over flat open ground, else [`departures()`][rainuav.radio.engines.ray_engine.departures]
+    (toward the diffracting edge and the specular point), traced once per site."""
+    return _paths(scn, jobs, x_m, y_m)[0]
+
+
+def _paths(
+    scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
+) -> tuple[Directions, Paths | None]:
+    """[`ray_directions()`][rainuav.radio.engines.ray_engine.ray_directions], and the paths traced
+    for them (None over flat open ground, where the core's closed forms need no tracing)."""
+    paths, index = None, {}
+    if not _flat_open(scn):
+        unique = list({id(s): s for s, _ in jobs}.values())
+        index = {id(s): k for k, s in enumerate(unique)}
+        paths = _path_table(scn, unique, x_m, y_m)
+    out = []
+    for site, _ in jobs:
+        az, el_d, el_r = _directions(scn, site, x_m, y_m)
+        if paths is not None:
+            k = index[id(site)]
+            el_d, el_r = np.degrees(paths[1][k, ..., 3]), np.degrees(paths[1][k, ..., 4])
+        out.append((az, el_d, el_r))
+    return out, paths
+
+
+def ray_gains(
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    directions: Directions | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The linear antenna gain of every (site, cell) toward every pixel along the direct and
+    the reflected ray, two (M, H, W) arrays: the part of a ray map that no weather changes
+    (``directions``: [`ray_directions()`][rainuav.radio.engines.ray_engine.ray_directions], computed
+    here if not given)."""
+    dirs = ray_directions(scn, jobs, x_m, y_m) if directions is None else directions
+    shape = (len(jobs), y_m.size, x_m.size)
+    gd, gr = np.empty(shape), np.empty(shape)
+    for m, ((_, cell), (az, el_d, el_r)) in enumerate(zip(jobs, dirs, strict=True)):
+        gd[m], gr[m] = gain_linear(cell, az, el_d), gain_linear(cell, az, el_r)
+    return gd, gr
+
+
+def ray_terms(
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    weights: Sequence[Weight | None] | None = None,
+) -> np.ndarray:
+    """Everything of a ray map that no weather changes: each cell's clear-air power at every pixel
+    split into direct, reflected and interference parts, and its rays' lengths, (M, H, W, 7):
+    ``[direct, reflect, cross, d1, d2, wall, d3]`` (antenna gains, spreading, ground, pixel means,
+    diffraction, the walls' rays: [`wall_terms()`][rainuav.radio.engines.wall_rays.wall_terms]);
+    with ``weights`` (as [`ray_power()`][rainuav.radio.engines.ray_engine.ray_power] takes them),
+    the parts of the whole pattern less those of the weighted part (what the rays keep where the PE
+    carries the rest). [`ray_slicer()`][rainuav.radio.engines.ray_engine.ray_slicer] adds the
+    rain."""
+    dirs, paths = _paths(scn, jobs, x_m, y_m)
+    gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
+    args = _medium_args(scn)
+    rays = trace_walls(scn, jobs, x_m, y_m)
+    walls = wall_terms(scn, jobs, x_m, y_m, rays=rays)
+    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, True, walls, paths)
+    if weights is None:
+        return full
+    wd, wr = _weights_at(jobs, dirs, weights)
+    out = full.copy()
+    out[..., :3] -= _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, True, None, paths)[
+        ..., :3
+    ]
+    if walls is not None:
+        inside = wall_terms(scn, jobs, x_m, y_m, weights, rays=rays)
+        assert inside is not None
+        kept = walls[..., 0] - inside[..., 0]
+        # The kept rays' mean length: the power-weighted lengths less the weighted part's.
+        dl = walls[..., 0] * walls[..., 1] - inside[..., 0] * inside[..., 1]
+        out[..., 5] = np.maximum(kept, 0.0)
+        out[..., 6] = np.divide(dl, kept, out=np.zeros_like(kept), where=kept > 0)
+    return out
+
+
+def _weights_at(
+    jobs: Sequence[tuple[Site, Cell]],
+    directions: Directions,
+    weights: Sequence[Weight | None],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each cell's weight (M, H, W) along the direct and the reflected ray's departure
+    directions (0: none)."""
+    shape = (len(jobs), *directions[0][0].shape) if jobs else (0, 0, 0)
+    wd, wr = np.zeros(shape), np.zeros(shape)
+    for m, ((_, cell), (az, el_d, el_r)) in enumerate(zip(jobs, directions, strict=True)):
+        if weights[m] is not None:
+            wd[m] = weight_at(weights[m], cell, az, el_d)
+            wr[m] = weight_at(weights[m], cell, az, el_r)
+    return wd, wr
+
+
+def ray_slicer(
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    terms: np.ndarray | None = None,
+) -> _core.RaySlicer:
+    """Every cell's rays over the map traced once in clear air (``terms``, default
+    [`ray_terms()`][rainuav.radio.engines.ray_engine.ray_terms]), with each site's fan of lines for
+    the rain (``rainuav_core::raytime``): ``slicer.power(**rain_args(scn_at_t))`` is the received
+    power (M, H, W) of the weather of any instant, the rain integrated once per site for every pixel
+    at once and shared by the site's cells and both rays."""
+    places: dict[tuple[float, float, float], int] = {}
+    site_of = [places.setdefault((s.x_m, s.y_m, s.height_m), len(places)) for s, _ in jobs]
+    return _core.RaySlicer(
+        ray_terms(scn, jobs, x_m, y_m) if terms is None else terms,
+        np.array(list(places), dtype=float).reshape(-1, 3),
+        np.asarray(site_of, dtype=np.int64),
+        np.ascontiguousarray(x_m, dtype=float),
+        np.ascontiguousarray(y_m, dtype=float),
+        node_spacing_m=_node_spacing(scn),
+    )
+
+
+def rain_args(scn: Scenario, table: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, Any]:
+    """The rain of ``scn`` as `rainuav._core.RaySlicer.power` takes it (``table``: see
+    [`gamma_field()`][rainuav.radio.engines.ray_engine.gamma_field])."""
+    g_uniform, g_raster, g_os = gamma_field(scn, table=table)
+    return {"gamma_db_per_m": g_uniform, "gamma_raster": g_raster, "gamma_origin_step": g_os}
+
+
+def ray_power(
+    scn: Scenario,
+    jobs: Sequence[tuple[Site, Cell]],
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    weights: Sequence[Weight | None] | None = None,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Received power (mW, isotropic receiver) of every (site, cell) at every pixel centre,
+    (M, H, W), each the mean over its pixel; and, if ``weights`` are given, the power of the
+    part of each pattern they select (``weights[m]`` scales cell m's pattern; None: nothing).
+    Directions, gains, the rain field and the obstacles are prepared once for both."""
+    dirs, paths = _paths(scn, jobs, x_m, y_m)
+    gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
+    args = _medium_args(scn)
+    rays = trace_walls(scn, jobs, x_m, y_m)
+    walls = wall_terms(scn, jobs, x_m, y_m, rays=rays)
+    full = _trace(scn, jobs, x_m, y_m, (gd, gr), args, walls=walls, paths=paths)
+    if weights is None:
+        return full, None
+    wd, wr = _weights_at(jobs, dirs, weights)
+    inside = None if walls is None else wall_terms(scn, jobs, x_m, y_m, weights, rays=rays)
+    return full, _trace(scn, jobs, x_m, y_m, (gd * wd, gr * wr), args, walls=inside, paths=paths)

@@ -1,0 +1,296 @@
+"""A radio map as data: [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap] (received power per
+cell, serving cell, SIR and SINR at the flight altitude), its .npz form, the checks a map file must
+pass, and keeping a map in the cache. [`rainuav.radio.outputs.maps`][rainuav.radio.outputs.maps]
+builds maps; [`rainuav.radio.outputs.timemap`][rainuav.radio.outputs.timemap] builds them in
+time."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import warnings
+import zipfile
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from rainuav._io import write_atomic
+from rainuav.errors import CacheWarning, InvalidInputError
+from rainuav.radio.outputs.cache import cache_dir
+from rainuav.radio.outputs.plot import plot_map
+from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, SIR_CEIL_DB, SIR_FLOOR_DB
+from rainuav.radio.scene.presets import DEFAULT_MIN_DB, SINR_THRESHOLDS_DB
+from rainuav.radio.scene.scenario import Scenario
+
+__all__ = [
+    "FORMAT_VERSION",
+    "RadioMap",
+    "check_arrays",
+    "check_map_arrays",
+    "map_ranges",
+    "read_npz",
+    "store",
+    "write_npz",
+]
+
+FORMAT_VERSION = 2
+"""Version of the .npz layout written by
+[`RadioMap.save()`][rainuav.radio.outputs.mapdata.RadioMap.save]."""
+
+
+@dataclass
+class RadioMap:
+    """Received power per cell, serving cell, SIR and SINR at the flight altitude."""
+
+    x_m: npt.NDArray[np.float64]
+    """(W,) pixel-centre east coordinates."""
+    y_m: npt.NDArray[np.float64]
+    """(H,) pixel-centre north coordinates."""
+    extent_m: tuple[float, float, float, float]
+    """(x_min, x_max, y_min, y_max) of the area."""
+    altitude_m: float
+    """Flight altitude, m."""
+    rss_dbm: npt.NDArray[np.float64]
+    """(M, H, W) received power per cell, isotropic receiver, dBm (-250 where unreached)."""
+    serving_cell: npt.NDArray[np.int64]
+    """(H, W) the strongest cell (-1 where none reaches)."""
+    sir_db: npt.NDArray[np.float64]
+    """(H, W) SIR in dB, clipped to [-40, 60]."""
+    sinr_db: npt.NDArray[np.float64]
+    """(H, W) SINR in dB, clipped to [-40, 60]."""
+    scenario: Scenario
+    """The scenario the map was built from."""
+    cell_site: npt.NDArray[np.int64]
+    """(M,) the site index of each cell."""
+    pe_share: npt.NDArray[np.float32] = None  # type: ignore[assignment]
+    """(M, H, W) which engine produced each cell's power at each pixel: the PE's share of
+    it (0: rays alone, 1: the PE alone; all 0 if not given)."""
+    pe_cone_deg: npt.NDArray[np.float64] = None  # type: ignore[assignment]
+    """(M, 2) each cell's PE cone, half-widths across range and in height, degrees (0: no
+    PE for that cell, or not given)."""
+    build_seconds: float = 0.0
+    """Wall time of the build (0 when loaded from the cache)."""
+    timings: dict[str, float] = dataclasses.field(default_factory=dict)
+    """Seconds per phase of the build: source, screens, march, resample (empty if cached)."""
+    not_flyable: npt.NDArray[np.bool_] | None = None
+    """(H, W) the pixels a UAV may not enter: terrain or obstacles within the clearance of the
+    flight height
+    ([`rainuav.radio.scene.terrain.not_flyable()`][rainuav.radio.scene.terrain.not_flyable]); None
+    over flat open ground."""
+
+    _ARRAYS = (
+        "x_m",
+        "y_m",
+        "rss_dbm",
+        "serving_cell",
+        "sir_db",
+        "sinr_db",
+        "cell_site",
+        "pe_share",
+        "pe_cone_deg",
+    )
+
+    def __post_init__(self) -> None:
+        if self.pe_share is None:
+            self.pe_share = np.zeros(np.shape(self.rss_dbm), np.float32)
+        if self.pe_cone_deg is None:
+            self.pe_cone_deg = np.zeros((len(self.rss_dbm), 2))
+
+    def default_min_db(self, signal: str = "sinr") -> float:
+        """The outage threshold a navigation task on this map uses unless told otherwise: for
+        SINR the preset's documented one (``presets.SINR_THRESHOLDS_DB``, by the scenario's
+        name); for SIR, and for scenarios of no preset, 10 dB (the paper's minimum SIR)."""
+        if signal == "sinr":
+            return SINR_THRESHOLDS_DB.get(self.scenario.name, DEFAULT_MIN_DB)
+        return DEFAULT_MIN_DB
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Writes an .npz with the scenario as TOML metadata, atomically."""
+        arrays = {k: getattr(self, k) for k in self._ARRAYS}
+        arrays["extent_m"] = np.asarray(self.extent_m, dtype=np.float64)
+        arrays["altitude_m"] = np.float64(self.altitude_m)
+        if self.not_flyable is not None:
+            arrays["not_flyable"] = np.asarray(self.not_flyable, dtype=bool)
+        return write_npz(path, arrays, self.scenario, FORMAT_VERSION)
+
+    @classmethod
+    def load(
+        cls, path: str | os.PathLike[str], known: tuple[str, Scenario] | None = None
+    ) -> RadioMap:
+        """Reads a map written by [`save()`][rainuav.radio.outputs.mapdata.RadioMap.save] (bit-exact
+        round trip). ``known``: ``(digest, scenario)`` the caller looked the file up by (a cache
+        hit): where the file's digest is that one, the map carries the caller's scenario, never the
+        stored one (whose DEM or footprint file may have moved since: the key is their contents)."""
+        need = (*cls._ARRAYS, "extent_m", "altitude_m")
+        data, scn = read_npz(path, "radio map", need, FORMAT_VERSION, known)
+        if data["extent_m"].shape != (4,):
+            raise InvalidInputError(f"{path}: not a rainuav radio map (bad metadata)")
+        check_map_arrays(path, data, scn)
+        mask = data.get("not_flyable")
+        if mask is not None and (mask.shape != scn.area.shape or mask.dtype != bool):
+            raise InvalidInputError(
+                f"{path}: not_flyable must be a bool array of shape {scn.area.shape}"
+            )
+        ext = tuple(float(v) for v in data["extent_m"])
+        return cls(
+            x_m=data["x_m"],
+            y_m=data["y_m"],
+            extent_m=ext,  # type: ignore[arg-type]
+            altitude_m=float(data["altitude_m"]),
+            rss_dbm=data["rss_dbm"],
+            serving_cell=data["serving_cell"],
+            sir_db=data["sir_db"],
+            sinr_db=data["sinr_db"],
+            scenario=scn,
+            cell_site=data["cell_site"],
+            pe_share=data["pe_share"],
+            pe_cone_deg=data["pe_cone_deg"],
+            not_flyable=mask,
+        )
+
+    def plot(self, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
+        """Draws the map in dB (``kind`` 'sir', 'sinr' or 'rss'; ``cell`` selects one cell's
+        RSS, default the strongest) with the sites marked; returns the matplotlib Axes
+        ([`rainuav.radio.outputs.plot.plot_map()`][rainuav.radio.outputs.plot.plot_map])."""
+        return plot_map(self, kind, cell, ax)
+
+    def coverage(self, sir_min_db: float = 10.0) -> float:
+        """Share of the area with SIR >= sir_min_db."""
+        return float(np.mean(self.sir_db >= sir_min_db))
+
+
+def write_npz(
+    path: str | os.PathLike[str], arrays: dict[str, Any], scn: Scenario, version: int
+) -> Path:
+    """Writes ``arrays`` with ``scn`` as TOML and the format ``version`` as one .npz (no
+    pickles), atomically: how maps and map series are saved."""
+    meta = {
+        "format_version": np.int64(version),
+        "scenario_toml": np.asarray(scn.to_toml_string()),
+        "digest": np.asarray(scn.digest()),
+    }
+
+    def write(tmp: Path) -> None:
+        with tmp.open("wb") as fh:
+            np.savez(fh, **arrays, **meta)
+
+    return write_atomic(path, write)
+
+
+def read_npz(
+    path: str | os.PathLike[str],
+    what: str,
+    need: Iterable[str],
+    version: int,
+    known: tuple[str, Scenario] | None = None,
+) -> tuple[dict[str, np.ndarray], Scenario]:
+    """The arrays and the scenario of an .npz written by
+    [`write_npz()`][rainuav.radio.outputs.mapdata.write_npz] (never unpickled), or
+    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file: unreadable, missing an
+    array of ``need``, of another format ``version``, or a scenario that is not valid (``what``: the
+    kind of file, for the message). ``known``: ``(digest, scenario)`` the caller looked the file up
+    by (the map cache); where the file's stored digest is that one, its scenario is that scenario
+    and its TOML is not parsed again (seconds for a radar weather's rate maps)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+        raise InvalidInputError(f"{path}: not a readable {what} ({err})") from err
+    missing = {*need, "scenario_toml"} - set(data)
+    if missing:
+        raise InvalidInputError(f"{path}: not a rainuav {what} (missing {sorted(missing)})")
+    v = data.get("format_version", np.array(-1))
+    if v.shape != () or not np.issubdtype(v.dtype, np.integer):
+        raise InvalidInputError(f"{path}: not a rainuav {what} (no format_version)")
+    if int(v) != version:
+        raise InvalidInputError(f"{path}: {what} format {int(v)}, this rainuav reads {version}")
+    if data["scenario_toml"].dtype.kind != "U":
+        raise InvalidInputError(f"{path}: not a rainuav {what} (bad metadata)")
+    stored = data.get("digest")
+    if known is not None and stored is not None and stored.dtype.kind == "U":
+        if str(stored) == known[0]:
+            return data, known[1]
+    try:
+        scn = Scenario.from_toml_string(str(data["scenario_toml"]))
+    except InvalidInputError as err:
+        raise InvalidInputError(f"{path}: its scenario is not valid ({err})") from err
+    return data, scn
+
+
+def check_arrays(
+    path: Any,
+    data: dict[str, np.ndarray],
+    scn: Scenario,
+    shapes: dict[str, tuple[int, ...]],
+    ranges: dict[str, tuple[float, float]],
+) -> None:
+    """Each array of ``shapes`` numeric, of its shape and finite, each of ``ranges`` within
+    its bounds, and ``x_m``, ``y_m`` the pixel centres of ``scn``'s area; else
+    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file and the array."""
+    for k, shape in shapes.items():
+        a = data[k]
+        if a.shape != shape or a.dtype.kind not in "fiu":
+            raise InvalidInputError(
+                f"{path}: {k} must be a numeric array of shape {shape} for its scenario "
+                f"(got {a.dtype} {a.shape})"
+            )
+        if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
+            raise InvalidInputError(f"{path}: {k} holds NaN or infinite values")
+    for k, (lo, hi) in ranges.items():
+        a = data[k]
+        if a.size and (a.min() < lo or a.max() > hi):
+            raise InvalidInputError(
+                f"{path}: {k} must lie in [{lo:g}, {hi:g}] (holds {a.min():g} to {a.max():g})"
+            )
+    for k, want in zip(("x_m", "y_m"), scn.area.centres(), strict=True):
+        if not np.allclose(data[k], want, rtol=0, atol=1e-6 * max(1.0, float(np.ptp(want)))):
+            raise InvalidInputError(f"{path}: {k} is not the pixel centres of its area")
+
+
+def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
+    """A map's arrays as [`build_radio_map()`][rainuav.radio.outputs.maps.build_radio_map] writes
+    them, or [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file and the array:
+    shapes from the scenario, types, and values finite and in their physical ranges (SIR and SINR
+    within [SIR_FLOOR_DB, SIR_CEIL_DB], RSS within [RSS_FLOOR_DBM, 100] dBm, serving cells and sites
+    that exist, PE shares in [0, 1], pixel centres where the area puts them)."""
+    h, w = scn.area.shape
+    m = len(data["cell_site"]) if data["cell_site"].ndim == 1 else -1  # the map's own cells
+    shapes = {
+        "x_m": (w,), "y_m": (h,), "rss_dbm": (m, h, w), "serving_cell": (h, w),
+        "sir_db": (h, w), "sinr_db": (h, w), "cell_site": (m,), "pe_share": (m, h, w),
+        "pe_cone_deg": (m, 2),
+    }  # fmt: skip
+    check_arrays(path, data, scn, shapes, map_ranges(m, scn) | {
+        "pe_share": (0.0, 1.0), "pe_cone_deg": (0.0, 90.0),
+    })  # fmt: skip
+
+
+def map_ranges(cells: int, scn: Scenario) -> dict[str, tuple[float, float]]:
+    """The physical ranges of a map's (or a series') power, SIR, SINR, serving cell and
+    cell sites, for ``cells`` cells of ``scn``."""
+    return {
+        "sir_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
+        "sinr_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
+        "rss_dbm": (RSS_FLOOR_DBM, 100.0),
+        "serving_cell": (-1, cells - 1),
+        "cell_site": (0, len(scn.sites) - 1),
+    }
+
+
+def store(rm: Any, path: Path) -> None:
+    """Keeps ``rm`` (a map or a map series: anything with ``save``) in the cache at ``path``; a
+    cache that cannot be written is a [`CacheWarning`][rainuav.errors.CacheWarning] (the map is the
+    caller's all the same)."""
+    try:
+        rm.save(path)
+    except OSError as err:
+        warnings.warn(
+            f"radio-map cache {cache_dir()} cannot be written ({err.strerror or err}); the map "
+            "is not kept for next time (set RAINUAV_CACHE_DIR to a writable folder)",
+            CacheWarning,
+            stacklevel=3,
+        )

@@ -1,0 +1,433 @@
+"""Sionna RT, a full ray tracer, as an independent reference for the building physics
+(docs/physics.md section 12).
+
+The same scene in both: a scenario's buildings (boxes and footprints, merged as the ray engine
+reads them) become closed meshes in the tracer; each site radiates from one isotropic antenna of the
+scenario's polarisation, and the map is the path gain at the pixel centres of the scenario's area at
+its flight altitude (the tracer's measurement plane, one cell a pixel). What is compared is the
+**building effect**: the map with the buildings minus the map without them, in dB, each method
+against itself, so that the antennas and the spreading cancel and what remains is what the
+buildings do (shadows, diffraction, wall reflections).
+
+- The tracer's map is a Monte Carlo estimate; it is run twice with half the rays each (two seeds)
+  and their mean is the reference; their difference estimates its noise per pixel.
+- A pixel counts where the tracer covers it (both halves received something, with and without
+  buildings), its halves agree within ``2 MAX_NOISE_DB``, and the UAV is outside every building;
+  building effects below ``FLOOR_DB`` are compared as ``FLOOR_DB``.
+- The tracer's settings: specular reflections on the walls up to ``max_depth`` interactions, edge
+  diffraction (one diffraction a path, at the wedges where the buildings' faces meet, with the
+  coefficient of ITU-R P.526-15 section 6 in place of Sionna RT's own:
+  [`rainuav.radio.reference.tracer_wedge`][rainuav.radio.reference.tracer_wedge] says why), no
+  transmission through walls (the ray engine's buildings are opaque), no diffuse scattering, and no
+  ground or a PEC one by images ([`tracer_gain()`][rainuav.radio.reference.tracer.tracer_gain]).
+  Walls are the ITU-R P.2040 material of the footprints, as in the ray engine; the buildings are
+  closed meshes whose faces share their edges
+  ([`prism_arrays()`][rainuav.radio.reference.tracer.prism_arrays]).
+
+Needs ``sionna-rt`` (the ``test`` extra). On a machine without a GPU it runs through LLVM: Debian's
+``libllvm19``, found through ``DRJIT_LIBLLVM_PATH`` (set here when unset and the library is where
+Debian puts it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rainuav.radio.scene.cell import Cell, Pattern
+from rainuav.radio.scene.scenario import Medium, Scenario, Site
+
+__all__ = [
+    "FLOOR_DB",
+    "ISOTROPIC",
+    "LLVM_PATHS",
+    "MAX_NOISE_DB",
+    "SHADOW_DB",
+    "Agreement",
+    "TracerMap",
+    "agreement",
+    "compare",
+    "engine_gain",
+    "inside_buildings",
+    "isotropic_scenario",
+    "load_sionna",
+    "prism_arrays",
+    "tracer_gain",
+    "tracer_scene",
+]
+
+LLVM_PATHS = (
+    "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1",
+    "/usr/lib/x86_64-linux-gnu/libLLVM-19.so",
+    "/usr/lib/aarch64-linux-gnu/libLLVM.so.19.1",
+    "/usr/lib/llvm-19/lib/libLLVM.so.1",
+)
+"""Where Debian's ``libllvm19`` puts the library Dr.Jit's CPU backend loads."""
+
+SHADOW_DB = -6.0
+"""A pixel is in a building's shadow where the building effect is below this (dB)."""
+
+FLOOR_DB = -60.0
+"""Building effects below this (dB) are compared as this: both maps call such a pixel dark (no
+link budget reaches it), and the tracer's paths there can be vanishing single diffractions whose
+dB value means nothing."""
+
+MAX_NOISE_DB = 3.0
+"""A pixel is compared where the tracer's two halves agree within twice this (dB): its estimate
+is then good to about this."""
+
+
+def load_sionna() -> tuple[Any, Any]:
+    """Imports Mitsuba and Sionna RT on a GPU where one is present, else on the CPU through LLVM,
+    with the wedge coefficient of [`tracer_wedge`][rainuav.radio.reference.tracer_wedge]: returns
+    ``(mitsuba, sionna.rt)``. Raises ImportError naming what is missing."""
+    if "DRJIT_LIBLLVM_PATH" not in os.environ:
+        for p in LLVM_PATHS:
+            if os.path.exists(p):
+                os.environ["DRJIT_LIBLLVM_PATH"] = p
+                break
+    try:
+        import mitsuba as mi
+    except ImportError as err:  # pragma: no cover - depends on the machine
+        raise ImportError("the tracer needs sionna-rt: pip install '.[test]'") from err
+    if mi.variant() is None:
+        variants = mi.variants()
+        for v in ("cuda_ad_mono_polarized", "llvm_ad_mono_polarized"):
+            if v in variants:
+                try:
+                    mi.set_variant(v)
+                    break
+                except (ImportError, RuntimeError, AttributeError):
+                    continue
+        else:  # pragma: no cover - depends on the machine
+            raise ImportError(
+                "Sionna RT found neither CUDA nor LLVM: install Debian's libllvm19 and set "
+                "DRJIT_LIBLLVM_PATH to its libLLVM.so"
+            )
+    import sionna.rt as rt
+
+    from rainuav.radio.reference.tracer_wedge import install
+
+    install()
+    return mi, rt
+
+
+ISOTROPIC = Pattern(
+    azimuth_deg=[-180.0, 180.0], elevation_deg=[-90.0, 90.0], gain_db=[[0.0, 0.0], [0.0, 0.0]]
+)
+"""A pattern of 0 dBi in every direction."""
+
+
+def isotropic_scenario(scn: Scenario, *, buildings: bool = True, ground: str = "none") -> Scenario:
+    """``scn`` as both methods compare it: each distinct site once, with one isotropic cell of
+    0 dBm; clear air; no ground or a PEC one (``ground``); the ray engine; with or without its
+    buildings."""
+    sites, seen = [], set()
+    for s in scn.sites:
+        key = (s.x_m, s.y_m, s.height_m)
+        if key not in seen:
+            seen.add(key)
+            cell = Cell(azimuth_deg=0.0, tilt_deg=0.0, pattern=ISOTROPIC, tx_power_dbm=0.0)
+            sites.append(Site(x_m=s.x_m, y_m=s.y_m, height_m=s.height_m, cells=[cell]))
+    out = dataclasses.replace(
+        scn, sites=sites, medium=Medium(kind="clear"), ground=ground, engine="ray"
+    )
+    if not buildings:
+        out = dataclasses.replace(out, buildings=[], footprints=None, height_map_m=None)
+    return out
+
+
+def engine_gain(scn: Scenario, engine: str = "ray") -> np.ndarray:
+    """The path gain (linear, isotropic antennas) of each site of
+    [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]'s ``scn`` at every
+    pixel, (S, H, W), by the ray engine or (``engine`` ``"hybrid"`` or ``"pe"``) by
+    [`build_radio_map()`][rainuav.radio.outputs.maps.build_radio_map] with that engine (the cells
+    radiate 0 dBm: the map's dBm are the path gain's dB)."""
+    from rainuav.radio.engines import engine_of
+    from rainuav.radio.engines.ray_engine import ray_power
+
+    if engine_of(engine).marches:  # the map with the march in it
+        from rainuav.radio.outputs.maps import build_radio_map
+
+        rm = build_radio_map(dataclasses.replace(scn, engine=engine), cache=False)
+        return np.asarray(10.0 ** (rm.rss_dbm / 10.0), dtype=float)
+    x, y = scn.area.centres()
+    jobs = [(s, s.cells[0]) for s in scn.sites]
+    power_mw, _ = ray_power(scn, jobs, x, y)
+    return power_mw
+
+
+def prism_arrays(polygon: Any, base: float, top: float) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices (V, 3) and triangles (F, 3) of ``polygon`` (holes included) extruded from
+    ``base`` to ``top`` m: a closed mesh, faces outward (counter-clockwise seen from outside),
+    and faces that meet share their vertices. The tracer finds a wedge where two faces share an
+    edge and takes an edge of one face alone for a free edge (a half-plane): a mesh whose faces
+    did not share their vertices would make every corner two half-planes and every seam between
+    two triangles of a wall or a roof a diffracting edge."""
+    import shapely
+
+    index: dict[tuple[float, float, float], int] = {}
+
+    def vertex(x: float, y: float, z: float) -> int:
+        return index.setdefault((round(float(x), 6), round(float(y), 6), float(z)), len(index))
+
+    faces: list[list[int]] = []
+    for t in shapely.get_parts(shapely.constrained_delaunay_triangles(polygon)):
+        c = np.asarray(t.exterior.coords)[:3, :2]
+        e1, e2 = c[1] - c[0], c[2] - c[0]
+        if e1[0] * e2[1] - e1[1] * e2[0] < 0:
+            c = c[::-1]
+        faces.append([vertex(*c[k], top) for k in (0, 1, 2)])
+        faces.append([vertex(*c[k], base) for k in (0, 2, 1)])
+    for ring, outer in [(polygon.exterior, True)] + [(r, False) for r in polygon.interiors]:
+        c = np.asarray(ring.coords)[:, :2]
+        if ring.is_ccw != outer:
+            c = c[::-1]
+        for a, b in itertools.pairwise(c):
+            q = [vertex(*a, base), vertex(*b, base), vertex(*b, top), vertex(*a, top)]
+            faces += [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+    return np.asarray(list(index), float), np.asarray(faces, np.int64)
+
+
+def _prism_mesh(mi: Any, name: str, polygon: Any, base: float, top: float) -> Any:
+    """[`prism_arrays()`][rainuav.radio.reference.tracer.prism_arrays] as a Mitsuba mesh."""
+    v, f = prism_arrays(polygon, base, top)
+    mesh = mi.Mesh(name, len(v), len(f))
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = mi.Float(v.astype(np.float32).ravel())
+    params["faces"] = mi.UInt32(f.astype(np.uint32).ravel())
+    params.update()
+    return mesh
+
+
+@dataclass(frozen=True)
+class TracerMap:
+    """The tracer's path gain (linear) of each site at every pixel, (S, H, W), from two halves of
+    its rays."""
+
+    half_a: np.ndarray
+    half_b: np.ndarray
+
+    @property
+    def gain(self) -> np.ndarray:
+        """The estimate: the mean of the halves."""
+        return 0.5 * (self.half_a + self.half_b)
+
+    @property
+    def covered(self) -> np.ndarray:
+        """Where both halves received something."""
+        return (self.half_a > 0) & (self.half_b > 0)
+
+
+def tracer_scene(scn: Scenario, material: str | None = None) -> Any:
+    """Sionna RT's scene of ``scn``: its buildings as closed meshes of their footprints' P.2040
+    material (``material``, an ITU material name, for all of them where given; 0.3 m thick
+    walls), and one isotropic antenna of the scenario's polarisation on each side, without
+    transmitters. Over a PEC ground (``scn.ground == "pec"``) every building extends as deep
+    below the ground as it stands above it (the image method)."""
+    if scn.ground not in ("none", "pec"):
+        raise ValueError(f"the tracer's ground is none or pec (got {scn.ground!r})")
+    from rainuav.radio.scene.buildings import scenario_buildings
+
+    mi, rt = load_sionna()
+    scene = rt.load_scene()
+    scene.frequency = scn.freq_hz
+    found = scenario_buildings(scn)
+    objects = []
+    for k, f in enumerate(found.footprints if found is not None else ()):
+        mat = rt.ITURadioMaterial(name=f"wall-{k}", itu_type=material or f.material, thickness=0.3)
+        base = -f.height_m if scn.ground == "pec" else f.min_height_m
+        mesh = _prism_mesh(mi, f"b{k}", f.polygon, base, f.height_m)
+        objects.append(rt.SceneObject(mi_mesh=mesh, name=f"b{k}", radio_material=mat))
+    if objects:
+        scene.edit(add=objects)
+    pol = scn.polarization.upper()
+    scene.tx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
+    scene.rx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
+    return scene
+
+
+def tracer_gain(
+    scn: Scenario,
+    *,
+    samples: int = 2_000_000,
+    max_depth: int = 2,
+    diffraction: bool = True,
+    seed: int = 0,
+) -> TracerMap:
+    """Sionna RT's path gain of each site of
+    [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]'s ``scn`` at every
+    pixel (module docstring): ``samples`` rays per site in all, in two halves seeded ``2 seed`` and
+    ``2 seed + 1``. Over a PEC ground (``scn.ground == "pec"``) by the image method: every building
+    extends as deep below the ground as it stands above it, each site has its image below the
+    ground, and a pixel's gain is the sum of both (incoherent: the pixel mean of the ground's
+    fringes, as the ray engine takes it)."""
+    pec = scn.ground == "pec"
+    mi, rt = load_sionna()
+    scene = tracer_scene(scn)
+    images = (1.0, -1.0) if pec else (1.0,)
+    for sign in images:
+        for k, s in enumerate(scn.sites):
+            at = mi.Point3f(s.x_m, s.y_m, sign * s.height_m)
+            scene.add(rt.Transmitter(name=f"tx{k}{'i' if sign < 0 else ''}", position=at))
+    a = scn.area
+    h, w = a.shape
+    res = ((a.x_max_m - a.x_min_m) / w, (a.y_max_m - a.y_min_m) / h)
+    solver = rt.RadioMapSolver()
+    halves = []
+    for half in range(2):
+        rm = solver(
+            scene,
+            center=mi.Point3f(
+                0.5 * (a.x_min_m + a.x_max_m), 0.5 * (a.y_min_m + a.y_max_m), a.altitude_m
+            ),
+            orientation=mi.Point3f(0.0, 0.0, 0.0),
+            size=mi.Point2f(a.x_max_m - a.x_min_m, a.y_max_m - a.y_min_m),
+            cell_size=mi.Point2f(*res),
+            samples_per_tx=max(1, samples // 2),
+            max_depth=max_depth,
+            los=True,
+            specular_reflection=max_depth > 0,
+            diffuse_reflection=False,
+            refraction=False,
+            diffraction=diffraction,
+            edge_diffraction=diffraction,
+            seed=2 * seed + half,
+        )
+        g = np.asarray(rm.path_gain.numpy(), dtype=float).reshape(len(images), len(scn.sites), h, w)
+        halves.append(g.sum(axis=0))
+    return TracerMap(halves[0], halves[1])
+
+
+@dataclass(frozen=True)
+class Agreement:
+    """The building effect of the ray engine against the tracer's over the pixels both cover
+    (one value a site, dB unless said)."""
+
+    pixels: np.ndarray
+    """Pixels compared."""
+    noisy: np.ndarray
+    """Pixels the tracer covers but left out: its noise above the tolerance."""
+    shadow_pixels: np.ndarray
+    """Of these, where the tracer sees a shadow (effect below
+    [`SHADOW_DB`][rainuav.radio.reference.tracer.SHADOW_DB])."""
+    shadow_median: np.ndarray
+    """Median of |engine - tracer| in the tracer's shadow."""
+    shadow_p90: np.ndarray
+    """90th percentile of |engine - tracer| there."""
+    shadow_bias: np.ndarray
+    """Median of engine - tracer there (negative: the engine's shadows are deeper)."""
+    light_median: np.ndarray
+    """Median of |engine - tracer| where the tracer sees light."""
+    classes_agree: np.ndarray
+    """Share of pixels on which shadow and light agree."""
+    noise_median: np.ndarray
+    """Median over the shadow of the tracer's own noise, |half a - half b| / 2 in dB."""
+
+    def rows(self) -> list[dict[str, float]]:
+        """One dict a site."""
+        names = [f.name for f in dataclasses.fields(self)]
+        return [{n: float(getattr(self, n)[k]) for n in names} for k in range(len(self.pixels))]
+
+
+def _q(v: np.ndarray, p: float) -> float:
+    return float(np.percentile(v, p)) if v.size else float("nan")
+
+
+def _db(x: np.ndarray) -> np.ndarray:
+    with np.errstate(divide="ignore"):
+        return 10.0 * np.log10(x)
+
+
+def agreement(
+    engine_with: np.ndarray,
+    engine_without: np.ndarray,
+    tracer_with: TracerMap,
+    tracer_without: TracerMap,
+    inside: np.ndarray,
+    max_noise_db: float = MAX_NOISE_DB,
+) -> Agreement:
+    """Compares the building effects (module docstring) site by site; ``inside`` (H, W) marks
+    pixels where the UAV would be inside a building (left out), and pixels where the tracer's
+    halves differ by more than ``2 max_noise_db`` are left out (its own estimate is uncertain
+    there by more than the tolerance; the count is in ``noisy``)."""
+    with np.errstate(invalid="ignore"):
+        return _agreement(engine_with, engine_without, tracer_with, tracer_without, inside,
+                          max_noise_db)  # fmt: skip
+
+
+def _agreement(
+    engine_with: np.ndarray,
+    engine_without: np.ndarray,
+    tracer_with: TracerMap,
+    tracer_without: TracerMap,
+    inside: np.ndarray,
+    max_noise_db: float,
+) -> Agreement:
+    ours = np.maximum(_db(engine_with) - _db(engine_without), FLOOR_DB)
+    ref = np.maximum(_db(tracer_with.gain) - _db(tracer_without.gain), FLOOR_DB)
+    noise = 0.5 * np.abs(_db(tracer_with.half_a) - _db(tracer_with.half_b))
+    covered = tracer_with.covered & tracer_without.covered & ~inside[None] & np.isfinite(ours)
+    ok = covered & (noise <= max_noise_db)
+    stats: dict[str, list[float]] = {f.name: [] for f in dataclasses.fields(Agreement)}
+    for k in range(ours.shape[0]):
+        o, r, n = ours[k][ok[k]], ref[k][ok[k]], noise[k][ok[k]]
+        dark = r < SHADOW_DB
+        err = o - r
+
+        stats["pixels"].append(float(o.size))
+        stats["noisy"].append(float((covered[k] & ~ok[k]).sum()))
+        stats["shadow_pixels"].append(float(dark.sum()))
+        stats["shadow_median"].append(_q(np.abs(err[dark]), 50))
+        stats["shadow_p90"].append(_q(np.abs(err[dark]), 90))
+        stats["shadow_bias"].append(_q(err[dark], 50))
+        stats["light_median"].append(_q(np.abs(err[~dark]), 50))
+        stats["classes_agree"].append(
+            float(np.mean((o < SHADOW_DB) == dark)) if o.size else float("nan")
+        )
+        stats["noise_median"].append(_q(n[dark], 50))
+    return Agreement(**{k: np.asarray(v) for k, v in stats.items()})
+
+
+def inside_buildings(scn: Scenario) -> np.ndarray:
+    """(H, W): pixels whose centre lies in a building at least as tall as the flight altitude."""
+    from rainuav.radio.scene.buildings import scenario_buildings
+
+    found = scenario_buildings(scn)
+    x, y = scn.area.centres()
+    if found is None:
+        return np.zeros((y.size, x.size), bool)
+    xx, yy = np.meshgrid(x, y)
+    h = found.prisms.height_at(xx.ravel(), yy.ravel()).reshape(xx.shape)
+    return h >= scn.area.altitude_m
+
+
+def compare(
+    scn: Scenario,
+    *,
+    samples: int = 2_000_000,
+    seed: int = 0,
+    max_depth: int = 2,
+    ground: str = "none",
+    engine: str = "ray",
+) -> Agreement:
+    """The building effect of the ray engine (or ``engine``:
+    [`engine_gain()`][rainuav.radio.reference.tracer.engine_gain]) against the tracer's on ``scn``
+    (each site once, isotropic:
+    [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]), over no ground or
+    a PEC one."""
+    with_b = isotropic_scenario(scn, ground=ground)
+    without = isotropic_scenario(scn, buildings=False, ground=ground)
+    kw = {"samples": samples, "seed": seed, "max_depth": max_depth}
+    return agreement(
+        engine_gain(with_b, engine),
+        engine_gain(without, engine),
+        tracer_gain(with_b, **kw),
+        tracer_gain(without, **kw),
+        inside_buildings(with_b),
+    )

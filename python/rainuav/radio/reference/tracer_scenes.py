@@ -1,0 +1,148 @@
+"""The scenes on which the ray engine is compared with Sionna RT
+([`rainuav.radio.reference.tracer`][rainuav.radio.reference.tracer]): small ones for the tests (one
+block, a thick building, a street canyon of two rows, an L-shaped building, a corner of the shipped
+district from its footprint file) and larger ones held back for the results page (the ``urban``
+preset's blocks and sites, a square of the shipped OpenStreetMap-style district). Each is
+``name(freq_hz, altitude_m, polarization) -> Scenario``; the buildings' walls are ITU-R P.2040
+concrete.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from rainuav.radio.scene.area import Area, FootprintsFile
+from rainuav.radio.scene.scenario import Building, Origin, Scenario, Site
+
+__all__ = ["HELD_BACK", "SCENES", "TEST_SCENES", "scene"]
+
+
+def _area(x0: float, x1: float, y0: float, y1: float, altitude_m: float, res: float) -> Area:
+    return Area(
+        x_min_m=x0, x_max_m=x1, y_min_m=y0, y_max_m=y1, altitude_m=altitude_m, resolution_m=res
+    )
+
+
+def _box(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # One 40 m block, roof 30 m; the site 50 m in front of it.
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(0.0, 240.0, -120.0, 120.0, altitude_m, 4.0),
+        sites=[Site(x_m=10.0, y_m=0.0, height_m=25.0)],
+        buildings=[Building(x0_m=60.0, x1_m=100.0, y0_m=-20.0, y1_m=20.0, height_m=30.0)],
+    )
+
+
+def _thick(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # A deep building (90 m along the path, 50 m across), roof 20 m, seen from a 30 m mast.
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(0.0, 300.0, -150.0, 150.0, altitude_m, 5.0),
+        sites=[Site(x_m=15.0, y_m=-20.0, height_m=30.0)],
+        buildings=[Building(x0_m=80.0, x1_m=170.0, y0_m=-25.0, y1_m=25.0, height_m=20.0)],
+    )
+
+
+def _canyon(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # Two rows of three buildings along a 20 m street; the site in the street.
+    rows = [
+        Building(x0_m=x0, x1_m=x0 + 50.0, y0_m=y0, y1_m=y0 + 30.0, height_m=h)
+        for x0, h in ((40.0, 24.0), (100.0, 30.0), (160.0, 21.0))
+        for y0 in (-40.0, 10.0)
+    ]
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(0.0, 260.0, -100.0, 100.0, altitude_m, 4.0),
+        sites=[Site(x_m=20.0, y_m=0.0, height_m=15.0)],
+        buildings=rows,
+    )
+
+
+def _corner(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # An L-shaped building (six corners, one of them re-entrant) from a footprint file's polygon.
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(-40.0, 200.0, -120.0, 120.0, altitude_m, 4.0),
+        sites=[Site(x_m=-20.0, y_m=-30.0, height_m=25.0)],
+        buildings=[
+            Building(x0_m=40.0, x1_m=70.0, y0_m=-60.0, y1_m=40.0, height_m=28.0),
+            Building(x0_m=70.0, x1_m=130.0, y0_m=-60.0, y1_m=-30.0, height_m=28.0),
+        ],
+    )
+
+
+def _footprints(
+    freq_hz: float,
+    altitude_m: float,
+    pol: str,
+    bounds: tuple[float, float, float, float],
+    sites: list[Site],
+    res: float,
+) -> Scenario:
+    from pathlib import Path
+
+    file = Path(__file__).resolve().parents[4] / "examples" / "buildings.geojson"
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        origin=Origin(lat_deg=47.3730, lon_deg=8.5470),
+        area=_area(*bounds, altitude_m, res),
+        sites=sites,
+        footprints=FootprintsFile(file=str(file)),
+    )  # fmt: skip
+
+
+def _block(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # A 240 m square of the shipped district (nine buildings of 6-21 m from the footprint
+    # file), the site in a street.
+    site = Site(x_m=262.0, y_m=370.0, height_m=20.0)
+    return _footprints(freq_hz, altitude_m, pol, (250.0, 490.0, 250.0, 490.0), [site], 4.0)
+
+
+def _district(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # A 400 m square of the shipped OpenStreetMap-style district, three sites.
+    sites = [
+        Site(x_m=-150.0, y_m=-160.0, height_m=30.0),
+        Site(x_m=120.0, y_m=40.0, height_m=30.0),
+        Site(x_m=-60.0, y_m=150.0, height_m=30.0),
+    ]
+    return _footprints(freq_hz, altitude_m, pol, (-200.0, 200.0, -200.0, 200.0), sites, 5.0)
+
+
+def _urban(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # The urban preset's nine 60 m blocks and its seven sites, the map round the blocks.
+    from rainuav.radio.scene.presets import urban
+
+    scn = urban(0.0, freq_hz, polarization=pol)
+    area = _area(300.0, 1500.0, 300.0, 1500.0, altitude_m, 10.0)
+    sites = [s for s in scn.sites if 300.0 <= s.x_m <= 1500.0 and 300.0 <= s.y_m <= 1500.0]
+    return dataclasses.replace(scn, area=area, sites=sites)
+
+
+TEST_SCENES = ("box", "thick", "canyon", "corner", "block")
+"""The scenes the tests compare on (and the methods' choices were made on)."""
+
+HELD_BACK = ("urban", "district")
+"""The scenes the results page reports, on which no choice was made."""
+
+SCENES = {
+    "box": _box,
+    "thick": _thick,
+    "canyon": _canyon,
+    "corner": _corner,
+    "block": _block,
+    "district": _district,
+    "urban": _urban,
+}
+"""The comparison's scenes: ``name(freq_hz, altitude_m, polarization) -> Scenario``."""
+
+
+def scene(
+    name: str, freq_hz: float = 4.9e9, altitude_m: float = 20.0, polarization: str = "v"
+) -> Scenario:
+    """The comparison scene ``name`` ([`SCENES`][rainuav.radio.reference.tracer_scenes.SCENES])."""
+    return SCENES[name](freq_hz, altitude_m, polarization)
