@@ -179,3 +179,45 @@ def test_same_configuration_same_run_bit_for_bit(tmp_path: Path) -> None:
     a, b = (w["online"] for w in weights)
     assert a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
     assert np.isclose(runs[0]["episodes"], 3)
+
+
+def test_earlier_names_are_read_and_a_field_twice_is_refused(tmp_path: Path) -> None:
+    # Run files written before the task had its own table, and before rain_rate and altitudes
+    # carried their units, load as today's (the old checkpoints' configurations too: the same
+    # reader).
+    old = tmp_path / "old.toml"
+    old.write_text(
+        'scenario = "uma"\nrain_rate = 5.0\naltitudes = "25:115:15"\nmax_steps = 70\n'
+        "goal_x_m = 300.0\ngoal_y_m = 350.0\n[dqn]\nlanes = 2\n"
+    )
+    cfg = load_config(old)
+    assert (cfg.rain_rate_mm_h, cfg.altitudes_m) == (5.0, "25:115:15")
+    assert (cfg.task.max_steps, cfg.task.goal_m, cfg.dqn.lanes) == (70, (300.0, 350.0), 2)
+    new = tmp_path / "new.toml"
+    new.write_text(
+        'scenario = "uma"\nrain_rate_mm_h = 5.0\naltitudes_m = "25:115:15"\n'
+        "[task]\nmax_steps = 70\ngoal_m = [300.0, 350.0]\n[dqn]\nlanes = 2\n"
+    )
+    assert load_config(new) == cfg
+    # The flags' earlier names too, and one coordinate of the destination at a time.
+    flags = (
+        "--scenario",
+        "uma",
+        "--rain-rate",
+        "5",
+        "--altitudes",
+        "25:115:15",
+        "--max-steps",
+        "70",
+    )
+    assert _cli(*flags, "--goal-x-m", "300", "--goal-y-m", "350", "--lanes", "2") == _cli(
+        "--config", str(new)
+    )
+    assert _cli("--goal-y-m", "350").task.goal_m == (NavConfig().goal_m[0], 350.0)
+    # One field under two names is refused, naming it.
+    twice = tmp_path / "twice.toml"
+    twice.write_text("max_steps = 70\n[task]\nmax_steps = 80\n")
+    with pytest.raises(InvalidInputError, match=r"task\.max_steps is given twice"):
+        load_config(twice)
+    with pytest.raises(InvalidInputError, match="rain_rate_mm_h is given twice"):
+        resolve_config({"rain_rate": 5.0, "rain_rate_mm_h": 6.0})
