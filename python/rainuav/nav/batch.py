@@ -2,16 +2,38 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from rainuav.nav.field import SignalField, blocked_at
-from rainuav.nav.task import MOVES, NavConfig, base_reward
+from rainuav.nav.levelfield import LevelStepper
+from rainuav.nav.task import MOVES, NavConfig
 
 __all__ = ["BatchStepper"]
 
 
-class BatchStepper:
-    """Steps many UAVs at once with exactly the scalar environment's transitions.
+class _OneLevel:
+    """A plane's signal as a field of one level, the way
+    [`LevelStepper`][rainuav.nav.levelfield.LevelStepper] reads one."""
+
+    levels = 1
+
+    def __init__(self, field: Any) -> None:
+        self.plane = field
+        self.extent = field.extent
+
+    def blocked(self, x: Any, y: Any, level: Any) -> np.ndarray:
+        return blocked_at(self.plane, x, y)
+
+    def __call__(self, x: Any, y: Any, t_s: Any, level: Any, *world: Any) -> np.ndarray:
+        return self.plane(x, y, t_s, *world)
+
+
+class BatchStepper(LevelStepper):
+    """Steps many UAVs at once with exactly the scalar environment's transitions: the one
+    batched stepper ([`LevelStepper`][rainuav.nav.levelfield.LevelStepper]) over the plane's
+    single level, where every move lasts one tick.
 
     State per UAV: ``start`` (N, 2) float, ``offset`` (N, 2) int (steps taken in x and y) and
     ``t`` (N,) steps so far; position = start + step_m * offset, flight time ``t * move_s``
@@ -19,11 +41,9 @@ class BatchStepper:
     """
 
     def __init__(self, field: SignalField, cfg: NavConfig):
-        self.field = field
-        self.cfg = cfg
-        self.goal = np.asarray(cfg.goal_m, dtype=np.float64)
+        super().__init__(_OneLevel(field), cfg, [], [])  # type: ignore[arg-type]
 
-    def step(
+    def step(  # type: ignore[override]
         self,
         start: np.ndarray,
         offset: np.ndarray,
@@ -35,50 +55,16 @@ class BatchStepper:
         """One move for every UAV. Returns new ``offset``, ``t``, ``position`` (after clamping),
         ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area or entered
         a pixel that is not flyable), ``arrived`` (reached the goal) and ``t_s`` (the instant the
-        move ends, s). ``goal`` (N, 2): each UAV's destination (default: the task's); ``world``
+        move ends, s). ``goal`` (N, 2): each UAV's destination (default the task's); ``world``
         (N,): each UAV's world where the field is a
         [`rainuav.nav.field.SignalBank`][rainuav.nav.field.SignalBank]."""
-        cfg = self.cfg
-        g = self.goal if goal is None else np.asarray(goal, dtype=np.float64).reshape(-1, 2).T
-        x0, x1, y0, y1 = self.field.extent
-        new_off = offset + MOVES[action]
-        q = start + cfg.step_m * new_off
-        out = (q[:, 0] < x0) | (q[:, 0] > x1) | (q[:, 1] < y0) | (q[:, 1] > y1)
-        qc = np.stack([np.clip(q[:, 0], x0, x1), np.clip(q[:, 1], y0, y1)], axis=1)
-        # A move into a pixel that may not be entered is a move out of the area.
-        out |= blocked_at(self.field, qc[:, 0], qc[:, 1])
-        t_new = t + 1
-        t_s = self.time_s(t_new)
-        if world is None:
-            signal = self.field(qc[:, 0], qc[:, 1], t_s)
-        else:
-            signal = self.field(qc[:, 0], qc[:, 1], t_s, world)
-        b = base_reward(signal, cfg)
-        arrived = ~out & (np.hypot(q[:, 0] - g[0], q[:, 1] - g[1]) <= cfg.tol_m)
-        reward = (
-            b
-            - np.where(out, cfg.out_of_bounds_penalty, 0.0)
-            + np.where(arrived, cfg.goal_reward, 0.0)
-        )
-        terminated = out | arrived
-        truncated = ~terminated & (t_new >= cfg.max_steps)
-        return {
-            "offset": new_off,
-            "t": t_new,
-            "position": qc,
-            "reward": reward,
-            "terminated": terminated,
-            "truncated": truncated,
-            "signal_db": signal,
-            "out": out,
-            "arrived": arrived,
-            "t_s": t_s,
-        }
-
-    def time_s(self, t: np.ndarray) -> np.ndarray:
-        """The instant, s, after ``t`` moves (the exact planner's clock,
-        ``rainuav_core::planlevels``: ``0 + t * move_s``, operation for operation)."""
-        return 0.0 + np.asarray(t).astype(np.float64) * self.cfg.move_s
+        t = np.asarray(t)
+        level = np.zeros(t.shape, dtype=np.int64)
+        g = None if goal is None else np.asarray(goal, dtype=np.float64).reshape(-1, 2)
+        r = super().step(start, offset, level, t, action, g, world)
+        r["t"] = r.pop("tick")
+        del r["level"], r["duration"]
+        return r
 
     def moves_to_goal(self, position: np.ndarray, goal: np.ndarray | None = None) -> np.ndarray:
         """Fewest moves from each (N, 2) position to a point of its lattice within ``tol_m``

@@ -217,7 +217,10 @@ class LevelField:
 
 class LevelStepper:
     """Many UAVs among levels stepped at once (the module's rules), exactly as
-    ``rainuav_core::planlevels`` replays a plan.
+    ``rainuav_core::planlevels`` replays a plan: the one batched stepper (the plane's,
+    [`rainuav.nav.batch.BatchStepper`][rainuav.nav.batch.BatchStepper], is this one over its
+    single level). The field it reads has ``extent``, ``levels``, ``blocked(x, y, level)`` and
+    is called ``field(x, y, t_s, level[, world])``.
 
     State per UAV: ``start`` (N, 2), ``offset`` (N, 2) int steps in x and y, ``level`` (N,)
     and ``tick`` (N,) the clock; position = start + step_m * offset, time ``tick * move_s``.
@@ -268,7 +271,10 @@ class LevelStepper:
         out |= f.blocked(qc[:, 0], qc[:, 1], new_level) | ~band
         new_tick = tick + duration
         t_s = self.time_s(new_tick)
-        signal = f(qc[:, 0], qc[:, 1], t_s, new_level, 0 if world is None else world)
+        if world is None:
+            signal = f(qc[:, 0], qc[:, 1], t_s, new_level)
+        else:
+            signal = f(qc[:, 0], qc[:, 1], t_s, new_level, world)
         b = base_reward(signal, cfg)
         b = np.where(flat, b, duration * b)  # a vertical move: its duration times b
         g = self.goal[None] if goal is None else np.asarray(goal, dtype=np.float64)
