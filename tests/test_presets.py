@@ -221,3 +221,17 @@ def test_earlier_names_are_read_and_a_field_twice_is_refused(tmp_path: Path) -> 
         load_config(twice)
     with pytest.raises(InvalidInputError, match="rain_rate_mm_h is given twice"):
         resolve_config({"rain_rate": 5.0, "rain_rate_mm_h": 6.0})
+
+
+def test_a_destination_off_the_area_is_refused_before_any_map(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import rainuav.world as world
+
+    def no_map(*_: Any, **__: Any) -> None:
+        raise AssertionError("a map was built for a task that cannot fly on it")
+
+    monkeypatch.setattr(world, "build_source", no_map)
+    assert main(["--task.goal-m", "99999,1", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "task.goal_m must lie inside the area" in err, err

@@ -129,19 +129,23 @@ def check_task(cfg: NavConfig, prefix: str = "") -> None:
         raise InvalidInputError(f"{prefix}signal must be one of {SIGNALS} (got {cfg.signal!r})")
 
 
-def check_config(cfg: NavConfig, extent: tuple[float, float, float, float]) -> None:
-    """Raises InvalidInputError naming the first field of ``cfg`` out of range for a map over
-    ``extent`` ([`check_task()`][rainuav.nav.task.check_task], then the points inside the
-    area)."""
+def check_config(
+    cfg: NavConfig, extent: tuple[float, float, float, float], prefix: str = ""
+) -> None:
+    """Raises InvalidInputError naming (after ``prefix``) the first field of ``cfg`` out of range
+    for a map over ``extent`` ([`check_task()`][rainuav.nav.task.check_task], then the points
+    inside the area)."""
     x0, x1, y0, y1 = extent
-    check_task(cfg)
+    check_task(cfg, prefix)
     g = cfg.goal_m
     if not (x0 <= g[0] <= x1 and y0 <= g[1] <= y1):
-        raise InvalidInputError(f"goal_m must lie inside the area {extent} (got {cfg.goal_m!r})")
+        raise InvalidInputError(
+            f"{prefix}goal_m must lie inside the area {extent} (got {cfg.goal_m!r})"
+        )
     if cfg.start_m is not None:
         s = cfg.start_m
         if not (x0 <= s[0] <= x1 and y0 <= s[1] <= y1):
-            raise InvalidInputError(f"start_m must lie inside the area (got {cfg.start_m!r})")
+            raise InvalidInputError(f"{prefix}start_m must lie inside the area (got {s!r})")
 
 
 def base_reward(signal_db: Any, cfg: NavConfig) -> Any:

@@ -33,7 +33,7 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalBank, SignalField, SignalSeries
 from rainuav.nav.levels import LevelField, UAVLevelsEnv
-from rainuav.nav.task import NavConfig, check_task
+from rainuav.nav.task import NavConfig, check_config, check_task
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio.engines import ENGINES as RADIO_ENGINES
 from rainuav.radio.engines import for_time
@@ -374,8 +374,11 @@ def build_world(
     (``task``, where given, in place of the spec's; ``scenario`` in place of its preset;
     ``cache=False``: a storm flown once, not kept in the map cache)."""
     check_spec(spec)
-    source = build_source(spec, make_scenario(spec, scenario), progress=progress, cache=cache)
-    return _observed(world_from(source, task_of(spec) if task is None else task), spec)
+    scn = make_scenario(spec, scenario)
+    task = task_of(spec) if task is None else task
+    check_config(task, _extent(scn), "task.")  # a destination off the area: before any map
+    source = build_source(spec, scn, progress=progress, cache=cache)
+    return _observed(world_from(source, task), spec)
 
 
 def _observed(world: World, spec: Any) -> World:
