@@ -144,8 +144,8 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
                             help=text if shown else argparse.SUPPRESS)  # fmt: skip
             if prefix:  # the task's and the learner's fields also as --name
                 ap.add_argument(_flag(f.name), dest=name, type=kind, **hidden)
-    for old, new in RENAMED.items():
-        ap.add_argument(_flag(old), dest=new, type=str if "altitudes" in old else float, **hidden)
+            for old in (o for o, n in RENAMED.items() if n == name):  # and under earlier names
+                ap.add_argument(_flag(old), dest=name, type=kind, **hidden)
     for old in ("goal_x_m", "goal_y_m"):
         ap.add_argument(_flag(old), dest=old, type=float, **hidden)
     return ap

@@ -27,6 +27,7 @@ __all__ = [
     "TrainConfig",
     "check_config",
     "config_diff",
+    "field_name",
     "flat",
     "flat_fields",
     "load_config",
@@ -263,21 +264,42 @@ def _names(cls: type) -> set[str]:
     return {f.name for f in dataclasses.fields(cls)}
 
 
+def field_name(key: str) -> str | None:
+    """The flat name (``scenario``, ``task.max_steps``, ``dqn.lr``) that ``key`` names in any
+    form [`flat_fields()`][rainuav.rl.config.flat_fields] reads: itself, a task field without
+    its table (``max_steps``) or a [`RENAMED`][rainuav.rl.config.RENAMED] field; ``goal_x_m``
+    and ``goal_y_m`` are parts of ``task.goal_m``. None: no field."""
+    if key in ("goal_x_m", "goal_y_m"):
+        return "task.goal_m"
+    section, _, name = key.rpartition(".")
+    if section:
+        return key if section in SECTIONS and name in _names(SECTIONS[section]) else None
+    if name in _names(NavConfig):
+        return f"task.{name}"
+    name = RENAMED.get(name, name)
+    return name if name in _names(TrainConfig) - set(SECTIONS) else None
+
+
 def flat_fields(data: dict[str, Any], where: str) -> dict[str, Any]:
     """The fields of a run's TOML table (``[task]`` and ``[dqn]`` sub-tables, or names already
     flat) as flat names (``scenario``, ``task.max_steps``, ``dqn.lr``). Earlier forms are read
-    too: the [`RENAMED`][rainuav.rl.config.RENAMED] fields, a task field at the top
-    (``max_steps``) and the destination as ``goal_x_m`` / ``goal_y_m``. Unknown names, and a
-    field given twice, raise InvalidInputError naming ``where``."""
+    too ([`field_name()`][rainuav.rl.config.field_name]): the
+    [`RENAMED`][rainuav.rl.config.RENAMED] fields, a task field at the top (``max_steps``) and
+    the destination as ``goal_x_m`` / ``goal_y_m``. Unknown names, and a field given twice,
+    raise InvalidInputError naming ``where``."""
     out: dict[str, Any] = {}
+    unknown: list[str] = []
+    goal: dict[int, Any] = {}
 
     def put(key: str, value: Any) -> None:
-        if key in out:
-            raise InvalidInputError(f"{where}: {key} is given twice (under two names)")
-        out[key] = value
+        name = field_name(key)
+        if name is None:
+            unknown.append(key)
+        elif name in out:
+            raise InvalidInputError(f"{where}: {name} is given twice (under two names)")
+        else:
+            out[name] = value
 
-    goal: dict[int, Any] = {}
-    task_names = _names(NavConfig)
     for key, value in data.items():
         if key in SECTIONS:
             if not isinstance(value, dict):
@@ -286,23 +308,11 @@ def flat_fields(data: dict[str, Any], where: str) -> dict[str, Any]:
                 put(f"{key}.{k}", v)
         elif key in ("goal_x_m", "goal_y_m"):
             goal[key == "goal_y_m"] = value
-        elif key in task_names:
-            put(f"task.{key}", value)
         else:
-            put(RENAMED.get(key, key), value)
+            put(key, value)
     if goal:
         default = NavConfig().goal_m
         put("task.goal_m", (goal.get(0, default[0]), goal.get(1, default[1])))
-    unknown = []
-    for key in out:
-        section, _, name = key.rpartition(".")
-        known = (
-            _names(SECTIONS[section])
-            if section in SECTIONS
-            else _names(TrainConfig) - set(SECTIONS)
-        )
-        if name not in known or (section and section not in SECTIONS):
-            unknown.append(key)
     if unknown:
         unknown.sort(key=lambda k: ("." in k, k))  # the run's own first, then the tables'
         raise InvalidInputError(f"{where}: unknown field(s) {unknown}")

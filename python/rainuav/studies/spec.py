@@ -40,7 +40,7 @@ from rainuav._io import read_toml
 from rainuav.errors import InvalidInputError
 from rainuav.radio.scene import presets
 from rainuav.radio.scene.scenario import Scenario
-from rainuav.rl.config import MAX_STARTS, TrainConfig, check_config, flat_fields, resolve_config
+from rainuav.rl.config import MAX_STARTS, TrainConfig, check_config, field_name, resolve_config
 from rainuav.world import make_scenario
 
 __all__ = ["BUILT_IN", "COMPUTE", "SCENARIO_FIELDS", "Case", "Study", "load_study"]
@@ -164,11 +164,7 @@ def _check_fields(where: str, fields: dict[str, Any]) -> None:
     for k in fields:
         if k in SCENARIO_FIELDS:
             continue
-        try:
-            ok = k not in ("seed", "out", "dqn", "task") and bool(flat_fields({k: 0}, where))
-        except InvalidInputError:
-            ok = False
-        if not ok:
+        if k in ("seed", "out") or field_name(k) is None:
             raise InvalidInputError(
                 f"{where}: unknown field {k!r} (a TrainConfig field, 'task.<field>', "
                 f"'dqn.<field>' or one of {list(SCENARIO_FIELDS)})"
