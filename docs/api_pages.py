@@ -19,6 +19,7 @@ GROUPS = {
     "radio.scene": "Radio maps, the scene",
     "radio.engines": "Radio maps, the engines",
     "radio.outputs": "Radio maps, the outputs",
+    "radio.measured": "Radio maps from measurements",
     "radio.reference": "Radio maps, the reference tracer",
     "nav": "Navigation",
     "world": "Worlds",

@@ -146,13 +146,14 @@ def test_the_walker_sees_the_packages_modules() -> None:
     assert {"rainuav.radio", "rainuav.nav", "rainuav.rl"} <= set(ours)
 
 
-RADIO_PARTS = ("scene", "engines", "outputs", "reference")
+RADIO_PARTS = ("scene", "engines", "outputs", "measured", "reference")
 """``rainuav.radio``'s sub-packages, bottom up: what is there, how the field gets there, what
-comes out, and what the engines are measured against."""
+comes out, what comes out corrected by measurements, and what the engines are measured
+against."""
 
 
-def test_radio_is_scene_engines_outputs_and_reference() -> None:
-    """Every module of ``rainuav.radio`` lives in one of its four parts, and a part imports only
+def test_radio_is_scene_engines_outputs_measured_and_reference() -> None:
+    """Every module of ``rainuav.radio`` lives in one of its five parts, and a part imports only
     the parts below it (the scene may read the engines' registry, the package itself, to know
     the names a scenario may give)."""
     ours, _ = graph()

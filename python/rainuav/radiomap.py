@@ -120,6 +120,17 @@ def build_parser() -> argparse.ArgumentParser:
         "(rainuav.radio.outputs.levelmaps)",
     )  # fmt: skip
     _cli.earlier_name(ap, "--altitudes", "altitudes_m")
+    ap.add_argument(
+        "--measurements", type=Path, default=None, metavar="LOG.csv",
+        help="a drive-test or flight log (lat,lon or x_m,y_m, alt_m, cell, rsrp_dbm or rss_dbm): "
+        "the map calibrated and corrected by it, with each pixel's standard deviation "
+        "(rainuav.radio.measured); writes fit.json",
+    )  # fmt: skip
+    ap.add_argument(
+        "--calibrate", default="power_db,tilt_deg,azimuth_deg,height_m", metavar="NAMES",
+        help="with --measurements: the site parameters fitted per cell, comma-separated, or "
+        "'none' (default: all four)",
+    )  # fmt: skip
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
     ap.add_argument(
@@ -212,6 +223,11 @@ def _build(args: argparse.Namespace) -> int:
         band = _cli.altitude_band(args.altitudes_m)
         scn = scn.replace(area=dataclasses.replace(scn.area, altitudes_m=band))
         scn.area.check()
+    if args.measurements is not None and (
+        scn.area.altitudes_m or args.duration_s is not None or args.slice_s is not None
+    ):
+        raise InvalidInputError("--measurements corrects one map: not with --altitudes-m or "
+                                "--duration-s")  # fmt: skip
     if scn.area.altitudes_m:
         if args.duration_s is not None or args.slice_s is not None:
             raise InvalidInputError("--altitudes-m: maps in time at several heights are not "
@@ -220,9 +236,20 @@ def _build(args: argparse.Namespace) -> int:
     if args.duration_s is not None or args.slice_s is not None:
         return _build_series(args, scn)
     rm = build_radio_map(scn, cache=not args.no_cache, progress=True)
+    if args.measurements is not None:
+        rm = _corrected(args, rm)
     begin_folder(args.out, "radiomap.npz")
-    kinds = ("sinr", "sir", "serving", "rss")
+    kinds: tuple[str, ...] = ("sinr", "sir", "serving", "rss")
+    if rm.rss_std_db is not None:
+        kinds += ("rss_std", "correction")
     pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in kinds]
+    if rm.fit is not None:
+        import json
+
+        from rainuav._io import write_atomic
+
+        text = json.dumps(rm.fit, indent=2) + "\n"
+        pngs.append(write_atomic(args.out / "fit.json", lambda t: _write_text(t, text)))
     if scn.origin is not None:  # georeferenced: the map for a GIS too
         from rainuav.radio.outputs.maptiff import write_map_geotiff
 
@@ -238,6 +265,38 @@ def _build(args: argparse.Namespace) -> int:
     )
     print(f"wrote {npz}, " + ", ".join(str(p) for p in pngs))
     return 0
+
+
+def _write_text(path: Path, text: str) -> None:
+    path.write_text(text)
+
+
+def _corrected(args: argparse.Namespace, rm: Any) -> Any:
+    """``rm`` corrected by the log of ``--measurements`` (one line on the rows used, one on
+    the cross-validated error)."""
+    from rainuav.radio.measured import correct_map, read_log
+
+    names = [] if args.calibrate.strip() == "none" else [
+        p.strip() for p in args.calibrate.split(",") if p.strip()
+    ]  # fmt: skip
+    from rainuav.radio.measured.calibrate import BOUNDS
+
+    for p in names:
+        if p not in BOUNDS:
+            raise InvalidInputError(f"--calibrate: {p!r} is not one of {', '.join(BOUNDS)}, none")
+    ref = rm.scenario.area.altitude_reference or "ground"
+    log = read_log(args.measurements, rm.scenario, altitude_reference=ref)
+    print(log.summary(), file=sys.stderr)
+    out = correct_map(rm, log, params=names)
+    assert out.fit is not None
+    cv = out.fit["cross_validation"]
+    print(
+        f"measurements: held-out RMSE {cv['prior']['rmse_db']:.1f} dB (prior), "
+        f"{cv['calibrated']['rmse_db']:.1f} (calibrated), {cv['corrected']['rmse_db']:.1f} "
+        f"(corrected), leaving one {cv['left_out']} out of {cv['folds']}; "
+        f"{100 * cv['within_one_sigma']:.0f}% of held-out errors within one sigma"
+    )
+    return out
 
 
 def _threshold(args: argparse.Namespace, scn: Any) -> float:

@@ -1,5 +1,5 @@
 """Radio maps: a scenario (network, weather, airspace) in, every cell's received power, the
-serving cell, SIR and SINR at the flight altitude out. Four sub-packages, each depending only on
+serving cell, SIR and SINR at the flight altitude out. Five sub-packages, each depending only on
 those before it:
 
 - [`scene`][rainuav.radio.scene]: what is there. The scenario and its TOML form
@@ -23,6 +23,12 @@ those before it:
   GeoTIFF ([`maptiff`][rainuav.radio.outputs.maptiff]), figures
   ([`plot`][rainuav.radio.outputs.plot]) and the map cache
   ([`cache`][rainuav.radio.outputs.cache]).
+- [`measured`][rainuav.radio.measured]: what comes out corrected by measurements. A drive-test or
+  flight log read into the map's frame ([`log`][rainuav.radio.measured.log]), the site parameters
+  it says are wrong fitted ([`calibrate`][rainuav.radio.measured.calibrate]), what is still off as
+  a field with its uncertainty ([`residual`][rainuav.radio.measured.residual]), the corrected map
+  ([`correct`][rainuav.radio.measured.correct]) and logs drawn from a map taken as the truth
+  ([`synthetic`][rainuav.radio.measured.synthetic]).
 - [`reference`][rainuav.radio.reference]: what the engines are measured against, a full ray
   tracer on the same scene ([`tracer`][rainuav.radio.reference.tracer]).
 

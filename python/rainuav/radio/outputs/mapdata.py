@@ -7,6 +7,7 @@ time."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import warnings
 import zipfile
@@ -81,6 +82,16 @@ class RadioMap:
     flight height
     ([`rainuav.radio.scene.terrain.not_flyable()`][rainuav.radio.scene.terrain.not_flyable]); None
     over flat open ground."""
+    prior_rss_dbm: npt.NDArray[np.float64] | None = None
+    """(M, H, W) a map corrected by measurements
+    ([`rainuav.radio.measured`][rainuav.radio.measured]): the physics map it started from, dBm;
+    None for a physics map."""
+    rss_std_db: npt.NDArray[np.float64] | None = None
+    """(M, H, W) a corrected map: the standard deviation of ``rss_dbm``, dB; None for a physics
+    map."""
+    fit: dict[str, Any] | None = None
+    """A corrected map: its calibration, residual fields and cross-validated error (what
+    ``fit.json`` holds); None for a physics map."""
 
     _ARRAYS = (
         "x_m",
@@ -93,6 +104,7 @@ class RadioMap:
         "pe_share",
         "pe_cone_deg",
     )
+    _MEASURED = ("prior_rss_dbm", "rss_std_db")
 
     def __post_init__(self) -> None:
         if self.pe_share is None:
@@ -115,6 +127,11 @@ class RadioMap:
         arrays["altitude_m"] = np.float64(self.altitude_m)
         if self.not_flyable is not None:
             arrays["not_flyable"] = np.asarray(self.not_flyable, dtype=bool)
+        for k in self._MEASURED:
+            if getattr(self, k) is not None:
+                arrays[k] = np.asarray(getattr(self, k), dtype=np.float64)
+        if self.fit is not None:
+            arrays["fit_json"] = np.asarray(json.dumps(self.fit))
         return write_npz(path, arrays, self.scenario, FORMAT_VERSION)
 
     @classmethod
@@ -136,6 +153,12 @@ class RadioMap:
                 f"{path}: not_flyable must be a bool array of shape {scn.area.shape}"
             )
         ext = tuple(float(v) for v in data["extent_m"])
+        shape = data["rss_dbm"].shape
+        extra = {k: data[k] for k in cls._MEASURED if k in data}
+        ranges = {"prior_rss_dbm": (RSS_FLOOR_DBM, 100.0), "rss_std_db": (0.0, 200.0)}
+        check_arrays(path, extra | {k: data[k] for k in ("x_m", "y_m")}, scn,
+                     {k: shape for k in extra}, {k: ranges[k] for k in extra})  # fmt: skip
+        fit = _fit_of(path, data.get("fit_json"))
         return cls(
             x_m=data["x_m"],
             y_m=data["y_m"],
@@ -150,6 +173,8 @@ class RadioMap:
             pe_share=data["pe_share"],
             pe_cone_deg=data["pe_cone_deg"],
             not_flyable=mask,
+            fit=fit,
+            **extra,
         )
 
     def plot(self, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
@@ -161,6 +186,18 @@ class RadioMap:
     def coverage(self, sir_min_db: float = 10.0) -> float:
         """Share of the area with SIR >= sir_min_db."""
         return float(np.mean(self.sir_db >= sir_min_db))
+
+
+def _fit_of(path: Any, raw: np.ndarray | None) -> dict[str, Any] | None:
+    if raw is None:
+        return None
+    try:
+        fit = json.loads(str(raw)) if raw.dtype.kind == "U" else None
+    except json.JSONDecodeError:
+        fit = None
+    if not isinstance(fit, dict):
+        raise InvalidInputError(f"{path}: fit_json is not a JSON object")
+    return fit
 
 
 def write_npz(

@@ -8,7 +8,9 @@ the origin, written as the file's CRS), with band descriptions and units:
 2. ``rss_serving_dbm``: the received power of the serving cell, dBm;
 3. ``serving_cell``: the index of the serving cell (nodata where no cell reaches);
 4. ``not_flyable``: 1 where the UAV may not fly (terrain or obstacles within the clearance
-   of the flight height), else 0.
+   of the flight height), else 0;
+5. ``rss_serving_std_db`` (a map corrected by measurements alone,
+   [`rainuav.radio.measured`][rainuav.radio.measured]): the standard deviation of band 2, dB.
 
 The nodata value is [`NODATA`][rainuav.radio.outputs.maptiff.NODATA]. Written to a temporary file
 and renamed: a reader never sees half a file. Needs rasterio (the ``geo`` extra)."""
@@ -36,10 +38,12 @@ BANDS = (
     ("not_flyable", ""),
 )
 """Band names (descriptions) and units, in order."""
+STD_BAND = ("rss_serving_std_db", "dB")
+"""The fifth band of a map corrected by measurements."""
 
 
 def _bands(rm: Any, slice_index: int | None) -> np.ndarray:
-    """(4, H, W) float32, rows south to north (the map's own order)."""
+    """(4, H, W) float32 (5 for a corrected map), rows south to north (the map's own order)."""
     sinr = np.asarray(rm.sinr_db, dtype=np.float64)
     rss = np.asarray(rm.rss_dbm, dtype=np.float64)
     serving = np.asarray(rm.serving_cell)
@@ -55,7 +59,11 @@ def _bands(rm: Any, slice_index: int | None) -> np.ndarray:
         mask = map_mask(rm.scenario)
     blocked = np.zeros((h, w)) if mask is None else np.asarray(mask, dtype=np.float64)
     cell = np.where(serving >= 0, serving, NODATA)
-    return np.stack([sinr, best, cell, blocked]).astype(np.float32)
+    bands = [sinr, best, cell, blocked]
+    std = getattr(rm, "rss_std_db", None)
+    if std is not None and slice_index is None:
+        bands.append(np.where(serving >= 0, std[np.maximum(serving, 0), ii, jj], NODATA))
+    return np.stack(bands).astype(np.float32)
 
 
 def write_map_geotiff(
@@ -79,10 +87,11 @@ def write_map_geotiff(
         )
     a = scn.area
     data = _bands(rm, slice_index)[:, ::-1, :]  # rows north to south
-    _, h, w = data.shape
+    count, h, w = data.shape
+    names = (*BANDS, STD_BAND)[:count]
     px, py = (a.x_max_m - a.x_min_m) / w, (a.y_max_m - a.y_min_m) / h
     profile = {
-        "driver": "GTiff", "height": h, "width": w, "count": len(BANDS), "dtype": "float32",
+        "driver": "GTiff", "height": h, "width": w, "count": count, "dtype": "float32",
         "crs": rasterio.crs.CRS.from_proj4(geo.proj4), "nodata": NODATA,
         "transform": Affine(px, 0.0, a.x_min_m, 0.0, -py, a.y_max_m), "compress": "deflate",
     }  # fmt: skip
@@ -90,7 +99,7 @@ def write_map_geotiff(
     def write(tmp: Path) -> None:
         with rasterio.open(tmp, "w", **profile) as dst:
             dst.write(np.ascontiguousarray(data))
-            for k, (name, unit) in enumerate(BANDS, start=1):
+            for k, (name, unit) in enumerate(names, start=1):
                 dst.set_band_description(k, name)
                 if unit:
                     dst.set_band_unit(k, unit)

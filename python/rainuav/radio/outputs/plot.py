@@ -15,14 +15,16 @@ from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
 
 __all__ = ["KINDS", "plot_map", "save_map_png", "save_series_gif"]
 
-KINDS = ("sir", "sinr", "rss", "serving")
+KINDS = ("sir", "sinr", "rss", "serving", "rss_std", "correction")
+"""What a map figure shows; the last two only for a map corrected by measurements."""
 
 
 def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
     """Draws the map ``rm`` (a RadioMap): ``kind`` 'sir', 'sinr', 'rss' (dB; ``cell``
-    selects one cell's RSS, default the strongest) or 'serving' (the serving cell), with
-    the sites and beam azimuths marked. Returns the matplotlib Axes (a new pyplot figure
-    when ``ax`` is None)."""
+    selects one cell's RSS, default the strongest) or 'serving' (the serving cell); for a map
+    corrected by measurements 'rss_std' (the serving cell's standard deviation) or 'correction'
+    (the serving cell's corrected minus prior power), with the sites and beam azimuths marked.
+    Returns the matplotlib Axes (a new pyplot figure when ``ax`` is None)."""
     if kind not in KINDS:
         raise InvalidInputError(f"kind must be one of {KINDS} (got {kind!r})")
     if ax is None:
@@ -52,6 +54,11 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
                 facecolor="0.75", label=f"out of reach ({RSS_FLOOR_DBM:g} dBm in the files)"
             )
             ax.legend(handles=[floor], loc="upper right", fontsize="small", framealpha=0.8)
+    elif kind in ("rss_std", "correction"):
+        if rm.rss_std_db is None:
+            raise InvalidInputError(f"kind {kind!r} needs a map corrected by measurements")
+        data, label, cmap, lo, hi = _measured(rm, kind)
+        im = ax.imshow(data, origin="lower", extent=rm.extent_m, cmap=cmap, vmin=lo, vmax=hi)
     elif kind == "serving":
         data, label = rm.serving_cell, "serving cell"
         cells = max(len(rm.rss_dbm), 1)
@@ -72,6 +79,17 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
     ax.set_ylabel("y [m]")
     ax.set_title(f"{rm.scenario.name}: {label}, {rm.altitude_m:g} m")
     return ax
+
+
+def _measured(rm: Any, kind: str) -> tuple[Any, str, str, float, float | None]:
+    """A corrected map's 'rss_std' or 'correction' figure: data, label, colours and range."""
+    ii, jj = np.indices(rm.serving_cell.shape)
+    s = np.maximum(rm.serving_cell, 0)
+    if kind == "rss_std":
+        return rm.rss_std_db[s, ii, jj], "RSS std, serving cell [dB]", "magma", 0.0, None
+    d = rm.rss_dbm[s, ii, jj] - rm.prior_rss_dbm[s, ii, jj]
+    m = max(1.0, float(np.percentile(np.abs(d), 99)))
+    return d, "corrected - prior RSS, serving cell [dB]", "RdBu_r", -m, m
 
 
 def _sites(rm: Any, ax: Any) -> None:

@@ -1,0 +1,13 @@
+"""Maps that learn from what is measured: a drive-test or flight log in
+([`log`][rainuav.radio.measured.log]), the site parameters it says are wrong fitted
+([`calibrate`][rainuav.radio.measured.calibrate]), what is still off estimated as a field with its
+uncertainty ([`residual`][rainuav.radio.measured.residual]), and the corrected map out
+([`correct`][rainuav.radio.measured.correct]:
+[`correct_map()`][rainuav.radio.measured.correct.correct_map])."""
+
+from __future__ import annotations
+
+from rainuav.radio.measured.correct import correct_map
+from rainuav.radio.measured.log import MeasurementLog, read_log, rss_from_rsrp
+
+__all__ = ["MeasurementLog", "correct_map", "read_log", "rss_from_rsrp"]

@@ -1,0 +1,364 @@
+"""The map where the log was measured, and the site parameters the log says are wrong.
+
+**The prior at the log's points.** A map is one flight level; a log is wherever the UAV flew.
+[`prior_at()`][rainuav.radio.measured.calibrate.prior_at] reads each cell's power at every logged
+point: bilinear in the map's pixels, and linear in height between maps built at levels
+``level_step_m`` apart that bracket the point (the map itself where every point lies within half
+a step of its altitude).
+
+**Calibration.** A site database gets some things wrong: the transmit power, the tilt, the
+azimuth, the antenna height. [`calibrate()`][rainuav.radio.measured.calibrate.calibrate] fits,
+per cell, an offset to each (within [`BOUNDS`][rainuav.radio.measured.calibrate.BOUNDS]) by robust
+least squares (SciPy's ``least_squares``, soft-L1 loss with a 4 dB scale, so a few deep fades or
+bad rows do not pull the fit). The model keeps the propagation the engine computed and changes
+what the parameters change: the antenna's gain toward the point (the pattern turned by the
+azimuth offset, tipped by the tilt offset, seen from the moved height) and the free-space
+spreading from the moved antenna:
+
+    P(theta) = P_map + dP + G(az - daz, el' - dtilt) - G(az, el) + 20 log10(d / d')
+
+with ``el'`` and ``d'`` the elevation and distance from the antenna ``dh`` higher. Each value's
+uncertainty is the square root of the diagonal of ``s^2 (J^T J)^-1`` at the solution, ``s`` the
+residuals' robust spread (1.4826 times their median absolute deviation). A cell with fewer than
+``MIN_POINTS_PER_PARAMETER`` points per parameter fits its power offset alone, and none with fewer
+than that for one."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.interpolate import RegularGridInterpolator
+from scipy.optimize import least_squares
+
+from rainuav.errors import InvalidInputError
+from rainuav.radio.measured.log import MeasurementLog
+from rainuav.radio.outputs.mapdata import RadioMap
+from rainuav.radio.scene.cell import Cell, pattern_by_key
+from rainuav.radio.scene.scenario import Scenario, Site
+from rainuav.radio.scene.terrain import surface_at
+
+__all__ = [
+    "BOUNDS",
+    "CellFit",
+    "calibrate",
+    "calibrated_at",
+    "calibrated_maps",
+    "gain_change_db",
+    "prior_at",
+]
+
+BOUNDS: dict[str, tuple[float, float]] = {
+    "power_db": (-15.0, 15.0),
+    "tilt_deg": (-15.0, 15.0),
+    "azimuth_deg": (-45.0, 45.0),
+    "height_m": (-30.0, 30.0),
+}
+"""Each fitted offset's name and bounds (dB, degrees, degrees, metres)."""
+SCALES = {"power_db": 1.0, "tilt_deg": 1.0, "azimuth_deg": 5.0, "height_m": 5.0}
+MIN_POINTS_PER_PARAMETER = 15
+MAX_EVALUATIONS = 200
+START_GRID = {"tilt_deg": tuple(np.arange(-8.0, 8.5, 1.0)),
+              "azimuth_deg": tuple(np.arange(-30.0, 31.0, 5.0))}  # fmt: skip
+STARTS = 3
+SCAN_POINTS = 100
+TABLE_STEP_DEG = 0.25
+SOFT_L1_SCALE_DB = 4.0
+GAIN_FLOOR_DB = -80.0
+
+
+def _level_coordinate(scn: Scenario, log: MeasurementLog) -> np.ndarray:
+    return log.z_m if scn.area.msl else log.alt_m
+
+
+def prior_at(
+    rm: RadioMap,
+    log: MeasurementLog,
+    level_step_m: float = 10.0,
+    build: Any = None,
+) -> np.ndarray:
+    """Each logged row's cell power in the prior, dBm, (N,) (module docstring). ``build``: the
+    function that builds a map of a scenario (default
+    [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map], cached)."""
+    scn = rm.scenario
+    at = _level_coordinate(scn, log)
+    if np.all(np.abs(at - rm.altitude_m) <= level_step_m / 2):
+        return _bilinear(rm, log)
+    if build is None:
+        from rainuav.radio.outputs.maps import build_radio_map as build
+    from rainuav.radio.outputs.levelmaps import level_scenario
+
+    low = np.floor(at / level_step_m) * level_step_m
+    frac = (at - low) / level_step_m
+    low = np.maximum(low, 0.5)
+    high = low + level_step_m
+    out = np.zeros(len(log))
+    maps: dict[float, RadioMap] = {}
+    for lev in sorted({*low.tolist(), *high[frac > 0].tolist()}):
+        maps[lev] = rm if abs(lev - rm.altitude_m) < 1e-9 else build(level_scenario(scn, lev))
+    for lev, m in maps.items():
+        v = _bilinear(m, log)
+        out += np.where(low == lev, (1 - frac) * v, 0.0) + np.where(high == lev, frac * v, 0.0)
+    return out
+
+
+def _bilinear(rm: RadioMap, log: MeasurementLog) -> np.ndarray:
+    out = np.empty(len(log))
+    for c in np.unique(log.cell):
+        m = log.cell == c
+        f = RegularGridInterpolator(
+            (rm.y_m, rm.x_m), rm.rss_dbm[c], bounds_error=False, fill_value=None
+        )
+        out[m] = f(np.column_stack([log.y_m[m], log.x_m[m]]))
+    return out
+
+
+def _site_z(scn: Scenario, site: Site) -> float:
+    return float(surface_at(scn, np.array([site.x_m]), np.array([site.y_m]))[0]) + site.height_m
+
+
+@functools.lru_cache(maxsize=16)
+def _pattern_table(key: tuple[Any, ...]) -> np.ndarray:
+    """The pattern of cells with ``key`` in its own frame, dBi floored at ``GAIN_FLOOR_DB``,
+    every ``TABLE_STEP_DEG`` in azimuth (-180..180) and elevation (-90..90)."""
+    az = np.arange(-180.0, 180.0 + TABLE_STEP_DEG / 2, TABLE_STEP_DEG)
+    el = np.arange(-90.0, 90.0 + TABLE_STEP_DEG / 2, TABLE_STEP_DEG)
+    g = pattern_by_key(key).gain_dbi(*np.meshgrid(az, el, indexing="ij"))
+    return np.maximum(np.asarray(g, dtype=float), GAIN_FLOOR_DB)
+
+
+def _bilinear_table(t: np.ndarray, az: np.ndarray, el: np.ndarray) -> np.ndarray:
+    fa = (az + 180.0) / TABLE_STEP_DEG
+    fe = (el + 90.0) / TABLE_STEP_DEG
+    ia = np.clip(np.floor(fa).astype(np.int64), 0, t.shape[0] - 2)
+    ie = np.clip(np.floor(fe).astype(np.int64), 0, t.shape[1] - 2)
+    wa, we = fa - ia, fe - ie
+    return ((1 - wa) * ((1 - we) * t[ia, ie] + we * t[ia, ie + 1])
+            + wa * ((1 - we) * t[ia + 1, ie] + we * t[ia + 1, ie + 1]))  # fmt: skip
+
+
+class _View:
+    """One cell seen from a set of points: what the gain change needs that no offset changes."""
+
+    def __init__(
+        self, scn: Scenario, site: Site, cell: Cell, x: Any, y: Any, z: Any, table: bool = False
+    ) -> None:
+        x, y, z = (np.asarray(v, dtype=float) for v in (x, y, z))
+        self.cell, self.table = cell, table
+        self.rho = np.hypot(x - site.x_m, y - site.y_m)
+        self.az = np.degrees(np.arctan2(y - site.y_m, x - site.x_m))
+        self.dz = z - _site_z(scn, site)
+        self.g0 = self._gain(cell, self.dz)
+
+    def _gain(self, cell: Cell, dz: np.ndarray) -> np.ndarray:
+        el = np.clip(np.degrees(np.arctan2(dz, self.rho)) - cell.tilt_deg, -90.0, 90.0)
+        az = (self.az - cell.azimuth_deg + 180.0) % 360.0 - 180.0
+        if not self.table:
+            g = pattern_by_key(cell.key()).gain_dbi(az, el)
+            return np.maximum(np.asarray(g, dtype=float), GAIN_FLOOR_DB)
+        return _bilinear_table(_pattern_table(cell.key()), az, el)
+
+    def change(self, offsets: dict[str, float]) -> np.ndarray:
+        dh = offsets.get("height_m", 0.0)
+        moved = dataclasses.replace(
+            self.cell,
+            azimuth_deg=self.cell.azimuth_deg + offsets.get("azimuth_deg", 0.0),
+            tilt_deg=self.cell.tilt_deg + offsets.get("tilt_deg", 0.0),
+        )
+        dz1 = self.dz - dh
+        spread = 10 * np.log10((self.rho**2 + self.dz**2 + 1e-6) / (self.rho**2 + dz1**2 + 1e-6))
+        return offsets.get("power_db", 0.0) + self._gain(moved, dz1) - self.g0 + spread
+
+
+def gain_change_db(
+    scn: Scenario, site: Site, cell: Cell, x: Any, y: Any, z: Any, offsets: dict[str, float]
+) -> np.ndarray:
+    """The change of the cell's power at the points (x, y, z above sea level), dB, when its
+    parameters move by ``offsets`` (module docstring; names of
+    [`BOUNDS`][rainuav.radio.measured.calibrate.BOUNDS], missing ones 0)."""
+    return _View(scn, site, cell, x, y, z).change(offsets)
+
+
+@dataclass
+class CellFit:
+    """One cell's calibration."""
+
+    cell: int
+    """The map's cell index."""
+    points: int
+    """Logged rows of the cell."""
+    offsets: dict[str, float]
+    """The fitted offset of each parameter (names of ``BOUNDS``)."""
+    std: dict[str, float]
+    """Each offset's one-sigma uncertainty."""
+    at_bound: list[str]
+    """Parameters whose fit stopped at a bound (their uncertainty understates it)."""
+    rmse_before_db: float
+    """RMS of measured minus prior."""
+    rmse_after_db: float
+    """RMS of measured minus calibrated prior."""
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def _soft_l1(r: np.ndarray) -> float:
+    z = (r / SOFT_L1_SCALE_DB) ** 2
+    return float(np.sum(2 * (np.sqrt(1 + z) - 1)))
+
+
+def _starts(names: list[str], resid: Any) -> list[np.ndarray]:
+    """Where the fit starts: the power offset that centres the residuals with the beam where
+    the database puts it, and the ``STARTS`` best beam directions on a grid (tilt every degree,
+    azimuth every 5), each with the power that centres its residuals. A pattern's nulls and lobes
+    make the cost ripple: a single start falls into the nearest ripple."""
+    x0 = np.zeros(len(names))
+    pw = names.index("power_db") if "power_db" in names else None
+
+    def centred(x: np.ndarray) -> np.ndarray:
+        if pw is not None:
+            x[pw] = np.clip(x[pw] - np.median(resid(x)), *BOUNDS["power_db"])
+        return x
+
+    axes = [(names.index(p), grid) for p, grid in START_GRID.items() if p in names]
+    if not axes:
+        return [centred(x0)]
+    scored = []
+    for values in itertools.product(*(g for _, g in axes)):
+        x = x0.copy()
+        for (i, _), v in zip(axes, values, strict=True):
+            x[i] = v
+        x = centred(x)
+        scored.append((_soft_l1(resid(x)), x))
+    scored.sort(key=lambda t: t[0])
+    return [x0, centred(x0.copy())] + [x for _, x in scored[:STARTS]]
+
+
+class _Fit:
+    """The residuals (model minus measured, dB) of one cell's offsets ``names`` at a view's
+    points, and their robust least-squares fit from a start."""
+
+    def __init__(self, view: _View, prior: np.ndarray, meas: np.ndarray, names: list[str]):
+        self.view, self.prior, self.meas, self.names = view, prior, meas, names
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        off = dict(zip(self.names, theta.tolist(), strict=True))
+        return self.prior + self.view.change(off) - self.meas
+
+    def solve(self, x0: np.ndarray) -> Any:
+        lo = [BOUNDS[p][0] for p in self.names]
+        hi = [BOUNDS[p][1] for p in self.names]
+        return least_squares(
+            self, x0, bounds=(lo, hi), loss="soft_l1", f_scale=SOFT_L1_SCALE_DB,
+            x_scale=np.array([SCALES[p] for p in self.names]), max_nfev=MAX_EVALUATIONS,
+        )  # fmt: skip
+
+
+def _near(names: list[str], c: int, near: list[CellFit] | None) -> np.ndarray | None:
+    for f in near or []:
+        if f.cell == c and list(f.offsets) == names:
+            return np.array([f.offsets[p] for p in names])
+    return None
+
+
+def _cells(scn: Scenario) -> list[tuple[Site, Cell]]:
+    return [(s, c) for s in scn.sites for c in s.cells]
+
+
+def calibrate(
+    scn: Scenario,
+    log: MeasurementLog,
+    prior: np.ndarray,
+    params: Sequence[str] = tuple(BOUNDS),
+    near: list[CellFit] | None = None,
+) -> list[CellFit]:
+    """Fits each measured cell's ``params`` offsets to the log (module docstring); ``prior``:
+    each row's power in the prior map
+    ([`prior_at()`][rainuav.radio.measured.calibrate.prior_at]). ``near``: an earlier fit of
+    the same cells (on more of the log) to start from alone, where it fitted the same
+    parameters (a cross-validation fold)."""
+    bad = [p for p in params if p not in BOUNDS]
+    if bad:
+        raise InvalidInputError(
+            f"calibration parameter {bad[0]!r} is not one of {', '.join(BOUNDS)}"
+        )
+    cells = _cells(scn)
+    fits = []
+    for c in np.unique(log.cell):
+        m = log.cell == c
+        n = int(m.sum())
+        names = list(params) if n >= MIN_POINTS_PER_PARAMETER * len(params) else ["power_db"]
+        if n < MIN_POINTS_PER_PARAMETER:
+            names = []
+        site, cell = cells[c]
+        x, y, z, meas, pri = log.x_m[m], log.y_m[m], log.z_m[m], log.rss_dbm[m], prior[m]
+        before = float(np.sqrt(np.mean((meas - pri) ** 2)))
+        if not names:
+            fits.append(CellFit(int(c), n, {}, {}, [], before, before))
+            continue
+
+        view = _Fit(_View(scn, site, cell, x, y, z), pri, meas, names)
+        x0 = _near(names, c, near)
+        if x0 is None:  # each start on a sample of the points, the best then on all
+            pick = np.random.default_rng(0).permutation(n)[:SCAN_POINTS]
+            sub = _View(scn, site, cell, x[pick], y[pick], z[pick], table=True)
+            scan = _Fit(sub, pri[pick], meas[pick], names)
+            x0 = min((scan.solve(s) for s in _starts(names, scan)), key=lambda r: r.cost).x
+        res = view.solve(x0)
+        r = res.fun
+        s = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+        std = np.sqrt(np.maximum(np.diag(s**2 * np.linalg.pinv(res.jac.T @ res.jac)), 0.0))
+        stuck = [p for p, v in zip(names, res.x, strict=True)
+                 if min(v - BOUNDS[p][0], BOUNDS[p][1] - v) < 1e-3 * np.ptp(BOUNDS[p])]  # fmt: skip
+        fits.append(
+            CellFit(
+                cell=int(c),
+                points=n,
+                offsets={p: float(v) for p, v in zip(names, res.x, strict=True)},
+                std={p: float(v) for p, v in zip(names, std, strict=True)},
+                at_bound=stuck,
+                rmse_before_db=before,
+                rmse_after_db=float(np.sqrt(np.mean(r**2))),
+            )
+        )
+    return fits
+
+
+def calibrated_maps(rm: RadioMap, fits: list[CellFit]) -> np.ndarray:
+    """The map's ``rss_dbm`` (M, H, W) with each fitted cell's parameters moved, dBm (pixels a
+    cell does not reach stay unreached)."""
+    scn = rm.scenario
+    cells = _cells(scn)
+    out = np.array(rm.rss_dbm, dtype=float, copy=True)
+    gx, gy = np.meshgrid(rm.x_m, rm.y_m)
+    from rainuav.radio.scene.terrain import flight_heights
+
+    gz = flight_heights(scn)
+    for f in fits:
+        if not f.offsets:
+            continue
+        site, cell = cells[f.cell]
+        d = gain_change_db(scn, site, cell, gx, gy, gz, f.offsets)
+        reached = out[f.cell] > -249.0
+        out[f.cell] = np.where(reached, out[f.cell] + d, out[f.cell])
+    return out
+
+
+def calibrated_at(
+    scn: Scenario, log: MeasurementLog, prior: np.ndarray, fits: list[CellFit]
+) -> np.ndarray:
+    """Each row's power in the calibrated prior, dBm."""
+    cells = _cells(scn)
+    out = np.array(prior, dtype=float, copy=True)
+    for f in fits:
+        if not f.offsets:
+            continue
+        m = log.cell == f.cell
+        site, cell = cells[f.cell]
+        out[m] += gain_change_db(scn, site, cell, log.x_m[m], log.y_m[m], log.z_m[m], f.offsets)
+    return out

@@ -1,0 +1,187 @@
+"""What the calibrated map still gets wrong: the residual (measured minus calibrated, dB) of one
+cell as a field in (east, north, height), estimated by Gaussian-process regression
+(scikit-learn's ``GaussianProcessRegressor``).
+
+**Bins.** Rows are first averaged over the map's pixels and height bins of ``level_step_m``
+(what a drive test does over fast fading): one point a bin, at the mean position of its rows.
+Where a cell has more than ``MAX_POINTS`` bins, the bins are doubled in size until it has not
+(the count is reported).
+
+**Kernel.** ``C Matern(nu = 1.5, anisotropic) + White``: an amplitude (how far the calibrated
+map is off, typically), one length scale east and north and one in height (height only where
+the log spans more than one height bin), and the measurement noise of a bin. The
+hyperparameters maximise the marginal likelihood on at most ``MAX_FIT`` bins (drawn with the
+seed), then the field is conditioned on every bin with them fixed. Away from the measurements
+the mean returns to 0 (the calibrated map) and the standard deviation to the amplitude.
+
+**Standard deviation.** The uncertainty of the field itself (the noise term removed), so of the
+map's mean power at a pixel, not of one future measurement there (that adds the noise)."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.interpolate import RegularGridInterpolator
+from scipy.spatial import cKDTree
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.gaussian_process import GaussianProcessRegressor
+from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
+
+__all__ = ["MAX_FIT", "MAX_POINTS", "ResidualField", "bin_points", "fit_residual"]
+
+MAX_POINTS = 2500
+"""The most bins one cell's field is conditioned on."""
+MAX_FIT = 250
+"""The most bins its hyperparameters are fitted on."""
+HEIGHT_RATIOS = (1.0, 3.0, 10.0)
+"""The ratios of the ground's length scale to the height's that are tried (the likeliest kept)."""
+FAR = 4.0
+"""Length scales beyond which a pixel's field is its prior (Matern 3/2: correlation 0.008)."""
+GRID_POINTS = 2500
+"""The fewest map pixels the field is computed at where its length scales allow fewer
+([`ResidualField.on_grid()`][rainuav.radio.measured.residual.ResidualField.on_grid])."""
+
+
+def bin_points(
+    x: np.ndarray, y: np.ndarray, h: np.ndarray, v: np.ndarray, size_m: float, step_m: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Averages the values ``v`` at (x, y, h) over bins ``size_m`` wide and ``step_m`` tall:
+    the bins' mean positions (B, 3), mean values (B,) and row counts (B,)."""
+    keys = np.column_stack(
+        [np.floor(x / size_m), np.floor(y / size_m), np.round(h / step_m)]
+    ).astype(np.int64)
+    _, inv, count = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inv = inv.ravel()
+
+    def mean(a: np.ndarray) -> np.ndarray:
+        return np.bincount(inv, weights=a) / count
+
+    return np.column_stack([mean(x), mean(y), mean(h)]), mean(v), count
+
+
+def _features(pts: np.ndarray, ratio: float) -> np.ndarray:
+    """East, north and (where ``ratio``) height times ``ratio``: one isotropic length scale."""
+    if ratio == 0:
+        return pts[:, :2]
+    return np.column_stack([pts[:, 0], pts[:, 1], pts[:, 2] * ratio])
+
+
+@dataclass
+class ResidualField:
+    """One cell's residual field."""
+
+    gp: GaussianProcessRegressor
+    """The conditioned regressor (its kernel's hyperparameters fixed)."""
+    height_ratio: float
+    """How many times longer the field's length scale is across the ground than in height
+    (0: the same at every height: the log spans one height bin)."""
+    amplitude_db: float
+    """The field's standard deviation far from any measurement, dB."""
+    noise_db: float
+    """A bin's measurement noise, dB."""
+    length_m: float
+    """The length scale across the ground, m (in height: this over ``height_ratio``)."""
+    bins: int
+    """The points it is conditioned on."""
+    bin_m: float
+    """The bins' width, m (the map's pixel, or larger where thinned)."""
+
+    def _x(self, pts: np.ndarray) -> np.ndarray:
+        return _features(pts, self.height_ratio)
+
+    def mean(self, pts: np.ndarray, chunk: int = 20000) -> np.ndarray:
+        """The field at the points (N, 3): east, north, height, dB."""
+        out = [self.gp.predict(self._x(pts[i : i + chunk])) for i in range(0, len(pts), chunk)]
+        return np.concatenate(out) if out else np.zeros(0)
+
+    def std(self, pts: np.ndarray, chunk: int = 4000) -> np.ndarray:
+        """The field's standard deviation at the points (N, 3), dB (module docstring)."""
+        noise = self.noise_db**2
+        out = []
+        for i in range(0, len(pts), chunk):
+            _, s = self.gp.predict(self._x(pts[i : i + chunk]), return_std=True)
+            out.append(np.sqrt(np.maximum(s**2 - noise, 0.0)))
+        return np.concatenate(out) if out else np.zeros(0)
+
+    def on_grid(self, x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray) -> tuple[Any, Any]:
+        """The mean and standard deviation over the pixel centres ``x_m`` (W,), ``y_m`` (H,) at
+        heights ``h_m`` (H, W). Both vary over the field's length scales, many pixels: they are
+        computed every ``k`` pixels (``k`` a quarter of the shorter length scale across the
+        ground, in pixels, and at least enough for ``GRID_POINTS`` nodes; the last row and column
+        always) and bilinear between."""
+        gx, gy = np.meshgrid(x_m, y_m)
+        h_m = np.broadcast_to(np.asarray(h_m, dtype=float), gx.shape)
+        px = float(abs(x_m[1] - x_m[0])) if len(x_m) > 1 else 1.0
+        k = max(1, min(int(self.length_m / (2 * px)), int(np.sqrt(gx.size / GRID_POINTS))))
+        ri = np.unique(np.r_[np.arange(0, len(y_m), k), len(y_m) - 1])
+        ci = np.unique(np.r_[np.arange(0, len(x_m), k), len(x_m) - 1])
+        sub = np.ix_(ri, ci)
+        pts = np.column_stack([gx[sub].ravel(), gy[sub].ravel(), h_m[sub].ravel()])
+        # Farther than FAR length scales from every measurement the field is its prior (a
+        # correlation under 1%): mean 0, deviation the amplitude.
+        tree = cKDTree(self.gp.X_train_ / self.length_m)
+        near = tree.query(self._x(pts) / self.length_m, distance_upper_bound=FAR)[0] < FAR
+        mean = np.zeros(len(pts))
+        std = np.full(len(pts), self.amplitude_db)
+        mean[near], std[near] = self.mean(pts[near]), self.std(pts[near])
+        mean, std = mean.reshape(len(ri), len(ci)), std.reshape(len(ri), len(ci))
+        if k == 1:
+            return mean, std
+        at = np.column_stack([gy.ravel(), gx.ravel()])
+        out = [RegularGridInterpolator((y_m[ri], x_m[ci]), v)(at).reshape(gx.shape)
+               for v in (mean, std)]  # fmt: skip
+        return out[0], out[1]
+
+
+def _kernel(spread: float, length: float, bounds: tuple[float, float]) -> Any:
+    return ConstantKernel(max(spread, 0.25), (1e-4, 1e4)) * Matern(
+        length, (bounds[0], bounds[1]), nu=1.5
+    ) + WhiteKernel(1.0, (1e-2, 1e2))
+
+
+def fit_residual(
+    pts: np.ndarray,
+    resid: np.ndarray,
+    *,
+    size_m: float,
+    step_m: float,
+    extent_m: float,
+    seed: int = 0,
+    like: ResidualField | None = None,
+) -> ResidualField:
+    """The residual field of one cell from its rows at ``pts`` (N, 3: east, north, height) and
+    their residuals, dB (module docstring). ``size_m``/``step_m``: the bins; ``extent_m``: the
+    area's size (the longest length scale is 5 times it); ``like``: a field whose
+    hyperparameters to reuse (a cross-validation fold), else fitted here."""
+    bm = size_m
+    while True:
+        bp, bv, _ = bin_points(pts[:, 0], pts[:, 1], pts[:, 2], resid, bm, step_m)
+        if len(bv) <= MAX_POINTS:
+            break
+        bm *= 2
+    if like is not None:
+        kernel, ratio = like.gp.kernel_, like.height_ratio
+    else:
+        in_height = np.ptp(np.round(bp[:, 2] / step_m)) >= 1
+        k0 = _kernel(float(np.var(bv)), extent_m / 10, (2 * size_m, 5 * extent_m))
+        pick = np.random.default_rng(seed).permutation(len(bv))[:MAX_FIT]
+        best = None
+        for ratio in HEIGHT_RATIOS if in_height else (0.0,):
+            with warnings.catch_warnings():  # a bound reached is a result (a flat field, say)
+                warnings.simplefilter("ignore", ConvergenceWarning)
+                g = GaussianProcessRegressor(k0, random_state=seed)
+                g.fit(_features(bp[pick], ratio), bv[pick])
+            if best is None or g.log_marginal_likelihood_value_ > best[0]:
+                best = (g.log_marginal_likelihood_value_, g.kernel_, ratio)
+        assert best is not None
+        _, kernel, ratio = best
+    gp = GaussianProcessRegressor(kernel, optimizer=None).fit(_features(bp, ratio), bv)
+    return ResidualField(
+        gp=gp, height_ratio=float(ratio),
+        amplitude_db=float(np.sqrt(kernel.k1.k1.constant_value)),
+        noise_db=float(np.sqrt(kernel.k2.noise_level)),
+        length_m=float(kernel.k1.k2.length_scale), bins=len(bv), bin_m=bm,
+    )  # fmt: skip

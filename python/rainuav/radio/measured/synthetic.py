@@ -1,0 +1,88 @@
+"""Measurement logs drawn from a map taken as the truth: what a drive test over that map would have
+logged. For checks (a truth the prior does not know: another engine's map, or sites whose tilts
+and powers differ from the database's) and for trying the correction before a real log exists.
+
+[`sample_log()`][rainuav.radio.measured.synthetic.sample_log] flies straight east-west lines over
+the map, evenly spaced, until a share of the pixels is covered, and logs at each pixel the
+``cells`` strongest cells' power with Gaussian noise (the noise of one logged value: fast
+fading left after a receiver's averaging, and the receiver's error).
+[`write_log()`][rainuav.radio.measured.synthetic.write_log] writes a log as the CSV
+[`read_log()`][rainuav.radio.measured.log.read_log] reads."""
+
+from __future__ import annotations
+
+import csv
+import os
+from pathlib import Path
+
+import numpy as np
+
+from rainuav._io import write_atomic
+from rainuav.errors import InvalidInputError
+from rainuav.radio.measured.log import MeasurementLog
+from rainuav.radio.outputs.mapdata import RadioMap
+from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
+from rainuav.radio.scene.terrain import flight_heights_at
+
+__all__ = ["flight_line_pixels", "sample_log", "write_log"]
+
+
+def flight_line_pixels(shape: tuple[int, int], share: float, offset: float = 0.5) -> np.ndarray:
+    """(row, column) of the pixels on east-west lines covering ``share`` of a map of ``shape``,
+    the lines evenly spaced, the first ``offset`` of a spacing from the south edge, (K, 2)."""
+    if not 0.0 < share <= 1.0:
+        raise InvalidInputError(f"share must lie within (0, 1] (got {share:g})")
+    h, w = shape
+    lines = max(1, min(h, round(share * h)))
+    rows = np.unique(np.clip(((np.arange(lines) + offset) * h / lines).astype(int), 0, h - 1))
+    return np.array([(r, c) for r in rows for c in range(w)], dtype=np.int64)
+
+
+def sample_log(
+    truth: RadioMap,
+    share: float = 0.02,
+    *,
+    cells: int = 6,
+    noise_db: float = 2.0,
+    seed: int = 0,
+    offset: float = 0.5,
+    flight: int = 0,
+) -> MeasurementLog:
+    """A log over ``truth`` (module docstring): ``share`` of its pixels on flight lines
+    (``offset``: where the first line lies, in spacings), the ``cells`` strongest cells at each,
+    each value with ``noise_db`` of Gaussian noise drawn from ``seed``, all rows of ``flight``."""
+    rng = np.random.default_rng(seed)
+    px = flight_line_pixels(truth.rss_dbm.shape[1:], share, offset)
+    r, c = px[:, 0], px[:, 1]
+    power = truth.rss_dbm[:, r, c]  # (M, K)
+    k = min(cells, power.shape[0])
+    top = np.argsort(-power, axis=0)[:k]  # (k, K)
+    cell = top.T.ravel()
+    rr, cc = np.repeat(r, k), np.repeat(c, k)
+    value = truth.rss_dbm[cell, rr, cc]
+    keep = value > RSS_FLOOR_DBM + 1.0
+    x, y = truth.x_m[cc[keep]], truth.y_m[rr[keep]]
+    n = int(keep.sum())
+    scn = truth.scenario
+    z = flight_heights_at(scn, x, y)
+    return MeasurementLog(
+        x_m=x, y_m=y, z_m=z, alt_m=np.full(n, float(truth.altitude_m)), cell=cell[keep],
+        rss_dbm=value[keep] + rng.normal(0.0, noise_db, n), flight=np.full(n, flight),
+        rows=n, source=f"drawn from the {scn.name} map",
+    )  # fmt: skip
+
+
+def write_log(log: MeasurementLog, path: str | os.PathLike[str]) -> Path:
+    """Writes ``log`` as CSV in the scenario's metres (``x_m,y_m,alt_m,cell,rss_dbm,flight``),
+    atomically."""
+
+    def write(tmp: Path) -> None:
+        with tmp.open("w", newline="") as f:
+            out = csv.writer(f)
+            out.writerow(["x_m", "y_m", "alt_m", "cell", "rss_dbm", "flight"])
+            for row in zip(log.x_m, log.y_m, log.alt_m, log.cell, log.rss_dbm, log.flight,
+                           strict=True):  # fmt: skip
+                x, y, a, c, v, fl = row
+                out.writerow([f"{x:.2f}", f"{y:.2f}", f"{a:.2f}", int(c), f"{v:.2f}", int(fl)])
+
+    return write_atomic(path, write)
