@@ -259,3 +259,32 @@ def test_a_corrected_map_carries_its_deviation_in_the_geotiff(worlds, tmp_path) 
         assert src.count == 5 and src.descriptions[4] == "rss_serving_std_db"
         band = src.read(5)[::-1]
     assert np.allclose(band, _serving(cm.rss_std_db, cm).astype(np.float32))
+
+
+@pytest.mark.slow
+def test_a_log_at_several_heights_reads_the_prior_at_each(worlds) -> None:
+    """Rows flown at 60 m read the prior from a map built at 60 m (bilinear there; exact at
+    pixel centres), rows at 65 m halfway between the 60 and 70 m maps (linear in height, the
+    documented rule), and the residual field varies in height."""
+    import dataclasses as dc
+
+    from rainuav.radio.outputs.levelmaps import level_scenario
+
+    prior, truth, _ = worlds
+    scn = prior.scenario
+    at60 = build_radio_map(level_scenario(scn, 60.0), cache=False)
+    at70 = build_radio_map(level_scenario(scn, 70.0), cache=False)
+    low = sample_log(at60, 0.05, seed=1)
+    low = dc.replace(low, alt_m=np.full(len(low), 60.0), z_m=np.full(len(low), 60.0))
+    p60 = prior_at(prior, low)
+    ii = np.searchsorted(at60.y_m, low.y_m)
+    jj = np.searchsorted(at60.x_m, low.x_m)
+    assert np.allclose(p60, at60.rss_dbm[low.cell, ii, jj], atol=1e-9)
+    mid = dc.replace(low, alt_m=np.full(len(low), 65.0), z_m=np.full(len(low), 65.0))
+    want = 0.5 * (at60.rss_dbm[low.cell, ii, jj] + at70.rss_dbm[low.cell, ii, jj])
+    assert np.allclose(prior_at(prior, mid), want, atol=1e-9)
+    both = sample_log(truth, 0.05, seed=2)
+    both = dc.replace(both, alt_m=np.where(np.arange(len(both)) % 2, 100.0, 60.0))
+    both = dc.replace(both, z_m=both.alt_m)
+    cm = correct_map(prior, both, cross_validate=False)
+    assert any(f["height_length_m"] is not None for f in cm.fit["residual"])

@@ -49,6 +49,7 @@ __all__ = [
     "calibrate",
     "calibrated_at",
     "calibrated_maps",
+    "calibration_std_db",
     "gain_change_db",
     "prior_at",
 ]
@@ -65,8 +66,9 @@ MIN_POINTS_PER_PARAMETER = 15
 MAX_EVALUATIONS = 200
 START_GRID = {"tilt_deg": tuple(np.arange(-8.0, 8.5, 1.0)),
               "azimuth_deg": tuple(np.arange(-30.0, 31.0, 5.0))}  # fmt: skip
-STARTS = 3
+STARTS = 2
 SCAN_POINTS = 100
+SCAN_EVALUATIONS = 60
 TABLE_STEP_DEG = 0.25
 SOFT_L1_SCALE_DB = 4.0
 GAIN_FLOOR_DB = -80.0
@@ -196,6 +198,8 @@ class CellFit:
     """The fitted offset of each parameter (names of ``BOUNDS``)."""
     std: dict[str, float]
     """Each offset's one-sigma uncertainty."""
+    cov: list[list[float]]
+    """The offsets' covariance (in the order of ``offsets``)."""
     at_bound: list[str]
     """Parameters whose fit stopped at a bound (their uncertainty understates it)."""
     rmse_before_db: float
@@ -213,10 +217,11 @@ def _soft_l1(r: np.ndarray) -> float:
 
 
 def _starts(names: list[str], resid: Any) -> list[np.ndarray]:
-    """Where the fit starts: the power offset that centres the residuals with the beam where
-    the database puts it, and the ``STARTS`` best beam directions on a grid (tilt every degree,
-    azimuth every 5), each with the power that centres its residuals. A pattern's nulls and lobes
-    make the cost ripple: a single start falls into the nearest ripple."""
+    """Where the fit starts: the database's values (no offset), and the ``STARTS`` best beam
+    directions on a grid (tilt every degree, azimuth every 5), each with the power offset that
+    centres its residuals. A pattern's nulls and lobes make the cost ripple: a single start
+    falls into the nearest ripple. Each start runs ``SCAN_EVALUATIONS`` steps on
+    ``SCAN_POINTS`` of the rows (the pattern tabulated); the best goes on, on every row."""
     x0 = np.zeros(len(names))
     pw = names.index("power_db") if "power_db" in names else None
 
@@ -236,7 +241,7 @@ def _starts(names: list[str], resid: Any) -> list[np.ndarray]:
         x = centred(x)
         scored.append((_soft_l1(resid(x)), x))
     scored.sort(key=lambda t: t[0])
-    return [x0, centred(x0.copy())] + [x for _, x in scored[:STARTS]]
+    return [x0] + [x for _, x in scored[:STARTS]]
 
 
 class _Fit:
@@ -250,12 +255,12 @@ class _Fit:
         off = dict(zip(self.names, theta.tolist(), strict=True))
         return self.prior + self.view.change(off) - self.meas
 
-    def solve(self, x0: np.ndarray) -> Any:
+    def solve(self, x0: np.ndarray, evaluations: int = MAX_EVALUATIONS) -> Any:
         lo = [BOUNDS[p][0] for p in self.names]
         hi = [BOUNDS[p][1] for p in self.names]
         return least_squares(
             self, x0, bounds=(lo, hi), loss="soft_l1", f_scale=SOFT_L1_SCALE_DB,
-            x_scale=np.array([SCALES[p] for p in self.names]), max_nfev=MAX_EVALUATIONS,
+            x_scale=np.array([SCALES[p] for p in self.names]), max_nfev=evaluations,
         )  # fmt: skip
 
 
@@ -299,7 +304,7 @@ def calibrate(
         x, y, z, meas, pri = log.x_m[m], log.y_m[m], log.z_m[m], log.rss_dbm[m], prior[m]
         before = float(np.sqrt(np.mean((meas - pri) ** 2)))
         if not names:
-            fits.append(CellFit(int(c), n, {}, {}, [], before, before))
+            fits.append(CellFit(int(c), n, {}, {}, [], [], before, before))
             continue
 
         view = _Fit(_View(scn, site, cell, x, y, z), pri, meas, names)
@@ -308,11 +313,13 @@ def calibrate(
             pick = np.random.default_rng(0).permutation(n)[:SCAN_POINTS]
             sub = _View(scn, site, cell, x[pick], y[pick], z[pick], table=True)
             scan = _Fit(sub, pri[pick], meas[pick], names)
-            x0 = min((scan.solve(s) for s in _starts(names, scan)), key=lambda r: r.cost).x
+            x0 = min((scan.solve(s, SCAN_EVALUATIONS) for s in _starts(names, scan)),
+                     key=lambda r: r.cost).x  # fmt: skip
         res = view.solve(x0)
         r = res.fun
         s = 1.4826 * float(np.median(np.abs(r - np.median(r))))
-        std = np.sqrt(np.maximum(np.diag(s**2 * np.linalg.pinv(res.jac.T @ res.jac)), 0.0))
+        cov = s**2 * np.linalg.pinv(res.jac.T @ res.jac)
+        std = np.sqrt(np.maximum(np.diag(cov), 0.0))
         stuck = [p for p, v in zip(names, res.x, strict=True)
                  if min(v - BOUNDS[p][0], BOUNDS[p][1] - v) < 1e-3 * np.ptp(BOUNDS[p])]  # fmt: skip
         fits.append(
@@ -321,6 +328,7 @@ def calibrate(
                 points=n,
                 offsets={p: float(v) for p, v in zip(names, res.x, strict=True)},
                 std={p: float(v) for p, v in zip(names, std, strict=True)},
+                cov=cov.tolist(),
                 at_bound=stuck,
                 rmse_before_db=before,
                 rmse_after_db=float(np.sqrt(np.mean(r**2))),
@@ -347,6 +355,30 @@ def calibrated_maps(rm: RadioMap, fits: list[CellFit]) -> np.ndarray:
         reached = out[f.cell] > -249.0
         out[f.cell] = np.where(reached, out[f.cell] + d, out[f.cell])
     return out
+
+
+def calibration_std_db(scn: Scenario, fit: CellFit, x: Any, y: Any, z: Any) -> np.ndarray:
+    """How far the fitted offsets' uncertainty moves the cell's power at the points (x, y, z
+    above sea level), dB: half the change between the offsets one standard deviation either way
+    along each principal axis of their covariance, added in quadrature (sigma points, on the
+    tabulated pattern: where the power is linear in the offsets this is ``sqrt(J C J^T)``, and it
+    stays finite beside a pattern's nulls, whose place a small tilt moves)."""
+    x = np.asarray(x, dtype=float)
+    if not fit.offsets:
+        return np.zeros(x.shape)
+    site, cell = _cells(scn)[fit.cell]
+    view = _View(scn, site, cell, x, y, z, table=True)
+    names = list(fit.offsets)
+    theta = np.array([fit.offsets[p] for p in names])
+    lam, vec = np.linalg.eigh(np.asarray(fit.cov))
+    var = np.zeros(x.shape)
+    for k in range(len(names)):
+        d = np.sqrt(max(float(lam[k]), 0.0)) * vec[:, k]
+        up, dn = (
+            view.change(dict(zip(names, t.tolist(), strict=True))) for t in (theta + d, theta - d)
+        )
+        var += ((up - dn) / 2) ** 2
+    return np.sqrt(var)
 
 
 def calibrated_at(

@@ -7,9 +7,11 @@
    ([`calibrate()`][rainuav.radio.measured.calibrate.calibrate]) and the map moved by them.
 3. Per cell, the residual (measured minus calibrated) as a Gaussian-process field
    ([`rainuav.radio.measured.residual`][rainuav.radio.measured.residual]): the corrected power is
-   the calibrated map plus the field's mean, its standard deviation the field's. A cell the log
-   does not measure keeps its calibrated (there: prior) power, with the median amplitude of the
-   measured cells' fields as its deviation (how far a map of this place is off, typically).
+   the calibrated map plus the field's mean, its standard deviation the field's and the fitted
+   offsets' own (their covariance carried to the power,
+   [`calibration_std_db()`][rainuav.radio.measured.calibrate.calibration_std_db]), added in
+   quadrature. A cell the log does not measure keeps its prior power, with the prior's RMS
+   error over every logged row as its deviation (how far this map is off, typically).
 4. The serving cell, SIR and SINR again from the corrected powers.
 5. The error at points the fit did not see: the whole of 2-3 again with one flight left out
    (the log's ``flight`` column), else one height bin, else one ninth of the area (a 3 x 3 grid),
@@ -29,12 +31,14 @@ from rainuav.radio.measured.calibrate import (
     calibrate,
     calibrated_at,
     calibrated_maps,
+    calibration_std_db,
     prior_at,
 )
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.measured.residual import ResidualField, fit_residual
 from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
+from rainuav.radio.scene.terrain import flight_heights
 
 __all__ = ["MIN_FIELD_POINTS", "correct_map"]
 
@@ -107,13 +111,17 @@ def correct_map(
         )
     cal = calibrated_maps(rm, fits)
     reached = rm.rss_dbm > RSS_FLOOR_DBM + 1.0
-    pooled = float(np.median([f.amplitude_db for f in fields.values()]))
+    pooled = float(np.sqrt(np.mean((log.rss_dbm - prior) ** 2)))
     std = np.full(cal.shape, pooled)
     h = np.full(scn.area.shape, rm.altitude_m)
     for c, f in fields.items():
-        mean, s = f.on_grid(rm.x_m, rm.y_m, h)
+        mean, std[c] = f.on_grid(rm.x_m, rm.y_m, h)
         cal[c] = np.where(reached[c], cal[c] + mean, cal[c])
-        std[c] = s
+    gx, gy = np.meshgrid(rm.x_m, rm.y_m)
+    gz = flight_heights(scn)
+    for fc in fits:  # the fitted offsets' own uncertainty, independent of the residual's
+        if fc.offsets:
+            std[fc.cell] = np.hypot(std[fc.cell], calibration_std_db(scn, fc, gx, gy, gz))
     cal = np.where(reached, np.clip(cal, RSS_FLOOR_DBM, 100.0), RSS_FLOOR_DBM)
     power = np.where(reached, 10.0 ** (cal / 10.0), 0.0)
     serving, sir, sinr = sir_from_power(power, scn.noise_power_dbm)
@@ -181,6 +189,12 @@ def _cross_validate(
             if m.any():
                 corr[m] += f.mean(pts[m])
                 sd[m] = np.hypot(f.std(pts[m]), f.noise_db)
+        for fc in fits:
+            m = te.cell == fc.cell
+            if fc.offsets and m.any():
+                sd[m] = np.hypot(
+                    sd[m], calibration_std_db(scn, fc, te.x_m[m], te.y_m[m], te.z_m[m])
+                )
         idx = np.flatnonzero(test)
         err["prior"][idx] = te.rss_dbm - prior[test]
         err["calibrated"][idx] = te.rss_dbm - cal_te
