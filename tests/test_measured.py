@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -288,3 +289,27 @@ def test_a_log_at_several_heights_reads_the_prior_at_each(worlds) -> None:
     both = dc.replace(both, z_m=both.alt_m)
     cm = correct_map(prior, both, cross_validate=False)
     assert any(f["height_length_m"] is not None for f in cm.fit["residual"])
+
+
+@pytest.mark.slow
+def test_the_guides_worked_example_finds_the_wrong_cells(tmp_path) -> None:
+    """docs/measurements_example.py as the page "Maps from measurements" runs it: the two wrong
+    tilts and the wrong power are found within 3 sigma (the page prints the values)."""
+    import json
+    import runpy
+    import sys
+
+    argv = sys.argv
+    sys.argv = ["measurements_example.py", "--out", str(tmp_path)]
+    try:
+        runpy.run_path(str(Path(__file__).resolve().parents[1] / "docs" /
+                           "measurements_example.py"), run_name="__main__")  # fmt: skip
+    finally:
+        sys.argv = argv
+    fit = json.loads((tmp_path / "maps" / "fit.json").read_text())
+    truth = {0: {"tilt_deg": 3.0}, 7: {"tilt_deg": -2.0}, 12: {"power_db": -6.0}}
+    for f in fit["calibration"]:
+        if f["cell"] in truth:
+            for p, v in f["offsets"].items():
+                want = truth[f["cell"]].get(p, 0.0)
+                assert abs(v - want) <= 3 * f["std"][p], (f["cell"], p, v, want)
