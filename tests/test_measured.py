@@ -54,6 +54,12 @@ def worlds():
     return _worlds()
 
 
+@pytest.fixture(scope="module")
+def corrected(worlds):
+    prior, truth, _ = worlds
+    return correct_map(prior, sample_log(truth, 0.02, seed=5), cross_validate=False)
+
+
 def _serving(rm, truth):
     ii, jj = np.indices(truth.serving_cell.shape)
     return rm[truth.serving_cell, ii, jj]
@@ -141,13 +147,13 @@ def test_the_standard_deviation_is_calibrated(worlds) -> None:
     assert cv["corrected"]["rmse_db"] < cv["prior"]["rmse_db"]
 
 
-def test_a_corrected_map_round_trips_and_keeps_its_prior(worlds, tmp_path) -> None:
+def test_a_corrected_map_round_trips_and_keeps_its_prior(worlds, corrected, tmp_path) -> None:
     """The .npz keeps the corrected power, its prior, the deviation and the fit, bit for bit;
     SINR is recomputed from the corrected powers; a corrected map is not corrected twice."""
     from rainuav.radio import RadioMap
 
     prior, truth, _ = worlds
-    cm = correct_map(prior, sample_log(truth, 0.02, seed=5), cross_validate=False)
+    cm = corrected
     assert np.array_equal(cm.prior_rss_dbm, prior.rss_dbm)
     assert not np.array_equal(cm.sinr_db, prior.sinr_db)
     back = RadioMap.load(cm.save(tmp_path / "m.npz"))
@@ -221,6 +227,7 @@ def test_a_long_log_is_refused_and_many_bins_are_thinned(worlds, tmp_path, monke
     assert max(f["bin_m"] for f in cm.fit["residual"]) > prior.scenario.area.resolution_m
 
 
+@pytest.mark.slow
 def test_radiomap_corrects_a_map_by_a_log(worlds, tmp_path) -> None:
     """``python -m rainuav.radiomap --measurements LOG`` writes the corrected map, its prior, the
     deviation, fit.json and the two extra figures; a bad log exits 2 in one line."""
@@ -248,14 +255,13 @@ def test_radiomap_corrects_a_map_by_a_log(worlds, tmp_path) -> None:
     assert not (tmp_path / "o2" / "radiomap.npz").exists()
 
 
-def test_a_corrected_map_carries_its_deviation_in_the_geotiff(worlds, tmp_path) -> None:
+def test_a_corrected_map_carries_its_deviation_in_the_geotiff(corrected, tmp_path) -> None:
     rasterio = pytest.importorskip("rasterio")
     from rainuav.radio.outputs.maptiff import write_map_geotiff
     from rainuav.radio.scene.scenario import Origin
 
-    prior, truth, _ = worlds
-    cm = correct_map(prior, sample_log(truth, 0.02, seed=5), cross_validate=False)
-    cm = dataclasses.replace(cm, scenario=cm.scenario.replace(origin=Origin(47.0, 8.0)))
+    scn = corrected.scenario.replace(origin=Origin(47.0, 8.0))
+    cm = dataclasses.replace(corrected, scenario=scn)
     with rasterio.open(write_map_geotiff(cm, tmp_path / "m.tif")) as src:
         assert src.count == 5 and src.descriptions[4] == "rss_serving_std_db"
         band = src.read(5)[::-1]
