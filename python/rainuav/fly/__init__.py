@@ -158,6 +158,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="--altitude-m above the terrain under the UAV (ground, the default) or above "
         "mean sea level (msl)",
     )  # fmt: skip
+    ap.add_argument(
+        "--measurements", type=Path, default=None, metavar="LOG.csv",
+        help="a drive-test or flight log (cells as the sites file's site_id:k or the map's "
+        "index): the map corrected by it before the plan; the summary gives the plan's expected "
+        "outage and its spread, fit.json the fit (rainuav.radio.measured)",
+    )  # fmt: skip
     ap.add_argument("--out", type=Path, required=True, help="output folder")
     args = ap.parse_args(_cli.attach_negative_values(argv, LATLON_FLAGS))
 
@@ -224,6 +230,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             flyer=flyer,
             flown_by=by,
             start_altitude_m=start_alt,
+            measurements=args.measurements,
         )
         print(json.dumps(summary, indent=2))
         if place.scenario.footprints is not None:

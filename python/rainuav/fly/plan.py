@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -67,6 +68,7 @@ def fly_place(
     flyer: Callable[[UAVNavEnv], tuple[np.ndarray, bool]] | None = None,
     flown_by: str = "exact optimum",
     start_altitude_m: float | None = None,
+    measurements: Path | None = None,
 ) -> dict:
     """Builds the place's map, plans the exact optimum and the straight line from the start, writes
     [`FLIGHT_FILES`][rainuav.fly.plan.FLIGHT_FILES] into ``out`` (each atomically) and returns
@@ -75,8 +77,15 @@ def fly_place(
     from its start and returns the path and whether it arrived, in place of the exact optimum (which
     stays the yardstick: ``excess_over_optimum``); ``flown_by`` names it in the summary.
     ``start_altitude_m``: with ``area.altitudes_m``, the level to start at
-    ([`rainuav.fly.heights.fly_levels()`][rainuav.fly.heights.fly_levels])."""
+    ([`rainuav.fly.heights.fly_levels()`][rainuav.fly.heights.fly_levels]). ``measurements``: a
+    drive-test or flight log that corrects the map before the plan
+    ([`rainuav.radio.measured`][rainuav.radio.measured]); the summary then gives the plan's
+    expected outage share and its spread from the corrected map's deviation, and ``fit.json`` the
+    fit."""
     a = place.scenario.area
+    if measurements is not None and (a.altitudes_m or place.scenario.medium.moves):
+        raise InvalidInputError("--measurements corrects one map: not with --altitudes-m or a "
+                                "--weather file in time")  # fmt: skip
     if a.altitudes_m:  # altitude as a decision
         if flyer is not None:
             raise InvalidInputError("--policy flies one altitude: not with --altitudes-m")
@@ -93,6 +102,8 @@ def fly_place(
         rm: Any = build_radio_map_series(scn, series_times(horizon, SLICE_S), progress=progress)
     else:
         rm = build_radio_map(scn, progress=progress)
+    if measurements is not None:
+        rm = _corrected(place, rm, measurements)
     threshold = presets.SINR_THRESHOLDS_DB["uma"] if min_db is None else min_db
     task = NavConfig(
         goal_m=place.goal_m, start_m=place.start_m, max_steps=steps, speed_m_s=speed_m_s,
@@ -159,6 +170,14 @@ def fly_place(
         "area_m": [a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m],
         **(buildings_near_route(scn, path) or {}),
     }  # fmt: skip
+    if getattr(rm, "fit", None) is not None:  # outage as a probability, from the deviation
+        from rainuav.radio.measured.outage import outage_probability, path_outage
+
+        r, c = pixel_index(rm.sinr_db.shape, rm.extent_m, path[1:, 0], path[1:, 1])
+        prob = outage_probability(rm, min_db, pixels=(r, c))
+        summary["measurements"] = {"log": rm.fit["log"],
+                                   "cross_validation": rm.fit["cross_validation"],
+                                   **path_outage(prob)}  # fmt: skip
     _write(place, out, ll, path, t_s, sinr, serving, min_db, summary, rm, mission)
     return summary
 
@@ -180,6 +199,17 @@ def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, f
     top = (t.pixel_max(a.shape) + obstacle_pixel_max(scn))[pixel_index(a.shape, a.bounds, x, y)]
     picks = terrain_waypoints(dense, z, top, a.clearance_m)
     return dense[picks], z[picks], float(t.at(x[0], y[0]))
+
+
+def _corrected(place: Place, rm: Any, log_path: Path) -> Any:
+    from rainuav.radio.measured import correct_map, read_log
+    from rainuav.radio.scene.sites import cell_names
+
+    scn = place.scenario
+    log = read_log(log_path, scn, cell_names=cell_names(place.sites),
+                   altitude_reference=scn.area.altitude_reference or "ground")  # fmt: skip
+    print(log.summary(), file=sys.stderr)
+    return correct_map(rm, log)
 
 
 def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.ndarray,
@@ -207,5 +237,8 @@ def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.nd
     plot_flight(rm, path, place, out / "flight.png")
     # The map at take-off for a GIS (SINR, serving power and cell, not flyable).
     write_map_geotiff(rm, out / "sinr.tif", None if rm.sinr_db.ndim == 2 else 0)
+    if getattr(rm, "fit", None) is not None:
+        fit = json.dumps(rm.fit, indent=2) + "\n"
+        write_atomic(out / "fit.json", lambda tmp: tmp.write_text(fit))
     done = json.dumps(summary, indent=2) + "\n"  # last: the folder is complete
     write_atomic(out / "summary.json", lambda tmp: tmp.write_text(done))

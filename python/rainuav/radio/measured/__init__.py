@@ -3,11 +3,19 @@
 ([`calibrate`][rainuav.radio.measured.calibrate]), what is still off estimated as a field with its
 uncertainty ([`residual`][rainuav.radio.measured.residual]), and the corrected map out
 ([`correct`][rainuav.radio.measured.correct]:
-[`correct_map()`][rainuav.radio.measured.correct.correct_map])."""
+[`correct_map()`][rainuav.radio.measured.correct.correct_map]), with outage as a probability
+([`outage`][rainuav.radio.measured.outage])."""
 
 from __future__ import annotations
 
 from rainuav.radio.measured.correct import correct_map
 from rainuav.radio.measured.log import MeasurementLog, read_log, rss_from_rsrp
+from rainuav.radio.measured.outage import outage_probability
 
-__all__ = ["MeasurementLog", "correct_map", "read_log", "rss_from_rsrp"]
+__all__ = [
+    "MeasurementLog",
+    "correct_map",
+    "outage_probability",
+    "read_log",
+    "rss_from_rsrp",
+]

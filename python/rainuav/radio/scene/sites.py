@@ -32,7 +32,7 @@ from rainuav.geo import Georef
 from rainuav.radio.scene.cell import Cell
 from rainuav.radio.scene.scenario import Site
 
-__all__ = ["REQUIRED", "SiteRow", "read_site_rows", "sites_from_rows"]
+__all__ = ["REQUIRED", "SiteRow", "cell_names", "read_site_rows", "sites_from_rows"]
 
 REQUIRED = ("site_id", "lat", "lon", "height_m", "azimuth_deg", "electrical_tilt_deg",
             "tx_power_dbm")  # fmt: skip
@@ -178,3 +178,13 @@ def sites_from_rows(rows: list[SiteRow], georef: Georef, where: str = "sites") -
         ]
         sites.append(Site(x_m=float(x), y_m=float(y), height_m=first["height_m"], cells=cells))
     return sites
+
+
+def cell_names(rows: list[SiteRow]) -> list[str]:
+    """Each cell's name, ``site_id:k`` (its k-th sector from 1, in the file's order), in the
+    order [`sites_from_rows()`][rainuav.radio.scene.sites.sites_from_rows] makes the cells: what a
+    measurement log's ``cell`` column may give."""
+    masts: dict[str, list[SiteRow]] = {}
+    for r in rows:
+        masts.setdefault(r["site_id"], []).append(r)
+    return [f"{sid}:{k}" for sid, sectors in masts.items() for k in range(1, len(sectors) + 1)]
