@@ -243,3 +243,22 @@ def test_planner_refuses_plans_beyond_memory() -> None:
         plan.optimal_many(env, [[100.0, 100.0], [39_000.0, 100.0]])
     with pytest.raises(rainuav.InvalidInputError, match="max_steps"):
         plan.optimal(env, [100.0, 100.0])
+
+
+def test_chance_weighted_planner_against_brute_force() -> None:
+    """``plan_on(..., reward="chance")`` (the Rust planner: a move costs ``1 + mu P`` where the
+    field holds outage probabilities P) against every 6-move sequence flown by the Python
+    environment on the field ``-P`` with the ``shortfall`` reward at 0 dB, whose base reward is
+    the same ``-1 - mu max(0, 0 + P)``; to 1e-9."""
+    from rainuav.nav.field import SignalField
+
+    prob = np.random.default_rng(4).uniform(0, 1, (4, 5))
+    kw = {"extent_m": (0, 50, 0, 40), "goal_m": (30.0, 30.0), "max_steps": 6, "mu": 0.7,
+          "goal_reward": 50.0}  # fmt: skip
+    e = UAVNavEnv(sir_db=-prob, reward="shortfall", min_db=0.0, **kw)
+    field = SignalField(prob, kw["extent_m"])
+    for start in ([0.0, 0.0], [10.0, 30.0], [45.0, 5.0]):
+        p = plan.plan_on(field, e.cfg, np.array([start]), reward="chance")[0]
+        assert p.return_ == pytest.approx(brute_force(e, np.array(start), 6), abs=1e-9)
+    with pytest.raises(rainuav.errors.InvalidInputError, match="reward must be"):
+        plan.plan_on(field, e.cfg, np.array([[0.0, 0.0]]), reward="linear")

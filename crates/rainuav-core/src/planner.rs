@@ -20,6 +20,8 @@ pub enum RewardKind {
     Outage,
     /// `-1 + mu 10^(SIR/10)`.
     Linear,
+    /// `-1 - mu P`: the signal is the probability of outage (a map known with uncertainty).
+    Chance,
 }
 
 impl FromStr for RewardKind {
@@ -29,9 +31,10 @@ impl FromStr for RewardKind {
             "shortfall" => Ok(RewardKind::Shortfall),
             "outage" => Ok(RewardKind::Outage),
             "linear" => Ok(RewardKind::Linear),
+            "chance" => Ok(RewardKind::Chance),
             _ => Err(CoreError::invalid(
                 "reward",
-                "must be 'shortfall', 'outage' or 'linear'",
+                "must be 'shortfall', 'outage', 'linear' or 'chance'",
                 format!("{s:?}"),
             )),
         }
@@ -203,6 +206,7 @@ impl NavTask<'_> {
             RewardKind::Shortfall => -1.0 - self.mu * (self.sir_min_db - sir).max(0.0),
             RewardKind::Outage => -1.0 - self.mu * if sir < self.sir_min_db { 1.0 } else { 0.0 },
             RewardKind::Linear => -1.0 + self.mu * 10f64.powf(sir / 10.0),
+            RewardKind::Chance => -1.0 - self.mu * sir,
         }
     }
 
@@ -217,6 +221,7 @@ impl NavTask<'_> {
                 pairs.for_each(|(o, s)| *o = -1.0 - mu * if s < min { 1.0 } else { 0.0 })
             }
             RewardKind::Linear => pairs.for_each(|(o, s)| *o = -1.0 + mu * 10f64.powf(s / 10.0)),
+            RewardKind::Chance => pairs.for_each(|(o, s)| *o = -1.0 - mu * s),
         }
     }
 

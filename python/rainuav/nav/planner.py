@@ -62,16 +62,23 @@ def optimal_many(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
     return plan_on(env.field, env.cfg, starts_m)
 
 
-def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
+def plan_on(
+    field: Any, cfg: NavConfig, starts_m: npt.ArrayLike, reward: str | None = None
+) -> list[Plan]:
     """Exact optimal plans of the task ``cfg`` (``min_db`` resolved) on ``field`` (a
-    [`SignalField`][rainuav.nav.field.SignalField], or a series in time) from each start."""
+    [`SignalField`][rainuav.nav.field.SignalField], or a series in time) from each start.
+    ``reward="chance"``: ``field`` holds each pixel's probability of outage (a map known with
+    uncertainty, ``rainuav.radio.measured.outage``) and a move costs ``1 + mu P`` there, the
+    ``"outage"`` reward's expectation (in place of ``cfg.reward``)."""
+    if reward not in (None, "chance"):
+        raise InvalidInputError(f"reward must be None or 'chance' (got {reward!r})")
     starts = np.ascontiguousarray(np.asarray(starts_m, dtype=np.float64).reshape(-1, 2))
     task = {
         "step_m": float(cfg.step_m),
         "tol_m": float(cfg.tol_m),
         "max_steps": int(cfg.max_steps),
         "mu": float(cfg.mu),
-        "reward": cfg.reward,
+        "reward": reward or cfg.reward,
         "sir_min_db": float(cfg.min_db),  # the Rust planner's name for the threshold
         "goal_reward": float(cfg.goal_reward),
         "out_of_bounds_penalty": float(cfg.out_of_bounds_penalty),

@@ -361,8 +361,9 @@ def calibration_std_db(scn: Scenario, fit: CellFit, x: Any, y: Any, z: Any) -> n
     """How far the fitted offsets' uncertainty moves the cell's power at the points (x, y, z
     above sea level), dB: half the change between the offsets one standard deviation either way
     along each principal axis of their covariance, added in quadrature (sigma points, on the
-    tabulated pattern: where the power is linear in the offsets this is ``sqrt(J C J^T)``, and it
-    stays finite beside a pattern's nulls, whose place a small tilt moves)."""
+    tabulated pattern, the offsets kept within their bounds: where the power is linear in the
+    offsets this is ``sqrt(J C J^T)``, and it stays finite beside a pattern's nulls, whose place a
+    small tilt moves, and for an offset the log hardly constrains)."""
     x = np.asarray(x, dtype=float)
     if not fit.offsets:
         return np.zeros(x.shape)
@@ -371,11 +372,14 @@ def calibration_std_db(scn: Scenario, fit: CellFit, x: Any, y: Any, z: Any) -> n
     names = list(fit.offsets)
     theta = np.array([fit.offsets[p] for p in names])
     lam, vec = np.linalg.eigh(np.asarray(fit.cov))
+    lo = np.array([BOUNDS[p][0] for p in names])
+    hi = np.array([BOUNDS[p][1] for p in names])
     var = np.zeros(x.shape)
     for k in range(len(names)):
         d = np.sqrt(max(float(lam[k]), 0.0)) * vec[:, k]
         up, dn = (
-            view.change(dict(zip(names, t.tolist(), strict=True))) for t in (theta + d, theta - d)
+            view.change(dict(zip(names, np.clip(t, lo, hi).tolist(), strict=True)))
+            for t in (theta + d, theta - d)
         )
         var += ((up - dn) / 2) ** 2
     return np.sqrt(var)

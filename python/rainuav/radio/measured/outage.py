@@ -2,12 +2,15 @@
 and what it makes of a path.
 
 Each cell's power at a pixel is uncertain by its ``rss_std_db`` (Gaussian in dB, independent
-between cells). The serving cell, the interference and so the SINR follow from all of them
-together (a draw may change which cell serves), so the probability is estimated by drawing:
+between cells; a draw is capped at 100 dBm, the maps' own ceiling). The serving cell, the
+interference and so the SINR follow from all of them together (a draw may change which cell
+serves), so the probability is estimated by drawing:
 ``DRAWS`` draws of every cell's power at each pixel (one seed, so the same map gives the same
 probabilities), the SINR of each draw as
 [`sir_from_power()`][rainuav.radio.outputs.sinr.sir_from_power] computes it, and the share below
-the threshold (a standard error of at most ``0.5 / sqrt(DRAWS)``, 0.016)."""
+the threshold (a standard error of at most ``0.5 / sqrt(DRAWS)``, 0.016). The exact planner
+takes the probabilities as a field (``rainuav.nav.planner.plan_on(..., reward="chance")``: a
+move costs ``1 + mu P``, the ``"outage"`` reward's expectation)."""
 
 from __future__ import annotations
 
@@ -48,7 +51,7 @@ def outage_probability(
         s = slice(i, i + chunk)
         k = mean[:, s].shape[1]
         d = mean[None, :, s] + dev[None, :, s] * rng.standard_normal((draws, m, k))
-        p = np.where(reached[None, :, s], 10.0 ** (d / 10.0), 0.0)
+        p = np.where(reached[None, :, s], 10.0 ** (np.minimum(d, 100.0) / 10.0), 0.0)
         sinr = sir_from_power(p.transpose(1, 0, 2).reshape(m, -1), noise)[2]
         out[s] = (sinr.reshape(draws, k) < min_db).mean(axis=0)
     return out if pixels is not None else out.reshape(rss.shape[1:])
