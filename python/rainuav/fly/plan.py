@@ -174,7 +174,7 @@ def fly_place(
         from rainuav.radio.measured.outage import outage_probability, path_outage
 
         r, c = pixel_index(rm.sinr_db.shape, rm.extent_m, path[1:, 0], path[1:, 1])
-        prob = outage_probability(rm, min_db, pixels=(r, c))
+        prob = outage_probability(rm, min_db, pixels=(r, c), draws=4096)  # the path's pixels
         summary["measurements"] = {"log": rm.fit["log"],
                                    "cross_validation": rm.fit["cross_validation"],
                                    **path_outage(prob)}  # fmt: skip
