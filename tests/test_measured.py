@@ -182,8 +182,11 @@ def test_bad_rows_are_counted_and_skipped(worlds, tmp_path) -> None:
         "100,100,100,1,-10",  # RSRP out of range
         "200,300,100,2,-95",  # good
     ]
-    p = _write(tmp_path / "log.csv", "X (m),y_m,Altitude,Cell,RSRP (dBm)", rows)
+    tail = [0, 0, 2, 3, 4, 5, 6]  # the duplicate row stays a duplicate
+    rows = [r + f",{k},2026-11-27T10:00:{k:02d}Z" for k, r in zip(tail, rows, strict=True)]
+    p = _write(tmp_path / "log.csv", "X (m),y_m,Altitude,Cell,RSRP (dBm),SINR,Timestamp", rows)
     log = read_log(p, scn)
+    assert log.sinr_db.tolist() == [0.0, 6.0] and log.time_s.tolist() == [0.0, 6.0]
     assert len(log) == 2 and log.rows == 7
     assert sorted(log.skipped.values()) == [1, 1, 1, 1, 1]
     assert log.rss_dbm[0] == pytest.approx(rss_from_rsrp(-90.0, scn.bandwidth_hz))

@@ -51,6 +51,7 @@ def _take(log: MeasurementLog, m: np.ndarray) -> MeasurementLog:
         log, x_m=log.x_m[m], y_m=log.y_m[m], z_m=log.z_m[m], alt_m=log.alt_m[m],
         cell=log.cell[m], rss_dbm=log.rss_dbm[m], flight=log.flight[m],
         time_s=None if log.time_s is None else log.time_s[m],
+        sinr_db=None if log.sinr_db is None else log.sinr_db[m],
     )  # fmt: skip
 
 

@@ -103,6 +103,9 @@ class MeasurementLog:
     """Which flight each row belongs to (0 where the log names none)."""
     time_s: npt.NDArray[np.float64] | None = None
     """Seconds since the log's first instant, where the log has a ``time`` column."""
+    sinr_db: npt.NDArray[np.float64] | None = None
+    """The SINR the receiver reported, dB, where the log has a ``sinr_db`` column (kept for the
+    user; the fit uses the per-cell power: a SINR depends on every cell and on the load)."""
     rows: int = 0
     """Data rows in the file."""
     skipped: dict[str, int] = field(default_factory=dict)
@@ -298,6 +301,7 @@ def _to_log(
     return MeasurementLog(
         x_m=x[use], y_m=y[use], z_m=z, alt_m=above, cell=cell[use], rss_dbm=level[use],
         flight=flight, time_s=t, rows=n, skipped=dict(skipped), source=str(p),
+        sinr_db=column("sinr_db")[use] if "sinr_db" in cols else None,
     )  # fmt: skip
 
 
