@@ -17,6 +17,7 @@ flown on the truth; the table gives the mean cost over the truth's own plan.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -66,8 +67,12 @@ def run(seeds: list[int], n_starts: int) -> list[dict]:
                 mean_map, prob = cm, outage_probability(cm, thr)
             plans = {"mean": planner.plan_on(_field(mean_map.sinr_db, prior), task, starts)}
             if prob is not None:
-                plans["chance"] = planner.plan_on(_field(prob, prior), task, starts,
-                                                  reward="chance")  # fmt: skip
+                chance = dataclasses.replace(task, reward="chance")
+                field = SignalField(
+                    mean_map.sinr_db, prior.extent_m, "sinr_db", prior.serving_cell,
+                    prior.not_flyable, outage_p=prob,
+                )  # fmt: skip
+                plans["chance"] = planner.plan_on(field, chance, starts)
             for kind, ps in plans.items():
                 costs = [cost_on(truth, p.path_m, thr) for p in ps]
                 excess = np.array(costs) / np.array(best) - 1.0

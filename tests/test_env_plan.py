@@ -246,19 +246,27 @@ def test_planner_refuses_plans_beyond_memory() -> None:
 
 
 def test_chance_weighted_planner_against_brute_force() -> None:
-    """``plan_on(..., reward="chance")`` (the Rust planner: a move costs ``1 + mu P`` where the
-    field holds outage probabilities P) against every 6-move sequence flown by the Python
-    environment on the field ``-P`` with the ``shortfall`` reward at 0 dB, whose base reward is
-    the same ``-1 - mu max(0, 0 + P)``; to 1e-9."""
+    """The ``"chance"`` reward (a move costs ``1 + mu P``, ``P`` the field's ``outage_p`` where
+    it ends): the Rust planner's plan against every 6-move sequence flown by the Python
+    environment with that reward, to 1e-9; and the environment against the same environment on
+    the field ``-P`` with the ``shortfall`` reward at 0 dB, whose base reward is the same
+    ``-1 - mu max(0, 0 + P)`` (another code path), move by move."""
     from rainuav.nav.field import SignalField
 
-    prob = np.random.default_rng(4).uniform(0, 1, (4, 5))
+    rng = np.random.default_rng(4)
+    prob = rng.uniform(0, 1, (4, 5))
     kw = {"extent_m": (0, 50, 0, 40), "goal_m": (30.0, 30.0), "max_steps": 6, "mu": 0.7,
           "goal_reward": 50.0}  # fmt: skip
-    e = UAVNavEnv(sir_db=-prob, reward="shortfall", min_db=0.0, **kw)
-    field = SignalField(prob, kw["extent_m"])
+    field = SignalField(small_map(2, 4, 5), kw.pop("extent_m"), outage_p=prob)
+    e = UAVNavEnv(field=field, reward="chance", min_db=5.0, **kw)
     for start in ([0.0, 0.0], [10.0, 30.0], [45.0, 5.0]):
-        p = plan.plan_on(field, e.cfg, np.array([start]), reward="chance")[0]
+        p = plan.optimal(e, start)
         assert p.return_ == pytest.approx(brute_force(e, np.array(start), 6), abs=1e-9)
-    with pytest.raises(rainuav.errors.InvalidInputError, match="reward must be"):
-        plan.plan_on(field, e.cfg, np.array([[0.0, 0.0]]), reward="linear")
+    twin = UAVNavEnv(sir_db=-prob, extent_m=field.extent, reward="shortfall", min_db=0.0, **kw)
+    for env_ in (e, twin):
+        env_.reset(options={"start_m": [10.0, 10.0]})
+    for a in rng.integers(0, 4, 6):
+        r1, r2 = e.step(int(a))[1], twin.step(int(a))[1]
+        assert r1 == pytest.approx(r2, abs=1e-12)
+    with pytest.raises(rainuav.errors.InvalidInputError, match="outage probabilities"):
+        UAVNavEnv(sir_db=-prob, extent_m=field.extent, reward="chance", **kw)

@@ -405,3 +405,32 @@ def test_outage_probability_by_drawing(corrected) -> None:
     assert diff.mean() < 0.015 and diff.max() < 0.08, (diff.mean(), diff.max())
     whole = outage_probability(cm, thr, draws=16)
     assert whole.shape == cm.sinr_db.shape and 0.0 <= whole.min() <= whole.max() <= 1.0
+
+
+def test_a_world_of_a_corrected_map_flies_the_chance_of_outage(corrected, worlds) -> None:
+    """``world_from(map, task)`` with the ``"chance"`` reward puts the corrected map's outage
+    probabilities in the field; the environment's move then earns ``-1 - mu P`` at its end (P
+    read bilinearly, as the map), and the exact plan's return is what the environment pays
+    flying it (to 1e-9). A physics map has no probabilities: refused in one line."""
+    from rainuav.nav import planner
+    from rainuav.nav.task import NavConfig
+    from rainuav.radio.measured import outage_probability
+    from rainuav.world import world_from
+
+    task = NavConfig(goal_m=(1400.0, 1600.0), reward="chance", mu=2.0, max_steps=400)
+    world = world_from(corrected, task)
+    thr = world.task.min_db
+    assert np.array_equal(world.field.outage_p, outage_probability(corrected, thr))
+    env = world.env()
+    p = planner.optimal(env, np.array([312.5, 412.5]))
+    env.reset(options={"start_m": [312.5, 412.5]})
+    total = 0.0
+    for a in p.actions:
+        _, r, term, _, _ = env.step(int(a))
+        total += r
+    assert term and total == pytest.approx(p.return_, abs=1e-9)
+    env.reset(options={"start_m": [312.5, 412.5]})
+    r = env.step(0)[1]
+    assert r == pytest.approx(-1 - 2.0 * float(world.field.chance(322.5, 412.5)), abs=1e-12)
+    with pytest.raises(InvalidInputError, match="corrected by measurements"):
+        world_from(worlds[0], task)

@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from rainuav.errors import InvalidInputError
 from rainuav.nav.field import SignalField, blocked_at
 from rainuav.nav.levelfield import LevelStepper
 from rainuav.nav.task import MOVES, NavConfig
@@ -28,6 +29,12 @@ class _OneLevel:
 
     def __call__(self, x: Any, y: Any, t_s: Any, level: Any, *world: Any) -> np.ndarray:
         return self.plane(x, y, t_s, *world)
+
+    def chance(self, x: Any, y: Any, t_s: Any, level: Any, *world: Any) -> np.ndarray:
+        chance = getattr(self.plane, "chance", None)
+        if chance is None:
+            raise InvalidInputError("reward 'chance' flies one map with outage_p")
+        return np.asarray(chance(x, y, t_s))
 
 
 class BatchStepper(LevelStepper):

@@ -150,6 +150,12 @@ class UAVNavEnv(gym.Env):
             min_db = default(kind) if callable(default) else DEFAULT_MIN_DB
         self.cfg = dataclasses.replace(cfg, signal=kind, min_db=min_db)
         check_config(self.cfg, self.field.extent)
+        if self.cfg.reward == "chance" and getattr(self.field, "outage_p", None) is None:
+            raise InvalidInputError(
+                "reward 'chance' needs one map with outage probabilities (field=SignalField(..., "
+                "outage_p=P); rainuav.world.world_from builds it from a map corrected by "
+                "measurements)"
+            )
         if blocked_at(self.field, *self.cfg.goal_m):
             raise InvalidInputError(
                 f"goal_m {tuple(self.cfg.goal_m)} lies where the UAV may not fly (terrain or "

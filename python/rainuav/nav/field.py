@@ -66,6 +66,18 @@ def pixel_index(
     return i.astype(np.int64), j.astype(np.int64)
 
 
+def _checked_probability(p: Any, shape: tuple[int, int]) -> np.ndarray:
+    """``p`` as a read-only (H, W) float array of probabilities in [0, 1]."""
+    a = np.asarray(p, dtype=np.float64)
+    if a.shape != shape or not np.all((a >= 0) & (a <= 1)):
+        raise InvalidInputError(
+            f"outage_p must be a (H, W) = {shape} array of probabilities in [0, 1] (got {a.shape})"
+        )
+    a = np.ascontiguousarray(a)
+    a.flags.writeable = False
+    return a
+
+
 def _checked_mask(mask: Any, shape: tuple[int, int]) -> np.ndarray | None:
     """``mask`` as a read-only (H, W) bool array of the map's pixels, or None."""
     if mask is None:
@@ -132,18 +144,30 @@ class SignalField:
         name: str = "sinr_db",
         serving_cell: npt.ArrayLike | None = None,
         not_flyable: npt.ArrayLike | None = None,
+        outage_p: npt.ArrayLike | None = None,
     ):
         self.db, self.extent, self.serving = _checked(
             values_db, extent_m, name, serving_cell, "(H, W)"
         )
         self.not_flyable = _checked_mask(not_flyable, self.db.shape)
         self.name = name
+        self.outage_p = None if outage_p is None else _checked_probability(outage_p, self.db.shape)
         self._points = _PointCache()
 
     def __call__(self, x: Any, y: Any, t_s: Any = None) -> Any:
         """The map at the points ``(x, y)`` (bilinear between pixel centres, edge values
         beyond them); ``t_s`` is ignored (one map)."""
         return bilinear(self.db, self.extent, x, y)
+
+    def chance(self, x: Any, y: Any, t_s: Any = None) -> Any:
+        """The probability of outage at the points ``(x, y)``, bilinear as the map (the task's
+        ``"chance"`` reward); needs ``outage_p``."""
+        if self.outage_p is None:
+            raise InvalidInputError(
+                "reward 'chance' needs a field with outage_p (a map corrected by measurements, "
+                "through rainuav.world.world_from)"
+            )
+        return bilinear(self.outage_p, self.extent, x, y)
 
     def serving_cell(self, x: Any, y: Any, t_s: Any = None) -> Any:
         """The serving cell at the pixel holding ``(x, y)`` (-1 where the map names none)."""

@@ -275,8 +275,15 @@ class LevelStepper:
             signal = f(qc[:, 0], qc[:, 1], t_s, new_level)
         else:
             signal = f(qc[:, 0], qc[:, 1], t_s, new_level, world)
-        b = base_reward(signal, cfg)
-        b = np.where(flat, b, duration * b)  # a vertical move: its duration times b
+        chance = None
+        if cfg.reward == "chance":  # the probability of outage where the move ends
+            if not hasattr(f, "chance"):
+                raise InvalidInputError("reward 'chance' flies one map with outage_p")
+            chance = f.chance(
+                qc[:, 0], qc[:, 1], t_s, new_level, *([] if world is None else [world])
+            )
+        base = base_reward(signal, cfg, chance)
+        b = np.where(flat, base, duration * base)  # a vertical move: its duration times b
         g = self.goal[None] if goal is None else np.asarray(goal, dtype=np.float64)
         arrived = flat & ~out & (np.hypot(q[:, 0] - g[:, 0], q[:, 1] - g[:, 1]) <= cfg.tol_m)
         reward = (
@@ -294,6 +301,7 @@ class LevelStepper:
             "terminated": terminated,
             "truncated": ~terminated & (new_tick >= cfg.max_steps),
             "signal_db": signal,
+            "base": base,
             "out": out,
             "arrived": arrived,
             "duration": duration,

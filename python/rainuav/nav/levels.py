@@ -93,6 +93,8 @@ class UAVLevelsEnv(gym.Env):
             cfg, min_db=DEFAULT_MIN_DB if cfg.min_db is None else cfg.min_db
         )
         check_config(self.cfg, field.extent)
+        if self.cfg.reward == "chance":
+            raise InvalidInputError("reward 'chance' flies one map, not several levels")
         self.field = field
         self.climb, self.descend = level_durations(
             field.altitudes_m, self.cfg, climb_m_s, descend_m_s

@@ -62,23 +62,18 @@ def optimal_many(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
     return plan_on(env.field, env.cfg, starts_m)
 
 
-def plan_on(
-    field: Any, cfg: NavConfig, starts_m: npt.ArrayLike, reward: str | None = None
-) -> list[Plan]:
+def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
     """Exact optimal plans of the task ``cfg`` (``min_db`` resolved) on ``field`` (a
-    [`SignalField`][rainuav.nav.field.SignalField], or a series in time) from each start.
-    ``reward="chance"``: ``field`` holds each pixel's probability of outage (a map known with
-    uncertainty, ``rainuav.radio.measured.outage``) and a move costs ``1 + mu P`` there, the
-    ``"outage"`` reward's expectation (in place of ``cfg.reward``)."""
-    if reward not in (None, "chance"):
-        raise InvalidInputError(f"reward must be None or 'chance' (got {reward!r})")
+    [`SignalField`][rainuav.nav.field.SignalField], or a series in time) from each start. With
+    ``cfg.reward == "chance"`` the plan reads the field's ``outage_p`` (a move costs ``1 + mu P``
+    where it ends)."""
     starts = np.ascontiguousarray(np.asarray(starts_m, dtype=np.float64).reshape(-1, 2))
     task = {
         "step_m": float(cfg.step_m),
         "tol_m": float(cfg.tol_m),
         "max_steps": int(cfg.max_steps),
         "mu": float(cfg.mu),
-        "reward": reward or cfg.reward,
+        "reward": cfg.reward,
         "sir_min_db": float(cfg.min_db),  # the Rust planner's name for the threshold
         "goal_reward": float(cfg.goal_reward),
         "out_of_bounds_penalty": float(cfg.out_of_bounds_penalty),
@@ -89,7 +84,11 @@ def plan_on(
     if mask is not None:
         task["blocked"] = np.ascontiguousarray(np.asarray(mask, dtype=np.uint8)[None])
     goal = (float(cfg.goal_m[0]), float(cfg.goal_m[1]))
-    if isinstance(field, SignalField):
+    if cfg.reward == "chance":
+        if getattr(field, "outage_p", None) is None:
+            raise InvalidInputError("reward 'chance' plans on one map with outage_p")
+        slices, times = field.outage_p[None, None], np.zeros(1)
+    elif isinstance(field, SignalField):
         slices, times = field.db[None, None], np.zeros(1)
     else:
         slices, times = field.db[:, None], np.asarray(field.t_s, dtype=np.float64)

@@ -6,10 +6,13 @@
 - A move ``q' = q + step_m e_a`` earns ``b(q')``: ``"shortfall"`` (default)
   ``-1 - mu max(0, min_db - S)``, ``"outage"`` ``-1 - mu [S < min_db]`` or
   ``"linear"`` ``-1 + mu 10^(S/10)`` (the paper's literal form: it pays to loiter near a base
-  station). Leaving the area (a coordinate beyond the bounds): ``b(clamp(q')) -
-  out_of_bounds_penalty``, terminated, the UAV stays at ``clamp(q')``. Reaching the goal
-  (``|q' - goal| <= tol_m``): ``b(q') + goal_reward``, terminated. Truncated after
-  ``max_steps`` steps (unless terminated on that step).
+  station), or ``"chance"`` ``-1 - mu P``, ``P`` the probability of outage at ``q'`` on a map known
+  with uncertainty (the ``"outage"`` reward's expectation; the field must carry ``outage_p``: a
+  map corrected by measurements, through ``rainuav.world.world_from``). Leaving the area (a
+  coordinate beyond the bounds): ``b(clamp(q')) - out_of_bounds_penalty``, terminated, the UAV
+  stays at ``clamp(q')``. Reaching the goal (``|q' - goal| <= tol_m``): ``b(q') +
+  goal_reward``, terminated. Truncated after ``max_steps`` steps (unless terminated on that
+  step).
 - Time: each move takes ``step_m / speed_m_s`` seconds, and the signal it earns is the field's at
   the new position and the instant the move ends ([`rainuav.nav.field`][rainuav.nav.field]; a single
   map does not change in time, so time changes nothing there).
@@ -41,7 +44,7 @@ __all__ = [
     "make_config",
 ]
 
-REWARDS = ("shortfall", "outage", "linear")
+REWARDS = ("shortfall", "outage", "linear", "chance")
 SIGNALS = ("sinr", "sir")
 #: Unit steps of the four actions: +x, +y, -x, -y.
 MOVES = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]], dtype=np.int64)
@@ -68,7 +71,7 @@ class NavConfig:
     mu: float = 10.0 / 43.0
     """Weight of the signal term."""
     reward: str = "shortfall"
-    """'shortfall', 'outage' or 'linear'."""
+    """'shortfall', 'outage', 'linear' or 'chance' (module docstring)."""
     signal: str = "sinr"
     """Which map the task flies on: 'sinr' or 'sir' (the paper's)."""
     min_db: float | None = None
@@ -148,11 +151,15 @@ def check_config(
             raise InvalidInputError(f"{prefix}start_m must lie inside the area (got {s!r})")
 
 
-def base_reward(signal_db: Any, cfg: NavConfig) -> Any:
-    """b(q') from the signal (SINR or SIR, dB) at the new position; ``cfg.min_db`` must be
-    resolved (not None)."""
+def base_reward(signal_db: Any, cfg: NavConfig, outage_p: Any = None) -> Any:
+    """b(q') from the signal (SINR or SIR, dB) at the new position, or for ``"chance"`` from the
+    probability of outage there, ``outage_p``; ``cfg.min_db`` must be resolved (not None)."""
     if cfg.min_db is None:
         raise InvalidInputError("min_db is unresolved: build the task through UAVNavEnv")
+    if cfg.reward == "chance":
+        if outage_p is None:
+            raise InvalidInputError("reward 'chance' needs the outage probability (outage_p)")
+        return -1.0 - cfg.mu * np.asarray(outage_p, dtype=np.float64)
     if cfg.reward == "shortfall":
         return -1.0 - cfg.mu * np.maximum(0.0, cfg.min_db - signal_db)
     if cfg.reward == "outage":

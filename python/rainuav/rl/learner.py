@@ -123,7 +123,8 @@ def learning_reward(
     lattice, whatever the level): a potential of the state, so the optimum is kept."""
     reward = r["reward"]
     if d.sir_weight != 1.0:  # among levels each move's part weighs its duration, as its reward
-        sir = (base_reward(r["signal_db"], env.cfg) + 1.0) * r.get("duration", 1.0)
+        base = r["base"] if "base" in r else base_reward(r["signal_db"], env.cfg)
+        sir = (base + 1.0) * r.get("duration", 1.0)
         reward = reward + (d.sir_weight - 1.0) * sir
     return reward + shaping_term(env, d, pos, r["position"], learner_ends(d, r), goal)
 

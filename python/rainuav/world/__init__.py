@@ -317,6 +317,17 @@ def world_from(source: Any, task: NavConfig) -> World:
     min_db = task.min_db
     if min_db is None:  # the same rule for a map and a series (by the scenario's name)
         min_db = RadioMap.default_min_db(source, signal)  # type: ignore[arg-type]
+    if task.reward == "chance":  # outage as a probability: a map corrected by measurements
+        if not isinstance(field, SignalField) or getattr(source, "rss_std_db", None) is None:
+            raise InvalidInputError(
+                "task.reward 'chance' flies one map corrected by measurements (its rss_std_db: "
+                "rainuav.radio.measured.correct_map)"
+            )
+        if signal != "sinr":
+            raise InvalidInputError("task.reward 'chance' is the SINR's outage: task.signal sinr")
+        from rainuav.radio.measured.outage import outage_probability
+
+        field.outage_p = outage_probability(source, min_db)
     return World(source, field, dataclasses.replace(task, min_db=min_db))
 
 

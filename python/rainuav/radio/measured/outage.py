@@ -9,9 +9,9 @@ serves), so the probability is estimated by drawing:
 probabilities), the SINR of each draw as
 [`sir_from_power()`][rainuav.radio.outputs.sinr.sir_from_power] computes it, and the share below
 the threshold (a standard error of at most ``0.5 / sqrt(draws)``: 0.031 at the default
-256). The exact planner
-takes the probabilities as a field (``rainuav.nav.planner.plan_on(..., reward="chance")``: a
-move costs ``1 + mu P``, the ``"outage"`` reward's expectation)."""
+256). The task's ``"chance"`` reward reads them (``rainuav.nav.task``: a move costs ``1 + mu P``,
+the ``"outage"`` reward's expectation; ``rainuav.world.world_from`` puts them in the field of a
+corrected map, for the exact planner and the environment)."""
 
 from __future__ import annotations
 
