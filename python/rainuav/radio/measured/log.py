@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.radio.scene.scenario import Scenario
 from rainuav.radio.scene.terrain import surface_at
@@ -183,6 +184,9 @@ def read_log(
             f"altitude_reference must be 'ground' or 'msl' (got {altitude_reference!r})"
         )
     try:
+        # Rows are held as Python strings while read: about 30 times the file's size (a
+        # million rows, 26 MB, peaked at 780 MB).
+        check_fits(f"measurement log {p}", 35.0 * p.stat().st_size, "split the log")
         with p.open(newline="", encoding="utf-8-sig") as f:
             reader = csv.reader(f)
             header = next(reader, None)
