@@ -245,6 +245,7 @@ def test_planner_refuses_plans_beyond_memory() -> None:
         plan.optimal(env, [100.0, 100.0])
 
 
+@pytest.mark.slow
 def test_chance_weighted_planner_against_brute_force() -> None:
     """The ``"chance"`` reward (a move costs ``1 + mu P``, ``P`` the field's ``outage_p`` where
     it ends): the Rust planner's plan against every 6-move sequence flown by the Python

@@ -407,6 +407,7 @@ def test_outage_probability_by_drawing(corrected) -> None:
     assert whole.shape == cm.sinr_db.shape and 0.0 <= whole.min() <= whole.max() <= 1.0
 
 
+@pytest.mark.slow
 def test_a_world_of_a_corrected_map_flies_the_chance_of_outage(corrected, worlds) -> None:
     """``world_from(map, task)`` with the ``"chance"`` reward puts the corrected map's outage
     probabilities in the field; the environment's move then earns ``-1 - mu P`` at its end (P
