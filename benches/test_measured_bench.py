@@ -14,15 +14,13 @@ Run: ``python -m pytest benches/test_measured_bench.py --benchmark-enable --benc
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 from rainuav.radio import Area, build_radio_map, presets
 from rainuav.radio.measured import correct_map
 from rainuav.radio.measured.calibrate import calibrate, calibrated_at, prior_at
 from rainuav.radio.measured.correct import _fields
-from rainuav.radio.measured.synthetic import sample_log
+from rainuav.radio.measured.synthetic import perturbed_sites, sample_log
 
 SHARE = 0.025  # 5 lines of 200 pixels x 5 cells = 5 000 rows
 
@@ -30,13 +28,7 @@ SHARE = 0.025  # 5 lines of 200 pixels x 5 cells = 5 000 rows
 @pytest.fixture(scope="module")
 def case():
     scn = presets.uma(0.0, 28e9, engine="ray", ground="none", area=Area(resolution_m=10.0))
-    rng = np.random.default_rng(1)
-    sites = [
-        dataclasses.replace(s, cells=[dataclasses.replace(
-            c, tx_power_dbm=c.tx_power_dbm + rng.normal(0, 3), tilt_deg=c.tilt_deg
-            + rng.normal(0, 2), azimuth_deg=c.azimuth_deg + rng.normal(0, 5)) for c in s.cells])
-        for s in scn.sites
-    ]  # fmt: skip
+    sites, _ = perturbed_sites(scn.sites, 1)
     truth = presets.rain_cell(5.0, 28e9, engine="ray", ground="none", area=scn.area, sites=sites)
     prior = build_radio_map(scn)
     log = sample_log(build_radio_map(truth), SHARE, cells=5, seed=7)

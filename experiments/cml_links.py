@@ -12,24 +12,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 from rainuav.cml import compare, stats
 
-
-def _cpu() -> str:
-    """The CPU's model name (Linux), else the machine's architecture."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.machine()
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "tutorials"))
+from radiomap_in_rain import made_by
 
 
 def figure(path: Path, res: dict) -> None:
@@ -53,8 +44,7 @@ def figure(path: Path, res: dict) -> None:
         axis.set_xlabel("measured rain attenuation, dB (5-min mean)")
     ax[0].set_ylabel("predicted from the radar's rain, dB")
     fig.colorbar(im, ax=ax, label="five-minute intervals")
-    stamp = (f"python experiments/cml_links.py, {time.strftime('%Y-%m-%d')}, {_cpu()}, "
-             f"{os.cpu_count()} cores")  # fmt: skip
+    stamp = made_by("python experiments/cml_links.py")
     fig.suptitle(f"{res['links']} links, {res['intervals']} wet five-minute intervals ({stamp})",
                  fontsize=9)  # fmt: skip
     fig.savefig(path, dpi=110)

@@ -18,40 +18,25 @@ every pixel, the prior's RMS error for unmeasured cells), which that run prompte
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
-import os
-import platform
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 from rainuav.radio import Area, build_radio_map, presets
 from rainuav.radio.measured import correct_map
-from rainuav.radio.measured.synthetic import flight_line_pixels, sample_log
+from rainuav.radio.measured.synthetic import flight_line_pixels, perturbed_sites, sample_log
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "tutorials"))
+from radiomap_in_rain import made_by
 
 LINES = (1, 2, 4, 10)
 
 
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.machine()
-
-
 def worlds(seed: int):
     scn = presets.uma(0.0, 28e9, engine="ray", ground="none", area=Area(resolution_m=10.0))
-    rng = np.random.default_rng(seed)
-    sites = [
-        dataclasses.replace(s, cells=[dataclasses.replace(
-            c, tx_power_dbm=c.tx_power_dbm + rng.normal(0, 3), tilt_deg=c.tilt_deg
-            + rng.normal(0, 2), azimuth_deg=c.azimuth_deg + rng.normal(0, 5)) for c in s.cells])
-        for s in scn.sites
-    ]  # fmt: skip
+    sites, _ = perturbed_sites(scn.sites, seed)
     truth = presets.rain_cell(5.0, 28e9, engine="ray", ground="none", area=scn.area, sites=sites)
     return build_radio_map(scn), build_radio_map(truth)
 
@@ -150,8 +135,7 @@ def figure(path: Path, rows: list[dict], keep: dict) -> None:
     ax[3].set_xlabel("pixels measured [%]")
     ax[3].set_ylabel("median |corrected - truth| at held-out pixels [dB]")
     ax[3].legend(fontsize=7)
-    stamp = (f"python experiments/measured_maps.py, {time.strftime('%Y-%m-%d')}, {_cpu()}, "
-             f"{os.cpu_count()} cores")  # fmt: skip
+    stamp = made_by("python experiments/measured_maps.py")
     fig.suptitle(f"uma 28 GHz prior against rain_cell truth with wrong sites ({stamp})", fontsize=9)
     fig.savefig(path, dpi=100)
 

@@ -20,7 +20,12 @@ from rainuav.errors import InvalidInputError
 from rainuav.radio import Area, build_radio_map, presets
 from rainuav.radio.measured import correct_map, read_log, rss_from_rsrp
 from rainuav.radio.measured.calibrate import calibrate, prior_at
-from rainuav.radio.measured.synthetic import flight_line_pixels, sample_log, write_log
+from rainuav.radio.measured.synthetic import (
+    flight_line_pixels,
+    perturbed_sites,
+    sample_log,
+    write_log,
+)
 
 NOISE_DB = 2.0
 
@@ -28,20 +33,7 @@ NOISE_DB = 2.0
 def _worlds(seed: int = 1, resolution_m: float = 25.0, rain: bool = True):
     area = Area(resolution_m=resolution_m)
     scn = presets.uma(0.0, 28e9, engine="ray", ground="none", area=area)
-    rng = np.random.default_rng(seed)
-    errors = []
-    sites = []
-    for s in scn.sites:
-        cells = []
-        for c in s.cells:
-            e = {"power_db": rng.normal(0, 3), "tilt_deg": rng.normal(0, 2),
-                 "azimuth_deg": rng.normal(0, 5)}  # fmt: skip
-            errors.append(e)
-            cells.append(dataclasses.replace(
-                c, tx_power_dbm=c.tx_power_dbm + e["power_db"],
-                tilt_deg=c.tilt_deg + e["tilt_deg"], azimuth_deg=c.azimuth_deg + e["azimuth_deg"],
-            ))  # fmt: skip
-        sites.append(dataclasses.replace(s, cells=cells))
+    sites, errors = perturbed_sites(scn.sites, seed)
     if rain:
         truth = presets.rain_cell(5.0, 28e9, engine="ray", ground="none", area=area, sites=sites)
     else:

@@ -33,9 +33,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.interpolate import RegularGridInterpolator
 from scipy.optimize import least_squares
 
+from rainuav._sampling import bilinear
 from rainuav.errors import InvalidInputError
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.outputs.mapdata import RadioMap
@@ -97,8 +97,8 @@ def prior_at(
 
     low = np.floor(at / level_step_m) * level_step_m
     frac = (at - low) / level_step_m
-    low = np.maximum(low, 0.5)
     high = low + level_step_m
+    low = np.maximum(low, 0.5)  # the lowest map flies 0.5 m up (an area's least altitude)
     out = np.zeros(len(log))
     maps: dict[float, RadioMap] = {}
     for lev in sorted({*low.tolist(), *high[frac > 0].tolist()}):
@@ -110,14 +110,9 @@ def prior_at(
 
 
 def _bilinear(rm: RadioMap, log: MeasurementLog) -> np.ndarray:
-    out = np.empty(len(log))
-    for c in np.unique(log.cell):
-        m = log.cell == c
-        f = RegularGridInterpolator(
-            (rm.y_m, rm.x_m), rm.rss_dbm[c], bounds_error=False, fill_value=None
-        )
-        out[m] = f(np.column_stack([log.y_m[m], log.x_m[m]]))
-    return out
+    """Each row's cell in ``rm``, bilinear between pixel centres (the navigation's sampler)."""
+    return bilinear(np.asarray(rm.rss_dbm, dtype=np.float64), rm.extent_m, log.x_m, log.y_m,
+                    log.cell)  # fmt: skip
 
 
 def _site_z(scn: Scenario, site: Site) -> float:

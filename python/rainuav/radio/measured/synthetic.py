@@ -7,11 +7,14 @@ the map, evenly spaced, until a share of the pixels is covered, and logs at each
 ``cells`` strongest cells' power with Gaussian noise (the noise of one logged value: fast
 fading left after a receiver's averaging, and the receiver's error).
 [`write_log()`][rainuav.radio.measured.synthetic.write_log] writes a log as the CSV
-[`read_log()`][rainuav.radio.measured.log.read_log] reads."""
+[`read_log()`][rainuav.radio.measured.log.read_log] reads;
+[`perturbed_sites()`][rainuav.radio.measured.synthetic.perturbed_sites] draws a network that
+differs from its database."""
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import os
 from pathlib import Path
 
@@ -22,9 +25,38 @@ from rainuav.errors import InvalidInputError
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
+from rainuav.radio.scene.scenario import Site
 from rainuav.radio.scene.terrain import flight_heights_at
 
-__all__ = ["flight_line_pixels", "sample_log", "write_log"]
+__all__ = ["flight_line_pixels", "perturbed_sites", "sample_log", "write_log"]
+
+
+def perturbed_sites(
+    sites: list[Site],
+    seed: int,
+    power_db: float = 3.0,
+    tilt_deg: float = 2.0,
+    azimuth_deg: float = 5.0,
+) -> tuple[list[Site], list[dict[str, float]]]:
+    """``sites`` as the real network might differ from its database: each cell's transmit power,
+    tilt and azimuth moved by draws of N(0, ``power_db``), N(0, ``tilt_deg``) and
+    N(0, ``azimuth_deg``) from ``seed`` (in that order, cell after cell). Returns the moved sites
+    and each cell's offsets (the names of the calibration's ``BOUNDS``)."""
+    rng = np.random.default_rng(seed)
+    moved, offsets = [], []
+    for s in sites:
+        cells = []
+        for c in s.cells:
+            e = {"power_db": float(rng.normal(0, power_db)),
+                 "tilt_deg": float(rng.normal(0, tilt_deg)),
+                 "azimuth_deg": float(rng.normal(0, azimuth_deg))}  # fmt: skip
+            offsets.append(e)
+            cells.append(dataclasses.replace(
+                c, tx_power_dbm=c.tx_power_dbm + e["power_db"],
+                tilt_deg=c.tilt_deg + e["tilt_deg"], azimuth_deg=c.azimuth_deg + e["azimuth_deg"],
+            ))  # fmt: skip
+        moved.append(dataclasses.replace(s, cells=cells))
+    return moved, offsets
 
 
 def flight_line_pixels(shape: tuple[int, int], share: float, offset: float = 0.5) -> np.ndarray:
