@@ -1,7 +1,8 @@
 """The ray engine's buildings against Sionna RT 2.2, scene by scene (the results page's table).
 
     python experiments/tracer_compare.py [--scenes urban district] [--freqs-ghz 3.5 4.9 28]
-        [--altitudes 20 100] [--pols v h] [--samples 8e6] [--json FILE] [--figure FILE]
+        [--altitudes 20 100] [--pols v h] [--samples 8e6] [--reference map|paths] [--step N]
+        [--json FILE] [--figure FILE]
 
 For each scene ([`rainuav.radio.reference.tracer_scenes`][rainuav.radio.reference.tracer_scenes]; by
 default the held-back ones, on which no choice of the methods was made), frequency, UAV altitude and
@@ -14,7 +15,11 @@ shadow (median, 90th percentile), the median signed difference (negative: the en
 deeper), the median |difference| in the light, the share of pixels where shadow and light agree, and
 the tracer's own noise (median, from two halves of its rays). The targets: shadow within 3 dB median
 and 8 dB p90, light within 0.5 dB, 95% agreement. ``--figure``: the building effect of both and
-their difference for the first case's first site.
+their difference for the first case's first site. ``--reference paths``: against the tracer's path
+solver at the centre of every ``--step``-th pixel
+([`rainuav.radio.reference.tracer_paths`][rainuav.radio.reference.tracer_paths]: its exact paths,
+where the radio map is a Monte Carlo estimate that is dark and scattered in deep shadows; its
+"noise" is then the difference between two candidate searches).
 """
 
 from __future__ import annotations
@@ -75,12 +80,20 @@ def main() -> None:
         "--engine", default="ray", choices=["ray", "hybrid", "pe"],
         help="rainuav's engine (hybrid: the parabolic equation in each cell's cone)",
     )  # fmt: skip
+    ap.add_argument(
+        "--reference", default="map", choices=["map", "paths"],
+        help="the tracer's radio map, or its path solver at the pixel centres",
+    )  # fmt: skip
+    ap.add_argument(
+        "--step", type=int, default=1,
+        help="with --reference paths: every STEP-th pixel in both directions",
+    )  # fmt: skip
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--figure", type=Path, default=None)
     args = ap.parse_args()
     samples = int(args.samples)
     print(f"# {platform.processor() or platform.machine()}, {samples:.0e} rays a site, "
-          f"engine {args.engine}")  # fmt: skip
+          f"engine {args.engine}, reference {args.reference} (step {args.step})")  # fmt: skip
     head = "scene     GHz  alt pol site pixels shadow  med   p90   bias light agree noise"
     print(head)
     rows = []
@@ -90,8 +103,9 @@ def main() -> None:
                 for pol in args.pols:
                     t = time.perf_counter()
                     a = tracer.compare(
-                        scene(name, f * 1e9, alt, pol), samples=samples, engine=args.engine
-                    )
+                        scene(name, f * 1e9, alt, pol), samples=samples, engine=args.engine,
+                        reference=args.reference, step=args.step,
+                    )  # fmt: skip
                     for k, r in enumerate(a.rows()):
                         rows.append({"scene": name, "freq_ghz": f, "altitude_m": alt,
                                      "pol": pol, "site": k, **r})  # fmt: skip

@@ -415,19 +415,32 @@ def compare(
     max_depth: int = 2,
     ground: str = "none",
     engine: str = "ray",
+    reference: str = "map",
+    step: int = 1,
 ) -> Agreement:
     """The building effect of the ray engine (or ``engine``:
     [`engine_gain()`][rainuav.radio.reference.tracer.engine_gain]) against the tracer's on ``scn``
     (each site once, isotropic:
     [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]), over no ground or
-    a PEC one."""
+    a PEC one. ``reference``: ``"map"``, the tracer's radio map
+    ([`tracer_gain()`][rainuav.radio.reference.tracer.tracer_gain]), or ``"paths"``, its path
+    solver at every ``step``-th pixel's centre
+    ([`path_gain()`][rainuav.radio.reference.tracer_paths.path_gain])."""
+    if reference not in ("map", "paths"):
+        raise ValueError(f"reference is 'map' or 'paths' (got {reference!r})")
     with_b = isotropic_scenario(scn, ground=ground)
     without = isotropic_scenario(scn, buildings=False, ground=ground)
-    kw = {"samples": samples, "seed": seed, "max_depth": max_depth}
+    kw: dict[str, Any] = {"samples": samples, "seed": seed, "max_depth": max_depth}
+    if reference == "paths":
+        from rainuav.radio.reference.tracer_paths import path_gain as gain
+
+        kw["step"] = step
+    else:
+        gain = tracer_gain
     return agreement(
         engine_gain(with_b, engine),
         engine_gain(without, engine),
-        tracer_gain(with_b, **kw),
-        tracer_gain(without, **kw),
+        gain(with_b, **kw),
+        gain(without, **kw),
         inside_buildings(with_b),
     )

@@ -3,13 +3,18 @@
 block, a thick building, a street canyon of two rows, an L-shaped building, a corner of the shipped
 district from its footprint file) and larger ones held back for the results page (the ``urban``
 preset's blocks and sites, a square of the shipped OpenStreetMap-style district). Each is
-``name(freq_hz, altitude_m, polarization) -> Scenario``; the buildings' walls are ITU-R P.2040
-concrete.
+``name(freq_hz, altitude_m, polarization) -> Scenario``; the boxes' walls are ITU-R P.2040
+concrete, the footprints' their features' materials. The tracer meshes each building as a prism
+to its roof, so the footprint scenes read the shipped file with every roof flat at its height
+(the ray engine ends a wall at the eaves where a feature gives ``roof:height``: 102 of the file's
+665 features), and both methods see the same walls.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
+from pathlib import Path
 
 from rainuav.radio.scene.area import Area, FootprintsFile
 from rainuav.radio.scene.scenario import Building, Origin, Scenario, Site
@@ -83,9 +88,7 @@ def _footprints(
     sites: list[Site],
     res: float,
 ) -> Scenario:
-    from pathlib import Path
-
-    file = Path(__file__).resolve().parents[4] / "examples" / "buildings.geojson"
+    file = _flat_roofs(Path(__file__).resolve().parents[4] / "examples" / "buildings.geojson")
     return Scenario(
         freq_hz=freq_hz,
         polarization=pol,
@@ -94,6 +97,39 @@ def _footprints(
         sites=sites,
         footprints=FootprintsFile(file=str(file)),
     )  # fmt: skip
+
+
+def _flat_roofs(src: Path) -> Path:
+    # The footprint file with every roof flat at its height: the tracer meshes a building as a
+    # prism to its roof, so the compared geometry has walls to the roof (the ray engine's walls
+    # end at the eaves where a feature gives roof:height or roof:levels). Written once, whole,
+    # next to the system's temporary files.
+    import json
+    import tempfile
+
+    from rainuav.ground.osm import feature_heights
+
+    data = json.loads(src.read_text())
+    for feat in data["features"]:
+        props = feat["properties"]
+        if "roof:height" in props or "roof:levels" in props:
+            props["height"] = f"{feature_heights(props, 10.0)[0]:g}"
+            props.pop("roof:height", None)
+            props.pop("roof:levels", None)
+    text = json.dumps(data)
+    out = Path(tempfile.gettempdir()) / "rainuav-tracer" / f"flat-roofs-{_digest(text)}.geojson"
+    if not out.exists():
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(text)
+        tmp.replace(out)
+    return out
+
+
+def _digest(text: str) -> str:
+    import hashlib
+
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def _block(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
