@@ -8,10 +8,10 @@ For each scene ([`rainuav.radio.reference.tracer_scenes`][rainuav.radio.referenc
 default the held-back ones, on which no choice of the methods was made), frequency, UAV altitude and
 polarisation: the building effect (map with buildings minus without, dB) of the ray engine against
 the tracer's, site by site, on the pixels the tracer covers (no ground, isotropic antennas;
-[`rainuav.radio.reference.tracer.compare()`][rainuav.radio.reference.tracer.compare]; ``--engine
-hybrid``: rainuav's hybrid engine, the parabolic equation in each cell's cone). Prints one line a
-site: pixels compared, the tracer's shadow pixels (effect below -6 dB), |engine - tracer| in the
-shadow (median, 90th percentile), the median signed difference (negative: the engine's shadow
+[`rainuav.radio.reference.comparison.compare()`][rainuav.radio.reference.comparison.compare];
+``--engine hybrid``: rainuav's hybrid engine, the parabolic equation in each cell's cone). Prints
+one line a site: pixels compared, the tracer's shadow pixels (effect below -6 dB), |engine - tracer|
+in the shadow (median, 90th percentile), the median signed difference (negative: the engine's shadow
 deeper), the median |difference| in the light, the share of pixels where shadow and light agree, and
 the tracer's own noise (median, from two halves of its rays). The targets: shadow within 3 dB median
 and 8 dB p90, light within 0.5 dB, 95% agreement. ``--figure``: the building effect of both and
@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 from rainuav.radio.reference import tracer
+from rainuav.radio.reference.comparison import compare
 from rainuav.radio.reference.tracer_scenes import HELD_BACK, SCENES, scene
 
 
@@ -102,7 +103,7 @@ def main() -> None:
             for alt in args.altitudes:
                 for pol in args.pols:
                     t = time.perf_counter()
-                    a = tracer.compare(
+                    a = compare(
                         scene(name, f * 1e9, alt, pol), samples=samples, engine=args.engine,
                         reference=args.reference, step=args.step,
                     )  # fmt: skip

@@ -26,7 +26,7 @@ Tolerances and why:
 from __future__ import annotations
 
 import pytest
-from rainuav.radio.reference.tracer import compare
+from rainuav.radio.reference.comparison import compare
 from rainuav.radio.reference.tracer_scenes import TEST_SCENES, scene
 
 pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]

@@ -20,7 +20,7 @@ are lit by the site alone, not by its image in the ground as well (2.5 dB darker
 from __future__ import annotations
 
 import pytest
-from rainuav.radio.reference.tracer import compare
+from rainuav.radio.reference.comparison import compare
 from rainuav.radio.reference.tracer_scenes import scene
 
 pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]

@@ -338,11 +338,12 @@ def ray_departures(
     terrain_roughness_m: float = 0.0,
     prisms: Prisms | None = None,
     full: bool = False,
+    polarization: str = "h",
 ) -> _F:
     """Departure elevations (degrees) toward which each site's gains are taken, (S, H, W, 2):
     the direct ray's (the diffracting edge, else the pixel) and the reflected ray's; with
     ``full``, each path's geometry (S, H, W, 7): d1, d2, loss_db, el_direct, el_reflect (rad),
-    psi, reflect."""
+    psi, reflect; ``polarization`` sets the roofs' wedge coefficients in the loss."""
 
 @final
 class RaySlicer:

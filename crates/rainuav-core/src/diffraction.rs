@@ -131,6 +131,22 @@ pub fn deygout(
     h_rs: f64,
     lambda: f64,
 ) -> (f64, Option<(f64, f64)>) {
+    deygout_with(profile, d, h_ts, h_rs, lambda, |nu, _, _, _| {
+        knife_edge_loss_db(nu)
+    })
+}
+
+/// [`deygout`] with each chosen edge's loss given by `edge_loss(nu, i, from, to)`: its `nu`, its
+/// index in `profile` and the ends of its (sub-)path, `(distance, height)` with the Earth's
+/// bulge added.
+pub fn deygout_with(
+    profile: &[(f64, f64)],
+    d: f64,
+    h_ts: f64,
+    h_rs: f64,
+    lambda: f64,
+    edge_loss: impl Fn(f64, usize, (f64, f64), (f64, f64)) -> f64,
+) -> (f64, Option<(f64, f64)>) {
     if d.is_nan() || d <= 0.0 {
         return (0.0, None);
     }
@@ -138,8 +154,8 @@ pub fn deygout(
     // The edge of largest nu strictly between (s0, z0) and (s1, z1).
     let best = |(s0, z0): (f64, f64), (s1, z1): (f64, f64)| {
         let span = s1 - s0;
-        let mut out: Option<(f64, (f64, f64))> = None;
-        for &(di, hi) in profile {
+        let mut out: Option<(f64, usize, (f64, f64))> = None;
+        for (i, &(di, hi)) in profile.iter().enumerate() {
             if di <= s0 || di >= s1 {
                 continue;
             }
@@ -147,20 +163,20 @@ pub fn deygout(
             let (a, b) = (di - s0, s1 - di);
             let line = z0 + (z1 - z0) * a / span;
             let nu = (g - line) * (2.0 * span / (lambda * a * b)).sqrt();
-            if out.is_none_or(|(n, _)| nu > n) {
-                out = Some((nu, (di, g)));
+            if out.is_none_or(|(n, _, _)| nu > n) {
+                out = Some((nu, i, (di, g)));
             }
         }
-        out.filter(|(nu, _)| *nu > -0.78)
+        out.filter(|(nu, _, _)| *nu > -0.78)
     };
     let (t, r) = ((0.0, h_ts), (d, h_rs));
-    let Some((nu_p, edge)) = best(t, r) else {
+    let Some((nu_p, i_p, edge)) = best(t, r) else {
         return (0.0, None);
     };
-    let mut loss = knife_edge_loss_db(nu_p);
+    let mut loss = edge_loss(nu_p, i_p, t, r);
     for (a, b) in [(t, edge), (edge, r)] {
-        if let Some((nu, _)) = best(a, b) {
-            loss += knife_edge_loss_db(nu);
+        if let Some((nu, i, _)) = best(a, b) {
+            loss += edge_loss(nu, i, a, b);
         }
     }
     if loss == 0.0 {

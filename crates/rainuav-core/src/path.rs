@@ -153,6 +153,81 @@ impl RayScene<'_> {
         knife_edge_loss_db(nu)
     }
 
+    /// The loss (dB) of the profile's edge `i` on the (sub-)path from `(s0, z0)` to `(s1, z1)`
+    /// (distances along the ground line `a -> b`, `rho` long; heights with the Earth's bulge),
+    /// of Fresnel parameter `nu` (docs/physics.md section 12). Where the edge is lit past
+    /// grazing (`nu > 0`) and is a building's (a roof on one side of it along the path, lower
+    /// ground or a lower roof on the other), the edge is the right-angled wedge of a roof and a
+    /// wall: ITU-R P.526-15 section 6's coefficient in the path's vertical plane, face 0 the
+    /// face the site lights (the roof from above, else the wall), the faces P.2040 concrete (a footprint names
+    /// its walls' material, not its roof's), the field along the edge for horizontal
+    /// polarisation and across it for vertical. Elsewhere the knife edge, `J(nu)`.
+    #[allow(clippy::too_many_arguments)]
+    fn roof_edge_loss_db(
+        &self,
+        prof: &[(f64, f64)],
+        (a, b, rho): ([f64; 2], [f64; 2], f64),
+        nu: f64,
+        i: usize,
+        (s0, z0): (f64, f64),
+        (s1, z1): (f64, f64),
+        lambda: f64,
+    ) -> f64 {
+        use crate::diffraction::{EFFECTIVE_EARTH_RADIUS_M, utd_wedge};
+        use crate::rays::{RayGround, reflection_coefficient};
+        use std::f64::consts::PI;
+        if nu <= 0.0 {
+            return knife_edge_loss_db(nu);
+        }
+        let (de, h) = prof[i];
+        // Which way the roof runs from the edge: the scene's obstacles a centimetre on either
+        // side along the path (the profile reads a face a micrometre inside its building).
+        let top = |d: f64| {
+            let t = d / rho;
+            self.obstacle_at(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]))
+        };
+        let (here, back, on) = (top(de), top(de - 0.01), top(de + 0.01));
+        let face0 = if here <= 0.0 {
+            return knife_edge_loss_db(nu);
+        } else if on == here && back < here {
+            [1.0, 0.0]
+        } else if back == here && on < here {
+            [-1.0, 0.0]
+        } else {
+            return knife_edge_loss_db(nu);
+        };
+        let g = h + de * (rho - de) / (2.0 * EFFECTIVE_EARTH_RADIUS_M);
+        let (u, v) = ([s0 - de, z0 - g], [s1 - de, z1 - g]);
+        // Angles from the roof (face 0) through the air to the wall (face n, straight down):
+        // counter-clockwise where the roof runs on along the path, clockwise where it runs back.
+        let angle = |w: [f64; 2]| {
+            let t = w[1].atan2(face0[0] * w[0]);
+            if t < 0.0 { t + 2.0 * PI } else { t }
+        };
+        let n = 1.5;
+        let (mut phi1, mut phi2) = (angle(u), angle(v));
+        if !(phi1 > 0.0 && phi1 < n * PI && phi2 > 0.0 && phi2 < n * PI) {
+            return knife_edge_loss_db(nu);
+        }
+        if phi1 > PI {
+            // A site below the roof's plane lights the wall alone: the wall is face 0.
+            (phi1, phi2) = (n * PI - phi1, n * PI - phi2);
+        }
+        let (sp, sd) = (crate::norm(u[0], u[1]), crate::norm(v[0], v[1]));
+        let f_ghz = self.freq_hz / 1e9;
+        let concrete =
+            num_complex::Complex64::new(5.24, -17.98 * 0.0462 * f_ghz.powf(0.7822) / f_ghz);
+        let face = RayGround::Dielectric(concrete);
+        let grazing = |t: f64| t.sin().abs().asin();
+        let r0 = reflection_coefficient(face, self.polarization, grazing(phi1));
+        let rn = reflection_coefficient(face, self.polarization, grazing(n * PI - phi2));
+        let k = 2.0 * PI / lambda;
+        let d = utd_wedge(n, phi1, phi2, sp * sd / (sp + sd), 1.0, k, r0, rn);
+        // Relative to the free field over the unfolded length.
+        let amp = d.norm() * ((sp + sd) / (sp * sd)).sqrt();
+        -20.0 * amp.max(1e-30).log10()
+    }
+
     /// The diffraction loss (dB) of the direct ray over the profile `prof` of the ground line
     /// `a -> b` between the ends at `za`, `zb` (m above sea level), and the edge toward which
     /// the antenna's gain is taken (docs/physics.md section 12). The principal edge (Deygout's:
@@ -172,14 +247,16 @@ impl RayScene<'_> {
         zb: f64,
         lambda: f64,
     ) -> (f64, Option<(f64, f64)>) {
-        use crate::diffraction::{bullington, deygout};
+        use crate::diffraction::{bullington, deygout_with};
         let rho = crate::norm(b[0] - a[0], b[1] - a[1]);
         let bull = bullington(prof, rho, za, zb, lambda);
         let obstacles = self.prisms.is_some_and(|p| !p.is_empty()) || self.heights.is_some();
         if !obstacles {
             return (bull.loss_db, bull.edge);
         }
-        let (l_d, edge) = deygout(prof, rho, za, zb, lambda);
+        let (l_d, edge) = deygout_with(prof, rho, za, zb, lambda, |nu, i, from, to| {
+            self.roof_edge_loss_db(prof, (a, b, rho), nu, i, from, to, lambda)
+        });
         let Some((de, _)) = edge else {
             return (bull.loss_db, bull.edge);
         };

@@ -306,12 +306,13 @@ fn ray_power<'py>(
 /// x, y, height above the terrain. With `full`, every path's whole geometry instead,
 /// (S, H, W, 7): `[d1, d2, loss_db, el_direct, el_reflect, psi, reflect]` (elevations in
 /// radians), which `ray_power` takes back as `geometry` (with `geometry_sites`) so each path
-/// is traced once.
+/// is traced once. `polarization` (`"v"` or `"h"`) sets the roofs' wedge coefficients in the
+/// diffraction loss.
 #[pyfunction]
 #[pyo3(signature = (sites, x_m, y_m, *, altitude_m, freq_hz, ground, buildings, heights,
     heights_origin_step, terrain=None, terrain_origin_step=None, altitude_msl=false,
     terrain_roughness_m=0.0,
-    prisms=None, full=false))]
+    prisms=None, full=false, polarization="h"))]
 #[allow(clippy::too_many_arguments)]
 fn ray_departures<'py>(
     py: Python<'py>,
@@ -330,8 +331,10 @@ fn ray_departures<'py>(
     terrain_roughness_m: f64,
     prisms: Option<Bound<'py, Prisms>>,
     full: bool,
+    polarization: &str,
 ) -> PyResult<Bound<'py, PyArray4<f64>>> {
     let sites = parse_sites(&sites)?;
+    let polarization = parse_polarization(polarization)?;
     let ground = parse_ground(ground, (1.0, 0.0))?;
     let obst = obstacles(&buildings, prisms.as_ref())?;
     let x = x_m.as_array().to_vec();
@@ -345,7 +348,7 @@ fn ray_departures<'py>(
         pixel_m: [0.0, 0.0],
         freq_hz,
         ground,
-        polarization: RayPolarization::H,
+        polarization,
         rain: RainField::Uniform(0.0),
         prisms: obst.as_ref(),
         heights: raster(hr, Some(heights_origin_step)),

@@ -162,6 +162,7 @@ def _path_table(scn: Scenario, sites: Sequence[Site], x_m: np.ndarray, y_m: np.n
         freq_hz=scn.freq_hz,
         ground="none" if scn.ground == "none" else "pec",
         full=True,
+        polarization=scn.polarization,
         **obstacle_args(scn),
         **core_args(scn),
     )

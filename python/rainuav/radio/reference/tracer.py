@@ -51,7 +51,6 @@ __all__ = [
     "Agreement",
     "TracerMap",
     "agreement",
-    "compare",
     "engine_gain",
     "inside_buildings",
     "isotropic_scenario",
@@ -405,42 +404,3 @@ def inside_buildings(scn: Scenario) -> np.ndarray:
     xx, yy = np.meshgrid(x, y)
     h = found.prisms.height_at(xx.ravel(), yy.ravel()).reshape(xx.shape)
     return h >= scn.area.altitude_m
-
-
-def compare(
-    scn: Scenario,
-    *,
-    samples: int = 2_000_000,
-    seed: int = 0,
-    max_depth: int = 2,
-    ground: str = "none",
-    engine: str = "ray",
-    reference: str = "map",
-    step: int = 1,
-) -> Agreement:
-    """The building effect of the ray engine (or ``engine``:
-    [`engine_gain()`][rainuav.radio.reference.tracer.engine_gain]) against the tracer's on ``scn``
-    (each site once, isotropic:
-    [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]), over no ground or
-    a PEC one. ``reference``: ``"map"``, the tracer's radio map
-    ([`tracer_gain()`][rainuav.radio.reference.tracer.tracer_gain]), or ``"paths"``, its path
-    solver at every ``step``-th pixel's centre
-    ([`path_gain()`][rainuav.radio.reference.tracer_paths.path_gain])."""
-    if reference not in ("map", "paths"):
-        raise ValueError(f"reference is 'map' or 'paths' (got {reference!r})")
-    with_b = isotropic_scenario(scn, ground=ground)
-    without = isotropic_scenario(scn, buildings=False, ground=ground)
-    kw: dict[str, Any] = {"samples": samples, "seed": seed, "max_depth": max_depth}
-    if reference == "paths":
-        from rainuav.radio.reference.tracer_paths import path_gain as gain
-
-        kw["step"] = step
-    else:
-        gain = tracer_gain
-    return agreement(
-        engine_gain(with_b, engine),
-        engine_gain(without, engine),
-        gain(with_b, **kw),
-        gain(without, **kw),
-        inside_buildings(with_b),
-    )

@@ -1,0 +1,58 @@
+"""The ray engine's building effect against Sionna RT's, on one scene: the tracer's radio map
+([`rainuav.radio.reference.tracer`][rainuav.radio.reference.tracer]) or its path solver at the
+pixel centres ([`rainuav.radio.reference.tracer_paths`][rainuav.radio.reference.tracer_paths]) as
+the reference (docs/physics.md section 12)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rainuav.radio.reference.tracer import (
+    Agreement,
+    agreement,
+    engine_gain,
+    inside_buildings,
+    isotropic_scenario,
+    tracer_gain,
+)
+from rainuav.radio.reference.tracer_paths import path_gain
+from rainuav.radio.scene.scenario import Scenario
+
+__all__ = ["compare"]
+
+
+def compare(
+    scn: Scenario,
+    *,
+    samples: int = 2_000_000,
+    seed: int = 0,
+    max_depth: int = 2,
+    ground: str = "none",
+    engine: str = "ray",
+    reference: str = "map",
+    step: int = 1,
+) -> Agreement:
+    """The building effect of the ray engine (or ``engine``:
+    [`engine_gain()`][rainuav.radio.reference.tracer.engine_gain]) against the tracer's on ``scn``
+    (each site once, isotropic:
+    [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]), over no ground or
+    a PEC one. ``reference``: ``"map"``, the tracer's radio map
+    ([`tracer_gain()`][rainuav.radio.reference.tracer.tracer_gain]), or ``"paths"``, its path
+    solver at every ``step``-th pixel's centre
+    ([`path_gain()`][rainuav.radio.reference.tracer_paths.path_gain])."""
+    if reference not in ("map", "paths"):
+        raise ValueError(f"reference is 'map' or 'paths' (got {reference!r})")
+    with_b = isotropic_scenario(scn, ground=ground)
+    without = isotropic_scenario(scn, buildings=False, ground=ground)
+    kw: dict[str, Any] = {"samples": samples, "seed": seed, "max_depth": max_depth}
+    gain: Any = tracer_gain
+    if reference == "paths":
+        gain = path_gain
+        kw["step"] = step
+    return agreement(
+        engine_gain(with_b, engine),
+        engine_gain(without, engine),
+        gain(with_b, **kw),
+        gain(without, **kw),
+        inside_buildings(with_b),
+    )
