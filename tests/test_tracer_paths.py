@@ -1,20 +1,23 @@
 """The ray engine's building effect against Sionna RT 2.2's path solver at the pixel centres
-([`rainuav.radio.reference.tracer_paths`][rainuav.radio.reference.tracer_paths]): the tracer's
-exact paths, where its radio map (``tests/test_tracer.py``) is a Monte Carlo estimate that is dark
-and scattered in deep shadows. Three test scenes, one mechanism each: a street canyon (walls
-once and twice, corners, the corners beside the line), a thick building seen over its roof at
-10 m (the roof's edges), and a block over a PEC ground by images (the ground). Every third pixel
-in both directions, 1 million candidate rays a site in two seeded halves.
+([`rainuav.radio.reference.tracer_paths`][rainuav.radio.reference.tracer_paths]): the tracer's exact
+paths, where its radio map (``tests/test_tracer.py``) is a Monte Carlo estimate that is dark and
+scattered in deep shadows. Four test scenes, one mechanism each: a street canyon (walls once and
+twice, corners, the corners beside the line), a thick building seen over its roof at 10 m (the
+roof's edges), nine buildings of the shipped footprint file (their materials), and a block over a
+PEC ground by images (the ground). Every third pixel in both directions, 1 million candidate rays a
+site in two seeded halves.
 
-Tolerances and why: the issue's targets, unloosened: where the tracer sees a shadow, within 3 dB
-at the median and 8 dB at the 90th percentile; where it sees light, 0.5 dB at the median; shadow
-and light agree on 95% of the pixels. Measured on these cases (Intel Xeon, 2 cores): canyon V
-0.46 / 2.03 dB, thick H 2.60 / 6.97 dB, block V over PEC 2.65 / 3.29 dB (shadow median / p90);
-light at most 0.005 dB; all pixels agree. The two halves of the candidate search find the same
-paths here (their difference is 0.00 dB at the median); the test holds it under 0.5 dB. What
-remains is known: the thick building's roof edges are knife edges in the engine and right-angled
-wedges in the tracer (the engine 1.9 dB brighter), and over the PEC ground the engine's corners
-are lit by the site alone, not by its image in the ground as well (2.5 dB darker).
+Tolerances and why. Without a ground the engine and the path solver trace the same mechanisms
+(walls once and twice, corners and walls then corners with P.526-15 section 6's wedge, roofs'
+edges as wedges), so the shadow is held to 1 dB at the median and 4 dB at the 90th percentile:
+measured on all ten cases without ground of ``tests/test_tracer.py`` at every second pixel,
+0.01-0.27 dB and 0.1-2.7 dB (Intel Xeon, 2 cores); the margin covers the coarser sampling here
+and a candidate search that finds a path more or less on another machine. Over the PEC ground
+the engine lights its corners from the site alone, not also from its image in the ground, and is
+2.7 dB darker at the median: that case is held to the issue's targets, 3 dB and 8 dB (measured
+2.7 and 3.3 dB). The light is held to 0.5 dB at the median and shadow and light to 95%
+agreement (measured at most 0.05 dB and 99.4% or more). The two halves of the candidate search
+find the same paths here (0.00 dB apart at the median); the test holds them within 0.5 dB.
 """
 
 from __future__ import annotations
@@ -25,7 +28,12 @@ from rainuav.radio.reference.tracer_scenes import scene
 
 pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]
 
-CASES = [("canyon", "v", 20.0, "none"), ("thick", "h", 10.0, "none"), ("box", "v", 20.0, "pec")]
+CASES = [
+    ("canyon", "v", 20.0, "none"),
+    ("thick", "h", 10.0, "none"),
+    ("block", "h", 8.0, "none"),
+    ("box", "v", 20.0, "pec"),
+]
 
 
 @pytest.mark.parametrize("case", CASES, ids=[f"{n}-{p}-{g}" for n, p, _, g in CASES])
@@ -37,8 +45,9 @@ def test_the_engine_meets_the_targets_against_the_tracers_exact_paths(case) -> N
     assert r["pixels"] > 250 and r["shadow_pixels"] > 60, r
     assert r["light_median"] <= 0.5, r
     assert r["classes_agree"] >= 0.95, r
-    assert r["shadow_median"] <= 3.0, r
-    assert r["shadow_p90"] <= 8.0, r
+    med, p90 = (3.0, 8.0) if ground == "pec" else (1.0, 4.0)  # the docstring says why
+    assert r["shadow_median"] <= med, r
+    assert r["shadow_p90"] <= p90, r
     # Two candidate searches found the same paths: the reference is not noisy.
     assert r["noise_median"] <= 0.5, r
 
