@@ -159,9 +159,10 @@ impl RayScene<'_> {
     /// grazing (`nu > 0`) and is a building's (a roof on one side of it along the path, lower
     /// ground or a lower roof on the other), the edge is the right-angled wedge of a roof and a
     /// wall: ITU-R P.526-15 section 6's coefficient in the path's vertical plane, face 0 the
-    /// face the site lights (the roof from above, else the wall), the faces P.2040 concrete (a footprint names
-    /// its walls' material, not its roof's), the field along the edge for horizontal
-    /// polarisation and across it for vertical. Elsewhere the knife edge, `J(nu)`.
+    /// face the path's start lights (the roof from above its plane, else the wall), the faces
+    /// P.2040 concrete (a footprint names its walls' material, not its roof's), the field along
+    /// the edge for horizontal polarisation and across it for vertical. Elsewhere the knife
+    /// edge, `J(nu)`.
     #[allow(clippy::too_many_arguments)]
     fn roof_edge_loss_db(
         &self,
