@@ -50,9 +50,11 @@ __all__ = [
     "SHADOW_DB",
     "Agreement",
     "TracerMap",
+    "add_transmitters",
     "agreement",
     "engine_gain",
     "inside_buildings",
+    "interactions",
     "isotropic_scenario",
     "load_sionna",
     "prism_arrays",
@@ -251,6 +253,35 @@ def tracer_scene(scn: Scenario, material: str | None = None) -> Any:
     return scene
 
 
+def add_transmitters(scene: Any, scn: Scenario) -> int:
+    """Adds one transmitter a site of ``scn`` to the tracer's ``scene``, and over a PEC ground
+    (``scn.ground == "pec"``) each site's image below the ground after them (the image method;
+    [`tracer_scene()`][rainuav.radio.reference.tracer.tracer_scene] extends the buildings below
+    it): returns how many sets of sites there are (1, or 2 with the images)."""
+    mi, rt = load_sionna()
+    images = (1.0, -1.0) if scn.ground == "pec" else (1.0,)
+    for sign in images:
+        for k, s in enumerate(scn.sites):
+            at = mi.Point3f(s.x_m, s.y_m, sign * s.height_m)
+            scene.add(rt.Transmitter(name=f"tx{k}{'i' if sign < 0 else ''}", position=at))
+    return len(images)
+
+
+def interactions(max_depth: int, diffraction: bool = True) -> dict[str, Any]:
+    """The interactions both of the tracer's solvers trace (module docstring): line of sight,
+    specular reflections up to ``max_depth``, edge diffraction where ``diffraction``; no diffuse
+    scattering, no transmission through walls."""
+    return {
+        "max_depth": max_depth,
+        "los": True,
+        "specular_reflection": max_depth > 0,
+        "diffuse_reflection": False,
+        "refraction": False,
+        "diffraction": diffraction,
+        "edge_diffraction": diffraction,
+    }
+
+
 def tracer_gain(
     scn: Scenario,
     *,
@@ -266,14 +297,9 @@ def tracer_gain(
     extends as deep below the ground as it stands above it, each site has its image below the
     ground, and a pixel's gain is the sum of both (incoherent: the pixel mean of the ground's
     fringes, as the ray engine takes it)."""
-    pec = scn.ground == "pec"
     mi, rt = load_sionna()
     scene = tracer_scene(scn)
-    images = (1.0, -1.0) if pec else (1.0,)
-    for sign in images:
-        for k, s in enumerate(scn.sites):
-            at = mi.Point3f(s.x_m, s.y_m, sign * s.height_m)
-            scene.add(rt.Transmitter(name=f"tx{k}{'i' if sign < 0 else ''}", position=at))
+    images = add_transmitters(scene, scn)
     a = scn.area
     h, w = a.shape
     res = ((a.x_max_m - a.x_min_m) / w, (a.y_max_m - a.y_min_m) / h)
@@ -289,16 +315,10 @@ def tracer_gain(
             size=mi.Point2f(a.x_max_m - a.x_min_m, a.y_max_m - a.y_min_m),
             cell_size=mi.Point2f(*res),
             samples_per_tx=max(1, samples // 2),
-            max_depth=max_depth,
-            los=True,
-            specular_reflection=max_depth > 0,
-            diffuse_reflection=False,
-            refraction=False,
-            diffraction=diffraction,
-            edge_diffraction=diffraction,
             seed=2 * seed + half,
+            **interactions(max_depth, diffraction),
         )
-        g = np.asarray(rm.path_gain.numpy(), dtype=float).reshape(len(images), len(scn.sites), h, w)
+        g = np.asarray(rm.path_gain.numpy(), dtype=float).reshape(images, len(scn.sites), h, w)
         halves.append(g.sum(axis=0))
     return TracerMap(halves[0], halves[1])
 

@@ -22,7 +22,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from rainuav.radio.reference.tracer import TracerMap, inside_buildings, load_sionna, tracer_scene
+from rainuav.radio.reference.tracer import (
+    TracerMap,
+    add_transmitters,
+    inside_buildings,
+    interactions,
+    load_sionna,
+    tracer_scene,
+)
 from rainuav.radio.scene.scenario import Scenario
 
 __all__ = ["path_gain"]
@@ -45,12 +52,7 @@ def path_gain(
         raise ValueError(f"step is a whole number of pixels >= 1 (got {step})")
     mi, rt = load_sionna()
     scene = tracer_scene(scn)
-    pec = scn.ground == "pec"
-    images = (1.0, -1.0) if pec else (1.0,)
-    for sign in images:
-        for k, s in enumerate(scn.sites):
-            at = mi.Point3f(s.x_m, s.y_m, sign * s.height_m)
-            scene.add(rt.Transmitter(name=f"tx{k}{'i' if sign < 0 else ''}", position=at))
+    images = add_transmitters(scene, scn)
     h, w = scn.area.shape
     x, y = scn.area.centres()
     ii, jj = np.meshgrid(np.arange(0, h, step), np.arange(0, w, step), indexing="ij")
@@ -64,23 +66,17 @@ def path_gain(
     for half in range(2):
         paths = solver(
             scene,
-            max_depth=max_depth,
             max_num_paths_per_src=10**7,
             samples_per_src=max(1, samples // 2),
-            los=True,
-            specular_reflection=max_depth > 0,
-            diffuse_reflection=False,
-            refraction=False,
-            diffraction=True,
-            edge_diffraction=True,
             synthetic_array=False,
             seed=2 * seed + half,
+            **interactions(max_depth),
         )
         re, im = (np.asarray(v, dtype=float) for v in paths.a)
         valid = np.asarray(paths.valid.numpy(), dtype=bool)
         power = (re**2 + im**2) * valid.reshape(re.shape)
         # (receivers, rx antennas, transmitters, tx antennas, paths) -> (receivers, transmitters)
-        per = power.sum(axis=(1, 3, 4)).reshape(len(ii), len(images), len(scn.sites)).sum(axis=1)
+        per = power.sum(axis=(1, 3, 4)).reshape(len(ii), images, len(scn.sites)).sum(axis=1)
         g = np.zeros((len(scn.sites), h, w))
         g[:, ii, jj] = per.T
         halves.append(g)
