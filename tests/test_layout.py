@@ -388,3 +388,14 @@ def test_the_learner_never_tests_environment_classes() -> None:
         if tested.search(line)
     ]
     assert not hits, f"environment classes tested at {hits}"
+
+
+def test_one_environment_class() -> None:
+    """One environment flies one level and several: ``UAVLevelsEnv`` is ``UAVNavEnv``'s
+    constructor with the arguments it has always taken, with no behaviour of its own."""
+    from rainuav.nav.env import UAVNavEnv
+    from rainuav.nav.levels import UAVLevelsEnv
+
+    assert issubclass(UAVLevelsEnv, UAVNavEnv)
+    own = {k for k in vars(UAVLevelsEnv) if not (k.startswith("__") and k.endswith("__"))}
+    assert not own and set(vars(UAVLevelsEnv)) & {"__init__"} == {"__init__"}, own

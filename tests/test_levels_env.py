@@ -109,7 +109,7 @@ def test_climbs_last_their_duration_and_land_in_their_slice() -> None:
     assert info["t_s"] == 3.0 and info["level"] == 1 and r == pytest.approx(3 * -1.0)
     _, r, *_, info = env.step(5)
     assert info["t_s"] == 8.0 and info["level"] == 0 and r == pytest.approx(5 * (-1.0 - 10.0))
-    assert env.observation_space.contains(env.observe(info["position_m"], 0, 8))
+    assert env.observation_space.contains(env.observe_batch(info["position_m"], 0, 8))
     assert env.action_space == gym.spaces.Discrete(6)
 
 

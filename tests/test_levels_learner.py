@@ -13,7 +13,6 @@ import torch
 from rainuav.errors import InvalidInputError
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio.outputs.levelmaps import LevelStack
 from rainuav.radio.scene.scenario import Area, Scenario, Site
@@ -88,7 +87,7 @@ def test_a_stack_of_levels_is_saved_and_read_back_exactly(tmp_path: Path) -> Non
     w = world(small_cfg(tmp_path, 10))
     w.save(tmp_path)
     env = load_world(tmp_path, small_cfg(tmp_path, 10)).env()
-    assert isinstance(env, UAVLevelsEnv) and env.field.altitudes_m.tolist() == ALTS
+    assert env.level_axis and env.field.altitudes_m.tolist() == ALTS
 
 
 def test_the_learners_step_is_the_environments() -> None:
@@ -194,7 +193,9 @@ def test_greedy_flights_among_levels_replay_in_the_environment() -> None:
         env.reset(options={"start_m": s})
         ret = 0.0
         for k in range(r["steps"]):
-            obs = env.observe(r["path"][k][None], r["levels"][k : k + 1], r["ticks"][k : k + 1])
+            obs = env.observe_batch(
+                r["path"][k][None], r["levels"][k : k + 1], r["ticks"][k : k + 1]
+            )
             q = agent.q_values(agent.observe(obs, r["ticks"][k]))
             assert q.shape == (1, 6)
             _, rew, _, _, info = env.step(int(np.argmax(q)))

@@ -55,7 +55,7 @@ def test_weather_view_among_levels_shows_every_level() -> None:
     assert v is not None and v.layers == 3
     pos = np.array([[330.0, 410.0], [20.0, 780.0]])  # the second: the window leaves the area
     tick, level, world = np.array([4, 9]), np.array([2, 0]), np.array([1, 0])
-    obs = env.observe(pos, level, tick, np.array([[700.0, 500.0]] * 2), world)
+    obs = env.observe_batch(pos, level, tick, np.array([[700.0, 500.0]] * 2), world)
     assert obs["local"].shape == (2, 3, 11, 11) and obs["area"].shape == (2, 3, 16, 16)
     np.testing.assert_array_equal(obs["level"][:, 0], level / 2)
     off = v.local_offsets()

@@ -185,7 +185,7 @@ def test_batched_destinations_match_scalar_envs() -> None:
 
 
 def test_bad_weather_options_are_refused() -> None:
-    with pytest.raises(InvalidInputError, match="random_goal needs observation='weather'"):
+    with pytest.raises(InvalidInputError, match="random_goal and a bank of worlds need observation='weather'"):
         UAVNavEnv(field=weather_env().field, goal_m=(500.0, 500.0), random_goal=True)
     with pytest.raises(InvalidInputError, match="observation must be one of"):
         UAVNavEnv(field=weather_env().field, goal_m=(500.0, 500.0), observation="radar")

@@ -143,7 +143,7 @@ def make_levels_env(
 ) -> Any:
     """``gym.make("rainuav/UAVLevels-v0", scenario="uma", altitudes_m=[30, 60, 90])``: the
     navigation task with altitude as a decision
-    ([`rainuav.nav.levels.UAVLevelsEnv`][rainuav.nav.levels.UAVLevelsEnv]) over the scenario's maps
+    ([`rainuav.nav.levels`][rainuav.nav.levels]) over the scenario's maps
     at each of ``altitudes_m`` (in time where its weather moves, every ``slice_s`` over the
     horizon); the weather keywords as [`make_nav_env()`][rainuav.envs.make_nav_env], the task's
     fields as keywords (``min_db`` by default the preset's SINR threshold), the climb and descent
@@ -151,7 +151,7 @@ def make_levels_env(
     ``observation="weather"`` shows every level's weather
     ([`rainuav.nav.views.WeatherView`][rainuav.nav.views.WeatherView], one layer a level) and
     ``random_goal`` draws a destination per episode."""
-    from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, UAVLevelsEnv
+    from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S
     from rainuav.radio.scene.presets import SINR_THRESHOLDS_DB
     from rainuav.world import level_field, make_scenario, series_instants
 
@@ -166,9 +166,9 @@ def make_levels_env(
     field, _ = level_field(scn, series_instants(spec) if scn.medium.moves else None)
     if nav.min_db is None:
         nav = dataclasses.replace(nav, min_db=SINR_THRESHOLDS_DB.get(scn.name, 10.0))
-    return UAVLevelsEnv(
-        field,
-        nav,
+    return UAVNavEnv(
+        field=field,
+        config=nav,
         climb_m_s=CLIMB_M_S if climb_m_s is None else climb_m_s,
         descend_m_s=DESCEND_M_S if descend_m_s is None else descend_m_s,
         start_level=start_level,

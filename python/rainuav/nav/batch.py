@@ -27,6 +27,10 @@ class _OneLevel:
     def blocked(self, x: Any, y: Any, level: Any) -> np.ndarray:
         return blocked_at(self.plane, x, y)
 
+    def flyable(self, x: float, y: float) -> np.ndarray:
+        """(1,) bool: whether the UAV may fly over ``(x, y)``."""
+        return np.array([not blocked_at(self.plane, x, y)])
+
     def __call__(self, x: Any, y: Any, t_s: Any, level: Any, *world: Any) -> np.ndarray:
         return self.plane(x, y, t_s, *world)
 

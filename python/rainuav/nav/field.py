@@ -17,8 +17,17 @@ import numpy.typing as npt
 
 from rainuav._sampling import bilinear, in_time
 from rainuav.errors import InvalidInputError
+from rainuav.nav.task import SIGNALS
 
-__all__ = ["SignalBank", "SignalField", "SignalSeries", "SirField", "blocked_at", "pixel_index"]
+__all__ = [
+    "SignalBank",
+    "SignalField",
+    "SignalSeries",
+    "SirField",
+    "blocked_at",
+    "pixel_index",
+    "signal_field",
+]
 
 
 def _checked(
@@ -351,3 +360,33 @@ class SignalBank:
 
 SirField = SignalField
 """The old name (the field is whichever signal the task flies on)."""
+
+
+def signal_field(
+    radio_map: Any, sinr_db: Any, sir_db: Any, extent_m: Any, signal: str | None
+) -> SignalField:
+    """The field a task flies on: the ``signal`` map of ``radio_map``, or the one raw array
+    given (``sinr_db`` or ``sir_db``, which then names the signal)."""
+    if signal is not None and signal not in SIGNALS:
+        raise InvalidInputError(f"signal must be one of {SIGNALS} (got {signal!r})")
+    raw = {k: v for k, v in (("sinr", sinr_db), ("sir", sir_db)) if v is not None}
+    if radio_map is not None:
+        if raw:
+            raise InvalidInputError(f"give radio_map or {next(iter(raw))}_db, not both")
+        signal = signal or "sinr"
+        values = getattr(radio_map, f"{signal}_db", None)
+        if values is None:
+            raise InvalidInputError(
+                f"signal={signal!r}: radio_map has no {signal}_db (rebuild it with this version)"
+            )
+        serving = getattr(radio_map, "serving_cell", None)
+        mask = getattr(radio_map, "not_flyable", None)
+        return SignalField(values, radio_map.extent_m, f"{signal}_db", serving, mask)
+    if len(raw) != 1:
+        raise InvalidInputError("give radio_map, or exactly one of sinr_db and sir_db")
+    kind, values = next(iter(raw.items()))
+    if signal is not None and signal != kind:
+        raise InvalidInputError(f"signal={signal!r} but the map given is {kind}_db")
+    if extent_m is None:
+        raise InvalidInputError(f"extent_m is required with {kind}_db")
+    return SignalField(values, extent_m, f"{kind}_db")

@@ -22,7 +22,7 @@ from rainuav import _core
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField
-from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S, UAVLevelsEnv, level_durations
+from rainuav.nav.levelfield import CLIMB_M_S, DESCEND_M_S, LevelField, level_durations
 from rainuav.nav.task import NavConfig
 
 __all__ = [
@@ -52,6 +52,8 @@ class Plan:
 def _as_env(env: UAVNavEnv) -> UAVNavEnv:
     if not isinstance(env, UAVNavEnv):
         raise InvalidInputError(f"env must be a rainuav.nav.UAVNavEnv (got {type(env).__name__})")
+    if env.level_axis:
+        raise InvalidInputError("env flies among levels: plan with optimal_among_levels")
     return env
 
 
@@ -220,14 +222,16 @@ def optimal_levels(
 
 
 def optimal_among_levels(
-    env: UAVLevelsEnv, starts_m: npt.ArrayLike, start_levels: npt.ArrayLike | None = None
+    env: UAVNavEnv, starts_m: npt.ArrayLike, start_levels: npt.ArrayLike | None = None
 ) -> list[LevelPlan]:
     """[`optimal_levels()`][rainuav.nav.planner.optimal_levels] on the levels environment's signal
     and task (its levels' maps, or maps in time, and masks) from each start (N, 2), at
     ``start_levels`` (N,; default where the env starts a flight there:
-    [`UAVLevelsEnv.start_level_at()`][rainuav.nav.levels.UAVLevelsEnv.start_level_at])."""
-    if not isinstance(env, UAVLevelsEnv):
-        raise InvalidInputError(f"env must be a UAVLevelsEnv (got {type(env).__name__})")
+    [`UAVNavEnv.start_level_at()`][rainuav.nav.env.UAVNavEnv.start_level_at])."""
+    if not (isinstance(env, UAVNavEnv) and isinstance(env.field, LevelField)):
+        raise InvalidInputError(
+            f"env must be a UAVNavEnv among levels, on a LevelField (got {type(env).__name__})"
+        )
     starts = np.asarray(starts_m, dtype=np.float64).reshape(-1, 2)
     if start_levels is None:
         start_levels = [env.start_level_at(p) for p in starts]

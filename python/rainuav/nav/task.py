@@ -38,6 +38,7 @@ __all__ = [
     "LoiteringWarning",
     "NavConfig",
     "base_reward",
+    "check_action",
     "check_config",
     "check_task",
     "flight_cost",
@@ -182,3 +183,20 @@ def make_config(base: NavConfig | None = None, **kw: Any) -> NavConfig:
     if bad:
         raise InvalidInputError(f"unknown NavConfig field(s) {sorted(bad)}")
     return dataclasses.replace(base if base is not None else NavConfig(), **kw)
+
+
+def check_action(action: Any, n: int = 4) -> int:
+    """``action`` as an int if it is one integer in ``0..n-1`` (a Python or numpy integer, or a
+    0-d integer array, as Gymnasium's ``Discrete(n)`` holds); anything else (a float such as
+    1.7, a string, a bool) raises [`InvalidInputError`][rainuav.errors.InvalidInputError], never a
+    silent rounding."""
+    a = np.asarray(action) if isinstance(action, np.ndarray) else action
+    if isinstance(a, np.ndarray):
+        ok = a.shape == () and np.issubdtype(a.dtype, np.integer)
+        a = a[()] if ok else a
+    else:
+        ok = isinstance(a, int | np.integer) and not isinstance(a, bool)
+    if not ok or not 0 <= int(a) < n:
+        allowed = "0, 1, 2 or 3" if n == 4 else f"in 0..{n - 1}"
+        raise InvalidInputError(f"action must be one integer {allowed} (got {action!r})")
+    return int(a)

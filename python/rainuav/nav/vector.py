@@ -52,8 +52,10 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         num_envs: int,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     ) -> None:
-        if not isinstance(env, UAVNavEnv):
-            raise InvalidInputError(f"env must be a UAVNavEnv (got {type(env).__name__})")
+        if not isinstance(env, UAVNavEnv) or env.level_axis:
+            raise InvalidInputError(
+                f"env must be a UAVNavEnv on one level (got {type(env).__name__})"
+            )
         check_num_envs(num_envs)
         if env.random_goal:
             raise InvalidInputError(

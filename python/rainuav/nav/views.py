@@ -37,7 +37,8 @@ import gymnasium as gym
 import numpy as np
 
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import blocked_at
+from rainuav.nav.field import SignalBank, blocked_at
+from rainuav.nav.levelfield import LevelField
 from rainuav.nav.task import NavConfig
 
 __all__ = ["GOAL_MARGIN_M", "REACH", "WeatherView", "sample_goal", "sample_start_for"]
@@ -163,6 +164,38 @@ class WeatherView:
             lv = np.asarray(level_frac, np.float32).reshape(-1, 1)
             obs["level"] = np.broadcast_to(lv, (n, 1)).copy()
         return obs
+
+    def observe_field(
+        self, field: Any, t_s: np.ndarray, pos: Any, level: Any, t: Any, goal: Any, world: Any,
+        min_db: float, max_steps: int,
+    ) -> dict[str, np.ndarray]:  # fmt: skip
+        """[`observe()`][rainuav.nav.views.WeatherView.observe] of UAVs at ``pos`` (N, 2), or
+        of one at (2,), flying ``field`` (one level's signal, or a
+        [`LevelField`][rainuav.nav.levelfield.LevelField] whose levels are the layers) on
+        ``level`` after ``t`` ticks, at the instants ``t_s`` (N,), for the destinations ``goal``
+        in the worlds ``world`` of a bank."""
+        p = np.asarray(pos, dtype=np.float64)
+        one = p.ndim == 1
+        p = p.reshape(-1, 2)
+        n = len(p)
+        ts = np.asarray(t_s, dtype=np.float64).reshape(n, 1)
+        w = np.broadcast_to(np.asarray(0 if world is None else world), (n,))[:, None]
+        lv = None
+        if isinstance(field, LevelField):
+            top = max(field.levels - 1, 1)
+            lv = np.broadcast_to(np.asarray(level, dtype=np.float32), (n,)) / np.float32(top)
+
+            def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+                return field.every_level(x, y, ts, w)
+        else:
+
+            def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+                return field(x, y, ts, w) if isinstance(field, SignalBank) else field(x, y, ts)
+
+        area = field.at_points(self.area_points(field.extent), ts[:, 0], w[:, 0])
+        frac = np.broadcast_to(np.asarray(t), (n,)).astype(np.float32) / np.float32(max_steps)
+        obs = self.observe(sample, field.extent, p, frac, goal, min_db, area, lv)
+        return {k: v[0] for k, v in obs.items()} if one else obs
 
     def flat(self, obs: dict[str, Any]) -> np.ndarray:
         """(N, sum of [`sizes`][rainuav.nav.views.WeatherView.sizes]) float32: the parts of a batch

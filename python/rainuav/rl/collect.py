@@ -15,14 +15,13 @@ from typing import Any
 import numpy as np
 
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.shield import shield_moves
 from rainuav.rl.dqn import Agent, NStepWindow, best_action
 from rainuav.rl.setup import torch_settings
 
 __all__ = ["Lanes", "greedy_rollouts"]
 
-Env = UAVNavEnv | UAVLevelsEnv
+Env = UAVNavEnv
 
 
 @dataclass

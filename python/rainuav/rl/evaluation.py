@@ -20,7 +20,6 @@ import torch
 from rainuav._checks import check_integer
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.radio.outputs.maps import RadioMap
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
@@ -54,7 +53,7 @@ __all__ = [
     "summarise",
 ]
 
-Env = UAVNavEnv | UAVLevelsEnv
+Env = UAVNavEnv
 
 
 def _policy_flights(

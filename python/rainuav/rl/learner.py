@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import base_reward
 from rainuav.rl.config import DQNConfig
 
@@ -83,7 +82,7 @@ def training_start(env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator) -> np
 
 
 def training_level(
-    env: UAVNavEnv | UAVLevelsEnv, d: DQNConfig, start: np.ndarray, rng: np.random.Generator
+    env: UAVNavEnv, d: DQNConfig, start: np.ndarray, rng: np.random.Generator
 ) -> int:
     """The level a training flight from ``start`` takes off at: among levels, with
     probability ``level_starts`` uniform among the levels flyable there, else the lowest

@@ -8,7 +8,7 @@ never looks inside the observation.
   Fourier features.
 - [`WeatherEncoder`][rainuav.rl.networks.WeatherEncoder] +
   [`WeatherQNet`][rainuav.rl.networks.WeatherQNet]: the learner that reads the weather
-  (``UAVNavEnv(observation="weather")``, or among levels ``UAVLevelsEnv``'s). The ``Dict``
+  (``UAVNavEnv(observation="weather")``, on one level or among several). The ``Dict``
   observation ([`rainuav.nav.views.WeatherView`][rainuav.nav.views.WeatherView]) is flattened in a
   fixed order for the replay; the network splits it again: two small convolutional stacks read the
   local window and the whole-area grid (one channel a level among levels), an MLP reads them with

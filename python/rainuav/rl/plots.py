@@ -12,7 +12,6 @@ import numpy as np
 
 from rainuav._io import write_atomic
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.levels import UAVLevelsEnv
 
 __all__ = [
     "draw_flights",
@@ -26,7 +25,7 @@ __all__ = [
 ]
 
 
-def map_image(ax: Any, env: UAVNavEnv | UAVLevelsEnv) -> Any:
+def map_image(ax: Any, env: UAVNavEnv) -> Any:
     """The task's signal map on ``ax`` (where it changes in time, at take-off; among levels,
     the lowest level's), its colour scale centred on the outage threshold."""
     x0, x1, y0, y1 = env.field.extent
@@ -63,7 +62,7 @@ def draw_flights(ax: Any, env: UAVNavEnv, rolls: list, optimal: Sequence[Any] = 
 
 
 def plot_trajectories(
-    env: UAVNavEnv | UAVLevelsEnv,
+    env: UAVNavEnv,
     rolls: list,
     path: Path,
     title: str,
@@ -103,12 +102,12 @@ def plot_trajectories(
     write_atomic(path, lambda t: fig.savefig(t, dpi=110, format="png"))
 
 
-def optimal_paths(env: UAVNavEnv | UAVLevelsEnv, rolls: list) -> list:
+def optimal_paths(env: UAVNavEnv, rolls: list) -> list:
     """The exact planner's paths from the starts of ``rolls`` (to draw beside them)."""
     return [p.path_m for p in optimal_plans(env, rolls)]
 
 
-def optimal_plans(env: UAVNavEnv | UAVLevelsEnv, rolls: list) -> list:
+def optimal_plans(env: UAVNavEnv, rolls: list) -> list:
     """The exact planner's plans from the starts of ``rolls``."""
     from rainuav.nav import planner
 
@@ -118,9 +117,7 @@ def optimal_plans(env: UAVNavEnv | UAVLevelsEnv, rolls: list) -> list:
     return planner.optimal_many(env, starts)
 
 
-def plot_policy(
-    env: UAVNavEnv | UAVLevelsEnv, metrics: dict[str, Any], rolls: list, path: Path
-) -> None:
+def plot_policy(env: UAVNavEnv, metrics: dict[str, Any], rolls: list, path: Path) -> None:
     """The network's flights beside the exact optimum from the same starts, titled with its
     success and mean excess cost (among levels, with the heights flown)."""
     plans = optimal_plans(env, rolls)

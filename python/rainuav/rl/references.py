@@ -6,7 +6,7 @@ comes to ([`flights()`][rainuav.rl.references.flights]) and how it compares with
 
 On one level: the exact optimum, the straight line, and where the weather moves the plan of the
 weather at take-off and re-planning ([`rainuav.nav.baselines`][rainuav.nav.baselines]). Among levels
-([`rainuav.nav.levels.UAVLevelsEnv`][rainuav.nav.levels.UAVLevelsEnv]): the exact optimum among
+([`rainuav.nav.levels`][rainuav.nav.levels]): the exact optimum among
 levels from the level a flight starts at, and the baselines of one altitude (``fixed_altitude``: the
 exact plan held at the level nearest [`PAPER_ALTITUDE_M`][rainuav.rl.references.PAPER_ALTITUDE_M],
 the paper's; ``best_single_altitude``: the exact plan at each level, the best chosen with hindsight
@@ -22,7 +22,6 @@ import numpy as np
 from rainuav.errors import InvalidInputError
 from rainuav.nav import baselines, planner
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import flight_cost
 
 __all__ = [
@@ -45,7 +44,7 @@ PLAN_CHUNK = 1000
 """Starts planned per call of the exact planner: evaluations over more show a progress bar."""
 
 
-def eval_starts(env: UAVNavEnv | UAVLevelsEnv, n: int, seed: int) -> np.ndarray:
+def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
     """``n`` starts drawn uniformly (farther than the tolerance from the goal) from ``seed``."""
     rng = np.random.default_rng(seed)
     return np.array([env.sample_start(rng) for _ in range(n)], dtype=np.float64).reshape(-1, 2)
@@ -58,7 +57,7 @@ def relative_gap(optimum: np.ndarray, returns: np.ndarray) -> np.ndarray:
     return (optimum - returns) / np.maximum(np.abs(optimum), 1e-9)
 
 
-def _arrived(env: UAVNavEnv | UAVLevelsEnv, path: np.ndarray) -> bool:
+def _arrived(env: UAVNavEnv, path: np.ndarray) -> bool:
     """Whether a planner's path ends at the destination (inside the area)."""
     x0, x1, y0, y1 = env.field.extent
     p, g = path[-1], np.asarray(env.cfg.goal_m)
@@ -67,7 +66,7 @@ def _arrived(env: UAVNavEnv | UAVLevelsEnv, path: np.ndarray) -> bool:
 
 
 def flights(
-    env: UAVNavEnv | UAVLevelsEnv,
+    env: UAVNavEnv,
     returns: Any,
     arrived: Any,
     paths: list,
@@ -124,7 +123,7 @@ def summarise(f: dict[str, np.ndarray], optimum: dict[str, np.ndarray]) -> dict[
 
 
 def reference_flights(
-    env: UAVNavEnv | UAVLevelsEnv,
+    env: UAVNavEnv,
     starts: np.ndarray,
     replan_every: int = baselines.DEFAULT_REPLAN_EVERY,
 ) -> dict[str, dict[str, Any]]:
@@ -142,7 +141,7 @@ def reference_flights(
     return {"optimal": optimal_flights(env, starts), **refs}
 
 
-def optimal_flights(env: UAVNavEnv | UAVLevelsEnv, starts: np.ndarray) -> dict[str, Any]:
+def optimal_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, Any]:
     """The exact planner's flights from ``starts`` (among levels: the plan among levels from the
     level each flight starts at), as
     [`reference_flights()`][rainuav.rl.references.reference_flights] gives ``optimal``: the
@@ -161,7 +160,7 @@ def optimal_flights(env: UAVNavEnv | UAVLevelsEnv, starts: np.ndarray) -> dict[s
     return _plans(plans, env)
 
 
-def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
+def _plans(plans: list, env: UAVNavEnv) -> dict[str, Any]:
     """[`flights()`][rainuav.rl.references.flights] of planned flights (plans, or among levels level
     plans, whose levels are kept for the heights flown)."""
     among = env.altitudes_m is not None
@@ -179,7 +178,7 @@ def _plans(plans: list, env: UAVNavEnv | UAVLevelsEnv) -> dict[str, Any]:
     return f
 
 
-def level_reference_flights(env: UAVLevelsEnv, starts: np.ndarray) -> dict[str, dict[str, Any]]:
+def level_reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dict[str, Any]]:
     """Among levels (module docstring): ``optimal`` (the exact plan among levels),
     ``fixed_altitude``, ``best_single_altitude`` and ``straight_line``. A level whose plane
     cannot hold the task (its destination not flyable) flies no flight that arrives."""

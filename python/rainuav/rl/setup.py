@@ -13,7 +13,6 @@ import torch
 from rainuav._checks import check_fits as check_fits_memory
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.dqn import Agent, Encoder, memory_needed
@@ -38,7 +37,7 @@ def check_fits(cfg: TrainConfig) -> None:
     )
 
 
-def make_agent(cfg: TrainConfig, env: UAVNavEnv | UAVLevelsEnv, device: torch.device) -> Agent:
+def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
     """An agent for ``env``: the time limit, the destination and one move in observation units
     (refused first if it cannot fit in memory: [`check_fits()`][rainuav.rl.setup.check_fits])."""
     check_fits(cfg)
@@ -48,7 +47,7 @@ def make_agent(cfg: TrainConfig, env: UAVNavEnv | UAVLevelsEnv, device: torch.de
     return Agent(cfg.dqn, cfg.seed, device, make_encoder(cfg.dqn, env, step))
 
 
-def make_encoder(d: DQNConfig, env: UAVNavEnv | UAVLevelsEnv, step: tuple[float, float]) -> Encoder:
+def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Encoder:
     """The encoder (and network) for ``env``'s observation
     ([`rainuav.rl.networks`][rainuav.rl.networks]): the weather-reading one where the env shows the
     weather, else the position one (with the env's fixed destination; among levels with the level

@@ -32,7 +32,7 @@ from rainuav._cli import altitude_band
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalBank, SignalField, SignalSeries
-from rainuav.nav.levels import LevelField, UAVLevelsEnv
+from rainuav.nav.levels import LevelField
 from rainuav.nav.task import NavConfig, check_config, check_task
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio.engines import ENGINES as RADIO_ENGINES
@@ -261,11 +261,7 @@ class World:
 
     def env(self) -> Any:
         """A Gymnasium environment of this world (a fresh one per call): a
-        [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv], or among levels a
-        [`rainuav.nav.levels.UAVLevelsEnv`][rainuav.nav.levels.UAVLevelsEnv]."""
-        if isinstance(self.field, LevelField):
-            return UAVLevelsEnv(self.field, self.task, observation=self.observation,
-                                random_goal=self.random_goal)  # fmt: skip
+        [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv], on one level or among several."""
         return UAVNavEnv(
             field=self.field,
             config=self.task,
