@@ -39,26 +39,11 @@ from typing import Any
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.levelfield import (
-    CLIMB_M_S,
-    DESCEND_M_S,
-    LEVEL_ACTIONS,
-    LevelField,
-    LevelStepper,
-    level_durations,
-)
+from rainuav.nav.levelfield import CLIMB_M_S, DESCEND_M_S, LevelField
 from rainuav.nav.task import NavConfig
 from rainuav.nav.views import WeatherView
 
-__all__ = [
-    "CLIMB_M_S",
-    "DESCEND_M_S",
-    "LEVEL_ACTIONS",
-    "LevelField",
-    "LevelStepper",
-    "UAVLevelsEnv",
-    "level_durations",
-]
+__all__ = ["CLIMB_M_S", "DESCEND_M_S", "LevelField", "UAVLevelsEnv"]
 
 
 class UAVLevelsEnv(UAVNavEnv):
