@@ -26,7 +26,9 @@ def per_second(env: UAVNavEnv, n: int, steps: int, rng: np.random.Generator) -> 
     t = np.zeros(n, dtype=np.int64)
     t0 = time.perf_counter()
     for _ in range(steps):
-        r = env.stepper.step(start, off, t % env.cfg.max_steps, rng.integers(0, 4, n))
+        r = env.step_batch(
+            start, off, np.zeros(n, dtype=np.int64), t % env.cfg.max_steps, rng.integers(0, 4, n)
+        )
         off, t = np.clip(r["offset"], -50, 50), r["t"]
     return n * steps / (time.perf_counter() - t0)
 

@@ -4,7 +4,7 @@ Gymnasium env doing the same steps one at a time, in the same run."""
 from __future__ import annotations
 
 import numpy as np
-from rainuav.nav import BatchStepper, UAVNavEnv
+from rainuav.nav import UAVNavEnv
 
 N = 8192
 SIR = np.random.default_rng(0).uniform(-10, 30, (200, 200))
@@ -15,20 +15,20 @@ def make():
     rng = np.random.default_rng(1)
     starts = np.array([env.sample_start(rng) for _ in range(N)])
     actions = rng.integers(0, 4, N)
-    return env, BatchStepper(env.field, env.cfg), starts, actions
+    return env, starts, actions
 
 
 def test_bench_batched_steps(benchmark) -> None:
-    _, stepper, starts, actions = make()
+    env, starts, actions = make()
     off = np.zeros((N, 2), dtype=np.int64)
     t = np.zeros(N, dtype=np.int64)
-    out = benchmark(stepper.step, starts, off, t, actions)
+    out = benchmark(env.step_batch, starts, off, np.zeros(N, dtype=np.int64), t, actions)
     assert out["reward"].shape == (N,)
     benchmark.extra_info["uav_steps_per_call"] = N
 
 
 def test_bench_scalar_env_steps(benchmark) -> None:
-    env, _, starts, actions = make()
+    env, starts, actions = make()
     env.reset(options={"start_m": starts[0]})
 
     def run():

@@ -67,7 +67,7 @@ def policy_flights(predict: Any, env: UAVNavEnv, starts: np.ndarray) -> dict[str
         idx = np.flatnonzero(live)
         pos = starts[idx] + env.cfg.step_m * off[idx]
         a = np.asarray(predict(env.observe(pos, t[idx])), dtype=np.int64).reshape(-1)
-        r = env.stepper.step(starts[idx], off[idx], t[idx], a)
+        r = env.step_batch(starts[idx], off[idx], np.zeros_like(idx), t[idx], a)
         off[idx], t[idx] = r["offset"], r["t"]
         ret[idx] += r["reward"]
         for j, k in enumerate(idx):

@@ -141,7 +141,7 @@ def _shaping_sum(
     total, disc = 0.0, 1.0
     for a in actions:
         pos = start + env.cfg.step_m * off
-        r = env.stepper.step(start, off, t, np.array([a]))
+        r = env.step_batch(start, off, np.zeros_like(t), t, np.array([a]))
         off, t = r["offset"], r["t"]
         total += disc * float((learning_reward(env, d, pos, r) - r["reward"])[0])
         disc *= d.gamma
@@ -198,7 +198,9 @@ def test_sir_weight_scales_only_the_sir_part_of_the_reward() -> None:
     mu = env.cfg.mu
     start = np.array([[37.0, 195.0], [295.0, 350.0], [1.0, 195.0]])
     off, t = np.zeros((3, 2), np.int64), np.zeros(3, np.int64)
-    r = env.stepper.step(start, off, t, np.array([1, 0, 2]))  # a move, an arrival, off the map
+    r = env.step_batch(
+        start, off, np.zeros_like(t), t, np.array([1, 0, 2])
+    )  # a move, an arrival, off the map
     assert r["arrived"].tolist() == [False, True, False] and r["out"].tolist() == [0, 0, 1]
     short = np.maximum(0.0, 10.0 - r["signal_db"])
     assert short[0] == short[2] == 15.0  # both end in the -5 dB band

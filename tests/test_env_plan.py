@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import rainuav
 from gymnasium.utils.env_checker import check_env
-from rainuav.nav import BatchStepper, LoiteringWarning, UAVNavEnv
+from rainuav.nav import LoiteringWarning, UAVNavEnv
 from rainuav.nav import planner as plan
 
 EXT = (0.0, 400.0, 0.0, 300.0)
@@ -75,13 +75,12 @@ def test_batched_stepper_equals_scalar_env() -> None:
     n, steps = 64, 40
     starts = np.array([e.sample_start(rng) for _ in range(n)])
     actions = rng.integers(0, 4, (steps, n))
-    stepper = BatchStepper(e.field, e.cfg)
     off = np.zeros((n, 2), dtype=np.int64)
     t = np.zeros(n, dtype=np.int64)
     done = np.zeros(n, dtype=bool)
     batch_rewards = np.zeros((steps, n))
     for k in range(steps):
-        r = stepper.step(starts, off, t, actions[k])
+        r = e.step_batch(starts, off, np.zeros(n, dtype=np.int64), t, actions[k])
         batch_rewards[k] = np.where(done, np.nan, r["reward"])
         done |= r["terminated"] | r["truncated"]
         off, t = r["offset"], r["t"]
@@ -219,7 +218,7 @@ def test_shielded_flights_always_arrive_in_time() -> None:
             clock = t[i] + (ew.cfg.max_steps - limit[i]).astype(np.int64)
             ok = ew.stepper.safe_actions(pos, clock)
             a = np.array([rng.choice(np.flatnonzero(row)) for row in ok])
-            r = ew.stepper.step(starts[i], off[i], clock, a)
+            r = ew.step_batch(starts[i], off[i], np.zeros_like(i), clock, a)
             off[i], t[i] = r["offset"], t[i] + 1
             assert not r["out"].any()
             arrived[i[r["arrived"]]] = True

@@ -173,7 +173,7 @@ def test_batched_destinations_match_scalar_envs() -> None:
         if not len(idx):
             break
         a = rng.integers(0, 4, len(idx))
-        r = env.stepper.step(starts[idx], off[idx], t[idx], a, goals[idx])
+        r = env.step_batch(starts[idx], off[idx], np.zeros_like(idx), t[idx], a, goals[idx])
         off[idx], t[idx] = r["offset"], r["t"]
         for j, k in enumerate(idx):
             _, rew, term, trunc, _ = singles[k].step(int(a[j]))
@@ -185,7 +185,9 @@ def test_batched_destinations_match_scalar_envs() -> None:
 
 
 def test_bad_weather_options_are_refused() -> None:
-    with pytest.raises(InvalidInputError, match="random_goal and a bank of worlds need observation='weather'"):
+    with pytest.raises(
+        InvalidInputError, match="random_goal and a bank of worlds need observation='weather'"
+    ):
         UAVNavEnv(field=weather_env().field, goal_m=(500.0, 500.0), random_goal=True)
     with pytest.raises(InvalidInputError, match="observation must be one of"):
         UAVNavEnv(field=weather_env().field, goal_m=(500.0, 500.0), observation="radar")

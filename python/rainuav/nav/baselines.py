@@ -43,7 +43,7 @@ def fly_actions(env: UAVNavEnv, starts_m: npt.ArrayLike, actions: list[np.ndarra
     while live.any():
         idx = np.flatnonzero(live)
         a = np.array([actions[k][done[k]] for k in idx], dtype=np.int64)
-        r = env.stepper.step(starts[idx], off[idx], t[idx], a)
+        r = env.step_batch(starts[idx], off[idx], np.zeros_like(idx), t[idx], a)
         off[idx], t[idx] = r["offset"], r["t"]
         ret[idx] += r["reward"]
         for j, k in enumerate(idx):
@@ -97,7 +97,7 @@ def replans(
             sel = np.flatnonzero(moving)
             k = idx[sel]
             a = np.array([plans[j].actions[m] for j in sel], dtype=np.int64)
-            r = env.stepper.step(starts[k], off[k], t[sel], a)
+            r = env.step_batch(starts[k], off[k], np.zeros_like(k), t[sel], a)
             off[k], t[sel] = r["offset"], r["t"]
             ret[k] += r["reward"]
             for j, kk in enumerate(k):

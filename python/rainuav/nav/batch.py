@@ -42,40 +42,13 @@ class _OneLevel:
 
 
 class BatchStepper(LevelStepper):
-    """Steps many UAVs at once with exactly the scalar environment's transitions: the one
-    batched stepper ([`LevelStepper`][rainuav.nav.levelfield.LevelStepper]) over the plane's
-    single level, where every move lasts one tick.
-
-    State per UAV: ``start`` (N, 2) float, ``offset`` (N, 2) int (steps taken in x and y) and
-    ``t`` (N,) steps so far; position = start + step_m * offset, flight time ``t * move_s``
-    (every flight takes off at time 0 of the field).
-    """
+    """The one batched stepper ([`LevelStepper`][rainuav.nav.levelfield.LevelStepper]) over the
+    plane's single level, where every move lasts one tick (many UAVs are stepped through
+    [`UAVNavEnv.step_batch()`][rainuav.nav.env.UAVNavEnv.step_batch], every ``level`` 0), with
+    the plane's shield: the moves that can still arrive in time."""
 
     def __init__(self, field: SignalField, cfg: NavConfig):
         super().__init__(_OneLevel(field), cfg, [], [])  # type: ignore[arg-type]
-
-    def step(  # type: ignore[override]
-        self,
-        start: np.ndarray,
-        offset: np.ndarray,
-        t: np.ndarray,
-        action: np.ndarray,
-        goal: np.ndarray | None = None,
-        world: np.ndarray | None = None,
-    ) -> dict[str, np.ndarray]:
-        """One move for every UAV. Returns new ``offset``, ``t``, ``position`` (after clamping),
-        ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out`` (left the area or entered
-        a pixel that is not flyable), ``arrived`` (reached the goal) and ``t_s`` (the instant the
-        move ends, s). ``goal`` (N, 2): each UAV's destination (default the task's); ``world``
-        (N,): each UAV's world where the field is a
-        [`rainuav.nav.field.SignalBank`][rainuav.nav.field.SignalBank]."""
-        t = np.asarray(t)
-        level = np.zeros(t.shape, dtype=np.int64)
-        g = None if goal is None else np.asarray(goal, dtype=np.float64).reshape(-1, 2)
-        r = super().step(start, offset, level, t, action, g, world)
-        r["t"] = r.pop("tick")
-        del r["level"], r["duration"]
-        return r
 
     def moves_to_goal(self, position: np.ndarray, goal: np.ndarray | None = None) -> np.ndarray:
         """Fewest moves from each (N, 2) position to a point of its lattice within ``tol_m``

@@ -124,7 +124,7 @@ def straight_line(env: UAVNavEnv, start_m: npt.ArrayLike) -> Plan:
         pos = start[0] + env.cfg.step_m * off[0]
         dx, dy = goal - pos
         a = (0 if dx > 0 else 2) if abs(dx) >= abs(dy) else (1 if dy > 0 else 3)
-        r = env.stepper.step(start, off, t, np.array([a]))
+        r = env.step_batch(start, off, np.zeros(1, dtype=np.int64), t, np.array([a]))
         off, t = r["offset"], r["t"]
         actions.append(a)
         path.append(r["position"][0].copy())

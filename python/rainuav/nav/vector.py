@@ -157,8 +157,9 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         resetting = self._ended.copy()  # NEXT_STEP: these only reset on this call
         moving = ~resetting
         if moving.any():
-            r = self.env.stepper.step(
-                self._start[moving], self._offset[moving], self._t[moving], a[moving]
+            t = self._t[moving]
+            r = self.env.step_batch(
+                self._start[moving], self._offset[moving], np.zeros_like(t), t, a[moving]
             )
             self._offset[moving], self._t[moving] = r["offset"], r["t"]
             reward[moving] = r["reward"]
