@@ -4,9 +4,10 @@
 //! section 6, [`crate::diffraction::utd_wedge`]). The corners looked at: those of the
 //! buildings in the way, and those the site lights (its line to the edge clear somewhere
 //! between the terrain and the roof) among the buildings within [`LIT_RADIUS_M`] of it, where
-//! the pixel's line to the site passes within [`CORRIDOR_M`] of the corner: a building across
-//! the street from those in the way, whose corner the site sees down the street. The two
-//! limits bound the work; the test scenes lie within both.
+//! going round the corner is at most [`EXCESS_M`] longer (horizontally) than the straight line
+//! from the site to the pixel (the corner inside the ellipse with the two as foci): a building
+//! across the street from those in the way, whose corner the site sees down the street. The
+//! two limits bound the work; docs/physics.md section 12 says what they leave out.
 //!
 //! A corner is a footprint vertex whose exterior angle `n pi` exceeds `pi` (a box's corners:
 //! `n = 1.5`); its faces are the two walls that meet there, their material the building's. The
@@ -47,7 +48,6 @@ use crate::error::{CoreError, Result};
 use crate::rays::{RayGround, RayPolarization, RayScene, reflection_coefficient};
 use crate::sight::Sight;
 use crate::walls::{WallRay, wall_reflectance};
-use sources::to_segment;
 
 /// How far (m) outside its corner, along the exterior bisector, a leg's visibility check ends:
 /// the corner's own walls are not in the way of a ray that grazes them; and how far short of a
@@ -59,13 +59,13 @@ const CORNER_GAP_M: f64 = 0.05;
 pub const IMAGE_RADIUS_M: f64 = 150.0;
 
 /// The corners the site lights (module docs) are looked for among the buildings whose bounding
-/// box comes within this distance (m) of the site: a city's streets show a site a few blocks
-/// each way.
-pub const LIT_RADIUS_M: f64 = 500.0;
+/// box comes within this distance (m) of the site: a city's streets show a site several blocks
+/// each way (a street canyon 40 m below the roofs is lit round a corner 650 m from its site).
+pub const LIT_RADIUS_M: f64 = 1000.0;
 
-/// A corner the site lights diffracts to the pixels it hides whose straight line to the site
-/// passes within this distance (m) of it.
-pub const CORRIDOR_M: f64 = 100.0;
+/// A corner the site lights diffracts to the pixels it hides for which the path round it is at
+/// most this much (m, horizontally) longer than the straight line.
+pub const EXCESS_M: f64 = 200.0;
 
 /// A prism's corners, each with its images of the site.
 type CornersOf = Vec<(Corner, Vec<Image>)>;
@@ -192,6 +192,11 @@ impl RayScene<'_> {
         if r1 < 1e-6 || r2 < 1e-6 {
             return None;
         }
+        let zv = zs + (zq - zs) * r1 / (r1 + r2);
+        let zt = self.terrain_at(c.v[0], c.v[1]);
+        if zv < zt || zv > zt + c.top || (image.is_none() && zv <= c.z_min) {
+            return None;
+        }
         let (mut phi1, mut phi2) = (ccw(c.a0, to_s), ccw(c.a0, to_q));
         if !(phi1 > 0.0 && phi1 < c.ext && phi2 > 0.0 && phi2 < c.ext) {
             return None;
@@ -200,21 +205,11 @@ impl RayScene<'_> {
             // Face 0 is the face the site lights: measure from the other face.
             (phi1, phi2) = (c.ext - phi1, c.ext - phi2);
         }
-        let zv = zs + (zq - zs) * r1 / (r1 + r2);
-        let zt = self.terrain_at(c.v[0], c.v[1]);
-        if zv < zt || zv > zt + c.top {
-            return None;
-        }
         let out = c.outside();
         // The legs: site -> (wall ->) corner -> pixel.
         let mut reflectance = 1.0;
         let first = match image {
-            None => {
-                if zv <= c.z_min {
-                    return None;
-                }
-                (c.v, zv, r1)
-            }
+            None => (c.v, zv, r1),
             Some(m) => {
                 let zp = zs + (zv - zs) * m.d_sp / r1;
                 let zt = self.terrain_at(m.p[0], m.p[1]);
@@ -298,7 +293,13 @@ impl RayScene<'_> {
         // row that needs them) and shared by every row.
         let cache: Vec<OnceLock<CornersOf>> = (0..prisms.len()).map(|_| OnceLock::new()).collect();
         let bounds = self.bounds();
-        let lit = self.lit_corners((s, zs), bounds);
+        // The ray meets a corner's edge between the site's height and the pixel's: a corner whose
+        // roof is below both never diffracts.
+        let zq_min = (0..self.y_m.len())
+            .flat_map(|i| (0..w).map(move |j| [self.x_m[j], self.y_m[i]]))
+            .map(|q| self.receiver_height(q))
+            .fold(f64::INFINITY, f64::min);
+        let lit = self.lit_corners((s, zs), zs.min(zq_min), bounds);
         Ok((0..self.y_m.len())
             .into_par_iter()
             .flat_map_iter(|i| {
@@ -355,15 +356,13 @@ impl RayScene<'_> {
                     }
                     // The corners the site lights beside the line (their buildings not in the
                     // way; `hits` is sorted).
-                    for c in &lit {
-                        if hits.binary_search(&(c.prism as u32)).is_ok()
-                            || to_segment(c.v, s, q) > CORRIDOR_M
-                        {
-                            continue;
+                    lit.near(q, |c| {
+                        if hits.binary_search(&(c.prism as u32)).is_err() {
+                            let ray =
+                                self.corner_ray(s, zs, q, zq, c, eps[c.prism], None, &mut sight);
+                            rays.extend(ray.map(to_ray));
                         }
-                        let ray = self.corner_ray(s, zs, q, zq, c, eps[c.prism], None, &mut sight);
-                        rays.extend(ray.map(to_ray));
-                    }
+                    });
                 }
                 rays
             })

@@ -5,20 +5,98 @@
 use num_complex::Complex64;
 use rayon::prelude::*;
 
-use super::{CORNER_GAP_M, Corner, IMAGE_RADIUS_M, Image, LIT_RADIUS_M, material_left, unit};
+use std::f64::consts::PI;
+
+use super::{
+    CORNER_GAP_M, Corner, EXCESS_M, IMAGE_RADIUS_M, Image, LIT_RADIUS_M, material_left, unit,
+};
 use crate::rays::RayScene;
 use crate::sight::Sight;
 
-/// The distance (m) from `p` to the segment `a -> b`.
-pub(super) fn to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let dd = d[0] * d[0] + d[1] * d[1];
-    let t = if dd > 0.0 {
-        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / dd).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    crate::norm(p[0] - a[0] - t * d[0], p[1] - a[1] - t * d[1])
+/// The corners the site lights, for the pixels to look up those within their ellipse
+/// ([`EXCESS_M`]): in bands of distance from the site (band 0 within `EXCESS_M / 2`, where
+/// every corner is inside every pixel's ellipse; band `k` from `EXCESS_M 2^(k-2)` to twice
+/// that), each sorted by azimuth from the site. A pixel at distance `d` reads, in a band from
+/// `r`, the azimuths within `acos((d + e) / d - e (2 d + e) / (2 r d))` of its own (`e` =
+/// [`EXCESS_M`]): no corner at `r` or farther outside that lies inside the ellipse.
+pub(super) struct Lit {
+    site: [f64; 2],
+    /// Each band's inner radius and its corners with their azimuths (rad, in `[-pi, pi]`).
+    bands: Vec<(f64, Vec<(f64, Corner)>)>,
+}
+
+impl Lit {
+    pub(super) fn new(site: [f64; 2], corners: Vec<Corner>) -> Self {
+        let half = 0.5 * EXCESS_M;
+        let mut bands: Vec<(f64, Vec<(f64, Corner)>)> = Vec::new();
+        for c in corners {
+            let (dx, dy) = (c.v[0] - site[0], c.v[1] - site[1]);
+            let r = crate::norm(dx, dy);
+            let k = if r < half {
+                0
+            } else {
+                1 + (r / half).log2().floor() as usize
+            };
+            while bands.len() <= k {
+                let inner = if bands.is_empty() {
+                    0.0
+                } else {
+                    half * 2f64.powi(bands.len() as i32 - 1)
+                };
+                bands.push((inner, Vec::new()));
+            }
+            bands[k].1.push((dy.atan2(dx), c));
+        }
+        for (_, band) in &mut bands {
+            band.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        Self { site, bands }
+    }
+
+    /// Calls `f` on every corner inside the ellipse of the pixel `q` (in the order of the bands
+    /// and azimuths).
+    pub(super) fn near(&self, q: [f64; 2], mut f: impl FnMut(&Corner)) {
+        let (dx, dy) = (q[0] - self.site[0], q[1] - self.site[1]);
+        let d = crate::norm(dx, dy);
+        let aq = dy.atan2(dx);
+        let e = EXCESS_M;
+        let mut visit = |c: &Corner| {
+            let r1 = crate::norm(c.v[0] - self.site[0], c.v[1] - self.site[1]);
+            if r1 + crate::norm(c.v[0] - q[0], c.v[1] - q[1]) - d <= e {
+                f(c);
+            }
+        };
+        for (inner, band) in &self.bands {
+            let g = if *inner > 0.0 && d > 1e-9 {
+                (d + e) / d - e * (2.0 * d + e) / (2.0 * inner * d)
+            } else {
+                -1.0
+            };
+            if g > 1.0 {
+                continue;
+            }
+            if g <= -1.0 {
+                band.iter().for_each(|(_, c)| visit(c));
+                continue;
+            }
+            let w = g.acos();
+            let mut read = |lo: f64, hi: f64| {
+                let i = band.partition_point(|(a, _)| *a < lo);
+                band[i..]
+                    .iter()
+                    .take_while(|(a, _)| *a <= hi)
+                    .for_each(|(_, c)| visit(c));
+            };
+            let (lo, hi) = (aq - w, aq + w);
+            read(lo.max(-PI), hi.min(PI));
+            if lo < -PI {
+                read(lo + 2.0 * PI, PI);
+            }
+            if hi > PI {
+                read(-PI, hi - 2.0 * PI);
+            }
+        }
+    }
 }
 
 impl RayScene<'_> {
@@ -81,14 +159,16 @@ impl RayScene<'_> {
     }
 
     /// The corners of the buildings within [`LIT_RADIUS_M`] of the site (at `zs`) whose edge it
-    /// sees somewhere between the terrain and the roof, each with its `z_min`.
+    /// sees somewhere between the terrain and the roof, each with its `z_min`, for the pixels to
+    /// look up; less those whose roof is below `z_low` (m above sea level).
     pub(super) fn lit_corners(
         &self,
         (site, zs): ([f64; 2], f64),
+        z_low: f64,
         bounds: crate::sight::Bounds,
-    ) -> Vec<Corner> {
+    ) -> Lit {
         let Some(prisms) = self.prisms else {
-            return Vec::new();
+            return Lit::new(site, Vec::new());
         };
         let r = LIT_RADIUS_M;
         let mut near = Vec::new();
@@ -96,7 +176,8 @@ impl RayScene<'_> {
             [site[0] - r, site[0] + r, site[1] - r, site[1] + r],
             &mut near,
         );
-        near.par_iter()
+        let corners = near
+            .par_iter()
             .flat_map_iter(|&k| {
                 let mut sight = self.sight(bounds);
                 let mut corners = Vec::new();
@@ -106,12 +187,16 @@ impl RayScene<'_> {
                         return false;
                     }
                     let z_lo = self.terrain_at(c.v[0], c.v[1]);
+                    if z_lo + c.top < z_low {
+                        return false;
+                    }
                     c.z_min = sight.lowest((site, zs, 0.0), (c.outside(), 0.0, 1.0), z_lo);
                     c.z_min < z_lo + c.top
                 });
                 corners
             })
-            .collect()
+            .collect();
+        Lit::new(site, corners)
     }
 
     /// The heights at corner `c` above which the legs from the site (at `zs`) reach it: the

@@ -1,5 +1,6 @@
 //! Unit tests of [`super`].
 
+use super::sources::Lit;
 use super::*;
 use crate::obstacles::Prisms;
 use crate::rays::RainField;
@@ -115,4 +116,88 @@ fn a_corner_across_the_street_from_the_building_in_the_way_diffracts_too() {
         ray.factor
     );
     assert!((ray.length_m - (r1 + r2)).abs() < 1e-9);
+}
+
+#[test]
+fn the_lit_corners_a_pixel_reads_are_exactly_those_inside_its_ellipse() {
+    // Brute force: 2 000 corners scattered over 3 km round the site (every band, every
+    // azimuth, the wrap at -pi included) and 300 pixels, near and far; the bands' look-up
+    // must find the same corners as testing every one.
+    let mut seed = 7u64;
+    let mut next = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let site = [120.0, -40.0];
+    let corner = |v| Corner {
+        v,
+        a0: [1.0, 0.0],
+        ext: 1.5 * PI,
+        top: 10.0,
+        prism: 0,
+        z_min: 0.0,
+    };
+    let mut at = |r: f64| {
+        let (t, s) = (2.0 * PI * next(), r * next().sqrt());
+        [site[0] + s * t.cos(), site[1] + s * t.sin()]
+    };
+    let mut corners: Vec<Corner> = (0..2000).map(|_| corner(at(3000.0))).collect();
+    corners.push(corner([site[0] - 500.0, site[1]])); // azimuth pi exactly
+    let pixels: Vec<[f64; 2]> = (0..300)
+        .map(|k| at(if k % 2 == 0 { 300.0 } else { 4000.0 }))
+        .collect();
+    let lit = Lit::new(site, corners.clone());
+    let mut found = 0;
+    for q in pixels {
+        let d = crate::norm(q[0] - site[0], q[1] - site[1]);
+        let mut want: Vec<[f64; 2]> = corners
+            .iter()
+            .filter(|c| {
+                crate::norm(c.v[0] - site[0], c.v[1] - site[1])
+                    + crate::norm(c.v[0] - q[0], c.v[1] - q[1])
+                    - d
+                    <= EXCESS_M
+            })
+            .map(|c| c.v)
+            .collect();
+        let mut got = Vec::new();
+        lit.near(q, |c| got.push(c.v));
+        let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
+        want.sort_by(key);
+        got.sort_by(key);
+        assert_eq!(got, want, "pixel {q:?}");
+        found += want.len();
+    }
+    // The ellipses select: neither none nor every corner, on the whole.
+    assert!(found > 300 && found < 300 * corners.len() / 2, "{found}");
+}
+
+#[test]
+fn a_lit_corner_far_from_the_site_and_off_the_line_diffracts_inside_its_ellipse() {
+    // Block A (x 0..40, y -30..10) hides the pixel (200, -5) from the site (-600, 0); block B
+    // (x 0..40, y 110..150) stands 100 m across from it. B's south-east corner (40, 110) is
+    // 649 m from the site and 114 m off the straight line, but going round it is only 46 m
+    // longer than the line: it lights the pixel (a street below the roofs lit round a far
+    // corner). With the site 1.2 km away, beyond the lit corners' radius, B sends nothing.
+    let prisms = Prisms::from_boxes(&[
+        [0.0, 40.0, -30.0, 10.0, 100.0],
+        [0.0, 40.0, 110.0, 150.0, 100.0],
+    ])
+    .unwrap();
+    let (x, y) = ([200.0], [-5.0]);
+    let scene = flat_scene(&x, &y, &prisms);
+    let eps = [Complex64::new(5.24, -0.5); 2];
+    let az = |x: f64, y: f64| y.atan2(x).to_degrees();
+    let rays = scene.corner_rays([-600.0, 0.0, 10.0], &eps).unwrap();
+    let ray = rays
+        .iter()
+        .find(|r| (r.az_deg - az(640.0, 110.0)).abs() < 1e-9)
+        .unwrap_or_else(|| panic!("no ray round (40, 110): {rays:?}"));
+    let (r1, r2) = (640.0f64.hypot(110.0), 160.0f64.hypot(115.0));
+    assert!((ray.length_m - (r1 + r2)).abs() < 1e-9);
+    assert!(r1 > 500.0 && r1 + r2 - 800.0f64.hypot(5.0) < EXCESS_M);
+    let far = scene.corner_rays([-1200.0, 0.0, 10.0], &eps).unwrap();
+    assert!(far.iter().all(|r| r.az_deg.abs() < 3.0), "{far:?}"); // A's corners at most
 }
