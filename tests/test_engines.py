@@ -75,6 +75,7 @@ def test_hybrid_is_continuous_across_the_seam(pe_and_rays) -> None:
         assert np.percentile(jump[band], 95) < 1.0
 
 
+@pytest.mark.slow  # the module's PE map (10 s), which the fast tier does not build
 def test_engine_record_and_cone_report(pe_and_rays) -> None:
     hyb, ray = pe_and_rays
     assert hyb.pe_share.shape == hyb.rss_dbm.shape

@@ -19,7 +19,18 @@ def _python_blocks(path: Path) -> list[str]:
     return [b for b in blocks if "--8<--" not in b]  # a script included whole runs as a test
 
 
-@pytest.mark.parametrize("path", [README, *PAGES], ids=lambda p: str(p.relative_to(ROOT)))
+SLOW_PAGES = {"docs/guide/learning.md"}
+"""Pages whose examples train a network (about 10 s): in the full tier only."""
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        pytest.param(p, marks=pytest.mark.slow) if str(p.relative_to(ROOT)) in SLOW_PAGES else p
+        for p in [README, *PAGES]
+    ],
+    ids=lambda p: str(p.relative_to(ROOT)),
+)
 def test_python_blocks_run(path: Path) -> None:
     for block in _python_blocks(path):
         exec(compile(block, str(path), "exec"), {})
