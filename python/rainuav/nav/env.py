@@ -63,9 +63,11 @@ DEFAULT_MIN_DB = 10.0
 
 
 class UAVNavEnv(gym.Env):
-    """UAV navigation over a SINR or SIR map (registered as ``rainuav/UAVNav-v0``), on one level
-    (``Discrete(4)``) or, given a [`LevelField`][rainuav.nav.levelfield.LevelField], among its
-    levels (``Discrete(6)``, registered as ``rainuav/UAVLevels-v0``)."""
+    """UAV navigation over a SINR or SIR map, on one level or among several.
+
+    One level: ``Discrete(4)``, registered as ``rainuav/UAVNav-v0``. Given a
+    [`LevelField`][rainuav.nav.levelfield.LevelField]: among its levels, ``Discrete(6)``,
+    registered as ``rainuav/UAVLevels-v0``."""
 
     metadata = {"render_modes": []}  # noqa: RUF012 - gymnasium's convention
 

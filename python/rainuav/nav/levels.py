@@ -47,8 +47,10 @@ __all__ = ["CLIMB_M_S", "DESCEND_M_S", "LevelField", "UAVLevelsEnv"]
 
 
 class UAVLevelsEnv(UAVNavEnv):
-    """[`UAVNavEnv`][rainuav.nav.env.UAVNavEnv] among the levels of ``field`` (module docstring):
-    ``Discrete(6)``; no behaviour of its own."""
+    """[`UAVNavEnv`][rainuav.nav.env.UAVNavEnv] built among the levels of ``field``.
+
+    ``Discrete(6)`` (module docstring); the constructor with the arguments it has always taken,
+    no behaviour of its own."""
 
     def __init__(
         self,
