@@ -39,7 +39,14 @@ import numpy.typing as npt
 from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
-from rainuav.nav.field import SignalBank, SignalField, SignalSeries, blocked_at, signal_field
+from rainuav.nav.field import (
+    SignalBank,
+    SignalField,
+    SignalSeries,
+    blocked_at,
+    read_signal,
+    signal_field,
+)
 from rainuav.nav.levelfield import (
     CLIMB_M_S,
     DESCEND_M_S,
@@ -60,6 +67,13 @@ it and over the area with its position, time and destination
 
 DEFAULT_MIN_DB = 10.0
 """The outage threshold of a map that names none (the paper's minimum SIR), dB."""
+
+
+def _index(name: str, value: Any, n: int) -> int:
+    """``value`` as an index in ``0..n-1`` (an integer, not a bool), else one line naming it."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 0 <= value < n:
+        raise InvalidInputError(f"{name} must be an integer in 0..{n - 1} (got {value!r})")
+    return int(value)
 
 
 class UAVNavEnv(gym.Env):
@@ -172,12 +186,8 @@ class UAVNavEnv(gym.Env):
             self.stepper = BatchStepper(self.field, self.cfg)
         self.climb_m_s, self.descend_m_s = float(climb_m_s), float(descend_m_s)
         self.levels = self.stepper.field.levels
-        if start_level is not None and not (
-            isinstance(start_level, int | np.integer) and 0 <= start_level < self.levels
-        ):
-            raise InvalidInputError(
-                f"start_level must be an integer in 0..{self.levels - 1} (got {start_level!r})"
-            )
+        if start_level is not None:
+            start_level = _index("start_level", start_level, self.levels)
         self.start_level = start_level
         self.view = None
         if observation == "weather":
@@ -251,10 +261,8 @@ class UAVNavEnv(gym.Env):
 
     def exploration_moves(self, level: Any) -> np.ndarray | None:
         """The moves an exploring UAV draws from: None on one level (every move); among levels
-        (N, 6) bool, every move but a climb from the highest level and a descent from the lowest
-        (each would end the flight at once: random moves would end a sixth of the early flights
-        at the lowest level, before they learn anything; the network's own choices are never
-        restricted)."""
+        (N, 6) bool, all but a climb from the top and a descent from the bottom (random moves
+        would end a sixth of the early flights at once; the network's own are never restricted)."""
         if not self.level_axis:
             return None
         level = np.asarray(level)
@@ -314,9 +322,7 @@ class UAVNavEnv(gym.Env):
         """The signal at ``(x, y)`` at ``t_s`` (in a bank, of world ``world``; on ``level``)."""
         if isinstance(self.field, LevelField):
             return self.field(x, y, t_s, level, world)
-        if isinstance(self.field, SignalBank):
-            return self.field(x, y, t_s, world)
-        return self.field(x, y, t_s)
+        return read_signal(self.field, x, y, t_s, world)
 
     @property
     def position_m(self) -> np.ndarray:
@@ -356,14 +362,13 @@ class UAVNavEnv(gym.Env):
             drawn, goal, world = self.draw_task(self.np_random, goal)
             p = drawn if p is None else p
             if "world" in opts:
-                world = self._world_option(opts["world"])
+                world = _index(
+                    "options['world']", opts["world"], self.field.worlds if self.banked else 1
+                )
         level = opts.get("start_level")
         if level is None:
             level = self.start_level_at(p)
-        if not (isinstance(level, int | np.integer) and 0 <= level < self.levels):
-            raise InvalidInputError(
-                f"options['start_level'] must be an integer in 0..{self.levels - 1}"
-            )
+        level = _index("options['start_level']", level, self.levels)
         if isinstance(self.field, LevelField) and self.field.blocked(p[0], p[1], level):
             raise InvalidInputError(
                 f"the start ({p[0]:g}, {p[1]:g}) is not flyable at level {level} "
@@ -394,12 +399,6 @@ class UAVNavEnv(gym.Env):
                 "obstacles within the clearance of the flight height)"
             )
         return p
-
-    def _world_option(self, value: Any) -> int:
-        n = self.field.worlds if self.banked else 1
-        if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 0 <= value < n:
-            raise InvalidInputError(f"options['world'] must be an integer in 0..{n - 1}")
-        return int(value)
 
     def _info(self, signal: float, arrived: bool = False) -> dict[str, Any]:
         assert self.cfg.min_db is not None  # resolved in __init__

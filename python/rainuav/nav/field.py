@@ -26,6 +26,7 @@ __all__ = [
     "SirField",
     "blocked_at",
     "pixel_index",
+    "read_signal",
     "signal_field",
 ]
 
@@ -108,6 +109,14 @@ def blocked_at(field: Any, x: Any, y: Any) -> np.ndarray:
     if mask is None:
         return np.zeros(np.broadcast(np.asarray(x), np.asarray(y)).shape, dtype=bool)
     return mask[pixel_index(mask.shape, field.extent, x, y)]
+
+
+def read_signal(field: Any, x: Any, y: Any, t_s: Any, world: Any = None) -> Any:
+    """The signal of ``field`` (a map, maps in time or a bank) at ``(x, y)`` at ``t_s``; in a
+    bank, of world ``world`` (default 0), which the others do not take."""
+    if isinstance(field, SignalBank):
+        return field(x, y, t_s, 0 if world is None else world)
+    return field(x, y, t_s)
 
 
 def _lerp(g: np.ndarray, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import SignalBank, SignalField, SignalSeries, blocked_at
+from rainuav.nav.field import SignalBank, SignalField, SignalSeries, blocked_at, read_signal
 from rainuav.nav.task import MOVES, NavConfig, base_reward
 
 __all__ = [
@@ -133,13 +133,7 @@ class LevelField:
     def every_level(self, x: Any, y: Any, t_s: Any, world: Any = None) -> np.ndarray:
         """(N, L, M): every level's signal at the points ``(x, y)`` (N, M), row n at
         ``t_s[n]`` (N, 1) in world ``world[n]`` (N, 1; a field of banks)."""
-        return np.stack([self._read(f, x, y, t_s, world) for f in self.fields], axis=1)
-
-    @staticmethod
-    def _read(f: Any, x: Any, y: Any, t: Any, world: Any) -> np.ndarray:
-        if isinstance(f, SignalBank):
-            return f(x, y, t, 0 if world is None else world)
-        return f(x, y, t)
+        return np.stack([read_signal(f, x, y, t_s, world) for f in self.fields], axis=1)
 
     @classmethod
     def from_stack(
@@ -186,7 +180,7 @@ class LevelField:
         out = np.empty(x.shape)
         for k in np.unique(lv):
             on = lv == k
-            out[on] = self._read(self.fields[int(k)], x[on], y[on], t[on], w[on])
+            out[on] = read_signal(self.fields[int(k)], x[on], y[on], t[on], w[on])
         return out
 
     def serving_cell(self, x: Any, y: Any, t_s: Any, level: Any) -> np.ndarray:

@@ -22,7 +22,7 @@ from rainuav import _core
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField
-from rainuav.nav.levelfield import CLIMB_M_S, DESCEND_M_S, LevelField, level_durations
+from rainuav.nav.levelfield import CLIMB_M_S, DESCEND_M_S, level_durations
 from rainuav.nav.task import NavConfig
 
 __all__ = [
@@ -228,7 +228,7 @@ def optimal_among_levels(
     and task (its levels' maps, or maps in time, and masks) from each start (N, 2), at
     ``start_levels`` (N,; default where the env starts a flight there:
     [`UAVNavEnv.start_level_at()`][rainuav.nav.env.UAVNavEnv.start_level_at])."""
-    if not (isinstance(env, UAVNavEnv) and isinstance(env.field, LevelField)):
+    if not (isinstance(env, UAVNavEnv) and env.level_axis):
         raise InvalidInputError(
             f"env must be a UAVNavEnv among levels, on a LevelField (got {type(env).__name__})"
         )

@@ -37,7 +37,7 @@ import gymnasium as gym
 import numpy as np
 
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import SignalBank, blocked_at
+from rainuav.nav.field import blocked_at, read_signal
 from rainuav.nav.levelfield import LevelField
 from rainuav.nav.task import NavConfig
 
@@ -190,7 +190,7 @@ class WeatherView:
         else:
 
             def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-                return field(x, y, ts, w) if isinstance(field, SignalBank) else field(x, y, ts)
+                return read_signal(field, x, y, ts, w)
 
         area = field.at_points(self.area_points(field.extent), ts[:, 0], w[:, 0])
         frac = np.broadcast_to(np.asarray(t), (n,)).astype(np.float32) / np.float32(max_steps)

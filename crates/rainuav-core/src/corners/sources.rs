@@ -13,6 +13,9 @@ use super::{
 use crate::rays::RayScene;
 use crate::sight::Sight;
 
+/// A lit corner with its azimuth (rad, in `[-pi, pi]`) and distance (m) from the site.
+type Placed = (f64, f64, Corner);
+
 /// The corners the site lights, for the pixels to look up those within their ellipse
 /// ([`EXCESS_M`]): in bands of distance from the site (band 0 within `EXCESS_M / 2`, where
 /// every corner is inside every pixel's ellipse; band `k` from `EXCESS_M 2^(k-2)` to twice
@@ -21,14 +24,14 @@ use crate::sight::Sight;
 /// [`EXCESS_M`]): no corner at `r` or farther outside that lies inside the ellipse.
 pub(super) struct Lit {
     site: [f64; 2],
-    /// Each band's inner radius and its corners with their azimuths (rad, in `[-pi, pi]`).
-    bands: Vec<(f64, Vec<(f64, Corner)>)>,
+    /// Each band's inner radius and its corners, sorted by azimuth.
+    bands: Vec<(f64, Vec<Placed>)>,
 }
 
 impl Lit {
     pub(super) fn new(site: [f64; 2], corners: Vec<Corner>) -> Self {
         let half = 0.5 * EXCESS_M;
-        let mut bands: Vec<(f64, Vec<(f64, Corner)>)> = Vec::new();
+        let mut bands: Vec<(f64, Vec<Placed>)> = Vec::new();
         for c in corners {
             let (dx, dy) = (c.v[0] - site[0], c.v[1] - site[1]);
             let r = crate::norm(dx, dy);
@@ -45,7 +48,7 @@ impl Lit {
                 };
                 bands.push((inner, Vec::new()));
             }
-            bands[k].1.push((dy.atan2(dx), c));
+            bands[k].1.push((dy.atan2(dx), r, c));
         }
         for (_, band) in &mut bands {
             band.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -60,8 +63,7 @@ impl Lit {
         let d = crate::norm(dx, dy);
         let aq = dy.atan2(dx);
         let e = EXCESS_M;
-        let mut visit = |c: &Corner| {
-            let r1 = crate::norm(c.v[0] - self.site[0], c.v[1] - self.site[1]);
+        let mut visit = |&(_, r1, ref c): &Placed| {
             if r1 + crate::norm(c.v[0] - q[0], c.v[1] - q[1]) - d <= e {
                 f(c);
             }
@@ -76,16 +78,16 @@ impl Lit {
                 continue;
             }
             if g <= -1.0 {
-                band.iter().for_each(|(_, c)| visit(c));
+                band.iter().for_each(&mut visit);
                 continue;
             }
             let w = g.acos();
             let mut read = |lo: f64, hi: f64| {
-                let i = band.partition_point(|(a, _)| *a < lo);
+                let i = band.partition_point(|(a, _, _)| *a < lo);
                 band[i..]
                     .iter()
-                    .take_while(|(a, _)| *a <= hi)
-                    .for_each(|(_, c)| visit(c));
+                    .take_while(|(a, _, _)| *a <= hi)
+                    .for_each(&mut visit);
             };
             let (lo, hi) = (aq - w, aq + w);
             read(lo.max(-PI), hi.min(PI));
