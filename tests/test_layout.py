@@ -24,6 +24,7 @@ BASE = {"errors", "_io", "_checks", "_sampling", "_core", "_cli"}
 LAYERS = {
     "base": 0,
     "medium": 1,
+    "signals": 1,
     "antenna": 1,
     "geo": 1,
     "missions": 2,

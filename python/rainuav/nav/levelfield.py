@@ -18,6 +18,7 @@ from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.field import SignalBank, SignalField, SignalSeries, blocked_at, read_signal
 from rainuav.nav.task import MOVES, NavConfig, base_reward
+from rainuav.signals import Signal
 
 __all__ = [
     "CLIMB_M_S",
@@ -25,6 +26,7 @@ __all__ = [
     "LEVEL_ACTIONS",
     "LevelField",
     "LevelStepper",
+    "field_of",
     "level_durations",
 ]
 
@@ -301,3 +303,40 @@ class LevelStepper:
             "duration": duration,
             "t_s": t_s,
         }
+
+
+def field_of(signal: Signal) -> SignalField | SignalSeries | SignalBank | LevelField:
+    """The field the environment and the planner read of one
+    [`Signal`][rainuav.signals.Signal], by its axes' sizes: one level gives a map
+    ([`SignalField`][rainuav.nav.field.SignalField]), maps in time
+    ([`SignalSeries`][rainuav.nav.field.SignalSeries]) or, with several worlds, a bank
+    ([`SignalBank`][rainuav.nav.field.SignalBank]); several levels give a
+    [`LevelField`][rainuav.nav.levelfield.LevelField] of those. The values are the signal's, bit
+    for bit. A bank flies over open ground: a signal of several worlds with a closed pixel is
+    refused."""
+    if not isinstance(signal, Signal):
+        raise InvalidInputError(f"signal must be a rainuav.signals.Signal (got {type(signal)})")
+    v, name, mask, srv = signal.values, signal.name, signal.not_flyable, signal.serving_cell
+    p, t, lv = v.shape[:3]
+    t_s = signal.t_s
+    if p > 1:
+        if mask is not None and mask.any():
+            raise InvalidInputError(
+                "not_flyable: a signal of several worlds (a bank of storms) flies over open "
+                "ground, with no pixel closed"
+            )
+        if lv > 1:
+            return LevelField.bank(v, t_s, signal.extent_m, signal.altitudes_m)
+        return SignalBank(v[:, :, 0], t_s, signal.extent_m, name)
+    if lv > 1:
+        return LevelField.from_stack(
+            v[0, 0] if t == 1 else v[0], signal.altitudes_m, signal.extent_m,
+            t_s=None if t == 1 else t_s, not_flyable=mask,
+            serving_cell=None if srv is None else (srv[0, 0] if t == 1 else srv[0]),
+        )  # fmt: skip
+    m = None if mask is None else mask[0]
+    if t == 1:
+        s = None if srv is None else srv[0, 0, 0]
+        return SignalField(v[0, 0, 0], signal.extent_m, name, s, m)
+    s = None if srv is None else srv[0, :, 0]
+    return SignalSeries(v[0, :, 0], t_s, signal.extent_m, name, s, m)

@@ -1,0 +1,96 @@
+"""The radio maps as one [`Signal`][rainuav.signals.Signal] (axes ``world, time, level, north,
+east``): [`signal_of()`][rainuav.radio.outputs.signals.signal_of] for a built map, maps in time or
+the maps of every level, and [`load_signal()`][rainuav.radio.outputs.signals.load_signal] for a
+file of any of them: the signal file (``signal.npz``) and the three files the maps are saved in
+(``radiomap.npz``, ``radiomap_series.npz``, ``radiolevels.npz``), which keep loading as they
+are."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from rainuav.errors import InvalidInputError
+from rainuav.radio.outputs.levelmaps import LevelStack, RadioLevels, RadioLevelSeries
+from rainuav.radio.outputs.mapdata import RadioMap
+from rainuav.radio.outputs.timemap import RadioMapSeries
+from rainuav.radio.scene.terrain import map_mask
+from rainuav.signals import Signal, read_arrays, signal_meta
+
+__all__ = ["load_signal", "signal_of"]
+
+SIGNALS = ("sinr", "sir")
+
+
+def _scenario_toml(obj: Any) -> str:
+    scn = getattr(obj, "scenario", None)
+    return scn.to_toml_string() if scn is not None else ""
+
+
+def signal_of(source: Any, signal: str = "sinr") -> Signal:
+    """The ``signal`` (``"sinr"`` or ``"sir"``) of a built map
+    ([`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap]), maps in time
+    ([`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries]) or the maps of every level
+    ([`RadioLevels`][rainuav.radio.outputs.levelmaps.RadioLevels],
+    [`RadioLevelSeries`][rainuav.radio.outputs.levelmaps.RadioLevelSeries],
+    [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack], which hold SINR alone), with its
+    serving cells and not-flyable pixels, as one signal. The values are the source's, bit for
+    bit."""
+    if signal not in SIGNALS:
+        raise InvalidInputError(f"signal must be one of {SIGNALS} (got {signal!r})")
+    name = f"{signal}_db"
+    if isinstance(source, RadioMap):
+        nf = None if source.not_flyable is None else source.not_flyable[None]
+        return Signal.from_axes(getattr(source, name), ("north", "east"), source.extent_m,
+                                altitudes_m=[source.altitude_m], serving_cell=source.serving_cell,
+                                name=name, not_flyable=nf,
+                                scenario_toml=_scenario_toml(source))  # fmt: skip
+    if isinstance(source, RadioMapSeries):
+        a = source.scenario.area
+        extent = (a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m)
+        mask = map_mask(source.scenario)  # the ground's, the same at every instant
+        nf = None if mask is None else mask[None]
+        return Signal.from_axes(getattr(source, name), ("time", "north", "east"), extent,
+                                t_s=source.t_s, altitudes_m=[source.scenario.area.altitude_m],
+                                serving_cell=source.serving_cell, name=name, not_flyable=nf,
+                                scenario_toml=_scenario_toml(source))  # fmt: skip
+    if isinstance(source, RadioLevels | RadioLevelSeries | LevelStack):
+        if signal != "sinr":
+            raise InvalidInputError("the maps of every level hold SINR alone (signal='sinr')")
+        if isinstance(source, RadioLevels):
+            source = LevelStack.of(source, source.maps[0].scenario)
+        t = getattr(source, "t_s", None)
+        dims = ("level", "north", "east") if t is None else ("time", "level", "north", "east")
+        return Signal.from_axes(source.sinr_db, dims, source.extent,
+                                t_s=(0.0,) if t is None else t, altitudes_m=source.altitudes_m,
+                                serving_cell=source.serving_cell, name=name,
+                                not_flyable=np.asarray(source.not_flyable, bool),
+                                scenario_toml=_scenario_toml(source))  # fmt: skip
+    raise InvalidInputError(
+        "source must be a RadioMap, RadioMapSeries, RadioLevels, RadioLevelSeries or LevelStack "
+        f"(got {type(source).__name__})"
+    )
+
+
+def load_signal(path: str | os.PathLike[str], signal: str = "sinr") -> Signal:
+    """The signal a file holds: a signal file
+    ([`Signal.save()`][rainuav.signals.Signal.save]), or a map, maps in time or the maps of
+    every level as the radio maps save them (read and checked by their own loaders, then
+    [`signal_of()`][rainuav.radio.outputs.signals.signal_of]; ``signal`` picks SINR or SIR where
+    the file holds both). Anything else is one line naming the file."""
+    data = read_arrays(path, "signal or radio map file")
+    if signal_meta(data) is not None:
+        return Signal.load(path)
+    keys = set(data)
+    if {"altitudes_m", "sinr_db", "not_flyable"} <= keys:
+        return signal_of(LevelStack.load(path), signal)
+    if {"t_s", "rss_dbm", "sinr_db"} <= keys:
+        return signal_of(RadioMapSeries.load(path), signal)
+    if {"rss_dbm", "sinr_db", "altitude_m"} <= keys:
+        return signal_of(RadioMap.load(path), signal)
+    raise InvalidInputError(
+        f"{path}: neither a signal file nor a radio map, maps in time or maps of every level "
+        "(rainuav's signal.npz, radiomap.npz, radiomap_series.npz or radiolevels.npz)"
+    )

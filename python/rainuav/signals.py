@@ -1,0 +1,277 @@
+"""One signal with named axes: the maps a UAV flies through, whatever their dimensions.
+
+A [`Signal`][rainuav.signals.Signal] holds one array of a signal in dB (SINR by default) over
+the axes [`AXES`][rainuav.signals.AXES], ``(world, time, level, north, east)``, and what reading
+it needs: the instants of the time axis, the altitudes of the level axis, the area, the
+serving cell of every value and the pixels a UAV may not enter at each level. A plain map has
+size 1 on the first three axes; maps in time (a storm that moves) have ``time > 1``; the maps of
+every flight level have ``level > 1``; a bank of storms flown at once has ``world > 1``.
+
+One file format holds any of them (``signal.npz``:
+[`Signal.save()`][rainuav.signals.Signal.save], [`Signal.load()`][rainuav.signals.Signal.load]);
+[`rainuav.radio.outputs.signals.load_signal()`][rainuav.radio.outputs.signals.load_signal] also
+reads the three files the radio maps are saved in (``radiomap.npz``, ``radiomap_series.npz``,
+``radiolevels.npz``), and [`rainuav.nav.levelfield.field_of()`][rainuav.nav.levelfield.field_of]
+turns a signal into the field the environment and the planner read.
+
+Files are data: read without pickles, every array checked (shapes, finite values, the axes'
+order), a bad file refused in one line naming it and the field."""
+
+from __future__ import annotations
+
+import json
+import os
+import zipfile
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from rainuav._io import write_atomic
+from rainuav.errors import InvalidInputError
+
+__all__ = ["AXES", "FORMAT", "FORMAT_VERSION", "Signal"]
+
+AXES = ("world", "time", "level", "north", "east")
+"""The axes of every signal, in the order its array holds them."""
+FORMAT = "rainuav.signal"
+"""What a signal file says it is (its ``format`` entry)."""
+FORMAT_VERSION = 1
+"""Version of the layout [`Signal.save()`][rainuav.signals.Signal.save] writes."""
+
+
+def _extent(extent_m: Any) -> tuple[float, float, float, float]:
+    e = np.asarray(extent_m, dtype=np.float64)
+    if e.shape != (4,) or not np.all(np.isfinite(e)) or not (e[1] > e[0] and e[3] > e[2]):
+        raise InvalidInputError(
+            f"extent_m must be (x_min, x_max, y_min, y_max) with x_max > x_min and y_max > y_min "
+            f"(got {extent_m!r})"
+        )
+    return (float(e[0]), float(e[1]), float(e[2]), float(e[3]))
+
+
+def _axis(name: str, v: Any, n: int) -> np.ndarray:
+    """The coordinates of an axis of size ``n``: finite, strictly increasing."""
+    a = np.asarray(v, dtype=np.float64).reshape(-1)
+    if a.shape != (n,) or not np.all(np.isfinite(a)) or np.any(np.diff(a) <= 0):
+        raise InvalidInputError(
+            f"{name} must be {n} finite, strictly increasing values (got shape {a.shape})"
+        )
+    a = np.ascontiguousarray(a)
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Signal:
+    """A signal in dB over ``(world, time, level, north, east)`` (module docs). Checked when
+    made: anything out of shape or not finite is one line naming the field."""
+
+    values: npt.NDArray[np.floating]
+    """(P, T, L, H, W), dB, finite: world, time, level, north (rows, south first), east."""
+    extent_m: tuple[float, float, float, float]
+    """(x_min, x_max, y_min, y_max), m: the area the pixels tile."""
+    t_s: npt.NDArray[np.float64]
+    """(T,) the instants of the time axis, s, strictly increasing (``[0.0]`` for one)."""
+    altitudes_m: npt.NDArray[np.float64]
+    """(L,) the altitudes of the level axis, m, strictly increasing."""
+    name: str = "sinr_db"
+    """Which signal: ``"sinr_db"`` or ``"sir_db"``."""
+    serving_cell: npt.NDArray[np.integer] | None = None
+    """The values' shape: the serving cell of each (-1: none); None: not known."""
+    not_flyable: npt.NDArray[np.bool_] | None = None
+    """(L, H, W): the pixels a UAV may not enter at each level; None: all open."""
+    scenario_toml: str = ""
+    """The scenario the signal was built from, as TOML ('' for none): metadata, never read
+    back as code."""
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.values)
+        if v.ndim != len(AXES) or min(v.shape) < 1 or v.dtype.kind != "f":
+            raise InvalidInputError(
+                f"values must be a floating {len(AXES)}-D array over {AXES} (got {v.dtype} "
+                f"of shape {v.shape})"
+            )
+        if not np.all(np.isfinite(v)):
+            raise InvalidInputError("values must be finite everywhere (no NaN or inf)")
+        if self.name not in ("sinr_db", "sir_db"):
+            raise InvalidInputError(f"name must be 'sinr_db' or 'sir_db' (got {self.name!r})")
+        _, t, lv, h, w = v.shape
+        put = object.__setattr__  # frozen: the checked forms replace what was handed in
+        put(self, "values", np.ascontiguousarray(v))
+        put(self, "extent_m", _extent(self.extent_m))
+        put(self, "t_s", _axis("t_s", self.t_s, t))
+        put(self, "altitudes_m", _axis("altitudes_m", self.altitudes_m, lv))
+        if self.serving_cell is not None:
+            s = np.asarray(self.serving_cell)
+            if s.shape != v.shape or s.dtype.kind not in "iu":
+                raise InvalidInputError(
+                    f"serving_cell must be an integer array of the values' shape {v.shape} "
+                    f"(got {s.dtype} of shape {s.shape})"
+                )
+            put(self, "serving_cell", np.ascontiguousarray(s))
+        if self.not_flyable is not None:
+            m = np.asarray(self.not_flyable)
+            if m.shape != (lv, h, w) or m.dtype != bool:
+                raise InvalidInputError(
+                    f"not_flyable must be a bool (level, north, east) = {(lv, h, w)} array "
+                    f"(got {m.dtype} of shape {m.shape})"
+                )
+            put(self, "not_flyable", np.ascontiguousarray(m))
+
+    @classmethod
+    def from_axes(
+        cls,
+        values: npt.ArrayLike,
+        dims: tuple[str, ...],
+        extent_m: Any,
+        *,
+        t_s: npt.ArrayLike = (0.0,),
+        altitudes_m: npt.ArrayLike = (0.0,),
+        serving_cell: npt.ArrayLike | None = None,
+        **meta: Any,
+    ) -> Signal:
+        """The signal of an array whose axes ``dims`` name (any of [`AXES`][rainuav.signals.AXES],
+        each once, ``north`` and ``east`` among them, in any order): moved into the signal's order,
+        the axes it lacks added with size 1. ``serving_cell``, if given, has ``values``' axes.
+        E.g. ``Signal.from_axes(sinr, ("level", "north", "east"), extent, altitudes_m=alts)``."""
+        bad = [d for d in dims if d not in AXES]
+        if bad or len(set(dims)) != len(dims) or not {"north", "east"} <= set(dims):
+            raise InvalidInputError(
+                f"dims must name each axis once, north and east among them, from {AXES} "
+                f"(got {dims!r})"
+            )
+
+        def canonical(a: npt.ArrayLike, what: str) -> np.ndarray:
+            arr = np.asarray(a)
+            if arr.ndim != len(dims):
+                raise InvalidInputError(
+                    f"{what} must have one axis a name of dims {dims} (got shape {arr.shape})"
+                )
+            order = [dims.index(d) for d in AXES if d in dims]
+            arr = np.transpose(arr, order)
+            return arr.reshape([arr.shape[order.index(dims.index(d))] if d in dims else 1
+                                for d in AXES])  # fmt: skip
+
+        v = canonical(values, "values")
+        s = None if serving_cell is None else canonical(serving_cell, "serving_cell")
+        return cls(v, extent_m, np.asarray(t_s, np.float64), np.asarray(altitudes_m, np.float64),
+                   serving_cell=s, **meta)  # fmt: skip
+
+    @property
+    def sizes(self) -> dict[str, int]:
+        """Each axis's size, by name."""
+        return dict(zip(AXES, self.values.shape, strict=True))
+
+    def take(self, *, world: int | None = None, time: int | None = None,
+             level: int | None = None) -> Signal:  # fmt: skip
+        """The signal at one world, instant or level (each given index keeps its axis, with size
+        1); e.g. ``take(level=0)``: the lowest level's signal."""
+        idx: list[Any] = [slice(None)] * len(AXES)
+        for k, (axis, i) in enumerate((("world", world), ("time", time), ("level", level))):
+            if i is not None:
+                n = self.values.shape[k]
+                if not isinstance(i, int | np.integer) or not -n <= i < n:
+                    raise InvalidInputError(f"{axis} must be an index in 0..{n - 1} (got {i!r})")
+                idx[k] = slice(int(i) % n, int(i) % n + 1)
+        at = tuple(idx)
+        lv = at[2]
+        return replace(
+            self,
+            values=self.values[at],
+            t_s=self.t_s[at[1]],
+            altitudes_m=self.altitudes_m[lv],
+            serving_cell=None if self.serving_cell is None else self.serving_cell[at],
+            not_flyable=None if self.not_flyable is None else self.not_flyable[lv],
+        )
+
+    def to_xarray(self) -> Any:
+        """The values as an ``xarray.DataArray`` with the axes named and their coordinates
+        (instants, altitudes, the pixels' centres in m); needs xarray (the ``weather`` extra)."""
+        try:
+            import xarray as xr
+        except ImportError as err:  # pragma: no cover - depends on the installed extras
+            raise InvalidInputError(
+                "to_xarray needs xarray: pip install 'rainuav[weather]'"
+            ) from err
+        p, _, _, h, w = self.values.shape
+        x0, x1, y0, y1 = self.extent_m
+        coords = {
+            "world": np.arange(p),
+            "time": self.t_s,
+            "level": self.altitudes_m,
+            "north": y0 + (np.arange(h) + 0.5) * (y1 - y0) / h,
+            "east": x0 + (np.arange(w) + 0.5) * (x1 - x0) / w,
+        }
+        return xr.DataArray(self.values, coords=coords, dims=AXES, name=self.name)
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Writes the signal as one .npz (``signal.npz``; no pickles), atomically."""
+        arrays: dict[str, Any] = {
+            "values": self.values,
+            "t_s": self.t_s,
+            "altitudes_m": self.altitudes_m,
+            "extent_m": np.asarray(self.extent_m, np.float64),
+            "meta_json": np.asarray(json.dumps({
+                "format": FORMAT, "format_version": FORMAT_VERSION, "axes": list(AXES),
+                "name": self.name, "scenario_toml": self.scenario_toml,
+            })),
+        }  # fmt: skip
+        if self.serving_cell is not None:
+            arrays["serving_cell"] = self.serving_cell
+        if self.not_flyable is not None:
+            arrays["not_flyable"] = self.not_flyable
+
+        def write(tmp: Path) -> None:
+            with tmp.open("wb") as fh:
+                np.savez(fh, **arrays)
+
+        return write_atomic(path, write)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> Signal:
+        """Reads a file written by [`save()`][rainuav.signals.Signal.save] (bit-exact round
+        trip), checked; anything else is one line naming the file."""
+        data = read_arrays(path, "signal file")
+        meta = signal_meta(data)
+        if meta is None:
+            raise InvalidInputError(f"{path}: not a rainuav signal file (no {FORMAT} metadata)")
+        if meta.get("format_version") != FORMAT_VERSION or meta.get("axes") != list(AXES):
+            raise InvalidInputError(
+                f"{path}: a signal file of format version {meta.get('format_version')!r} with "
+                f"axes {meta.get('axes')!r}; this version reads {FORMAT_VERSION} with {AXES}"
+            )
+        missing = {"values", "t_s", "altitudes_m", "extent_m"} - set(data)
+        if missing:
+            raise InvalidInputError(
+                f"{path}: not a rainuav signal file (missing {sorted(missing)})"
+            )
+        try:
+            return cls(data["values"], data["extent_m"], data["t_s"], data["altitudes_m"],
+                       str(meta.get("name", "")), data.get("serving_cell"),
+                       data.get("not_flyable"), str(meta.get("scenario_toml", "")))  # fmt: skip
+        except InvalidInputError as err:
+            raise InvalidInputError(f"{path}: {err}") from None
+
+
+def read_arrays(path: str | os.PathLike[str], what: str) -> dict[str, np.ndarray]:
+    """Every array of an .npz, read without pickles, or one line naming the file."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+        raise InvalidInputError(f"{path}: not a readable {what} ({err})") from err
+
+
+def signal_meta(data: dict[str, np.ndarray]) -> dict[str, Any] | None:
+    """A signal file's metadata (its ``meta_json``), or None where the arrays are not one."""
+    raw = data.get("meta_json")
+    if raw is None or raw.dtype.kind != "U" or raw.ndim != 0:
+        return None
+    try:
+        meta = json.loads(str(raw))
+    except json.JSONDecodeError:
+        return None
+    return meta if isinstance(meta, dict) and meta.get("format") == FORMAT else None
