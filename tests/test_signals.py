@@ -195,3 +195,32 @@ def test_bad_signals_and_files_are_refused_in_one_line(tmp_path: Path) -> None:
             load_signal(tmp_path / name)
         assert "\n" not in str(err.value) and name in str(err.value)
     assert dataclasses.is_dataclass(load_signal(tmp_path / "ok.npz"))
+
+
+def test_a_world_of_a_signal_flies_as_the_world_of_its_source(series, tmp_path: Path) -> None:
+    """world_from reads every kind as one signal: a world made of the signal of a series flies
+    exactly as the world of the series (the planner's return to 1e-9, the same threshold from
+    the scenario's name), and is saved and read back with a run as signal.npz."""
+    from rainuav.nav import planner
+    from rainuav.nav.task import NavConfig
+    from rainuav.world import load_world, world_from
+
+    task = NavConfig(goal_m=(1800.0, 1800.0), max_steps=60)
+    a, b = world_from(series, task), world_from(signal_of(series), task)
+    assert a.task.min_db == b.task.min_db == -2.0  # the storm preset's documented threshold
+    starts = [(150.0, 250.0), (900.0, 150.0), (250.0, 1100.0)]
+    ra = [planner.optimal(a.env(), s).return_ for s in starts]
+    rb = [planner.optimal(b.env(), s).return_ for s in starts]
+    assert np.allclose(ra, rb, rtol=0, atol=1e-9)
+    assert b.save(tmp_path).name == "signal.npz"
+    c = load_world(tmp_path, dataclasses.replace(spec_for(task)))
+    assert isinstance(c.source, Signal)
+    assert np.allclose([planner.optimal(c.env(), s).return_ for s in starts], ra, atol=1e-9)
+    with pytest.raises(InvalidInputError, match="task.signal is 'sir'"):
+        world_from(signal_of(series), dataclasses.replace(task, signal="sir"))
+
+
+def spec_for(task):
+    from rainuav.world import WorldSpec
+
+    return WorldSpec(task=task)

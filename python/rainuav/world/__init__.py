@@ -25,26 +25,28 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+import tomllib
 
 from rainuav._checks import check_field_kinds
 from rainuav._cli import altitude_band
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalBank, SignalField, SignalSeries
+from rainuav.nav.levelfield import field_of
 from rainuav.nav.levels import LevelField
 from rainuav.nav.task import NavConfig, check_config, check_task
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio.engines import ENGINES as RADIO_ENGINES
 from rainuav.radio.engines import for_time
 from rainuav.radio.outputs.levelmaps import LevelStack
-from rainuav.radio.outputs.mapdata import RadioMap
+from rainuav.radio.outputs.mapdata import RadioMap, default_min_db
 from rainuav.radio.outputs.maps import build_radio_map
+from rainuav.radio.outputs.signals import signal_of
 from rainuav.radio.outputs.timemap import RadioMapSeries, build_radio_map_series, series_times
 from rainuav.radio.scene import presets
 from rainuav.radio.scene.scenario import Scenario
 from rainuav.radio.scene.storms import check_storm_seed
-from rainuav.radio.scene.terrain import map_mask
+from rainuav.signals import Signal
 
 __all__ = [
     "MAP_FILES",
@@ -66,10 +68,12 @@ __all__ = [
     "world_from",
 ]
 
-MAP_FILES = ("radiomap.npz", "radiomap_series.npz", "radiolevels.npz")
-"""The files a world's signal is saved in: a single map, maps in time, or the maps of every
+MAP_FILES = ("radiomap.npz", "radiomap_series.npz", "radiolevels.npz", "signal.npz")
+"""The files a world's signal is saved in: a single map, maps in time, the maps of every
 flight level
-([`rainuav.radio.outputs.levelmaps.LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack])."""
+([`rainuav.radio.outputs.levelmaps.LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack]), or
+a world made of a [`Signal`][rainuav.signals.Signal]."""
+_SOURCES = (RadioMap, RadioMapSeries, LevelStack, Signal)
 ENGINES = ("", *RADIO_ENGINES)
 MAX_POOL = 64
 """The most storms flown at once (each holds its maps in time: about 20 MB)."""
@@ -239,7 +243,7 @@ def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
 class World:
     """A signal (one map, or maps in time) and the task flown on it (``min_db`` resolved)."""
 
-    source: RadioMap | RadioMapSeries | LevelStack | None
+    source: RadioMap | RadioMapSeries | LevelStack | Signal | None
     """What the signal is read from (saved with a run; None for a storm pool's bank)."""
     field: SignalField | SignalSeries | SignalBank | LevelField
     """The signal the UAV flies through (a [`LevelField`][rainuav.nav.levelfield.LevelField] where
@@ -278,41 +282,35 @@ class World:
         atomically (a storm pool's storms are not saved: their seeds rebuild them)."""
         if self.source is None:
             return None
-        kinds = (RadioMap, RadioMapSeries, LevelStack)
-        name = next(n for n, k in zip(MAP_FILES, kinds, strict=True) if isinstance(self.source, k))
+        kind = next(k for k in _SOURCES if isinstance(self.source, k))
+        name = MAP_FILES[_SOURCES.index(kind)]
         return self.source.save(Path(folder) / name)
 
 
 def world_from(source: Any, task: NavConfig) -> World:
-    """The world of a built map or series and a task (``min_db`` unset: the scenario's
-    documented threshold for the signal flown)."""
+    """The world of a built map, series or stack of levels, or of a
+    [`Signal`][rainuav.signals.Signal], and a task (``min_db`` unset: the scenario's documented
+    threshold for the signal flown). Every kind is read as one signal
+    ([`signal_of()`][rainuav.radio.outputs.signals.signal_of]) and flown through the field its
+    axes ask for ([`field_of()`][rainuav.nav.levelfield.field_of])."""
     signal = task.signal
-    field: SignalField | SignalSeries | LevelField
-    if isinstance(source, LevelStack):  # altitude as a decision: the SINR of every level
-        field = LevelField.from_stack(source.sinr_db, source.altitudes_m, source.extent,
-                                      t_s=source.t_s, not_flyable=source.not_flyable,
-                                      serving_cell=source.serving_cell)  # fmt: skip
-    elif isinstance(source, RadioMapSeries):
-        field = SignalSeries(
-            getattr(source, f"{signal}_db"),
-            source.t_s,
-            _extent(source.scenario),
-            f"{signal}_db",
-            source.serving_cell,
-            map_mask(source.scenario),
-        )
-    elif isinstance(source, RadioMap):
-        field = SignalField(
-            getattr(source, f"{signal}_db"), source.extent_m, f"{signal}_db",
-            source.serving_cell, source.not_flyable,
-        )  # fmt: skip
+    if isinstance(source, Signal):
+        if source.name != f"{signal}_db":
+            raise InvalidInputError(
+                f"task.signal is {signal!r} but the signal given is {source.name}"
+            )
+        sig = source
+    elif isinstance(source, RadioMap | RadioMapSeries | LevelStack):
+        sig = signal_of(source, signal, scenario_toml=False)
     else:
         raise InvalidInputError(
-            f"a world needs a RadioMap, RadioMapSeries or LevelStack (got {type(source).__name__})"
+            "a world needs a RadioMap, RadioMapSeries, LevelStack or Signal (got "
+            f"{type(source).__name__})"
         )
+    field = field_of(sig)
     min_db = task.min_db
-    if min_db is None:  # the same rule for a map and a series (by the scenario's name)
-        min_db = RadioMap.default_min_db(source, signal)  # type: ignore[arg-type]
+    if min_db is None:  # the same rule for every kind (by the scenario's name)
+        min_db = default_min_db(_scenario_name(source), signal)
     if task.reward == "chance":  # outage as a probability: a map corrected by measurements
         if not isinstance(field, SignalField) or getattr(source, "rss_std_db", None) is None:
             raise InvalidInputError(
@@ -346,26 +344,13 @@ def level_field(
     [`build_radio_level_series()`][rainuav.radio.outputs.levelmaps.build_radio_level_series] (engine
     'pe' then becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps
     flown once (a storm pool's), not kept in the map cache."""
-    from rainuav.nav.levels import LevelField
     from rainuav.radio.outputs.levelmaps import build_radio_level_series, build_radio_levels
 
     if times_s is None:
         stack = build_radio_levels(scn, progress=progress, cache=cache)
-        serving = np.stack([m.serving_cell for m in stack.maps])
-        field = LevelField.from_stack(
-            stack.sinr_db,
-            stack.altitudes_m,
-            stack.extent,
-            not_flyable=stack.not_flyable,
-            serving_cell=serving,
-        )
-        return field, stack
-    scn = for_time(scn)
-    series = build_radio_level_series(scn, times_s, progress=progress, cache=cache)
-    field = LevelField.from_stack(series.sinr_db, series.altitudes_m, series.extent,
-                                  t_s=series.t_s, not_flyable=series.not_flyable,
-                                  serving_cell=series.serving_cell)  # fmt: skip
-    return field, series
+    else:
+        stack = build_radio_level_series(for_time(scn), times_s, progress=progress, cache=cache)
+    return field_of(signal_of(stack, scenario_toml=False)), stack
 
 
 def build_world(
@@ -418,7 +403,7 @@ def source_key(spec: Any, scn: Scenario) -> str:
 def load_world(folder: Path, spec: Any) -> World | None:
     """The world saved in a run's ``folder`` ([`World.save()`][rainuav.world.World.save]) with the
     task of ``spec``, or None where the folder holds none."""
-    for name, kind in zip(MAP_FILES, (RadioMap, RadioMapSeries, LevelStack), strict=True):
+    for name, kind in zip(MAP_FILES, _SOURCES, strict=True):
         if (Path(folder) / name).exists():
             return _observed(world_from(kind.load(Path(folder) / name), task_of(spec)), spec)
     return None
@@ -426,6 +411,19 @@ def load_world(folder: Path, spec: Any) -> World | None:
 
 def _extent(scn: Scenario) -> tuple[float, float, float, float]:
     return (scn.area.x_min_m, scn.area.x_max_m, scn.area.y_min_m, scn.area.y_max_m)
+
+
+def _scenario_name(source: Any) -> str:
+    """The name of the scenario a source was built from ('' where a signal carries none)."""
+    if isinstance(source, Signal):
+        if not source.scenario_toml:
+            return ""
+        try:
+            name = tomllib.loads(source.scenario_toml).get("name", "")
+        except tomllib.TOMLDecodeError:
+            return ""
+        return name if isinstance(name, str) else ""
+    return str(source.scenario.name)
 
 
 def in_world(spec: Any, source: Any) -> tuple[Any, World]:

@@ -32,6 +32,7 @@ __all__ = [
     "RadioMap",
     "check_arrays",
     "check_map_arrays",
+    "default_min_db",
     "map_ranges",
     "read_npz",
     "store",
@@ -116,9 +117,7 @@ class RadioMap:
         """The outage threshold a navigation task on this map uses unless told otherwise: for
         SINR the preset's documented one (``presets.SINR_THRESHOLDS_DB``, by the scenario's
         name); for SIR, and for scenarios of no preset, 10 dB (the paper's minimum SIR)."""
-        if signal == "sinr":
-            return SINR_THRESHOLDS_DB.get(self.scenario.name, DEFAULT_MIN_DB)
-        return DEFAULT_MIN_DB
+        return default_min_db(self.scenario.name, signal)
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Writes an .npz with the scenario as TOML metadata, atomically."""
@@ -186,6 +185,15 @@ class RadioMap:
     def coverage(self, sir_min_db: float = 10.0) -> float:
         """Share of the area with SIR >= sir_min_db."""
         return float(np.mean(self.sir_db >= sir_min_db))
+
+
+def default_min_db(scenario_name: str, signal: str = "sinr") -> float:
+    """The outage threshold of a task on ``signal`` over a map of the scenario named
+    ``scenario_name``
+    ([`RadioMap.default_min_db()`][rainuav.radio.outputs.mapdata.RadioMap.default_min_db])."""
+    if signal == "sinr":
+        return SINR_THRESHOLDS_DB.get(scenario_name, DEFAULT_MIN_DB)
+    return DEFAULT_MIN_DB
 
 
 def _fit_of(path: Any, raw: np.ndarray | None) -> dict[str, Any] | None:

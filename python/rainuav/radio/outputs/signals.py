@@ -24,12 +24,7 @@ __all__ = ["load_signal", "signal_of"]
 SIGNALS = ("sinr", "sir")
 
 
-def _scenario_toml(obj: Any) -> str:
-    scn = getattr(obj, "scenario", None)
-    return scn.to_toml_string() if scn is not None else ""
-
-
-def signal_of(source: Any, signal: str = "sinr") -> Signal:
+def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) -> Signal:
     """The ``signal`` (``"sinr"`` or ``"sir"``) of a built map
     ([`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap]), maps in time
     ([`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries]) or the maps of every level
@@ -37,7 +32,13 @@ def signal_of(source: Any, signal: str = "sinr") -> Signal:
     [`RadioLevelSeries`][rainuav.radio.outputs.levelmaps.RadioLevelSeries],
     [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack], which hold SINR alone), with its
     serving cells and not-flyable pixels, as one signal. The values are the source's, bit for
-    bit."""
+    bit. ``scenario_toml``: the signal carries the source's scenario as TOML (for a file; a
+    radar weather's TOML takes seconds to write: False leaves it out)."""
+
+    def toml(obj: Any) -> str:
+        scn = getattr(obj, "scenario", None)
+        return scn.to_toml_string() if scenario_toml and scn is not None else ""
+
     if signal not in SIGNALS:
         raise InvalidInputError(f"signal must be one of {SIGNALS} (got {signal!r})")
     name = f"{signal}_db"
@@ -46,7 +47,7 @@ def signal_of(source: Any, signal: str = "sinr") -> Signal:
         return Signal.from_axes(getattr(source, name), ("north", "east"), source.extent_m,
                                 altitudes_m=[source.altitude_m], serving_cell=source.serving_cell,
                                 name=name, not_flyable=nf,
-                                scenario_toml=_scenario_toml(source))  # fmt: skip
+                                scenario_toml=toml(source))  # fmt: skip
     if isinstance(source, RadioMapSeries):
         a = source.scenario.area
         extent = (a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m)
@@ -55,19 +56,23 @@ def signal_of(source: Any, signal: str = "sinr") -> Signal:
         return Signal.from_axes(getattr(source, name), ("time", "north", "east"), extent,
                                 t_s=source.t_s, altitudes_m=[source.scenario.area.altitude_m],
                                 serving_cell=source.serving_cell, name=name, not_flyable=nf,
-                                scenario_toml=_scenario_toml(source))  # fmt: skip
+                                scenario_toml=toml(source))  # fmt: skip
     if isinstance(source, RadioLevels | RadioLevelSeries | LevelStack):
         if signal != "sinr":
             raise InvalidInputError("the maps of every level hold SINR alone (signal='sinr')")
-        if isinstance(source, RadioLevels):
-            source = LevelStack.of(source, source.maps[0].scenario)
+        if isinstance(source, RadioLevels):  # the maps' own arrays (a LevelStack's are narrowed)
+            serving = np.stack([m.serving_cell for m in source.maps])
+            scn = source.maps[0].scenario
+        else:
+            serving, scn = source.serving_cell, getattr(source, "scenario", None)
+        about = scn.to_toml_string() if scenario_toml and scn is not None else ""
         t = getattr(source, "t_s", None)
         dims = ("level", "north", "east") if t is None else ("time", "level", "north", "east")
         return Signal.from_axes(source.sinr_db, dims, source.extent,
                                 t_s=(0.0,) if t is None else t, altitudes_m=source.altitudes_m,
-                                serving_cell=source.serving_cell, name=name,
+                                serving_cell=serving, name=name,
                                 not_flyable=np.asarray(source.not_flyable, bool),
-                                scenario_toml=_scenario_toml(source))  # fmt: skip
+                                scenario_toml=about)  # fmt: skip
     raise InvalidInputError(
         "source must be a RadioMap, RadioMapSeries, RadioLevels, RadioLevelSeries or LevelStack "
         f"(got {type(source).__name__})"
