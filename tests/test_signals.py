@@ -216,7 +216,7 @@ def test_a_world_of_a_signal_flies_as_the_world_of_its_source(series, tmp_path: 
     c = load_world(tmp_path, dataclasses.replace(spec_for(task)))
     assert isinstance(c.source, Signal)
     assert np.allclose([planner.optimal(c.env(), s).return_ for s in starts], ra, atol=1e-9)
-    with pytest.raises(InvalidInputError, match="task.signal is 'sir'"):
+    with pytest.raises(InvalidInputError, match=r"task\.signal is 'sir'"):
         world_from(signal_of(series), dataclasses.replace(task, signal="sir"))
 
 
@@ -224,3 +224,14 @@ def spec_for(task):
     from rainuav.world import WorldSpec
 
     return WorldSpec(task=task)
+
+
+def test_a_band_of_one_level_stays_a_level_field() -> None:
+    """levels=True gives a LevelField of one level (a band of one flight level, six moves),
+    reading as the plain map does."""
+    s = stack()
+    one = Signal.from_axes(s.sinr_db[:1], ("level", "north", "east"), s.extent, altitudes_m=[30.0])
+    a, b = field_of(one, levels=True), field_of(one)
+    assert type(a) is LevelField and a.levels == 1 and type(b) is SignalField
+    x, y, t = points()
+    assert np.array_equal(a(x / 5, y / 5, t, 0), b(x / 5, y / 5))

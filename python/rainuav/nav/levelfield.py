@@ -305,15 +305,17 @@ class LevelStepper:
         }
 
 
-def field_of(signal: Signal) -> SignalField | SignalSeries | SignalBank | LevelField:
+def field_of(
+    signal: Signal, *, levels: bool = False
+) -> SignalField | SignalSeries | SignalBank | LevelField:
     """The field the environment and the planner read of one
     [`Signal`][rainuav.signals.Signal], by its axes' sizes: one level gives a map
     ([`SignalField`][rainuav.nav.field.SignalField]), maps in time
     ([`SignalSeries`][rainuav.nav.field.SignalSeries]) or, with several worlds, a bank
     ([`SignalBank`][rainuav.nav.field.SignalBank]); several levels give a
-    [`LevelField`][rainuav.nav.levelfield.LevelField] of those. The values are the signal's, bit
-    for bit. A bank flies over open ground: a signal of several worlds with a closed pixel is
-    refused."""
+    [`LevelField`][rainuav.nav.levelfield.LevelField] of those (``levels=True``: whatever their
+    number, a band of one level flown with six moves). The values are the signal's, bit for bit.
+    A bank flies over open ground: a signal of several worlds with a closed pixel is refused."""
     if not isinstance(signal, Signal):
         raise InvalidInputError(f"signal must be a rainuav.signals.Signal (got {type(signal)})")
     v, name, mask, srv = signal.values, signal.name, signal.not_flyable, signal.serving_cell
@@ -325,10 +327,10 @@ def field_of(signal: Signal) -> SignalField | SignalSeries | SignalBank | LevelF
                 "not_flyable: a signal of several worlds (a bank of storms) flies over open "
                 "ground, with no pixel closed"
             )
-        if lv > 1:
+        if lv > 1 or levels:
             return LevelField.bank(v, t_s, signal.extent_m, signal.altitudes_m)
         return SignalBank(v[:, :, 0], t_s, signal.extent_m, name)
-    if lv > 1:
+    if lv > 1 or levels:
         return LevelField.from_stack(
             v[0, 0] if t == 1 else v[0], signal.altitudes_m, signal.extent_m,
             t_s=None if t == 1 else t_s, not_flyable=mask,

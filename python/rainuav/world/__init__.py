@@ -350,7 +350,7 @@ def level_field(
         stack = build_radio_levels(scn, progress=progress, cache=cache)
     else:
         stack = build_radio_level_series(for_time(scn), times_s, progress=progress, cache=cache)
-    return field_of(signal_of(stack, scenario_toml=False)), stack
+    return field_of(signal_of(stack, scenario_toml=False), levels=True), stack
 
 
 def build_world(
