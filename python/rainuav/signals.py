@@ -66,8 +66,9 @@ def _axis(name: str, v: Any, n: int) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Signal:
-    """A signal in dB over ``(world, time, level, north, east)`` (module docs). Checked when
-    made: anything out of shape or not finite is one line naming the field."""
+    """A signal in dB over ``(world, time, level, north, east)``, checked when made.
+
+    Anything out of shape or not finite is one line naming the field (module docs)."""
 
     values: npt.NDArray[np.floating]
     """(P, T, L, H, W), dB, finite: world, time, level, north (rows, south first), east."""
@@ -133,9 +134,11 @@ class Signal:
         serving_cell: npt.ArrayLike | None = None,
         **meta: Any,
     ) -> Signal:
-        """The signal of an array whose axes ``dims`` name (any of [`AXES`][rainuav.signals.AXES],
-        each once, ``north`` and ``east`` among them, in any order): moved into the signal's order,
-        the axes it lacks added with size 1. ``serving_cell``, if given, has ``values``' axes.
+        """The signal of an array whose axes are named by ``dims``, in any order.
+
+        ``dims`` names each axis once (any of [`AXES`][rainuav.signals.AXES], ``north`` and
+        ``east`` among them); they are moved into the signal's order, the axes it lacks added
+        with size 1. ``serving_cell``, if given, has ``values``' axes.
         E.g. ``Signal.from_axes(sinr, ("level", "north", "east"), extent, altitudes_m=alts)``."""
         bad = [d for d in dims if d not in AXES]
         if bad or len(set(dims)) != len(dims) or not {"north", "east"} <= set(dims):
@@ -167,8 +170,10 @@ class Signal:
 
     def take(self, *, world: int | None = None, time: int | None = None,
              level: int | None = None) -> Signal:  # fmt: skip
-        """The signal at one world, instant or level (each given index keeps its axis, with size
-        1); e.g. ``take(level=0)``: the lowest level's signal."""
+        """The signal at one world, instant or level.
+
+        Each given index keeps its axis, with size 1; e.g. ``take(level=0)``: the lowest level's
+        signal."""
         idx: list[Any] = [slice(None)] * len(AXES)
         for k, (axis, i) in enumerate((("world", world), ("time", time), ("level", level))):
             if i is not None:
@@ -188,8 +193,10 @@ class Signal:
         )
 
     def to_xarray(self) -> Any:
-        """The values as an ``xarray.DataArray`` with the axes named and their coordinates
-        (instants, altitudes, the pixels' centres in m); needs xarray (the ``weather`` extra)."""
+        """The values as an ``xarray.DataArray``, the axes named.
+
+        Its coordinates are the instants, the altitudes and the pixels' centres in m; needs
+        xarray (the ``weather`` extra)."""
         try:
             import xarray as xr
         except ImportError as err:  # pragma: no cover - depends on the installed extras
@@ -232,8 +239,9 @@ class Signal:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Signal:
-        """Reads a file written by [`save()`][rainuav.signals.Signal.save] (bit-exact round
-        trip), checked; anything else is one line naming the file."""
+        """Reads a file written by [`save()`][rainuav.signals.Signal.save], bit for bit.
+
+        Every array is checked; anything else is one line naming the file."""
         data = read_arrays(path, "signal file")
         meta = signal_meta(data)
         if meta is None:

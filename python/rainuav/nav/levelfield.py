@@ -308,8 +308,9 @@ class LevelStepper:
 def field_of(
     signal: Signal, *, levels: bool = False
 ) -> SignalField | SignalSeries | SignalBank | LevelField:
-    """The field the environment and the planner read of one
-    [`Signal`][rainuav.signals.Signal], by its axes' sizes: one level gives a map
+    """The field the environment and the planner read of one signal, by its axes' sizes.
+
+    For a [`Signal`][rainuav.signals.Signal], one level gives a map
     ([`SignalField`][rainuav.nav.field.SignalField]), maps in time
     ([`SignalSeries`][rainuav.nav.field.SignalSeries]) or, with several worlds, a bank
     ([`SignalBank`][rainuav.nav.field.SignalBank]); several levels give a

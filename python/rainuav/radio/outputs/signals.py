@@ -25,7 +25,9 @@ SIGNALS = ("sinr", "sir")
 
 
 def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) -> Signal:
-    """The ``signal`` (``"sinr"`` or ``"sir"``) of a built map
+    """A built map, maps in time or maps of every level as one signal.
+
+    The ``signal`` (``"sinr"`` or ``"sir"``) of a built map
     ([`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap]), maps in time
     ([`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries]) or the maps of every level
     ([`RadioLevels`][rainuav.radio.outputs.levelmaps.RadioLevels],
@@ -80,9 +82,10 @@ def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) 
 
 
 def load_signal(path: str | os.PathLike[str], signal: str = "sinr") -> Signal:
-    """The signal a file holds: a signal file
-    ([`Signal.save()`][rainuav.signals.Signal.save]), or a map, maps in time or the maps of
-    every level as the radio maps save them (read and checked by their own loaders, then
+    """The signal a file holds, whichever of rainuav's map files it is.
+
+    A signal file ([`Signal.save()`][rainuav.signals.Signal.save]), or a map, maps in time or
+    the maps of every level as the radio maps save them (read and checked by their own loaders, then
     [`signal_of()`][rainuav.radio.outputs.signals.signal_of]; ``signal`` picks SINR or SIR where
     the file holds both). Anything else is one line naming the file."""
     data = read_arrays(path, "signal or radio map file")
