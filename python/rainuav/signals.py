@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import os
 import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -153,10 +154,8 @@ class Signal:
                 raise InvalidInputError(
                     f"{what} must have one axis a name of dims {dims} (got shape {arr.shape})"
                 )
-            order = [dims.index(d) for d in AXES if d in dims]
-            arr = np.transpose(arr, order)
-            return arr.reshape([arr.shape[order.index(dims.index(d))] if d in dims else 1
-                                for d in AXES])  # fmt: skip
+            arr = np.transpose(arr, [dims.index(d) for d in AXES if d in dims])
+            return np.expand_dims(arr, [k for k, d in enumerate(AXES) if d not in dims])
 
         v = canonical(values, "values")
         s = None if serving_cell is None else canonical(serving_cell, "serving_cell")
@@ -243,7 +242,7 @@ class Signal:
 
         Every array is checked; anything else is one line naming the file."""
         data = read_arrays(path, "signal file")
-        meta = signal_meta(data)
+        meta = _signal_meta(data)
         if meta is None:
             raise InvalidInputError(f"{path}: not a rainuav signal file (no {FORMAT} metadata)")
         if meta.get("format_version") != FORMAT_VERSION or meta.get("axes") != list(AXES):
@@ -264,16 +263,27 @@ class Signal:
             raise InvalidInputError(f"{path}: {err}") from None
 
 
-def read_arrays(path: str | os.PathLike[str], what: str) -> dict[str, np.ndarray]:
-    """Every array of an .npz, read without pickles, or one line naming the file."""
+def _npz(path: str | os.PathLike[str], what: str, read: Callable[[Any], Any]) -> Any:
+    """``read`` of the opened .npz (never unpickled), or one line naming the file (``what``:
+    the kind of file, for the message)."""
     try:
         with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
+            return read(z)
     except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
         raise InvalidInputError(f"{path}: not a readable {what} ({err})") from err
 
 
-def signal_meta(data: dict[str, np.ndarray]) -> dict[str, Any] | None:
+def read_arrays(path: str | os.PathLike[str], what: str) -> dict[str, np.ndarray]:
+    """Every array of an .npz, read without pickles, or one line naming the file."""
+    return _npz(path, what, lambda z: {k: z[k] for k in z.files})
+
+
+def array_names(path: str | os.PathLike[str], what: str) -> set[str]:
+    """The names of an .npz's arrays, none of them read, or one line naming the file."""
+    return _npz(path, what, lambda z: set(z.files))
+
+
+def _signal_meta(data: dict[str, np.ndarray]) -> dict[str, Any] | None:
     """A signal file's metadata (its ``meta_json``), or None where the arrays are not one."""
     raw = data.get("meta_json")
     if raw is None or raw.dtype.kind != "U" or raw.ndim != 0:

@@ -10,7 +10,6 @@ import dataclasses
 import json
 import os
 import warnings
-import zipfile
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,6 +25,7 @@ from rainuav.radio.outputs.plot import plot_map
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, SIR_CEIL_DB, SIR_FLOOR_DB
 from rainuav.radio.scene.presets import DEFAULT_MIN_DB, SINR_THRESHOLDS_DB
 from rainuav.radio.scene.scenario import Scenario
+from rainuav.signals import read_arrays
 
 __all__ = [
     "FORMAT_VERSION",
@@ -240,11 +240,7 @@ def read_npz(
     kind of file, for the message). ``known``: ``(digest, scenario)`` the caller looked the file up
     by (the map cache); where the file's stored digest is that one, its scenario is that scenario
     and its TOML is not parsed again (seconds for a radar weather's rate maps)."""
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
-        raise InvalidInputError(f"{path}: not a readable {what} ({err})") from err
+    data = read_arrays(path, what)
     missing = {*need, "scenario_toml"} - set(data)
     if missing:
         raise InvalidInputError(f"{path}: not a rainuav {what} (missing {sorted(missing)})")

@@ -17,7 +17,7 @@ from rainuav.radio.outputs.levelmaps import LevelStack, RadioLevels, RadioLevelS
 from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.timemap import RadioMapSeries
 from rainuav.radio.scene.terrain import map_mask
-from rainuav.signals import Signal, read_arrays, signal_meta
+from rainuav.signals import Signal, array_names, read_arrays
 
 __all__ = ["load_signal", "signal_of"]
 
@@ -37,8 +37,7 @@ def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) 
     bit. ``scenario_toml``: the signal carries the source's scenario as TOML (for a file; a
     radar weather's TOML takes seconds to write: False leaves it out)."""
 
-    def toml(obj: Any) -> str:
-        scn = getattr(obj, "scenario", None)
+    def toml(scn: Any) -> str:
         return scn.to_toml_string() if scenario_toml and scn is not None else ""
 
     if signal not in SIGNALS:
@@ -49,7 +48,7 @@ def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) 
         return Signal.from_axes(getattr(source, name), ("north", "east"), source.extent_m,
                                 altitudes_m=[source.altitude_m], serving_cell=source.serving_cell,
                                 name=name, not_flyable=nf,
-                                scenario_toml=toml(source))  # fmt: skip
+                                scenario_toml=toml(source.scenario))  # fmt: skip
     if isinstance(source, RadioMapSeries):
         a = source.scenario.area
         extent = (a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m)
@@ -58,7 +57,7 @@ def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) 
         return Signal.from_axes(getattr(source, name), ("time", "north", "east"), extent,
                                 t_s=source.t_s, altitudes_m=[source.scenario.area.altitude_m],
                                 serving_cell=source.serving_cell, name=name, not_flyable=nf,
-                                scenario_toml=toml(source))  # fmt: skip
+                                scenario_toml=toml(source.scenario))  # fmt: skip
     if isinstance(source, RadioLevels | RadioLevelSeries | LevelStack):
         if signal != "sinr":
             raise InvalidInputError("the maps of every level hold SINR alone (signal='sinr')")
@@ -67,14 +66,13 @@ def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) 
             scn = source.maps[0].scenario
         else:
             serving, scn = source.serving_cell, getattr(source, "scenario", None)
-        about = scn.to_toml_string() if scenario_toml and scn is not None else ""
         t = getattr(source, "t_s", None)
         dims = ("level", "north", "east") if t is None else ("time", "level", "north", "east")
         return Signal.from_axes(source.sinr_db, dims, source.extent,
                                 t_s=(0.0,) if t is None else t, altitudes_m=source.altitudes_m,
                                 serving_cell=serving, name=name,
                                 not_flyable=np.asarray(source.not_flyable, bool),
-                                scenario_toml=about)  # fmt: skip
+                                scenario_toml=toml(scn))  # fmt: skip
     raise InvalidInputError(
         "source must be a RadioMap, RadioMapSeries, RadioLevels, RadioLevelSeries or LevelStack "
         f"(got {type(source).__name__})"
@@ -87,17 +85,19 @@ def load_signal(path: str | os.PathLike[str], signal: str = "sinr") -> Signal:
     A signal file ([`Signal.save()`][rainuav.signals.Signal.save]), or a map, maps in time or
     the maps of every level as the radio maps save them (read and checked by their own loaders, then
     [`signal_of()`][rainuav.radio.outputs.signals.signal_of]; ``signal`` picks SINR or SIR where
-    the file holds both). Anything else is one line naming the file."""
-    data = read_arrays(path, "signal or radio map file")
-    if signal_meta(data) is not None:
+    the file holds both). The kind is told by the arrays' names, and the file read once, by its
+    own loader. Anything else is one line naming the file."""
+    what = "signal or radio map file"
+    keys = array_names(path, what)
+    if "meta_json" in keys:
         return Signal.load(path)
-    keys = set(data)
     if {"altitudes_m", "sinr_db", "not_flyable"} <= keys:
         return signal_of(LevelStack.load(path), signal)
     if {"t_s", "rss_dbm", "sinr_db"} <= keys:
         return signal_of(RadioMapSeries.load(path), signal)
     if {"rss_dbm", "sinr_db", "altitude_m"} <= keys:
         return signal_of(RadioMap.load(path), signal)
+    read_arrays(path, what)  # an array that cannot be read is the better reason
     raise InvalidInputError(
         f"{path}: neither a signal file nor a radio map, maps in time or maps of every level "
         "(rainuav's signal.npz, radiomap.npz, radiomap_series.npz or radiolevels.npz)"
