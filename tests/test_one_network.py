@@ -198,13 +198,15 @@ def test_bad_weather_options_are_refused() -> None:
 
 
 def pool_cfg(out: object, **kw: object) -> object:
-    """A tiny run over the storm distribution (2 storms renewed every 3 episodes)."""
+    """A tiny run over the storm distribution (2 storms renewed every 3 episodes; the ray
+    engine: what is checked is the pool, not the propagation)."""
     from rainuav.rl.config import DQNConfig, TrainConfig
 
     fields = {
         "scenario": "storm", "observation": "weather", "random_goal": True, "storm_pool": 2,
         "storm_episodes": 3, "task": NavConfig(max_steps=40), "out": str(out),
         "eval_starts": 3, "validate_every": 0, "stages": 1, "checkpoint_every": 1000,
+        "engine": "ray",
         "dqn": DQNConfig(episodes=16, lanes=4, learning_starts=50, replay_capacity=2000,
                          hidden=16),
     }  # fmt: skip

@@ -4,8 +4,10 @@ paths, where its radio map (``tests/test_tracer.py``) is a Monte Carlo estimate 
 scattered in deep shadows. Four test scenes, one mechanism each: a street canyon (walls once and
 twice, corners, the corners beside the line), a thick building seen over its roof at 10 m (the
 roof's edges), nine buildings of the shipped footprint file (their materials), and a block over a
-PEC ground by images (the ground). Every third pixel in both directions, 1 million candidate rays a
-site in two seeded halves.
+PEC ground by images (the ground). Every third pixel in both directions, candidate rays a site in
+two seeded halves: 1 million among the nine buildings, 400 000 in the other scenes (where 1 million
+gives the same paths: every figure below to 0.004 dB; among the nine buildings 400 000 reach fewer
+pixels).
 
 Tolerances and why. Without a ground the engine and the path solver trace the same mechanisms
 (walls once and twice, corners and walls then corners with P.526-15 section 6's wedge, roofs'
@@ -32,18 +34,18 @@ from rainuav.radio.reference.tracer_scenes import scene
 pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]
 
 CASES = [
-    ("canyon", "v", 20.0, "none"),
-    ("thick", "h", 10.0, "none"),
-    ("block", "h", 8.0, "none"),
-    ("box", "v", 20.0, "pec"),
+    ("canyon", "v", 20.0, "none", 400_000),
+    ("thick", "h", 10.0, "none", 400_000),
+    ("block", "h", 8.0, "none", 1_000_000),
+    ("box", "v", 20.0, "pec", 400_000),
 ]
 
 
-@pytest.mark.parametrize("case", CASES, ids=[f"{n}-{p}-{g}" for n, p, _, g in CASES])
+@pytest.mark.parametrize("case", CASES, ids=[f"{n}-{p}-{g}" for n, p, _, g, _ in CASES])
 def test_the_engine_meets_the_targets_against_the_tracers_exact_paths(case) -> None:
-    name, pol, alt, ground = case
+    name, pol, alt, ground, samples = case
     r = compare(
-        scene(name, 4.9e9, alt, pol), samples=1_000_000, ground=ground, reference="paths", step=3
+        scene(name, 4.9e9, alt, pol), samples=samples, ground=ground, reference="paths", step=3
     ).rows()[0]
     assert r["pixels"] > 250 and r["shadow_pixels"] > 60, r
     assert r["light_median"] <= 0.5, r
