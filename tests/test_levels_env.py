@@ -135,7 +135,7 @@ def test_bad_input_is_refused_in_one_line() -> None:
     with pytest.raises(InvalidInputError, match="not flyable at level 0"):
         env.reset(options={"start_m": (5.0, 5.0), "start_level": 0})
     series = SignalSeries(stack(4, 2)[:, 0], [0.0, 5.0], EXTENT)
-    with pytest.raises(InvalidInputError, match="all SignalField, all SignalSeries or all"):
+    with pytest.raises(InvalidInputError, match="all maps, all maps in time"):
         LevelField([series, field.fields[1], field.fields[2]], ALTS)
 
 

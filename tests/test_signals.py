@@ -94,12 +94,13 @@ def test_the_field_of_a_signal_reads_as_the_field_of_its_source(series) -> None:
     one = series.at(0.0)
     a = field_of(signal_of(one))
     b = SignalField(one.sinr_db, one.extent_m, "sinr_db", one.serving_cell, one.not_flyable)
-    assert type(a) is SignalField
+    assert type(a) is SignalField and not a.varies and a.values.shape == (1, 1, 20, 20)
     assert np.array_equal(a(x, y), b(x, y))
     assert np.array_equal(a.serving_cell(x, y), b.serving_cell(x, y))
     a = field_of(signal_of(series))
     b = SignalSeries(series.sinr_db, series.t_s, one.extent_m, "sinr_db", series.serving_cell)
-    assert type(a) is SignalSeries and np.array_equal(a(x, y, t), b(x, y, t))
+    assert type(a) is SignalField and a.varies and not a.banked
+    assert np.array_equal(a(x, y, t), b(x, y, t))
     for moving in (False, True):
         s = stack(moving)
         a = field_of(signal_of(s))
@@ -119,7 +120,8 @@ def test_the_field_of_a_signal_reads_as_the_field_of_its_source(series) -> None:
     w = np.arange(len(x)) % 4
     sig = Signal.from_axes(v, ("world", "time", "north", "east"), one.extent_m, t_s=series.t_s)
     a, b = field_of(sig), SignalBank(v, series.t_s, one.extent_m)
-    assert type(a) is SignalBank and np.array_equal(a(x, y, t, w), b(x, y, t, w))
+    assert type(a) is SignalField and a.banked and a.worlds == 4
+    assert np.array_equal(a(x, y, t, w), b(x, y, t, w))
     lv5 = rng.normal(0.0, 10.0, (4, 2, 3, 20, 20))
     sig = Signal(lv5, one.extent_m, series.t_s, np.array([30.0, 45.0, 100.0]))
     a, b = field_of(sig), LevelField.bank(lv5, series.t_s, one.extent_m, [30.0, 45.0, 100.0])

@@ -39,14 +39,7 @@ import numpy.typing as npt
 from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
-from rainuav.nav.field import (
-    SignalBank,
-    SignalField,
-    SignalSeries,
-    blocked_at,
-    read_signal,
-    signal_field,
-)
+from rainuav.nav.field import SignalField, blocked_at, read_signal, signal_field
 from rainuav.nav.levelfield import (
     CLIMB_M_S,
     DESCEND_M_S,
@@ -95,7 +88,7 @@ class UAVNavEnv(gym.Env):
         signal: str | None = None,
         min_db: float | None = None,
         config: NavConfig | None = None,
-        field: SignalField | SignalSeries | SignalBank | LevelField | None = None,
+        field: SignalField | LevelField | None = None,
         observation: str = "position",
         view: WeatherView | None = None,
         random_goal: bool = False,
@@ -124,10 +117,11 @@ class UAVNavEnv(gym.Env):
         if field is not None:
             if radio_map is not None or sinr_db is not None or sir_db is not None:
                 raise InvalidInputError("give field or a map, not both")
-            if not isinstance(field, SignalField | SignalSeries | SignalBank | LevelField):
-                raise InvalidInputError("field must be a SignalField, SignalSeries, SignalBank "
-                                        f"or LevelField (got {type(field).__name__})")  # fmt: skip
-            self.field: SignalField | SignalSeries | SignalBank | LevelField = field
+            if not isinstance(field, SignalField | LevelField):
+                raise InvalidInputError(
+                    f"field must be a SignalField or a LevelField (got {type(field).__name__})"
+                )
+            self.field: SignalField | LevelField = field
         else:
             self.field = signal_field(radio_map, sinr_db, sir_db, extent_m, signal)
         self.level_axis = isinstance(self.field, LevelField)  # altitude as a decision
@@ -150,7 +144,7 @@ class UAVNavEnv(gym.Env):
                     "..., outage_p=P); rainuav.world.world_from builds it from a map corrected by "
                     "measurements)"
                 )
-            self.banked = isinstance(self.field, SignalBank)
+            self.banked = self.field.banked
         check_config(self.cfg, self.field.extent)
         if not self.level_axis and blocked_at(self.field, *self.cfg.goal_m):
             raise InvalidInputError(

@@ -2,11 +2,11 @@
 or SIR, `rainuav._sampling`), with its input checked once, and the serving cell at the
 nearest pixel when the map names one.
 
-Two kinds, one interface (``field(x, y, t_s)``, ``field.serving_cell(x, y, t_s)``,
-``field.varies``): [`SignalField`][rainuav.nav.field.SignalField], one map (time is ignored), and
-[`SignalSeries`][rainuav.nav.field.SignalSeries], maps at instants ``t_s`` (a storm that moves),
-linear in time between them. The exact planner in space-time (``rainuav_core::planlevels``) reads
-the series operation for operation as ``SignalSeries.__call__`` does."""
+One class, [`SignalField`][rainuav.nav.field.SignalField], over worlds x instants x north x
+east (``field(x, y, t_s, world)``, ``field.serving_cell(x, y, t_s)``, ``field.varies``): one map
+(time is ignored), maps at instants ``t_s`` (a storm that moves), linear in time between them, or
+a bank of worlds. The exact planner in space-time (``rainuav_core::planlevels``) reads the series
+operation for operation as ``SignalField.__call__`` does."""
 
 from __future__ import annotations
 
@@ -113,10 +113,8 @@ def blocked_at(field: Any, x: Any, y: Any) -> np.ndarray:
 
 def read_signal(field: Any, x: Any, y: Any, t_s: Any, world: Any = None) -> Any:
     """The signal of ``field`` (a map, maps in time or a bank) at ``(x, y)`` at ``t_s``; in a
-    bank, of world ``world`` (default 0), which the others do not take."""
-    if isinstance(field, SignalBank):
-        return field(x, y, t_s, 0 if world is None else world)
-    return field(x, y, t_s)
+    bank, of world ``world`` (default 0)."""
+    return field(x, y, t_s, world)
 
 
 def _lerp(g: np.ndarray, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -146,14 +144,27 @@ class _PointCache:
 
 
 class SignalField:
-    """A SINR (or SIR) map in dB over ``extent_m = (x_min, x_max, y_min, y_max)``, sampled
-    bilinearly between pixel centres (`rainuav._sampling.bilinear`). ``name`` is the
-    array's name in error messages; ``serving_cell`` (H, W), optional, is looked up at the
-    nearest pixel; ``not_flyable`` (H, W), optional, marks the pixels a UAV may not enter
-    ([`blocked_at()`][rainuav.nav.field.blocked_at])."""
+    """A signal in dB (SINR or SIR) over ``extent_m = (x_min, x_max, y_min, y_max)``, one class
+    for every kind: ``values`` (P, K, H, W), P worlds' maps at the K instants ``t_s``. Bilinear
+    in space within a slice (`rainuav._sampling.bilinear`), linear in time between the two
+    slices around an instant, held before the first and after the last
+    (``rainuav_core::planlevels``' signal in time, operation for operation); a point of a bank
+    reads its own world. Made by:
 
-    varies = False
-    """One map: the signal does not change in time."""
+    - ``SignalField(values_db (H, W), extent_m, ...)``: one map (time is ignored);
+    - [`SignalField.series`][rainuav.nav.field.SignalField.series]`(values_db (K, H, W), t_s,
+      extent_m, ...)` (also `SignalSeries`): maps in time, a storm that moves;
+    - [`SignalField.bank`][rainuav.nav.field.SignalField.bank]`(values_db (P, K, H, W), t_s,
+      extent_m)` (also `SignalBank`): several worlds in one array, each point reading its own;
+      the UAVs of one training batch fly different storms through one call, and a world's slot
+      is replaced in place ([`put()`][rainuav.nav.field.SignalField.put]) when the learner moves
+      on.
+
+    ``db`` is the values as given (``(H, W)``, ``(K, H, W)`` or ``(P, K, H, W)``). ``name`` is
+    the array's name in error messages; ``serving_cell`` (the shape of ``db``; maps and series)
+    is read at the nearest pixel of the latest slice at or before the instant; ``not_flyable``
+    (H, W) marks the pixels a UAV may not enter ([`blocked_at()`][rainuav.nav.field.blocked_at]; a
+    bank flies over open ground); ``outage_p`` (H, W, one map) the chance of outage."""
 
     def __init__(
         self,
@@ -163,81 +174,81 @@ class SignalField:
         serving_cell: npt.ArrayLike | None = None,
         not_flyable: npt.ArrayLike | None = None,
         outage_p: npt.ArrayLike | None = None,
+        *,
+        t_s: npt.ArrayLike | None = None,
+        banked: bool = False,
     ):
-        self.db, self.extent, self.serving = _checked(
-            values_db, extent_m, name, serving_cell, "(H, W)"
-        )
-        self.not_flyable = _checked_mask(not_flyable, self.db.shape)
-        self.name = name
-        self.outage_p = None if outage_p is None else _checked_probability(outage_p, self.db.shape)
-        self._points = _PointCache()
-
-    def __call__(self, x: Any, y: Any, t_s: Any = None) -> Any:
-        """The map at the points ``(x, y)`` (bilinear between pixel centres, edge values
-        beyond them); ``t_s`` is ignored (one map)."""
-        return bilinear(self.db, self.extent, x, y)
-
-    def chance(self, x: Any, y: Any, t_s: Any = None) -> Any:
-        """The probability of outage at the points ``(x, y)``, bilinear as the map (the task's
-        ``"chance"`` reward); needs ``outage_p``."""
-        if self.outage_p is None:
-            raise InvalidInputError(
-                "reward 'chance' needs a field with outage_p (a map corrected by measurements, "
-                "through rainuav.world.world_from)"
-            )
-        return bilinear(self.outage_p, self.extent, x, y)
-
-    def serving_cell(self, x: Any, y: Any, t_s: Any = None) -> Any:
-        """The serving cell at the pixel holding ``(x, y)`` (-1 where the map names none)."""
-        if self.serving is None:
-            return np.full(np.broadcast(np.asarray(x), np.asarray(y)).shape, -1, dtype=np.int64)
-        return self.serving[pixel_index(self.db.shape, self.extent, x, y)]
-
-    def frozen(self, t_s: float = 0.0) -> SignalField:
-        """The map at ``t_s``: this one."""
-        return self
-
-    def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
-        """(N, M): the map at the fixed points (M, 2) for each of the N instants ``t_s``
-        (the same row: one map); sampled once per set of points."""
-        g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
-        return np.broadcast_to(g, (np.size(t_s), len(g)))
-
-
-class SignalSeries:
-    """Maps ``values_db`` (K, H, W) in dB at the instants ``t_s`` (K,), s, strictly
-    increasing, over ``extent_m``: bilinear in space within a slice, linear in time between the
-    two slices around an instant, held before the first and after the last
-    (``rainuav_core::planlevels``' signal in time, operation for operation).
-    ``serving_cell`` (K, H, W), optional, is read at the nearest pixel of the latest slice at
-    or before the instant."""
-
-    varies = True
-    """The signal changes in time."""
-
-    def __init__(
-        self,
-        values_db: npt.ArrayLike,
-        t_s: npt.ArrayLike,
-        extent_m: tuple[float, float, float, float],
-        name: str = "sinr_db",
-        serving_cell: npt.ArrayLike | None = None,
-        not_flyable: npt.ArrayLike | None = None,
-    ):
-        self.db, self.extent, self.serving = _checked(
-            values_db, extent_m, name, serving_cell, "(K, H, W)"
-        )
-        self.not_flyable = _checked_mask(not_flyable, self.db.shape[1:])
-        t = np.asarray(t_s, dtype=np.float64)
-        k = self.db.shape[0]
+        """One map; with ``t_s``, maps in time; ``banked``: a bank (use the two makers)."""
+        dims = "(P, K, H, W)" if banked else "(H, W)" if t_s is None else "(K, H, W)"
+        self.db, self.extent, self.serving = _checked(values_db, extent_m, name, serving_cell, dims)
+        self.values = self.db.reshape((1,) * (4 - self.db.ndim) + self.db.shape)
+        self._map = self.values[0, 0] if self.values.shape[:2] == (1, 1) else None
+        _, k, h, w = self.values.shape
+        self.not_flyable = _checked_mask(not_flyable, (h, w))
+        t = np.zeros(1) if t_s is None else np.asarray(t_s, dtype=np.float64)
         if t.shape != (k,) or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
             raise InvalidInputError(
                 f"t_s must be {k} finite, strictly increasing instants (got {t.shape})"
             )
         self.t_s = np.ascontiguousarray(t)
         self.name = name
+        self.banked = banked
+        self.varies = k > 1
+        """Whether the signal changes in time."""
+        self.outage_p = None if outage_p is None else _checked_probability(outage_p, (h, w))
         self._points = _PointCache()
         self._last_brackets: tuple[Any, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+
+    @classmethod
+    def series(
+        cls,
+        values_db: npt.ArrayLike,
+        t_s: npt.ArrayLike,
+        extent_m: tuple[float, float, float, float],
+        name: str = "sinr_db",
+        serving_cell: npt.ArrayLike | None = None,
+        not_flyable: npt.ArrayLike | None = None,
+    ) -> SignalField:
+        """Maps ``values_db`` (K, H, W) at the instants ``t_s`` (K,), s, strictly increasing;
+        ``serving_cell`` (K, H, W), optional."""
+        return cls(values_db, extent_m, name, serving_cell, not_flyable, t_s=t_s)
+
+    @classmethod
+    def bank(
+        cls,
+        values_db: npt.ArrayLike,
+        t_s: npt.ArrayLike,
+        extent_m: tuple[float, float, float, float],
+        name: str = "sinr_db",
+    ) -> SignalField:
+        """Several worlds' signals, ``values_db`` (P, K, H, W), at the common instants ``t_s``
+        (K,) over one extent, each read as its own series (a one-instant bank is P still maps)."""
+        return cls(values_db, extent_m, name, t_s=t_s, banked=True)
+
+    @property
+    def worlds(self) -> int:
+        """Worlds held (P)."""
+        return self.values.shape[0]
+
+    def put(self, world: int, values_db: npt.ArrayLike) -> None:
+        """Replaces world ``world``'s maps (K, H, W) of a bank (checked: the bank's shape,
+        finite)."""
+        if not self.banked:
+            raise InvalidInputError("put renews a world of a bank (SignalField.bank) only")
+        v = np.asarray(values_db, dtype=np.float64)
+        if v.shape != self.values.shape[1:] or not np.all(np.isfinite(v)):
+            raise InvalidInputError(
+                f"{self.name} must be finite, of shape {self.values.shape[1:]} (got {v.shape})"
+            )
+        self.values[world] = v
+        self._points = _PointCache()  # samples of the old storm are stale
+
+    def member(self, world: int) -> SignalField:
+        """World ``world``'s signal on its own (a copy)."""
+        v = self.values[world]
+        if v.shape[0] == 1:
+            return SignalField(v[0].copy(), self.extent, self.name)
+        return SignalField.series(v.copy(), self.t_s, self.extent, self.name)
 
     def brackets(self, tau: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """For each instant of ``tau``: the slices around it and the later one's weight
@@ -261,111 +272,77 @@ class SignalSeries:
         self._last_brackets = (key, (k0, k1, f))
         return k0, k1, f
 
-    def __call__(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
+    def __call__(self, x: Any, y: Any, t_s: Any = 0.0, world: Any = None) -> Any:
         """The signal at the points ``(x, y)`` at the instants ``t_s`` (a number, or one per
-        point)."""
+        point; a map ignores it), of world ``world`` (one per point, or one; default 0)."""
+        if self._map is not None:  # one map
+            return bilinear(self._map, self.extent, x, y)
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        out = in_time(self.db, self.extent, x, y, *self.brackets(t_s))
+        k0, k1, f = self.brackets(t_s)
+        flat = self.values.reshape(-1, *self.values.shape[2:])
+        if world is not None:
+            base = np.asarray(world, dtype=np.int64) * self.values.shape[1]
+            k0, k1 = base + k0, base + k1
+        out = in_time(flat, self.extent, x, y, k0, k1, f)
         return out[()] if out.ndim == 0 else out
+
+    def chance(self, x: Any, y: Any, t_s: Any = None) -> Any:
+        """The probability of outage at the points ``(x, y)``, bilinear as the map (the task's
+        ``"chance"`` reward); needs ``outage_p``."""
+        if self.outage_p is None:
+            raise InvalidInputError(
+                "reward 'chance' needs a field with outage_p (a map corrected by measurements, "
+                "through rainuav.world.world_from)"
+            )
+        return bilinear(self.outage_p, self.extent, x, y)
 
     def serving_cell(self, x: Any, y: Any, t_s: Any = 0.0) -> Any:
         """The serving cell at the pixel holding ``(x, y)`` in the latest slice at or before
-        ``t_s`` (a number, or one per point; -1 where the series names none)."""
-        shape = np.broadcast(np.asarray(x), np.asarray(y), np.asarray(t_s)).shape
+        ``t_s`` (a number, or one per point; a map ignores it; -1 where none is named)."""
+        if not self.varies:
+            shape = np.broadcast(np.asarray(x), np.asarray(y)).shape
+        else:
+            shape = np.broadcast(np.asarray(x), np.asarray(y), np.asarray(t_s)).shape
         if self.serving is None:
             return np.full(shape, -1, dtype=np.int64)
-        k = np.searchsorted(self.t_s, np.broadcast_to(t_s, shape), side="right") - 1
         i, j = pixel_index(self.db.shape, self.extent, x, y)
+        if not self.varies:
+            return self.serving[i, j]
+        k = np.searchsorted(self.t_s, np.broadcast_to(t_s, shape), side="right") - 1
         return self.serving[np.maximum(k, 0), i, j]
 
     def frozen(self, t_s: float = 0.0) -> SignalField:
-        """The weather of ``t_s`` held still: the one map the series gives at that instant
-        (what a tool that ignores the storm's motion plans on)."""
+        """The weather of ``t_s`` held still: the one map the signal gives at that instant
+        (what a tool that ignores the storm's motion plans on; a map: itself)."""
+        if self.banked:
+            raise InvalidInputError("frozen: a bank holds several worlds; take one (member)")
+        if not self.varies:
+            return self
         k0, k1, f = (int(a) if a.dtype.kind == "i" else float(a) for a in self.brackets(t_s))
         v = self.db[k0] if k0 == k1 else (1.0 - f) * self.db[k0] + f * self.db[k1]
         return SignalField(v, self.extent, self.name, not_flyable=self.not_flyable)
 
     def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
-        """(N, M): the signal at the fixed points (M, 2) at each of the N instants ``t_s``,
-        as `__call__` gives it; every slice is sampled once per set of points."""
-        g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
-        return _lerp(g, *self.brackets(np.atleast_1d(t_s)))
-
-
-class SignalBank:
-    """Several worlds' signals in one array, each point reading its own world: ``values_db`` (P, K,
-    H, W), the P worlds' maps at the common instants ``t_s`` (K,) over one extent, read as each
-    world's [`SignalSeries`][rainuav.nav.field.SignalSeries] reads it (a one-instant bank is P still
-    maps). The UAVs of one training batch fly different storms through one call; a world's slot is
-    replaced in place ([`put()`][rainuav.nav.field.SignalBank.put]) when the learner moves on to a
-    new storm."""
-
-    varies = True
-    """The worlds' signals may change in time (a bank of still maps says False)."""
-
-    not_flyable = None
-    """Storm banks fly over flat open ground: no pixel is closed."""
-
-    def __init__(
-        self,
-        values_db: npt.ArrayLike,
-        t_s: npt.ArrayLike,
-        extent_m: tuple[float, float, float, float],
-        name: str = "sinr_db",
-    ):
-        v = np.asarray(values_db, dtype=np.float64)
-        if v.ndim != 4:
-            raise InvalidInputError(f"{name} must be a 4-D (P, K, H, W) array (got {v.shape})")
-        p, k, h, w = v.shape
-        self._series = SignalSeries(v.reshape(p * k, h, w), np.arange(p * k), extent_m, name)
-        self.db = self._series.db.reshape(p, k, h, w)
-        self.extent, self.name = self._series.extent, name
-        self._times = SignalSeries(np.zeros((k, 1, 1)), t_s, extent_m, "t_s")
-        self.t_s = self._times.t_s
-        self.varies = k > 1
-        self._points = _PointCache()
-
-    @property
-    def worlds(self) -> int:
-        return self.db.shape[0]
-
-    def put(self, world: int, values_db: npt.ArrayLike) -> None:
-        """Replaces world ``world``'s maps (K, H, W) (checked: the bank's shape, finite)."""
-        v = np.asarray(values_db, dtype=np.float64)
-        if v.shape != self.db.shape[1:] or not np.all(np.isfinite(v)):
-            raise InvalidInputError(
-                f"{self.name} must be finite, of shape {self.db.shape[1:]} (got {v.shape})"
-            )
-        self.db[world] = v
-        self._points = _PointCache()  # samples of the old storm are stale
-
-    def at_points(self, points: np.ndarray, t_s: Any, world: Any) -> np.ndarray:
-        """(N, M): world ``world[n]``'s signal at the fixed points (M, 2) at the instants
-        ``t_s[n]``, as `__call__` gives it; every slice sampled once per set of
-        points (until [`put()`][rainuav.nav.field.SignalBank.put])."""
-        g = self._points.get(self.db, self.extent, np.asarray(points, dtype=np.float64))
+        """(N, M): the signal at the fixed points (M, 2) at each of the N instants ``t_s`` (of
+        world ``world[n]``), as `__call__` gives it; every slice is sampled once per set of
+        points (until [`put()`][rainuav.nav.field.SignalField.put])."""
+        g = self._points.get(self.values, self.extent, np.asarray(points, dtype=np.float64))
+        g = g.reshape(-1, g.shape[-1])
+        if len(g) == 1:
+            return np.broadcast_to(g[0], (np.size(t_s), g.shape[-1]))
         t = np.atleast_1d(t_s)
-        w = np.broadcast_to(np.asarray(world, dtype=np.int64), t.shape)
-        k0, k1, f = self._times.brackets(t)
-        kk = self.db.shape[1]
-        return _lerp(g.reshape(-1, g.shape[-1]), w * kk + k0, w * kk + k1, f)
+        k0, k1, f = self.brackets(t)
+        if world is not None:
+            w = np.broadcast_to(np.asarray(world, dtype=np.int64), t.shape)
+            k0, k1 = w * self.values.shape[1] + k0, w * self.values.shape[1] + k1
+        return _lerp(g, k0, k1, f)
 
-    def __call__(self, x: Any, y: Any, t_s: Any, world: Any) -> Any:
-        """The signal of world ``world`` (one per point, or one) at the points ``(x, y)`` at
-        the instants ``t_s``, as that world's [`SignalSeries`][rainuav.nav.field.SignalSeries] gives
-        it."""
-        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        k0, k1, f = self._times.brackets(np.asarray(t_s, dtype=np.float64))
-        base = np.asarray(world, dtype=np.int64) * self.db.shape[1]
-        out = in_time(self._series.db, self.extent, x, y, base + k0, base + k1, f)
-        return out[()] if out.ndim == 0 else out
 
-    def member(self, world: int) -> SignalField | SignalSeries:
-        """World ``world``'s signal on its own (a copy)."""
-        if self.db.shape[1] == 1:
-            return SignalField(self.db[world, 0].copy(), self.extent, self.name)
-        return SignalSeries(self.db[world].copy(), self.t_s, self.extent, self.name)
+SignalSeries = SignalField.series
+"""Maps in time: [`SignalField.series`][rainuav.nav.field.SignalField.series]."""
 
+SignalBank = SignalField.bank
+"""A bank of worlds: [`SignalField.bank`][rainuav.nav.field.SignalField.bank]."""
 
 SirField = SignalField
 """The old name (the field is whichever signal the task flies on)."""

@@ -66,11 +66,11 @@ class LevelField:
     [`SignalSeries`][rainuav.nav.field.SignalSeries] or [`SignalBank`][rainuav.nav.field.SignalBank]
     a level (all of one kind, over one area), lowest first, at ``altitudes_m``. A field of banks
     holds many storms' levels at once (a storm pool among levels): each UAV reads its own world's
-    (``world``), and [`put()`][rainuav.nav.field.SignalBank.put] renews one."""
+    (``world``), and [`put()`][rainuav.nav.field.SignalField.put] renews one."""
 
     def __init__(
         self,
-        fields: Sequence[SignalField | SignalSeries | SignalBank],
+        fields: Sequence[SignalField],
         altitudes_m: npt.ArrayLike,
     ) -> None:
         alts = as_real_array("altitudes_m", altitudes_m).reshape(-1)
@@ -81,12 +81,14 @@ class LevelField:
             )
         if alts.size > 1 and not np.all(np.diff(alts) > 0):
             raise InvalidInputError(f"altitudes_m must increase (got {alts.tolist()})")
-        kinds = {type(f) for f in fields}
-        if not kinds <= {SignalField, SignalSeries, SignalBank} or len(kinds) != 1:
+        if not all(isinstance(f, SignalField) for f in fields):
+            raise InvalidInputError("fields must be SignalFields")
+        kinds = {(f.banked, f.varies) for f in fields}
+        if len(kinds) != 1:
             raise InvalidInputError(
-                "fields must be all SignalField, all SignalSeries or all SignalBank"
+                "fields must be all maps, all maps in time (SignalSeries) or all banks (SignalBank)"
             )
-        if kinds == {SignalBank} and len({f.db.shape for f in fields}) != 1:  # type: ignore[union-attr]
+        if fields[0].banked and len({f.db.shape for f in fields}) != 1:
             raise InvalidInputError("the levels' banks must hold as many worlds and instants")
         if len({f.extent for f in fields}) != 1:
             raise InvalidInputError("the levels' fields must cover one area (one extent)")
@@ -94,7 +96,7 @@ class LevelField:
         self.altitudes_m = alts
         self.extent = fields[0].extent
         self.varies = bool(fields[0].varies)
-        self.banked = isinstance(fields[0], SignalBank)
+        self.banked = fields[0].banked
 
     @classmethod
     def bank(
@@ -115,7 +117,7 @@ class LevelField:
     @property
     def worlds(self) -> int:
         """Worlds held (1 but for a field of banks)."""
-        return self.fields[0].worlds if self.banked else 1  # type: ignore[union-attr]
+        return self.fields[0].worlds
 
     def put(self, world: int, stack: npt.ArrayLike) -> None:
         """Replaces world ``world`` of a field of banks by ``stack`` (T, L, H, W)."""
@@ -125,7 +127,7 @@ class LevelField:
         if v.ndim != 4 or v.shape[1] != self.levels:
             raise InvalidInputError(f"stack must be (T, {self.levels}, H, W) (got {v.shape})")
         for k, f in enumerate(self.fields):
-            f.put(world, v[:, k])  # type: ignore[union-attr]
+            f.put(world, v[:, k])
 
     def at_points(self, points: np.ndarray, t_s: Any, world: Any) -> np.ndarray:
         """(N, L, M): every level's signal at the fixed points (M, 2), UAV n at ``t_s[n]``
@@ -160,7 +162,7 @@ class LevelField:
         mask = None if not_flyable is None else np.asarray(not_flyable)
         srv = None if serving_cell is None else np.asarray(serving_cell)
         axis = sig.ndim - 3  # the level axis
-        fields: list[SignalField | SignalSeries] = []
+        fields: list[SignalField] = []
         for k in range(sig.shape[axis]):
             m = None if mask is None else mask[k]
             s = None if srv is None else np.take(srv, k, axis=axis)
@@ -305,9 +307,7 @@ class LevelStepper:
         }
 
 
-def field_of(
-    signal: Signal, *, levels: bool = False
-) -> SignalField | SignalSeries | SignalBank | LevelField:
+def field_of(signal: Signal, *, levels: bool = False) -> SignalField | LevelField:
     """The field the environment and the planner read of one signal, by its axes' sizes.
 
     For a [`Signal`][rainuav.signals.Signal], one level gives a map

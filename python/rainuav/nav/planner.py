@@ -21,7 +21,6 @@ import numpy.typing as npt
 from rainuav import _core
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import SignalField
 from rainuav.nav.levelfield import CLIMB_M_S, DESCEND_M_S, level_durations
 from rainuav.nav.task import NavConfig
 
@@ -66,7 +65,7 @@ def optimal_many(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
 
 def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
     """Exact optimal plans of the task ``cfg`` (``min_db`` resolved) on ``field`` (a
-    [`SignalField`][rainuav.nav.field.SignalField], or a series in time) from each start. With
+    [`SignalField`][rainuav.nav.field.SignalField]: a map or a series in time) from each start. With
     ``cfg.reward == "chance"`` the plan reads the field's ``outage_p`` (a move costs ``1 + mu P``
     where it ends)."""
     starts = np.ascontiguousarray(np.asarray(starts_m, dtype=np.float64).reshape(-1, 2))
@@ -90,10 +89,10 @@ def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
         if getattr(field, "outage_p", None) is None:
             raise InvalidInputError("reward 'chance' plans on one map with outage_p")
         slices, times = field.outage_p[None, None], np.zeros(1)
-    elif isinstance(field, SignalField):
-        slices, times = field.db[None, None], np.zeros(1)
-    else:
-        slices, times = field.db[:, None], np.asarray(field.t_s, dtype=np.float64)
+    elif getattr(field, "banked", False):
+        raise InvalidInputError("the planner plans on one world: take a bank's member(world)")
+    else:  # a map is a series of one slice at t = 0
+        slices, times = field.values[0][:, None], field.t_s
     raw = _core.plan_optimal_levels(
         np.ascontiguousarray(slices, dtype=np.float64), np.ascontiguousarray(times),
         tuple(float(v) for v in field.extent), goal,  # type: ignore[arg-type]
@@ -243,6 +242,6 @@ def optimal_among_levels(
         blocked = np.stack([np.zeros(f[0].db.shape[-2:], bool) if m is None else m for m in masks])
     return optimal_levels(
         sig, env.field.altitudes_m, env.field.extent, env.cfg, starts, start_levels,
-        t_s=getattr(f[0], "t_s", None), not_flyable=blocked, climb_m_s=env.climb_m_s,
+        t_s=f[0].t_s if env.field.varies else None, not_flyable=blocked, climb_m_s=env.climb_m_s,
         descend_m_s=env.descend_m_s,
     )  # fmt: skip

@@ -31,7 +31,7 @@ from rainuav._checks import check_field_kinds
 from rainuav._cli import altitude_band
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import SignalBank, SignalField, SignalSeries
+from rainuav.nav.field import SignalField
 from rainuav.nav.levelfield import field_of
 from rainuav.nav.levels import LevelField
 from rainuav.nav.task import NavConfig, check_config, check_task
@@ -245,7 +245,7 @@ class World:
 
     source: RadioMap | RadioMapSeries | LevelStack | Signal | None
     """What the signal is read from (saved with a run; None for a storm pool's bank)."""
-    field: SignalField | SignalSeries | SignalBank | LevelField
+    field: SignalField | LevelField
     """The signal the UAV flies through (a [`LevelField`][rainuav.nav.levelfield.LevelField] where
     altitude is a decision)."""
     task: NavConfig

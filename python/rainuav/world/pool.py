@@ -19,7 +19,7 @@ import numpy as np
 
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import SignalBank, SignalSeries
+from rainuav.nav.field import SignalBank, SignalField
 from rainuav.nav.levelfield import LevelField
 from rainuav.radio.outputs.levelmaps import LevelStack
 from rainuav.radio.outputs.timemap import build_radio_map_series
@@ -100,13 +100,13 @@ class StormPool:
         first += [self._build(self._draw()) for _ in range(spec.storm_pool - 1)]
         field = first[0][1].field
         self.task = first[0][1].task
-        self.bank: SignalBank | LevelField
+        self.bank: SignalField | LevelField
         if isinstance(field, LevelField):
             stacks = np.stack([_maps(w) for _, w in first])
             t_s = field.fields[0].t_s  # type: ignore[union-attr]
             self.bank = LevelField.bank(stacks, t_s, field.extent, field.altitudes_m)
         else:
-            assert isinstance(field, SignalSeries)  # a storm moves
+            assert isinstance(field, SignalField) and field.varies  # a storm moves
             self.bank = SignalBank([w.field.db for _, w in first], field.t_s, field.extent)
         self.seeds = [k for k, _ in first]
         self.flown.extend(self.seeds)
