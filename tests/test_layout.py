@@ -20,7 +20,7 @@ MAX_LINES = 450
 
 # Layers, bottom up. A module may import a lower layer, or its own group; never a group of the
 # same or a higher layer (so radio and nav do not know each other).
-BASE = {"errors", "_io", "_checks", "_sampling", "_core", "_cli"}
+BASE = {"errors", "_io", "_checks", "_sampling", "_core", "_cli", "_threads"}
 LAYERS = {
     "base": 0,
     "medium": 1,

@@ -103,8 +103,9 @@ def _checked_mask(mask: Any, shape: tuple[int, int]) -> np.ndarray | None:
 
 
 def blocked_at(field: Any, x: Any, y: Any) -> np.ndarray:
-    """Whether the pixel holding each point ``(x, y)`` may not be entered (the field's
-    ``not_flyable`` mask; False everywhere without one)."""
+    """Whether the pixel holding each point ``(x, y)`` may not be entered.
+
+    The field's ``not_flyable`` mask; False everywhere without one."""
     mask = getattr(field, "not_flyable", None)
     if mask is None:
         return np.zeros(np.broadcast(np.asarray(x), np.asarray(y)).shape, dtype=bool)
@@ -112,8 +113,9 @@ def blocked_at(field: Any, x: Any, y: Any) -> np.ndarray:
 
 
 def read_signal(field: Any, x: Any, y: Any, t_s: Any, world: Any = None) -> Any:
-    """The signal of ``field`` (a map, maps in time or a bank) at ``(x, y)`` at ``t_s``; in a
-    bank, of world ``world`` (default 0)."""
+    """The signal of ``field`` at ``(x, y)`` at ``t_s``, in a bank of world ``world``.
+
+    ``field``: a map, maps in time or a bank (``world`` default 0)."""
     return field(x, y, t_s, world)
 
 
@@ -144,8 +146,10 @@ class _PointCache:
 
 
 class SignalField:
-    """A signal in dB (SINR or SIR) over ``extent_m = (x_min, x_max, y_min, y_max)``, one class
-    for every kind: ``values`` (P, K, H, W), P worlds' maps at the K instants ``t_s``. Bilinear
+    """One level's signal in dB (SINR or SIR): a map, maps in time or a bank of worlds.
+
+    Over ``extent_m = (x_min, x_max, y_min, y_max)``, one class for every kind: ``values`` (P, K,
+    H, W), P worlds' maps at the K instants ``t_s``. Bilinear
     in space within a slice (`rainuav._sampling.bilinear`), linear in time between the two
     slices around an instant, held before the first and after the last
     (``rainuav_core::planlevels``' signal in time, operation for operation); a point of a bank

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from rainuav import _core
+from rainuav._threads import each
 from rainuav.radio.engines.grid import C0_M_S
 from rainuav.radio.engines.pe_engine import rain_rate_at
 from rainuav.radio.engines.wall_rays import obstacle_args, trace_walls, wall_terms
@@ -269,8 +270,12 @@ def ray_gains(
     dirs = ray_directions(scn, jobs, x_m, y_m) if directions is None else directions
     shape = (len(jobs), y_m.size, x_m.size)
     gd, gr = np.empty(shape), np.empty(shape)
-    for m, ((_, cell), (az, el_d, el_r)) in enumerate(zip(jobs, dirs, strict=True)):
+
+    def one(m: int) -> None:
+        (_, cell), (az, el_d, el_r) = jobs[m], dirs[m]
         gd[m], gr[m] = gain_linear(cell, az, el_d), gain_linear(cell, az, el_r)
+
+    each(len(jobs), one)
     return gd, gr
 
 

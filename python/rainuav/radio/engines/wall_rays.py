@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from rainuav import _core
+from rainuav._threads import each
 from rainuav.radio.scene.buildings import prism_eps, scenario_buildings, wall_args
 from rainuav.radio.scene.cell import Cell, Weight, gain_linear, weight_at
 from rainuav.radio.scene.scenario import Scenario, Site
@@ -108,7 +109,9 @@ def wall_terms(
     (site_k, pixel, az, el, factor, length, _kind), index = traced
     plane = y_m.size * x_m.size
     out = np.zeros((len(jobs), plane, 2))
-    for m, (site, cell) in enumerate(jobs):
+
+    def one(m: int) -> None:
+        site, cell = jobs[m]
         sel = site_k == index[id(site)]
         g = gain_linear(cell, az[sel], el[sel])
         if weights is not None:
@@ -119,4 +122,6 @@ def wall_terms(
         dl = np.bincount(pixel[sel], p * length[sel], minlength=plane)
         out[m, :, 0] = total
         out[m, :, 1] = np.divide(dl, total, out=np.zeros(plane), where=total > 0)
+
+    each(len(jobs), one)
     return out.reshape(len(jobs), y_m.size, x_m.size, 2)
