@@ -12,10 +12,11 @@ __all__ = ["each"]
 
 
 def each(n: int, body: Callable[[int], None]) -> None:
-    """Calls ``body(k)`` for every ``k < n``, on up to as many threads as the machine has cores
+    """Calls ``body(k)`` for every ``k < n``, on up to as many threads as this process may use cores
     (one: in order, on this thread). The rounds must not share what they write; any error is
     raised here."""
-    threads = min(n, os.cpu_count() or 1)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    threads = min(n, cores or 1)
     if threads <= 1:
         for k in range(n):
             body(k)

@@ -282,13 +282,18 @@ class SignalField:
         if self._map is not None:  # one map
             return bilinear(self._map, self.extent, x, y)
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        k0, k1, f = self.brackets(t_s)
         flat = self.values.reshape(-1, *self.values.shape[2:])
-        if world is not None:
-            base = np.asarray(world, dtype=np.int64) * self.values.shape[1]
-            k0, k1 = base + k0, base + k1
-        out = in_time(flat, self.extent, x, y, k0, k1, f)
+        out = in_time(flat, self.extent, x, y, *self._rows(t_s, world))
         return out[()] if out.ndim == 0 else out
+
+    def _rows(self, t_s: Any, world: Any) -> tuple[Any, Any, np.ndarray]:
+        """[`brackets()`][rainuav.nav.field.SignalField.brackets] of ``t_s`` as rows of the
+        worlds' slices stacked (world ``w``'s slice ``k`` is row ``w K + k``; default world 0)."""
+        k0, k1, f = self.brackets(t_s)
+        if world is None:
+            return k0, k1, f
+        base = np.asarray(world, dtype=np.int64) * self.values.shape[1]
+        return base + k0, base + k1, f
 
     def chance(self, x: Any, y: Any, t_s: Any = None) -> Any:
         """The probability of outage at the points ``(x, y)``, bilinear as the map (the task's
@@ -334,12 +339,7 @@ class SignalField:
         g = g.reshape(-1, g.shape[-1])
         if len(g) == 1:
             return np.broadcast_to(g[0], (np.size(t_s), g.shape[-1]))
-        t = np.atleast_1d(t_s)
-        k0, k1, f = self.brackets(t)
-        if world is not None:
-            w = np.broadcast_to(np.asarray(world, dtype=np.int64), t.shape)
-            k0, k1 = w * self.values.shape[1] + k0, w * self.values.shape[1] + k1
-        return _lerp(g, k0, k1, f)
+        return _lerp(g, *self._rows(np.atleast_1d(t_s), world))
 
 
 SignalSeries = SignalField.series
