@@ -126,6 +126,18 @@ def small_cfg(out: Path, episodes: int) -> TrainConfig:
     )
 
 
+def plumbing_cfg(out: Path, episodes: int) -> TrainConfig:
+    """``small_cfg`` flown from fewer starts: for the tests of what a run saves, resumes and
+    reports (the same figures either way), not of how well it learns."""
+    return dataclasses.replace(
+        small_cfg(out, episodes),
+        eval_starts=10,
+        validate_starts=6,
+        checkpoint_every=25,
+        validate_every=25,
+    )
+
+
 def _env() -> UAVNavEnv:
     return UAVNavEnv(radio_map=synthetic_map(), goal_m=(300.0, 350.0), max_steps=100)
 
@@ -378,7 +390,7 @@ def test_weight_average_is_the_running_mean() -> None:
 
 @pytest.mark.slow
 def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_path: Path) -> None:
-    plain, averaged = small_cfg(tmp_path / "plain", 120), small_cfg(tmp_path / "avg", 120)
+    plain, averaged = plumbing_cfg(tmp_path / "plain", 60), plumbing_cfg(tmp_path / "avg", 60)
     plain.dqn.average_from, averaged.dqn.average_from = 1.0, 0.5
     p = train(*in_world(plain, synthetic_map()), progress=False)
     m = train(*in_world(averaged, synthetic_map()), progress=False)
@@ -388,8 +400,8 @@ def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_pat
     assert a["average"] is None and a["n_averaged"] == 0
     for k in a["online"]:
         assert torch.equal(a["online"][k], b["online"][k]), k
-    # One sample per finished episode after 60 of 120; the mean is what the run reports.
-    assert b["n_averaged"] == 60
+    # One sample per finished episode after 30 of 60; the mean is what the run reports.
+    assert b["n_averaged"] == 30
     policy = torch.load(tmp_path / "avg" / "policy.pt", weights_only=True)["online"]
     assert all(torch.equal(policy[k], b["average"][k].cpu()) for k in policy)
     assert not all(torch.equal(policy[k], b["online"][k].cpu()) for k in policy)
@@ -410,14 +422,14 @@ def test_weight_averaging_reports_the_mean_and_leaves_training_unchanged(tmp_pat
 def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
     """Interrupted at a checkpoint, or stopped by its budget and resumed with a larger one,
     a run ends as the run that never stopped."""
-    full = train(*in_world(small_cfg(tmp_path / "full", 120), synthetic_map()), progress=False)
+    full = train(*in_world(plumbing_cfg(tmp_path / "full", 60), synthetic_map()), progress=False)
     part_dir = tmp_path / "part"
-    # Interrupted after the checkpoint at 50 finished episodes, with lanes in mid-flight.
+    # Interrupted after the checkpoint at 25 finished episodes, with lanes in mid-flight.
     assert (
-        train(*in_world(small_cfg(part_dir, 120), synthetic_map()), progress=False, stop_after=50)
+        train(*in_world(plumbing_cfg(part_dir, 60), synthetic_map()), progress=False, stop_after=25)
         == {}
     )
-    resumed = train(*saved_world(small_cfg(part_dir, 120)), resume=True, progress=False)
+    resumed = train(*saved_world(plumbing_cfg(part_dir, 60)), resume=True, progress=False)
     for k in (
         "mean_return",
         "success_rate",
@@ -431,11 +443,11 @@ def test_resume_equals_uninterrupted(tmp_path: Path) -> None:
         assert torch.equal(a[k], b[k]), k
     # A wall-clock budget spent at once stops a run at its first finished episodes; resumed
     # with no budget it ends as the run that never stopped (same figures, same weights).
-    short = dataclasses.replace(small_cfg(tmp_path / "budget", 120), time_budget_s=1e-9)
-    assert train(*in_world(short, synthetic_map()), progress=False)["episodes"] < 120
+    short = dataclasses.replace(plumbing_cfg(tmp_path / "budget", 60), time_budget_s=1e-9)
+    assert train(*in_world(short, synthetic_map()), progress=False)["episodes"] < 60
     more = dataclasses.replace(short, time_budget_s=0.0)
     resumed = train(*saved_world(more), resume=True, progress=False)
-    assert resumed["episodes"] == 120
+    assert resumed["episodes"] == 60
     for k in ("mean_return", "success_rate", "mean_steps", "mean_gap_to_optimal"):
         assert resumed[k] == full[k], k
     c = checkpoint.load(tmp_path / "budget" / "checkpoint.pt")["agent"]["online"]
