@@ -136,7 +136,7 @@ def test_bad_input_is_refused_in_one_line() -> None:
         env.reset(options={"start_m": (5.0, 5.0), "start_level": 0})
     series = SignalSeries(stack(4, 2)[:, 0], [0.0, 5.0], EXTENT)
     with pytest.raises(InvalidInputError, match="all maps, all maps in time"):
-        LevelField([series, field.fields[1], field.fields[2]], ALTS)
+        LevelField.of_levels([series, field.level(1), field.level(2)], ALTS)
 
 
 def test_a_plan_too_big_for_memory_is_refused_before_allocating() -> None:
@@ -174,3 +174,32 @@ def test_gym_make_builds_the_levels_of_a_scenario() -> None:
     assert obs["local"].shape == (2, 11, 11) and obs["level"][0] == 0.0 and "goal_m" in info
     with pytest.raises(InvalidInputError, match="signal: the environment among levels"):
         gym.make("rainuav/UAVLevels-v0", scenario=scn, signal="sir")
+
+
+def test_a_field_of_levels_is_its_levels_read_one_by_one() -> None:
+    """One field over (time, level, north, east) reads, level by level, bit for bit what each
+    level's own field reads (maps and maps in time, with closed pixels and serving cells); its
+    levels taken apart and put together again give the same field."""
+    rng = np.random.default_rng(5)
+    x, y = rng.uniform(-10, 130, 300), rng.uniform(-10, 90, 300)
+    t, lv = rng.uniform(-2, 12, 300), rng.integers(0, 3, 300)
+    mask = rng.random((3, 8, 12)) < 0.2
+    for sig, t_s in ((stack(6), None), (stack(7, 4), [0.0, 3.0, 5.0, 10.0])):
+        serving = rng.integers(0, 5, sig.shape)
+        field = LevelField.from_stack(sig, ALTS, EXTENT, t_s=t_s, not_flyable=mask,
+                                      serving_cell=serving)  # fmt: skip
+        assert field.levels == 3 and field.values.shape[2] == 3
+        again = LevelField.of_levels([field.level(k) for k in range(3)], ALTS)
+        for k in range(3):
+            one = field.level(k)
+            assert one.altitudes_m is None and one.levels == 1
+            on = lv == k
+            got = field(x[on], y[on], t[on], level=k)
+            np.testing.assert_array_equal(got, one(x[on], y[on], t[on]))
+            np.testing.assert_array_equal(got, again(x[on], y[on], t[on], level=k))
+            np.testing.assert_array_equal(
+                field.serving_cell(x[on], y[on], t[on], k), one.serving_cell(x[on], y[on], t[on])
+            )
+            np.testing.assert_array_equal(field.blocked(x[on], y[on], k), one.blocked(x[on], y[on]))
+        np.testing.assert_array_equal(field.blocked(x, y, lv), again.blocked(x, y, lv))
+        assert np.array_equal(field.flyable(5.0, 5.0), ~mask[:, 0, 0])

@@ -134,13 +134,13 @@ def test_the_yardsticks_among_levels_are_the_planners() -> None:
     refs = reference_flights(env, starts)
     opt = planner.optimal_among_levels(env, starts)
     assert np.allclose(refs["optimal"]["return"], [p.return_ for p in opt], rtol=0, atol=1e-9)
-    top = UAVNavEnv(field=env.field.fields[2], config=env.cfg)  # 100 m: the fixed level
+    top = UAVNavEnv(field=env.field.level(2), config=env.cfg)  # 100 m: the fixed level
     fixed = planner.optimal_many(top, starts)
     assert np.allclose(refs["fixed_altitude"]["return"], [p.return_ for p in fixed], atol=1e-9)
     line = [planner.straight_line(top, s).return_ for s in starts]
     assert np.allclose(refs["straight_line"]["return"], line, atol=1e-9)
     per_level = [planner.optimal_many(UAVNavEnv(field=f, config=env.cfg), starts)
-                 for f in env.field.fields]  # fmt: skip
+                 for f in map(env.field.level, range(env.field.levels))]  # fmt: skip
     best = np.max([[p.return_ for p in ps] for ps in per_level], axis=0)
     assert np.allclose(refs["best_single_altitude"]["return"], best, atol=1e-9)
     # Every flight arrives here, and the optimum among levels from the lowest level is at

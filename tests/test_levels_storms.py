@@ -86,17 +86,17 @@ def test_level_bank_reads_each_world_as_its_own_levels() -> None:
     rng = np.random.default_rng(3)
     x, y = rng.uniform(-50, 1050, 400), rng.uniform(-50, 850, 400)
     t, lv, w = rng.uniform(-5, 25, 400), rng.integers(0, 3, 400), rng.integers(0, 3, 400)
-    got = bank(x, y, t, lv, w)
+    got = bank(x, y, t, w, level=lv)
     for p in range(3):
         own = LevelField.from_stack(s[p], ALTS, EXTENT, t_s=T_S)
         on = w == p
-        np.testing.assert_array_equal(got[on], own(x[on], y[on], t[on], lv[on]))
+        np.testing.assert_array_equal(got[on], own(x[on], y[on], t[on], level=lv[on]))
     bank.put(0, s[2])
-    np.testing.assert_array_equal(bank(x, y, t, lv, 0), bank(x, y, t, lv, 2))
+    np.testing.assert_array_equal(bank(x, y, t, 0, level=lv), bank(x, y, t, 2, level=lv))
     assert bank.worlds == 3 and bank.banked
-    with pytest.raises(InvalidInputError, match=r"stack must be \(T, 3, H, W\)"):
+    with pytest.raises(InvalidInputError, match=r"must be finite, of shape \(3, 3, 40, 50\)"):
         bank.put(0, s[2][:, :2])
-    with pytest.raises(InvalidInputError, match="put renews a world of a field of banks"):
+    with pytest.raises(InvalidInputError, match="put renews a world of a bank"):
         LevelField.from_stack(s[0], ALTS, EXTENT, t_s=T_S).put(0, s[1])
 
 
@@ -191,7 +191,7 @@ def test_bad_weather_options_among_levels_are_refused() -> None:
         WeatherView(layers=0)
     with pytest.raises(InvalidInputError, match="as many worlds and instants"):
         two, three = (LevelField.bank(stacks(p), T_S, EXTENT, ALTS) for p in (2, 3))
-        LevelField([two.fields[0], three.fields[1]], ALTS[:2])
+        LevelField.of_levels([two.level(0), three.level(1)], ALTS[:2])
 
 
 def pool_cfg(out: Path, **kw: object) -> object:

@@ -94,7 +94,7 @@ def test_the_field_of_a_signal_reads_as_the_field_of_its_source(series) -> None:
     one = series.at(0.0)
     a = field_of(signal_of(one))
     b = SignalField(one.sinr_db, one.extent_m, "sinr_db", one.serving_cell, one.not_flyable)
-    assert type(a) is SignalField and not a.varies and a.values.shape == (1, 1, 20, 20)
+    assert type(a) is SignalField and not a.varies and a.values.shape == (1, 1, 1, 20, 20)
     assert np.array_equal(a(x, y), b(x, y))
     assert np.array_equal(a.serving_cell(x, y), b.serving_cell(x, y))
     a = field_of(signal_of(series))
@@ -110,8 +110,8 @@ def test_the_field_of_a_signal_reads_as_the_field_of_its_source(series) -> None:
         )  # fmt: skip
         lv = np.arange(len(x)) % 3
         xs, ys = x / 5.0, y / 5.0
-        assert type(a) is LevelField and a.levels == 3
-        assert np.array_equal(a(xs, ys, t, lv), b(xs, ys, t, lv))
+        assert type(a) is SignalField and a.altitudes_m is not None and a.levels == 3
+        assert np.array_equal(a(xs, ys, t, level=lv), b(xs, ys, t, level=lv))
         assert np.array_equal(a.serving_cell(xs, ys, t, lv), b.serving_cell(xs, ys, t, lv))
         assert np.array_equal(a.blocked(xs, ys, lv), b.blocked(xs, ys, lv))
     # A bank: four worlds' maps in time, each point reading its own world.
@@ -126,7 +126,7 @@ def test_the_field_of_a_signal_reads_as_the_field_of_its_source(series) -> None:
     sig = Signal(lv5, one.extent_m, series.t_s, np.array([30.0, 45.0, 100.0]))
     a, b = field_of(sig), LevelField.bank(lv5, series.t_s, one.extent_m, [30.0, 45.0, 100.0])
     lv = np.arange(len(x)) % 3
-    assert a.banked and np.array_equal(a(x, y, t, lv, w), b(x, y, t, lv, w))
+    assert a.banked and np.array_equal(a(x, y, t, w, level=lv), b(x, y, t, w, level=lv))
 
 
 def test_named_axes_are_put_in_the_signals_order() -> None:
@@ -234,6 +234,6 @@ def test_a_band_of_one_level_stays_a_level_field() -> None:
     s = stack()
     one = Signal.from_axes(s.sinr_db[:1], ("level", "north", "east"), s.extent, altitudes_m=[30.0])
     a, b = field_of(one, levels=True), field_of(one)
-    assert type(a) is LevelField and a.levels == 1 and type(b) is SignalField
+    assert a.altitudes_m is not None and a.levels == 1 and b.altitudes_m is None
     x, y, t = points()
-    assert np.array_equal(a(x / 5, y / 5, t, 0), b(x / 5, y / 5))
+    assert np.array_equal(a(x / 5, y / 5, t, level=0), b(x / 5, y / 5))

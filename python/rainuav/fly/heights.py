@@ -100,16 +100,16 @@ def fly_levels(
     start_level = int(lv[0])
     up, down = plan.actions == 4, plan.actions == 5
     t_s = plan.ticks * task.move_s
-    sig = field(path[:, 0], path[:, 1], t_s, lv)
+    sig = field(path[:, 0], path[:, 1], t_s, level=lv)
     serving = field.serving_cell(path[:, 0], path[:, 1], t_s, lv)
     cost = -(plan.return_ - task.goal_reward)
     # The baselines: each level alone, exactly (in space-time where the weather moves).
     per_level = []
     for k in range(len(alts)):
-        p = planner.plan_on(field.fields[k], task, np.asarray(place.start_m)[None])[0]
+        p = planner.plan_on(field.level(k), task, np.asarray(place.start_m)[None])[0]
         arrives = bool(np.hypot(*(p.path_m[-1] - np.asarray(place.goal_m))) <= task.tol_m)
         q = p.path_m[1:]
-        s = field(q[:, 0], q[:, 1], np.arange(1, len(p.path_m)) * task.move_s, k)
+        s = field(q[:, 0], q[:, 1], np.arange(1, len(p.path_m)) * task.move_s, level=k)
         per_level.append((-(p.return_ - task.goal_reward) if arrives else None,
                           float(np.mean(s < threshold)) if arrives else None))  # fmt: skip
     fixed = int(np.argmin(np.abs(alts - scn.area.altitude_m)))

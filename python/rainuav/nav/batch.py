@@ -2,43 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
-from rainuav.errors import InvalidInputError
-from rainuav.nav.field import SignalField, blocked_at
+from rainuav.nav.field import SignalField
 from rainuav.nav.levelfield import LevelStepper
 from rainuav.nav.task import MOVES, NavConfig
 
 __all__ = ["BatchStepper"]
-
-
-class _OneLevel:
-    """A plane's signal as a field of one level, the way
-    [`LevelStepper`][rainuav.nav.levelfield.LevelStepper] reads one."""
-
-    levels = 1
-
-    def __init__(self, field: Any) -> None:
-        self.plane = field
-        self.extent = field.extent
-
-    def blocked(self, x: Any, y: Any, level: Any) -> np.ndarray:
-        return blocked_at(self.plane, x, y)
-
-    def flyable(self, x: float, y: float) -> np.ndarray:
-        """(1,) bool: whether the UAV may fly over ``(x, y)``."""
-        return np.array([not blocked_at(self.plane, x, y)])
-
-    def __call__(self, x: Any, y: Any, t_s: Any, level: Any, *world: Any) -> np.ndarray:
-        return self.plane(x, y, t_s, *world)
-
-    def chance(self, x: Any, y: Any, t_s: Any, level: Any, *world: Any) -> np.ndarray:
-        chance = getattr(self.plane, "chance", None)
-        if chance is None:
-            raise InvalidInputError("reward 'chance' flies one map with outage_p")
-        return np.asarray(chance(x, y, t_s))
 
 
 class BatchStepper(LevelStepper):
@@ -48,7 +18,7 @@ class BatchStepper(LevelStepper):
     the plane's shield: the moves that can still arrive in time."""
 
     def __init__(self, field: SignalField, cfg: NavConfig):
-        super().__init__(_OneLevel(field), cfg, [], [])  # type: ignore[arg-type]
+        super().__init__(field, cfg, [], [])
 
     def moves_to_goal(self, position: np.ndarray, goal: np.ndarray | None = None) -> np.ndarray:
         """Fewest moves from each (N, 2) position to a point of its lattice within ``tol_m``

@@ -1,6 +1,7 @@
 """The Gymnasium environment: fly a UAV on a lattice over a SINR (or SIR) map to a destination, on
-one flight level (four moves) or, given a [`LevelField`][rainuav.nav.levelfield.LevelField], among
-several (six: a climb and a descent besides; [`rainuav.nav.levels`][rainuav.nav.levels]). One class.
+one flight level (four moves) or, given a field with flight levels (a
+[`SignalField`][rainuav.nav.field.SignalField] with ``altitudes_m``), among them (six: a climb and a
+descent besides; [`rainuav.nav.levels`][rainuav.nav.levels]). One class.
 
 Semantics (the planner and the tests rely on them; docs/physics.md section 6):
 
@@ -39,14 +40,14 @@ import numpy.typing as npt
 from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
-from rainuav.nav.field import SignalField, blocked_at, read_signal, signal_field
+from rainuav.nav.field import SignalField
 from rainuav.nav.levelfield import (
     CLIMB_M_S,
     DESCEND_M_S,
     LEVEL_ACTIONS,
-    LevelField,
     LevelStepper,
     level_durations,
+    signal_field,
 )
 from rainuav.nav.task import LoiteringWarning, NavConfig, check_action, check_config, make_config
 from rainuav.nav.views import WeatherView, sample_goal, sample_start_for
@@ -72,9 +73,9 @@ def _index(name: str, value: Any, n: int) -> int:
 class UAVNavEnv(gym.Env):
     """UAV navigation over a SINR or SIR map, on one level or among several.
 
-    One level: ``Discrete(4)``, registered as ``rainuav/UAVNav-v0``. Given a
-    [`LevelField`][rainuav.nav.levelfield.LevelField]: among its levels, ``Discrete(6)``,
-    registered as ``rainuav/UAVLevels-v0``."""
+    One level: ``Discrete(4)``, registered as ``rainuav/UAVNav-v0``. Given a field with flight
+    levels (``altitudes_m``): among them, ``Discrete(6)``, registered as
+    ``rainuav/UAVLevels-v0``."""
 
     metadata = {"render_modes": []}  # noqa: RUF012 - gymnasium's convention
 
@@ -88,7 +89,7 @@ class UAVNavEnv(gym.Env):
         signal: str | None = None,
         min_db: float | None = None,
         config: NavConfig | None = None,
-        field: SignalField | LevelField | None = None,
+        field: SignalField | None = None,
         observation: str = "position",
         view: WeatherView | None = None,
         random_goal: bool = False,
@@ -98,8 +99,8 @@ class UAVNavEnv(gym.Env):
         **task: Any,
     ) -> None:
         """A map (``radio_map``, one raw array with ``extent_m``, or a built ``field``: a signal in
-        time, a bank of worlds, one drawn per episode, or a
-        [`LevelField`][rainuav.nav.levelfield.LevelField], the levels' signals) and the task: a
+        time, a bank of worlds, one drawn per episode, or any of them among flight levels) and the
+        task: a
         whole ``config`` ([`NavConfig`][rainuav.nav.task.NavConfig]), its fields as keywords
         (``goal_m``, ``max_steps``, ...: over ``config``'s where both are given), and ``signal`` and
         ``min_db`` (which win over both). ``observation``:
@@ -117,17 +118,15 @@ class UAVNavEnv(gym.Env):
         if field is not None:
             if radio_map is not None or sinr_db is not None or sir_db is not None:
                 raise InvalidInputError("give field or a map, not both")
-            if not isinstance(field, SignalField | LevelField):
-                raise InvalidInputError(
-                    f"field must be a SignalField or a LevelField (got {type(field).__name__})"
-                )
-            self.field: SignalField | LevelField = field
+            if not isinstance(field, SignalField):
+                raise InvalidInputError(f"field must be a SignalField (got {type(field).__name__})")
+            self.field: SignalField = field
         else:
             self.field = signal_field(radio_map, sinr_db, sir_db, extent_m, signal)
-        self.level_axis = isinstance(self.field, LevelField)  # altitude as a decision
+        self.level_axis = self.field.altitudes_m is not None  # altitude as a decision
         if min_db is None:
             min_db = cfg.min_db
-        if isinstance(self.field, LevelField):
+        if self.level_axis:
             self.cfg = dataclasses.replace(cfg, min_db=DEFAULT_MIN_DB if min_db is None else min_db)
             if self.cfg.reward == "chance":
                 raise InvalidInputError("reward 'chance' flies one map, not several levels")
@@ -146,7 +145,7 @@ class UAVNavEnv(gym.Env):
                 )
             self.banked = self.field.banked
         check_config(self.cfg, self.field.extent)
-        if not self.level_axis and blocked_at(self.field, *self.cfg.goal_m):
+        if not self.level_axis and self.field.blocked(*self.cfg.goal_m):
             raise InvalidInputError(
                 f"goal_m {tuple(self.cfg.goal_m)} lies where the UAV may not fly (terrain or "
                 "obstacles within the clearance of the flight height)"
@@ -168,7 +167,7 @@ class UAVNavEnv(gym.Env):
                 "alone does not show the destination or the storm)"
             )
         self.observation, self.random_goal = observation, bool(random_goal)
-        if isinstance(self.field, LevelField):
+        if self.field.altitudes_m is not None:
             self.climb, self.descend = level_durations(
                 self.field.altitudes_m, self.cfg, climb_m_s, descend_m_s
             )
@@ -204,7 +203,7 @@ class UAVNavEnv(gym.Env):
     @property
     def altitudes_m(self) -> np.ndarray | None:
         """The flight levels' altitudes, m, lowest first (the altitude axis); None: one level."""
-        return self.field.altitudes_m if isinstance(self.field, LevelField) else None
+        return self.field.altitudes_m
 
     # -- many UAVs at once: the interface the learner uses -----------------------------------
     def observe_batch(
@@ -267,7 +266,7 @@ class UAVNavEnv(gym.Env):
 
     def lowest_flyable(self, x: float, y: float) -> int:
         """The lowest level the UAV may fly at over ``(x, y)``."""
-        ok = self.stepper.field.flyable(x, y)
+        ok = self.field.flyable(x, y)
         if not ok.any():
             raise InvalidInputError(f"({x:g}, {y:g}) is not flyable at any level")
         return int(np.flatnonzero(ok)[0])
@@ -287,7 +286,7 @@ class UAVNavEnv(gym.Env):
         g = np.asarray(self.cfg.goal_m if goal is None else goal)
         for _ in range(100_000):
             p = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1)])
-            if np.hypot(*(p - g)) > self.cfg.tol_m and self.stepper.field.flyable(*p).any():
+            if np.hypot(*(p - g)) > self.cfg.tol_m and self.field.flyable(*p).any():
                 return p
         raise InvalidInputError(
             f"no flyable start farther than tol_m = {self.cfg.tol_m} m from the destination "
@@ -308,15 +307,13 @@ class UAVNavEnv(gym.Env):
         g = sample_goal(rng, self.field.extent) if goal is None else np.asarray(goal, float)
         for _ in range(1000):
             p = sample_start_for(rng, self.field.extent, g, self.cfg)
-            if self.stepper.field.flyable(*p).any():
+            if self.field.flyable(*p).any():
                 return p, g, world
         raise InvalidInputError(f"no flyable start within reach of the destination {tuple(g)}")
 
     def signal(self, x: Any, y: Any, t_s: Any, world: Any = 0, level: Any = 0) -> Any:
         """The signal at ``(x, y)`` at ``t_s`` (in a bank, of world ``world``; on ``level``)."""
-        if isinstance(self.field, LevelField):
-            return self.field(x, y, t_s, level, world)
-        return read_signal(self.field, x, y, t_s, world)
+        return self.field(x, y, t_s, world, level=level)
 
     @property
     def position_m(self) -> np.ndarray:
@@ -363,7 +360,7 @@ class UAVNavEnv(gym.Env):
         if level is None:
             level = self.start_level_at(p)
         level = _index("options['start_level']", level, self.levels)
-        if isinstance(self.field, LevelField) and self.field.blocked(p[0], p[1], level):
+        if self.level_axis and self.field.blocked(p[0], p[1], level):
             raise InvalidInputError(
                 f"the start ({p[0]:g}, {p[1]:g}) is not flyable at level {level} "
                 f"({self.field.altitudes_m[level]:g} m); the lowest it may be flown at is level "
@@ -387,7 +384,7 @@ class UAVNavEnv(gym.Env):
             raise InvalidInputError(
                 f"{name} must be (x, y) inside the area {self.field.extent} (got {value!r})"
             )
-        if not self.level_axis and blocked_at(self.field, *p):
+        if not self.level_axis and self.field.blocked(*p):
             raise InvalidInputError(
                 f"{name} ({p[0]:g}, {p[1]:g}) lies where the UAV may not fly (terrain or "
                 "obstacles within the clearance of the flight height)"
@@ -399,17 +396,13 @@ class UAVNavEnv(gym.Env):
         t_s = float(self.stepper.time_s(self._t)[0])
         x, y = self._pos
         lv = int(self._level[0])
-        if isinstance(self.field, LevelField):
-            serving = int(self.field.serving_cell(x, y, t_s, lv))
-        else:
-            cell = getattr(self.field, "serving_cell", None)
-            serving = -1 if cell is None else int(cell(x, y, t_s))
+        serving = int(self.field.serving_cell(x, y, t_s, lv))
         info: dict[str, Any] = {
             "signal_db": signal,
             "serving_cell": serving,
             "position_m": self._pos.copy(),
         }
-        if isinstance(self.field, LevelField):
+        if self.level_axis:
             info["level"] = lv
             info["altitude_m"] = float(self.field.altitudes_m[lv])
         info.update(outage=bool(signal < self.cfg.min_db), arrived=arrived, t_s=t_s)

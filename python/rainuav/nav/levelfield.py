@@ -1,23 +1,23 @@
-"""The signal of every flight level and the stepping rules among levels (the task is in
-[`rainuav.nav.levels`][rainuav.nav.levels]): [`LevelField`][rainuav.nav.levelfield.LevelField] (one
-signal a level: maps, maps in time, or a bank of storms in time),
-[`level_durations()`][rainuav.nav.levelfield.level_durations] (how long a climb and a descent last)
-and [`LevelStepper`][rainuav.nav.levelfield.LevelStepper] (many UAVs moved at once, as the exact
-planner replays a plan)."""
+"""The stepping rules among flight levels (the task is in
+[`rainuav.nav.levels`][rainuav.nav.levels]; the levels' signal is a
+[`SignalField`][rainuav.nav.field.SignalField] with a level axis):
+[`level_durations()`][rainuav.nav.levelfield.level_durations] (how long a climb and a descent
+last),
+[`LevelStepper`][rainuav.nav.levelfield.LevelStepper] (many UAVs moved at once, as the exact
+planner replays a plan), [`field_of()`][rainuav.nav.levelfield.field_of] (the field of a
+signal) and [`signal_field()`][rainuav.nav.levelfield.signal_field] (the field of a radio map)."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import SignalBank, SignalField, SignalSeries, blocked_at, read_signal
-from rainuav.nav.task import MOVES, NavConfig, base_reward
+from rainuav.nav.field import SignalBank, SignalField, SignalSeries
+from rainuav.nav.task import MOVES, SIGNALS, NavConfig, base_reward
 from rainuav.signals import Signal
 
 __all__ = [
@@ -28,6 +28,7 @@ __all__ = [
     "LevelStepper",
     "field_of",
     "level_durations",
+    "signal_field",
 ]
 
 CLIMB_M_S = 5.0
@@ -61,170 +62,25 @@ def level_durations(
     return ticks(climb_m_s), ticks(descend_m_s)
 
 
-class LevelField:
-    """The signal of every level: one [`SignalField`][rainuav.nav.field.SignalField],
-    [`SignalSeries`][rainuav.nav.field.SignalSeries] or [`SignalBank`][rainuav.nav.field.SignalBank]
-    a level (all of one kind, over one area), lowest first, at ``altitudes_m``. A field of banks
-    holds many storms' levels at once (a storm pool among levels): each UAV reads its own world's
-    (``world``), and [`put()`][rainuav.nav.field.SignalField.put] renews one."""
-
-    def __init__(
-        self,
-        fields: Sequence[SignalField],
-        altitudes_m: npt.ArrayLike,
-    ) -> None:
-        alts = as_real_array("altitudes_m", altitudes_m).reshape(-1)
-        if len(fields) != alts.size or alts.size == 0:
-            raise InvalidInputError(
-                f"altitudes_m must hold one altitude a level ({len(fields)} levels, got "
-                f"{alts.size})"
-            )
-        if alts.size > 1 and not np.all(np.diff(alts) > 0):
-            raise InvalidInputError(f"altitudes_m must increase (got {alts.tolist()})")
-        if not all(isinstance(f, SignalField) for f in fields):
-            raise InvalidInputError("fields must be SignalFields")
-        kinds = {(f.banked, f.varies) for f in fields}
-        if len(kinds) != 1:
-            raise InvalidInputError(
-                "fields must be all maps, all maps in time (SignalSeries) or all banks (SignalBank)"
-            )
-        if fields[0].banked and len({f.db.shape for f in fields}) != 1:
-            raise InvalidInputError("the levels' banks must hold as many worlds and instants")
-        if len({f.extent for f in fields}) != 1:
-            raise InvalidInputError("the levels' fields must cover one area (one extent)")
-        self.fields = tuple(fields)
-        self.altitudes_m = alts
-        self.extent = fields[0].extent
-        self.varies = bool(fields[0].varies)
-        self.banked = fields[0].banked
-
-    @classmethod
-    def bank(
-        cls,
-        stacks: npt.ArrayLike,
-        t_s: npt.ArrayLike,
-        extent_m: tuple[float, float, float, float],
-        altitudes_m: npt.ArrayLike,
-    ) -> LevelField:
-        """Many worlds' levels in time: ``stacks`` (P, T, L, H, W), the P worlds' signal at
-        every level at the instants ``t_s`` (T,) (flat open ground: no pixel closed)."""
-        v = np.asarray(stacks, dtype=np.float64)
-        if v.ndim != 5:
-            raise InvalidInputError(f"stacks must be (P, T, L, H, W) (got {v.shape})")
-        return cls([SignalBank(v[:, :, k], t_s, extent_m) for k in range(v.shape[2])],
-                   altitudes_m)  # fmt: skip
-
-    @property
-    def worlds(self) -> int:
-        """Worlds held (1 but for a field of banks)."""
-        return self.fields[0].worlds
-
-    def put(self, world: int, stack: npt.ArrayLike) -> None:
-        """Replaces world ``world`` of a field of banks by ``stack`` (T, L, H, W)."""
-        if not self.banked:
-            raise InvalidInputError("put renews a world of a field of banks only")
-        v = np.asarray(stack, dtype=np.float64)
-        if v.ndim != 4 or v.shape[1] != self.levels:
-            raise InvalidInputError(f"stack must be (T, {self.levels}, H, W) (got {v.shape})")
-        for k, f in enumerate(self.fields):
-            f.put(world, v[:, k])
-
-    def at_points(self, points: np.ndarray, t_s: Any, world: Any) -> np.ndarray:
-        """(N, L, M): every level's signal at the fixed points (M, 2), UAV n at ``t_s[n]``
-        in world ``world[n]`` (each slice sampled once per set of points)."""
-        return np.stack([f.at_points(points, t_s, world) for f in self.fields], axis=1)
-
-    def every_level(self, x: Any, y: Any, t_s: Any, world: Any = None) -> np.ndarray:
-        """(N, L, M): every level's signal at the points ``(x, y)`` (N, M), row n at
-        ``t_s[n]`` (N, 1) in world ``world[n]`` (N, 1; a field of banks)."""
-        return np.stack([read_signal(f, x, y, t_s, world) for f in self.fields], axis=1)
-
-    @classmethod
-    def from_stack(
-        cls,
-        signal_db: npt.ArrayLike,
-        altitudes_m: npt.ArrayLike,
-        extent_m: tuple[float, float, float, float],
-        *,
-        t_s: npt.ArrayLike | None = None,
-        not_flyable: npt.ArrayLike | None = None,
-        serving_cell: npt.ArrayLike | None = None,
-    ) -> LevelField:
-        """From a stack (L, H, W), or (T, L, H, W) at the instants ``t_s``; ``not_flyable``
-        (L, H', W') and ``serving_cell`` (the stack's shape) optional."""
-        sig = np.asarray(signal_db, dtype=np.float64)
-        if sig.ndim not in (3, 4):
-            raise InvalidInputError(
-                f"signal_db must be (L, H, W) or (T, L, H, W) (got {sig.shape})"
-            )
-        if (sig.ndim == 4) != (t_s is not None):
-            raise InvalidInputError("t_s goes with a (T, L, H, W) stack, and only with one")
-        mask = None if not_flyable is None else np.asarray(not_flyable)
-        srv = None if serving_cell is None else np.asarray(serving_cell)
-        axis = sig.ndim - 3  # the level axis
-        fields: list[SignalField] = []
-        for k in range(sig.shape[axis]):
-            m = None if mask is None else mask[k]
-            s = None if srv is None else np.take(srv, k, axis=axis)
-            if sig.ndim == 3:
-                fields.append(SignalField(sig[k], extent_m, serving_cell=s, not_flyable=m))
-            else:
-                fields.append(SignalSeries(sig[:, k], t_s, extent_m, serving_cell=s,
-                                           not_flyable=m))  # fmt: skip
-        return cls(fields, altitudes_m)
-
-    @property
-    def levels(self) -> int:
-        return len(self.fields)
-
-    def __call__(self, x: Any, y: Any, t_s: Any, level: Any, world: Any = 0) -> np.ndarray:
-        """The signal at ``(x, y)`` on ``level`` at ``t_s`` (in a field of banks, of world
-        ``world``; arrays of one shape, or numbers)."""
-        x, y, t, lv, w = np.broadcast_arrays(*(np.asarray(v) for v in (x, y, t_s, level, world)))
-        out = np.empty(x.shape)
-        for k in np.unique(lv):
-            on = lv == k
-            out[on] = read_signal(self.fields[int(k)], x[on], y[on], t[on], w[on])
-        return out
-
-    def serving_cell(self, x: Any, y: Any, t_s: Any, level: Any) -> np.ndarray:
-        """The serving cell at ``(x, y)`` on ``level`` at ``t_s`` (-1 where none is named)."""
-        x, y, t, lv = np.broadcast_arrays(*(np.asarray(v) for v in (x, y, t_s, level)))
-        out = np.full(x.shape, -1, dtype=np.int64)
-        for k in np.unique(lv):
-            on = lv == k
-            serving = getattr(self.fields[int(k)], "serving_cell", None)
-            if callable(serving):
-                out[on] = serving(x[on], y[on], t[on])
-        return out
-
-    def flyable(self, x: float, y: float) -> np.ndarray:
-        """(L,) bool: the levels a UAV may fly at over ``(x, y)``."""
-        every = np.arange(self.levels)
-        return ~self.blocked(np.full(self.levels, x), np.full(self.levels, y), every)
-
-    def blocked(self, x: Any, y: Any, level: Any) -> np.ndarray:
-        """Whether the pixel holding ``(x, y)`` may not be entered on ``level``."""
-        x, y, lv = np.broadcast_arrays(*(np.asarray(v) for v in (x, y, level)))
-        out = np.zeros(x.shape, dtype=bool)
-        for k in np.unique(lv):
-            on = lv == k
-            out[on] = blocked_at(self.fields[int(k)], x[on], y[on])
-        return out
+LevelField = SignalField
+"""The old name of a field among levels: a [`SignalField`][rainuav.nav.field.SignalField] with
+``altitudes_m`` ([`SignalField.from_stack`][rainuav.nav.field.SignalField.from_stack],
+[`SignalField.bank`][rainuav.nav.field.SignalField.bank] with altitudes,
+[`SignalField.of_levels`][rainuav.nav.field.SignalField.of_levels])."""
 
 
 class LevelStepper:
     """Many UAVs among levels stepped at once (the module's rules), exactly as
     ``rainuav_core::planlevels`` replays a plan: the one batched stepper (the plane's,
     [`rainuav.nav.batch.BatchStepper`][rainuav.nav.batch.BatchStepper], is this one over its
-    single level). The field it reads has ``extent``, ``levels``, ``blocked(x, y, level)`` and
-    is called ``field(x, y, t_s, level[, world])``.
+    single level). It reads a [`SignalField`][rainuav.nav.field.SignalField] (``extent``,
+    ``levels``, ``blocked(x, y, level)``, ``field(x, y, t_s, world, level)``).
 
     State per UAV: ``start`` (N, 2), ``offset`` (N, 2) int steps in x and y, ``level`` (N,)
     and ``tick`` (N,) the clock; position = start + step_m * offset, time ``tick * move_s``.
     """
 
-    def __init__(self, field: LevelField, cfg: NavConfig, climb: list[int], descend: list[int]):
+    def __init__(self, field: SignalField, cfg: NavConfig, climb: list[int], descend: list[int]):
         self.field, self.cfg = field, cfg
         top = field.levels - 1
         # Ticks of the climb and descent from each level (past the band: the last gap on
@@ -269,17 +125,10 @@ class LevelStepper:
         out |= f.blocked(qc[:, 0], qc[:, 1], new_level) | ~band
         new_tick = tick + duration
         t_s = self.time_s(new_tick)
-        if world is None:
-            signal = f(qc[:, 0], qc[:, 1], t_s, new_level)
-        else:
-            signal = f(qc[:, 0], qc[:, 1], t_s, new_level, world)
+        signal = f(qc[:, 0], qc[:, 1], t_s, world, level=new_level)
         chance = None
         if cfg.reward == "chance":  # the probability of outage where the move ends
-            if not hasattr(f, "chance"):
-                raise InvalidInputError("reward 'chance' flies one map with outage_p")
-            chance = f.chance(
-                qc[:, 0], qc[:, 1], t_s, new_level, *([] if world is None else [world])
-            )
+            chance = np.asarray(f.chance(qc[:, 0], qc[:, 1], t_s))
         base = base_reward(signal, cfg, chance)
         b = np.where(flat, base, duration * base)  # a vertical move: its duration times b
         g = self.goal[None] if goal is None else np.asarray(goal, dtype=np.float64)
@@ -307,15 +156,15 @@ class LevelStepper:
         }
 
 
-def field_of(signal: Signal, *, levels: bool = False) -> SignalField | LevelField:
+def field_of(signal: Signal, *, levels: bool = False) -> SignalField:
     """The field the environment and the planner read of one signal, by its axes' sizes.
 
     For a [`Signal`][rainuav.signals.Signal], one level gives a map
     ([`SignalField`][rainuav.nav.field.SignalField]), maps in time
     ([`SignalSeries`][rainuav.nav.field.SignalSeries]) or, with several worlds, a bank
-    ([`SignalBank`][rainuav.nav.field.SignalBank]); several levels give a
-    [`LevelField`][rainuav.nav.levelfield.LevelField] of those (``levels=True``: whatever their
-    number, a band of one level flown with six moves). The values are the signal's, bit for bit.
+    ([`SignalBank`][rainuav.nav.field.SignalBank]); several levels give the same with a level
+    axis and ``altitudes_m`` (``levels=True``: whatever their number, a band of one level flown
+    with six moves). The values are the signal's, bit for bit.
     A bank flies over open ground: a signal of several worlds with a closed pixel is refused."""
     if not isinstance(signal, Signal):
         raise InvalidInputError(f"signal must be a rainuav.signals.Signal (got {type(signal)})")
@@ -329,10 +178,10 @@ def field_of(signal: Signal, *, levels: bool = False) -> SignalField | LevelFiel
                 "ground, with no pixel closed"
             )
         if lv > 1 or levels:
-            return LevelField.bank(v, t_s, signal.extent_m, signal.altitudes_m)
-        return SignalBank(v[:, :, 0], t_s, signal.extent_m, name)
+            return SignalField.bank(v, t_s, signal.extent_m, signal.altitudes_m)
+        return SignalBank(v[:, :, 0], t_s, signal.extent_m, name=name)
     if lv > 1 or levels:
-        return LevelField.from_stack(
+        return SignalField.from_stack(
             v[0, 0] if t == 1 else v[0], signal.altitudes_m, signal.extent_m,
             t_s=None if t == 1 else t_s, not_flyable=mask,
             serving_cell=None if srv is None else (srv[0, 0] if t == 1 else srv[0]),
@@ -343,3 +192,33 @@ def field_of(signal: Signal, *, levels: bool = False) -> SignalField | LevelFiel
         return SignalField(v[0, 0, 0], signal.extent_m, name, s, m)
     s = None if srv is None else srv[0, :, 0]
     return SignalSeries(v[0, :, 0], t_s, signal.extent_m, name, s, m)
+
+
+def signal_field(
+    radio_map: Any, sinr_db: Any, sir_db: Any, extent_m: Any, signal: str | None
+) -> SignalField:
+    """The field a task flies on: the ``signal`` map of ``radio_map``, or the one raw array
+    given (``sinr_db`` or ``sir_db``, which then names the signal)."""
+    if signal is not None and signal not in SIGNALS:
+        raise InvalidInputError(f"signal must be one of {SIGNALS} (got {signal!r})")
+    raw = {k: v for k, v in (("sinr", sinr_db), ("sir", sir_db)) if v is not None}
+    if radio_map is not None:
+        if raw:
+            raise InvalidInputError(f"give radio_map or {next(iter(raw))}_db, not both")
+        signal = signal or "sinr"
+        values = getattr(radio_map, f"{signal}_db", None)
+        if values is None:
+            raise InvalidInputError(
+                f"signal={signal!r}: radio_map has no {signal}_db (rebuild it with this version)"
+            )
+        serving = getattr(radio_map, "serving_cell", None)
+        mask = getattr(radio_map, "not_flyable", None)
+        return SignalField(values, radio_map.extent_m, f"{signal}_db", serving, mask)
+    if len(raw) != 1:
+        raise InvalidInputError("give radio_map, or exactly one of sinr_db and sir_db")
+    kind, values = next(iter(raw.items()))
+    if signal is not None and signal != kind:
+        raise InvalidInputError(f"signal={signal!r} but the map given is {kind}_db")
+    if extent_m is None:
+        raise InvalidInputError(f"extent_m is required with {kind}_db")
+    return SignalField(values, extent_m, f"{kind}_db")

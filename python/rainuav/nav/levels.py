@@ -25,8 +25,9 @@ level ([`rainuav.nav.task`][rainuav.nav.task]) and a climb or a descent of one l
   ``random_goal`` draws a destination per flight, and a field of banks (a storm pool among
   levels) a world per flight, as ``UAVNavEnv`` does.
 
-The environment is [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv] given a
-[`LevelField`][rainuav.nav.levelfield.LevelField]; ``UAVLevelsEnv(field, config, ...)`` is the same
+The environment is [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv] given a field with flight levels (a
+[`SignalField`][rainuav.nav.field.SignalField] with ``altitudes_m``); ``UAVLevelsEnv(field, config,
+...)`` is the same
 class built with the arguments it has always taken. The exact optimum of this task is
 [`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]
 (``rainuav_core::planlevels``), which reads the signal operation for operation as
@@ -39,6 +40,7 @@ from typing import Any
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.field import SignalField
 from rainuav.nav.levelfield import CLIMB_M_S, DESCEND_M_S, LevelField
 from rainuav.nav.task import NavConfig
 from rainuav.nav.views import WeatherView
@@ -54,7 +56,7 @@ class UAVLevelsEnv(UAVNavEnv):
 
     def __init__(
         self,
-        field: LevelField,
+        field: SignalField,
         config: NavConfig | None = None,
         *,
         climb_m_s: float = CLIMB_M_S,
@@ -67,8 +69,11 @@ class UAVLevelsEnv(UAVNavEnv):
     ) -> None:
         """The levels' ``field`` and the task ``config`` (``min_db`` None: 10 dB); the rest as
         [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv]'s."""
-        if not isinstance(field, LevelField):
-            raise InvalidInputError(f"field must be a LevelField (got {type(field).__name__})")
+        if not isinstance(field, SignalField) or field.altitudes_m is None:
+            raise InvalidInputError(
+                f"field must be a SignalField among flight levels, with altitudes_m (got "
+                f"{type(field).__name__})"
+            )
         super().__init__(
             field=field, config=config, climb_m_s=climb_m_s, descend_m_s=descend_m_s,
             start_level=start_level, observation=observation, view=view,

@@ -91,8 +91,8 @@ def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
         slices, times = field.outage_p[None, None], np.zeros(1)
     elif getattr(field, "banked", False):
         raise InvalidInputError("the planner plans on one world: take a bank's member(world)")
-    else:  # a map is a series of one slice at t = 0
-        slices, times = field.values[0][:, None], field.t_s
+    else:  # a map is a series of one slice at t = 0, on its one level
+        slices, times = field.values[0], field.t_s
     raw = _core.plan_optimal_levels(
         np.ascontiguousarray(slices, dtype=np.float64), np.ascontiguousarray(times),
         tuple(float(v) for v in field.extent), goal,  # type: ignore[arg-type]
@@ -228,20 +228,13 @@ def optimal_among_levels(
     ``start_levels`` (N,; default where the env starts a flight there:
     [`UAVNavEnv.start_level_at()`][rainuav.nav.env.UAVNavEnv.start_level_at])."""
     if not (isinstance(env, UAVNavEnv) and env.level_axis):
-        raise InvalidInputError(
-            f"env must be a UAVNavEnv among levels, on a LevelField (got {type(env).__name__})"
-        )
+        raise InvalidInputError(f"env must be a UAVNavEnv among levels (got {type(env).__name__})")
     starts = np.asarray(starts_m, dtype=np.float64).reshape(-1, 2)
     if start_levels is None:
         start_levels = [env.start_level_at(p) for p in starts]
-    f = env.field.fields
-    sig = np.stack([g.db for g in f], axis=1 if env.field.varies else 0)
-    masks = [g.not_flyable for g in f]
-    blocked = None
-    if any(m is not None for m in masks):
-        blocked = np.stack([np.zeros(f[0].db.shape[-2:], bool) if m is None else m for m in masks])
+    f = env.field
     return optimal_levels(
-        sig, env.field.altitudes_m, env.field.extent, env.cfg, starts, start_levels,
-        t_s=f[0].t_s if env.field.varies else None, not_flyable=blocked, climb_m_s=env.climb_m_s,
+        f.db, f.altitudes_m, f.extent, env.cfg, starts, start_levels,
+        t_s=f.t_s if f.varies else None, not_flyable=f.not_flyable, climb_m_s=env.climb_m_s,
         descend_m_s=env.descend_m_s,
     )  # fmt: skip

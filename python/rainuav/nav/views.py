@@ -38,7 +38,6 @@ import numpy as np
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.field import blocked_at, read_signal
-from rainuav.nav.levelfield import LevelField
 from rainuav.nav.task import NavConfig
 
 __all__ = ["GOAL_MARGIN_M", "REACH", "WeatherView", "sample_goal", "sample_start_for"]
@@ -170,8 +169,8 @@ class WeatherView:
         min_db: float, max_steps: int,
     ) -> dict[str, np.ndarray]:  # fmt: skip
         """[`observe()`][rainuav.nav.views.WeatherView.observe] of UAVs at ``pos`` (N, 2), or
-        of one at (2,), flying ``field`` (one level's signal, or a
-        [`LevelField`][rainuav.nav.levelfield.LevelField] whose levels are the layers) on
+        of one at (2,), flying ``field`` (a [`SignalField`][rainuav.nav.field.SignalField]; among
+        levels, its levels are the layers) on
         ``level`` after ``t`` ticks, at the instants ``t_s`` (N,), for the destinations ``goal``
         in the worlds ``world`` of a bank."""
         p = np.asarray(pos, dtype=np.float64)
@@ -181,12 +180,13 @@ class WeatherView:
         ts = np.asarray(t_s, dtype=np.float64).reshape(n, 1)
         w = np.broadcast_to(np.asarray(0 if world is None else world), (n,))[:, None]
         lv = None
-        if isinstance(field, LevelField):
+        if field.altitudes_m is not None:
             top = max(field.levels - 1, 1)
             lv = np.broadcast_to(np.asarray(level, dtype=np.float32), (n,)) / np.float32(top)
 
             def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-                return field.every_level(x, y, ts, w)
+                every = range(field.levels)
+                return np.stack([field(x, y, ts, w, level=k) for k in every], axis=1)
         else:
 
             def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -30,7 +30,7 @@ def map_image(ax: Any, env: UAVNavEnv) -> Any:
     the lowest level's), its colour scale centred on the outage threshold."""
     x0, x1, y0, y1 = env.field.extent
     lo = float(env.cfg.min_db if env.cfg.min_db is not None else 0.0)
-    field = env.field.fields[0] if env.altitudes_m is not None else env.field
+    field = env.field.level(0)
     return ax.imshow(
         field.frozen(0.0).db,
         origin="lower",

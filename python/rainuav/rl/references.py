@@ -82,7 +82,7 @@ def flights(
     if env.altitudes_m is not None:
         if levels is None or ticks is None:
             raise InvalidInputError("flights among levels need their levels and ticks")
-        signal = [env.field(p[1:, 0], p[1:, 1], time_s(t[1:]), lv[1:])
+        signal = [env.field(p[1:, 0], p[1:, 1], time_s(t[1:]), level=lv[1:])
                   for p, lv, t in zip(paths, levels, ticks, strict=True)]  # fmt: skip
     else:
         signal = [env.field(p[1:, 0], p[1:, 1], time_s(np.arange(1, len(p)))) for p in paths]
@@ -187,7 +187,7 @@ def level_reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dic
     per_level = []
     for k in range(env.field.levels):
         try:
-            plane = UAVNavEnv(field=env.field.fields[k], config=env.cfg)
+            plane = UAVNavEnv(field=env.field.level(k), config=env.cfg)
         except InvalidInputError:
             per_level.append(None)
             continue

@@ -33,7 +33,6 @@ from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField
 from rainuav.nav.levelfield import field_of
-from rainuav.nav.levels import LevelField
 from rainuav.nav.task import NavConfig, check_config, check_task
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.radio.engines import ENGINES as RADIO_ENGINES
@@ -245,9 +244,8 @@ class World:
 
     source: RadioMap | RadioMapSeries | LevelStack | Signal | None
     """What the signal is read from (saved with a run; None for a storm pool's bank)."""
-    field: SignalField | LevelField
-    """The signal the UAV flies through (a [`LevelField`][rainuav.nav.levelfield.LevelField] where
-    altitude is a decision)."""
+    field: SignalField
+    """The signal the UAV flies through (with flight levels where altitude is a decision)."""
     task: NavConfig
     """The navigation task."""
     observation: str = "position"
@@ -337,7 +335,7 @@ def level_field(
     scn: Scenario, times_s: Any = None, *, progress: bool = False, cache: bool = True
 ) -> tuple[Any, Any]:
     """The signal at every level of ``scn``'s ``area.altitudes_m`` as a
-    [`rainuav.nav.levels.LevelField`][rainuav.nav.levelfield.LevelField] (what the flights among
+    [`SignalField`][rainuav.nav.field.SignalField] with those altitudes (what the flights among
     levels read), and the maps it came from:
     [`rainuav.radio.outputs.levelmaps.build_radio_levels()`][rainuav.radio.outputs.levelmaps.build_radio_levels],
     or where ``times_s`` are given

@@ -20,7 +20,6 @@ import numpy as np
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.nav.field import SignalBank, SignalField
-from rainuav.nav.levelfield import LevelField
 from rainuav.radio.outputs.levelmaps import LevelStack
 from rainuav.radio.outputs.timemap import build_radio_map_series
 from rainuav.radio.scene.scenario import Scenario
@@ -80,7 +79,7 @@ class StormPool:
 
     Among flight levels (``spec.altitudes_m``) a storm is the maps of every level in time
     ([`rainuav.radio.outputs.levelmaps.LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack]) and
-    the bank a [`rainuav.nav.levelfield.LevelField.bank()`][rainuav.nav.levelfield.LevelField.bank];
+    the bank a [`SignalField.bank()`][rainuav.nav.field.SignalField.bank] with their altitudes;
     the pool's memory (the slots, the storm being mapped and the one being put) is checked once the
     first storm is mapped."""
 
@@ -100,11 +99,10 @@ class StormPool:
         first += [self._build(self._draw()) for _ in range(spec.storm_pool - 1)]
         field = first[0][1].field
         self.task = first[0][1].task
-        self.bank: SignalField | LevelField
-        if isinstance(field, LevelField):
+        self.bank: SignalField
+        if field.altitudes_m is not None:
             stacks = np.stack([_maps(w) for _, w in first])
-            t_s = field.fields[0].t_s  # type: ignore[union-attr]
-            self.bank = LevelField.bank(stacks, t_s, field.extent, field.altitudes_m)
+            self.bank = SignalField.bank(stacks, field.t_s, field.extent, field.altitudes_m)
         else:
             assert isinstance(field, SignalField) and field.varies  # a storm moves
             self.bank = SignalBank([w.field.db for _, w in first], field.t_s, field.extent)
@@ -191,6 +189,6 @@ class StormPool:
 def _maps(world: World) -> np.ndarray:
     """What a storm puts in a bank's slot: its maps in time (T, H, W), or among levels every
     level's (T, L, H, W)."""
-    if isinstance(world.field, LevelField):
+    if world.field.altitudes_m is not None:
         return np.asarray(world.source.sinr_db)  # type: ignore[union-attr]
     return np.asarray(world.field.db)  # type: ignore[union-attr]
