@@ -44,3 +44,42 @@ def _one_torch_thread() -> Iterator[None]:
     one()
     yield
     one()
+
+
+def _best_return_of_every_sequence(env, start, horizon: int) -> float:
+    """The best return over every sequence of ``horizon`` moves from ``start`` (4^horizon of
+    them), each flown through the environment's own transitions (an independent route to the
+    optimum: no dynamic programme). The sequences fly side by side through ``step_batch``, the
+    stepper ``step()`` calls with one UAV; the best sequence is flown again through ``step()``
+    and must earn the same return exactly."""
+    import itertools
+
+    import numpy as np
+
+    seqs = np.array(list(itertools.product(range(4), repeat=horizon)), dtype=np.int64)
+    n = len(seqs)
+    starts = np.repeat(np.asarray(start, dtype=np.float64).reshape(1, 2), n, axis=0)
+    offset, t = np.zeros((n, 2), dtype=np.int64), np.zeros(n, dtype=np.int64)
+    level = np.zeros(n, dtype=np.int64)
+    ret, alive = np.zeros(n), np.ones(n, dtype=bool)
+    for k in range(horizon):
+        r = env.step_batch(starts, offset, level, t, seqs[:, k])
+        ret += np.where(alive, r["reward"], 0.0)
+        alive &= ~(r["terminated"] | r["truncated"])
+        offset, t = r["offset"], r["t"]
+    best = int(np.argmax(ret))
+    env.reset(options={"start_m": np.asarray(start, dtype=np.float64)})
+    again = 0.0
+    for a in seqs[best]:
+        _, r1, term, trunc, _ = env.step(int(a))
+        again += r1
+        if term or trunc:
+            break
+    assert again == ret[best]
+    return float(ret[best])
+
+
+@pytest.fixture
+def best_return_of_every_sequence():
+    """[`_best_return_of_every_sequence`]: the brute-force optimum of a small task."""
+    return _best_return_of_every_sequence

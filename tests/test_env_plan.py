@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
-
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -93,23 +91,8 @@ def test_batched_stepper_equals_scalar_env() -> None:
                 break
 
 
-def brute_force(e: UAVNavEnv, start: np.ndarray, horizon: int) -> float:
-    best = -np.inf
-    for seq in itertools.product(range(4), repeat=horizon):
-        e.reset(options={"start_m": start})
-        g = 0.0
-        for a in seq:
-            _, r, term, trunc, _ = e.step(a)
-            g += r
-            if term or trunc:
-                break
-        best = max(best, g)
-    return best
-
-
-@pytest.mark.slow
 @pytest.mark.parametrize("reward", ["shortfall", "outage", "linear"])
-def test_planner_against_brute_force(reward: str) -> None:
+def test_planner_against_brute_force(reward: str, best_return_of_every_sequence) -> None:
     # 6 moves, 4^6 sequences: the DP optimum must equal the best enumerated return.
     kw = {
         "sir_db": small_map(1, 4, 5),
@@ -127,7 +110,8 @@ def test_planner_against_brute_force(reward: str) -> None:
         e = UAVNavEnv(**kw)
     for start in ([0.0, 0.0], [10.0, 30.0], [45.0, 5.0]):
         p = plan.optimal(e, start)
-        assert p.return_ == pytest.approx(brute_force(e, np.array(start), 6), abs=1e-9)
+        best = best_return_of_every_sequence(e, np.array(start), 6)
+        assert p.return_ == pytest.approx(best, abs=1e-9)
 
 
 def test_plans_replay_to_their_return() -> None:
@@ -244,8 +228,7 @@ def test_planner_refuses_plans_beyond_memory() -> None:
         plan.optimal(env, [100.0, 100.0])
 
 
-@pytest.mark.slow
-def test_chance_weighted_planner_against_brute_force() -> None:
+def test_chance_weighted_planner_against_brute_force(best_return_of_every_sequence) -> None:
     """The ``"chance"`` reward (a move costs ``1 + mu P``, ``P`` the field's ``outage_p`` where
     it ends): the Rust planner's plan against every 6-move sequence flown by the Python
     environment with that reward, to 1e-9; and the environment against the same environment on
@@ -261,7 +244,8 @@ def test_chance_weighted_planner_against_brute_force() -> None:
     e = UAVNavEnv(field=field, reward="chance", min_db=5.0, **kw)
     for start in ([0.0, 0.0], [10.0, 30.0], [45.0, 5.0]):
         p = plan.optimal(e, start)
-        assert p.return_ == pytest.approx(brute_force(e, np.array(start), 6), abs=1e-9)
+        best = best_return_of_every_sequence(e, np.array(start), 6)
+        assert p.return_ == pytest.approx(best, abs=1e-9)
     twin = UAVNavEnv(sir_db=-prob, extent_m=field.extent, reward="shortfall", min_db=0.0, **kw)
     for env_ in (e, twin):
         env_.reset(options={"start_m": [10.0, 10.0]})

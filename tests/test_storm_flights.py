@@ -4,8 +4,6 @@ path, the baselines, the world built from a spec, and static maps unchanged."""
 
 from __future__ import annotations
 
-import itertools
-
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -31,30 +29,16 @@ def storm_env(**kw) -> UAVNavEnv:
     return UAVNavEnv(field=series(), min_db=0.0, speed_m_s=5.0, **{**task, **kw})
 
 
-def brute_force(env: UAVNavEnv, start: np.ndarray) -> float:
-    """The best return over every action sequence, each flown through the environment itself
-    (an independent route: no dynamic programme, the env's own stepper and signal)."""
-    best = -np.inf
-    for seq in itertools.product(range(4), repeat=env.cfg.max_steps):
-        env.reset(options={"start_m": start})
-        ret = 0.0
-        for a in seq:
-            _, r, term, trunc, _ = env.step(a)
-            ret += r
-            if term or trunc:
-                break
-        best = max(best, ret)
-    return best
-
-
-@pytest.mark.slow
-def test_space_time_optimum_equals_brute_force_through_the_env() -> None:
+def test_space_time_optimum_equals_brute_force_through_the_env(
+    best_return_of_every_sequence,
+) -> None:
     # Tolerance 1e-9: the planner reads the signal operation for operation as the env does.
     # Five moves of 2 s cross the slices at 3, 6 and 9 s: the best path depends on timing.
     env = storm_env(max_steps=5)
     starts = np.array([[0.0, 0.0], [15.0, 25.0], [55.0, 5.0]])
     for s in starts:
-        assert planner.optimal(env, s).return_ == pytest.approx(brute_force(env, s), abs=1e-9)
+        best = best_return_of_every_sequence(env, s, env.cfg.max_steps)
+        assert planner.optimal(env, s).return_ == pytest.approx(best, abs=1e-9)
     # Timing matters here: planning on the take-off weather alone loses from two starts.
     frozen = [p.return_ for p in frozen_plans(env, starts)]
     best = [p.return_ for p in planner.optimal_many(env, starts)]
