@@ -15,8 +15,6 @@ from rainuav.radio.scene.scenario import Area, Scenario
 from rainuav.radio.scene.stochastic import StochasticRain, field_rates, nodes, noise_field
 from rainuav.radio.scene.weather import Medium
 
-pytest.importorskip("pysteps")  # the 'weather' extra; installed with the test extra
-
 
 def test_the_noise_has_the_spectrum_slope_asked_for() -> None:
     # The radially averaged power spectrum (pysteps' own rapsd) of one 512 x 512 noise field,

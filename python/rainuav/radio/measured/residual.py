@@ -21,14 +21,14 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 from scipy.spatial import cKDTree
-from sklearn.exceptions import ConvergenceWarning
-from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
+
+if TYPE_CHECKING:  # scikit-learn is imported where a field is fitted (it takes seconds to load)
+    from sklearn.gaussian_process import GaussianProcessRegressor
 
 __all__ = ["MAX_FIT", "MAX_POINTS", "ResidualField", "bin_points", "fit_residual"]
 
@@ -137,6 +137,8 @@ class ResidualField:
 
 
 def _kernel(spread: float, length: float, bounds: tuple[float, float]) -> Any:
+    from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
+
     return ConstantKernel(max(spread, 0.25), (1e-4, 1e4)) * Matern(
         length, (bounds[0], bounds[1]), nu=1.5
     ) + WhiteKernel(1.0, (1e-2, 1e2))
@@ -156,6 +158,9 @@ def fit_residual(
     their residuals, dB (module docstring). ``size_m``/``step_m``: the bins; ``extent_m``: the
     area's size (the longest length scale is 5 times it); ``like``: a field whose
     hyperparameters to reuse (a cross-validation fold), else fitted here."""
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.gaussian_process import GaussianProcessRegressor
+
     bm = size_m
     while True:
         bp, bv, _ = bin_points(pts[:, 0], pts[:, 1], pts[:, 2], resid, bm, step_m)
