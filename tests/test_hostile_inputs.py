@@ -42,7 +42,7 @@ from rainuav.radio.scene.scenario import Area, Cell, Scenario, Site
 from rainuav.rl import checkpoint
 from rainuav.rl.loop import train as train_run
 from rainuav.world import in_world, saved_world
-from test_agent_train import small_cfg, synthetic_map
+from test_agent_train import plumbing_cfg, small_cfg, synthetic_map
 
 TALLY: Counter[str] = Counter()
 """Outcome of every probe that ran: 'refused' or 'accepted' (anything else fails its test)."""
@@ -107,7 +107,7 @@ def run_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A finished tiny training run (20 episodes on the synthetic 400 m map)."""
     out = tmp_path_factory.mktemp("run") / "run"
     torch.set_num_threads(1)
-    train_run(*in_world(small_cfg(out, 20), synthetic_map()), progress=False)
+    train_run(*in_world(plumbing_cfg(out, 20), synthetic_map()), progress=False)
     return out
 
 
