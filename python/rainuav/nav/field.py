@@ -1,14 +1,14 @@
-"""The signal field the UAV flies through: pixel-centred bilinear sampling of a map in dB (SINR
-or SIR, `rainuav._sampling`), with its input checked once
-([`rainuav.nav.fieldinput`][rainuav.nav.fieldinput]), and the serving cell at the nearest pixel
-when the map names one.
+"""The signal field the UAV flies through, sampled as the planners sample it.
 
-One class, [`SignalField`][rainuav.nav.field.SignalField], over worlds x instants x levels x
-north x east (``field(x, y, t_s, world, level=...)``, ``field.serving_cell(x, y, t_s, level)``,
-``field.varies``, ``field.altitudes_m``): one map (time is ignored), maps at instants ``t_s`` (a
-storm that moves), linear in time between them, or a bank of worlds, on one level or among flight
-levels. The exact planners (``rainuav_core::planlevels``) read it operation for operation as
-``SignalField.__call__`` does."""
+Pixel-centred bilinear sampling of a map in dB (SINR or SIR, `rainuav._sampling`), with its input
+checked once ([`rainuav.nav.fieldinput`][rainuav.nav.fieldinput]), and the serving cell at the
+nearest pixel when the map names one. One class, [`SignalField`][rainuav.nav.field.SignalField],
+over worlds x instants x levels x north x east (``field(x, y, t_s, world, level=...)``,
+``field.serving_cell(x, y, t_s, level)``, ``field.varies``, ``field.altitudes_m``): one map (time
+is ignored), maps at instants ``t_s`` (a storm that moves), linear in time between them, or a
+bank of worlds, on one level or among flight levels. The exact planners
+(``rainuav_core::planlevels``) read it operation for operation as ``SignalField.__call__``
+does."""
 
 from __future__ import annotations
 
@@ -80,10 +80,10 @@ class _PointCache:
 
 
 class SignalField:
-    """The signal in dB (SINR or SIR) the UAV flies through: a map, maps in time, a bank of
-    worlds, each on one level or on several flight levels.
+    """The signal in dB (SINR or SIR) the UAV flies through, whatever its axes.
 
-    Over ``extent_m = (x_min, x_max, y_min, y_max)``, one class for every kind: ``values`` (P, K,
+    A map, maps in time, a bank of worlds, each on one level or on several flight levels. Over
+    ``extent_m = (x_min, x_max, y_min, y_max)``, one class for every kind: ``values`` (P, K,
     L, H, W), P worlds' maps at the K instants ``t_s`` on the L levels at ``altitudes_m``. Bilinear
     in space within a slice (`rainuav._sampling.bilinear`), linear in time between the two
     slices around an instant, held before the first and after the last
@@ -136,6 +136,7 @@ class SignalField:
         self.altitudes_m = None if altitudes_m is None else checked_altitudes(altitudes_m, nl)
         """The levels' altitudes, m, lowest first; None: the plane of one level."""
         self.levels = nl
+        """The levels (L; 1 for the plane)."""
         mask_shape = (h, w) if altitudes_m is None else (nl, h, w)
         self.not_flyable = checked_mask(not_flyable, mask_shape)
         t = np.zeros(1) if t_s is None else np.asarray(t_s, dtype=np.float64)

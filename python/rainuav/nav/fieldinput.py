@@ -1,5 +1,6 @@
-"""The checks of a signal field's input (one line naming the bad array, never a traceback
-from deep inside) and the pixel that holds a point, shared by
+"""The checks of a signal field's input and the pixel that holds a point.
+
+One line names the bad array, never a traceback from deep inside; shared by
 [`rainuav.nav.field`][rainuav.nav.field] and the flights that read its masks."""
 
 from __future__ import annotations
@@ -28,8 +29,11 @@ def checked_values(
     serving_cell: npt.ArrayLike | None,
     dims: str,
 ) -> tuple[np.ndarray, tuple[float, float, float, float], np.ndarray | None]:
-    """The values (``dims``: ``"(H, W)"`` or ``"(K, H, W)"``), finite; the extent; the
-    serving cells of the same shape, if given. Anything else: one line naming the field."""
+    """The values, the extent and the serving cells of a field, checked.
+
+    The values with the axes ``dims`` (``"(H, W)"``, ``"(K, L, H, W)"``...), finite; the extent;
+    the serving cells of the values' shape, if given. Anything else: one line naming the
+    field."""
     ndim = dims.count(",") + 1
     v = np.asarray(values_db, dtype=np.float64)
     if v.ndim != ndim or min(v.shape) < 1:

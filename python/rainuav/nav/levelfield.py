@@ -1,11 +1,11 @@
-"""The stepping rules among flight levels (the task is in
-[`rainuav.nav.levels`][rainuav.nav.levels]; the levels' signal is a
-[`SignalField`][rainuav.nav.field.SignalField] with a level axis):
-[`level_durations()`][rainuav.nav.levelfield.level_durations] (how long a climb and a descent
-last),
-[`LevelStepper`][rainuav.nav.levelfield.LevelStepper] (many UAVs moved at once, as the exact
-planner replays a plan), [`field_of()`][rainuav.nav.levelfield.field_of] (the field of a
-signal) and [`signal_field()`][rainuav.nav.levelfield.signal_field] (the field of a radio map)."""
+"""The stepping rules among flight levels, and the field of a signal or of a radio map.
+
+The task among levels is in [`rainuav.nav.levels`][rainuav.nav.levels]; the levels' signal is a
+[`SignalField`][rainuav.nav.field.SignalField] with a level axis.
+[`level_durations()`][rainuav.nav.levelfield.level_durations]: how long a climb and a descent
+last; [`LevelStepper`][rainuav.nav.levelfield.LevelStepper]: many UAVs moved at once, as the exact
+planner replays a plan; [`field_of()`][rainuav.nav.levelfield.field_of]: the field of a signal;
+[`signal_field()`][rainuav.nav.levelfield.signal_field]: the field of a radio map."""
 
 from __future__ import annotations
 
