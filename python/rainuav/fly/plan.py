@@ -33,7 +33,7 @@ from rainuav.missions import (
 )
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import blocked_at, pixel_index
+from rainuav.nav.field import pixel_index
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio.engines import for_time
 from rainuav.radio.outputs.maps import build_radio_map
@@ -111,7 +111,7 @@ def fly_place(
     )  # fmt: skip
     world: World = world_from(rm, task)
     for name, (x, y) in (("--start", place.start_m), ("--goal", place.goal_m)):
-        if blocked_at(world.field, x, y):
+        if world.field.blocked(x, y):
             lat, lon = place.georef.to_latlon(x, y)
             raise InvalidInputError(
                 f"{name} {latlon_text(float(lat), float(lon))} lies where the UAV may not "

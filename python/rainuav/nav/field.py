@@ -320,7 +320,7 @@ class SignalField:
             k0, k1 = k0 * nl + lv, k1 * nl + lv
         return k0, k1, f
 
-    def chance(self, x: Any, y: Any, t_s: Any = None, level: Any = None, world: Any = None) -> Any:
+    def chance(self, x: Any, y: Any, t_s: Any = None) -> Any:
         """The probability of outage at the points ``(x, y)``, bilinear as the map (the task's
         ``"chance"`` reward); needs ``outage_p``."""
         if self.outage_p is None:

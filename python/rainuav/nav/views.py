@@ -37,7 +37,6 @@ import gymnasium as gym
 import numpy as np
 
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import blocked_at, read_signal
 from rainuav.nav.task import NavConfig
 
 __all__ = ["GOAL_MARGIN_M", "REACH", "WeatherView", "sample_goal", "sample_start_for"]
@@ -184,13 +183,15 @@ class WeatherView:
             top = max(field.levels - 1, 1)
             lv = np.broadcast_to(np.asarray(level, dtype=np.float32), (n,)) / np.float32(top)
 
+            every = np.arange(field.levels)[None, :, None]
+
             def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-                every = range(field.levels)
-                return np.stack([field(x, y, ts, w, level=k) for k in every], axis=1)
+                # (N, M) points -> (N, L, M): every level in one pass.
+                return field(x[:, None], y[:, None], ts[:, :, None], w[:, :, None], level=every)
         else:
 
             def sample(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-                return read_signal(field, x, y, ts, w)
+                return field(x, y, ts, w)
 
         area = field.at_points(self.area_points(field.extent), ts[:, 0], w[:, 0])
         frac = np.broadcast_to(np.asarray(t), (n,)).astype(np.float32) / np.float32(max_steps)
@@ -257,7 +258,7 @@ def sample_start_for(
         p = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1)])
         d = np.abs(p - goal).sum()
         if np.hypot(*(p - goal)) > cfg.tol_m and d <= reach:
-            if field is not None and blocked_at(field, *p):
+            if field is not None and field.blocked(*p):
                 continue
             return p
     raise InvalidInputError(
