@@ -46,7 +46,7 @@ def main() -> None:
         "--episodes",
         "8",
         "--storm-pool",
-        "2",
+        "1",
         "--eval-starts",
         "4",
         "--validate-starts",
