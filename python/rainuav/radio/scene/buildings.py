@@ -20,6 +20,7 @@ terrain, their walls, and the pixels they touch.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -249,9 +250,7 @@ def wall_args(scn: Scenario) -> tuple[np.ndarray, np.ndarray]:
     b = scenario_buildings(scn)
     if b is None or b.walls.shape[0] == 0:
         return np.zeros((0, 6)), np.zeros((0, 2))
-    eps = {m: material_permittivity(m, scn.freq_hz) for m in set(b.wall_material)}
-    e = np.array([[eps[m].real, eps[m].imag] for m in b.wall_material], dtype=float)
-    return np.ascontiguousarray(b.walls), e
+    return np.ascontiguousarray(b.walls), _permittivities(b.wall_material, scn.freq_hz)
 
 
 def prism_eps(scn: Scenario) -> np.ndarray | None:
@@ -260,8 +259,15 @@ def prism_eps(scn: Scenario) -> np.ndarray | None:
     b = scenario_buildings(scn)
     if b is None or len(b.footprints) == 0:
         return None
-    eps = [material_permittivity(f.material, scn.freq_hz) for f in b.footprints]
-    return np.array([[e.real, e.imag] for e in eps], dtype=float).reshape(-1, 2)
+    return _permittivities([f.material for f in b.footprints], scn.freq_hz)
+
+
+def _permittivities(materials: Sequence[str], freq_hz: float) -> np.ndarray:
+    """Each material's permittivity at ``freq_hz`` (N, 2: real, imaginary), found once a
+    distinct material."""
+    names, which = np.unique(np.asarray(materials, dtype=str), return_inverse=True)
+    eps = np.array([material_permittivity(m, freq_hz) for m in names], dtype=complex)
+    return np.ascontiguousarray(np.column_stack([eps.real, eps.imag])[which.ravel()], dtype=float)
 
 
 def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> np.ndarray:
@@ -280,7 +286,8 @@ def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> n
         return out
     px = (a.x_max_m - a.x_min_m) / w
     py = (a.y_max_m - a.y_min_m) / h
-    bounds = np.array([f.polygon.bounds for f in b.footprints])  # (P, 4): x0, y0, x1, y1
+    polys = np.asarray([f.polygon for f in b.footprints], dtype=object)
+    bounds = shapely.bounds(polys)  # (P, 4): x0, y0, x1, y1
     j0 = np.clip(np.floor((bounds[:, 0] - a.x_min_m) / px), 0, w - 1).astype(np.int64)
     j1 = np.clip(np.floor((bounds[:, 2] - a.x_min_m) / px), 0, w - 1).astype(np.int64)
     i0 = np.clip(np.floor((bounds[:, 1] - a.y_min_m) / py), 0, h - 1).astype(np.int64)
@@ -294,7 +301,6 @@ def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> n
     ii, jj = i0[owner] + k // width, j0[owner] + k % width
     cells = shapely.box(a.x_min_m + jj * px, a.y_min_m + ii * py,
                         a.x_min_m + (jj + 1) * px, a.y_min_m + (ii + 1) * py)  # fmt: skip
-    polys = np.asarray([f.polygon for f in b.footprints], dtype=object)
     shapely.prepare(polys)
     # Interiors that meet: an overlap of positive area, not a shared edge or corner.
     hit = shapely.relate_pattern(polys[owner], cells, "T********")
