@@ -167,7 +167,7 @@ class UAVNavEnv(gym.Env):
                 "alone does not show the destination or the storm)"
             )
         self.observation, self.random_goal = observation, bool(random_goal)
-        if self.field.altitudes_m is not None:
+        if self.level_axis:
             self.climb, self.descend = level_durations(
                 self.field.altitudes_m, self.cfg, climb_m_s, descend_m_s
             )
