@@ -4,6 +4,7 @@ independent references, maps over a DEM in two CRSs, shifts, and bad DEMs refuse
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import warnings
 from pathlib import Path
@@ -485,6 +486,38 @@ def test_obstacles_count_wherever_they_touch_a_pixel() -> None:
     box = uma(buildings=[Building(995.0, 1011.0, 500.0, 510.0, 70.0)])
     got = obstacle_pixel_max(box)
     assert set(zip(*np.nonzero(got), strict=True)) == {(50, 99), (50, 100), (50, 101)}
+
+
+def test_the_mask_reads_only_the_buildings_that_can_close_a_pixel(dems: dict[str, Path]) -> None:
+    # `not_flyable` intersects with the pixels only the buildings at least the lowest flight
+    # height less the clearance and the highest ground tall: against every building intersected
+    # (the mask from `obstacle_pixel_max` with none left out), over the ridge with the height
+    # above the ground (60 m: the ridge's 150 m of relief leave none out) and above sea level
+    # (500 m), and over flat ground. 60 boxes 5-120 m tall; some pixels closed each time.
+    from rainuav.radio.scene.scenario import Building
+    from rainuav.radio.scene.terrain import obstacle_pixel_max
+
+    rng = np.random.default_rng(3)
+    boxes = []
+    for _ in range(60):
+        x, y = rng.uniform(0.0, 1150.0), rng.uniform(0.0, 750.0)
+        boxes.append(Building(x, x + rng.uniform(8, 50), y, y + rng.uniform(8, 50),
+                              float(rng.uniform(5.0, 120.0))))  # fmt: skip
+    msl = {"altitude_reference": "msl"}
+    for dem, area, left_out in [(dems["ridge_4326"], {}, False), (dems["ridge_4326"], msl, True),
+                                (None, {}, True)]:  # fmt: skip
+        scn = scenario(dem, **area).replace(buildings=boxes)
+        if area:
+            scn = scn.replace(area=dataclasses.replace(scn.area, altitude_m=500.0))
+        a, t = scn.area, scenario_terrain(scn)
+        ground = np.zeros(a.shape) if t is None else t.pixel_max(a.shape)
+        flight = flight_heights(scn)
+        every = ground + obstacle_pixel_max(scn) + a.clearance_m >= flight
+        mask = not_flyable(scn)
+        assert np.array_equal(mask, every)
+        assert mask.any() and not mask.all()
+        lowest = flight.min() - a.clearance_m - ground.max()
+        assert any(b.height_m < lowest for b in boxes) == left_out, lowest
 
 
 # -- flights that keep out of what they may not enter ------------------------------------------

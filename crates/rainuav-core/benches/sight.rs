@@ -1,9 +1,9 @@
 //! Criterion benchmarks of the queries along a segment among buildings: 10 000 boxes like a
 //! city (94% 6-18 m, 6% towers 60-150 m, over 8.8 km), 1 000 legs from 25 m to a receiver at
 //! 100 m. The buildings that can stand in each leg's way
-//! ([`Prisms::near_segment_under`]: the hierarchy's nodes left where their roofs stay below
-//! the leg) against every building whose box the leg meets ([`Prisms::near_segment`]: the same
-//! hierarchy blind to the roofs), then the roofs under 25 m dropped.
+//! ([`Prisms::near_segment_under`]: the tiers' buckets left where their roofs stay below the
+//! leg) against every building whose box the leg meets ([`Prisms::near_segment`]: the same
+//! buckets blind to the roofs), then the roofs under 25 m dropped.
 #![allow(missing_docs)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -40,7 +40,7 @@ fn bench(c: &mut Criterion) {
     let mut near = Vec::new();
     let mut g = c.benchmark_group("buildings_along_1000_legs");
     g.sample_size(20);
-    g.bench_function("hierarchy_with_roofs", |b| {
+    g.bench_function("tiers_with_roofs", |b| {
         b.iter(|| {
             let mut n = 0;
             for &(a, q) in &legs {

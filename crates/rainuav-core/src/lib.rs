@@ -16,12 +16,12 @@
 //! assert!(gamma / itu > 0.8 && gamma / itu < 1.3, "{}", gamma / itu);
 //! ```
 
-mod bvh;
 pub mod corners;
 pub mod diffraction;
 pub mod drops;
 pub mod dsd;
 pub mod error;
+mod grid;
 pub mod medium;
 pub mod memory;
 pub mod mie;
@@ -36,6 +36,7 @@ pub mod rays;
 pub mod raytime;
 pub mod sampling;
 pub mod sight;
+mod tiers;
 pub mod walls;
 pub mod walls2;
 pub mod water;

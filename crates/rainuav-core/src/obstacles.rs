@@ -3,11 +3,13 @@
 //! Boxes are the four-cornered case ([`Prisms::from_boxes`]).
 //!
 //! A bucket grid over the footprints' bounding boxes finds the prisms near a point or in a box;
-//! a hierarchy of the boxes with each node's tallest roof ([`crate::bvh`]) finds those along
-//! a segment, so a path reads only the buildings it can cross and that reach its rays.
+//! the prisms parted by roof height, a grid of buckets a tier with each bucket's tallest roof
+//! ([`crate::tiers`]), find those along a segment, so a path reads only the buildings it can
+//! cross and that reach its rays.
 
-use crate::bvh::Bvh;
 use crate::error::{CoreError, Result};
+use crate::grid::Buckets;
+use crate::tiers::Tiers;
 
 /// A box-shaped building: `[x0, x1, y0, y1, height]`, metres.
 pub type Building = [f64; 5];
@@ -31,106 +33,9 @@ pub struct Prisms {
     rings: Vec<[usize; 2]>,
     items: Vec<Prism>,
     grid: Buckets,
-    bvh: Bvh,
+    tiers: Tiers,
     /// The tallest roof above the terrain, m (0: none).
     top_max: f64,
-}
-
-/// A regular grid of buckets, each listing the prisms whose bounding box overlaps it
-/// (compressed rows: `ids[starts[c]..starts[c + 1]]`).
-#[derive(Debug, Clone, Default)]
-struct Buckets {
-    origin: [f64; 2],
-    size: f64,
-    nx: usize,
-    ny: usize,
-    starts: Vec<usize>,
-    ids: Vec<u32>,
-}
-
-impl Buckets {
-    fn build(items: &[Prism]) -> Result<Self> {
-        if items.is_empty() {
-            return Ok(Self::default());
-        }
-        let mut b = [
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        ];
-        for p in items {
-            b = [
-                b[0].min(p.bbox[0]),
-                b[1].max(p.bbox[1]),
-                b[2].min(p.bbox[2]),
-                b[3].max(p.bbox[3]),
-            ];
-        }
-        let (w, h) = ((b[1] - b[0]).max(1.0), (b[3] - b[2]).max(1.0));
-        // About two buckets a prism, at most 2^20.
-        let cells = (2 * items.len()).clamp(1, 1 << 20) as f64;
-        let size = (w * h / cells).sqrt().max(1.0);
-        let nx = ((w / size).ceil() as usize).max(1);
-        let ny = ((h / size).ceil() as usize).max(1);
-        let mut g = Buckets {
-            origin: [b[0], b[2]],
-            size,
-            nx,
-            ny,
-            starts: vec![0; nx * ny + 1],
-            ids: Vec::new(),
-        };
-        let mut counts = vec![0usize; nx * ny];
-        for p in items {
-            let (c0, c1, r0, r1) = g.range(p.bbox);
-            for r in r0..=r1 {
-                for c in c0..=c1 {
-                    counts[r * nx + c] += 1;
-                }
-            }
-        }
-        let total: usize = counts.iter().sum();
-        crate::memory::check_memory_for("footprints", "use fewer or smaller buildings", total * 4)?;
-        for c in 0..nx * ny {
-            g.starts[c + 1] = g.starts[c] + counts[c];
-        }
-        let mut fill = g.starts.clone();
-        g.ids = vec![0; total];
-        for (k, p) in items.iter().enumerate() {
-            let (c0, c1, r0, r1) = g.range(p.bbox);
-            for r in r0..=r1 {
-                for c in c0..=c1 {
-                    g.ids[fill[r * nx + c]] = k as u32;
-                    fill[r * nx + c] += 1;
-                }
-            }
-        }
-        Ok(g)
-    }
-
-    fn col(&self, x: f64) -> usize {
-        (((x - self.origin[0]) / self.size).floor().max(0.0) as usize).min(self.nx - 1)
-    }
-
-    fn row(&self, y: f64) -> usize {
-        (((y - self.origin[1]) / self.size).floor().max(0.0) as usize).min(self.ny - 1)
-    }
-
-    /// The buckets (columns `c0..=c1`, rows `r0..=r1`) a box overlaps, clamped to the grid.
-    fn range(&self, bbox: [f64; 4]) -> (usize, usize, usize, usize) {
-        (
-            self.col(bbox[0]),
-            self.col(bbox[1]),
-            self.row(bbox[2]),
-            self.row(bbox[3]),
-        )
-    }
-
-    fn bucket(&self, r: usize, c: usize) -> &[u32] {
-        let k = r * self.nx + c;
-        &self.ids[self.starts[k]..self.starts[k + 1]]
-    }
 }
 
 impl Prisms {
@@ -202,17 +107,17 @@ impl Prisms {
                 }
             })
             .collect();
-        let grid = Buckets::build(&items)?;
         let top_max = items.iter().map(|p| p.top).fold(0.0, f64::max);
         let boxes: Vec<[f64; 4]> = items.iter().map(|p| p.bbox).collect();
         let tops: Vec<f64> = items.iter().map(|p| p.top).collect();
-        let bvh = Bvh::build(&boxes, &tops);
+        let grid = Buckets::build(&boxes, 0.0)?;
+        let tiers = Tiers::build(&boxes, &tops)?;
         Ok(Prisms {
             xy,
             rings,
             items,
             grid,
-            bvh,
+            tiers,
             top_max,
         })
     }
@@ -278,14 +183,16 @@ impl Prisms {
             .map(move |r| &self.xy[r[0]..r[1]])
     }
 
-    fn edges(&self, k: usize) -> impl Iterator<Item = ([f64; 2], [f64; 2])> + '_ {
+    /// Hands `f` each edge of prism `k`'s rings, `(from, to)`, ring by ring in order.
+    fn for_edges(&self, k: usize, mut f: impl FnMut([f64; 2], [f64; 2])) {
         let p = self.items[k];
-        self.rings[p.rings[0]..p.rings[1]]
-            .iter()
-            .flat_map(move |r| {
-                let ring = &self.xy[r[0]..r[1]];
-                (0..ring.len()).map(move |i| (ring[i], ring[(i + 1) % ring.len()]))
-            })
+        for r in &self.rings[p.rings[0]..p.rings[1]] {
+            let ring = &self.xy[r[0]..r[1]];
+            for w in ring.windows(2) {
+                f(w[0], w[1]);
+            }
+            f(ring[ring.len() - 1], ring[0]);
+        }
     }
 
     /// Whether prism `k`'s footprint holds `(x, y)` (even-odd over its rings).
@@ -295,11 +202,11 @@ impl Prisms {
             return false;
         }
         let mut inside = false;
-        for (p, q) in self.edges(k) {
+        self.for_edges(k, |p, q| {
             if (p[1] > y) != (q[1] > y) && x < p[0] + (y - p[1]) / (q[1] - p[1]) * (q[0] - p[0]) {
                 inside = !inside;
             }
-        }
+        });
         inside
     }
 
@@ -341,11 +248,11 @@ impl Prisms {
     /// appended to `out` unsorted.
     pub fn crossings(&self, k: usize, a: [f64; 2], b: [f64; 2], out: &mut Vec<f64>) {
         let d = [b[0] - a[0], b[1] - a[1]];
-        for (p, q) in self.edges(k) {
+        self.for_edges(k, |p, q| {
             let e = [q[0] - p[0], q[1] - p[1]];
             let den = d[0] * e[1] - d[1] * e[0];
             if den.abs() < 1e-12 {
-                continue;
+                return;
             }
             let w = [p[0] - a[0], p[1] - a[1]];
             let t = (w[0] * e[1] - w[1] * e[0]) / den;
@@ -353,7 +260,7 @@ impl Prisms {
             if (0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&s) {
                 out.push(t);
             }
-        }
+        });
     }
 }
 

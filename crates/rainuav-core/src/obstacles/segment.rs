@@ -1,4 +1,4 @@
-//! The prisms a segment of a line of sight meets ([`Prisms`]' hierarchy walked along it).
+//! The prisms a segment of a line of sight meets ([`Prisms`]' tiers walked along it).
 
 use super::Prisms;
 
@@ -44,8 +44,9 @@ impl Prisms {
     /// The prisms whose bounding box the segment `a -> b` (points `a + t (b - a)`) meets on
     /// some `lo..=hi` where their roof plus `lift` reaches `floor(lo, hi)`, each once, in index
     /// order. `floor(lo, hi)` is the lowest (m above sea level) a prism standing over
-    /// `t in lo..=hi` must reach to matter to the caller, or less: a node of the hierarchy
-    /// whose tallest roof stays below it is not read, nor a prism whose box does.
+    /// `t in lo..=hi` must reach to matter to the caller, or less (and no higher over an
+    /// interval than over any part of it): a tier or bucket whose tallest roof stays below it
+    /// is not read, nor a prism whose box does.
     pub fn near_segment_over(
         &self,
         a: [f64; 2],
@@ -103,6 +104,6 @@ impl Prisms {
             (lo <= hi).then_some((lo.max(0.0), hi.min(1.0)))
         };
         let item = |k: u32| (self.items[k as usize].bbox, self.items[k as usize].top);
-        self.bvh.along(inside, floor, item, lift, visit)
+        self.tiers.along(a, d, inside, floor, item, lift, visit)
     }
 }

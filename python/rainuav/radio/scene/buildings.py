@@ -270,12 +270,14 @@ def _permittivities(materials: Sequence[str], freq_hz: float) -> np.ndarray:
     return np.ascontiguousarray(np.column_stack([eps.real, eps.imag])[which.ravel()], dtype=float)
 
 
-def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> np.ndarray:
+def pixels_touched_max(
+    scn: Scenario, shape: tuple[int, int] | None = None, at_least_m: float = 0.0
+) -> np.ndarray:
     """The tallest building (m above the terrain) whose footprint overlaps each pixel of the
     area (an overlap of positive area: footprints intersected with pixels as polygons; a
-    pixel a footprint only touches along an edge or at a corner does not count), (H, W).
-    Every (footprint, pixel of its bounding box) pair is tested in one vectorised shapely
-    call."""
+    pixel a footprint only touches along an edge or at a corner does not count), (H, W),
+    among those at least ``at_least_m`` tall (0 where none is). Every (footprint, pixel of
+    its bounding box) pair is tested in one vectorised shapely call."""
     import shapely
 
     a = scn.area
@@ -286,7 +288,10 @@ def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> n
         return out
     px = (a.x_max_m - a.x_min_m) / w
     py = (a.y_max_m - a.y_min_m) / h
-    polys = np.asarray([f.polygon for f in b.footprints], dtype=object)
+    tall = [f for f in b.footprints if f.height_m >= at_least_m]
+    if not tall:
+        return out
+    polys = np.asarray([f.polygon for f in tall], dtype=object)
     bounds = shapely.bounds(polys)  # (P, 4): x0, y0, x1, y1
     j0 = np.clip(np.floor((bounds[:, 0] - a.x_min_m) / px), 0, w - 1).astype(np.int64)
     j1 = np.clip(np.floor((bounds[:, 2] - a.x_min_m) / px), 0, w - 1).astype(np.int64)
@@ -304,7 +309,7 @@ def pixels_touched_max(scn: Scenario, shape: tuple[int, int] | None = None) -> n
     shapely.prepare(polys)
     # Interiors that meet: an overlap of positive area, not a shared edge or corner.
     hit = shapely.relate_pattern(polys[owner], cells, "T********")
-    tops = np.array([f.height_m for f in b.footprints])[owner]
+    tops = np.array([f.height_m for f in tall])[owner]
     np.maximum.at(out, (ii[hit], jj[hit]), tops[hit])
     return out
 

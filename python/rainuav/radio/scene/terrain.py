@@ -103,14 +103,15 @@ def flight_heights(scn: Scenario) -> np.ndarray:
     return flight_heights_at(scn, gx, gy)
 
 
-def obstacle_pixel_max(scn: Scenario) -> np.ndarray:
+def obstacle_pixel_max(scn: Scenario, at_least_m: float = 0.0) -> np.ndarray:
     """The tallest obstacle (buildings: boxes and footprints, intersected with each pixel as
-    polygons; and ``height_map_m``; m above the terrain) touching each pixel, (H, W)."""
+    polygons; and ``height_map_m``; m above the terrain) touching each pixel, (H, W); the
+    buildings lower than ``at_least_m`` left out."""
     from rainuav.radio.scene.buildings import pixels_touched_max
 
     a = scn.area
     h, w = a.shape
-    out = pixels_touched_max(scn)
+    out = pixels_touched_max(scn, at_least_m=at_least_m)
     if scn.height_map_m is not None:
         hm = np.asarray(scn.height_map_m, dtype=float)
         rows, cols = hm.shape
@@ -134,8 +135,13 @@ def not_flyable(scn: Scenario) -> np.ndarray:
     a = scn.area
     t = scenario_terrain(scn)
     ground = np.zeros(a.shape) if t is None else t.pixel_max(a.shape)
-    top = ground + obstacle_pixel_max(scn)
-    return top + a.clearance_m >= flight_heights(scn)
+    flight = flight_heights(scn)
+    # A building lower than this stands below every pixel's flight height less the clearance,
+    # whatever the ground under it: it cannot close a pixel (10 000 footprints under a flight
+    # above the roofs: the few towers are intersected with the pixels, not every house).
+    lowest = float(flight.min() - a.clearance_m - ground.max())
+    top = ground + obstacle_pixel_max(scn, at_least_m=lowest)
+    return top + a.clearance_m >= flight
 
 
 def map_mask(scn: Scenario) -> np.ndarray | None:
