@@ -8,6 +8,8 @@ use crate::error::Result;
 /// `ids[starts[c]..starts[c + 1]]`, bucket `c = row * nx + col`).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Buckets {
+    /// The boxes' union, each grown by the margin: `[x0, x1, y0, y1]`.
+    pub(crate) bounds: [f64; 4],
     origin: [f64; 2],
     size: f64,
     nx: usize,
@@ -46,6 +48,7 @@ impl Buckets {
         let nx = ((w / size).ceil() as usize).max(1);
         let ny = ((h / size).ceil() as usize).max(1);
         let mut g = Buckets {
+            bounds: b,
             origin: [b[0], b[2]],
             size,
             nx,

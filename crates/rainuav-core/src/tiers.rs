@@ -28,13 +28,12 @@ thread_local! {
     static SEEN: Cell<(u32, Vec<u32>)> = const { Cell::new((0, Vec::new())) };
 }
 
-/// One tier: its prisms' grid, each bucket's tallest roof (m above the terrain), and the tier's
-/// box (the prisms' boxes grown by [`MARGIN_M`]) and tallest roof.
+/// One tier: its prisms' grid (its `bounds` the tier's box), each bucket's tallest roof (m above
+/// the terrain) and the tier's.
 #[derive(Debug, Clone)]
 struct Tier {
     grid: Buckets,
     tops: Vec<f64>,
-    bbox: [f64; 4],
     top: f64,
 }
 
@@ -68,7 +67,7 @@ impl Tiers {
             for id in &mut grid.ids {
                 *id = ids[*id as usize];
             }
-            let cell_tops = (0..grid.len())
+            let cell_tops: Vec<f64> = (0..grid.len())
                 .map(|k| {
                     grid.at(k)
                         .iter()
@@ -76,27 +75,10 @@ impl Tiers {
                         .fold(0.0, f64::max)
                 })
                 .collect();
-            let bbox = tier_boxes.iter().fold(
-                [
-                    f64::INFINITY,
-                    f64::NEG_INFINITY,
-                    f64::INFINITY,
-                    f64::NEG_INFINITY,
-                ],
-                |b, p| {
-                    [
-                        b[0].min(p[0] - MARGIN_M),
-                        b[1].max(p[1] + MARGIN_M),
-                        b[2].min(p[2] - MARGIN_M),
-                        b[3].max(p[3] + MARGIN_M),
-                    ]
-                },
-            );
-            let top = ids.iter().map(|&i| tops[i as usize]).fold(0.0, f64::max);
+            let top = cell_tops.iter().copied().fold(0.0, f64::max);
             tiers.push(Tier {
                 grid,
                 tops: cell_tops,
-                bbox,
                 top,
             });
             lo = hi;
@@ -132,7 +114,7 @@ impl Tiers {
             walk = 1;
         }
         let open = self.tiers.iter().all(|tier| {
-            let Some(span) = inside(&tier.bbox) else {
+            let Some(span) = inside(&tier.grid.bounds) else {
                 return true;
             };
             if tier.top + lift < floor(span.0, span.1) {
