@@ -715,6 +715,24 @@ def test_train_leaves_no_process_wide_state(tmp_path: Path) -> None:
         torch.set_num_threads(threads)
 
 
+def test_torch_settings_are_deterministic_without_loading_the_compiler() -> None:
+    # torch's public switch imports torch._inductor (about 1.4 s of every training or flying
+    # command on 2 cores); the run's settings set the eager flag alone, and restore it. In a
+    # fresh process, so that no other test has loaded the compiler.
+    code = (
+        "import sys, torch\n"
+        "from rainuav.rl.setup import torch_settings\n"
+        "with torch_settings(torch.device('cpu')):\n"
+        "    assert torch.are_deterministic_algorithms_enabled()\n"
+        "    assert torch.is_deterministic_algorithms_warn_only_enabled()\n"
+        "assert not torch.are_deterministic_algorithms_enabled()\n"
+        "print('torch._inductor.config' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "False"
+
+
 def test_agent_and_start_streams_are_independent(tmp_path: Path) -> None:
     # The agent's generator and the start sampler come from one seed but draw independent
     # streams (SeedSequence.spawn), so lane 0's first start and first exploration decision

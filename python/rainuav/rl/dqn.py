@@ -7,6 +7,7 @@ measured, is in ``docs/guide/learning.md``."""
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import deque
 from collections.abc import Iterator
@@ -195,15 +196,20 @@ class Agent:
         self.online = encoder.make_net().to(device)
         self.target = encoder.make_net().to(device)
         self.target.load_state_dict(self.online.state_dict())
-        # The fused Adam kernel: one call instead of ~10 per parameter tensor (timed in
-        # BENCHMARKS.md, training section).
-        self.opt = torch.optim.Adam(self.online.parameters(), lr=cfg.lr, fused=True)
         self.replay = Replay(cfg.replay_capacity, self.obs_dim)
         self.rng = np.random.default_rng(random_streams(seed)["agent"])
         self.updates = 0
         # Running mean of the online weights (``average_from``): the reported network.
         self.average: dict[str, torch.Tensor] | None = None
         self.n_averaged = 0
+
+    @functools.cached_property
+    def opt(self) -> torch.optim.Adam:
+        """The optimiser, made when first used: a network only flown never makes one (torch's
+        first optimiser imports its compiler, about 1.5 s of a command on 2 cores). The fused
+        Adam kernel: one call instead of ~10 per parameter tensor (timed in BENCHMARKS.md,
+        training section)."""
+        return torch.optim.Adam(self.online.parameters(), lr=self.cfg.lr, fused=True)
 
     def epsilon(self, episode: Any) -> Any:
         """eps0 * eps_decay^episode (works on arrays of episode indices)."""
@@ -335,12 +341,15 @@ class Agent:
             "n_averaged": self.n_averaged,
         }
 
-    def load_state_dict(self, d: dict[str, Any]) -> None:
+    def load_state_dict(self, d: dict[str, Any], *, to_fly: bool = False) -> None:
+        """Restores a saved agent; ``to_fly``: only what flying reads (the networks and the
+        weight average), not the optimiser, the replay or the exploration's stream."""
         self.online.load_state_dict(d["online"])
         self.target.load_state_dict(d["target"])
-        self.opt.load_state_dict(d["opt"])
-        self.replay.load_state_dict(d["replay"])
-        self.rng.bit_generator.state = d["rng"]
+        if not to_fly:
+            self.opt.load_state_dict(d["opt"])
+            self.replay.load_state_dict(d["replay"])
+            self.rng.bit_generator.state = d["rng"]
         self.updates = int(d["updates"])
         # Checkpoints from before weight averaging hold neither.
         average, n_averaged = d.get("average"), d.get("n_averaged", 0)

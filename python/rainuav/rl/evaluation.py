@@ -199,7 +199,7 @@ def load_agent(
     agent = make_agent(cfg, env, pick_device(device))
     checks = Validation(np.zeros((0, 2)), {})
     try:
-        agent.load_state_dict(state["agent"])
+        agent.load_state_dict(state["agent"], to_fly=True)
         if "validation" in state:
             checks.load_state_dict(state["validation"])
         if not online:  # else: load_state_dict left the last online weights in agent.online
