@@ -89,6 +89,13 @@ def test_tiny_study_end_to_end_does_not_depend_on_workers(
     # The same study from scratch in one process: the same results.csv. (A study interrupted
     # mid-case and rerun: the next test, with a real kill.)
     assert (reference[0] / "results.csv").read_text() == csv
+    # A case whose result was deleted is run again, alone, to the same results.
+    first = (out / "cases" / cases[0] / "result.json").stat().st_mtime_ns
+    (out / "cases" / cases[1] / "result.json").unlink()
+    assert main([str(study), "--out", str(out), "--workers", "1"]) == 0
+    assert (out / "cases" / cases[0] / "result.json").stat().st_mtime_ns == first
+    assert (out / "cases" / cases[1] / "result.json").exists()
+    assert (out / "results.csv").read_text() == csv
 
 
 @pytest.mark.slow
