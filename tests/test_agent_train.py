@@ -715,6 +715,7 @@ def test_train_leaves_no_process_wide_state(tmp_path: Path) -> None:
         torch.set_num_threads(threads)
 
 
+@pytest.mark.slow
 def test_torch_settings_are_deterministic_without_loading_the_compiler() -> None:
     # torch's public switch imports torch._inductor (about 1.4 s of every training or flying
     # command on 2 cores); the run's settings set the eager flag alone, and restore it. In a
