@@ -11,7 +11,7 @@
 PYTHON ?= python
 # The suite on both cores of the 2-core machine, one file per worker (a file's tests share
 # their session's map cache); PYTEST_ARGS= runs it in one process.
-PYTEST_ARGS ?= -n 2 --dist loadfile
+PYTEST_ARGS ?= -n 2 --dist loadfile --no-loadscope-reorder
 
 .PHONY: test test-fast build llvm lint test-rust test-python bench fmt validate wheel wheel-check docs figures
 
