@@ -717,9 +717,9 @@ def test_train_leaves_no_process_wide_state(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_torch_settings_are_deterministic_without_loading_the_compiler() -> None:
-    # torch's public switch imports torch._inductor (about 1.4 s of every training or flying
-    # command on 2 cores); the run's settings set the eager flag alone, and restore it. In a
-    # fresh process, so that no other test has loaded the compiler.
+    # torch's public switch imports torch._inductor (about 1.5 s of a command that flies a
+    # saved network, on 2 cores); the run's settings set the eager flag alone, and restore it.
+    # In a fresh process, so that no other test has loaded the compiler.
     code = (
         "import sys, torch\n"
         "from rainuav.rl.setup import torch_settings\n"
