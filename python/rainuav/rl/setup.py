@@ -81,7 +81,7 @@ def pick_device(name: str) -> torch.device:
 
 def _deterministic(mode: bool, warn_only: bool) -> None:
     """``torch.use_deterministic_algorithms`` without importing the compiler: the public call
-    also sets ``torch._inductor``'s flag, and importing it costs about 1.4 s a process on 2
+    also sets ``torch._inductor``'s flag, and importing it costs about 1.5 s a process on 2
     cores. Nothing here compiles, so its flag is set only where it is already loaded."""
     eager = getattr(torch._C, "_set_deterministic_algorithms", None)
     if eager is None:  # another torch: the public call
