@@ -2,8 +2,9 @@
 //! building hides a pixel from a site, each convex corner that sees both ends diffracts a ray
 //! to the pixel, with the UTD coefficient of a finitely conducting wedge (ITU-R P.526-15
 //! section 6, [`crate::diffraction::utd_wedge`]). The corners looked at: those of the
-//! buildings in the way, and those the site lights (its line to the edge clear somewhere
-//! between the terrain and the roof) among the buildings within [`LIT_RADIUS_M`] of it, where
+//! buildings in the way, and those the site lights (its line to the edge, or its image's in a
+//! wall, clear somewhere between the terrain and the roof) among the buildings within
+//! [`LIT_RADIUS_M`] of it, where
 //! going round the corner is at most [`EXCESS_M`] longer (horizontally) than the straight line
 //! from the site to the pixel (the corner inside the ellipse with the two as foci): a building
 //! across the street from those in the way, whose corner the site sees down the street. The
@@ -22,10 +23,10 @@
 //! along the edge (vertical polarisation: perpendicular to the horizontal plane of incidence) or
 //! across it (horizontal polarisation).
 //!
-//! **A wall reflection, then the corner** (at the corners of the buildings in the way). A wall
-//! within [`IMAGE_RADIUS_M`] of a corner that
-//! faces both the site and the corner mirrors the site: its image diffracts at the corner as the
-//! site does, the reflection point where the line from the image to the corner crosses the wall
+//! **A wall reflection, then the corner** (a corner of a building in the way or beside the
+//! line; one beside the line that only an image lights is looked at too). A wall within
+//! [`IMAGE_RADIUS_M`] of a corner that faces both the site and the corner mirrors the site:
+//! its image diffracts at the corner as the site does, the reflection point where the line from the image to the corner crosses the wall
 //! (it exists where that point lies on the wall, between the terrain and the roof, and the legs
 //! site -> wall -> corner -> pixel are clear), with the wall's P.2040 reflectance
 //! ([`crate::walls::wall_reflectance`]). The walls are the prisms' edges. This is how a street
@@ -299,7 +300,7 @@ impl RayScene<'_> {
             .flat_map(|i| (0..w).map(move |j| [self.x_m[j], self.y_m[i]]))
             .map(|q| self.receiver_height(q))
             .fold(f64::INFINITY, f64::min);
-        let lit = self.lit_corners((s, zs), zs.min(zq_min), bounds);
+        let lit = self.lit_corners((s, zs), zs.min(zq_min), eps, bounds);
         Ok((0..self.y_m.len())
             .into_par_iter()
             .flat_map_iter(|i| {
@@ -356,10 +357,13 @@ impl RayScene<'_> {
                     }
                     // The corners the site lights beside the line (their buildings not in the
                     // way; `hits` is sorted).
-                    lit.near(q, |c| {
-                        if hits.binary_search(&(c.prism as u32)).is_err() {
-                            let ray =
-                                self.corner_ray(s, zs, q, zq, c, eps[c.prism], None, &mut sight);
+                    lit.near(q, |c, imgs| {
+                        if hits.binary_search(&(c.prism as u32)).is_ok() {
+                            return;
+                        }
+                        let sources = std::iter::once(None).chain(imgs.iter().map(Some));
+                        for m in sources {
+                            let ray = self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut sight);
                             rays.extend(ray.map(to_ray));
                         }
                     });

@@ -13,8 +13,9 @@ use super::{
 use crate::rays::RayScene;
 use crate::sight::Sight;
 
-/// A lit corner with its azimuth (rad, in `[-pi, pi]`) and distance (m) from the site.
-type Placed = (f64, f64, Corner);
+/// A lit corner with its azimuth (rad, in `[-pi, pi]`) and distance (m) from the site, and the
+/// images of the site that light it.
+type Placed = (f64, f64, Corner, Vec<Image>);
 
 /// The corners the site lights, for the pixels to look up those within their ellipse
 /// ([`EXCESS_M`]): in bands of distance from the site (band 0 within `EXCESS_M / 2`, where
@@ -29,10 +30,10 @@ pub(super) struct Lit {
 }
 
 impl Lit {
-    pub(super) fn new(site: [f64; 2], corners: Vec<Corner>) -> Self {
+    pub(super) fn new(site: [f64; 2], corners: Vec<(Corner, Vec<Image>)>) -> Self {
         let half = 0.5 * EXCESS_M;
         let mut bands: Vec<(f64, Vec<Placed>)> = Vec::new();
-        for c in corners {
+        for (c, images) in corners {
             let (dx, dy) = (c.v[0] - site[0], c.v[1] - site[1]);
             let r = crate::norm(dx, dy);
             let k = if r < half {
@@ -48,7 +49,7 @@ impl Lit {
                 };
                 bands.push((inner, Vec::new()));
             }
-            bands[k].1.push((dy.atan2(dx), r, c));
+            bands[k].1.push((dy.atan2(dx), r, c, images));
         }
         for (_, band) in &mut bands {
             band.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -56,16 +57,16 @@ impl Lit {
         Self { site, bands }
     }
 
-    /// Calls `f` on every corner inside the ellipse of the pixel `q` (in the order of the bands
-    /// and azimuths).
-    pub(super) fn near(&self, q: [f64; 2], mut f: impl FnMut(&Corner)) {
+    /// Calls `f` on every corner inside the ellipse of the pixel `q`, with the images that light
+    /// it (in the order of the bands and azimuths).
+    pub(super) fn near(&self, q: [f64; 2], mut f: impl FnMut(&Corner, &[Image])) {
         let (dx, dy) = (q[0] - self.site[0], q[1] - self.site[1]);
         let d = crate::norm(dx, dy);
         let aq = dy.atan2(dx);
         let e = EXCESS_M;
-        let mut visit = |&(_, r1, ref c): &Placed| {
+        let mut visit = |(_, r1, c, images): &Placed| {
             if r1 + crate::norm(c.v[0] - q[0], c.v[1] - q[1]) - d <= e {
-                f(c);
+                f(c, images);
             }
         };
         for (inner, band) in &self.bands {
@@ -83,10 +84,10 @@ impl Lit {
             }
             let w = g.acos();
             let mut read = |lo: f64, hi: f64| {
-                let i = band.partition_point(|(a, _, _)| *a < lo);
+                let i = band.partition_point(|(a, ..)| *a < lo);
                 band[i..]
                     .iter()
-                    .take_while(|(a, _, _)| *a <= hi)
+                    .take_while(|(a, ..)| *a <= hi)
                     .for_each(&mut visit);
             };
             let (lo, hi) = (aq - w, aq + w);
@@ -161,12 +162,14 @@ impl RayScene<'_> {
     }
 
     /// The corners of the buildings within [`LIT_RADIUS_M`] of the site (at `zs`) whose edge it
-    /// sees somewhere between the terrain and the roof, each with its `z_min`, for the pixels to
-    /// look up; less those whose roof is below `z_low` (m above sea level).
+    /// sees somewhere between the terrain and the roof, directly or by a wall within
+    /// [`IMAGE_RADIUS_M`] of the corner, each with its `z_min` and the images that light it,
+    /// for the pixels to look up; less those whose roof is below `z_low` (m above sea level).
     pub(super) fn lit_corners(
         &self,
         (site, zs): ([f64; 2], f64),
         z_low: f64,
+        eps: &[Complex64],
         bounds: crate::sight::Bounds,
     ) -> Lit {
         let Some(prisms) = self.prisms else {
@@ -181,21 +184,26 @@ impl RayScene<'_> {
         let corners = near
             .par_iter()
             .flat_map_iter(|&k| {
-                let mut sight = self.sight(bounds);
+                let (mut sight, mut scratch) = (self.sight(bounds), Vec::new());
                 let mut corners = Vec::new();
                 self.corners_of(k as usize, &mut corners);
-                corners.retain_mut(|c| {
-                    if crate::norm(c.v[0] - site[0], c.v[1] - site[1]) > r {
-                        return false;
-                    }
-                    let z_lo = self.terrain_at(c.v[0], c.v[1]);
-                    if z_lo + c.top < z_low {
-                        return false;
-                    }
-                    c.z_min = sight.lowest((site, zs, 0.0), (c.outside(), 0.0, 1.0), z_lo);
-                    c.z_min < z_lo + c.top
-                });
                 corners
+                    .into_iter()
+                    .filter_map(|mut c| {
+                        if crate::norm(c.v[0] - site[0], c.v[1] - site[1]) > r {
+                            return None;
+                        }
+                        let z_lo = self.terrain_at(c.v[0], c.v[1]);
+                        let top = z_lo + c.top;
+                        if top < z_low {
+                            return None;
+                        }
+                        let mut images = self.images_of(site, &c, eps, &mut scratch);
+                        self.first_legs((site, zs), &mut c, &mut images, &mut sight);
+                        images.retain(|m| m.z_min < top);
+                        (c.z_min < top || !images.is_empty()).then_some((c, images))
+                    })
+                    .collect::<Vec<_>>()
             })
             .collect();
         Lit::new(site, corners)
