@@ -4,11 +4,11 @@
 //! section 6, [`crate::diffraction::utd_wedge`]). The corners looked at: those of the
 //! buildings in the way, and those the site lights (its line to the edge, or its image's in a
 //! wall, clear somewhere between the terrain and the roof) among the buildings within
-//! [`LIT_RADIUS_M`] of it, where
-//! going round the corner is at most [`EXCESS_M`] longer (horizontally) than the straight line
-//! from the site to the pixel (the corner inside the ellipse with the two as foci): a building
-//! across the street from those in the way, whose corner the site sees down the street. The
-//! two limits bound the work; docs/physics.md section 12 says what they leave out.
+//! [`LIT_RADIUS_M`] of it, where going round the corner is at most [`EXCESS_M`] longer
+//! (horizontally) than the straight line from the site to the pixel (the corner inside the
+//! ellipse with the two as foci): a building across the street from those in the way, whose
+//! corner the site sees down the street. The two limits bound the work; docs/physics.md
+//! section 12 says what they leave out.
 //!
 //! A corner is a footprint vertex whose exterior angle `n pi` exceeds `pi` (a box's corners:
 //! `n = 1.5`); its faces are the two walls that meet there, their material the building's. The
@@ -26,12 +26,12 @@
 //! **A wall reflection, then the corner** (a corner of a building in the way or beside the
 //! line; one beside the line that only an image lights is looked at too). A wall within
 //! [`IMAGE_RADIUS_M`] of a corner that faces both the site and the corner mirrors the site:
-//! its image diffracts at the corner as the site does, the reflection point where the line from the image to the corner crosses the wall
-//! (it exists where that point lies on the wall, between the terrain and the roof, and the legs
-//! site -> wall -> corner -> pixel are clear), with the wall's P.2040 reflectance
-//! ([`crate::walls::wall_reflectance`]). The walls are the prisms' edges. This is how a street
-//! lights its side streets: the site sees the corner at grazing incidence along the street's
-//! wall, its image across the street at a wider angle.
+//! its image diffracts at the corner as the site does, the reflection point where the line from
+//! the image to the corner crosses the wall (it exists where that point lies on the wall,
+//! between the terrain and the roof, and the legs site -> wall -> corner -> pixel are clear),
+//! with the wall's P.2040 reflectance ([`crate::walls::wall_reflectance`]). The walls are the
+//! prisms' edges. This is how a street lights its side streets: the site sees the corner at
+//! grazing incidence along the street's wall, its image across the street at a wider angle.
 //!
 //! Each ray's power per mW radiated, isotropic antennas: `|Gamma|^2 (lambda / 4 pi)^2 |D|^2 /
 //! (s1 s2 (s1 + s2))` (`|Gamma|^2 = 1` without a reflection, `s1` the unfolded length to the
@@ -355,8 +355,8 @@ impl RayScene<'_> {
                             }
                         }
                     }
-                    // The corners the site lights beside the line (their buildings not in the
-                    // way; `hits` is sorted).
+                    // The corners the site, or its image in a wall, lights beside the line
+                    // (their buildings not in the way; `hits` is sorted).
                     lit.near(q, |c, imgs| {
                         if hits.binary_search(&(c.prism as u32)).is_ok() {
                             return;
