@@ -340,8 +340,13 @@ impl RayScene<'_> {
                             corners
                                 .into_iter()
                                 .map(|mut c| {
-                                    let mut imgs = self.images_of(s, &c, eps, &mut scratch);
-                                    self.first_legs((s, zs), &mut c, &mut imgs, &mut sight);
+                                    let imgs = self.sources_of(
+                                        (s, zs),
+                                        &mut c,
+                                        eps,
+                                        &mut scratch,
+                                        &mut sight,
+                                    );
                                     (c, imgs)
                                 })
                                 .collect()

@@ -105,7 +105,7 @@ impl Lit {
 impl RayScene<'_> {
     /// The images of the site (horizontal position `s`) in the walls near corner `c` that face
     /// both (module docs), with each wall's permittivity from `eps` (a prism's).
-    pub(super) fn images_of(
+    fn images_of(
         &self,
         s: [f64; 2],
         c: &Corner,
@@ -198,9 +198,8 @@ impl RayScene<'_> {
                         if top < z_low {
                             return None;
                         }
-                        let mut images = self.images_of(site, &c, eps, &mut scratch);
-                        self.first_legs((site, zs), &mut c, &mut images, &mut sight);
-                        images.retain(|m| m.z_min < top);
+                        let images =
+                            self.sources_of((site, zs), &mut c, eps, &mut scratch, &mut sight);
                         (c.z_min < top || !images.is_empty()).then_some((c, images))
                     })
                     .collect::<Vec<_>>()
@@ -209,11 +208,30 @@ impl RayScene<'_> {
         Lit::new(site, corners)
     }
 
+    /// Corner `c`'s images of the site (at `zs`; [`Self::images_of`]) with the heights above
+    /// which their legs and the direct one reach it ([`Self::first_legs`], which sets
+    /// `c.z_min`), less the images whose legs clear nothing below the roof (no ray of theirs
+    /// would pass `corner_ray`'s height test).
+    pub(super) fn sources_of(
+        &self,
+        (site, zs): ([f64; 2], f64),
+        c: &mut Corner,
+        eps: &[Complex64],
+        scratch: &mut Vec<u32>,
+        sight: &mut Sight,
+    ) -> Vec<Image> {
+        let mut images = self.images_of(site, c, eps, scratch);
+        self.first_legs((site, zs), c, &mut images, sight);
+        let top = self.terrain_at(c.v[0], c.v[1]) + c.top;
+        images.retain(|m| m.z_min < top);
+        images
+    }
+
     /// The heights at corner `c` above which the legs from the site (at `zs`) reach it: the
     /// direct leg into `c.z_min`, and site -> wall -> corner into each image's (module docs).
     /// They depend on the height at the corner alone (where the unfolded ray meets the edge),
     /// not on the pixel: found once a corner, each a [`Sight::lowest`].
-    pub(super) fn first_legs(
+    fn first_legs(
         &self,
         (site, zs): ([f64; 2], f64),
         c: &mut Corner,
