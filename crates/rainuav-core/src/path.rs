@@ -154,7 +154,8 @@ impl RayScene<'_> {
     }
 
     /// The loss (dB) of the profile's edge `i` on the (sub-)path from `(s0, z0)` to `(s1, z1)`
-    /// (distances along the ground line `a -> b`, `rho` long; heights with the Earth's bulge),
+    /// (distances along the path's ground line, `rho` long, whose point at distance `d` is
+    /// `at(d)`; heights with the Earth's bulge),
     /// of Fresnel parameter `nu` (docs/physics.md section 12). Where the edge is lit past
     /// grazing (`nu > 0`) and is a building's (a roof on one side of it along the path, lower
     /// ground or a lower roof on the other), the edge is the right-angled wedge of a roof and a
@@ -164,10 +165,10 @@ impl RayScene<'_> {
     /// the edge for horizontal polarisation and across it for vertical. Elsewhere the knife
     /// edge, `J(nu)`.
     #[allow(clippy::too_many_arguments)]
-    fn roof_edge_loss_db(
+    pub(crate) fn roof_edge_loss_db(
         &self,
         prof: &[(f64, f64)],
-        (a, b, rho): ([f64; 2], [f64; 2], f64),
+        (at, rho): (&dyn Fn(f64) -> [f64; 2], f64),
         nu: f64,
         i: usize,
         (s0, z0): (f64, f64),
@@ -184,8 +185,8 @@ impl RayScene<'_> {
         // Which way the roof runs from the edge: the scene's obstacles a centimetre on either
         // side along the path (the profile reads a face a micrometre inside its building).
         let top = |d: f64| {
-            let t = d / rho;
-            self.obstacle_at(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]))
+            let [x, y] = at(d);
+            self.obstacle_at(x, y)
         };
         let (here, back, on) = (top(de), top(de - 0.01), top(de + 0.01));
         let face0 = if here <= 0.0 {
@@ -255,8 +256,12 @@ impl RayScene<'_> {
         if !obstacles {
             return (bull.loss_db, bull.edge);
         }
+        let at = |d: f64| {
+            let t = d / rho;
+            [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+        };
         let (l_d, edge) = deygout_with(prof, rho, za, zb, lambda, |nu, i, from, to| {
-            self.roof_edge_loss_db(prof, (a, b, rho), nu, i, from, to, lambda)
+            self.roof_edge_loss_db(prof, (&at, rho), nu, i, from, to, lambda)
         });
         let Some((de, _)) = edge else {
             return (bull.loss_db, bull.edge);

@@ -74,6 +74,19 @@ impl Sight<'_, '_> {
         self.walk((a, za), (b, zb), true, |_, _| false)
     }
 
+    /// Every point of the surface's profile between `a` and `b` (as [`Sight::clear`] reads
+    /// them) at or above the line from `(a, za)` to `(b, zb)`, handed to `seen(t, height)` (`t`
+    /// the fraction of the way from `a`, buildings in no particular order) until it returns
+    /// false; whether it never did.
+    pub fn above(
+        &mut self,
+        (a, za): ([f64; 2], f64),
+        (b, zb): ([f64; 2], f64),
+        seen: impl FnMut(f64, f64) -> bool,
+    ) -> bool {
+        self.walk((a, za), (b, zb), false, seen)
+    }
+
     /// The height `m` that splits the lines from `(a, pa + qa z)` to `(b, pb + qb z)` (ground
     /// points; heights above sea level linear in `z`, `qa, qb >= 0`, not both 0): for every
     /// `z >= z_lo`, [`Sight::clear`] holds for the line at `z` exactly where `z > m`

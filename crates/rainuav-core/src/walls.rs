@@ -8,7 +8,8 @@
 //! conditions), so a wall visits only the pixels it can light. Each such pixel's specular
 //! point is where the line from the image to the receiver crosses the wall; the ray exists
 //! where that point lies between the wall's base and top and both legs clear the profile
-//! (terrain and buildings).
+//! (terrain and buildings), or where they pass over roofs at a loss the direct ray's method
+//! finds on the unfolded path ([`roofs`]).
 //!
 //! The coefficient is the Fresnel coefficient of the wall's material (ITU-R P.2040:
 //! `eps_c = eps_r - j sigma / (omega eps_0)`): with `theta` the angle from the wall's normal
@@ -27,6 +28,9 @@ use rayon::prelude::*;
 use crate::error::{CoreError, Result};
 use crate::rays::{RayPolarization, RayScene};
 use crate::sight::Sight;
+
+mod roofs;
+pub use roofs::MAX_ROOF_LOSS_DB;
 
 /// A wall: a footprint edge `a -> b` (outward normal on its right), from `base` to `top` m
 /// above the terrain, of complex relative permittivity `eps` (`eps_r - j sigma / (omega
@@ -284,22 +288,28 @@ impl RayScene<'_> {
         }
         let rho = crate::norm(q[0] - img[0], q[1] - img[1]);
         let (rho1, rho2) = (u * rho, (1.0 - u) * rho);
-        if !(leg_seen(sight, [site[0], site[1]], zs, p, zp, rho1)
-            && leg_seen(sight, q, zq, p, zp, rho2))
-        {
+        let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
+        let s = [site[0], site[1]];
+        let seen = leg_seen(sight, s, zs, p, zp, rho1) && leg_seen(sight, q, zq, p, zp, rho2);
+        let (loss_db, el) = if seen {
+            (0.0, (zp - zs).atan2(rho1))
+        } else if self.terrain_at(q[0], q[1]) + self.obstacle_at(q[0], q[1]) >= zq {
+            // A receiver inside a building: its own roof is no edge to diffract over.
             return None;
-        }
+        } else {
+            self.over_roofs(sight, (s, zs, rho1), (p, zp), (q, zq, rho2), lambda)?
+        };
         let length = (rho * rho + (zq - zs).powi(2)).sqrt().max(1e-3);
         let k = [p[0] - site[0], p[1] - site[1], zp - zs];
         let k_len = (k[0] * k[0] + k[1] * k[1] + k[2] * k[2]).sqrt().max(1e-9);
         let k = k.map(|v| v / k_len);
-        let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
         let r2 = wall_reflectance(w.eps, k, n, self.polarization);
+        let free = (lambda / (4.0 * std::f64::consts::PI * length)).powi(2);
         Some(WallRay {
             pixel: i * self.x_m.len() + j,
             az_deg: (p[1] - site[1]).atan2(p[0] - site[0]).to_degrees(),
-            el_deg: (zp - zs).atan2(rho1).to_degrees(),
-            factor: r2 * (lambda / (4.0 * std::f64::consts::PI * length)).powi(2),
+            el_deg: el.to_degrees(),
+            factor: r2 * free * 10f64.powf(-0.1 * loss_db),
             length_m: length,
         })
     }

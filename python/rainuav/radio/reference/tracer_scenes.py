@@ -1,13 +1,13 @@
 """The scenes on which the ray engine is compared with Sionna RT
 ([`rainuav.radio.reference.tracer`][rainuav.radio.reference.tracer]): small ones for the tests (one
 block, a thick building, a street canyon of two rows, an L-shaped building, a corner of the shipped
-district from its footprint file) and larger ones held back for the results page (the ``urban``
-preset's blocks and sites, a square of the shipped OpenStreetMap-style district). Each is
-``name(freq_hz, altitude_m, polarization) -> Scenario``; the boxes' walls are ITU-R P.2040
-concrete, the footprints' their features' materials. The tracer meshes each building as a prism
-to its roof, so the footprint scenes read the shipped file with every roof flat at its height
-(the ray engine ends a wall at the eaves where a feature gives ``roof:height``: 102 of the file's
-665 features), and both methods see the same walls.
+district from its footprint file, a wall seen over a lower roof) and larger ones held back for the
+results page (the ``urban`` preset's blocks and sites, a square of the shipped OpenStreetMap-style
+district). Each is ``name(freq_hz, altitude_m, polarization) -> Scenario``; the boxes' walls are
+ITU-R P.2040 concrete, the footprints' their features' materials. The tracer meshes each building as
+a prism to its roof, so the footprint scenes read the shipped file with every roof flat at its
+height (the ray engine ends a wall at the eaves where a feature gives ``roof:height``: 102 of the
+file's 665 features), and both methods see the same walls.
 """
 
 from __future__ import annotations
@@ -76,6 +76,22 @@ def _corner(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
         buildings=[
             Building(x0_m=40.0, x1_m=70.0, y0_m=-60.0, y1_m=40.0, height_m=28.0),
             Building(x0_m=70.0, x1_m=130.0, y0_m=-60.0, y1_m=-30.0, height_m=28.0),
+        ],
+    )
+
+
+def _roof_wall(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # A low block (roof 34 m) between a 40 m mast and a tall one's wall 150 m out: behind the
+    # low block the wall's reflection comes over its roof, less deep in its shadow than the
+    # direct ray.
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(-4.0, 148.0, -40.0, 40.0, altitude_m, 4.0),
+        sites=[Site(x_m=0.0, y_m=0.0, height_m=40.0)],
+        buildings=[
+            Building(x0_m=40.0, x1_m=60.0, y0_m=-100.0, y1_m=100.0, height_m=34.0),
+            Building(x0_m=150.0, x1_m=180.0, y0_m=-100.0, y1_m=100.0, height_m=50.0),
         ],
     )
 
@@ -160,7 +176,8 @@ def _urban(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
 
 
 TEST_SCENES = ("box", "thick", "canyon", "corner", "block")
-"""The scenes the tests compare on (and the methods' choices were made on)."""
+"""The scenes the tests compare on whole (and the methods' choices were made on); ``roof_wall``
+is compared on for one path, a wall's reflection over a roof."""
 
 HELD_BACK = ("urban", "district")
 """The scenes the results page reports, on which no choice was made."""
@@ -171,6 +188,7 @@ SCENES = {
     "canyon": _canyon,
     "corner": _corner,
     "block": _block,
+    "roof_wall": _roof_wall,
     "district": _district,
     "urban": _urban,
 }
