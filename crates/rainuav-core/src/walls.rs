@@ -30,7 +30,7 @@ use crate::rays::{RayPolarization, RayScene};
 use crate::sight::Sight;
 
 mod roofs;
-pub use roofs::MAX_ROOF_LOSS_DB;
+pub use roofs::{MAX_ROOF_LOSS_DB, ROOF_LEG_M};
 
 /// A wall: a footprint edge `a -> b` (outward normal on its right), from `base` to `top` m
 /// above the terrain, of complex relative permittivity `eps` (`eps_r - j sigma / (omega
@@ -56,9 +56,11 @@ pub struct WallRay {
     pub pixel: usize,
     /// Departure azimuth toward the specular point, degrees from east toward north.
     pub az_deg: f64,
-    /// Departure elevation toward the specular point, degrees.
+    /// Departure elevation toward the specular point (over the first leg's highest edge where
+    /// the ray passes over roofs), degrees.
     pub el_deg: f64,
-    /// Received power per mW radiated, isotropic antennas: `|Gamma|^2 (lambda / (4 pi d))^2`.
+    /// Received power per mW radiated, isotropic antennas: `|Gamma|^2 (lambda / (4 pi d))^2`,
+    /// times the diffraction loss of a ray over roofs ([`roofs`]).
     pub factor: f64,
     /// Length of the unfolded path, m.
     pub length_m: f64,

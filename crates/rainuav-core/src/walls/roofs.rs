@@ -6,8 +6,9 @@
 //! the profile, the path is read as the direct ray's is ([`RayScene::path`]): the points of both
 //! legs within the margin below the unfolded line, at their distance along it, Deygout's
 //! isolated edges with each roof edge a wedge, without the correction for real terrain. The
-//! specular point stays where the straight unfolded line meets the wall. A path whose loss is
-//! over [`MAX_ROOF_LOSS_DB`] is left out.
+//! specular point stays where the straight unfolded line meets the wall. Such a path is looked
+//! for where the leg from the wall to the pixel is at most [`ROOF_LEG_M`], and left out where its
+//! loss is over [`MAX_ROOF_LOSS_DB`] or the pixel is inside a building.
 
 use crate::diffraction::deygout_with;
 use crate::rays::RayScene;
@@ -22,10 +23,10 @@ pub const MAX_ROOF_LOSS_DB: f64 = 30.0;
 /// The longest leg from the wall to the pixel (m) on which a wall's ray over roofs is looked
 /// for: the street in front of the wall and the next blocks, where a UAV below the roofs is
 /// lit by such rays. On the 10 000-footprint benchmark map (UAV at 100 m, above most roofs)
-/// looking at every length finds 88 times as many of them, and changes the total power by more
-/// than 1 dB on 0.02% of the pixels, single cells' power by more than 0.1 dB on 2.7% of the
-/// cell-pixels (weak cells, deep in shadows), and the walls' and corners' rays took 5.1-5.8 s
-/// against 2.9-3.9 s without any rays over roofs (with this limit: the same as without).
+/// looking at every length finds 88 times as many of them and changes the total power by more
+/// than 1 dB on 0.02% of the pixels (single cells' power by more than 0.1 dB on 2.7% of the
+/// cell-pixels: weak cells deep in shadows), for 1.5-2 times the time of the walls' and corners'
+/// rays; with this limit that time does not change (BENCHMARKS.md).
 pub const ROOF_LEG_M: f64 = 150.0;
 
 /// One end of a wall ray's leg: the ground point, its height above sea level and the leg's
