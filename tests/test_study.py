@@ -40,33 +40,34 @@ def _write(tmp_path: Path, text: str) -> Path:
 
 
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory: pytest.TempPathFactory, session_cache: Path) -> tuple[Path, list]:
-    """The tiny study run once from scratch in one process (its folder and rows): what every
-    other way of running it (two workers, resumed, killed, on Ray) must reproduce."""
+def two_workers(
+    tmp_path_factory: pytest.TempPathFactory, session_cache: Path
+) -> tuple[Path, list, str]:
+    """The tiny study run once from scratch on two local worker processes (its folder, rows
+    and results.csv): what every other way of running it (one process, resumed, killed, on
+    Ray) must reproduce."""
     from rainuav.studies import run_study
 
-    tmp = tmp_path_factory.mktemp("reference")
-    out = tmp / "ref"
+    tmp = tmp_path_factory.mktemp("two_workers")
+    out = tmp / "a"
     with pytest.MonkeyPatch.context() as mp:  # the session's map cache, as in every test
         mp.setenv("RAINUAV_CACHE_DIR", str(session_cache))
-        rows = run_study(load_study(_write(tmp, TINY)), out, workers=1, progress=False)
-    return out, rows
+        rows = run_study(load_study(_write(tmp, TINY)), out, workers=2, progress=False)
+    return out, rows, (out / "results.csv").read_text()
 
 
 @pytest.mark.slow
 def test_tiny_study_end_to_end_does_not_depend_on_workers(
-    tmp_path: Path, reference: tuple[Path, list]
+    tmp_path: Path, two_workers: tuple[Path, list, str]
 ) -> None:
-    # Two cases (the base in clear air, 50 mm/h), tiny trainings on the ray engine's map.
-    study = _write(tmp_path, TINY)
-    out = tmp_path / "a"
-    assert main([str(study), "--out", str(out), "--workers", "2"]) == 0
+    # Two cases (the base in clear air, 50 mm/h), tiny trainings on the ray engine's map, run
+    # on two workers (the fixture).
+    out, _, csv = two_workers
     cases = sorted(p.name for p in (out / "cases").iterdir())
     assert cases == ["000_base_s0", "001_rain_rate_mm_h=50_s0"]
     for c in cases:
         for name in ("result.json", "optimal.png", "run/metrics.json", "run/policy.pt"):
             assert (out / "cases" / c / name).exists(), (c, name)
-    csv = (out / "results.csv").read_text()
     lines = csv.splitlines()
     assert len(lines) == 3 and lines[0].startswith("case,axis,value,seed")
     report = (out / "report.md").read_text()
@@ -86,10 +87,10 @@ def test_tiny_study_end_to_end_does_not_depend_on_workers(
     base_row = dict(zip(lines[0].split(","), lines[1].split(","), strict=True))
     assert base_row["on_base_success_rate"] == ""  # the base is not flown against itself
     assert "the paper's case f" in report and "trajectories.png" in report
-    # The same study from scratch in one process: the same results.csv. (A study interrupted
-    # mid-case and rerun: the next test, with a real kill.)
-    assert (reference[0] / "results.csv").read_text() == csv
-    # A case whose result was deleted is run again, alone, to the same results.
+    # A case whose result was deleted is run again, alone, in one process through the command
+    # line, to the same results. (The whole study in one process after a real kill: the next
+    # test.)
+    study = _write(tmp_path, TINY)
     first = (out / "cases" / cases[0] / "result.json").stat().st_mtime_ns
     (out / "cases" / cases[1] / "result.json").unlink()
     assert main([str(study), "--out", str(out), "--workers", "1"]) == 0
@@ -100,10 +101,11 @@ def test_tiny_study_end_to_end_does_not_depend_on_workers(
 
 @pytest.mark.slow
 def test_a_study_killed_mid_case_reruns_to_the_same_results(
-    tmp_path: Path, reference: tuple[Path, list]
+    tmp_path: Path, two_workers: tuple[Path, list, str]
 ) -> None:
-    # A real kill (SIGKILL, no clean-up) while the second case trains; the rerun redoes that
-    # case only and ends with the results.csv of an uninterrupted run.
+    # A real kill (SIGKILL, no clean-up) while the second case trains, in one process; the
+    # rerun redoes that case only and ends with the results.csv of the uninterrupted run on
+    # two workers.
     study = _write(tmp_path, TINY)
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "rainuav.study", str(study), "--out", str(out), "--workers", "1"]
@@ -122,7 +124,7 @@ def test_a_study_killed_mid_case_reruns_to_the_same_results(
     first = (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns
     assert main([str(study), "--out", str(out), "--workers", "1"]) == 0
     assert (out / "cases" / "000_base_s0" / "result.json").stat().st_mtime_ns == first
-    assert (out / "results.csv").read_text() == (reference[0] / "results.csv").read_text()
+    assert (out / "results.csv").read_text() == two_workers[2]
 
 
 @pytest.mark.parametrize(
@@ -174,14 +176,14 @@ def test_built_in_studies_load_and_name_their_cases() -> None:
 
 
 @pytest.mark.slow
-def test_ray_gives_the_local_results(tmp_path: Path, reference: tuple[Path, list]) -> None:
-    # The same tiny study as Ray tasks on a local instance (2 CPUs): the same results.csv as
-    # in a local process, and every case's files in the driver's folder.
+def test_ray_gives_the_local_results(tmp_path: Path, two_workers: tuple[Path, list, str]) -> None:
+    # The same tiny study as Ray tasks on a local instance (2 CPUs): the same rows and
+    # results.csv as on local workers, and every case's files in the driver's folder.
     import ray
     from rainuav.studies import run_study
 
     study = load_study(_write(tmp_path, TINY))
-    local = reference[1]
+    local = two_workers[1]
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         remote = run_study(study, tmp_path / "ray", progress=False, ray_address="local")
@@ -192,8 +194,7 @@ def test_ray_gives_the_local_results(tmp_path: Path, reference: tuple[Path, list
         return [{k: v for k, v in r.items() if k != "training_seconds"} for r in rows]
 
     assert timeless(remote) == timeless(local)
-    a = (reference[0] / "results.csv").read_text()
-    assert (tmp_path / "ray" / "results.csv").read_text() == a
+    assert (tmp_path / "ray" / "results.csv").read_text() == two_workers[2]
     for c in study.cases():
         for name in ("result.json", "optimal.png", "run/policy.pt"):
             assert (tmp_path / "ray" / "cases" / c.id / name).exists(), (c.id, name)
