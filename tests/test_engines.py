@@ -38,6 +38,8 @@ def _two_paper_cells(**kw: object) -> Scenario:
 
 @pytest.fixture(scope="module")
 def pe_and_rays() -> tuple[rainuav.radio.RadioMap, rainuav.radio.RadioMap]:
+    """Two of the paper's cells in clear air by the hybrid engine and by the rays alone (built
+    once: three tests read them)."""
     scn = _two_paper_cells()
     return build_radio_map(scn, cache=False), build_radio_map(scn.replace(engine="ray"))
 
@@ -87,10 +89,10 @@ def test_engine_record_and_cone_report(pe_and_rays) -> None:
 
 
 @pytest.mark.slow
-def test_raising_the_pe_budget_changes_little() -> None:
+def test_raising_the_pe_budget_changes_little(pe_and_rays) -> None:
     # Convergence in the cone: a cone narrowed by a small budget against the full 40 dB cone.
     # SINR within 0.5 dB on 95% of the pixels.
-    full = build_radio_map(_two_paper_cells(), cache=False)
+    full = pe_and_rays[0]
     small = build_radio_map(_two_paper_cells(pe=PESettings(budget_gpoints=0.05)), cache=False)
     assert np.all(small.pe_cone_deg < full.pe_cone_deg)
     d = np.abs(small.sinr_db - full.sinr_db)
@@ -165,13 +167,12 @@ def test_ray_rain_through_a_rain_cell_is_the_path_integral() -> None:
 
 
 @pytest.mark.slow
-def test_pe_rain_agrees_with_the_rays_inside_the_cone() -> None:
+def test_pe_rain_agrees_with_the_rays_inside_the_cone(pe_and_rays) -> None:
     # The PE's attenuation (an effective complex index in the march) against the rays' gamma
     # x length at pixels the PE carries alone: within 0.1 dB (the issue's tolerance).
-    clear = build_radio_map(_two_paper_cells(), cache=False)
+    clear, ray_clear = pe_and_rays
     rain_scn = presets.with_rain(_two_paper_cells(), 100.0)
     pe_rain = build_radio_map(rain_scn, cache=False)
-    ray_clear = build_radio_map(_two_paper_cells(engine="ray"), cache=False)
     ray_rain = build_radio_map(rain_scn.replace(engine="ray"), cache=False)
     inside = clear.pe_share[0] > 0.99
     a_pe = (clear.rss_dbm[0] - pe_rain.rss_dbm[0])[inside]
