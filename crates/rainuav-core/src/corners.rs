@@ -259,9 +259,21 @@ impl RayScene<'_> {
     /// height above the terrain]`) to the pixels the buildings hide from it (module docs);
     /// `eps` is each prism's wall permittivity. Rows run in parallel.
     pub fn corner_rays(&self, site: [f64; 3], eps: &[Complex64]) -> Result<Vec<WallRay>> {
+        let [corners, _] = self.edge_rays(site, eps, false)?;
+        Ok(corners)
+    }
+
+    /// The corners' rays ([`Self::corner_rays`]) and, with `eaves`, the rays the roof edges
+    /// beside the line diffract to the same pixels ([`eaves`]).
+    pub fn edge_rays(
+        &self,
+        site: [f64; 3],
+        eps: &[Complex64],
+        eaves: bool,
+    ) -> Result<[Vec<WallRay>; 2]> {
         self.check()?;
         let Some(prisms) = self.prisms else {
-            return Ok(Vec::new());
+            return Ok([Vec::new(), Vec::new()]);
         };
         if eps.len() != prisms.len() {
             return Err(CoreError::invalid(
@@ -301,7 +313,8 @@ impl RayScene<'_> {
             .map(|q| self.receiver_height(q))
             .fold(f64::INFINITY, f64::min);
         let lit = self.lit_corners((s, zs), zs.min(zq_min), eps, bounds);
-        Ok((0..self.y_m.len())
+        let lit_eaves = eaves.then(|| self.lit_eaves((s, zs), bounds));
+        let (corners, eaves): (Vec<_>, Vec<_>) = (0..self.y_m.len())
             .into_par_iter()
             .flat_map_iter(|i| {
                 let mut sight = self.sight(bounds);
@@ -320,6 +333,7 @@ impl RayScene<'_> {
                         factor,
                         length_m,
                     };
+                    let corner = |r| (false, to_ray(r));
                     // The buildings in the way of the straight line: among those the check
                     // just read.
                     hits.clone_from(&sight.near);
@@ -356,29 +370,42 @@ impl RayScene<'_> {
                             for m in sources {
                                 let ray =
                                     self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut sight);
-                                rays.extend(ray.map(to_ray));
+                                rays.extend(ray.map(corner));
                             }
                         }
                     }
                     // The corners the site, or its image in a wall, lights beside the line
                     // (their buildings not in the way; `hits` is sorted).
-                    lit.near(q, |c, imgs| {
+                    lit.near(q, |(c, imgs)| {
                         if hits.binary_search(&(c.prism as u32)).is_ok() {
                             return;
                         }
                         let sources = std::iter::once(None).chain(imgs.iter().map(Some));
                         for m in sources {
                             let ray = self.corner_ray(s, zs, q, zq, c, eps[c.prism], m, &mut sight);
-                            rays.extend(ray.map(to_ray));
+                            rays.extend(ray.map(corner));
                         }
                     });
+                    // The roof edges beside the line, of buildings not in the way.
+                    if let Some(lit) = &lit_eaves {
+                        lit.near(q, |e| {
+                            if hits.binary_search(&(e.prism as u32)).is_ok() {
+                                return;
+                            }
+                            let ray = self.eave_ray(s, zs, q, zq, e, eps[e.prism], &mut sight);
+                            rays.extend(ray.map(|r| (true, to_ray(r))));
+                        });
+                    }
                 }
                 rays
             })
-            .collect())
+            .partition(|(eave, _)| !eave);
+        let strip = |v: Vec<(bool, WallRay)>| v.into_iter().map(|(_, r)| r).collect();
+        Ok([strip(corners), strip(eaves)])
     }
 }
 
+pub mod eaves;
 mod sources;
 #[cfg(test)]
 mod tests;

@@ -134,7 +134,9 @@ fn ray_walls<'py>(
                     .map(|r| (k, 2, r)),
             );
             if let Some(eps) = &corner_eps {
-                all.extend(scene.corner_rays(site, eps)?.into_iter().map(|r| (k, 3, r)));
+                let [corners, eaves] = scene.edge_rays(site, eps, true)?;
+                all.extend(corners.into_iter().map(|r| (k, 3, r)));
+                all.extend(eaves.into_iter().map(|r| (k, 4, r)));
             }
         }
         Ok(all)

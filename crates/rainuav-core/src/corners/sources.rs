@@ -13,28 +13,36 @@ use super::{
 use crate::rays::RayScene;
 use crate::sight::Sight;
 
-/// A lit corner with its azimuth (rad, in `[-pi, pi]`) and distance (m) from the site, and the
-/// images of the site that light it.
-type Placed = (f64, f64, Corner, Vec<Image>);
+/// A lit item (a corner with its images, or a roof edge) with its azimuth (rad, in `[-pi, pi]`)
+/// and distance (m) from the site, its slack (how far, m, the item reaches from the point it is
+/// placed at) and that point.
+type Placed<T> = (f64, f64, f64, [f64; 2], T);
 
-/// The corners the site lights, for the pixels to look up those within their ellipse
-/// ([`EXCESS_M`]): in bands of distance from the site (band 0 within `EXCESS_M / 2`, where
-/// every corner is inside every pixel's ellipse; band `k` from `EXCESS_M 2^(k-2)` to twice
-/// that), each sorted by azimuth from the site. A pixel at distance `d` reads, in a band from
-/// `r`, the azimuths within `acos((d + e) / d - e (2 d + e) / (2 r d))` of its own (`e` =
-/// [`EXCESS_M`]): no corner at `r` or farther outside that lies inside the ellipse.
-pub(super) struct Lit {
+/// The items (corners, roof edges) the site lights, for the pixels to look up those within
+/// their ellipse (`excess` m of extra horizontal path, widened by twice an item's slack): in
+/// bands of distance from the site (band 0 within `excess / 2`, where every item is inside
+/// every pixel's ellipse; band `k` from `excess 2^(k-2)` to twice that), each sorted by azimuth
+/// from the site. A pixel at distance `d` reads, in a band from `r`, the azimuths within
+/// `acos((d + e) / d - e (2 d + e) / (2 r d))` of its own (`e` the excess widened by the
+/// largest slack): no item at `r` or farther outside that lies inside the ellipse.
+pub(crate) struct Lit<T> {
     site: [f64; 2],
-    /// Each band's inner radius and its corners, sorted by azimuth.
-    bands: Vec<(f64, Vec<Placed>)>,
+    excess: f64,
+    /// The largest slack of any item.
+    slack: f64,
+    /// Each band's inner radius and its items, sorted by azimuth.
+    bands: Vec<(f64, Vec<Placed<T>>)>,
 }
 
-impl Lit {
-    pub(super) fn new(site: [f64; 2], corners: Vec<(Corner, Vec<Image>)>) -> Self {
-        let half = 0.5 * EXCESS_M;
-        let mut bands: Vec<(f64, Vec<Placed>)> = Vec::new();
-        for (c, images) in corners {
-            let (dx, dy) = (c.v[0] - site[0], c.v[1] - site[1]);
+impl<T> Lit<T> {
+    /// Places `items` (each with its point `[x, y]` and slack, m) for pixels' ellipses of
+    /// `excess` m.
+    pub(crate) fn new(site: [f64; 2], excess: f64, items: Vec<([f64; 2], f64, T)>) -> Self {
+        let half = 0.5 * excess;
+        let mut bands: Vec<(f64, Vec<Placed<T>>)> = Vec::new();
+        let mut slack = 0.0f64;
+        for (v, sl, item) in items {
+            let (dx, dy) = (v[0] - site[0], v[1] - site[1]);
             let r = crate::norm(dx, dy);
             let k = if r < half {
                 0
@@ -49,24 +57,30 @@ impl Lit {
                 };
                 bands.push((inner, Vec::new()));
             }
-            bands[k].1.push((dy.atan2(dx), r, c, images));
+            slack = slack.max(sl);
+            bands[k].1.push((dy.atan2(dx), r, sl, v, item));
         }
         for (_, band) in &mut bands {
             band.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
-        Self { site, bands }
+        Self {
+            site,
+            excess,
+            slack,
+            bands,
+        }
     }
 
-    /// Calls `f` on every corner inside the ellipse of the pixel `q`, with the images that light
-    /// it (in the order of the bands and azimuths).
-    pub(super) fn near(&self, q: [f64; 2], mut f: impl FnMut(&Corner, &[Image])) {
+    /// Calls `f` on every item whose point is inside the ellipse of the pixel `q` widened by
+    /// twice its slack (in the order of the bands and azimuths).
+    pub(crate) fn near(&self, q: [f64; 2], mut f: impl FnMut(&T)) {
         let (dx, dy) = (q[0] - self.site[0], q[1] - self.site[1]);
         let d = crate::norm(dx, dy);
         let aq = dy.atan2(dx);
-        let e = EXCESS_M;
-        let mut visit = |(_, r1, c, images): &Placed| {
-            if r1 + crate::norm(c.v[0] - q[0], c.v[1] - q[1]) - d <= e {
-                f(c, images);
+        let e = self.excess + 2.0 * self.slack;
+        let mut visit = |(_, r1, sl, v, item): &Placed<T>| {
+            if r1 + crate::norm(v[0] - q[0], v[1] - q[1]) - d <= self.excess + 2.0 * sl {
+                f(item);
             }
         };
         for (inner, band) in &self.bands {
@@ -171,9 +185,9 @@ impl RayScene<'_> {
         z_low: f64,
         eps: &[Complex64],
         bounds: crate::sight::Bounds,
-    ) -> Lit {
+    ) -> Lit<(Corner, Vec<Image>)> {
         let Some(prisms) = self.prisms else {
-            return Lit::new(site, Vec::new());
+            return Lit::new(site, EXCESS_M, Vec::new());
         };
         let r = LIT_RADIUS_M;
         let mut near = Vec::new();
@@ -200,12 +214,12 @@ impl RayScene<'_> {
                         }
                         let images =
                             self.sources_of((site, zs), &mut c, eps, &mut scratch, &mut sight);
-                        (c.z_min < top || !images.is_empty()).then_some((c, images))
+                        (c.z_min < top || !images.is_empty()).then_some((c.v, 0.0, (c, images)))
                     })
                     .collect::<Vec<_>>()
             })
             .collect();
-        Lit::new(site, corners)
+        Lit::new(site, EXCESS_M, corners)
     }
 
     /// Corner `c`'s images of the site (at `zs`; [`Self::images_of`]) with the heights above

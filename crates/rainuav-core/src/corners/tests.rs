@@ -148,7 +148,14 @@ fn the_lit_corners_a_pixel_reads_are_exactly_those_inside_its_ellipse() {
     let pixels: Vec<[f64; 2]> = (0..300)
         .map(|k| at(if k % 2 == 0 { 300.0 } else { 4000.0 }))
         .collect();
-    let lit = Lit::new(site, corners.iter().map(|&c| (c, Vec::new())).collect());
+    let lit = Lit::new(
+        site,
+        EXCESS_M,
+        corners
+            .iter()
+            .map(|&c| (c.v, 0.0, (c, Vec::<Image>::new())))
+            .collect(),
+    );
     let mut found = 0;
     for q in pixels {
         let d = crate::norm(q[0] - site[0], q[1] - site[1]);
@@ -163,7 +170,7 @@ fn the_lit_corners_a_pixel_reads_are_exactly_those_inside_its_ellipse() {
             .map(|c| c.v)
             .collect();
         let mut got = Vec::new();
-        lit.near(q, |c, _| got.push(c.v));
+        lit.near(q, |(c, _)| got.push(c.v));
         let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
         want.sort_by(key);
         got.sort_by(key);

@@ -60,15 +60,17 @@ def obstacle_args(scn: Scenario) -> dict[str, Any]:
 WallRays = tuple[np.ndarray, ...]
 """Per ray off the walls (`rainuav._core.ray_walls`): its site (index into the distinct sites),
 pixel, departure azimuth and elevation (degrees), power per mW for isotropic antennas, length (m)
-and kind (1: one wall, 2: two walls, 3: a corner, alone or after a wall)."""
+and kind (1: one wall, 2: two walls, 3: a corner, alone or after a wall, 4: a roof's edge beside
+the line)."""
 
 
 def trace_walls(
     scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
 ) -> tuple[WallRays, dict[int, int]] | None:
     """Every ray the walls of ``scn`` reflect from each distinct site of ``jobs`` to each
-    pixel, and the rays the buildings' corners diffract into the pixels they hide from it
-    (`rainuav_core::corners`), and each site's index; None without walls."""
+    pixel, and the rays the buildings' corners and the roofs' edges beside the line diffract into
+    the pixels they hide from it (`rainuav_core::corners`), and each site's index; None without
+    walls."""
     walls, eps = wall_args(scn)
     if walls.shape[0] == 0:
         return None

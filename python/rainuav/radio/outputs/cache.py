@@ -18,7 +18,7 @@ from rainuav import _core
 
 __all__ = ["ENGINE_VERSION", "cache_dir", "clear_cache", "engine_fingerprint", "map_path"]
 
-ENGINE_VERSION = 7
+ENGINE_VERSION = 8
 """Bumped by hand with every change meant to change maps (a reminder in the changelog); the
 fingerprint also hashes the engine's code, so a forgotten bump still misses the cache."""
 

@@ -96,6 +96,22 @@ def _roof_wall(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
     )
 
 
+def _eave(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # A 40 m block hides the street behind it from a 30 m mast; beside the line, a long low
+    # building (roof 18 m) whose roof edge facing the mast both ends see from just above:
+    # the edge diffracts into the block's shadow.
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        area=_area(-4.0, 220.0, -60.0, 100.0, altitude_m, 4.0),
+        sites=[Site(x_m=0.0, y_m=0.0, height_m=30.0)],
+        buildings=[
+            Building(x0_m=100.0, x1_m=120.0, y0_m=-70.0, y1_m=25.0, height_m=40.0),
+            Building(x0_m=60.0, x1_m=220.0, y0_m=45.0, y1_m=70.0, height_m=18.0),
+        ],
+    )
+
+
 def _footprints(
     freq_hz: float,
     altitude_m: float,
@@ -177,7 +193,8 @@ def _urban(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
 
 TEST_SCENES = ("box", "thick", "canyon", "corner", "block")
 """The scenes the tests compare on whole (and the methods' choices were made on); ``roof_wall``
-is compared on for one path, a wall's reflection over a roof."""
+and ``eave`` are compared on for one path each: a wall's reflection over a roof, a roof's edge
+beside the line."""
 
 HELD_BACK = ("urban", "district")
 """The scenes the results page reports, on which no choice was made."""
@@ -189,6 +206,7 @@ SCENES = {
     "corner": _corner,
     "block": _block,
     "roof_wall": _roof_wall,
+    "eave": _eave,
     "district": _district,
     "urban": _urban,
 }

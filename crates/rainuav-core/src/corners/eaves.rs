@@ -1,0 +1,428 @@
+//! Diffraction at the horizontal edges of roofs beside the straight line (docs/physics.md section
+//! 12): where the buildings hide a pixel from a site, a roof edge that both see, off the line,
+//! diffracts a ray to it. The tracer finds such paths in the deepest shadows of a district seen
+//! from above its roofs: an edge a few metres below both ends, 200 m to the side, where the
+//! site and the pixel both graze the roof.
+//!
+//! An edge is a footprint ring's side at the roof's height (above the terrain at its middle),
+//! a right-angled wedge (`n = 1.5`) whose faces are the roof (face 0, toward the footprint)
+//! and the wall (face n, down), both of the building's material. The ray meets it where the
+//! unfolded path is straight (Keller's law: along the edge, the point splits the distances
+//! between the ends' projections on it in the ratio of their distances from the edge's line),
+//! and exists where that point lies on the edge and both legs clear every building and the
+//! terrain. The angles `phi1`, `phi2` are measured in the plane across the edge from the roof
+//! face, through the vertical, to the wall face; the coefficient is
+//! [`crate::diffraction::utd_wedge`]'s (ITU-R P.526-15 section 6).
+//!
+//! Such a ray is oblique: it runs along the edge as much as across it. So its field is split
+//! in the edge's own frames (Kouyoumjian and Pathak's `beta` and `phi` unit vectors, in and
+//! out): the part along the plane of the edge and the ray takes the soft coefficient (each
+//! face's TE Fresnel coefficient), the part across it the hard one (TM), and the receiver, of
+//! the site's polarisation, takes its projection of the sum. A vertically polarised ray
+//! grazing a roof is mostly hard, a horizontally polarised one mostly soft. Each face's P.2040
+//! coefficient is taken at the incident ray's angle with that face (-1 where the incident ray
+//! does not light it), as Sionna RT does after Hashimoto et al., not at P.526's `phi1` and `n
+//! pi - phi2`: the two agree at each face's reflection boundary for a ray square to the edge,
+//! where the coefficient's reflection terms matter most, but an oblique ray grazes the roof
+//! at a smaller angle than its `phi1` (6 against 15 degrees on the tracer tests' `eave` scene:
+//! at its pixel (190, 2), P.526's angles leave the edge's ray 3.5 dB (H) and 5.1 dB (V) off
+//! the path solver's, in opposite directions, the incident ray's angles 0.1 and 0.9 dB).
+//!
+//! The edges looked at: those of the buildings within [`LIT_RADIUS_M`] of the site that it sees
+//! at one of their sample points ([`EAVE_SAMPLE_M`] apart), less the buildings the straight
+//! line crosses (the direct ray's Deygout edges read those), for the pixels whose path over the
+//! edge is at most [`EAVE_EXCESS_M`] longer (horizontally) than the straight line. Far from the
+//! shadow and reflection boundaries of the roof and the wall an edge's ray is weak; a ray
+//! weaker than [`EAVE_FLOOR_DB`] below free space over the straight line is dropped before its
+//! legs are checked (a bound on the coefficient first, `|F| <= 1` and `|R| <= 1`, then the
+//! coefficient itself). Power per mW radiated, isotropic antennas: `(lambda / 4 pi)^2 |D|^2 /
+//! (s1 s2 (s1 + s2))`, as a corner's.
+
+use num_complex::Complex64;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+use super::sources::Lit;
+use super::{CORNER_GAP_M, LIT_RADIUS_M, material_left, unit};
+use crate::diffraction::utd_wedge;
+use crate::rays::{RayGround, RayPolarization, RayScene, reflection_coefficient};
+use crate::sight::{Bounds, Sight};
+
+/// A roof edge diffracts to the pixels it hides for which the path over it is at most this much
+/// (m, horizontally) longer than the straight line.
+pub const EAVE_EXCESS_M: f64 = 300.0;
+
+/// A roof edge's ray weaker than free space over the straight line by more than this (dB) is
+/// dropped.
+pub const EAVE_FLOOR_DB: f64 = 50.0;
+
+/// A roof edge is lit where the site sees one of its points this far apart (m) along it (at
+/// least its middle).
+pub const EAVE_SAMPLE_M: f64 = 5.0;
+
+/// The exterior angle of a roof edge over a vertical wall, `n pi`.
+const EAVE_N: f64 = 1.5;
+
+/// One roof edge: its first end and unit direction (horizontal), length, outward unit normal
+/// (horizontal, away from the footprint), the roof's height above sea level at its middle, and
+/// the prism.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Eave {
+    pub(super) a: [f64; 2],
+    pub(super) u: [f64; 2],
+    pub(super) len: f64,
+    pub(super) n: [f64; 2],
+    pub(super) z: f64,
+    pub(super) prism: usize,
+}
+
+fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+
+/// The angle (rad, in `[0, 2 pi)`) across an edge of a point `h` m outward of its wall's plane
+/// and `v` m above its roof, from the roof face through the vertical to the wall face.
+fn across(h: f64, v: f64) -> f64 {
+    let a = v.atan2(-h);
+    if a < 0.0 { a + 2.0 * PI } else { a }
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn normalized(a: [f64; 3]) -> [f64; 3] {
+    let n = dot3(a, a).sqrt().max(1e-300);
+    a.map(|v| v / n)
+}
+
+/// The unit field of an antenna of polarisation `pol` radiating (or receiving) along the unit
+/// direction `d`: the elevation unit vector (vertical) or the azimuth one (horizontal).
+fn field(pol: RayPolarization, d: [f64; 3]) -> [f64; 3] {
+    match pol {
+        RayPolarization::V => normalized([d[0] * d[2], d[1] * d[2], -(d[0] * d[0] + d[1] * d[1])]),
+        RayPolarization::H => normalized([-d[1], d[0], 0.0]),
+    }
+}
+
+/// The amplitudes a ray of polarisation `pol` brings to a receiver of the same polarisation
+/// through an edge of unit direction `edge`, incident along `ai` and diffracted along `ad`
+/// (unit vectors), by the soft and the hard coefficient: each the product of the incident
+/// field's part and the receiver's projection of the diffracted field's, in the edge-fixed
+/// frames (Kouyoumjian and Pathak's: `phi = edge x s / |edge x s|`, `beta = s x phi`).
+fn split(pol: RayPolarization, edge: [f64; 3], ai: [f64; 3], ad: [f64; 3]) -> (f64, f64) {
+    let frame = |s: [f64; 3]| {
+        let phi = normalized(cross(edge, s));
+        (cross(s, phi), phi)
+    };
+    let ((bi, fi), (bd, fd)) = (frame(ai), frame(ad));
+    let (ei, er) = (field(pol, ai), field(pol, ad));
+    (dot3(ei, bi) * dot3(bd, er), dot3(ei, fi) * dot3(fd, er))
+}
+
+impl Eave {
+    /// The point at `t` m along the edge, and the point [`CORNER_GAP_M`] outside it along the
+    /// wedge's exterior bisector (outward and up), where the legs' checks end, with its height.
+    fn at(&self, t: f64) -> ([f64; 2], [f64; 2], f64) {
+        let p = [self.a[0] + t * self.u[0], self.a[1] + t * self.u[1]];
+        let g = CORNER_GAP_M * std::f64::consts::FRAC_1_SQRT_2;
+        (p, [p[0] + g * self.n[0], p[1] + g * self.n[1]], self.z + g)
+    }
+}
+
+impl RayScene<'_> {
+    /// The roof edges of prism `k` (module docs).
+    fn eaves_of(&self, k: usize, out: &mut Vec<Eave>) {
+        let Some(prisms) = self.prisms else {
+            return;
+        };
+        let top = prisms.items()[k].top;
+        for (r, ring) in prisms.rings_of(k).enumerate() {
+            let m = ring.len();
+            let left = material_left(r, ring);
+            for i in 0..m {
+                let (a, b) = (ring[i], ring[(i + 1) % m]);
+                let Some(u) = unit([b[0] - a[0], b[1] - a[1]]) else {
+                    continue;
+                };
+                let len = crate::norm(b[0] - a[0], b[1] - a[1]);
+                let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+                out.push(Eave {
+                    a,
+                    u,
+                    len,
+                    // Outward: right of a -> b where the material lies on its left.
+                    n: if left { [u[1], -u[0]] } else { [-u[1], u[0]] },
+                    z: self.terrain_at(mid[0], mid[1]) + top,
+                    prism: k,
+                });
+            }
+        }
+    }
+
+    /// The roof edges of the buildings within [`LIT_RADIUS_M`] of the site (at `zs`) that it
+    /// sees at one of their sample points, for the pixels to look up.
+    pub(super) fn lit_eaves(&self, (site, zs): ([f64; 2], f64), bounds: Bounds) -> Lit<Eave> {
+        let r = LIT_RADIUS_M;
+        let mut near = Vec::new();
+        if let Some(prisms) = self.prisms {
+            prisms.near_box(
+                [site[0] - r, site[0] + r, site[1] - r, site[1] + r],
+                &mut near,
+            );
+        }
+        let eaves = near
+            .par_iter()
+            .flat_map_iter(|&k| {
+                let mut sight = self.sight(bounds);
+                let mut eaves = Vec::new();
+                self.eaves_of(k as usize, &mut eaves);
+                eaves.into_iter().filter_map(move |e| {
+                    let h = dot([site[0] - e.a[0], site[1] - e.a[1]], e.n);
+                    if across(h, zs - e.z) >= EAVE_N * PI {
+                        return None; // the site is under the roof's plane, inside the wall's
+                    }
+                    let m = (e.len / EAVE_SAMPLE_M).ceil().max(1.0);
+                    let seen = (0..m as usize).any(|i| {
+                        let (_, out, zo) = e.at(e.len * (i as f64 + 0.5) / m);
+                        sight.clear(site, zs, out, zo)
+                    });
+                    let (mid, ..) = e.at(0.5 * e.len);
+                    (seen && crate::norm(mid[0] - site[0], mid[1] - site[1]) <= r).then_some((
+                        mid,
+                        0.5 * e.len,
+                        e,
+                    ))
+                })
+            })
+            .collect();
+        Lit::new(site, EAVE_EXCESS_M, eaves)
+    }
+
+    /// The ray roof edge `e` diffracts from the site (`zs` m above sea level) to the pixel `q`
+    /// (receiver at `zq`), if it is strong enough (module docs) and both legs are clear.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn eave_ray(
+        &self,
+        s: [f64; 2],
+        zs: f64,
+        q: [f64; 2],
+        zq: f64,
+        e: &Eave,
+        eps: Complex64,
+        sight: &mut Sight,
+    ) -> Option<(f64, f64, f64, f64)> {
+        let (ps, pq) = (
+            [s[0] - e.a[0], s[1] - e.a[1]],
+            [q[0] - e.a[0], q[1] - e.a[1]],
+        );
+        let (ts, tq) = (dot(ps, e.u), dot(pq, e.u));
+        let (hs, hq) = (dot(ps, e.n), dot(pq, e.n));
+        let (vs, vq) = (zs - e.z, zq - e.z);
+        let (rs, rq) = (crate::norm(hs, vs), crate::norm(hq, vq));
+        if rs < 1e-6 || rq < 1e-6 {
+            return None;
+        }
+        let t = ts + (tq - ts) * rs / (rs + rq);
+        if !(0.0..=e.len).contains(&t) {
+            return None;
+        }
+        let ext = EAVE_N * PI;
+        let (phi1, phi2) = (across(hs, vs), across(hq, vq));
+        if !(phi1 > 0.0 && phi1 < ext && phi2 > 0.0 && phi2 < ext) {
+            return None;
+        }
+        let s1 = crate::norm(t - ts, rs);
+        let s2 = crate::norm(tq - t, rq);
+        let sin_b = rs / s1;
+        let k = crate::wavenumber(self.freq_hz);
+        let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
+        // The field's parts (module docs): (soft, hard) amplitudes from the site's polarisation
+        // through the edge to the pixel's.
+        let p = [e.a[0] + t * e.u[0], e.a[1] + t * e.u[1], e.z];
+        let (ai, ad) = (
+            [p[0] - s[0], p[1] - s[1], p[2] - zs].map(|v| v / s1),
+            [q[0] - p[0], q[1] - p[1], zq - p[2]].map(|v| v / s2),
+        );
+        let (soft, hard) = split(self.polarization, [e.u[0], e.u[1], 0.0], ai, ad);
+        // Free space over the straight line, less the floor, in the units of |D|^2.
+        let d2 = (q[0] - s[0]).powi(2) + (q[1] - s[1]).powi(2) + (zq - zs).powi(2);
+        let need = 10f64.powf(-0.1 * EAVE_FLOOR_DB) * s1 * s2 * (s1 + s2) / d2;
+        // The coefficients' bound: |F| <= 1 and |R| <= 1 in each of their four terms.
+        let pre = 1.0 / (2.0 * EAVE_N * (2.0 * PI * k).sqrt() * sin_b.max(1e-9));
+        let cot = |b: f64| 1.0 / ((PI + b) / (2.0 * EAVE_N)).tan().abs().max(1e-12);
+        let bound = pre
+            * (cot(phi2 - phi1) + cot(phi1 - phi2) + cot(-(phi2 + phi1)) + cot(phi2 + phi1))
+            * (soft.abs() + hard.abs());
+        if bound * bound < need {
+            return None;
+        }
+        let l = s1 * s2 * sin_b * sin_b / (s1 + s2);
+        let ground = RayGround::Dielectric(eps);
+        // Each face's coefficient at the incident ray's angle with it (module docs), -1 where
+        // the incident ray does not light the face.
+        let (g0, gn) = (ai[2].abs().asin(), dot([ai[0], ai[1]], e.n).abs().asin());
+        let face = |lit: bool, g: f64, pol| {
+            if lit {
+                reflection_coefficient(ground, pol, g)
+            } else {
+                Complex64::new(-1.0, 0.0)
+            }
+        };
+        let wedge = |pol| {
+            let r0 = face(vs > 0.0, g0, pol);
+            let rn = face(hs > 0.0, gn, pol);
+            utd_wedge(EAVE_N, phi1, phi2, l, sin_b, k, r0, rn)
+        };
+        // Soft: the field along the edge, perpendicular to each face's plane of incidence (the
+        // ground's horizontal formula); hard: across it.
+        let d = (wedge(RayPolarization::H) * soft + wedge(RayPolarization::V) * hard).norm_sqr();
+        if d < need {
+            return None;
+        }
+        let (_, out, zo) = e.at(t);
+        if !sight.clear(s, zs, out, zo) || !sight.clear(out, zo, q, zq) {
+            return None;
+        }
+        let factor = (lambda / (4.0 * PI)).powi(2) * d / (s1 * s2 * (s1 + s2));
+        let az = ai[1].atan2(ai[0]).to_degrees();
+        let el = ai[2].atan2(crate::norm(ai[0], ai[1])).to_degrees();
+        Some((az, el, factor, s1 + s2))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::obstacles::Prisms;
+    use crate::rays::RainField;
+
+    /// The `eave` scene of the tracer tests: a 40 m block hides the pixels behind it from a
+    /// 30 m mast at the origin; a long low building (roof 18 m) beside the line.
+    fn eave_scene<'a>(x: &'a [f64], y: &'a [f64], prisms: &'a Prisms) -> RayScene<'a> {
+        RayScene {
+            x_m: x,
+            y_m: y,
+            altitude_m: 20.0,
+            pixel_m: [0.0, 0.0],
+            freq_hz: 4.9e9,
+            polarization: RayPolarization::H,
+            ground: RayGround::None,
+            rain: RainField::Uniform(0.0),
+            heights: None,
+            terrain: None,
+            altitude_msl: false,
+            roughness_m: 0.0,
+            prisms: Some(prisms),
+        }
+    }
+
+    fn boxes() -> Prisms {
+        Prisms::from_boxes(&[
+            [100.0, 120.0, -70.0, 25.0, 40.0],
+            [60.0, 220.0, 45.0, 70.0, 18.0],
+        ])
+        .unwrap()
+    }
+
+    #[test]
+    fn a_roof_edge_ray_takes_the_shortest_path_over_the_edge() {
+        // Keller's point against brute force: the ray off the edge y = 45 (the low building's
+        // side facing the mast) is as long as the shortest path from the mast over that edge
+        // to the pixel, sampled every 0.1 mm along it.
+        let prisms = boxes();
+        let (x, y) = ([190.0], [2.0]);
+        let scene = eave_scene(&x, &y, &prisms);
+        let eps = [Complex64::new(5.24, -0.59); 2];
+        let [_, eaves] = scene.edge_rays([0.0, 0.0, 30.0], &eps, true).unwrap();
+        let path = |x: f64| {
+            let leg = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            leg([x, 45.0, -12.0]) + leg([190.0 - x, 2.0 - 45.0, 2.0])
+        };
+        let shortest = (0..1_600_000)
+            .map(|i| path(60.0 + 1e-4 * i as f64))
+            .fold(f64::INFINITY, f64::min);
+        let ray = eaves
+            .iter()
+            .min_by(|a, b| {
+                (a.length_m - shortest)
+                    .abs()
+                    .total_cmp(&(b.length_m - shortest).abs())
+            })
+            .expect("the edge facing the mast diffracts to the pixel");
+        assert!((ray.length_m - shortest).abs() < 1e-6, "{ray:?} {shortest}");
+        // Toward the edge: down from the mast, north of east.
+        assert!(
+            ray.el_deg < 0.0 && ray.az_deg > 0.0 && ray.az_deg < 90.0,
+            "{ray:?}"
+        );
+    }
+
+    #[test]
+    fn roof_edges_light_only_hidden_pixels_and_no_ray_is_below_the_floor() {
+        // A row of pixels from the open street (line of sight) into the block's shadow.
+        let prisms = boxes();
+        let x: Vec<f64> = (0..40).map(|i| 20.0 + 5.0 * i as f64).collect();
+        let y = [2.0];
+        let scene = eave_scene(&x, &y, &prisms);
+        let eps = [Complex64::new(5.24, -0.59); 2];
+        let site = [0.0, 0.0, 30.0];
+        let [_, eaves] = scene.edge_rays(site, &eps, true).unwrap();
+        assert!(!eaves.is_empty());
+        let lambda = crate::SPEED_OF_LIGHT_M_S / scene.freq_hz;
+        let mut sight = scene.sight(scene.bounds());
+        for r in &eaves {
+            let q = [x[r.pixel], y[0]];
+            assert!(
+                !sight.clear([0.0, 0.0], 30.0, q, 20.0),
+                "{r:?}: the pixel is in sight"
+            );
+            let d2 = q[0] * q[0] + q[1] * q[1] + 100.0;
+            let free = (lambda / (4.0 * PI)).powi(2) / d2;
+            assert!(r.factor >= free * 10f64.powf(-0.1 * EAVE_FLOOR_DB), "{r:?}");
+            assert!(
+                r.factor < free,
+                "{r:?}: an edge's ray is weaker than free space"
+            );
+        }
+        // Without the flag, none.
+        assert!(scene.edge_rays(site, &eps, false).unwrap()[1].is_empty());
+    }
+
+    #[test]
+    fn across_an_edge_square_to_the_ray_vertical_is_hard_and_horizontal_soft() {
+        // The edge along y, the ray in the x-z plane: a vertical field lies across the edge
+        // (hard), a horizontal one along it (soft). A ray oblique to the edge in the horizontal
+        // plane keeps that split but for its elevation's share, and the receiver's projection
+        // takes at most what came in.
+        let edge = [0.0, 1.0, 0.0];
+        let ai = normalized([1.0, 0.0, -0.2]);
+        let ad = normalized([1.0, 0.0, 0.05]);
+        let (s, h) = split(RayPolarization::V, edge, ai, ad);
+        assert!(s.abs() < 1e-12 && (h.abs() - 1.0).abs() < 1e-12, "{s} {h}");
+        let (s, h) = split(RayPolarization::H, edge, ai, ad);
+        assert!((s.abs() - 1.0).abs() < 1e-12 && h.abs() < 1e-12, "{s} {h}");
+        let ai = normalized([1.0, 0.8, -0.2]);
+        let ad = normalized([1.0, 0.8, 0.05]); // on the edge's Keller cone: same angle to it
+        for (pol, main) in [(RayPolarization::V, 1), (RayPolarization::H, 0)] {
+            let (s, h) = split(pol, edge, ai, ad);
+            let parts = [s.abs(), h.abs()];
+            assert!(
+                parts[1 - main] > 1e-3 && parts[1 - main] < 0.1,
+                "{pol:?} {s} {h}"
+            );
+            assert!(
+                parts[main] > 0.95 && s * s + h * h <= 1.0 + 1e-12,
+                "{pol:?} {s} {h}"
+            );
+        }
+    }
+}
