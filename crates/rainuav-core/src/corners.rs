@@ -326,6 +326,7 @@ impl RayScene<'_> {
                     if sight.clear_listing(s, zs, q, zq) {
                         continue;
                     }
+                    let start = rays.len();
                     let to_ray = |(az_deg, el_deg, factor, length_m)| WallRay {
                         pixel: i * w + j,
                         az_deg,
@@ -386,13 +387,31 @@ impl RayScene<'_> {
                             rays.extend(ray.map(corner));
                         }
                     });
-                    // The roof edges beside the line, of buildings not in the way.
+                    // The roof edges beside the line, of buildings not in the way, where their
+                    // rays can count beside free space and the corners' ([`eaves`]).
                     if let Some(lit) = &lit_eaves {
+                        let d2 = (q[0] - s[0]).powi(2) + (q[1] - s[1]).powi(2) + (zq - zs).powi(2);
+                        let strongest = rays[start..]
+                            .iter()
+                            .map(|(_, r): &(bool, WallRay)| r.factor)
+                            .fold(0.0, f64::max);
+                        let least = (eaves::floor(self.freq_hz) / d2)
+                            .max(strongest * 10f64.powf(-0.1 * eaves::EAVE_BELOW_DB));
                         lit.near(q, |e| {
                             if hits.binary_search(&(e.prism as u32)).is_ok() {
                                 return;
                             }
-                            let ray = self.eave_ray(s, zs, q, zq, e, eps[e.prism], &mut sight);
+                            let ray = self.eave_ray(
+                                s,
+                                zs,
+                                q,
+                                zq,
+                                e,
+                                eps[e.prism],
+                                least,
+                                &hits,
+                                &mut sight,
+                            );
                             rays.extend(ray.map(|r| (true, to_ray(r))));
                         });
                     }

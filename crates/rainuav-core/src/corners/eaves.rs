@@ -4,7 +4,8 @@
 //! from above its roofs: an edge a few metres below both ends, 200 m to the side, where the
 //! site and the pixel both graze the roof.
 //!
-//! An edge is a footprint ring's side at the roof's height (above the terrain at its middle),
+//! An edge is a footprint ring's side at the roof's height (above the terrain at its middle; in
+//! pieces of at most [`EAVE_PIECE_M`], each at the terrain at its own middle),
 //! a right-angled wedge (`n = 1.5`) whose faces are the roof (face 0, toward the footprint)
 //! and the wall (face n, down), both of the building's material. The ray meets it where the
 //! unfolded path is straight (Keller's law: along the edge, the point splits the distances
@@ -28,22 +29,28 @@
 //! at its pixel (190, 2), P.526's angles leave the edge's ray 3.5 dB (H) and 5.1 dB (V) off
 //! the path solver's, in opposite directions, the incident ray's angles 0.1 and 0.9 dB).
 //!
-//! The edges looked at: those of the buildings within [`LIT_RADIUS_M`] of the site that it sees
-//! at one of their sample points ([`EAVE_SAMPLE_M`] apart), less the buildings the straight
-//! line crosses (the direct ray's Deygout edges read those), for the pixels whose path over the
-//! edge is at most [`EAVE_EXCESS_M`] longer (horizontally) than the straight line. Far from the
-//! shadow and reflection boundaries of the roof and the wall an edge's ray is weak; a ray
-//! weaker than [`EAVE_FLOOR_DB`] below free space over the straight line is dropped before its
-//! legs are checked (a bound on the coefficient first, `|F| <= 1` and `|R| <= 1`, then the
-//! coefficient itself). Power per mW radiated, isotropic antennas: `(lambda / 4 pi)^2 |D|^2 /
-//! (s1 s2 (s1 + s2))`, as a corner's.
+//! The edges looked at: those of the buildings within [`EAVE_RADIUS_M`] of the site, in pieces
+//! of at most [`EAVE_PIECE_M`] (each placed for the pixels at its middle), less the buildings the
+//! straight line crosses (the direct ray's Deygout edges read those), for the pixels whose path
+//! over the edge is at most [`EAVE_EXCESS_M`] longer (horizontally) than the straight line. The
+//! leg from the site is read once a piece: the site's sight of its sample points (both ends and
+//! at most [`EAVE_SAMPLE_M`] apart, each just outside the edge), and a ray's first leg is taken
+//! as clear where the sample points on both sides of its diffraction point are seen (a
+//! building in the way between two seen points is missed). The leg to the pixel is checked
+//! whole, against the buildings that hide the pixel first. Far from the roof's and the wall's
+//! shadow and reflection boundaries an edge's ray is weak: a ray weaker than free space over
+//! the straight line by more than [`EAVE_FLOOR_DB`], or than the strongest corner's ray to the
+//! same pixel by more than [`EAVE_BELOW_DB`], is dropped before its leg to the pixel is checked
+//! (a bound on the coefficient first, `|F| <= 1` and `|R| <= 1`, then the coefficient itself).
+//! Power per mW radiated, isotropic antennas: `(lambda / 4 pi)^2 |D|^2 / (s1 s2 (s1 + s2))`, as a
+//! corner's.
 
 use num_complex::Complex64;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
 use super::sources::Lit;
-use super::{CORNER_GAP_M, LIT_RADIUS_M, material_left, unit};
+use super::{CORNER_GAP_M, material_left, unit};
 use crate::diffraction::utd_wedge;
 use crate::rays::{RayGround, RayPolarization, RayScene, reflection_coefficient};
 use crate::sight::{Bounds, Sight};
@@ -56,9 +63,27 @@ pub const EAVE_EXCESS_M: f64 = 300.0;
 /// dropped.
 pub const EAVE_FLOOR_DB: f64 = 50.0;
 
+/// The roof edges looked at are those of the buildings within this distance (m) of the site.
+pub const EAVE_RADIUS_M: f64 = 500.0;
+
+/// A roof edge's ray weaker than the strongest corner's ray to the same pixel by more than this
+/// (dB) is dropped.
+pub const EAVE_BELOW_DB: f64 = 30.0;
+
+/// The power per mW (isotropic antennas) [`EAVE_FLOOR_DB`] below free space at 1 m: divided by
+/// the squared distance, the least power of a roof edge's ray.
+pub(super) fn floor(freq_hz: f64) -> f64 {
+    let lambda = crate::SPEED_OF_LIGHT_M_S / freq_hz;
+    10f64.powf(-0.1 * EAVE_FLOOR_DB) * (lambda / (4.0 * PI)).powi(2)
+}
+
 /// A roof edge is lit where the site sees one of its points this far apart (m) along it (at
 /// least its middle).
 pub const EAVE_SAMPLE_M: f64 = 5.0;
+
+/// A roof edge is looked at in pieces of at most this length (m), each placed for the pixels at
+/// its middle ([`Lit`]: a long edge would widen every pixel's search).
+pub const EAVE_PIECE_M: f64 = 20.0;
 
 /// The exterior angle of a roof edge over a vertical wall, `n pi`.
 const EAVE_N: f64 = 1.5;
@@ -74,6 +99,11 @@ pub(super) struct Eave {
     pub(super) n: [f64; 2],
     pub(super) z: f64,
     pub(super) prism: usize,
+    /// Bit `i`: the site sees the edge at its `i`-th sample point ([`Eave::samples`]).
+    pub(super) seen: u32,
+    /// The site's projection on the edge's line (m from `a`), its distance from that line (m)
+    /// and its position across it (m outward, m above the roof).
+    pub(super) site: (f64, f64, f64, f64),
 }
 
 fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -129,6 +159,19 @@ fn split(pol: RayPolarization, edge: [f64; 3], ai: [f64; 3], ad: [f64; 3]) -> (f
 }
 
 impl Eave {
+    /// The number of intervals between the piece's sample points: at most [`EAVE_SAMPLE_M`]
+    /// apart, both ends included (`samples() + 1` points).
+    fn samples(&self) -> usize {
+        (self.len / EAVE_SAMPLE_M).ceil().clamp(1.0, 30.0) as usize
+    }
+
+    /// Whether the site sees the sample points on both sides of `t` m along the piece.
+    fn seen_at(&self, t: f64) -> bool {
+        let m = self.samples();
+        let i = ((t / self.len * m as f64).floor() as usize).min(m - 1);
+        self.seen >> i & 0b11 == 0b11
+    }
+
     /// The point at `t` m along the edge, and the point [`CORNER_GAP_M`] outside it along the
     /// wedge's exterior bisector (outward and up), where the legs' checks end, with its height.
     fn at(&self, t: f64) -> ([f64; 2], [f64; 2], f64) {
@@ -139,6 +182,28 @@ impl Eave {
 }
 
 impl RayScene<'_> {
+    /// Whether the line from `(a, za)` to `(b, zb)` passes below the roof of one of the
+    /// buildings `hits` where it crosses its footprint's outline (`ts`: scratch).
+    fn crosses_below(
+        &self,
+        hits: &[u32],
+        (a, za): ([f64; 2], f64),
+        (b, zb): ([f64; 2], f64),
+        ts: &mut Vec<f64>,
+    ) -> bool {
+        let Some(prisms) = self.prisms else {
+            return false;
+        };
+        hits.iter().any(|&k| {
+            ts.clear();
+            prisms.crossings(k as usize, a, b, ts);
+            ts.iter().any(|&t| {
+                let (x, y) = (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
+                self.terrain_at(x, y) + prisms.items()[k as usize].top >= za + (zb - za) * t
+            })
+        })
+    }
+
     /// The roof edges of prism `k` (module docs).
     fn eaves_of(&self, k: usize, out: &mut Vec<Eave>) {
         let Some(prisms) = self.prisms else {
@@ -153,17 +218,25 @@ impl RayScene<'_> {
                 let Some(u) = unit([b[0] - a[0], b[1] - a[1]]) else {
                     continue;
                 };
-                let len = crate::norm(b[0] - a[0], b[1] - a[1]);
-                let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
-                out.push(Eave {
-                    a,
-                    u,
-                    len,
-                    // Outward: right of a -> b where the material lies on its left.
-                    n: if left { [u[1], -u[0]] } else { [-u[1], u[0]] },
-                    z: self.terrain_at(mid[0], mid[1]) + top,
-                    prism: k,
-                });
+                let whole = crate::norm(b[0] - a[0], b[1] - a[1]);
+                let pieces = (whole / EAVE_PIECE_M).ceil().max(1.0);
+                let len = whole / pieces;
+                for i in 0..pieces as usize {
+                    let t = len * i as f64;
+                    let a = [a[0] + t * u[0], a[1] + t * u[1]];
+                    let mid = [a[0] + 0.5 * len * u[0], a[1] + 0.5 * len * u[1]];
+                    out.push(Eave {
+                        a,
+                        u,
+                        len,
+                        // Outward: right of a -> b where the material lies on its left.
+                        n: if left { [u[1], -u[0]] } else { [-u[1], u[0]] },
+                        z: self.terrain_at(mid[0], mid[1]) + top,
+                        prism: k,
+                        seen: 0,
+                        site: (0.0, 0.0, 0.0, 0.0),
+                    });
+                }
             }
         }
     }
@@ -171,7 +244,7 @@ impl RayScene<'_> {
     /// The roof edges of the buildings within [`LIT_RADIUS_M`] of the site (at `zs`) that it
     /// sees at one of their sample points, for the pixels to look up.
     pub(super) fn lit_eaves(&self, (site, zs): ([f64; 2], f64), bounds: Bounds) -> Lit<Eave> {
-        let r = LIT_RADIUS_M;
+        let r = EAVE_RADIUS_M;
         let mut near = Vec::new();
         if let Some(prisms) = self.prisms {
             prisms.near_box(
@@ -186,21 +259,23 @@ impl RayScene<'_> {
                 let mut eaves = Vec::new();
                 self.eaves_of(k as usize, &mut eaves);
                 eaves.into_iter().filter_map(move |e| {
-                    let h = dot([site[0] - e.a[0], site[1] - e.a[1]], e.n);
-                    if across(h, zs - e.z) >= EAVE_N * PI {
+                    let ps = [site[0] - e.a[0], site[1] - e.a[1]];
+                    let (t, h, v) = (dot(ps, e.u), dot(ps, e.n), zs - e.z);
+                    if across(h, v) >= EAVE_N * PI || crate::norm(h, v) < 1e-6 {
                         return None; // the site is under the roof's plane, inside the wall's
                     }
-                    let m = (e.len / EAVE_SAMPLE_M).ceil().max(1.0);
-                    let seen = (0..m as usize).any(|i| {
-                        let (_, out, zo) = e.at(e.len * (i as f64 + 0.5) / m);
-                        sight.clear(site, zs, out, zo)
-                    });
+                    let mut e = e;
+                    e.site = (t, crate::norm(h, v), h, v);
+                    let m = e.samples();
+                    for i in 0..=m {
+                        let (_, out, zo) = e.at(e.len * i as f64 / m as f64);
+                        if sight.clear(site, zs, out, zo) {
+                            e.seen |= 1 << i;
+                        }
+                    }
                     let (mid, ..) = e.at(0.5 * e.len);
-                    (seen && crate::norm(mid[0] - site[0], mid[1] - site[1]) <= r).then_some((
-                        mid,
-                        0.5 * e.len,
-                        e,
-                    ))
+                    (e.seen != 0 && crate::norm(mid[0] - site[0], mid[1] - site[1]) <= r)
+                        .then_some((mid, 0.5 * e.len, e))
                 })
             })
             .collect();
@@ -218,26 +293,33 @@ impl RayScene<'_> {
         zq: f64,
         e: &Eave,
         eps: Complex64,
+        least: f64,
+        hits: &[u32],
         sight: &mut Sight,
     ) -> Option<(f64, f64, f64, f64)> {
-        let (ps, pq) = (
-            [s[0] - e.a[0], s[1] - e.a[1]],
-            [q[0] - e.a[0], q[1] - e.a[1]],
-        );
-        let (ts, tq) = (dot(ps, e.u), dot(pq, e.u));
-        let (hs, hq) = (dot(ps, e.n), dot(pq, e.n));
-        let (vs, vq) = (zs - e.z, zq - e.z);
-        let (rs, rq) = (crate::norm(hs, vs), crate::norm(hq, vq));
-        if rs < 1e-6 || rq < 1e-6 {
+        // The site's terms were found once a piece ([`Self::lit_eaves`]).
+        let (ts, rs, hs, vs) = e.site;
+        let pq = [q[0] - e.a[0], q[1] - e.a[1]];
+        let (tq, hq, vq) = (dot(pq, e.u), dot(pq, e.n), zq - e.z);
+        let rq = crate::norm(hq, vq);
+        let t = ts + (tq - ts) * rs / (rs + rq);
+        if !(0.0..e.len).contains(&t) || rq < 1e-6 {
             return None;
         }
-        let t = ts + (tq - ts) * rs / (rs + rq);
-        if !(0.0..=e.len).contains(&t) {
+        let p = [e.a[0] + t * e.u[0], e.a[1] + t * e.u[1]];
+        let excess = crate::norm(p[0] - s[0], p[1] - s[1]) + crate::norm(q[0] - p[0], q[1] - p[1])
+            - crate::norm(q[0] - s[0], q[1] - s[1]);
+        if excess > EAVE_EXCESS_M || !e.seen_at(t) {
             return None;
         }
         let ext = EAVE_N * PI;
         let (phi1, phi2) = (across(hs, vs), across(hq, vq));
         if !(phi1 > 0.0 && phi1 < ext && phi2 > 0.0 && phi2 < ext) {
+            return None;
+        }
+        // The buildings that hide the pixel often hide it from the edge too: those first.
+        let (_, out, zo) = e.at(t);
+        if self.crosses_below(hits, (out, zo), (q, zq), &mut sight.ts) {
             return None;
         }
         let s1 = crate::norm(t - ts, rs);
@@ -247,15 +329,14 @@ impl RayScene<'_> {
         let lambda = crate::SPEED_OF_LIGHT_M_S / self.freq_hz;
         // The field's parts (module docs): (soft, hard) amplitudes from the site's polarisation
         // through the edge to the pixel's.
-        let p = [e.a[0] + t * e.u[0], e.a[1] + t * e.u[1], e.z];
+        let p = [p[0], p[1], e.z];
         let (ai, ad) = (
             [p[0] - s[0], p[1] - s[1], p[2] - zs].map(|v| v / s1),
             [q[0] - p[0], q[1] - p[1], zq - p[2]].map(|v| v / s2),
         );
         let (soft, hard) = split(self.polarization, [e.u[0], e.u[1], 0.0], ai, ad);
-        // Free space over the straight line, less the floor, in the units of |D|^2.
-        let d2 = (q[0] - s[0]).powi(2) + (q[1] - s[1]).powi(2) + (zq - zs).powi(2);
-        let need = 10f64.powf(-0.1 * EAVE_FLOOR_DB) * s1 * s2 * (s1 + s2) / d2;
+        // The least power worth tracing, in the units of |D|^2.
+        let need = least * s1 * s2 * (s1 + s2) / (lambda / (4.0 * PI)).powi(2);
         // The coefficients' bound: |F| <= 1 and |R| <= 1 in each of their four terms.
         let pre = 1.0 / (2.0 * EAVE_N * (2.0 * PI * k).sqrt() * sin_b.max(1e-9));
         let cot = |b: f64| 1.0 / ((PI + b) / (2.0 * EAVE_N)).tan().abs().max(1e-12);
@@ -288,8 +369,7 @@ impl RayScene<'_> {
         if d < need {
             return None;
         }
-        let (_, out, zo) = e.at(t);
-        if !sight.clear(s, zs, out, zo) || !sight.clear(out, zo, q, zq) {
+        if !sight.clear(out, zo, q, zq) {
             return None;
         }
         let factor = (lambda / (4.0 * PI)).powi(2) * d / (s1 * s2 * (s1 + s2));
