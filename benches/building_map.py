@@ -14,7 +14,7 @@
 3. **A ray map among 10 000 footprints**: the ``uma`` network's 21 cells spread over the
    8.8 km district of step 1 (its sites' layout scaled 4.4 times, each moved to the nearest
    open ground), 200 x 200 pixels (44 m), flat ground: every mechanism (roofs, corners,
-   walls once and twice).
+   walls once and twice, roof edges beside the line).
 
 No cache: every build is computed. Prints the best of ``--repeats`` wall times.
 """
@@ -131,10 +131,10 @@ def main() -> None:
     jobs = [(s, c) for s in wide.sites for c in s.cells]
     x, y = wide.area.centres()
     t_rays, traced = best_of(args.repeats, lambda: trace_walls(wide, jobs, x, y))
-    kinds = np.bincount(traced[0][6], minlength=4)
+    kinds = np.bincount(traced[0][6], minlength=5)
     print(f"uma 21 cells, 200 x 200 (44 m) among {n_big} footprints: {t_wide:.2f} s, of which "
-          f"the walls' and corners' rays {t_rays:.2f} s ({kinds[1]} one wall, {kinds[2]} two "
-          f"walls, {kinds[3]} corners)")  # fmt: skip
+          f"the walls' and edges' rays {t_rays:.2f} s ({kinds[1]} one wall, {kinds[2]} two "
+          f"walls, {kinds[3]} corners, {kinds[4]} roof edges beside the line)")  # fmt: skip
     q = [np.median(strongest), *np.percentile(strongest, [10, 90])]
     nf = m_city.not_flyable.mean()
     print(f"strongest cell changed by the buildings (median, p10, p90 dB): "
