@@ -181,6 +181,30 @@ pub(crate) fn ray_lengths(rho: f64, hs: f64, hq: f64) -> (f64, f64) {
     (d1, d2)
 }
 
+#[cfg(test)]
+impl<'a> RayScene<'a> {
+    /// A scene for the tests: pixels at `x` x `y`, `altitude_m` up, at `freq_hz`; vertical
+    /// polarisation, no ground, rain, buildings or terrain (set what a test needs with the
+    /// struct update syntax).
+    pub(crate) fn bare(x: &'a [f64], y: &'a [f64], altitude_m: f64, freq_hz: f64) -> Self {
+        RayScene {
+            x_m: x,
+            y_m: y,
+            altitude_m,
+            pixel_m: [0.0, 0.0],
+            freq_hz,
+            ground: RayGround::None,
+            polarization: RayPolarization::V,
+            rain: RainField::Uniform(0.0),
+            prisms: None,
+            heights: None,
+            terrain: None,
+            altitude_msl: false,
+            roughness_m: 0.0,
+        }
+    }
+}
+
 impl RayScene<'_> {
     pub(crate) fn check(&self) -> Result<()> {
         if self.x_m.is_empty() || self.y_m.is_empty() {

@@ -186,7 +186,7 @@ impl Sight<'_, '_> {
 mod tests {
     use super::*;
     use crate::obstacles::Prisms;
-    use crate::rays::{RainField, Raster, RayGround, RayPolarization};
+    use crate::rays::{Raster, RayGround};
     use ndarray::Array2;
     use num_complex::Complex64;
 
@@ -221,19 +221,11 @@ mod tests {
 
     fn scene<'a>(prisms: &'a Prisms, terrain: Option<Raster<'a>>, altitude_m: f64) -> RayScene<'a> {
         RayScene {
-            x_m: &[],
-            y_m: &[],
-            altitude_m,
-            pixel_m: [0.0, 0.0],
-            freq_hz: 3.5e9,
             ground: RayGround::Dielectric(Complex64::new(15.0, -1.0)),
-            polarization: RayPolarization::V,
-            rain: RainField::Uniform(0.0),
             prisms: Some(prisms),
-            heights: None,
             terrain,
-            altitude_msl: false,
             roughness_m: 0.3,
+            ..RayScene::bare(&[], &[], altitude_m, 3.5e9)
         }
     }
 

@@ -349,24 +349,9 @@ pub(crate) fn normal(w: &Wall) -> Option<([f64; 2], f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rays::{RainField, RayGround};
 
     fn scene<'a>(x: &'a [f64], y: &'a [f64]) -> RayScene<'a> {
-        RayScene {
-            x_m: x,
-            y_m: y,
-            altitude_m: 30.0,
-            pixel_m: [0.0, 0.0],
-            freq_hz: 3.5e9,
-            ground: RayGround::None,
-            polarization: RayPolarization::V,
-            rain: RainField::Uniform(0.0),
-            prisms: None,
-            heights: None,
-            terrain: None,
-            altitude_msl: false,
-            roughness_m: 0.0,
-        }
+        RayScene::bare(x, y, 30.0, 3.5e9)
     }
 
     #[test]

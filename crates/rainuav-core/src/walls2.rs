@@ -278,7 +278,7 @@ impl RayScene<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rays::{RainField, RayGround, RayPolarization};
+    use crate::rays::RayPolarization;
     use num_complex::Complex64;
 
     #[test]
@@ -305,21 +305,7 @@ mod tests {
             },
         ];
         let (x, y) = ([100.0], [4.0]);
-        let scene = RayScene {
-            x_m: &x,
-            y_m: &y,
-            altitude_m: 10.0,
-            pixel_m: [0.0, 0.0],
-            freq_hz: 4.9e9,
-            polarization: RayPolarization::V,
-            ground: RayGround::None,
-            rain: RainField::Uniform(0.0),
-            heights: None,
-            terrain: None,
-            altitude_msl: false,
-            roughness_m: 0.0,
-            prisms: None,
-        };
+        let scene = RayScene::bare(&x, &y, 10.0, 4.9e9);
         let rays = scene.wall_rays2([0.0, 0.0, 10.0], &walls).unwrap();
         // A then B, and B then A (images (0, -20), then (0, 40)).
         assert_eq!(rays.len(), 2, "{rays:?}");

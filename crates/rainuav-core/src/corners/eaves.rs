@@ -383,25 +383,14 @@ impl RayScene<'_> {
 mod tests {
     use super::*;
     use crate::obstacles::Prisms;
-    use crate::rays::RainField;
 
     /// The `eave` scene of the tracer tests: a 40 m block hides the pixels behind it from a
     /// 30 m mast at the origin; a long low building (roof 18 m) beside the line.
     fn eave_scene<'a>(x: &'a [f64], y: &'a [f64], prisms: &'a Prisms) -> RayScene<'a> {
         RayScene {
-            x_m: x,
-            y_m: y,
-            altitude_m: 20.0,
-            pixel_m: [0.0, 0.0],
-            freq_hz: 4.9e9,
             polarization: RayPolarization::H,
-            ground: RayGround::None,
-            rain: RainField::Uniform(0.0),
-            heights: None,
-            terrain: None,
-            altitude_msl: false,
-            roughness_m: 0.0,
             prisms: Some(prisms),
+            ..RayScene::bare(x, y, 20.0, 4.9e9)
         }
     }
 

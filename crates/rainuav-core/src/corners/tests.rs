@@ -3,25 +3,13 @@
 use super::sources::Lit;
 use super::*;
 use crate::obstacles::Prisms;
-use crate::rays::RainField;
 
 /// Pixels at `x` x `y` 10 m up among `prisms`, 4.9 GHz, vertical polarisation, no ground or
 /// rain.
 fn flat_scene<'a>(x: &'a [f64], y: &'a [f64], prisms: &'a Prisms) -> RayScene<'a> {
     RayScene {
-        x_m: x,
-        y_m: y,
-        altitude_m: 10.0,
-        pixel_m: [0.0, 0.0],
-        freq_hz: 4.9e9,
-        polarization: RayPolarization::V,
-        ground: RayGround::None,
-        rain: RainField::Uniform(0.0),
-        heights: None,
-        terrain: None,
-        altitude_msl: false,
-        roughness_m: 0.0,
         prisms: Some(prisms),
+        ..RayScene::bare(x, y, 10.0, 4.9e9)
     }
 }
 

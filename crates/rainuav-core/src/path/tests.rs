@@ -25,25 +25,15 @@ fn a_flat_roofs_far_edge_diffracts_as_a_right_angled_wedge_with_the_roof_as_its_
     // geometry, concrete faces (P.2040), the UTD coefficient of a finitely conducting wedge.
     use crate::diffraction::{EFFECTIVE_EARTH_RADIUS_M, utd_wedge};
     use crate::obstacles::Prisms;
-    use crate::rays::{RainField, RayGround, RayPolarization, RayScene, reflection_coefficient};
+    use crate::rays::{RayGround, RayPolarization, RayScene, reflection_coefficient};
     use std::f64::consts::PI;
     let prisms = Prisms::from_boxes(&[[100.0, 160.0, -50.0, 50.0, 20.0]]).unwrap();
     let (x, y) = ([200.0], [0.0]);
     for pol in [RayPolarization::V, RayPolarization::H] {
         let scene = RayScene {
-            x_m: &x,
-            y_m: &y,
-            altitude_m: 5.0,
-            pixel_m: [0.0, 0.0],
-            freq_hz: 4.9e9,
-            ground: RayGround::None,
             polarization: pol,
-            rain: RainField::Uniform(0.0),
             prisms: Some(&prisms),
-            heights: None,
-            terrain: None,
-            altitude_msl: false,
-            roughness_m: 0.0,
+            ..RayScene::bare(&x, &y, 5.0, 4.9e9)
         };
         let mut sight = scene.sight(scene.bounds());
         let got = scene

@@ -5,19 +5,9 @@ use ndarray::Array2;
 
 fn scene<'a>(x: &'a [f64], y: &'a [f64], ground: RayGround) -> RayScene<'a> {
     RayScene {
-        x_m: x,
-        y_m: y,
-        altitude_m: 100.0,
-        pixel_m: [0.0, 0.0],
-        freq_hz: 4.9e9,
         ground,
         polarization: RayPolarization::H,
-        rain: RainField::Uniform(0.0),
-        prisms: None,
-        heights: None,
-        terrain: None,
-        altitude_msl: false,
-        roughness_m: 0.0,
+        ..RayScene::bare(x, y, 100.0, 4.9e9)
     }
 }
 

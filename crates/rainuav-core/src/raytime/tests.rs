@@ -44,11 +44,7 @@ fn a_slice_is_the_static_power_of_its_rain() {
     let (x, y) = (grid(40, 40.0), grid(30, 40.0));
     let block = crate::rays::Prisms::from_boxes(&[[600.0, 700.0, 500.0, 560.0, 60.0]]).unwrap();
     let scene = RayScene {
-        x_m: &x,
-        y_m: &y,
-        altitude_m: 100.0,
         pixel_m: [40.0, 40.0],
-        freq_hz: 28e9,
         ground: RayGround::Pec,
         polarization: RayPolarization::H,
         rain: RainField::Raster(Raster {
@@ -56,10 +52,7 @@ fn a_slice_is_the_static_power_of_its_rain() {
             origin_step: [0.0, 10.0, 0.0, 10.0],
         }),
         prisms: Some(&block),
-        heights: None,
-        terrain: None,
-        altitude_msl: false,
-        roughness_m: 0.0,
+        ..RayScene::bare(&x, &y, 100.0, 28e9)
     };
     let sites = [[300.0, 400.0, 25.0], [1300.0, 900.0, 30.0]];
     let site_of = [0, 0, 1];

@@ -110,25 +110,14 @@ impl RayScene<'_> {
 #[cfg(test)]
 mod tests {
     use crate::obstacles::Prisms;
-    use crate::rays::{RainField, RayGround, RayPolarization, RayScene};
+    use crate::rays::{RayPolarization, RayScene};
     use crate::walls::{Wall, wall_reflectance};
     use num_complex::Complex64;
 
     fn scene<'a>(x: &'a [f64], y: &'a [f64], prisms: &'a Prisms) -> RayScene<'a> {
         RayScene {
-            x_m: x,
-            y_m: y,
-            altitude_m: 20.0,
-            pixel_m: [0.0, 0.0],
-            freq_hz: 4.9e9,
-            ground: RayGround::None,
-            polarization: RayPolarization::V,
-            rain: RainField::Uniform(0.0),
             prisms: Some(prisms),
-            heights: None,
-            terrain: None,
-            altitude_msl: false,
-            roughness_m: 0.0,
+            ..RayScene::bare(x, y, 20.0, 4.9e9)
         }
     }
 
