@@ -83,6 +83,28 @@ def test_replay_wraps_around() -> None:
     assert set(b["ret"].tolist()) <= {2.0, 3.0, 4.0, 5.0, 6.0}
 
 
+def test_replay_saves_the_rows_it_filled_and_restores_them_whole() -> None:
+    # A short run's checkpoint holds what it collected, not the memory's capacity (a small
+    # storm run: 310 MB before, 6.5 MB after); restored, the memory equals the one saved,
+    # empty rows included, and the whole arrays older checkpoints hold still load.
+    r = Replay(100)
+    for i in range(7):
+        r.add([i, -i], i % 4, float(i), [i + 1, -i], 0.9, i == 6)
+    d = r.state_dict()
+    assert d["obs"].shape == (7, 2) and d["size"] == 7 and d["pos"] == 7
+    back = Replay(100)
+    back.load_state_dict(d)
+    old = {k: getattr(r, k) for k in ("obs", "action", "ret", "next_obs", "discount", "done")}
+    older = Replay(100)
+    older.load_state_dict({**old, "size": 7, "pos": 7})
+    for k, v in old.items():
+        assert np.array_equal(getattr(back, k), v) and getattr(back, k).shape == v.shape
+        assert np.array_equal(getattr(older, k), v)
+    assert (back.size, back.pos) == (7, 7)
+    with pytest.raises(ValueError, match="replay.obs"):
+        back.load_state_dict({**d, "obs": np.zeros((5, 2), np.float32)})
+
+
 def _tiny_scenario():
     from rainuav.radio.scene.scenario import Area, Scenario, Site
 

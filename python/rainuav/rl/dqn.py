@@ -113,28 +113,45 @@ class Replay:
             "done": self.done[idx],
         }
 
+    _ARRAYS = ("obs", "action", "ret", "next_obs", "discount", "done")
+
     def state_dict(self) -> dict[str, Any]:
-        """The memory's arrays and counters, as a checkpoint saves them."""
+        """The memory's filled rows and counters, as a checkpoint saves them (the rows not yet
+        filled are zeros and are not written: a short run's checkpoint holds what it collected,
+        not the whole capacity)."""
+        n = self.size
         return {
-            k: getattr(self, k)
-            for k in ("obs", "action", "ret", "next_obs", "discount", "done", "size", "pos")
+            **{k: getattr(self, k)[:n].copy() for k in self._ARRAYS},
+            "size": self.size,
+            "pos": self.pos,
         }
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        """Restores a [`state_dict()`][rainuav.rl.dqn.Replay.state_dict]; arrays of another shape or
-        type, or counters out of range, raise ValueError (a checkpoint is checked before it is
-        trusted)."""
-        for k in ("obs", "action", "ret", "next_obs", "discount", "done"):
-            mine, v = getattr(self, k), d[k]
-            if not isinstance(v, np.ndarray) or v.shape != mine.shape or v.dtype != mine.dtype:
-                raise ValueError(f"replay.{k} must be a {mine.dtype} array of shape {mine.shape}")
+        """Restores a [`state_dict()`][rainuav.rl.dqn.Replay.state_dict] (or the whole arrays, as
+        older checkpoints hold them); arrays of another shape or type, or counters out of range,
+        raise ValueError (a checkpoint is checked before it is trusted)."""
         size, pos = d["size"], d["pos"]
         if not all(isinstance(v, int | np.integer) for v in (size, pos)) or not (
             0 <= size <= self.capacity and 0 <= pos < self.capacity
         ):
             raise ValueError(f"replay size and pos must be integers in 0..{self.capacity}")
-        for k in ("obs", "action", "ret", "next_obs", "discount", "done"):
-            setattr(self, k, d[k])
+        for k in self._ARRAYS:
+            mine, v = getattr(self, k), d[k]
+            rows = {int(size), mine.shape[0]}
+            if (
+                not isinstance(v, np.ndarray)
+                or v.dtype != mine.dtype
+                or v.shape[1:] != mine.shape[1:]
+                or v.shape[0] not in rows
+            ):
+                raise ValueError(
+                    f"replay.{k} must be a {mine.dtype} array of {int(size)} or {mine.shape[0]} "
+                    f"rows of shape {mine.shape[1:]}"
+                )
+        for k in self._ARRAYS:
+            full = np.zeros_like(getattr(self, k))
+            full[: len(d[k])] = d[k]
+            setattr(self, k, full)
         self.size, self.pos = int(size), int(pos)
 
 
