@@ -456,3 +456,33 @@ def test_map_sinr_uses_the_receiver_noise() -> None:
     ok = (quiet.sinr_db < sinr_mod.SIR_CEIL_DB) & (loud.sinr_db > sinr_mod.SIR_FLOOR_DB)
     assert ok.sum() > 10
     np.testing.assert_allclose((quiet.sinr_db - loud.sinr_db)[ok], 30.0, atol=1e-9)
+
+
+def test_a_rain_map_in_time_is_hashed_by_its_values() -> None:
+    # The digest reads a grid (a radar file's rates in time) as its shape and values, where
+    # their JSON text took seconds: two scenarios with equal rates share a key, one changed
+    # rate or another shape gives another key, and a scenario without grids keeps the key it
+    # had (the JSON of its fields).
+    import dataclasses
+    import hashlib
+    import json
+
+    from rainuav.radio.scene.presets import paper
+    from rainuav.radio.scene.weather import Medium
+
+    base = paper()
+    rates = np.random.default_rng(0).uniform(0.0, 50.0, (4, 30, 40))
+    times = [0.0, 60.0, 120.0, 180.0]
+
+    def with_rates(r: np.ndarray):
+        m = Medium(kind="map", rate_map_mm_h=r.tolist(), rate_times_s=times)
+        return dataclasses.replace(base, medium=m)
+
+    scn = with_rates(rates)
+    assert scn.digest() == with_rates(rates.copy()).digest()
+    changed = rates.copy()
+    changed[3, 29, 39] += 1e-6
+    assert with_rates(changed).digest() != scn.digest()
+    assert with_rates(rates.reshape(4, 40, 30)).digest() != scn.digest()
+    text = json.dumps(base.to_dict(), sort_keys=True)
+    assert base.digest() == hashlib.sha256(text.encode()).hexdigest()[:32]

@@ -300,7 +300,7 @@ class Scenario:
         """A hash of every field (two scenarios with the same digest describe the same network,
         weather and airspace). The radio-map cache keys on it together with the engine's fingerprint
         ([`rainuav.radio.outputs.cache.engine_fingerprint()`][rainuav.radio.outputs.cache.engine_fingerprint])."""
-        d = self.to_dict()
+        d = _digest_form(self)
         if self.terrain is not None:
             # The map follows the DEM's contents, not its name.
             from rainuav.ground import file_digest
@@ -416,3 +416,32 @@ def _build(cls: type, d: Any, where: str) -> Any:
         return cls(**kwargs)
     except TypeError as err:
         raise InvalidInputError(f"{where}: {err}") from err
+
+
+def _digest_form(v: Any) -> Any:
+    """What [`Scenario.digest()`][rainuav.radio.scene.scenario.Scenario.digest] hashes: the
+    fields as [`Scenario.to_dict()`][rainuav.radio.scene.scenario.Scenario.to_dict] gives them
+    (None dropped), but a grid (a list of lists of numbers: a rain-rate map in time, a height map)
+    as its shape and the SHA-256 of its values as float64, where the JSON text of a radar file's
+    half a million rates took seconds to write."""
+    if dataclasses.is_dataclass(v) and not isinstance(v, type):
+        return {
+            f.name: _digest_form(x)
+            for f in dataclasses.fields(v)
+            if (x := getattr(v, f.name)) is not None
+        }
+    if isinstance(v, dict):
+        return {k: _digest_form(x) for k, x in v.items() if x is not None}
+    if isinstance(v, list | tuple):
+        if v and isinstance(v[0], list | tuple | np.ndarray):
+            try:
+                a = np.ascontiguousarray(np.asarray(v, dtype=np.float64))
+            except (TypeError, ValueError):
+                a = None
+            if a is not None and a.ndim >= 2:
+                return {"grid": list(a.shape), "sha256": hashlib.sha256(a.tobytes()).hexdigest()}
+        return [_digest_form(x) for x in v]
+    if isinstance(v, np.ndarray):
+        a = np.ascontiguousarray(v, dtype=np.float64)
+        return {"grid": list(a.shape), "sha256": hashlib.sha256(a.tobytes()).hexdigest()}
+    return v
