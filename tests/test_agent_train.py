@@ -101,7 +101,7 @@ def test_replay_saves_the_rows_it_filled_and_restores_them_whole() -> None:
         assert np.array_equal(getattr(back, k), v) and getattr(back, k).shape == v.shape
         assert np.array_equal(getattr(older, k), v)
     assert (back.size, back.pos) == (7, 7)
-    with pytest.raises(ValueError, match="replay.obs"):
+    with pytest.raises(ValueError, match=r"replay\.obs"):
         back.load_state_dict({**d, "obs": np.zeros((5, 2), np.float32)})
 
 
