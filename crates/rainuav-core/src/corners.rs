@@ -33,6 +33,10 @@
 //! prisms' edges. This is how a street lights its side streets: the site sees the corner at
 //! grazing incidence along the street's wall, its image across the street at a wider angle.
 //!
+//! **The horizontal edges of roofs beside the line** diffract into the same hidden pixels:
+//! [`eaves`] (Keller's point on each roof edge the site sees, the same wedge with the field split
+//! into its soft and hard parts), traced in the same pass ([`RayScene::edge_rays`]).
+//!
 //! Each ray's power per mW radiated, isotropic antennas: `|Gamma|^2 (lambda / 4 pi)^2 |D|^2 /
 //! (s1 s2 (s1 + s2))` (`|Gamma|^2 = 1` without a reflection, `s1` the unfolded length to the
 //! edge); the caller applies the antenna gain toward the first interaction. Rays are returned as
