@@ -104,22 +104,8 @@ def test_a_wall_seen_over_a_roof_reflects_into_its_shadow() -> None:
     # the roof was 2-8 dB darker behind the block (median 3.18 dB). Tolerance 0.5 / 1.0 dB:
     # both trace the same two edges' paths here (the direct ray over the block, the wall's over
     # it), so what is left is the wedge coefficients' difference near grazing.
-    from rainuav.radio.reference.tracer import (
-        agreement,
-        engine_gain,
-        inside_buildings,
-        isotropic_scenario,
-    )
-    from rainuav.radio.reference.tracer_paths import path_gain
-
     scn = scene("roof_wall", 4.9e9, 10.0, "v")
-    w, wo = isotropic_scenario(scn), isotropic_scenario(scn, buildings=False)
-    kw = {"samples": 400_000, "step": 3}
-    ag = agreement(
-        engine_gain(w), engine_gain(wo), path_gain(w, **kw), path_gain(wo, **kw),
-        inside_buildings(w),
-    )  # fmt: skip
-    (row,) = ag.rows()
+    (row,) = compare(scn, samples=400_000, reference="paths", step=3).rows()
     assert row["shadow_pixels"] >= 40, row
     assert row["shadow_median"] <= 0.5 and row["shadow_p90"] <= 1.0, row
     assert row["light_median"] <= 0.1 and row["classes_agree"] == 1.0, row
@@ -138,22 +124,8 @@ def test_a_roof_edge_beside_the_line_lights_a_deep_shadow(pol: str) -> None:
     # rays (the field split into the edge's soft and hard parts, each face's coefficient at
     # the incident ray's angle with it) are all a few dB apart from the tracer's treatment of
     # the same paths.
-    from rainuav.radio.reference.tracer import (
-        agreement,
-        engine_gain,
-        inside_buildings,
-        isotropic_scenario,
-    )
-    from rainuav.radio.reference.tracer_paths import path_gain
-
     scn = scene("eave", 4.9e9, 20.0, pol)
-    w, wo = isotropic_scenario(scn), isotropic_scenario(scn, buildings=False)
-    kw = {"samples": 400_000, "step": 3}
-    ag = agreement(
-        engine_gain(w), engine_gain(wo), path_gain(w, **kw), path_gain(wo, **kw),
-        inside_buildings(w),
-    )  # fmt: skip
-    (row,) = ag.rows()
+    (row,) = compare(scn, samples=400_000, reference="paths", step=3).rows()
     assert row["shadow_pixels"] >= 40, row
     assert row["shadow_median"] <= 1.5 and row["shadow_p90"] <= 6.0, row
     assert row["light_median"] <= 0.1 and row["classes_agree"] == 1.0, row

@@ -342,16 +342,7 @@ impl RayScene<'_> {
                     // The buildings in the way of the straight line: among those the check
                     // just read.
                     hits.clone_from(&sight.near);
-                    let (dx, dy) = (q[0] - s[0], q[1] - s[1]);
-                    hits.retain(|&k| {
-                        ts.clear();
-                        prisms.crossings(k as usize, s, q, &mut ts);
-                        ts.iter().any(|&t| {
-                            let (x, y) = (s[0] + t * dx, s[1] + t * dy);
-                            self.terrain_at(x, y) + prisms.items()[k as usize].top
-                                >= zs + (zq - zs) * t
-                        })
-                    });
+                    hits.retain(|&k| self.crosses_below(&[k], (s, zs), (q, zq), &mut ts));
                     for &k in &hits {
                         let found = cache[k as usize].get_or_init(|| {
                             let (mut corners, mut scratch) = (Vec::new(), Vec::new());

@@ -184,7 +184,7 @@ impl Eave {
 impl RayScene<'_> {
     /// Whether the line from `(a, za)` to `(b, zb)` passes below the roof of one of the
     /// buildings `hits` where it crosses its footprint's outline (`ts`: scratch).
-    fn crosses_below(
+    pub(super) fn crosses_below(
         &self,
         hits: &[u32],
         (a, za): ([f64; 2], f64),
