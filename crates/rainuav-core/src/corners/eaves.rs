@@ -77,8 +77,8 @@ pub(super) fn floor(freq_hz: f64) -> f64 {
     10f64.powf(-0.1 * EAVE_FLOOR_DB) * (lambda / (4.0 * PI)).powi(2)
 }
 
-/// A roof edge is lit where the site sees one of its points this far apart (m) along it (at
-/// least its middle).
+/// The site's sight of a roof edge's piece is read at its points at most this far apart (m)
+/// along it, both ends included.
 pub const EAVE_SAMPLE_M: f64 = 5.0;
 
 /// A roof edge is looked at in pieces of at most this length (m), each placed for the pixels at
@@ -241,8 +241,8 @@ impl RayScene<'_> {
         }
     }
 
-    /// The roof edges of the buildings within [`LIT_RADIUS_M`] of the site (at `zs`) that it
-    /// sees at one of their sample points, for the pixels to look up.
+    /// The roof edges' pieces within [`EAVE_RADIUS_M`] of the site (at `zs`) that it sees at one
+    /// of their sample points, with the site's terms and sight, for the pixels to look up.
     pub(super) fn lit_eaves(&self, (site, zs): ([f64; 2], f64), bounds: Bounds) -> Lit<Eave> {
         let r = EAVE_RADIUS_M;
         let mut near = Vec::new();
@@ -259,6 +259,10 @@ impl RayScene<'_> {
                 let mut eaves = Vec::new();
                 self.eaves_of(k as usize, &mut eaves);
                 eaves.into_iter().filter_map(move |e| {
+                    let (mid, ..) = e.at(0.5 * e.len);
+                    if crate::norm(mid[0] - site[0], mid[1] - site[1]) > r {
+                        return None; // its building's box is near, the piece is not
+                    }
                     let ps = [site[0] - e.a[0], site[1] - e.a[1]];
                     let (t, h, v) = (dot(ps, e.u), dot(ps, e.n), zs - e.z);
                     if across(h, v) >= EAVE_N * PI || crate::norm(h, v) < 1e-6 {
@@ -273,9 +277,7 @@ impl RayScene<'_> {
                             e.seen |= 1 << i;
                         }
                     }
-                    let (mid, ..) = e.at(0.5 * e.len);
-                    (e.seen != 0 && crate::norm(mid[0] - site[0], mid[1] - site[1]) <= r)
-                        .then_some((mid, 0.5 * e.len, e))
+                    (e.seen != 0).then_some((mid, 0.5 * e.len, e))
                 })
             })
             .collect();
