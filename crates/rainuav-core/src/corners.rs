@@ -142,15 +142,21 @@ fn unit(d: [f64; 2]) -> Option<[f64; 2]> {
 }
 
 impl RayScene<'_> {
+    /// Prism `k`'s rings, each with its roof height and whether its material lies on the left
+    /// of the ring's order (none without prisms): what its corners and roof edges are read from.
+    fn sided_rings(&self, k: usize) -> impl Iterator<Item = (f64, &[[f64; 2]], bool)> {
+        self.prisms.into_iter().flat_map(move |p| {
+            let top = p.items()[k].top;
+            p.rings_of(k)
+                .enumerate()
+                .map(move |(r, ring)| (top, ring, material_left(r, ring)))
+        })
+    }
+
     /// The convex corners of prism `k` (its rings' vertices with an exterior angle above pi).
     fn corners_of(&self, k: usize, out: &mut Vec<Corner>) {
-        let Some(prisms) = self.prisms else {
-            return;
-        };
-        let top = prisms.items()[k].top;
-        for (r, ring) in prisms.rings_of(k).enumerate() {
+        for (top, ring, left) in self.sided_rings(k) {
             let m = ring.len();
-            let left = material_left(r, ring);
             for i in 0..m {
                 let v = ring[i];
                 let (prev, next) = (ring[(i + m - 1) % m], ring[(i + 1) % m]);

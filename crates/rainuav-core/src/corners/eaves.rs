@@ -50,7 +50,7 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 use super::sources::Lit;
-use super::{CORNER_GAP_M, material_left, unit};
+use super::{CORNER_GAP_M, unit};
 use crate::diffraction::utd_wedge;
 use crate::rays::{RayGround, RayPolarization, RayScene, reflection_coefficient};
 use crate::sight::{Bounds, Sight};
@@ -206,13 +206,8 @@ impl RayScene<'_> {
 
     /// The roof edges of prism `k` (module docs).
     fn eaves_of(&self, k: usize, out: &mut Vec<Eave>) {
-        let Some(prisms) = self.prisms else {
-            return;
-        };
-        let top = prisms.items()[k].top;
-        for (r, ring) in prisms.rings_of(k).enumerate() {
+        for (top, ring, left) in self.sided_rings(k) {
             let m = ring.len();
-            let left = material_left(r, ring);
             for i in 0..m {
                 let (a, b) = (ring[i], ring[(i + 1) % m]);
                 let Some(u) = unit([b[0] - a[0], b[1] - a[1]]) else {
