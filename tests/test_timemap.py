@@ -72,6 +72,26 @@ def _direct_length(scn, site, x, y):
     return rho, np.hypot(rho, scn.area.altitude_m - site.height_m)
 
 
+def test_the_next_storm_reuses_what_no_weather_changes_bit_for_bit() -> None:
+    # A storm pool's next storm over the same network: the rays' terms of the storm before are
+    # found again (the same array, not traced anew) and the series equals one built from scratch
+    # exactly (the terms do not depend on the weather).
+    from rainuav.radio.outputs import timemap
+
+    before, after = _storm(100.0, seed=3), _storm(100.0, seed=4)
+    timemap._static.clear()
+    fresh = build_radio_map_series(after, TIMES, cache=False)
+    timemap._static.clear()
+    build_radio_map_series(before, TIMES, cache=False)
+    kept = dict(timemap._static)
+    again = build_radio_map_series(after, TIMES, cache=False)
+    assert len(kept) == len(timemap._static) == 1
+    assert all(timemap._static[k] is v for k, v in kept.items())
+    for name in ("rss_dbm", "sinr_db", "serving_cell"):
+        assert np.array_equal(getattr(again, name), getattr(fresh, name)), name
+    assert not np.array_equal(again.sinr_db, build_radio_map_series(before, TIMES).sinr_db)
+
+
 def test_the_rain_path_integral_against_brute_force_quadrature() -> None:
     # The rain loss from a site to every pixel (the raster of the medium's gamma, 10 m nodes,
     # integrated along a fan of lines) against gamma(R(x, y)) of the exact rain field summed
