@@ -41,12 +41,14 @@ def test_a_file_is_the_weather_exactly_at_its_instants_and_linear_between(tmp_pa
     m = read_rate_grid(path, AREA)
     assert m.moves and m.rate_times_s == [0.0, 60.0, 120.0]
     maps = np.asarray(m.rate_map_mm_h)
-    for k, t in enumerate(m.rate_times_s):
-        assert np.array_equal(np.asarray(m.at(t).rate_map_mm_h), maps[k])
-    half = np.asarray(m.at(90.0).rate_map_mm_h)
-    np.testing.assert_allclose(half, 0.5 * (maps[1] + maps[2]), rtol=1e-12, atol=1e-12)
-    assert np.array_equal(np.asarray(m.at(-10.0).rate_map_mm_h), maps[0])  # held
-    assert np.array_equal(np.asarray(m.at(500.0).rate_map_mm_h), maps[2])
+    for at in (m.at, m.clock()):  # one instant, or many with the maps read once
+        for k, t in enumerate(m.rate_times_s):
+            assert np.array_equal(np.asarray(at(t).rate_map_mm_h), maps[k])
+        half = np.asarray(at(90.0).rate_map_mm_h)
+        np.testing.assert_allclose(half, 0.5 * (maps[1] + maps[2]), rtol=1e-12, atol=1e-12)
+        assert np.array_equal(np.asarray(at(-10.0).rate_map_mm_h), maps[0])  # held
+        assert np.array_equal(np.asarray(at(500.0).rate_map_mm_h), maps[2])
+        assert at(90.0).rate_times_s is None and at(90.0).kind == "map"
     # The file's grid is read where its nodes sit: the regridded map against the formula at
     # the area's grid centres, within the bilinear error of a 50 m grid on a 300 m cell.
     xs = np.asarray(np.linspace(0, 2000, maps.shape[2] + 1)[:-1]) + 1000 / maps.shape[2]

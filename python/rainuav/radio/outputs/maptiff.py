@@ -44,11 +44,12 @@ STD_BAND = ("rss_serving_std_db", "dB")
 
 def _bands(rm: Any, slice_index: int | None) -> np.ndarray:
     """(4, H, W) float32 (5 for a corrected map), rows south to north (the map's own order)."""
-    sinr = np.asarray(rm.sinr_db, dtype=np.float64)
-    rss = np.asarray(rm.rss_dbm, dtype=np.float64)
-    serving = np.asarray(rm.serving_cell)
-    if slice_index is not None:  # a map in time: one instant
+    sinr, rss, serving = rm.sinr_db, rm.rss_dbm, rm.serving_cell
+    if slice_index is not None:  # a map in time: one instant (read before the whole series)
         sinr, rss, serving = sinr[slice_index], rss[slice_index], serving[slice_index]
+    sinr = np.asarray(sinr, dtype=np.float64)
+    rss = np.asarray(rss, dtype=np.float64)
+    serving = np.asarray(serving)
     h, w = sinr.shape
     ii, jj = np.indices((h, w))
     best = np.where(serving >= 0, rss[np.maximum(serving, 0), ii, jj], NODATA)

@@ -324,8 +324,9 @@ def build_radio_map_series(
         bar = tqdm(total=t.size, desc="radio map slices", unit="slice")
     t1 = time.perf_counter()
     try:
+        weather_at = scn.medium.clock()
         for k, tk in enumerate(t):
-            rain = rain_args(scn.replace(medium=scn.medium.at(tk)), table)
+            rain = rain_args(scn.replace(medium=weather_at(tk)), table)
             power = slicer.power(**rain, rss_dbm_out=rss[k], rss_floor_dbm=RSS_FLOOR_DBM)
             serving[k], sir[k], sinr[k] = sir_from_power(power, scn.noise_power_dbm)
             if bar is not None:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -123,22 +124,37 @@ class Medium:
         time. A weather that does not move returns itself."""
         t = _num("t_s", t_s, -1e6, 1e6, " s")
         if self.kind == "map" and self.rate_times_s is not None:
-            times = np.asarray(self.rate_times_s, dtype=float)
-            maps = np.asarray(self.rate_map_mm_h, dtype=float)
-            k = int(np.clip(np.searchsorted(times, t, side="right"), 1, max(len(times) - 1, 1)))
-            if len(times) == 1 or t <= times[0]:
-                now = maps[0]
-            elif t >= times[-1]:
-                now = maps[-1]
-            else:
-                w = (t - times[k - 1]) / (times[k] - times[k - 1])
-                now = maps[k - 1] if w == 0.0 else (1.0 - w) * maps[k - 1] + w * maps[k]
-            return dataclasses.replace(self, rate_map_mm_h=now.tolist(), rate_times_s=None)
+            return self._map_at(t, *self._rate_maps())
         if not self.moves:
             return self
         if self.kind == "field" and self.field is not None:
             return dataclasses.replace(self, field=self.field.at(t))
         return dataclasses.replace(self, cells=[c.at(t) for c in self.cells])
+
+    def clock(self) -> Callable[[float], Medium]:
+        """[`at()`][rainuav.radio.scene.weather.Medium.at] for many instants of one weather: a
+        rate map in time is read into an array once, not at every instant."""
+        if self.kind != "map" or self.rate_times_s is None:
+            return self.at
+        times, maps = self._rate_maps()
+        return lambda t_s: self._map_at(_num("t_s", t_s, -1e6, 1e6, " s"), times, maps)
+
+    def _rate_maps(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.asarray(self.rate_times_s, dtype=float), np.asarray(
+            self.rate_map_mm_h, dtype=float
+        )
+
+    def _map_at(self, t: float, times: np.ndarray, maps: np.ndarray) -> Medium:
+        """The rate map at ``t``: linear between the maps around it, held beyond the ends."""
+        k = int(np.clip(np.searchsorted(times, t, side="right"), 1, max(len(times) - 1, 1)))
+        if len(times) == 1 or t <= times[0]:
+            now = maps[0]
+        elif t >= times[-1]:
+            now = maps[-1]
+        else:
+            w = (t - times[k - 1]) / (times[k] - times[k - 1])
+            now = maps[k - 1] if w == 0.0 else (1.0 - w) * maps[k - 1] + w * maps[k]
+        return dataclasses.replace(self, rate_map_mm_h=now.tolist(), rate_times_s=None)
 
     @property
     def varies(self) -> bool:
