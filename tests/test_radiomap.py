@@ -178,7 +178,7 @@ def test_mirror_symmetric_scenario_gives_mirror_symmetric_map() -> None:
 
 @pytest.mark.slow
 def test_paper_preset_has_good_and_weak_regions(session_cache, monkeypatch) -> None:
-    # The session's cache (the second build below must come from it).
+    # The map cache these tests share: the second build below must be read from it.
     monkeypatch.setenv("RAINUAV_CACHE_DIR", str(session_cache))
     rm = build_radio_map(presets.paper(rain_rate_mm_h=25.0), cache=True)
     cov = rm.coverage(10.0)
