@@ -39,17 +39,18 @@ settings.load_profile("rainuav")
 
 
 # The test files that take longest, longest first (seconds of a whole run, `python -m pytest
-# -n 2 --dist loadfile -v --durations=0`, 2026-11-28): the rest follow in pytest's order. Each
-# worker takes whole files in the order collected (the Makefile's `--no-loadscope-reorder`: by
-# default pytest-xdist sends the files with the most tests first, which left a few long
-# end-to-end files to the end, one worker running them while the other idled). A list out of
-# date costs only that balance.
+# -n 2 --dist loadfile --junitxml=...`, summed per file, 2026-11-28; the tracer's three files
+# count as the one unit they run as): the rest follow in pytest's order. Each worker takes whole
+# files in the order collected (the Makefile's `--no-loadscope-reorder`: by default
+# pytest-xdist sends the files with the most tests first, which left a few long end-to-end
+# files to the end, one worker running them while the other idled). A list out of date costs
+# only that balance.
 LONGEST_FIRST = (
-    "test_study.py", "test_measured.py", "test_tutorials.py", "test_agent_train.py",
-    "test_engines.py", "test_radiomap.py", "test_tracer_paths.py", "test_hostile_inputs.py",
-    "test_levels_learner.py", "test_terrain.py", "test_one_network.py", "test_tracer.py",
-    "test_levels_storms.py", "test_levels.py", "test_readme.py", "test_geotiff.py",
-    "test_timemap.py", "test_places.py", "test_buildings.py", "test_tracer_wedge.py",
+    "test_tracer_paths.py", "test_tracer.py", "test_tracer_wedge.py", "test_study.py",
+    "test_agent_train.py", "test_measured.py", "test_tutorials.py", "test_levels_learner.py",
+    "test_hostile_inputs.py", "test_terrain.py", "test_engines.py", "test_one_network.py",
+    "test_radiomap.py", "test_levels.py", "test_buildings.py", "test_levels_storms.py",
+    "test_readme.py", "test_geotiff.py", "test_timemap.py", "test_places.py",
 )  # fmt: skip
 
 

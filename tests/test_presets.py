@@ -235,3 +235,19 @@ def test_a_destination_off_the_area_is_refused_before_any_map(
     assert main(["--task.goal-m", "99999,1", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "task.goal_m must lie inside the area" in err, err
+
+
+def test_a_configuration_as_a_dict_is_the_standard_librarys() -> None:
+    # to_dict (rainuav._io.plain, shared with the scenario's) against dataclasses.asdict with
+    # unset fields dropped, types included, for the defaults and every shipped preset.
+    from rainuav.rl.config import to_dict
+
+    def reference(d: dict[str, Any]) -> dict[str, Any]:
+        return {
+            k: reference(v) if isinstance(v, dict) else v for k, v in d.items() if v is not None
+        }
+
+    for preset in ("", "paper", "storms", "storm-levels"):
+        cfg = resolve_config({"preset": preset} if preset else {})
+        want = reference(dataclasses.asdict(cfg))
+        assert to_dict(cfg) == want and repr(to_dict(cfg)) == repr(want), preset

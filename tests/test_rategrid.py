@@ -118,10 +118,11 @@ def test_a_file_too_large_for_memory_is_refused_before_it_is_read(tmp_path, monk
 
 
 def test_a_scenario_as_a_dict_is_the_standard_librarys(tmp_path) -> None:
-    # Scenario.to_dict copies a list of numbers whole (a radar file's rates: 0.36 -> 0.07 s);
-    # the reference is dataclasses.asdict with None dropped, which it must equal exactly (types
-    # included: a tuple stays a tuple) for a weather in time, a height map, buildings and the
-    # presets. A user's own values keep their types: whole numbers and tuples.
+    # Scenario.to_dict (rainuav._io.plain) copies a list of numbers whole (a radar file's
+    # rates: 0.36 -> 0.07 s). The reference is dataclasses.asdict with None dropped, which it
+    # must equal exactly (types included: a tuple stays a tuple) for a weather in time, a height
+    # map, buildings and the presets. A user's own values keep their types: whole numbers and
+    # tuples.
     import dataclasses
 
     def reference(scn):

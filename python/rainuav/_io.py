@@ -4,6 +4,8 @@ reading TOML with one-line errors that name the file."""
 from __future__ import annotations
 
 import contextlib
+import copy
+import dataclasses
 import os
 import secrets
 import shutil
@@ -67,6 +69,26 @@ def write_atomic(path: str | os.PathLike[str], write: Callable[[Path], None]) ->
             f"cannot write {path} ({reason}; {free}); its earlier copy, if any, is kept"
         ) from err
     return Path(path)
+
+
+_NUMBERS = (float, int)
+
+
+def plain(v: Any) -> Any:
+    """A dataclass (or a dict, list or tuple of them) as plain TOML-ready data: what
+    ``dataclasses.asdict`` gives, with every field and key that is None left out, and a list of
+    plain numbers copied whole rather than one number at a time (a radar weather's half a
+    million rates: 0.36 -> 0.07 s)."""
+    if dataclasses.is_dataclass(v) and not isinstance(v, type):
+        fields = ((f.name, getattr(v, f.name)) for f in dataclasses.fields(v))
+        return {k: plain(x) for k, x in fields if x is not None}
+    if isinstance(v, dict):
+        return {k: plain(x) for k, x in v.items() if x is not None}
+    if isinstance(v, list | tuple):
+        if all(type(x) in _NUMBERS for x in v):
+            return type(v)(v)
+        return type(v)(plain(x) for x in v)
+    return copy.deepcopy(v)
 
 
 def read_toml(path: str | os.PathLike[str], what: str = "file") -> dict[str, Any]:

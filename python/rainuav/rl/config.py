@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from rainuav._checks import check_field_kinds
-from rainuav._io import read_toml
+from rainuav._io import plain, read_toml
 from rainuav.errors import InvalidInputError
 from rainuav.nav.task import NavConfig
 from rainuav.world import WorldSpec, check_spec
@@ -379,11 +379,7 @@ def flat(cfg: TrainConfig) -> dict[str, Any]:
 def to_dict(cfg: TrainConfig) -> dict[str, Any]:
     """A plain dict of the run, its ``task`` and ``dqn`` as tables (TOML-ready: unset fields are
     left out)."""
-
-    def kept(d: dict[str, Any]) -> dict[str, Any]:
-        return {k: kept(v) if isinstance(v, dict) else v for k, v in d.items() if v is not None}
-
-    return kept(dataclasses.asdict(cfg))
+    return plain(cfg)
 
 
 def read_config(path: str | Path) -> dict[str, Any]:
