@@ -84,10 +84,9 @@ def plain(v: Any) -> Any:
         return {k: plain(x) for k, x in fields if x is not None}
     if isinstance(v, dict):
         return {k: plain(x) for k, x in v.items() if x is not None}
-    if isinstance(v, list | tuple):
-        if all(type(x) in _NUMBERS for x in v):
-            return type(v)(v)
-        return type(v)(plain(x) for x in v)
+    if isinstance(v, list | tuple):  # a named tuple as a plain tuple: TOML has no names there
+        items = v if all(type(x) in _NUMBERS for x in v) else [plain(x) for x in v]
+        return list(items) if isinstance(v, list) else tuple(items)
     return copy.deepcopy(v)
 
 
