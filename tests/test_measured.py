@@ -134,9 +134,9 @@ def test_the_standard_deviation_is_calibrated(worlds) -> None:
     held = _held(truth.sinr_db.shape, 0.05)
     share = float(np.mean(e[held] <= sd[held]))
     assert 0.5 <= share <= 0.85, share
-    cv = cm.fit["cross_validation"]
-    assert 0.45 <= cv["within_one_sigma"] <= 0.85, cv
-    assert cv["corrected"]["rmse_db"] < cv["prior"]["rmse_db"]
+    cv = cm.fit["cross_validation"]["stretch"]
+    assert 0.45 <= cv["corrected"]["samples"]["within_one_sigma"] <= 0.85, cv["corrected"]
+    assert cv["corrected"]["samples"]["rmse_db"] < cv["prior"]["samples"]["rmse_db"]
 
 
 def test_a_corrected_map_round_trips_and_keeps_its_prior(worlds, corrected, tmp_path) -> None:
@@ -404,7 +404,8 @@ def test_a_world_of_a_corrected_map_flies_the_chance_of_outage(corrected, worlds
     """``world_from(map, task)`` with the ``"chance"`` reward puts the corrected map's outage
     probabilities in the field; the environment's move then earns ``-1 - mu P`` at its end (P
     read bilinearly, as the map), and the exact plan's return is what the environment pays
-    flying it (to 1e-9). A physics map has no probabilities: refused in one line."""
+    flying it (to 1e-9). A physics map flies it with its prior's spreads (wider than the
+    corrected map's, so more pixels are uncertain); maps in time are refused in one line."""
     from rainuav.nav import planner
     from rainuav.nav.task import NavConfig
     from rainuav.radio.measured import outage_probability
@@ -425,5 +426,7 @@ def test_a_world_of_a_corrected_map_flies_the_chance_of_outage(corrected, worlds
     env.reset(options={"start_m": [312.5, 412.5]})
     r = env.step(0)[1]
     assert r == pytest.approx(-1 - 2.0 * float(world.field.chance(322.5, 412.5)), abs=1e-12)
-    with pytest.raises(InvalidInputError, match="corrected by measurements"):
-        world_from(worlds[0], task)
+    physics = world_from(worlds[0], task)
+    assert np.array_equal(physics.field.outage_p, outage_probability(worlds[0], thr))
+    unsure = lambda q: float(np.mean((q > 0.05) & (q < 0.95)))  # noqa: E731
+    assert unsure(physics.field.outage_p) > unsure(world.field.outage_p)

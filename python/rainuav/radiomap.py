@@ -280,6 +280,7 @@ def _corrected(args: argparse.Namespace, rm: Any) -> Any:
         p.strip() for p in args.calibrate.split(",") if p.strip()
     ]  # fmt: skip
     from rainuav.radio.measured.calibrate import BOUNDS
+    from rainuav.radio.measured.correct import held_out_line
 
     for p in names:
         if p not in BOUNDS:
@@ -289,13 +290,7 @@ def _corrected(args: argparse.Namespace, rm: Any) -> Any:
     print(log.summary(), file=sys.stderr)
     out = correct_map(rm, log, params=names)
     assert out.fit is not None
-    cv = out.fit["cross_validation"]
-    print(
-        f"measurements: held-out RMSE {cv['prior']['rmse_db']:.1f} dB (prior), "
-        f"{cv['calibrated']['rmse_db']:.1f} (calibrated), {cv['corrected']['rmse_db']:.1f} "
-        f"(corrected), leaving one {cv['left_out']} out of {cv['folds']}; "
-        f"{100 * cv['within_one_sigma']:.0f}% of held-out errors within one sigma"
-    )
+    print(held_out_line(out.fit["cross_validation"]))
     return out
 
 

@@ -36,6 +36,7 @@ from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import pixel_index
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio.engines import for_time
+from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.maps import build_radio_map
 from rainuav.radio.outputs.maptiff import write_map_geotiff
 from rainuav.radio.outputs.timemap import build_radio_map_series, series_times
@@ -170,14 +171,19 @@ def fly_place(
         "area_m": [a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m],
         **(buildings_near_route(scn, path) or {}),
     }  # fmt: skip
-    if getattr(rm, "fit", None) is not None:  # outage as a probability, from the deviation
+    if isinstance(rm, RadioMap):  # outage as a probability, from the map's spreads
         from rainuav.radio.measured.outage import outage_probability, path_outage
 
         r, c = pixel_index(rm.sinr_db.shape, rm.extent_m, path[1:, 0], path[1:, 1])
         prob = outage_probability(rm, min_db, pixels=(r, c), draws=4096)  # the path's pixels
-        summary["measurements"] = {"log": rm.fit["log"],
-                                   "cross_validation": rm.fit["cross_validation"],
-                                   **path_outage(prob)}  # fmt: skip
+        summary["outage_chance"] = {
+            "spreads": "the prior's by mechanism" if rm.fit is None else "the measurements'",
+            **path_outage(prob),
+        }
+        if rm.fit is not None:
+            summary["measurements"] = {"log": rm.fit["log"],
+                                       "cross_validation": rm.fit["cross_validation"],
+                                       **path_outage(prob)}  # fmt: skip
     _write(place, out, ll, path, t_s, sinr, serving, min_db, summary, rm, mission)
     return summary
 

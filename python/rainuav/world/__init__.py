@@ -309,11 +309,11 @@ def world_from(source: Any, task: NavConfig) -> World:
     min_db = task.min_db
     if min_db is None:  # the same rule for every kind (by the scenario's name)
         min_db = default_min_db(_scenario_name(source), signal)
-    if task.reward == "chance":  # outage as a probability: a map corrected by measurements
-        if not isinstance(field, SignalField) or getattr(source, "rss_std_db", None) is None:
+    if task.reward == "chance":  # outage as a probability, from the map's spreads
+        if not isinstance(field, SignalField) or not isinstance(source, RadioMap):
             raise InvalidInputError(
-                "task.reward 'chance' flies one map corrected by measurements (its rss_std_db: "
-                "rainuav.radio.measured.correct_map)"
+                "task.reward 'chance' flies one radio map (a physics map with its prior's "
+                "spreads, or one corrected by measurements: rainuav.radio.measured.correct_map)"
             )
         if signal != "sinr":
             raise InvalidInputError("task.reward 'chance' is the SINR's outage: task.signal sinr")

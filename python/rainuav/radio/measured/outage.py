@@ -1,8 +1,14 @@
-"""Outage as a probability on a map corrected by measurements: P(SINR < threshold) at every pixel,
-and what it makes of a path.
+"""Outage as a probability on any map: P(SINR < threshold) at every pixel, and what it makes of a
+path.
 
-Each cell's power at a pixel is uncertain by its ``rss_std_db`` (Gaussian in dB, independent
-between cells; a draw is capped at 100 dBm, the maps' own ceiling). The serving cell, the
+Each cell's power at a pixel is uncertain by its spreads
+([`map_spreads()`][rainuav.radio.measured.outage.map_spreads]): a map corrected by measurements
+carries them (``rss_std_db``, the local mean's, and ``rss_sample_std_db``, one sample's); a
+physics map has its prior's by mechanism
+([`rainuav.radio.measured.prior`][rainuav.radio.measured.prior]). A link's outage happens sample by
+sample, so a draw of one cell's power is Gaussian in dB with both spreads in quadrature
+(``sample=False``: the local mean's alone, an outage of the average), independent between cells;
+a draw is capped at 100 dBm, the maps' own ceiling. The serving cell, the
 interference and so the SINR follow from all of them together (a draw may change which cell
 serves), so the probability is estimated by drawing:
 ``DRAWS`` draws of every cell's power at each pixel (one seed, so the same map gives the same
@@ -11,7 +17,7 @@ probabilities), the SINR of each draw as
 the threshold (a standard error of at most ``0.5 / sqrt(draws)``: 0.031 at the default
 256). The task's ``"chance"`` reward reads them (``rainuav.nav.task``: a move costs ``1 + mu P``,
 the ``"outage"`` reward's expectation; ``rainuav.world.world_from`` puts them in the field of a
-corrected map, for the exact planner and the environment)."""
+map, for the exact planner and the environment)."""
 
 from __future__ import annotations
 
@@ -22,21 +28,37 @@ import numpy as np
 from rainuav.errors import InvalidInputError
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
 
-__all__ = ["DRAWS", "outage_probability", "path_outage"]
+__all__ = ["DRAWS", "map_spreads", "outage_probability", "path_outage"]
 
 DRAWS = 256
 """Draws per pixel (a whole 200 x 200 map of 21 cells in about 10 s on 2 cores)."""
 
 
+def map_spreads(rm: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The local mean's and one sample's standard deviation of every cell's power at every
+    pixel of the map ``rm``, dB, (M, H, W) each: a corrected map's own (a map saved without the
+    sample spread: 0 for it), else the prior's by mechanism
+    ([`prior_spread()`][rainuav.radio.measured.prior.prior_spread])."""
+    if getattr(rm, "rss_std_db", None) is not None:
+        local = np.asarray(rm.rss_std_db, dtype=float)
+        sample = getattr(rm, "rss_sample_std_db", None)
+        return local, np.zeros_like(local) if sample is None else np.asarray(sample, float)
+    from rainuav.radio.measured.prior import prior_spread
+
+    return prior_spread(rm)
+
+
 def outage_probability(
-    rm: Any, min_db: float, seed: int = 0, draws: int = DRAWS, pixels: Any = None
-) -> np.ndarray:
-    """P(SINR < ``min_db``) at every pixel of the corrected map ``rm``, (H, W), or at the
-    ``pixels`` (rows, columns) alone, (N,) (module docstring)."""
-    if rm.rss_std_db is None:
-        raise InvalidInputError("the map carries no deviation: correct it by measurements first")
+    rm: Any, min_db: float, seed: int = 0, draws: int = DRAWS, pixels: Any = None,
+    sample: bool = True,
+) -> np.ndarray:  # fmt: skip
+    """P(SINR < ``min_db``) at every pixel of the map ``rm``, (H, W), or at the ``pixels``
+    (rows, columns) alone, (N,) (module docstring); ``sample`` False: of the local mean."""
+    if not 1 <= draws <= 1_000_000:
+        raise InvalidInputError(f"draws must lie within 1..1000000 (got {draws})")
     rss = np.asarray(rm.rss_dbm, dtype=float)
-    sd = np.asarray(rm.rss_std_db, dtype=float)
+    local, one = map_spreads(rm)
+    sd = np.hypot(local, one) if sample else local
     m = rss.shape[0]
     if pixels is None:
         mean, dev = rss.reshape(m, -1), sd.reshape(m, -1)

@@ -7,15 +7,27 @@ cell as a field in (east, north, height), estimated by Gaussian-process regressi
 Where a cell has more than ``MAX_POINTS`` bins, the bins are doubled in size until it has not
 (the count is reported).
 
-**Kernel.** ``C Matern(nu = 1.5, anisotropic) + White``: an amplitude (how far the calibrated
-map is off, typically), one length scale east and north and one in height (height only where
-the log spans more than one height bin), and the measurement noise of a bin. The
-hyperparameters maximise the marginal likelihood on at most ``MAX_FIT`` bins (drawn with the
-seed), then the field is conditioned on every bin with them fixed. Away from the measurements
-the mean returns to 0 (the calibrated map) and the standard deviation to the amplitude.
+**The sample spread.** The rows of one bin scatter around the bin's mean by fast fading, the
+UAV's antenna and airframe turning, and the receiver: their pooled standard deviation (the sum
+of squares about each bin's mean over the rows less the bins, over the bins of two rows or more)
+is the cell's ``sample_db``, the spread of one sample around the local mean. It also sets how
+well each bin's mean is known: ``sample_db^2 / n`` on the diagonal for a bin of ``n`` rows
+(scikit-learn's per-point ``alpha``), so a bin of one row weighs less than a bin of fifty.
+A log of one row a bin (a drive test that logs one averaged value a pixel) does not show it: the
+nugget below then is the sample spread, and the local mean's deviation leaves it out.
 
-**Standard deviation.** The uncertainty of the field itself (the noise term removed), so of the
-map's mean power at a pixel, not of one future measurement there (that adds the noise)."""
+**Kernel.** ``C Matern(nu = 1.5) + White``: an amplitude (how far the calibrated map's local
+mean is off, typically), one length scale across the ground and one in height (height only where
+the log spans more than one height bin; the ratio of the two chosen among ``HEIGHT_RATIOS`` by
+the likelihood), and a nugget: what the local mean varies from bin to bin that no smooth field
+explains. The hyperparameters maximise the marginal likelihood on at most ``MAX_FIT`` bins
+(drawn with the seed), then the field is conditioned on every bin with them fixed. Away from
+the measurements the mean returns to 0 (the calibrated map) and the standard deviation to
+``sqrt(amplitude^2 + nugget^2)``: the calibrated map's own spread, learned from the log.
+
+**Standard deviation.** ``std()`` is the uncertainty of the local mean (the 10 m average the
+map predicts) at a point: the field's posterior deviation and the nugget in quadrature. One
+future sample there spreads by that and ``sample_db`` in quadrature."""
 
 from __future__ import annotations
 
@@ -30,7 +42,15 @@ from scipy.spatial import cKDTree
 if TYPE_CHECKING:  # scikit-learn is imported where a field is fitted (it takes seconds to load)
     from sklearn.gaussian_process import GaussianProcessRegressor
 
-__all__ = ["MAX_FIT", "MAX_POINTS", "ResidualField", "bin_points", "fit_residual"]
+__all__ = [
+    "MAX_FIT",
+    "MAX_POINTS",
+    "ResidualField",
+    "bin_index",
+    "bin_points",
+    "fit_residual",
+    "sample_spread",
+]
 
 MAX_POINTS = 2500
 """The most bins one cell's field is conditioned on."""
@@ -45,21 +65,42 @@ GRID_POINTS = 2500
 ([`ResidualField.on_grid()`][rainuav.radio.measured.residual.ResidualField.on_grid])."""
 
 
+def bin_index(
+    x: np.ndarray, y: np.ndarray, h: np.ndarray, size_m: float, step_m: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which bin ``size_m`` wide and ``step_m`` tall each point (x, y, h) falls in: each row's
+    bin (N,) and the bins' row counts (B,)."""
+    keys = np.column_stack(
+        [np.floor(x / size_m), np.floor(y / size_m), np.round(h / step_m)]
+    ).astype(np.int64)
+    _, inv, count = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    return inv.ravel(), count
+
+
 def bin_points(
     x: np.ndarray, y: np.ndarray, h: np.ndarray, v: np.ndarray, size_m: float, step_m: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Averages the values ``v`` at (x, y, h) over bins ``size_m`` wide and ``step_m`` tall:
     the bins' mean positions (B, 3), mean values (B,) and row counts (B,)."""
-    keys = np.column_stack(
-        [np.floor(x / size_m), np.floor(y / size_m), np.round(h / step_m)]
-    ).astype(np.int64)
-    _, inv, count = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    inv = inv.ravel()
+    inv, count = bin_index(x, y, h, size_m, step_m)
 
     def mean(a: np.ndarray) -> np.ndarray:
         return np.bincount(inv, weights=a) / count
 
     return np.column_stack([mean(x), mean(y), mean(h)]), mean(v), count
+
+
+def sample_spread(
+    x: np.ndarray, y: np.ndarray, h: np.ndarray, v: np.ndarray, size_m: float, step_m: float
+) -> float:
+    """The pooled standard deviation of the values ``v`` about their bins' means (module
+    docstring: the sample spread), dB; NaN where no bin has two rows."""
+    inv, count = bin_index(x, y, h, size_m, step_m)
+    mean = np.bincount(inv, weights=v) / count
+    dof = len(v) - len(count)
+    if dof < 1:
+        return float("nan")
+    return float(np.sqrt(np.sum((v - mean[inv]) ** 2) / dof))
 
 
 def _features(pts: np.ndarray, ratio: float) -> np.ndarray:
@@ -79,15 +120,19 @@ class ResidualField:
     """How many times longer the field's length scale is across the ground than in height
     (0: the same at every height: the log spans one height bin)."""
     amplitude_db: float
-    """The field's standard deviation far from any measurement, dB."""
+    """The smooth field's standard deviation far from any measurement, dB."""
     noise_db: float
-    """A bin's measurement noise, dB."""
+    """The nugget: the local mean's bin-to-bin variation no smooth field explains, dB."""
+    sample_db: float
+    """The spread of one sample around the local mean (module docstring), dB."""
     length_m: float
     """The length scale across the ground, m (in height: this over ``height_ratio``)."""
     bins: int
     """The points it is conditioned on."""
     bin_m: float
     """The bins' width, m (the map's pixel, or larger where thinned)."""
+    nugget_is_sample: bool = False
+    """Whether the log showed no sample spread (one row a bin), so the nugget stands for it."""
 
     def _x(self, pts: np.ndarray) -> np.ndarray:
         return _features(pts, self.height_ratio)
@@ -97,13 +142,24 @@ class ResidualField:
         out = [self.gp.predict(self._x(pts[i : i + chunk])) for i in range(0, len(pts), chunk)]
         return np.concatenate(out) if out else np.zeros(0)
 
+    @property
+    def far_db(self) -> float:
+        """The local mean's deviation far from every measurement, dB (module docstring)."""
+        return (
+            self.amplitude_db
+            if self.nugget_is_sample
+            else float(np.hypot(self.amplitude_db, self.noise_db))
+        )
+
     def std(self, pts: np.ndarray, chunk: int = 4000) -> np.ndarray:
-        """The field's standard deviation at the points (N, 3), dB (module docstring)."""
-        noise = self.noise_db**2
+        """The local mean's standard deviation at the points (N, 3), dB (module docstring):
+        the field's posterior deviation with the nugget (scikit-learn's predictive deviation
+        of a kernel with a white term)."""
+        nugget = self.noise_db**2 if self.nugget_is_sample else 0.0
         out = []
         for i in range(0, len(pts), chunk):
             _, s = self.gp.predict(self._x(pts[i : i + chunk]), return_std=True)
-            out.append(np.sqrt(np.maximum(s**2 - noise, 0.0)))
+            out.append(np.sqrt(np.maximum(s**2 - nugget, 0.0)))
         return np.concatenate(out) if out else np.zeros(0)
 
     def on_grid(self, x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray) -> tuple[Any, Any]:
@@ -125,7 +181,7 @@ class ResidualField:
         tree = cKDTree(self.gp.X_train_ / self.length_m)
         near = tree.query(self._x(pts) / self.length_m, distance_upper_bound=FAR)[0] < FAR
         mean = np.zeros(len(pts))
-        std = np.full(len(pts), self.amplitude_db)
+        std = np.full(len(pts), self.far_db)
         mean[near], std[near] = self.mean(pts[near]), self.std(pts[near])
         mean, std = mean.reshape(len(ri), len(ci)), std.reshape(len(ri), len(ci))
         if k == 1:
@@ -141,7 +197,7 @@ def _kernel(spread: float, length: float, bounds: tuple[float, float]) -> Any:
 
     return ConstantKernel(max(spread, 0.25), (1e-4, 1e4)) * Matern(
         length, (bounds[0], bounds[1]), nu=1.5
-    ) + WhiteKernel(1.0, (1e-2, 1e2))
+    ) + WhiteKernel(1.0, (1e-3, 1e2))
 
 
 def fit_residual(
@@ -153,20 +209,30 @@ def fit_residual(
     extent_m: float,
     seed: int = 0,
     like: ResidualField | None = None,
+    max_points: int | None = None,
 ) -> ResidualField:
     """The residual field of one cell from its rows at ``pts`` (N, 3: east, north, height) and
     their residuals, dB (module docstring). ``size_m``/``step_m``: the bins; ``extent_m``: the
     area's size (the longest length scale is 5 times it); ``like``: a field whose
-    hyperparameters to reuse (a cross-validation fold), else fitted here."""
+    hyperparameters and sample spread to reuse (a cross-validation fold), else fitted here;
+    ``max_points``: the most bins it is conditioned on (default ``MAX_POINTS``)."""
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.gaussian_process import GaussianProcessRegressor
 
+    sample = sample_spread(pts[:, 0], pts[:, 1], pts[:, 2], resid, size_m, step_m)
+    unseen = not np.isfinite(sample)
+    if like is not None:
+        sample, unseen = like.sample_db, like.nugget_is_sample
+    if unseen:
+        sample = 0.0  # one row a bin: the spread is not seen (the nugget takes it)
+    max_points = MAX_POINTS if max_points is None else max_points
     bm = size_m
     while True:
-        bp, bv, _ = bin_points(pts[:, 0], pts[:, 1], pts[:, 2], resid, bm, step_m)
-        if len(bv) <= MAX_POINTS:
+        bp, bv, count = bin_points(pts[:, 0], pts[:, 1], pts[:, 2], resid, bm, step_m)
+        if len(bv) <= max_points:
             break
         bm *= 2
+    alpha = np.maximum(sample**2 / count, 1e-6)
     if like is not None:
         kernel, ratio = like.gp.kernel_, like.height_ratio
     else:
@@ -177,16 +243,18 @@ def fit_residual(
         for ratio in HEIGHT_RATIOS if in_height else (0.0,):
             with warnings.catch_warnings():  # a bound reached is a result (a flat field, say)
                 warnings.simplefilter("ignore", ConvergenceWarning)
-                g = GaussianProcessRegressor(k0, random_state=seed)
+                g = GaussianProcessRegressor(k0, alpha=alpha[pick], random_state=seed)
                 g.fit(_features(bp[pick], ratio), bv[pick])
             if best is None or g.log_marginal_likelihood_value_ > best[0]:
                 best = (g.log_marginal_likelihood_value_, g.kernel_, ratio)
         assert best is not None
         _, kernel, ratio = best
-    gp = GaussianProcessRegressor(kernel, optimizer=None).fit(_features(bp, ratio), bv)
+    gp = GaussianProcessRegressor(kernel, alpha=alpha, optimizer=None)
+    gp.fit(_features(bp, ratio), bv)
+    nugget = float(np.sqrt(kernel.k2.noise_level))
     return ResidualField(
         gp=gp, height_ratio=float(ratio),
-        amplitude_db=float(np.sqrt(kernel.k1.k1.constant_value)),
-        noise_db=float(np.sqrt(kernel.k2.noise_level)),
+        amplitude_db=float(np.sqrt(kernel.k1.k1.constant_value)), noise_db=nugget,
+        sample_db=nugget if unseen else float(sample), nugget_is_sample=bool(unseen),
         length_m=float(kernel.k1.k2.length_scale), bins=len(bv), bin_m=bm,
     )  # fmt: skip

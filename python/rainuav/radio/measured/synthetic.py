@@ -79,12 +79,19 @@ def sample_log(
     seed: int = 0,
     offset: float = 0.5,
     flight: int = 0,
+    repeat: int = 1,
+    k_db: float | None = None,
 ) -> MeasurementLog:
     """A log over ``truth`` (module docstring): ``share`` of its pixels on flight lines
     (``offset``: where the first line lies, in spacings), the ``cells`` strongest cells at each,
-    each value with ``noise_db`` of Gaussian noise drawn from ``seed``, all rows of ``flight``."""
+    each value with ``noise_db`` of Gaussian noise drawn from ``seed``, all rows of ``flight``.
+    ``repeat``: rows a pixel, each at a point drawn uniformly within it and with its own draw
+    (a receiver logging several samples a pixel); ``k_db``: each row's power also faded by a
+    Ricean draw of that K-factor (unit mean power; ``rainuav.radio.measured.prior``)."""
+    if not 1 <= repeat <= 1000:
+        raise InvalidInputError(f"repeat must lie within 1..1000 (got {repeat})")
     rng = np.random.default_rng(seed)
-    px = flight_line_pixels(truth.rss_dbm.shape[1:], share, offset)
+    px = np.repeat(flight_line_pixels(truth.rss_dbm.shape[1:], share, offset), repeat, axis=0)
     r, c = px[:, 0], px[:, 1]
     power = truth.rss_dbm[:, r, c]  # (M, K)
     k = min(cells, power.shape[0])
@@ -95,11 +102,22 @@ def sample_log(
     keep = value > RSS_FLOOR_DBM + 1.0
     x, y = truth.x_m[cc[keep]], truth.y_m[rr[keep]]
     n = int(keep.sum())
+    if repeat > 1:
+        px_m = truth.scenario.area.resolution_m
+        x = x + rng.uniform(-px_m / 2, px_m / 2, n) * 0.999
+        y = y + rng.uniform(-px_m / 2, px_m / 2, n) * 0.999
     scn = truth.scenario
     z = flight_heights_at(scn, x, y)
+    faded = value[keep] + rng.normal(0.0, noise_db, n)
+    if k_db is not None:
+        k = 10 ** (k_db / 10)
+        h = np.sqrt(k / (k + 1)) + np.sqrt(1 / (2 * (k + 1))) * (
+            rng.standard_normal(n) + 1j * rng.standard_normal(n)
+        )
+        faded = faded + 10 * np.log10(np.abs(h) ** 2)
     return MeasurementLog(
         x_m=x, y_m=y, z_m=z, alt_m=np.full(n, float(truth.altitude_m)), cell=cell[keep],
-        rss_dbm=value[keep] + rng.normal(0.0, noise_db, n), flight=np.full(n, flight),
+        rss_dbm=faded, flight=np.full(n, flight),
         rows=n, source=f"drawn from the {scn.name} map",
     )  # fmt: skip
 

@@ -88,8 +88,14 @@ class RadioMap:
     ([`rainuav.radio.measured`][rainuav.radio.measured]): the physics map it started from, dBm;
     None for a physics map."""
     rss_std_db: npt.NDArray[np.float64] | None = None
-    """(M, H, W) a corrected map: the standard deviation of ``rss_dbm``, dB; None for a physics
-    map."""
+    """(M, H, W) a corrected map: the standard deviation of the local mean ``rss_dbm``
+    predicts, dB; None for a physics map (its prior spreads:
+    [`rainuav.radio.measured.prior.prior_spread()`][rainuav.radio.measured.prior.prior_spread])."""
+    rss_sample_std_db: npt.NDArray[np.float64] | None = None
+    """(M, H, W) a corrected map: the standard deviation of one sample around the local mean
+    (fast fading, the UAV's antenna and airframe, the receiver), dB; a link's outage, sample by
+    sample, uses it and ``rss_std_db`` in quadrature. None for a physics map, or a corrected
+    map saved before it was kept."""
     fit: dict[str, Any] | None = None
     """A corrected map: its calibration, residual fields and cross-validated error (what
     ``fit.json`` holds); None for a physics map."""
@@ -105,7 +111,7 @@ class RadioMap:
         "pe_share",
         "pe_cone_deg",
     )
-    _MEASURED = ("prior_rss_dbm", "rss_std_db")
+    _MEASURED = ("prior_rss_dbm", "rss_std_db", "rss_sample_std_db")
 
     def __post_init__(self) -> None:
         if self.pe_share is None:
@@ -154,7 +160,8 @@ class RadioMap:
         ext = tuple(float(v) for v in data["extent_m"])
         shape = data["rss_dbm"].shape
         extra = {k: data[k] for k in cls._MEASURED if k in data}
-        ranges = {"prior_rss_dbm": (RSS_FLOOR_DBM, 100.0), "rss_std_db": (0.0, 200.0)}
+        ranges = {"prior_rss_dbm": (RSS_FLOOR_DBM, 100.0), "rss_std_db": (0.0, 200.0),
+                  "rss_sample_std_db": (0.0, 200.0)}  # fmt: skip
         check_arrays(path, extra | {k: data[k] for k in ("x_m", "y_m")}, scn,
                      {k: shape for k in extra}, {k: ranges[k] for k in extra})  # fmt: skip
         fit = _fit_of(path, data.get("fit_json"))

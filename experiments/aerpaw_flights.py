@@ -1,0 +1,165 @@
+"""Maps against real UAV flights: AERPAW's LTE flights at Lake Wheeler (the page "How far to trust
+a map" and the results page).
+
+    python experiments/aerpaw_flights.py PATH/TO/flights.csv [--thin 8] [--json FILE]
+
+The data (88 516 samples of one eNB on a 10 m mast at 3.5 GHz, 10 dBm, flown on one path at 30,
+50, 70, 90 and 110 m) stays out of the repository: its README says where it comes from. The
+prior: the ray engine over medium-dry ground with an isotropic antenna at the mast, 10 m
+pixels. The log: every ``--thin``-th sample of every flight (neighbouring samples 0.1 s apart
+are nearly the same draw), each flight its own ``flight``.
+
+Two held-out designs, both by rainuav's own cross-validation
+([`rainuav.radio.measured.correct.cross_validate_log`]): one flight (one height) left out at a
+time, the map fitted on the other four; and one of five stretches of every flight left out at a
+time. Per held-out height and per design, every method's scores on single samples and on 10 m
+local means: the prior (its spreads by mechanism), the prior with its power fitted, the
+calibrated map, the corrected map, the 25 nearest samples in 3-D and ordinary kriging.
+
+The prior's spread by mechanism is the published one; ``--model-db`` adds an engine error in
+quadrature. Which value to add is chosen on the validation heights (30 and 70 m, where the
+one-sigma coverage of single samples is brought to 68%) and reported on the others (50, 90,
+110 m), which that choice never saw.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from rainuav.radio.measured import read_log
+from rainuav.radio.measured.calibrate import prior_at
+from rainuav.radio.measured.correct import cross_validate_log
+from rainuav.radio.measured.prior import excess_at, spreads_of
+from rainuav.radio.measured.scores import local_means, score
+from rainuav.radio.outputs.maps import build_radio_map
+from rainuav.radio.reference.tracer import ISOTROPIC
+from rainuav.radio.scene.area import Area
+from rainuav.radio.scene.cell import Cell
+from rainuav.radio.scene.scenario import Origin, Scenario, Site
+
+LW1 = (35.727451, -78.695974)
+"""The eNB's site, degrees (the data's README)."""
+VALIDATION = (30, 70)
+"""The heights the prior's engine error is chosen on."""
+METHODS = ("prior", "power", "calibrated", "corrected", "knn", "kriging")
+
+
+def scenario(x: np.ndarray, y: np.ndarray) -> Scenario:
+    pad = 50.0
+    area = Area(x_min_m=math.floor((x.min() - pad) / 10) * 10,
+                x_max_m=math.ceil((x.max() + pad) / 10) * 10,
+                y_min_m=math.floor((y.min() - pad) / 10) * 10,
+                y_max_m=math.ceil((y.max() + pad) / 10) * 10,
+                altitude_m=70.0, resolution_m=10.0)  # fmt: skip
+    cell = Cell(azimuth_deg=0.0, tilt_deg=0.0, pattern=ISOTROPIC, tx_power_dbm=10.0)
+    return Scenario(name="aerpaw-lw1", freq_hz=3.5e9, polarization="v", area=area,
+                    sites=[Site(x_m=0.0, y_m=0.0, height_m=10.0, cells=[cell])],
+                    ground="medium-dry", engine="ray",
+                    origin=Origin(lat_deg=LW1[0], lon_deg=LW1[1]))  # fmt: skip
+
+
+def read(path: Path, thin: int, tmp: Path) -> tuple[Scenario, Path]:
+    rows = list(csv.DictReader(path.open()))
+    lat = np.array([float(r["lat"]) for r in rows])
+    lon = np.array([float(r["lon"]) for r in rows])
+    x = (lon - LW1[1]) * 111_320 * math.cos(math.radians(LW1[0]))
+    y = (lat - LW1[0]) * 110_574
+    out = tmp / "log.csv"
+    with out.open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["lat", "lon", "alt_m", "cell", "rss_dbm", "flight"])
+        flights: dict[str, int] = {}
+        for r in rows:
+            k = r["flight_alt_m"]
+            flights[k] = flights.get(k, -1) + 1
+            if flights[k] % thin == 0:
+                w.writerow([r["lat"], r["lon"], r["alt_m"], 0, r["rss_dbm"], k])
+    return scenario(x, y), out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("flights", type=Path)
+    ap.add_argument("--thin", type=int, default=8)
+    ap.add_argument("--json", type=Path, default=None)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        scn, path = read(args.flights, args.thin, Path(tmp))
+        t0 = time.perf_counter()
+        rm = build_radio_map(scn)
+        log = read_log(path, scn)
+        prior = prior_at(rm, log)
+        print(f"{log.summary()}; prior maps {time.perf_counter() - t0:.1f} s", flush=True)
+    # the log numbers its flights; each flight is one nominal height
+    height_of = {int(f): int(round(float(np.median(log.alt_m[log.flight == f])) / 10) * 10)
+                 for f in np.unique(log.flight)}  # fmt: skip
+    nominal = np.array([height_of[int(f)] for f in log.flight])
+    heights = sorted(set(height_of.values()))
+    # The prior's engine error, chosen on the validation heights.
+    ex = excess_at(scn, 0, log.x_m, log.y_m, log.z_m, prior)
+    err = log.rss_dbm - prior
+    val = np.isin(nominal, VALIDATION)
+    grid = np.arange(0.0, 20.01, 0.1)
+    cover = [np.mean(np.abs(err[val]) <= np.hypot(*spreads_of(ex[val], g))) for g in grid]
+    model_db = float(grid[int(np.argmin(np.abs(np.array(cover) - 0.6827)))])
+    pts = np.column_stack([log.x_m, log.y_m, log.alt_m])
+    report: dict = {"rows": len(log), "thin": args.thin, "model_db": model_db, "prior": {},
+                    "height_of_flight": height_of}  # fmt: skip
+    for name, mdb in (("published", 0.0), ("published + engine error", model_db)):
+        loc, smp = spreads_of(ex, mdb)
+        per = {}
+        for h in heights:
+            m = nominal == h
+            per[h] = {
+                "samples": score(err[m], np.hypot(loc[m], smp[m])),
+                "local_means": score(*local_means(pts[m], log.rss_dbm[m], prior[m], loc[m],
+                                                  smp[m], 10.0, 10.0)),
+            }  # fmt: skip
+        report["prior"][name] = per
+    t0 = time.perf_counter()
+    cv = cross_validate_log(rm, log, prior, params=("power_db", "height_m"))
+    report["cross_validation"] = cv
+    report["seconds"] = time.perf_counter() - t0
+    print(f"engine error chosen on {VALIDATION} m: {model_db:.1f} dB; "
+          f"cross-validation {report['seconds']:.0f} s")  # fmt: skip
+    for name, per in report["prior"].items():
+        for h, d in per.items():
+            s, lm = d["samples"], d["local_means"]
+            tag = "validation" if h in VALIDATION else "held out"
+            print(f"prior spread ({name}) at {h} m ({tag}): RMSE {s['rmse_db']:.2f}, bias "
+                  f"{s['bias_db']:+.2f} dB, samples {100 * s['within_one_sigma']:.0f}% / "
+                  f"{100 * s['within_two_sigma']:.0f}%, CRPS {s['crps_db']:.2f}; local means "
+                  f"{100 * lm['within_one_sigma']:.0f}% / "
+                  f"{100 * lm['within_two_sigma']:.0f}%")  # fmt: skip
+    for design in ("flight", "stretch"):
+        d = cv[design]
+        print(f"== one {design} left out ==")
+        for k in METHODS:
+            for part in ("samples", "local_means"):
+                s = d[k][part]
+                print(f"{k:>10} {part:>11}: RMSE {s['rmse_db']:.2f} bias {s['bias_db']:+.2f} "
+                      f"1-sigma {100 * s['within_one_sigma']:.0f}% 2-sigma "
+                      f"{100 * s['within_two_sigma']:.0f}% CRPS {s['crps_db']:.2f} "
+                      f"({s['points']})")  # fmt: skip
+        for g, fold in d.get("per_fold", {}).items():
+            line = ", ".join(f"{k} {fold[k]['samples']['rmse_db']:.2f}" for k in METHODS)
+            c = fold["corrected"]
+            where = f"{height_of[int(g)]} m" if design == "flight" else f"stretch {g}"
+            print(
+                f"  {where}: RMSE {line}; corrected samples "
+                f"{100 * c['samples']['within_one_sigma']:.0f}%, local means "
+                f"{100 * c['local_means']['within_one_sigma']:.0f}% within one sigma"
+            )
+    if args.json:
+        args.json.write_text(json.dumps(report, indent=1, default=float) + "\n")
+
+
+if __name__ == "__main__":
+    main()
