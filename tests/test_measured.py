@@ -251,6 +251,8 @@ def test_radiomap_corrects_a_map_by_a_log(worlds, tmp_path) -> None:
 
 
 def test_a_corrected_map_carries_its_deviation_in_the_geotiff(corrected, tmp_path) -> None:
+    """Bands 5 and 6: the serving cell's local-mean and one-sample spreads, as the map holds
+    them (float32), and both round-trip through the .npz."""
     rasterio = pytest.importorskip("rasterio")
     from rainuav.radio.outputs.maptiff import write_map_geotiff
     from rainuav.radio.scene.scenario import Origin
@@ -258,9 +260,13 @@ def test_a_corrected_map_carries_its_deviation_in_the_geotiff(corrected, tmp_pat
     scn = corrected.scenario.replace(origin=Origin(47.0, 8.0))
     cm = dataclasses.replace(corrected, scenario=scn)
     with rasterio.open(write_map_geotiff(cm, tmp_path / "m.tif")) as src:
-        assert src.count == 5 and src.descriptions[4] == "rss_serving_std_db"
-        band = src.read(5)[::-1]
+        assert src.count == 6 and src.descriptions[4] == "rss_serving_std_db"
+        assert src.descriptions[5] == "rss_serving_sample_std_db"
+        band, one = src.read(5)[::-1], src.read(6)[::-1]
     assert np.allclose(band, _serving(cm.rss_std_db, cm).astype(np.float32))
+    assert np.allclose(one, _serving(cm.rss_sample_std_db, cm).astype(np.float32))
+    back = type(cm).load(cm.save(tmp_path / "m.npz"))
+    assert np.array_equal(back.rss_sample_std_db, cm.rss_sample_std_db)
 
 
 @pytest.mark.slow

@@ -39,11 +39,14 @@ BANDS = (
 )
 """Band names (descriptions) and units, in order."""
 STD_BAND = ("rss_serving_std_db", "dB")
-"""The fifth band of a map corrected by measurements."""
+"""The fifth band of a map corrected by measurements: the serving cell's local-mean spread."""
+SAMPLE_BAND = ("rss_serving_sample_std_db", "dB")
+"""The sixth band of a map corrected by measurements: one sample's spread around it."""
 
 
 def _bands(rm: Any, slice_index: int | None) -> np.ndarray:
-    """(4, H, W) float32 (5 for a corrected map), rows south to north (the map's own order)."""
+    """(4, H, W) float32 (5 or 6 for a corrected map), rows south to north (the map's own
+    order)."""
     sinr, rss, serving = rm.sinr_db, rm.rss_dbm, rm.serving_cell
     if slice_index is not None:  # a map in time: one instant (read before the whole series)
         sinr, rss, serving = sinr[slice_index], rss[slice_index], serving[slice_index]
@@ -64,6 +67,9 @@ def _bands(rm: Any, slice_index: int | None) -> np.ndarray:
     std = getattr(rm, "rss_std_db", None)
     if std is not None and slice_index is None:
         bands.append(np.where(serving >= 0, std[np.maximum(serving, 0), ii, jj], NODATA))
+        one = getattr(rm, "rss_sample_std_db", None)
+        if one is not None:
+            bands.append(np.where(serving >= 0, one[np.maximum(serving, 0), ii, jj], NODATA))
     return np.stack(bands).astype(np.float32)
 
 
@@ -89,7 +95,7 @@ def write_map_geotiff(
     a = scn.area
     data = _bands(rm, slice_index)[:, ::-1, :]  # rows north to south
     count, h, w = data.shape
-    names = (*BANDS, STD_BAND)[:count]
+    names = (*BANDS, STD_BAND, SAMPLE_BAND)[:count]
     px, py = (a.x_max_m - a.x_min_m) / w, (a.y_max_m - a.y_min_m) / h
     profile = {
         "driver": "GTiff", "height": h, "width": w, "count": count, "dtype": "float32",
