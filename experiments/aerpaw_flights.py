@@ -89,6 +89,7 @@ def main() -> None:
     ap.add_argument("flights", type=Path)
     ap.add_argument("--thin", type=int, default=8)
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--markdown", action="store_true", help="print the page's tables too")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         scn, path = read(args.flights, args.thin, Path(tmp))
@@ -159,6 +160,47 @@ def main() -> None:
             )
     if args.json:
         args.json.write_text(json.dumps(report, indent=1, default=float) + "\n")
+    if args.markdown:
+        print(markdown(report))
+
+
+def markdown(report: dict) -> str:
+    """The two held-out tables of the page "How far to trust a map", from a report."""
+    cv = report["cross_validation"]
+    height_of = {int(k): v for k, v in report["height_of_flight"].items()}
+
+    def cell(d: dict, k: str, key: str = "rmse_db") -> str:
+        return f"{d[k]['samples'][key]:.2f} / {d[k]['local_means'][key]:.2f}"
+
+    def cover(d: dict) -> str:
+        c = d["corrected"]
+        return (f"{100 * c['samples']['within_one_sigma']:.0f}% / "
+                f"{100 * c['local_means']['within_one_sigma']:.0f}%")  # fmt: skip
+
+    out = []
+    for design, label in (("flight", "held-out height"), ("stretch", "held-out stretch")):
+        d = cv[design]
+        out += [f"| {label} | RMSE: power fitted | corrected | 25 nearest samples | ordinary "
+                "kriging | corrected within one sigma | CRPS: corrected / nearest |",
+                "|---|---|---|---|---|---|---|"]  # fmt: skip
+        for g, f in d["per_fold"].items():
+            name = f"{height_of[int(g)]} m" if design == "flight" else f"{int(g) + 1} of 5"
+            crps = (
+                f"{f['corrected']['samples']['crps_db']:.2f} / {f['knn']['samples']['crps_db']:.2f}"
+            )
+            row = (name, cell(f, "power"), cell(f, "corrected"), cell(f, "knn"),
+                   cell(f, "kriging"), cover(f), crps)  # fmt: skip
+            out.append("| " + " | ".join(row) + " |")
+        two = d["corrected"]
+        crps = f"{two['samples']['crps_db']:.2f} / {d['knn']['samples']['crps_db']:.2f}"
+        out.append(
+            f"| all rows | {cell(d, 'power')} | {cell(d, 'corrected')} | {cell(d, 'knn')} | "
+            f"{cell(d, 'kriging')} | {cover(d)} (two sigma: "
+            f"{100 * two['samples']['within_two_sigma']:.0f}% / "
+            f"{100 * two['local_means']['within_two_sigma']:.0f}%) | {crps} |"
+        )
+        out.append("")
+    return "\n".join(out)
 
 
 if __name__ == "__main__":

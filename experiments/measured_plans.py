@@ -12,6 +12,12 @@ starts drawn from the world's seed. Four exact plans from each start: on the pri
 corrected map's mean, chance-weighted on the corrected map (a move costs ``1 + mu P``, ``P`` the
 pixel's outage probability from the corrected map's deviation), and on the truth itself. Each is
 flown on the truth; the table gives the mean cost over the truth's own plan.
+
+Each plan's **predicted outage** (the mean of its moves' outage probabilities on the map it was
+planned on: the prior's spreads by mechanism, or the corrected map's) is set beside its
+**realised outage** on the truth (the share of its moves that end below the threshold there).
+The truth is a map of local means, so both are of the local mean: the probabilities use the
+local mean's spread alone (``sample=False``).
 """
 
 from __future__ import annotations
@@ -46,6 +52,13 @@ def cost_on(truth, path: np.ndarray, thr: float) -> float:
     return float(len(path) - 1 + MU * np.sum(truth.sinr_db[r, c] < thr))
 
 
+def outage_on(truth, prob: np.ndarray, path: np.ndarray, thr: float) -> tuple[float, float]:
+    """The path's predicted outage share (its moves' mean probability in ``prob``) and its
+    realised one (the share of its moves ending below ``thr`` on the truth)."""
+    r, c = pixel_index(truth.sinr_db.shape, truth.extent_m, path[1:, 0], path[1:, 1])
+    return float(np.mean(prob[r, c])), float(np.mean(truth.sinr_db[r, c] < thr))
+
+
 def run(seeds: list[int], n_starts: int) -> list[dict]:
     thr = SINR_THRESHOLDS_DB["uma"]
     task = NavConfig(goal_m=GOAL, reward="outage", mu=MU, min_db=thr, max_steps=600)
@@ -64,7 +77,8 @@ def run(seeds: list[int], n_starts: int) -> list[dict]:
             else:
                 log = sample_log(truth, lines / 200, cells=5, seed=1000 + w)
                 cm = correct_map(prior, log, cross_validate=False)
-                mean_map, prob = cm, outage_probability(cm, thr)
+                mean_map, prob = cm, outage_probability(cm, thr, sample=False)
+            shown = prob if prob is not None else outage_probability(prior, thr, sample=False)
             plans = {"mean": planner.plan_on(_field(mean_map.sinr_db, prior), task, starts)}
             if prob is not None:
                 chance = dataclasses.replace(task, reward="chance")
@@ -76,14 +90,21 @@ def run(seeds: list[int], n_starts: int) -> list[dict]:
             for kind, ps in plans.items():
                 costs = [cost_on(truth, p.path_m, thr) for p in ps]
                 excess = np.array(costs) / np.array(best) - 1.0
+                pred, real = zip(*(outage_on(truth, shown, p.path_m, thr) for p in ps),
+                                 strict=True)  # fmt: skip
                 rows.append({"world": w, "lines": lines, "share": lines / 200, "plan": kind,
                              "excess_mean": float(excess.mean()),
                              "excess_median": float(np.median(excess)),
+                             "predicted_outage": float(np.mean(pred)),
+                             "realised_outage": float(np.mean(real)),
                              "seconds": time.perf_counter() - t0})  # fmt: skip
+                r = rows[-1]
                 print(f"world {w}, {lines:2d} lines ({lines / 2:.1f}%), plan on the "
                       f"{'prior' if lines == 0 else 'corrected ' + kind}: cost on the truth "
                       f"+{100 * excess.mean():.1f}% (median +{100 * np.median(excess):.1f}%) "
-                      "over the truth's own plan", flush=True)  # fmt: skip
+                      f"over the truth's own plan; outage predicted "
+                      f"{100 * r['predicted_outage']:.1f}%, realised "
+                      f"{100 * r['realised_outage']:.1f}%", flush=True)  # fmt: skip
     return rows
 
 

@@ -19,7 +19,11 @@ spreading from the moved antenna:
 
 with ``el'`` and ``d'`` the elevation and distance from the antenna ``dh`` higher. Each value's
 uncertainty is the square root of the diagonal of ``s^2 (J^T J)^-1`` at the solution, ``s`` the
-residuals' robust spread (1.4826 times their median absolute deviation). A cell with fewer than
+residuals' robust spread (1.4826 times their median absolute deviation) and ``J`` the
+Gauss-Newton Jacobian of the soft-L1 cost (each row weighted by ``(1 + (r / 4 dB)^2)^-3/4``, as
+SciPy reports it). The search runs on the pattern tabulated every ``TABLE_STEP_DEG`` (each
+parameter's finite difference in one batched evaluation); the residuals and ``J`` at its
+solution are taken on the exact pattern. A cell with fewer than
 ``MIN_POINTS_PER_PARAMETER`` points per parameter fits its power offset alone, and none with fewer
 than that for one."""
 
@@ -160,6 +164,23 @@ class _View:
             return np.maximum(np.asarray(g, dtype=float), GAIN_FLOOR_DB)
         return _bilinear_table(_pattern_table(cell.key()), az, el)
 
+    def change_many(self, offsets: dict[str, np.ndarray]) -> np.ndarray:
+        """``change()`` of a tabulated view for S sets of offsets at once (each (S,)), (S, N)."""
+        s = len(next(iter(offsets.values())))
+
+        def off(name: str) -> np.ndarray:
+            return np.asarray(offsets.get(name, np.zeros(s)), dtype=float)[:, None]
+
+        dz1 = self.dz[None, :] - off("height_m")
+        el = np.clip(
+            np.degrees(np.arctan2(dz1, self.rho)) - (self.cell.tilt_deg + off("tilt_deg")),
+            -90.0, 90.0,
+        )  # fmt: skip
+        az = (self.az - (self.cell.azimuth_deg + off("azimuth_deg")) + 180.0) % 360.0 - 180.0
+        g = _bilinear_table(_pattern_table(self.cell.key()), az, el)
+        spread = 10 * np.log10((self.rho**2 + self.dz**2 + 1e-6) / (self.rho**2 + dz1**2 + 1e-6))
+        return off("power_db") + g - self.g0 + spread
+
     def change(self, offsets: dict[str, float]) -> np.ndarray:
         dh = offsets.get("height_m", 0.0)
         moved = dataclasses.replace(
@@ -228,15 +249,19 @@ def _starts(names: list[str], resid: Any) -> list[np.ndarray]:
     axes = [(names.index(p), grid) for p, grid in START_GRID.items() if p in names]
     if not axes:
         return [centred(x0)]
-    scored = []
-    for values in itertools.product(*(g for _, g in axes)):
-        x = x0.copy()
-        for (i, _), v in zip(axes, values, strict=True):
-            x[i] = v
-        x = centred(x)
-        scored.append((_soft_l1(resid(x)), x))
-    scored.sort(key=lambda t: t[0])
-    return [x0] + [x for _, x in scored[:STARTS]]
+    grid = np.array(list(itertools.product(*(g for _, g in axes))), dtype=float)
+    xs = np.zeros((len(grid), len(names)))
+    for k, (i, _) in enumerate(axes):
+        xs[:, i] = grid[:, k]
+    r = resid.many(xs)  # every grid point at once (the power offset is additive: centred after)
+    if pw is not None:
+        new = np.clip(xs[:, pw] - np.median(r, axis=1), *BOUNDS["power_db"])
+        r = r + (new - xs[:, pw])[:, None]
+        xs[:, pw] = new
+    z = (r / SOFT_L1_SCALE_DB) ** 2
+    cost = np.sum(2 * (np.sqrt(1 + z) - 1), axis=1)
+    best = np.argsort(cost, kind="stable")[:STARTS]
+    return [x0] + [xs[i].copy() for i in best]
 
 
 class _Fit:
@@ -250,13 +275,39 @@ class _Fit:
         off = dict(zip(self.names, theta.tolist(), strict=True))
         return self.prior + self.view.change(off) - self.meas
 
+    def many(self, thetas: np.ndarray) -> np.ndarray:
+        """The residuals of S offset vectors (S, k) at once, (S, N) (a tabulated view)."""
+        off = {p: thetas[:, i] for i, p in enumerate(self.names)}
+        return self.prior + self.view.change_many(off) - self.meas
+
+    def jac(self, theta: np.ndarray) -> np.ndarray:
+        """Forward differences of a tabulated view's residuals, every parameter in one batched
+        evaluation (steps toward the inside of the bounds), (N, k)."""
+        hi = np.array([BOUNDS[p][1] for p in self.names])
+        h = 1e-4 * np.array([SCALES[p] for p in self.names]) * np.maximum(1.0, np.abs(theta))
+        h = np.where(theta + h > hi, -h, h)
+        rows = np.vstack([theta, theta + np.diag(h)])
+        r = self.many(rows)
+        return ((r[1:] - r[0]) / h[:, None]).T
+
     def solve(self, x0: np.ndarray, evaluations: int = MAX_EVALUATIONS) -> Any:
         lo = [BOUNDS[p][0] for p in self.names]
         hi = [BOUNDS[p][1] for p in self.names]
         return least_squares(
-            self, x0, bounds=(lo, hi), loss="soft_l1", f_scale=SOFT_L1_SCALE_DB,
+            self, x0, jac=self.jac if self.view.table else "2-point", bounds=(lo, hi),
+            loss="soft_l1", f_scale=SOFT_L1_SCALE_DB,
             x_scale=np.array([SCALES[p] for p in self.names]), max_nfev=evaluations,
         )  # fmt: skip
+
+
+def _exact_jac(fit: _Fit, theta: np.ndarray, r0: np.ndarray) -> np.ndarray:
+    """Forward differences of ``fit``'s residuals at ``theta`` (steps toward the inside of the
+    bounds), (N, k)."""
+    hi = np.array([BOUNDS[p][1] for p in fit.names])
+    h = 1e-4 * np.array([SCALES[p] for p in fit.names]) * np.maximum(1.0, np.abs(theta))
+    h = np.where(theta + h > hi, -h, h)
+    cols = [(fit(theta + np.eye(len(theta))[i] * h[i]) - r0) / h[i] for i in range(len(theta))]
+    return np.column_stack(cols) if cols else np.zeros((len(r0), 0))
 
 
 def _near(names: list[str], c: int, near: list[CellFit] | None) -> np.ndarray | None:
@@ -310,10 +361,17 @@ def calibrate(
             scan = _Fit(sub, pri[pick], meas[pick], names)
             x0 = min((scan.solve(s, SCAN_EVALUATIONS) for s in _starts(names, scan)),
                      key=lambda r: r.cost).x  # fmt: skip
-        res = view.solve(x0)
-        r = res.fun
+        # the optimum on the pattern tabulated every TABLE_STEP_DEG (every parameter's step in
+        # one batched evaluation), its residuals and Jacobian on the exact pattern
+        tab = _Fit(_View(scn, site, cell, x, y, z, table=True), pri, meas, names)
+        res = tab.solve(x0)
+        r = view(res.x)
+        # the Gauss-Newton Jacobian of the soft-L1 cost, as least_squares reports it: each row
+        # weighted by sqrt(rho'(z) + 2 z rho''(z)) = (1 + z)^-3/4, z = (r / scale)^2
+        z = (r / SOFT_L1_SCALE_DB) ** 2
+        jac = _exact_jac(view, res.x, r) * ((1 + z) ** -0.75)[:, None]
         s = 1.4826 * float(np.median(np.abs(r - np.median(r))))
-        cov = s**2 * np.linalg.pinv(res.jac.T @ res.jac)
+        cov = s**2 * np.linalg.pinv(jac.T @ jac)
         std = np.sqrt(np.maximum(np.diag(cov), 0.0))
         stuck = [p for p, v in zip(names, res.x, strict=True)
                  if min(v - BOUNDS[p][0], BOUNDS[p][1] - v) < 1e-3 * np.ptp(BOUNDS[p])]  # fmt: skip

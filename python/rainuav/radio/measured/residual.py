@@ -54,13 +54,13 @@ __all__ = [
 
 MAX_POINTS = 2500
 """The most bins one cell's field is conditioned on."""
-MAX_FIT = 250
+MAX_FIT = 150
 """The most bins its hyperparameters are fitted on."""
 HEIGHT_RATIOS = (1.0, 3.0, 10.0)
 """The ratios of the ground's length scale to the height's that are tried (the likeliest kept)."""
 FAR = 4.0
 """Length scales beyond which a pixel's field is its prior (Matern 3/2: correlation 0.008)."""
-GRID_POINTS = 2500
+GRID_POINTS = 625
 """The fewest map pixels the field is computed at where its length scales allow fewer
 ([`ResidualField.on_grid()`][rainuav.radio.measured.residual.ResidualField.on_grid])."""
 
