@@ -242,6 +242,7 @@ def test_radiomap_corrects_a_map_by_a_log(worlds, tmp_path) -> None:
     fit = json.loads((out / "fit.json").read_text())
     assert {k for f in fit["calibration"] for k in f["offsets"]} <= {"power_db", "tilt_deg"}
     assert (out / "rss_std.png").stat().st_size > 0 and (out / "correction.png").exists()
+    assert rm.rss_sample_std_db is not None and (out / "rss_sample_std.png").exists()
     bad = _write(tmp_path / "bad.csv", "x_m,y_m,alt_m,cell,rss_dbm", ["1e9,0,100,0,-60"])
     assert main(["--config", str(cfg), "--measurements", str(bad),
                  "--out", str(tmp_path / "o2")]) == 2  # fmt: skip

@@ -242,6 +242,8 @@ def _build(args: argparse.Namespace) -> int:
     kinds: tuple[str, ...] = ("sinr", "sir", "serving", "rss")
     if rm.rss_std_db is not None:
         kinds += ("rss_std", "correction")
+        if rm.rss_sample_std_db is not None:
+            kinds += ("rss_sample_std",)
     pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in kinds]
     if rm.fit is not None:
         import json

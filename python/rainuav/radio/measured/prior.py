@@ -53,6 +53,7 @@ from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
 
 __all__ = [
     "LOS_EXCESS_DB",
+    "MECHANISMS",
     "SHADOW_EXCESS_DB",
     "SPREADS",
     "Spread",
@@ -69,6 +70,7 @@ LOS_EXCESS_DB = 3.0
 SHADOW_EXCESS_DB = 20.0
 """The excess loss beyond which a pixel is in deep shadow, dB."""
 MECHANISMS = ("line of sight", "diffraction, reflection", "deep shadow")
+"""The mechanisms, in the order of [`mechanism_of()`][rainuav.radio.measured.prior.mechanism_of]."""
 
 
 @dataclass(frozen=True)

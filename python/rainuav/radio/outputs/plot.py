@@ -15,7 +15,7 @@ from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
 
 __all__ = ["KINDS", "plot_map", "save_map_png", "save_series_gif"]
 
-KINDS = ("sir", "sinr", "rss", "serving", "rss_std", "correction")
+KINDS = ("sir", "sinr", "rss", "serving", "rss_std", "rss_sample_std", "correction")
 """What a map figure shows; the last two only for a map corrected by measurements."""
 
 
@@ -54,8 +54,8 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
                 facecolor="0.75", label=f"out of reach ({RSS_FLOOR_DBM:g} dBm in the files)"
             )
             ax.legend(handles=[floor], loc="upper right", fontsize="small", framealpha=0.8)
-    elif kind in ("rss_std", "correction"):
-        if rm.rss_std_db is None:
+    elif kind in ("rss_std", "rss_sample_std", "correction"):
+        if rm.rss_std_db is None or (kind == "rss_sample_std" and rm.rss_sample_std_db is None):
             raise InvalidInputError(f"kind {kind!r} needs a map corrected by measurements")
         data, label, cmap, lo, hi = _measured(rm, kind)
         im = ax.imshow(data, origin="lower", extent=rm.extent_m, cmap=cmap, vmin=lo, vmax=hi)
@@ -86,7 +86,11 @@ def _measured(rm: Any, kind: str) -> tuple[Any, str, str, float, float | None]:
     ii, jj = np.indices(rm.serving_cell.shape)
     s = np.maximum(rm.serving_cell, 0)
     if kind == "rss_std":
-        return rm.rss_std_db[s, ii, jj], "RSS std, serving cell [dB]", "magma", 0.0, None
+        return (rm.rss_std_db[s, ii, jj], "local-mean RSS std, serving cell [dB]", "magma", 0.0,
+                None)  # fmt: skip
+    if kind == "rss_sample_std":
+        return (rm.rss_sample_std_db[s, ii, jj], "one sample's RSS std, serving cell [dB]",
+                "magma", 0.0, None)  # fmt: skip
     d = rm.rss_dbm[s, ii, jj] - rm.prior_rss_dbm[s, ii, jj]
     m = max(1.0, float(np.percentile(np.abs(d), 99)))
     return d, "corrected - prior RSS, serving cell [dB]", "RdBu_r", -m, m
