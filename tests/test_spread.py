@@ -167,3 +167,16 @@ def test_a_physics_map_has_its_priors_spreads_by_mechanism(worlds) -> None:
     bands = [(prior.sinr_db >= lo) & (prior.sinr_db < lo + 5) for lo in (0.0, 5.0, 10.0)]
     means = [p[b].mean() for b in bands]
     assert all(b.sum() > 50 for b in bands) and means[0] > means[1] > means[2], means
+
+
+def test_the_held_out_line_says_how_many_rows_were_scored_and_never_fails_on_none() -> None:
+    """A design where no row could be scored prints n/a, not a traceback; the count of rows
+    scored is in the line."""
+    from rainuav.radio.measured.correct import held_out_line
+
+    empty = {"samples": score([], []), "local_means": score([], [])}
+    cv = {"stretch": {"folds": 1, "rows": 3} | dict.fromkeys(
+        ("prior", "calibrated", "corrected", "knn"), empty
+    ), "left_out": "stretch"}  # fmt: skip
+    line = held_out_line(cv)
+    assert "(0 of 3 rows scored)" in line and "n/a" in line
