@@ -131,6 +131,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --measurements: the site parameters fitted per cell, comma-separated, or "
         "'none' (default: all four)",
     )  # fmt: skip
+    ap.add_argument(
+        "--receive-pattern", choices=("off", "elevation"), default="off",
+        help="with --measurements: 'elevation' fits the UAV's receive gain by elevation before "
+        "the residual field (fit.json's held-out scores say whether it helped; default off)",
+    )  # fmt: skip
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
     ap.add_argument(
@@ -290,7 +295,7 @@ def _corrected(args: argparse.Namespace, rm: Any) -> Any:
     ref = rm.scenario.area.altitude_reference or "ground"
     log = read_log(args.measurements, rm.scenario, altitude_reference=ref)
     print(log.summary(), file=sys.stderr)
-    out = correct_map(rm, log, params=names)
+    out = correct_map(rm, log, params=names, receive_pattern=args.receive_pattern)
     assert out.fit is not None
     print(held_out_line(out.fit["cross_validation"]))
     return out

@@ -47,6 +47,7 @@ from rainuav.radio.measured.calibrate import (
     prior_at,
 )
 from rainuav.radio.measured.log import MeasurementLog
+from rainuav.radio.measured.pattern import ElevationGain, elevation_deg, fit_gain
 from rainuav.radio.measured.prior import excess_at, spreads_of
 from rainuav.radio.measured.residual import ResidualField, fit_residual, sample_spread
 from rainuav.radio.measured.scores import local_means, score
@@ -73,6 +74,8 @@ STRETCHES = 5
 """The stretches each flight is cut into for the held-out stretches' design."""
 KNN = 25
 """The nearest logged samples the nearest-neighbour baseline averages."""
+RECEIVE_PATTERNS = ("off", "elevation")
+"""What ``correct_map``'s ``receive_pattern`` may be."""
 CV_MAX_POINTS = 1000
 """The most bins a cross-validation fold's fields are conditioned on (the map's own: 2 500)."""
 
@@ -129,6 +132,15 @@ class Correction:
     """One sample's deviation of a cell without a field, dB."""
     msl: bool = False
     """Whether the fields' height is above sea level (the map's altitude reference)."""
+    receive: ElevationGain | None = None
+    """The UAV's receive gain by elevation, where one was fitted
+    ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern])."""
+
+    def receive_at(self, log: MeasurementLog) -> np.ndarray:
+        """The receive gain at the rows of ``log``, dB (0 without one)."""
+        if self.receive is None:
+            return np.zeros(len(log))
+        return self.receive.at(elevation_deg(self.scenario, log.cell, log.x_m, log.y_m, log.z_m))
 
     def predict(
         self, log: MeasurementLog, prior: np.ndarray, *, fields: bool = True,
@@ -139,7 +151,7 @@ class Correction:
         each. ``fields`` False: the calibrated map alone, each measured cell's local deviation
         its field's far from every measurement (of ``far``'s fields, default its own)."""
         scn = self.scenario
-        mean = calibrated_at(scn, log, prior, self.fits)
+        mean = calibrated_at(scn, log, prior, self.fits) + self.receive_at(log)
         local = np.full(len(log), self.other_local_db)
         sample = np.full(len(log), self.other_sample_db)
         pts = np.column_stack([log.x_m, log.y_m, log.z_m if self.msl else log.alt_m])
@@ -165,14 +177,21 @@ class Correction:
 def fit_correction(
     rm: RadioMap, log: MeasurementLog, prior: np.ndarray, *,
     params: Sequence[str] = tuple(BOUNDS), level_step_m: float = 10.0, seed: int = 0,
-    like: Correction | None = None, max_points: int | None = None,
+    like: Correction | None = None, max_points: int | None = None, receive: bool = False,
 ) -> Correction:  # fmt: skip
     """Steps 2-3 of the module docstring on ``log``, whose rows' prior powers are ``prior``:
     the offsets, the fields and the spreads of the cells without one. ``like``: a correction
-    of more of the log whose hyperparameters to reuse (a cross-validation fold)."""
+    of more of the log whose hyperparameters to reuse (a cross-validation fold);
+    ``receive``: fit the UAV's receive gain by elevation before the fields
+    ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern])."""
     scn = rm.scenario
     fits = calibrate(scn, log, prior, params, near=None if like is None else like.fits)
     resid = log.rss_dbm - calibrated_at(scn, log, prior, fits)
+    gain = None
+    if receive:
+        el = elevation_deg(scn, log.cell, log.x_m, log.y_m, log.z_m)
+        gain = fit_gain(el, resid)
+        resid = resid - gain.at(el)
     fields = _fields(rm, log, resid, level_step_m, seed,
                      None if like is None else like.fields, max_points)  # fmt: skip
     pooled = float(np.sqrt(np.mean((log.rss_dbm - prior) ** 2)))
@@ -184,7 +203,7 @@ def fit_correction(
         h = _heights(rm, log)
         sample = sample_spread(log.x_m, log.y_m, h, resid, scn.area.resolution_m, level_step_m)
         sample = 0.0 if not np.isfinite(sample) else sample
-    return Correction(scn, fits, fields, pooled, sample, bool(scn.area.msl))
+    return Correction(scn, fits, fields, pooled, sample, bool(scn.area.msl), gain)
 
 
 def correct_map(
@@ -196,6 +215,7 @@ def correct_map(
     seed: int = 0,
     cross_validate: bool = True,
     build: Any = None,
+    receive_pattern: str = "off",
 ) -> RadioMap:
     """``rm`` corrected by ``log`` (module docstring): ``rss_dbm``, the serving cell, SIR and
     SINR corrected; ``prior_rss_dbm`` the map given; ``rss_std_db`` each pixel's local-mean
@@ -204,14 +224,24 @@ def correct_map(
     [`BOUNDS`][rainuav.radio.measured.calibrate.BOUNDS]; empty: none); ``level_step_m``: the
     height bins; ``seed``: the draw of the hyperparameters' fitting subset; ``build``: how maps at
     the log's heights are built (default the cached
-    [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map])."""
+    [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map]); ``receive_pattern``:
+    ``"off"`` or ``"elevation"`` (the UAV's receive gain by elevation fitted before the fields,
+    [`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern]; the held-out scores then
+    fit it in every fold, so ``fit.json`` says whether it helped)."""
+    if receive_pattern not in RECEIVE_PATTERNS:
+        raise InvalidInputError(
+            f"receive_pattern must be one of {', '.join(RECEIVE_PATTERNS)} "
+            f"(got {receive_pattern!r})"
+        )
     if rm.prior_rss_dbm is not None:
         raise InvalidInputError("the map is already corrected by measurements: correct its prior")
     if not 1.0 <= level_step_m <= 500.0:
         raise InvalidInputError(f"level_step_m must lie within 1..500 m (got {level_step_m:g})")
     scn = rm.scenario
     prior = prior_at(rm, log, level_step_m, build)
-    corr = fit_correction(rm, log, prior, params=params, level_step_m=level_step_m, seed=seed)
+    receive = receive_pattern == "elevation"
+    corr = fit_correction(rm, log, prior, params=params, level_step_m=level_step_m, seed=seed,
+                          receive=receive)  # fmt: skip
     if not corr.fields:
         raise InvalidInputError(
             f"{log.source or 'the log'}: no cell has {MIN_FIELD_POINTS} usable rows; too few "
@@ -222,12 +252,17 @@ def correct_map(
     std = np.full(cal.shape, corr.other_local_db)
     sample = np.full(cal.shape, corr.other_sample_db)
     h = np.full(scn.area.shape, rm.altitude_m)
+    gx, gy = np.meshgrid(rm.x_m, rm.y_m)
+    gz = flight_heights(scn)
+    if corr.receive is not None:
+        gzb = np.broadcast_to(gz, gx.shape)
+        for c in range(len(cal)):
+            g = corr.receive.at(elevation_deg(scn, c, gx.ravel(), gy.ravel(), gzb.ravel()))
+            cal[c] = np.where(reached[c], cal[c] + g.reshape(gx.shape), cal[c])
     for c, f in corr.fields.items():
         mean, std[c] = f.on_grid(rm.x_m, rm.y_m, h)
         sample[c] = f.sample_db
         cal[c] = np.where(reached[c], cal[c] + mean, cal[c])
-    gx, gy = np.meshgrid(rm.x_m, rm.y_m)
-    gz = flight_heights(scn)
     for fc in corr.fits:  # the fitted offsets' own uncertainty, independent of the residual's
         if fc.offsets:
             std[fc.cell] = np.hypot(std[fc.cell], calibration_std_db(scn, fc, gx, gy, gz))
@@ -244,10 +279,19 @@ def correct_map(
         "residual": [_field_dict(c, f) for c, f in corr.fields.items()],
         "unmeasured_cells_std_db": corr.other_local_db,
         "unmeasured_cells_sample_std_db": corr.other_sample_db,
+        "receive_pattern": {"choice": receive_pattern}
+        | ({} if corr.receive is None else {"elevation_gain": corr.receive.to_dict()}),
     }
     if cross_validate:
         fit["cross_validation"] = cross_validate_log(
-            rm, log, prior, params=params, level_step_m=level_step_m, seed=seed, whole=corr
+            rm,
+            log,
+            prior,
+            params=params,
+            level_step_m=level_step_m,
+            seed=seed,
+            whole=corr,
+            receive=receive,
         )
     return dataclasses.replace(
         rm, rss_dbm=cal, serving_cell=serving, sir_db=sir, sinr_db=sinr,
@@ -337,16 +381,18 @@ def _kriging(
 def cross_validate_log(
     rm: RadioMap, log: MeasurementLog, prior: np.ndarray, *,
     params: Sequence[str] = tuple(BOUNDS), level_step_m: float = 10.0, seed: int = 0,
-    whole: Correction | None = None, baselines: bool = True,
+    whole: Correction | None = None, baselines: bool = True, receive: bool = False,
 ) -> dict[str, Any]:  # fmt: skip
     """Every held-out design of the log (module docstring, step 5), scored: per design, its
     folds and, per method, the scores of single samples and of local means
     ([`score()`][rainuav.radio.measured.scores.score]). ``whole``: the correction of the
-    whole log (its hyperparameters are reused; fitted here if None)."""
+    whole log (its hyperparameters are reused; fitted here if None); ``receive``: the corrected
+    and calibrated maps fit the UAV's receive gain by elevation in every fold."""
     scn = rm.scenario
     step = level_step_m
     if whole is None:
-        whole = fit_correction(rm, log, prior, params=params, level_step_m=step, seed=seed)
+        whole = fit_correction(rm, log, prior, params=params, level_step_m=step, seed=seed,
+                               receive=receive)  # fmt: skip
     heights = _heights(rm, log)
     pts = np.column_stack([log.x_m, log.y_m, heights])
     z = log.z_m
@@ -375,7 +421,8 @@ def cross_validate_log(
             got["power"] = (calibrated_at(scn, te, prior[test], pw), np.full(len(te), loc),
                             np.full(len(te), smp))  # fmt: skip
             fc = fit_correction(rm, tr, prior[train], params=params, level_step_m=step,
-                                seed=seed, like=whole, max_points=CV_MAX_POINTS)  # fmt: skip
+                                seed=seed, like=whole, max_points=CV_MAX_POINTS,
+                                receive=receive)  # fmt: skip
             got["corrected"] = fc.predict(te, prior[test])
             got["calibrated"] = fc.predict(te, prior[test], fields=False, far=whole.fields)
             if baselines:
