@@ -10,7 +10,7 @@ pixels. The log: every ``--thin``-th sample of every flight (neighbouring sample
 are nearly the same draw), each flight its own ``flight``.
 
 Two held-out designs, both by rainuav's own cross-validation
-([`rainuav.radio.measured.correct.cross_validate_log`]): one flight (one height) left out at a
+([`rainuav.radio.measured.heldout.cross_validate_log`]): one flight (one height) left out at a
 time, the map fitted on the other four; and one of five stretches of every flight left out at a
 time. Per held-out height and per design, every method's scores on single samples and on 10 m
 local means: the prior (its spreads by mechanism), the prior with its power fitted, the
@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 from rainuav.radio.measured import read_log
 from rainuav.radio.measured.calibrate import prior_at
-from rainuav.radio.measured.correct import cross_validate_log
+from rainuav.radio.measured.heldout import cross_validate_log
 from rainuav.radio.measured.prior import excess_at, spreads_of
 from rainuav.radio.measured.scores import local_means, score
 from rainuav.radio.outputs.maps import build_radio_map

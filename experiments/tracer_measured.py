@@ -68,6 +68,7 @@ def main() -> None:
             "prior_off_corrected_db": float(np.median(np.abs(e[big]))),
             "within_one_sigma": float(np.mean(np.abs(e[m]) <= sd[m])),
             "within_two_sigma": float(np.mean(np.abs(e[m]) <= 2 * sd[m])),
+            "prior_off_within_one_sigma": float(np.mean(np.abs(e[big]) <= sd[big])),
             "prior_within_one_sigma": float(np.mean(np.abs(e0[m]) <= p_local[m])),
             "prior_within_two_sigma": float(np.mean(np.abs(e0[m]) <= 2 * p_local[m])),
         }  # fmt: skip
@@ -77,6 +78,8 @@ def main() -> None:
               f"prior is >8 dB off ({r['prior_off_pixels']} px) {r['prior_off_prior_db']:.1f} -> "
               f"{r['prior_off_corrected_db']:.1f} dB; corrected within one / two sigma "
               f"{100 * r['within_one_sigma']:.0f}% / {100 * r['within_two_sigma']:.0f}% "
+              f"({100 * r['prior_off_within_one_sigma']:.0f}% within one where the prior is >8 dB "
+              "off) "
               f"(the prior's spreads: {100 * r['prior_within_one_sigma']:.0f}% / "
               f"{100 * r['prior_within_two_sigma']:.0f}%)", flush=True)  # fmt: skip
     if args.json:

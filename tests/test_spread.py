@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from rainuav.radio import Area, build_radio_map, presets
 from rainuav.radio.measured import correct_map
-from rainuav.radio.measured.correct import designs
+from rainuav.radio.measured.heldout import designs
 from rainuav.radio.measured.outage import map_spreads, outage_probability
 from rainuav.radio.measured.prior import (
     SPREADS,
@@ -172,7 +172,7 @@ def test_a_physics_map_has_its_priors_spreads_by_mechanism(worlds) -> None:
 def test_the_held_out_line_says_how_many_rows_were_scored_and_never_fails_on_none() -> None:
     """A design where no row could be scored prints n/a, not a traceback; the count of rows
     scored is in the line."""
-    from rainuav.radio.measured.correct import held_out_line
+    from rainuav.radio.measured.heldout import held_out_line
 
     empty = {"samples": score([], []), "local_means": score([], [])}
     cv = {"stretch": {"folds": 1, "rows": 3} | dict.fromkeys(

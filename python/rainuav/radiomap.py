@@ -287,7 +287,7 @@ def _corrected(args: argparse.Namespace, rm: Any) -> Any:
         p.strip() for p in args.calibrate.split(",") if p.strip()
     ]  # fmt: skip
     from rainuav.radio.measured.calibrate import BOUNDS
-    from rainuav.radio.measured.correct import held_out_line
+    from rainuav.radio.measured.heldout import held_out_line
 
     for p in names:
         if p not in BOUNDS:

@@ -227,11 +227,6 @@ class CellFit:
         return dataclasses.asdict(self)
 
 
-def _soft_l1(r: np.ndarray) -> float:
-    z = (r / SOFT_L1_SCALE_DB) ** 2
-    return float(np.sum(2 * (np.sqrt(1 + z) - 1)))
-
-
 def _starts(names: list[str], resid: Any) -> list[np.ndarray]:
     """Where the fit starts: the database's values (no offset), and the ``STARTS`` best beam
     directions on a grid (tilt every degree, azimuth every 5), each with the power offset that
@@ -361,13 +356,11 @@ def calibrate(
             scan = _Fit(sub, pri[pick], meas[pick], names)
             x0 = min((scan.solve(s, SCAN_EVALUATIONS) for s in _starts(names, scan)),
                      key=lambda r: r.cost).x  # fmt: skip
-        # the optimum on the pattern tabulated every TABLE_STEP_DEG (every parameter's step in
-        # one batched evaluation), its residuals and Jacobian on the exact pattern
+        # the search on the table, the solution's residuals and Jacobian exact (docstring)
         tab = _Fit(_View(scn, site, cell, x, y, z, table=True), pri, meas, names)
         res = tab.solve(x0)
         r = view(res.x)
-        # the Gauss-Newton Jacobian of the soft-L1 cost, as least_squares reports it: each row
-        # weighted by sqrt(rho'(z) + 2 z rho''(z)) = (1 + z)^-3/4, z = (r / scale)^2
+        # each row weighted by sqrt(rho'(z) + 2 z rho''(z)) = (1 + z)^-3/4, as SciPy does
         z = (r / SOFT_L1_SCALE_DB) ** 2
         jac = _exact_jac(view, res.x, r) * ((1 + z) ** -0.75)[:, None]
         s = 1.4826 * float(np.median(np.abs(r - np.median(r))))

@@ -1,0 +1,150 @@
+"""What a log teaches about a map, in a form that predicts anywhere: the fitted site offsets, the
+receive gain by elevation, each cell's residual field and the spreads of the cells without one
+([`fit_correction()`][rainuav.radio.measured.fitting.fit_correction] returns a
+[`Correction`][rainuav.radio.measured.fitting.Correction]; steps 2-3 of
+[`rainuav.radio.measured.correct`][rainuav.radio.measured.correct])."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from rainuav.radio.measured.calibrate import BOUNDS, calibrate, calibrated_at, calibration_std_db
+from rainuav.radio.measured.log import MeasurementLog
+from rainuav.radio.measured.pattern import ElevationGain, elevation_deg, fit_gain
+from rainuav.radio.measured.residual import ResidualField, fit_residual, sample_spread
+from rainuav.radio.outputs.mapdata import RadioMap
+
+__all__ = ["MIN_FIELD_POINTS", "Correction", "fit_correction"]
+
+MIN_FIELD_POINTS = 10
+"""The fewest rows of a cell that give it a residual field."""
+
+
+def _take(log: MeasurementLog, m: np.ndarray) -> MeasurementLog:
+    return dataclasses.replace(
+        log, x_m=log.x_m[m], y_m=log.y_m[m], z_m=log.z_m[m], alt_m=log.alt_m[m],
+        cell=log.cell[m], rss_dbm=log.rss_dbm[m], flight=log.flight[m],
+        time_s=None if log.time_s is None else log.time_s[m],
+        sinr_db=None if log.sinr_db is None else log.sinr_db[m],
+    )  # fmt: skip
+
+
+def _heights(rm: RadioMap, log: MeasurementLog) -> np.ndarray:
+    return log.z_m if rm.scenario.area.msl else log.alt_m
+
+
+def _fields(
+    rm: RadioMap, log: MeasurementLog, resid: np.ndarray, step: float, seed: int,
+    like: dict[int, ResidualField] | None = None, max_points: int | None = None,
+) -> dict[int, ResidualField]:  # fmt: skip
+    a = rm.scenario.area
+    pts = np.column_stack([log.x_m, log.y_m, _heights(rm, log)])
+    extent = max(a.x_max_m - a.x_min_m, a.y_max_m - a.y_min_m)
+    out = {}
+    for c in np.unique(log.cell):
+        m = log.cell == c
+        if m.sum() < MIN_FIELD_POINTS or (like is not None and int(c) not in like):
+            continue
+        out[int(c)] = fit_residual(
+            pts[m], resid[m], size_m=a.resolution_m, step_m=step, extent_m=extent, seed=seed,
+            like=None if like is None else like[int(c)],
+            **({} if max_points is None else {"max_points": max_points}),
+        )  # fmt: skip
+    return out
+
+
+@dataclasses.dataclass
+class Correction:
+    """What a log says about a map: the fitted site offsets, each cell's residual field, and the
+    spreads of the cells it has no field for; a predictive distribution at any point
+    ([`predict()`][rainuav.radio.measured.fitting.Correction.predict])."""
+
+    scenario: Any
+    """The map's scenario."""
+    fits: list[Any]
+    """Per measured cell, the fitted offsets
+    ([`CellFit`][rainuav.radio.measured.calibrate.CellFit])."""
+    fields: dict[int, ResidualField]
+    """Per cell with enough rows, its residual field."""
+    other_local_db: float
+    """The local mean's deviation of a cell without a field, dB."""
+    other_sample_db: float
+    """One sample's deviation of a cell without a field, dB."""
+    msl: bool = False
+    """Whether the fields' height is above sea level (the map's altitude reference)."""
+    receive: ElevationGain | None = None
+    """The UAV's receive gain by elevation, where one was fitted
+    ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern])."""
+
+    def receive_at(self, log: MeasurementLog) -> np.ndarray:
+        """The receive gain at the rows of ``log``, dB (0 without one)."""
+        if self.receive is None:
+            return np.zeros(len(log))
+        return self.receive.at(elevation_deg(self.scenario, log.cell, log.x_m, log.y_m, log.z_m))
+
+    def predict(
+        self, log: MeasurementLog, prior: np.ndarray, *, fields: bool = True,
+        far: dict[int, ResidualField] | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+        """At the rows of ``log`` (their cells and positions) whose prior powers are ``prior``,
+        (N,): the corrected power, the local mean's and one sample's deviation, dB, (N,)
+        each. ``fields`` False: the calibrated map alone, each measured cell's local deviation
+        its field's far from every measurement (of ``far``'s fields, default its own)."""
+        scn = self.scenario
+        mean = calibrated_at(scn, log, prior, self.fits) + self.receive_at(log)
+        local = np.full(len(log), self.other_local_db)
+        sample = np.full(len(log), self.other_sample_db)
+        pts = np.column_stack([log.x_m, log.y_m, log.z_m if self.msl else log.alt_m])
+        for c, f in (self.fields if fields else (far or self.fields)).items():
+            m = log.cell == c
+            if not m.any():
+                continue
+            sample[m] = f.sample_db
+            if fields:
+                mean[m] += f.mean(pts[m])
+                local[m] = f.std(pts[m])
+            else:
+                local[m] = f.far_db
+        for fc in self.fits:
+            m = log.cell == fc.cell
+            if fc.offsets and m.any():
+                local[m] = np.hypot(
+                    local[m], calibration_std_db(scn, fc, log.x_m[m], log.y_m[m], log.z_m[m])
+                )
+        return mean, local, sample
+
+
+def fit_correction(
+    rm: RadioMap, log: MeasurementLog, prior: np.ndarray, *,
+    params: Sequence[str] = tuple(BOUNDS), level_step_m: float = 10.0, seed: int = 0,
+    like: Correction | None = None, max_points: int | None = None, receive: bool = False,
+) -> Correction:  # fmt: skip
+    """Steps 2-3 of the module docstring on ``log``, whose rows' prior powers are ``prior``:
+    the offsets, the fields and the spreads of the cells without one. ``like``: a correction
+    of more of the log whose hyperparameters to reuse (a cross-validation fold);
+    ``receive``: fit the UAV's receive gain by elevation before the fields
+    ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern])."""
+    scn = rm.scenario
+    fits = calibrate(scn, log, prior, params, near=None if like is None else like.fits)
+    resid = log.rss_dbm - calibrated_at(scn, log, prior, fits)
+    gain = None
+    if receive:
+        el = elevation_deg(scn, log.cell, log.x_m, log.y_m, log.z_m)
+        gain = fit_gain(el, resid)
+        resid = resid - gain.at(el)
+    fields = _fields(rm, log, resid, level_step_m, seed,
+                     None if like is None else like.fields, max_points)  # fmt: skip
+    pooled = float(np.sqrt(np.mean((log.rss_dbm - prior) ** 2)))
+    if like is not None:
+        sample = like.other_sample_db
+    elif fields:
+        sample = float(np.sqrt(np.mean([f.sample_db**2 for f in fields.values()])))
+    else:
+        h = _heights(rm, log)
+        sample = sample_spread(log.x_m, log.y_m, h, resid, scn.area.resolution_m, level_step_m)
+        sample = 0.0 if not np.isfinite(sample) else sample
+    return Correction(scn, fits, fields, pooled, sample, bool(scn.area.msl), gain)
