@@ -807,3 +807,33 @@ def test_scenario_file_weather_is_used_as_written(tmp_path: Path) -> None:
     assert (rained.kind, rained.rain_rate_mm_h, rained.dsd) == ("homogeneous", 5.0, cells.dsd)
     # The paper preset keeps its own 25 mm/h by default.
     assert make_scenario(TrainConfig()).medium.rain_rate_mm_h == 25.0
+
+
+def test_a_diverged_training_stops_in_one_line_and_saves_nothing_non_finite(tmp_path: Path) -> None:
+    """A learning rate of 1e8 without gradient clipping, an MSE loss and rewards scaled up 1000
+    times (the settings a user who met this had) blows the loss up within the first gradient
+    steps: the run stops with TrainingDivergedError naming the step and the settings, leaves no
+    policy.pt or metrics.json, and every checkpoint it did write holds finite weights. A
+    checkpoint or policy of NaN weights is refused on load and on save, naming the entry."""
+    from rainuav.errors import InvalidInputError, TrainingDivergedError
+
+    base = plumbing_cfg(tmp_path / "run", 40)
+    cfg = dataclasses.replace(base, checkpoint_every=5, dqn=dataclasses.replace(
+        base.dqn, lr=1e8, lr_final=0.0, grad_clip=0.0, loss="mse", reward_scale=0.001,
+        learning_starts=64,
+    ))  # fmt: skip
+    with pytest.raises(
+        TrainingDivergedError, match=r"diverged at gradient step \d+.*dqn\.lr 1e\+08"
+    ):
+        train(*in_world(cfg, synthetic_map()), progress=False)
+    run = tmp_path / "run"
+    assert not (run / "policy.pt").exists() and not (run / "metrics.json").exists()
+    if (run / "checkpoint.pt").exists():
+        checkpoint.load(run / "checkpoint.pt")  # finite, or it would be refused
+    bad = {"online": {"w": torch.tensor([1.0, float("nan")])}, "config": {}}
+    with pytest.raises(TrainingDivergedError, match=r"online\.w holds NaN"):
+        checkpoint.save(tmp_path / "nan.pt", bad)
+    assert not (tmp_path / "nan.pt").exists()
+    torch.save(bad, tmp_path / "nan.pt")  # written by hand, as a damaged file would be
+    with pytest.raises(InvalidInputError, match=r"nan\.pt: refused \(online\.w holds NaN"):
+        checkpoint.load(tmp_path / "nan.pt")

@@ -15,6 +15,11 @@ class InvalidInputError(RainuavError, ValueError):
     The message names the argument and the allowed range."""
 
 
+class TrainingDivergedError(InvalidInputError):
+    """A training's loss, weights or returns stopped being finite: the message names the step
+    and the settings that usually cause it; nothing non-finite was saved."""
+
+
 class WriteError(RainuavError, OSError):
     """A file could not be written (a full disk, a folder that is not writable): the message
     names the file, the reason and the free space; the earlier copy of the file is kept."""

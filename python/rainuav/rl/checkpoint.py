@@ -8,7 +8,12 @@ tensor}`` (a numpy scalar as a 0-d one) and restored bit for bit by
 torch's restricted unpickler, which builds tensors and plain containers and refuses any other
 global. A file that needs more (a pickle that would call a function, a class, an older checkpoint
 holding raw numpy objects) or that is not a checkpoint at all (empty, truncated, random bytes) is
-refused with one line naming the file."""
+refused with one line naming the file.
+
+Nothing non-finite is saved or loaded: a floating-point tensor or array holding a NaN or an
+infinity (a diverged training's weights) makes [`save()`][rainuav.rl.checkpoint.save] raise
+[`TrainingDivergedError`][rainuav.errors.TrainingDivergedError] before anything is written, and
+[`load()`][rainuav.rl.checkpoint.load] refuse the file, naming the entry."""
 
 from __future__ import annotations
 
@@ -20,9 +25,9 @@ import numpy as np
 import torch
 
 from rainuav._io import write_atomic
-from rainuav.errors import InvalidInputError
+from rainuav.errors import InvalidInputError, TrainingDivergedError
 
-__all__ = ["from_plain", "load", "save", "to_plain"]
+__all__ = ["from_plain", "load", "non_finite", "save", "to_plain"]
 
 _ARRAY = "__ndarray__"
 
@@ -59,8 +64,40 @@ def from_plain(obj: Any) -> Any:
     return obj
 
 
+def non_finite(obj: Any, where: str = "") -> str | None:
+    """The dotted name of the first floating-point tensor or array in ``obj`` holding a NaN or an
+    infinity, or None (plain numbers are a run's records, not weights: not checked)."""
+    if isinstance(obj, torch.Tensor):
+        if obj.is_floating_point() or obj.is_complex():
+            return None if bool(torch.isfinite(obj).all()) else where or "the value"
+        return None
+    if isinstance(obj, np.ndarray | np.generic):
+        a = np.asarray(obj)
+        if np.issubdtype(a.dtype, np.inexact) and not np.isfinite(a).all():
+            return where or "the value"
+        return None
+    if isinstance(obj, dict):
+        items: Any = obj.items()
+    elif isinstance(obj, list | tuple):
+        items = enumerate(obj)
+    else:
+        return None
+    for k, v in items:
+        got = non_finite(v, f"{where}.{k}" if where else str(k))
+        if got is not None:
+            return got
+    return None
+
+
 def save(path: str | os.PathLike[str], state: dict[str, Any]) -> Path:
-    """Writes ``state`` (tensors, numpy arrays and plain values) to ``path`` atomically."""
+    """Writes ``state`` (tensors, numpy arrays and plain values) to ``path`` atomically; refused,
+    nothing written, where a tensor or array is not finite (module docstring)."""
+    bad = non_finite(state)
+    if bad is not None:
+        raise TrainingDivergedError(
+            f"{Path(path).name}: not written: {bad} holds NaN or infinite values (the training "
+            "diverged: lower dqn.lr, keep dqn.grad-clip above 0, or use the huber loss)"
+        )
     plain = to_plain(state)
     return write_atomic(path, lambda tmp: torch.save(plain, tmp))
 
@@ -86,6 +123,11 @@ def load(
     if missing:
         raise InvalidInputError(
             f"{what} {p}: refused (no {missing[0]!r}; not written by this rainuav version?)"
+        )
+    bad = non_finite(state)
+    if bad is not None:
+        raise InvalidInputError(
+            f"{what} {p}: refused ({bad} holds NaN or infinite values: a diverged training's)"
         )
     return from_plain(state)
 

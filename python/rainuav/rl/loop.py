@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -32,7 +33,7 @@ import numpy as np
 import tomli_w
 
 from rainuav._io import FolderLock, check_out_dir, write_atomic
-from rainuav.errors import InvalidInputError
+from rainuav.errors import InvalidInputError, TrainingDivergedError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.radio.scene.storms import check_storm_seed
 from rainuav.rl import checkpoint
@@ -319,8 +320,22 @@ def update(run: RunState, moves: int) -> None:
     for _ in range(run.pending // every):
         loss = run.agent.learn()
         if loss is not None:
+            if not math.isfinite(loss):
+                raise diverged(run.agent, loss)
             run.losses.append(loss)
     run.pending %= every
+
+
+def diverged(agent: Agent, loss: float) -> TrainingDivergedError:
+    """The one-line error of a training whose loss stopped being finite: the gradient step and
+    the settings that usually cause it."""
+    c = agent.cfg
+    return TrainingDivergedError(
+        f"training diverged at gradient step {agent.updates}: the loss is {loss} (dqn.lr "
+        f"{c.lr:g}, dqn.grad-clip {c.grad_clip:g}, dqn.loss {c.loss}, dqn.reward-scale "
+        f"{c.reward_scale:g}); lower dqn.lr, keep dqn.grad-clip above 0 or use the huber loss. "
+        "Nothing of this step was saved"
+    )
 
 
 def finish(
