@@ -1053,6 +1053,82 @@ def test_the_default_height_is_a_flag(tmp_path, capsys) -> None:
         assert not (out / "radiomap.npz").exists()
 
 
+def test_an_episode_longer_than_any_command_allows_is_refused_where_it_is_read(tmp_path, capsys):
+    """``train --task.max-steps`` past 100 000 was a hang at 0%: one range for every command."""
+    for value in ("1000000000000", "200000", "0"):
+        rc, err = run_cli(train, ["--task.max-steps", value, "--out", tmp_path / "x"], capsys)
+        refused(f"train --task.max-steps {value}", rc, err, "max_steps must be within 1..100000")
+        assert not (tmp_path / "x").exists()
+
+
+def test_deeply_nested_json_is_one_line(run_copy, tmp_path, capsys) -> None:
+    """A fit_json nested 100 000 deep inside radiomap.npz, a GeoJSON as deep to --footprints:
+    a RecursionError before; one line now."""
+    deep = "[" * 100_000 + "]" * 100_000
+    rm = RadioMap.load(run_copy / "radiomap.npz")
+    path = rm.save(tmp_path / "deep.npz")
+    data = dict(np.load(path))
+    data["fit_json"] = np.asarray(deep)
+    np.savez(path, **data)
+    api_refused("radiomap.npz with a deep fit_json", lambda: RadioMap.load(path), "fit_json")
+    geo = tmp_path / "deep.geojson"
+    geo.write_text(deep)
+    from rainuav.radio.scene.scenario import Origin
+
+    toml = tiny_scenario().replace(origin=Origin(47.37, 8.54)).to_toml(tmp_path / "s.toml")
+    rc, err = run_cli(radiomap, ["--config", toml, "--footprints", geo, "--no-cache",
+                                 "--out", tmp_path / "o"], capsys)  # fmt: skip
+    refused("radiomap --footprints deep.geojson", rc, err, "deep.geojson")
+
+
+def test_a_preset_chain_too_long_or_beside_its_base(tmp_path, capsys) -> None:
+    """An ``extends`` chain of 1 100 presets was a RecursionError; a preset's ``extends`` is read
+    beside the preset (``p/a.toml`` extending ``b.toml`` finds ``p/b.toml``)."""
+    from rainuav.rl.config import MAX_EXTENDS, preset_fields
+
+    chain = tmp_path / "chain"
+    chain.mkdir()
+    for k in range(MAX_EXTENDS + 5):
+        (chain / f"p{k}.toml").write_text(f'extends = "p{k + 1}.toml"\n' if k < MAX_EXTENDS + 4
+                                          else "[dqn]\nlr = 1e-4\n")  # fmt: skip
+    api_refused("a preset chain of 105", lambda: preset_fields(chain / "p0.toml"), "extends chains")
+    near = tmp_path / "p"
+    near.mkdir()
+    (near / "b.toml").write_text("[dqn]\nlr = 2e-4\n")
+    (near / "a.toml").write_text('extends = "b.toml"\n[dqn]\ngamma = 0.97\n')
+    got = preset_fields(near / "a.toml")
+    assert got["dqn.lr"] == 2e-4 and got["dqn.gamma"] == 0.97
+    accepted("a preset extending its neighbour by name")
+
+
+@pytest.mark.parametrize("how", ["random bytes", "a folder", "tb a file"])
+def test_a_resumed_run_with_a_spoiled_log_is_one_line(run_copy, tmp_path, capsys, how) -> None:
+    """``train --resume`` with ``log.csv`` of random bytes, ``log.csv`` a folder or ``tb`` a plain
+    file: a UnicodeDecodeError, IsADirectoryError or FileExistsError before."""
+    log, tb = run_copy / "log.csv", run_copy / "tb"
+    if how == "random bytes":
+        log.write_bytes(np.random.default_rng(0).bytes(4000))
+    elif how == "a folder":
+        log.unlink()
+        log.mkdir()
+    else:
+        shutil.rmtree(tb, ignore_errors=True)
+        tb.write_text("not a folder")
+    m = train_run  # the API, as the command calls it
+    api_refused(f"--resume with {how}", lambda: m(*saved_world(plumbing_cfg(run_copy, 20)),
+                                                  resume=True, progress=False),
+                "log" if how != "tb a file" else "tb")  # fmt: skip
+
+
+def test_calibrate_without_measurements_is_refused(tmp_path, capsys) -> None:
+    """``radiomap --calibrate foo`` without ``--measurements`` was silently ignored."""
+    toml = tiny_scenario().to_toml(tmp_path / "s.toml")
+    for flag in (["--calibrate", "power_db"], ["--receive-pattern", "elevation"]):
+        rc, err = run_cli(radiomap, ["--config", toml, *flag, "--out", tmp_path / "o"], capsys)
+        refused(f"radiomap {flag[0]} alone", rc, err, flag[0], "--measurements")
+        assert not (tmp_path / "o").exists()
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():

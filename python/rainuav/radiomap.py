@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
         "(rainuav.radio.measured); writes fit.json",
     )  # fmt: skip
     ap.add_argument(
-        "--calibrate", default="power_db,tilt_deg,azimuth_deg,height_m", metavar="NAMES",
+        "--calibrate", default=None, metavar="NAMES",
         help="with --measurements: the site parameters fitted per cell, comma-separated, or "
         "'none' (default: all four)",
     )  # fmt: skip
@@ -228,6 +228,9 @@ def _build(args: argparse.Namespace) -> int:
         band = _cli.altitude_band(args.altitudes_m)
         scn = scn.replace(area=dataclasses.replace(scn.area, altitudes_m=band))
         scn.area.check()
+    if args.measurements is None and (args.calibrate is not None or args.receive_pattern != "off"):
+        flag = "--calibrate" if args.calibrate is not None else "--receive-pattern"
+        raise InvalidInputError(f"{flag} fits a map to a log: give the log with --measurements")
     if args.measurements is not None and (
         scn.area.altitudes_m or args.duration_s is not None or args.slice_s is not None
     ):
@@ -283,8 +286,11 @@ def _corrected(args: argparse.Namespace, rm: Any) -> Any:
     the cross-validated error)."""
     from rainuav.radio.measured import correct_map, read_log
 
-    names = [] if args.calibrate.strip() == "none" else [
-        p.strip() for p in args.calibrate.split(",") if p.strip()
+    given = (
+        args.calibrate if args.calibrate is not None else "power_db,tilt_deg,azimuth_deg,height_m"
+    )
+    names = [] if given.strip() == "none" else [
+        p.strip() for p in given.split(",") if p.strip()
     ]  # fmt: skip
     from rainuav.radio.measured.calibrate import BOUNDS
     from rainuav.radio.measured.heldout import held_out_line

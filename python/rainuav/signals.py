@@ -290,6 +290,6 @@ def _signal_meta(data: dict[str, np.ndarray]) -> dict[str, Any] | None:
         return None
     try:
         meta = json.loads(str(raw))
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, RecursionError):
         return None
     return meta if isinstance(meta, dict) and meta.get("format") == FORMAT else None

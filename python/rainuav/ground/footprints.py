@@ -240,6 +240,8 @@ def read_footprints(
             data = json.load(f)
     except (UnicodeDecodeError, json.JSONDecodeError) as err:
         raise InvalidInputError(f"{what}: not JSON ({err})") from None
+    except RecursionError:  # nested deeper than any footprint file
+        raise InvalidInputError(f"{what}: nested too deeply to be GeoJSON footprints") from None
     except OSError as err:
         raise InvalidInputError(f"{what}: cannot be read ({err.strerror})") from err
     if not isinstance(data, dict) or data.get("type") not in ("FeatureCollection", "Feature"):

@@ -32,6 +32,7 @@ import numpy as np
 from rainuav.errors import InvalidInputError
 
 __all__ = [
+    "MAX_STEPS",
     "MOVES",
     "REWARDS",
     "SIGNALS",
@@ -53,6 +54,11 @@ MOVES = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]], dtype=np.int64)
 
 class LoiteringWarning(UserWarning):
     """The 'linear' reward pays the UAV to hover near a base station."""
+
+
+MAX_STEPS = 100_000
+"""The most moves an episode may last (the exact planner's bound too: one range for every
+command, checked where the task is read)."""
 
 
 @dataclass
@@ -118,9 +124,13 @@ def check_task(cfg: NavConfig, prefix: str = "") -> None:
         v = getattr(cfg, name)
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise InvalidInputError(f"{prefix}{name} must be finite and > 0 (got {v!r})")
-    if not (isinstance(cfg.max_steps, (int, np.integer)) and cfg.max_steps >= 1):
+    if not (
+        isinstance(cfg.max_steps, (int, np.integer))
+        and not isinstance(cfg.max_steps, bool)
+        and 1 <= cfg.max_steps <= MAX_STEPS
+    ):
         v = cfg.max_steps
-        raise InvalidInputError(f"{prefix}max_steps must be an integer >= 1 (got {v!r})")
+        raise InvalidInputError(f"{prefix}max_steps must be within 1..{MAX_STEPS} (got {v!r})")
     for name in ("mu", "min_db", "goal_reward", "out_of_bounds_penalty"):
         v = getattr(cfg, name)
         if name == "min_db" and v is None:

@@ -20,6 +20,7 @@ from rainuav.nav.task import NavConfig
 from rainuav.world import WorldSpec, check_spec
 
 __all__ = [
+    "MAX_EXTENDS",
     "PRESET_DIR",
     "RENAMED",
     "SECTIONS",
@@ -319,6 +320,10 @@ def flat_fields(data: dict[str, Any], where: str) -> dict[str, Any]:
     return out
 
 
+MAX_EXTENDS = 100
+"""The most presets one ``extends`` chain may link."""
+
+
 def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict[str, Any]:
     """The fields a preset sets, flat (``"scenario"``, ``"dqn.lr"``): a shipped preset by name
     ([`preset_names()`][rainuav.rl.config.preset_names]) or a TOML file of the form of a run's
@@ -334,6 +339,14 @@ def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict
     base = data.pop("extends", None)
     if base is not None and (not isinstance(base, str) or base in (*_seen, text)):
         raise InvalidInputError(f"preset {path}: extends must name another preset (got {base!r})")
+    if base is not None and len(_seen) + 1 >= MAX_EXTENDS:
+        raise InvalidInputError(
+            f"preset {path}: extends chains more than {MAX_EXTENDS} presets (join some)"
+        )
+    if base is not None and base not in preset_names() and not Path(base).is_absolute():
+        near = path.parent / base  # a preset's extends is read from the preset's own folder
+        if near.is_file():
+            base = str(near)
     fields = {} if base is None else preset_fields(base, (*_seen, text))
     return {**fields, **flat_fields(data, f"preset {path}")}
 

@@ -7,6 +7,7 @@ import csv
 from pathlib import Path
 
 from rainuav._io import write_atomic
+from rainuav.errors import InvalidInputError
 
 __all__ = ["RunLog", "cut_log"]
 
@@ -14,9 +15,18 @@ __all__ = ["RunLog", "cut_log"]
 def cut_log(path: Path, done: int) -> None:
     """Cuts ``log.csv`` back to the episodes a checkpoint holds (``finished <= done``): the
     rows an interrupted run logged after its last checkpoint are logged again on resume.
-    Rewritten atomically; a row that does not parse ends the kept part."""
-    with path.open(newline="") as fh:
-        rows = list(csv.reader(fh))
+    Rewritten atomically; a row that does not parse ends the kept part; a log that is not a
+    readable text file is refused in one line."""
+    if not path.is_file():
+        raise InvalidInputError(f"--resume: {path} is not a file (the run's log.csv)")
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            rows = list(csv.reader(fh))
+    except (UnicodeDecodeError, csv.Error) as err:
+        raise InvalidInputError(
+            f"--resume: {path} is not the run's log (not CSV text: {type(err).__name__}); "
+            "move it away to start a new log"
+        ) from None
     keep = rows[:1]
     for row in rows[1:]:
         try:
@@ -40,8 +50,12 @@ class RunLog:
     def __init__(self, out: Path, resume: bool, total: int, done: int, progress: bool) -> None:
         from torch.utils.tensorboard import SummaryWriter
 
-        self.tb = SummaryWriter(str(out / "tb"))
-        path = out / "log.csv"
+        tb, path = out / "tb", out / "log.csv"
+        for p, folder, what in ((tb, True, "TensorBoard scalars"), (path, False, "log")):
+            if p.exists() and p.is_dir() != folder:
+                kind = "folder" if folder else "file"
+                raise InvalidInputError(f"{p} must be a {kind} (the run's {what}); move it away")
+        self.tb = SummaryWriter(str(tb))
         new = not (resume and path.exists())
         if not new:
             cut_log(path, done)

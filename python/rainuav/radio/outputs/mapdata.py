@@ -208,7 +208,7 @@ def _fit_of(path: Any, raw: np.ndarray | None) -> dict[str, Any] | None:
         return None
     try:
         fit = json.loads(str(raw)) if raw.dtype.kind == "U" else None
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, RecursionError):  # not JSON, or nested deeper than a fit
         fit = None
     if not isinstance(fit, dict):
         raise InvalidInputError(f"{path}: fit_json is not a JSON object")
