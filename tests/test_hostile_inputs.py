@@ -17,6 +17,7 @@ and during a study) are in ``benches/hostile_corpus.py``.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import os
 import re
@@ -1127,6 +1128,45 @@ def test_calibrate_without_measurements_is_refused(tmp_path, capsys) -> None:
         rc, err = run_cli(radiomap, ["--config", toml, *flag, "--out", tmp_path / "o"], capsys)
         refused(f"radiomap {flag[0]} alone", rc, err, flag[0], "--measurements")
         assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("how", ["emptied", "another goal"])
+def test_a_config_that_is_not_the_runs_is_refused_by_evaluate(run_copy, capsys, how) -> None:
+    """``config.toml`` emptied (read as the defaults before: another goal, 200 starts) or edited
+    to another goal: the checkpoint's own record of the configuration differs, so evaluate
+    refuses naming config.toml and what differs."""
+    cfg = run_copy / "config.toml"
+    if how == "emptied":
+        cfg.write_text("")
+    else:
+        cfg.write_text(re.sub(r"goal_m = \[[^]]*\]", "goal_m = [100.0, 100.0]", cfg.read_text()))
+    rc, err = run_cli(evaluate, [run_copy], capsys)
+    refused(f"evaluate with config.toml {how}", rc, err, "config.toml", "differs from")
+    assert not (run_copy / "evaluation.json").exists()
+
+
+@pytest.mark.parametrize("how", ["another map of the same area", "an extent of 1e9 m"])
+def test_a_map_swapped_into_a_run_is_refused_by_evaluate_and_resume(run_copy, capsys, how):
+    """Another map of the same area swapped into a run let --resume carry on, and a map with its
+    extent crafted to 1e9 m was evaluated: the checkpoint records what the run flies, and both
+    refuse naming radiomap.npz."""
+    path = run_copy / "radiomap.npz"
+    rm = RadioMap.load(path)
+    if how.startswith("another"):
+        rm = dataclasses.replace(
+            rm, sir_db=np.roll(rm.sir_db, 7, 1), sinr_db=np.roll(rm.sinr_db, 7, 1)
+        )
+        rm.save(path)
+    else:
+        data = dict(np.load(path))
+        data["extent_m"] = np.array([0.0, 1e9, 0.0, 1e9])
+        np.savez(path, **data)
+    rc, err = run_cli(evaluate, [run_copy], capsys)
+    refused(f"evaluate with {how}", rc, err, "radiomap.npz")
+    assert not (run_copy / "evaluation.json").exists()
+    api_refused(f"--resume with {how}",
+                lambda: train_run(*saved_world(plumbing_cfg(run_copy, 20)), resume=True,
+                                  progress=False), "radiomap.npz")  # fmt: skip
 
 
 def test_the_corpus_totals(capsys) -> None:

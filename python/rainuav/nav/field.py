@@ -34,6 +34,7 @@ __all__ = [
     "SignalSeries",
     "SirField",
     "blocked_at",
+    "field_digest",
     "pixel_index",
     "read_signal",
 ]
@@ -408,3 +409,20 @@ SignalBank = SignalField.bank
 
 SirField = SignalField
 """The old name (the field is whichever signal the task flies on)."""
+
+
+def field_digest(field: SignalField) -> str:
+    """A digest of what a field flies (its values, area, instants, levels and closed pixels):
+    a run records it, so that a map swapped into its folder is refused, not flown."""
+    import hashlib
+
+    h = hashlib.sha256()
+    levels = [] if field.altitudes_m is None else field.altitudes_m
+    closed = [] if field.not_flyable is None else field.not_flyable
+    extent = np.asarray(field.extent, dtype=np.float64)
+    for a in (field.values, extent, field.t_s, np.asarray(levels, np.float64),
+              np.asarray(closed, bool)):  # fmt: skip
+        arr = np.ascontiguousarray(a)
+        h.update(str((arr.dtype.str, arr.shape)).encode())
+        h.update(arr.tobytes())
+    return h.hexdigest()

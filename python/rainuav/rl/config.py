@@ -23,6 +23,7 @@ __all__ = [
     "MAX_EXTENDS",
     "PRESET_DIR",
     "RENAMED",
+    "RESUME_MAY_DIFFER",
     "SECTIONS",
     "DQNConfig",
     "TrainConfig",
@@ -404,6 +405,14 @@ def read_config(path: str | Path) -> dict[str, Any]:
 def load_config(path: str | Path) -> TrainConfig:
     """A TrainConfig from a TOML file (a run's ``config.toml``): its fields over its preset's."""
     return resolve_config(read_config(path))
+
+
+RESUME_MAY_DIFFER = ("device", "out", "time_budget_s")
+"""Fields a resumed run may change (the rest must equal the checkpoint's): the device, the
+folder's path (a run folder moved or copied elsewhere resumes where it now is; its results do
+not depend on where it lives) and the wall-clock budget (a run its budget stopped, on a slower
+machine, continues with a larger one to the episodes it was given, as if it had never
+stopped)."""
 
 
 def config_diff(saved: dict[str, Any], cfg: TrainConfig, ignore: tuple[str, ...] = ()) -> list[str]:

@@ -20,14 +20,17 @@ import torch
 from rainuav._checks import check_integer
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.field import field_digest
 from rainuav.radio.outputs.maps import RadioMap
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import (
     MAX_SEED,
     MAX_STARTS,
+    RESUME_MAY_DIFFER,
     TrainConfig,
     check_config,
+    config_diff,
     load_config,
 )
 from rainuav.rl.dqn import Agent
@@ -43,6 +46,7 @@ from rainuav.world import World, load_world, task_of, world_from
 
 __all__ = [
     "Validation",
+    "check_map_digest",
     "eval_starts",
     "evaluate",
     "evaluate_run_policy",
@@ -218,6 +222,19 @@ def load_agent(
     return agent, episodes, seconds
 
 
+def check_map_digest(state: dict[str, Any], field: Any, run: Path) -> None:
+    """Refuses a run folder whose map is not the one its checkpoint ``state`` was trained on
+    (a map swapped in, or crafted: [`field_digest()`][rainuav.nav.field.field_digest]); a
+    checkpoint that records none (an earlier release) passes."""
+    want = state.get("map_digest")
+    if isinstance(want, str) and want != field_digest(field):
+        raise InvalidInputError(
+            f"{run / 'radiomap.npz'}: refused (not the map this run was trained on: its digest "
+            "differs from the checkpoint's; put the run's own map back, or fly another map with "
+            "evaluate --scenario)"
+        )
+
+
 def evaluate_saved_run(
     run_dir: Path,
     device: str = "cpu",
@@ -255,10 +272,19 @@ def evaluate_saved_run(
     # Read (as data, never code) before any map is read: a bad file is refused at once.
     path = run / "checkpoint.pt"
     state = checkpoint.load(path, ("agent", "returns", "train_seconds"))
+    if isinstance(state.get("config"), dict):  # the run's own record of its configuration
+        diff = config_diff(state["config"], cfg, ignore=RESUME_MAY_DIFFER)
+        if diff:
+            raise InvalidInputError(
+                f"{run / 'config.toml'}: refused (differs from the configuration {path.name} "
+                f"was trained with, in {len(diff)} field(s): {'; '.join(diff[:3])}"
+                f"{'; ...' if len(diff) > 3 else ''}: edited, emptied or from another run)"
+            )
     if world is not None and radio_map is not None:
         raise InvalidInputError("give world or radio_map, not both")
     if callable(world):
         world = world(cfg)
+    own = False
     try:
         if radio_map is not None:
             world = world_from(radio_map, task_of(cfg))
@@ -273,10 +299,13 @@ def evaluate_saved_run(
                 raise InvalidInputError(
                     f"{run}: missing radiomap.npz; is this a rainuav.train output?"
                 )
+            own = True
         env = world.env()
     except InvalidInputError as err:
         where = run / "config.toml"
         raise InvalidInputError(f"{where}: does not fit the world flown: {err}") from err
+    if own:
+        check_map_digest(state, env.field, run)
     agent, episodes, seconds = load_agent(path, state, cfg, env, device, online)
     agent.cfg.shield = shield
     n = cfg.eval_starts if starts is None else starts

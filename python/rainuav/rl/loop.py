@@ -48,6 +48,7 @@ from rainuav.rl.callbacks import (
 )
 from rainuav.rl.collect import Lanes
 from rainuav.rl.config import (
+    RESUME_MAY_DIFFER,
     TrainConfig,
     check_config,
     config_diff,
@@ -57,6 +58,7 @@ from rainuav.rl.config import (
 from rainuav.rl.dqn import Agent
 from rainuav.rl.evaluation import (
     Validation,
+    check_map_digest,
     eval_starts,
     evaluate_run_policy,
 )
@@ -78,13 +80,6 @@ __all__ = [
     "train",
     "update",
 ]
-
-RESUME_MAY_DIFFER = ("device", "out", "time_budget_s")
-"""Fields a resumed run may change (the rest must equal the checkpoint's): the device, the
-folder's path (a run folder moved or copied elsewhere resumes where it now is; its results do
-not depend on where it lives) and the wall-clock budget (a run its budget stopped, on a slower
-machine, continues with a larger one to the episodes it was given, as if it had never
-stopped)."""
 
 
 # -- setup ------------------------------------------------------------------------------------
@@ -157,6 +152,8 @@ def train(
         world.save(out)
         write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
         env = world.env()
+        if saved is not None and world.pool is None:
+            check_map_digest(saved, env.field, out)
         # A storm pool's run is checked, validated and evaluated on a validation storm, with
         # the task's fixed destination.
         ref_env = None
