@@ -1169,6 +1169,14 @@ def test_a_map_swapped_into_a_run_is_refused_by_evaluate_and_resume(run_copy, ca
                                   progress=False), "radiomap.npz")  # fmt: skip
 
 
+def test_a_negative_coordinate_is_read_as_typed(tmp_path, capsys) -> None:
+    """``--task.goal-m -500,300`` ended in "expected one argument" (argparse took the value for
+    an option); read as typed, it is refused for what it is: outside the area."""
+    rc, err = run_cli(train, ["--task.goal-m", "-500,300", "--out", tmp_path / "x"], capsys)
+    refused("train --task.goal-m -500,300", rc, err, "goal_m must lie inside the area", "-500")
+    assert "expected one argument" not in err and not (tmp_path / "x").exists()
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():

@@ -183,6 +183,13 @@ def test_bad_rows_are_counted_and_skipped(worlds, tmp_path) -> None:
     assert sorted(log.skipped.values()) == [1, 1, 1, 1, 1]
     assert log.rss_dbm[0] == pytest.approx(rss_from_rsrp(-90.0, scn.bandwidth_hz))
     assert "2 of 7 rows used" in log.summary()
+    # short rows are short, not duplicates of each other; heights below the ground or beyond
+    # 3 000 m are the log's alt_m, not the map's altitude
+    more = [*rows, "100,100", "100,100", "150,150,-45,0,-90,0,x", "150,150,1e6,0,-90,0,x"]
+    log = read_log(_write(tmp_path / "log2.csv", "x_m,y_m,alt_m,cell,rsrp_dbm,sinr,time", more),
+                   scn)  # fmt: skip
+    assert log.skipped["short rows (fewer fields than the header)"] == 2
+    assert log.skipped["alt_m outside 0..3000 m above the ground"] == 2 and len(log) == 2
 
 
 def test_a_log_with_no_usable_row_or_of_another_place_is_refused(worlds, tmp_path) -> None:

@@ -14,7 +14,14 @@ from typing import Any
 
 from rainuav.errors import CacheWarning, InvalidInputError, WriteError
 
-__all__ = ["altitude_band", "attach_negative_values", "earlier_name", "plain_help", "run"]
+__all__ = [
+    "altitude_band",
+    "attach_negative_values",
+    "earlier_name",
+    "metre_flags",
+    "plain_help",
+    "run",
+]
 
 _NUMBERS = re.compile(r"^-(\d|\.\d)[\d.eE+\-]*(,\s*[+\-]?(\d|\.\d)[\d.eE+\-]*)*$")
 """A value that starts with a minus sign and is a number or a comma-separated list of them
@@ -39,6 +46,12 @@ def attach_negative_values(argv: Sequence[str] | None, flags: Sequence[str]) -> 
             out.append(a)
             i += 1
     return out
+
+
+def metre_flags(ap: argparse.ArgumentParser) -> list[str]:
+    """The options of ``ap`` that take metres (their names end in ``-m``): a coordinate there may
+    be negative, so [`attach_negative_values()`][rainuav._cli.attach_negative_values] joins it."""
+    return [s for s in ap._option_string_actions if s.startswith("--") and s.endswith(("-m", "_m"))]
 
 
 def _one_line(message: Any, category: type[Warning], *_: Any, **__: Any) -> None:

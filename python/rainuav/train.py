@@ -241,7 +241,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if "--help-all" in argv:
         build_parser(show_all=True).print_help()
         return 0
-    args = build_parser().parse_args(argv)
+    ap = build_parser()
+    args = ap.parse_args(_cli.attach_negative_values(argv, _cli.metre_flags(ap)))
     out: list[Path] = []  # the run's folder, once its configuration is known
 
     def kept() -> str:

@@ -27,8 +27,9 @@ resource blocks in the bandwidth ``B`` at subcarrier spacing ``Delta f`` (LTE's 
 
 **Bad rows** are counted by reason and skipped: a missing or non-numeric value, a point off the
 area, an unknown cell, an RSRP outside -160..-20 dBm (RSS: that range moved by the same
-conversion), and exact duplicates of an earlier row. A file with no usable row is refused in one
-line saying why the rows went."""
+conversion), a receiver below the ground or more than 3 000 m above it (``alt_m``), a row with
+fewer fields than the header, and exact duplicates of an earlier row. A file with no usable
+row is refused in one line saying why the rows went."""
 
 from __future__ import annotations
 
@@ -50,10 +51,20 @@ from rainuav.errors import InvalidInputError
 from rainuav.radio.scene.scenario import Scenario
 from rainuav.radio.scene.terrain import surface_at
 
-__all__ = ["ALIASES", "MAX_ROWS", "RSRP_RANGE_DBM", "MeasurementLog", "read_log", "rss_from_rsrp"]
+__all__ = [
+    "ALIASES",
+    "MAX_HEIGHT_M",
+    "MAX_ROWS",
+    "RSRP_RANGE_DBM",
+    "MeasurementLog",
+    "read_log",
+    "rss_from_rsrp",
+]
 
 RSRP_RANGE_DBM = (-160.0, -20.0)
 """The RSRP a log may report, dBm (3GPP TS 36.133 reports -156..-31)."""
+MAX_HEIGHT_M = 3000.0
+"""The highest a logged receiver may fly above the ground, m (a map's highest flight level)."""
 MAX_ROWS = 2_000_000
 """The most rows a log may have (a 2-million-row log is about 100 MB of CSV): split a longer one."""
 ALIASES: dict[str, tuple[str, ...]] = {
@@ -239,8 +250,12 @@ def _to_log(
 
     skipped: Counter[str] = Counter()
     seen: set[tuple[str, ...]] = set()
+    width = max(cols.values()) + 1
+    short = np.array([len(r) < width for r in rows], dtype=bool)
     dup = np.zeros(n, dtype=bool)
     for i, r in enumerate(rows):
+        if short[i]:  # a short row is not a duplicate of another short row: it is short
+            continue
         key = tuple(v.strip() for v in r)
         dup[i] = key in seen
         seen.add(key)
@@ -275,17 +290,27 @@ def _to_log(
         x, y = a, b
     ar = scn.area
     inside = numeric & (x >= ar.x_min_m) & (x <= ar.x_max_m) & (y >= ar.y_min_m) & (y <= ar.y_max_m)
+    height_ok = np.zeros(n, dtype=bool)
+    if inside.any():  # the receiver's height above the ground: what a map can be built at
+        g = surface_at(scn, x[inside], y[inside])
+        h = alt[inside] - g if altitude_reference == "msl" else alt[inside]
+        height_ok[inside] = (h >= 0.0) & (h <= MAX_HEIGHT_M)
     reasons = [
+        ("short rows (fewer fields than the header)", short),
         ("duplicate rows", dup),
-        ("missing or non-numeric values", ~dup & ~numeric),
+        ("missing or non-numeric values", ~short & ~dup & ~numeric),
         ("off the area", ~dup & numeric & ~inside),
         ("unknown cells", ~dup & inside & (cell < 0)),
         (f"levels outside RSRP {lo:g}..{hi:g} dBm", ~dup & inside & (cell >= 0) & ~good_level),
+        (
+            f"alt_m outside 0..{MAX_HEIGHT_M:g} m above the ground",
+            ~dup & inside & (cell >= 0) & good_level & ~height_ok,
+        ),
     ]
     for why, m in reasons:
         if m.any():
             skipped[why] = int(m.sum())
-    use = ~dup & inside & (cell >= 0) & good_level
+    use = ~dup & inside & (cell >= 0) & good_level & height_ok
     if not use.any():
         raise InvalidInputError(_no_row(p, n, skipped, x, y, numeric, scn))
     ground = surface_at(scn, x[use], y[use])
