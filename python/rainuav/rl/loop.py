@@ -348,8 +348,8 @@ def finish(
 ) -> dict[str, Any]:
     """Evaluates the run
     ([`rainuav.rl.evaluation.evaluate_run_policy()`][rainuav.rl.evaluation.evaluate_run_policy]),
-    saves the evaluated network's weights to ``policy.pt`` and writes ``metrics.json`` and the
-    figures."""
+    saves the evaluated network's weights to ``policy.pt``, draws the figures and writes
+    ``metrics.json`` last."""
     metrics, rolls = evaluate_run_policy(cfg, agent, env, checks)
     policy = {k: v.detach().cpu() for k, v in agent.online.state_dict().items()}
     save_checkpoint(out / "policy.pt", {"online": policy, "config": to_dict(cfg)})
@@ -361,12 +361,13 @@ def finish(
         metrics["storm_map_seconds"] = pool.map_seconds
         metrics["storm_wait_seconds"] = pool.wait_seconds
         metrics["evaluated_on_storm_seed"] = VALIDATION_SEEDS[0]
-    text = json.dumps(metrics, indent=2)
-    write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
     plot_returns(returns, out / "returns.png", checks.history)
     plot_policy(env, metrics, rolls[:40], out / "trajectories.png")
     if env.field.varies and env.altitudes_m is None:  # (among levels: trajectories.png)
         plot_storm_flights(env, rolls[:6], out / "storm_flights.png")
     if stages:
         plot_stages(env, stages, out / "stages.png")
+    # last: a folder that holds metrics.json is complete (a stop before it leaves none)
+    text = json.dumps(metrics, indent=2)
+    write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
     return metrics
