@@ -1177,6 +1177,23 @@ def test_a_negative_coordinate_is_read_as_typed(tmp_path, capsys) -> None:
     assert "expected one argument" not in err and not (tmp_path / "x").exists()
 
 
+def test_a_map_of_another_place_is_refused_naming_the_map(run_copy, capsys) -> None:
+    """A map of another area swapped into a run was refused as "config.toml: does not fit the
+    world flown: goal_m must lie inside the area": the file at fault is the map."""
+    path = run_copy / "radiomap.npz"
+    rm = RadioMap.load(path)
+    a = rm.scenario.area
+    far = dataclasses.replace(a, x_min_m=a.x_min_m + 5000, x_max_m=a.x_max_m + 5000)
+    sites = [dataclasses.replace(t, x_m=t.x_m + 5000) for t in rm.scenario.sites]
+    moved = dataclasses.replace(
+        rm, scenario=rm.scenario.replace(area=far, sites=sites), x_m=rm.x_m + 5000,
+        extent_m=(far.x_min_m, far.x_max_m, far.y_min_m, far.y_max_m),
+    )  # fmt: skip
+    moved.save(path)
+    rc, err = run_cli(evaluate, [run_copy], capsys)
+    refused("evaluate with a map of another place", rc, err, "radiomap.npz: refused", "goal_m")
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():

@@ -294,16 +294,17 @@ def evaluate_saved_run(
                     f"{run}: a run over the storm distribution has no world of its own; "
                     "fly it with --storm-seed K or --storm-seeds A-B"
                 )
-            world = load_world(run, cfg)
-            if world is None:
-                raise InvalidInputError(
-                    f"{run}: missing radiomap.npz; is this a rainuav.train output?"
-                )
             own = True
-        env = world.env()
+            world = load_world(run, cfg)
+        if world is not None:
+            env = world.env()
     except InvalidInputError as err:
+        if own:  # the run's own map file: name it (a damaged map, or one of another place)
+            raise InvalidInputError(f"{run / 'radiomap.npz'}: refused: {err}") from err
         where = run / "config.toml"
         raise InvalidInputError(f"{where}: does not fit the world flown: {err}") from err
+    if world is None:
+        raise InvalidInputError(f"{run}: missing radiomap.npz; is this a rainuav.train output?")
     if own:
         check_map_digest(state, env.field, run)
     agent, episodes, seconds = load_agent(path, state, cfg, env, device, online)
