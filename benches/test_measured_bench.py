@@ -27,23 +27,26 @@ SHARE = 0.025  # 5 lines of 200 pixels x 5 cells = 5 000 rows
 
 
 @pytest.fixture(scope="module")
-def case():
+def maps():
+    """The prior and the truth (wrong sites in a rain cell) the logs are drawn from."""
     scn = presets.uma(0.0, 28e9, engine="ray", ground="none", area=Area(resolution_m=10.0))
     sites, _ = perturbed_sites(scn.sites, 1)
     truth = presets.rain_cell(5.0, 28e9, engine="ray", ground="none", area=scn.area, sites=sites)
-    prior = build_radio_map(scn)
-    log = sample_log(build_radio_map(truth), SHARE, cells=5, seed=7)
+    return build_radio_map(scn), build_radio_map(truth)
+
+
+@pytest.fixture(scope="module")
+def case(maps):
+    prior, truth = maps
+    log = sample_log(truth, SHARE, cells=5, seed=7)
     assert prior.rss_dbm.shape[1:] == (200, 200) and len(log) == 5000
     return prior, log
 
 
 @pytest.fixture(scope="module")
-def long_case(case):
-    prior, _ = case
-    scn = prior.scenario
-    sites, _ = perturbed_sites(scn.sites, 1)
-    truth = presets.rain_cell(5.0, 28e9, engine="ray", ground="none", area=scn.area, sites=sites)
-    log = sample_log(build_radio_map(truth), 0.05, cells=5, seed=7, repeat=2)
+def long_case(maps):
+    prior, truth = maps
+    log = sample_log(truth, 0.05, cells=5, seed=7, repeat=2)
     assert len(log) == 20000
     return prior, log
 

@@ -14,8 +14,8 @@ prior's local-mean spreads: the published ones (set from 3GPP's tables before th
 was run), and with ``--tune`` the engine's own, measured on other scenes.
 
 ``--tune SCENE ...``: on those scenes (none named: every scene but the held-back ones), per
-mechanism, the error that 68.3% of the pixels stay within: the engine's measured spread, which
-``rainuav.radio.measured.prior.ENGINE_SPREADS`` holds. The ``--scenes`` never enter it.
+mechanism, the error that 68.3% of the pixels stay within: the engine's measured spread (the page
+"How far to trust a map" records it). The ``--scenes`` never enter it.
 """
 
 from __future__ import annotations

@@ -162,6 +162,10 @@ def test_a_physics_map_has_its_priors_spreads_by_mechanism(worlds) -> None:
     assert list(mechanism_of([0.0, 10.0, 30.0, np.nan])) == [0, 1, 2, 2]
     got_local, got_sample = map_spreads(prior)
     assert np.array_equal(got_local, local) and np.array_equal(got_sample, sample)
+    px = (np.array([0, 5, 17]), np.array([3, 40, 9]))  # the same values at pixels alone
+    at_local, at_sample = map_spreads(prior, px)
+    assert np.array_equal(at_local, local[:, px[0], px[1]])
+    assert np.array_equal(at_sample, sample[:, px[0], px[1]])
     p = outage_probability(prior, 10.0, draws=64)
     assert p.shape == prior.sinr_db.shape and np.all((p >= 0) & (p <= 1))
     bands = [(prior.sinr_db >= lo) & (prior.sinr_db < lo + 5) for lo in (0.0, 5.0, 10.0)]

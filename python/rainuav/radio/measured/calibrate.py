@@ -275,15 +275,20 @@ class _Fit:
         off = {p: thetas[:, i] for i, p in enumerate(self.names)}
         return self.prior + self.view.change_many(off) - self.meas
 
-    def jac(self, theta: np.ndarray) -> np.ndarray:
-        """Forward differences of a tabulated view's residuals, every parameter in one batched
-        evaluation (steps toward the inside of the bounds), (N, k)."""
+    def jac(self, theta: np.ndarray, r0: np.ndarray | None = None) -> np.ndarray:
+        """Forward differences of the residuals at ``theta`` (whose residuals ``r0`` are, where
+        known), steps toward the inside of the bounds, (N, k): a tabulated view's every
+        parameter in one batched evaluation, the exact pattern's one by one."""
         hi = np.array([BOUNDS[p][1] for p in self.names])
         h = 1e-4 * np.array([SCALES[p] for p in self.names]) * np.maximum(1.0, np.abs(theta))
         h = np.where(theta + h > hi, -h, h)
-        rows = np.vstack([theta, theta + np.diag(h)])
-        r = self.many(rows)
-        return ((r[1:] - r[0]) / h[:, None]).T
+        steps = theta + np.diag(h)
+        if self.view.table:
+            r = self.many(np.vstack([theta, steps]))
+            return ((r[1:] - r[0]) / h[:, None]).T
+        r0 = self(theta) if r0 is None else r0
+        cols = [(self(s) - r0) / d for s, d in zip(steps, h, strict=True)]
+        return np.column_stack(cols) if cols else np.zeros((len(r0), 0))
 
     def solve(self, x0: np.ndarray, evaluations: int = MAX_EVALUATIONS) -> Any:
         lo = [BOUNDS[p][0] for p in self.names]
@@ -293,16 +298,6 @@ class _Fit:
             loss="soft_l1", f_scale=SOFT_L1_SCALE_DB,
             x_scale=np.array([SCALES[p] for p in self.names]), max_nfev=evaluations,
         )  # fmt: skip
-
-
-def _exact_jac(fit: _Fit, theta: np.ndarray, r0: np.ndarray) -> np.ndarray:
-    """Forward differences of ``fit``'s residuals at ``theta`` (steps toward the inside of the
-    bounds), (N, k)."""
-    hi = np.array([BOUNDS[p][1] for p in fit.names])
-    h = 1e-4 * np.array([SCALES[p] for p in fit.names]) * np.maximum(1.0, np.abs(theta))
-    h = np.where(theta + h > hi, -h, h)
-    cols = [(fit(theta + np.eye(len(theta))[i] * h[i]) - r0) / h[i] for i in range(len(theta))]
-    return np.column_stack(cols) if cols else np.zeros((len(r0), 0))
 
 
 def _near(names: list[str], c: int, near: list[CellFit] | None) -> np.ndarray | None:
@@ -362,7 +357,7 @@ def calibrate(
         r = view(res.x)
         # each row weighted by sqrt(rho'(z) + 2 z rho''(z)) = (1 + z)^-3/4, as SciPy does
         z = (r / SOFT_L1_SCALE_DB) ** 2
-        jac = _exact_jac(view, res.x, r) * ((1 + z) ** -0.75)[:, None]
+        jac = view.jac(res.x, r) * ((1 + z) ** -0.75)[:, None]
         s = 1.4826 * float(np.median(np.abs(r - np.median(r))))
         cov = s**2 * np.linalg.pinv(jac.T @ jac)
         std = np.sqrt(np.maximum(np.diag(cov), 0.0))

@@ -34,18 +34,21 @@ DRAWS = 256
 """Draws per pixel (a whole 200 x 200 map of 21 cells in about 10 s on 2 cores)."""
 
 
-def map_spreads(rm: Any) -> tuple[np.ndarray, np.ndarray]:
+def map_spreads(rm: Any, pixels: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """The local mean's and one sample's standard deviation of every cell's power at every
-    pixel of the map ``rm``, dB, (M, H, W) each: a corrected map's own (a map saved without the
-    sample spread: 0 for it), else the prior's by mechanism
-    ([`prior_spread()`][rainuav.radio.measured.prior.prior_spread])."""
+    pixel of the map ``rm``, dB, (M, H, W) each (at the ``pixels`` (rows, columns) alone:
+    (M, N)): a corrected map's own (a map saved without the sample spread: 0 for it), else the
+    prior's by mechanism ([`prior_spread()`][rainuav.radio.measured.prior.prior_spread])."""
     if getattr(rm, "rss_std_db", None) is not None:
         local = np.asarray(rm.rss_std_db, dtype=float)
         sample = getattr(rm, "rss_sample_std_db", None)
-        return local, np.zeros_like(local) if sample is None else np.asarray(sample, float)
+        one = np.zeros_like(local) if sample is None else np.asarray(sample, float)
+        if pixels is not None:
+            local, one = local[:, pixels[0], pixels[1]], one[:, pixels[0], pixels[1]]
+        return local, one
     from rainuav.radio.measured.prior import prior_spread
 
-    return prior_spread(rm)
+    return prior_spread(rm, pixels=pixels)
 
 
 def outage_probability(
@@ -57,13 +60,13 @@ def outage_probability(
     if not 1 <= draws <= 1_000_000:
         raise InvalidInputError(f"draws must lie within 1..1000000 (got {draws})")
     rss = np.asarray(rm.rss_dbm, dtype=float)
-    local, one = map_spreads(rm)
+    local, one = map_spreads(rm, pixels)  # at the pixels asked for alone
     sd = np.hypot(local, one) if sample else local
     m = rss.shape[0]
     if pixels is None:
         mean, dev = rss.reshape(m, -1), sd.reshape(m, -1)
     else:
-        mean, dev = rss[:, pixels[0], pixels[1]], sd[:, pixels[0], pixels[1]]
+        mean, dev = rss[:, pixels[0], pixels[1]], sd
     rng = np.random.default_rng(seed)
     n = mean.shape[1]
     reached = mean > RSS_FLOOR_DBM + 1.0

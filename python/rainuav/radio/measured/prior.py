@@ -52,7 +52,6 @@ from rainuav.errors import InvalidInputError
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
 
 __all__ = [
-    "ENGINE_SPREADS",
     "LOS_EXCESS_DB",
     "MECHANISMS",
     "SHADOW_EXCESS_DB",
@@ -109,17 +108,6 @@ SPREADS: dict[str, Spread] = {
 }
 """The prior's spreads by mechanism (module docstring)."""
 
-ENGINE_SPREADS: dict[str, float] = {
-    "line of sight": 0.8,
-    "diffraction, reflection": 2.5,
-    "deep shadow": 2.9,
-}
-"""The ray engine's own local-mean error against Sionna RT's radio map, dB: the error 68% of the
-pixels stay within on seven single-building scenes (box, thick, canyon, corner, block,
-roof_wall, eave; 3.5 GHz, 20 m, no ground; ``python experiments/prior_spread_tracer.py
---tune``). Kept for comparison, not the default: on the held-back city scenes they hold 34-73%
-of the errors within one sigma, on real flights far fewer (the page "How far to trust a map")."""
-
 
 def excess_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np.ndarray:
     """The excess loss over free space of the powers ``power_dbm`` of the cell index ``cell``
@@ -136,20 +124,20 @@ def excess_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np
     return np.where(p > RSS_FLOOR_DBM + 1.0, fs - p, np.nan)
 
 
-def excess_loss_db(rm: Any) -> np.ndarray:
+def excess_loss_db(rm: Any, pixels: Any = None) -> np.ndarray:
     """Each cell's excess loss over free space from its antenna, dB, at every pixel of the map
-    ``rm`` at its flight height, (M, H, W) (module docstring); NaN where the cell does not
-    reach."""
+    ``rm`` at its flight height, (M, H, W), or at the ``pixels`` (rows, columns) alone, (M, N)
+    (module docstring); NaN where the cell does not reach."""
     from rainuav.radio.scene.terrain import flight_heights
 
     scn = rm.scenario
-    gx, gy = np.meshgrid(rm.x_m, rm.y_m)
-    gz = np.broadcast_to(flight_heights(scn), gx.shape)
-    out = np.full(np.shape(rm.rss_dbm), np.nan)
-    for c in range(out.shape[0]):
-        out[c] = excess_at(scn, c, gx.ravel(), gy.ravel(), gz.ravel(),
-                           np.ravel(rm.rss_dbm[c])).reshape(gx.shape)  # fmt: skip
-    return out
+    rss = np.asarray(rm.rss_dbm, dtype=float)
+    shape = rss.shape[1:]
+    r, c = np.indices(shape) if pixels is None else (np.asarray(pixels[0]), np.asarray(pixels[1]))
+    x, y = np.asarray(rm.x_m)[c].ravel(), np.asarray(rm.y_m)[r].ravel()
+    z = np.broadcast_to(flight_heights(scn), shape)[r, c].ravel()
+    out = np.stack([excess_at(scn, k, x, y, z, rss[k][r, c].ravel()) for k in range(len(rss))])
+    return out.reshape(len(rss), *np.shape(r))
 
 
 def spreads_of(
@@ -175,12 +163,12 @@ def mechanism_of(excess_db: Any) -> np.ndarray:
 
 
 def prior_spread(
-    rm: Any, model_db: float = 0.0, spreads: dict[str, Spread] | None = None
+    rm: Any, model_db: float = 0.0, spreads: dict[str, Spread] | None = None, pixels: Any = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The physics map ``rm``'s two spreads at every pixel of every cell, (M, H, W) each, dB:
-    the local mean's and one sample's (module docstring), by each pixel's mechanism;
-    ``model_db`` (0-30 dB) is added to the local mean's in quadrature (an engine's own error,
-    measured on held-out data)."""
+    """The physics map ``rm``'s two spreads at every pixel of every cell, (M, H, W) each (at the
+    ``pixels`` (rows, columns) alone: (M, N)), dB: the local mean's and one sample's (module
+    docstring), by each pixel's mechanism; ``model_db`` (0-30 dB) is added to the local mean's
+    in quadrature (an engine's own error, measured on held-out data)."""
     if not 0.0 <= model_db <= 30.0:
         raise InvalidInputError(f"model_db must lie within 0..30 dB (got {model_db:g})")
-    return spreads_of(excess_loss_db(rm), model_db, spreads)
+    return spreads_of(excess_loss_db(rm, pixels), model_db, spreads)

@@ -66,13 +66,16 @@ GRID_POINTS = 625
 
 
 def bin_index(
-    x: np.ndarray, y: np.ndarray, h: np.ndarray, size_m: float, step_m: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Which bin ``size_m`` wide and ``step_m`` tall each point (x, y, h) falls in: each row's
-    bin (N,) and the bins' row counts (B,)."""
-    keys = np.column_stack(
-        [np.floor(x / size_m), np.floor(y / size_m), np.round(h / step_m)]
-    ).astype(np.int64)
+    x: np.ndarray, y: np.ndarray, h: np.ndarray, size_m: float, step_m: float,
+    group: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Which bin ``size_m`` wide and ``step_m`` tall each point (x, y, h) falls in (apart for each
+    ``group``, where given: a cell's bins are not another's): each row's bin (N,) and the bins'
+    row counts (B,)."""
+    cols = [np.floor(x / size_m), np.floor(y / size_m), np.round(h / step_m)]
+    if group is not None:
+        cols.append(np.asarray(group, dtype=float))
+    keys = np.column_stack(cols).astype(np.int64)
     _, inv, count = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
     return inv.ravel(), count
 

@@ -77,10 +77,7 @@ def local_means(
     predicted, both averaged over its rows) and its deviation (the rows' mean local deviation
     and the bin average's standard error, ``sample_std / sqrt(n)``, in quadrature), (B,)
     each."""
-    h = pts[:, 2]
-    if cell is not None:  # a cell's bins apart from another's: heights a cell's 10 km apart
-        h = h + np.asarray(cell, dtype=float) * 1e4 * step_m
-    inv, count = bin_index(pts[:, 0], pts[:, 1], h, size_m, step_m)
+    inv, count = bin_index(pts[:, 0], pts[:, 1], pts[:, 2], size_m, step_m, cell)
 
     def avg(a: np.ndarray) -> np.ndarray:
         return np.bincount(inv, weights=a, minlength=len(count)) / count
