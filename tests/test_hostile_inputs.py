@@ -1194,6 +1194,64 @@ def test_a_map_of_another_place_is_refused_naming_the_map(run_copy, capsys) -> N
     refused("evaluate with a map of another place", rc, err, "radiomap.npz: refused", "goal_m")
 
 
+def test_a_log_at_two_hundred_heights_is_bounded_and_said(tmp_path, capsys) -> None:
+    """A log at 200 different 10 m heights (100-2 090 m) built about 200 maps and a 200-fold
+    cross-validation with nothing shown: it is refused naming alt_m and the flag that coarsens
+    the step, before any level map is built; with that flag it is corrected, with progress
+    shown, and its folds are at most ``MAX_FOLDS``."""
+    from rainuav.radio.measured.calibrate import MAX_LEVEL_MAPS
+    from rainuav.radio.measured.heldout import MAX_FOLDS, designs
+    from rainuav.radio.measured.log import read_log
+    from rainuav.radio.outputs.maps import build_radio_map
+
+    toml = tiny_scenario().to_toml(tmp_path / "s.toml")
+    rng = np.random.default_rng(0)
+    rows = ["x_m,y_m,alt_m,cell,rss_dbm"]
+    for k in range(200):
+        for x in rng.uniform(20, 380, 6):
+            rows.append(f"{x:.1f},{rng.uniform(20, 380):.1f},{100 + 10 * k},0,"
+                        f"{-70 + rng.normal(0, 4):.1f}")  # fmt: skip
+    log = tmp_path / "high.csv"
+    log.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "o"
+    rc, err = run_cli(radiomap, ["--config", toml, "--measurements", log, "--out", out], capsys)
+    refused("a log at 200 heights", rc, err, "high.csv", "alt_m", "100..2090",
+            str(MAX_LEVEL_MAPS), "53 m or more", "--level-step-m")  # fmt: skip
+    assert not (out / "radiomap.npz").exists() and "map 1/" not in err
+    rc, err = run_cli(radiomap, ["--config", toml, "--level-step-m", "0.5", "--measurements",
+                                 log, "--out", out], capsys)  # fmt: skip
+    refused("a level step of 0.5 m", rc, err, "--level-step-m", "1..500")
+    rc, err = run_cli(radiomap, ["--config", toml, "--level-step-m", "50", "--out", out], capsys)
+    refused("--level-step-m alone", rc, err, "--level-step-m", "--measurements")
+    scn = tiny_scenario()
+    rm = build_radio_map(scn)
+    read = read_log(log, scn)
+    folds = designs(rm, read, 10.0)
+    assert len(np.unique(folds["height"])) == MAX_FOLDS
+    accepted("a log at 200 heights, its height folds grouped")
+    rc, err = run_cli(radiomap, ["--config", toml, "--level-step-m", "53", "--measurements", log,
+                                 "--out", out], capsys)  # fmt: skip
+    assert rc == 0, err
+    assert "map 1/" in err and "held out: one height of" in err
+    assert (out / "radiomap.npz").exists()
+    accepted("a log at 200 heights with the 53 m level step it names, progress shown")
+
+
+def test_a_runs_config_as_a_preset_starts_from_the_preset_it_records(tmp_path, capsys) -> None:
+    """A ``preset`` key inside a preset (a run's ``config.toml`` handed on as a preset) gave an
+    odd note; it is the preset's base, as ``extends`` is, and both at once are refused."""
+    from rainuav.rl.config import preset_fields
+
+    (tmp_path / "b.toml").write_text("[dqn]\nlr = 2e-4\ngamma = 0.9\n")
+    (tmp_path / "run.toml").write_text(f'preset = "{tmp_path / "b.toml"}"\n[dqn]\ngamma = 0.97\n')
+    got = preset_fields(tmp_path / "run.toml")
+    assert "preset" not in got and got["dqn.lr"] == 2e-4 and got["dqn.gamma"] == 0.97
+    accepted("a run's config.toml as a preset")
+    (tmp_path / "both.toml").write_text('preset = "b.toml"\nextends = "b.toml"\n')
+    api_refused("extends and preset", lambda: preset_fields(tmp_path / "both.toml"),
+                "extends or preset")  # fmt: skip
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():

@@ -136,6 +136,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --measurements: 'elevation' fits the UAV's receive gain by elevation before "
         "the residual field (fit.json's held-out scores say whether it helped; default off)",
     )  # fmt: skip
+    ap.add_argument(
+        "--level-step-m", type=float, default=None, metavar="M",
+        help="with --measurements: the height between the maps built at the log's heights, "
+        "1..500 m (default 10; at most 40 maps, so a log spanning more needs a coarser step)",
+    )  # fmt: skip
     ap.add_argument("--out", type=Path, default=Path("maps"))
     ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
     ap.add_argument(
@@ -228,9 +233,16 @@ def _build(args: argparse.Namespace) -> int:
         band = _cli.altitude_band(args.altitudes_m)
         scn = scn.replace(area=dataclasses.replace(scn.area, altitudes_m=band))
         scn.area.check()
-    if args.measurements is None and (args.calibrate is not None or args.receive_pattern != "off"):
-        flag = "--calibrate" if args.calibrate is not None else "--receive-pattern"
+    fitted = {"--calibrate": args.calibrate is not None,
+              "--receive-pattern": args.receive_pattern != "off",
+              "--level-step-m": args.level_step_m is not None}  # fmt: skip
+    if args.measurements is None and any(fitted.values()):
+        flag = next(k for k, v in fitted.items() if v)
         raise InvalidInputError(f"{flag} fits a map to a log: give the log with --measurements")
+    if args.level_step_m is not None:
+        from rainuav._checks import check_number
+
+        check_number("--level-step-m", args.level_step_m, 1.0, 500.0, " m")
     if args.measurements is not None and (
         scn.area.altitudes_m or args.duration_s is not None or args.slice_s is not None
     ):
@@ -301,7 +313,8 @@ def _corrected(args: argparse.Namespace, rm: Any) -> Any:
     ref = rm.scenario.area.altitude_reference or "ground"
     log = read_log(args.measurements, rm.scenario, altitude_reference=ref)
     print(log.summary(), file=sys.stderr)
-    out = correct_map(rm, log, params=names, receive_pattern=args.receive_pattern)
+    out = correct_map(rm, log, params=names, receive_pattern=args.receive_pattern,
+                      level_step_m=args.level_step_m or 10.0, progress=True)  # fmt: skip
     assert out.fit is not None
     print(held_out_line(out.fit["cross_validation"]))
     return out

@@ -215,7 +215,7 @@ def _corrected(place: Place, rm: Any, log_path: Path) -> Any:
     log = read_log(log_path, scn, cell_names=cell_names(place.sites),
                    altitude_reference=scn.area.altitude_reference or "ground")  # fmt: skip
     print(log.summary(), file=sys.stderr)
-    return correct_map(rm, log)
+    return correct_map(rm, log, progress=True)
 
 
 def _write(place: Place, out: Path, ll: np.ndarray, path: np.ndarray, t_s: np.ndarray,

@@ -329,7 +329,8 @@ def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict
     """The fields a preset sets, flat (``"scenario"``, ``"dqn.lr"``): a shipped preset by name
     ([`preset_names()`][rainuav.rl.config.preset_names]) or a TOML file of the form of a run's
     ``config.toml`` (some fields only), which may start from another preset (``extends =
-    "NAME"``, its own fields winning). An unknown name or a bad file raises InvalidInputError."""
+    "NAME"``, its own fields winning; a run's ``config.toml`` starts from the ``preset`` it
+    records). An unknown name or a bad file raises InvalidInputError."""
     text = str(name_or_path)
     path = PRESET_DIR / f"{text}.toml" if text in preset_names() else Path(text)
     if not path.is_file():
@@ -337,6 +338,10 @@ def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict
             f"preset must be one of {preset_names()} or a TOML file (got {text!r}: no such file)"
         )
     data = read_toml(path, "preset")
+    if "preset" in data:  # a run's config.toml as a preset: the preset it records is its base
+        if "extends" in data:
+            raise InvalidInputError(f"preset {path}: give extends or preset, not both")
+        data["extends"] = data.pop("preset") or None
     base = data.pop("extends", None)
     if base is not None and (not isinstance(base, str) or base in (*_seen, text)):
         raise InvalidInputError(f"preset {path}: extends must name another preset (got {base!r})")

@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import itertools
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -49,6 +50,7 @@ from rainuav.radio.scene.terrain import surface_at
 
 __all__ = [
     "BOUNDS",
+    "MAX_LEVEL_MAPS",
     "CellFit",
     "calibrate",
     "calibrated_at",
@@ -76,6 +78,10 @@ SCAN_EVALUATIONS = 60
 TABLE_STEP_DEG = 0.25
 SOFT_L1_SCALE_DB = 4.0
 GAIN_FLOOR_DB = -80.0
+MAX_LEVEL_MAPS = 40
+"""The most maps [`prior_at()`][rainuav.radio.measured.calibrate.prior_at] builds at a log's
+heights (a 400 m span at the default 10 m step); a log spanning more is refused, naming a coarser
+``level_step_m``."""
 
 
 def _level_coordinate(scn: Scenario, log: MeasurementLog) -> np.ndarray:
@@ -87,10 +93,13 @@ def prior_at(
     log: MeasurementLog,
     level_step_m: float = 10.0,
     build: Any = None,
+    progress: bool = False,
 ) -> np.ndarray:
     """Each logged row's cell power in the prior, dBm, (N,) (module docstring). ``build``: the
     function that builds a map of a scenario (default
-    [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map], cached)."""
+    [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map], cached); ``progress``: one
+    line on standard error per map built. A log whose heights need more than
+    [`MAX_LEVEL_MAPS`][rainuav.radio.measured.calibrate.MAX_LEVEL_MAPS] maps is refused."""
     scn = rm.scenario
     at = _level_coordinate(scn, log)
     if np.all(np.abs(at - rm.altitude_m) <= level_step_m / 2):
@@ -104,8 +113,19 @@ def prior_at(
     high = low + level_step_m
     low = np.maximum(low, 0.5)  # the lowest map flies 0.5 m up (an area's least altitude)
     out = np.zeros(len(log))
+    levels = sorted({*low.tolist(), *high[frac > 0].tolist()})
+    if len(levels) > MAX_LEVEL_MAPS:
+        raise InvalidInputError(
+            f"{log.source or 'the log'}: its alt_m spans {float(at.min()):g}..{float(at.max()):g} "
+            f"m, {len(levels)} maps {level_step_m:g} m apart; at most {MAX_LEVEL_MAPS} (a level "
+            f"step of {np.ceil(float(np.ptp(at)) / (MAX_LEVEL_MAPS - 2)):g} m or more, radiomap "
+            "--level-step-m, or the log cut to the heights that matter)"
+        )
     maps: dict[float, RadioMap] = {}
-    for lev in sorted({*low.tolist(), *high[frac > 0].tolist()}):
+    for k, lev in enumerate(levels):
+        if progress:
+            print(f"the log's heights: map {k + 1}/{len(levels)} at {lev:g} m", file=sys.stderr,
+                  flush=True)  # fmt: skip
         maps[lev] = rm if abs(lev - rm.altitude_m) < 1e-9 else build(level_scenario(scn, lev))
     for lev, m in maps.items():
         v = _bilinear(m, log)

@@ -33,6 +33,7 @@
 from __future__ import annotations
 
 import dataclasses
+import sys
 from collections.abc import Sequence
 from typing import Any
 
@@ -70,6 +71,7 @@ def correct_map(
     cross_validate: bool = True,
     build: Any = None,
     receive_pattern: str = "off",
+    progress: bool = False,
 ) -> RadioMap:
     """``rm`` corrected by ``log`` (module docstring): ``rss_dbm``, the serving cell, SIR and
     SINR corrected; ``prior_rss_dbm`` the map given; ``rss_std_db`` each pixel's local-mean
@@ -81,7 +83,8 @@ def correct_map(
     [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map]); ``receive_pattern``:
     ``"off"`` or ``"elevation"`` (the UAV's receive gain by elevation fitted before the fields,
     [`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern]; the held-out scores then
-    fit it in every fold, so ``fit.json`` says whether it helped)."""
+    fit it in every fold, so ``fit.json`` says whether it helped); ``progress``: a line on
+    standard error per map built at the log's heights, per stage and per held-out fold."""
     if receive_pattern not in RECEIVE_PATTERNS:
         raise InvalidInputError(
             f"receive_pattern must be one of {', '.join(RECEIVE_PATTERNS)} "
@@ -92,8 +95,11 @@ def correct_map(
     if not 1.0 <= level_step_m <= 500.0:
         raise InvalidInputError(f"level_step_m must lie within 1..500 m (got {level_step_m:g})")
     scn = rm.scenario
-    prior = prior_at(rm, log, level_step_m, build)
+    prior = prior_at(rm, log, level_step_m, build, progress=progress)
     receive = receive_pattern == "elevation"
+    if progress:
+        print(f"fitting {len(log)} rows: calibration and residual fields", file=sys.stderr,
+              flush=True)  # fmt: skip
     corr = fit_correction(rm, log, prior, params=params, level_step_m=level_step_m, seed=seed,
                           receive=receive)  # fmt: skip
     if not corr.fields:
@@ -146,6 +152,7 @@ def correct_map(
             seed=seed,
             whole=corr,
             receive=receive,
+            progress=progress,
         )
     return dataclasses.replace(
         rm, rss_dbm=cal, serving_cell=serving, sir_db=sir, sinr_db=sinr,

@@ -5,6 +5,7 @@ user would otherwise use, and one line of what they say (step 5 of
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Sequence
 from typing import Any
 
@@ -18,7 +19,15 @@ from rainuav.radio.measured.residual import ResidualField
 from rainuav.radio.measured.scores import local_means, score
 from rainuav.radio.outputs.mapdata import RadioMap
 
-__all__ = ["CV_MAX_POINTS", "KNN", "STRETCHES", "cross_validate_log", "designs", "held_out_line"]
+__all__ = [
+    "CV_MAX_POINTS",
+    "KNN",
+    "MAX_FOLDS",
+    "STRETCHES",
+    "cross_validate_log",
+    "designs",
+    "held_out_line",
+]
 
 STRETCHES = 5
 """The stretches each flight is cut into for the held-out stretches' design."""
@@ -26,6 +35,9 @@ KNN = 25
 """The nearest logged samples the nearest-neighbour baseline averages."""
 CV_MAX_POINTS = 1000
 """The most bins a cross-validation fold's fields are conditioned on (the map's own: 2 500)."""
+MAX_FOLDS = 10
+"""The most folds of a design: a log of more flights or heights leaves out neighbouring
+flights (by number) or heights together, in at most this many groups."""
 
 
 def designs(rm: RadioMap, log: MeasurementLog, step: float) -> dict[str, np.ndarray]:
@@ -33,11 +45,11 @@ def designs(rm: RadioMap, log: MeasurementLog, step: float) -> dict[str, np.ndar
     every row's fold, (N,)."""
     out = {}
     if len(np.unique(log.flight)) >= 2:
-        out["flight"] = log.flight
+        out["flight"] = _at_most(log.flight, MAX_FOLDS)
     else:
         hb = np.round(_heights(rm, log) / step).astype(np.int64)
         if len(np.unique(hb)) >= 2:
-            out["height"] = hb
+            out["height"] = _at_most(hb, MAX_FOLDS)
     stretch = np.zeros(len(log), dtype=np.int64)
     for f in np.unique(log.flight):
         idx = np.flatnonzero(log.flight == f)
@@ -46,6 +58,15 @@ def designs(rm: RadioMap, log: MeasurementLog, step: float) -> dict[str, np.ndar
         stretch[idx] = (np.arange(len(idx)) * STRETCHES) // max(len(idx), 1)
     out["stretch"] = stretch
     return out
+
+
+def _at_most(group: np.ndarray, folds: int) -> np.ndarray:
+    """``group`` as it is if it has at most ``folds`` values, else its values in order cut into
+    ``folds`` runs of neighbouring values (each row's run, (N,))."""
+    values, rank = np.unique(group, return_inverse=True)
+    if len(values) <= folds:
+        return group
+    return (rank * folds) // len(values)
 
 
 def _knn(tr: MeasurementLog, te: MeasurementLog, heights: tuple[np.ndarray, np.ndarray],
@@ -101,12 +122,14 @@ def cross_validate_log(
     rm: RadioMap, log: MeasurementLog, prior: np.ndarray, *,
     params: Sequence[str] = tuple(BOUNDS), level_step_m: float = 10.0, seed: int = 0,
     whole: Correction | None = None, baselines: bool = True, receive: bool = False,
+    progress: bool = False,
 ) -> dict[str, Any]:  # fmt: skip
     """Every held-out design of the log (module docstring, step 5), scored: per design, its
     folds and, per method, the scores of single samples and of local means
     ([`score()`][rainuav.radio.measured.scores.score]). ``whole``: the correction of the
     whole log (its hyperparameters are reused; fitted here if None); ``receive``: the corrected
-    and calibrated maps fit the UAV's receive gain by elevation in every fold."""
+    and calibrated maps fit the UAV's receive gain by elevation in every fold; ``progress``: one
+    line on standard error per fold."""
     scn = rm.scenario
     step = level_step_m
     if whole is None:
@@ -127,7 +150,10 @@ def cross_validate_log(
         if baselines:
             methods += ["knn", "kriging"]
         pred = {k: [np.full(len(log), np.nan) for _ in range(3)] for k in methods}
-        for g in np.unique(group):
+        for k, g in enumerate(np.unique(group)):
+            if progress:
+                print(f"held out: one {name} of {len(np.unique(group))} ({k + 1})",
+                      file=sys.stderr, flush=True)  # fmt: skip
             test, train = group == g, group != g
             tr, te = _take(log, train), _take(log, test)
             idx = np.flatnonzero(test)
