@@ -14,7 +14,7 @@ import numpy as np
 from rainuav.radio.measured.calibrate import BOUNDS, calibrate, calibrated_at
 from rainuav.radio.measured.fitting import Correction, _fields, _heights, _take, fit_correction
 from rainuav.radio.measured.log import MeasurementLog
-from rainuav.radio.measured.prior import excess_at, spreads_of
+from rainuav.radio.measured.prior import SITE_DB, excess_at, site_distance_at, spreads_of
 from rainuav.radio.measured.residual import ResidualField
 from rainuav.radio.measured.scores import local_means, score
 from rainuav.radio.outputs.mapdata import RadioMap
@@ -139,10 +139,12 @@ def cross_validate_log(
     pts = np.column_stack([log.x_m, log.y_m, heights])
     z = log.z_m
     excess = np.full(len(log), np.nan)
+    dist = np.full(len(log), np.nan)
     for c in np.unique(log.cell):
         m = log.cell == c
         excess[m] = excess_at(scn, c, log.x_m[m], log.y_m[m], z[m], prior[m])
-    prior_local, prior_sample = spreads_of(excess)
+        dist[m] = site_distance_at(scn, c, log.x_m[m], log.y_m[m], z[m])
+    prior_local, prior_sample = spreads_of(excess, dist, SITE_DB)
     kriged: dict[int, ResidualField] | None = None
     out: dict[str, Any] = {}
     for name, group in designs(rm, log, step).items():

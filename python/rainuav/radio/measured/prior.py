@@ -30,6 +30,21 @@ rain-soaked link is uncertain by more than a clear one.
 (3GPP TR 36.777 Table B-2: the shadow fading of aerial users; TR 38.901 Table 7.5-6: the
 Ricean K-factor.)
 
+**Measured** (the default, [`MEASURED`][rainuav.radio.measured.prior.MEASURED] and
+[`SITE_DB`][rainuav.radio.measured.prior.SITE_DB]). The published spreads are a statistical
+model's; a physics map's own error is two things that these tables keep apart:
+
+- the engine's error where it knows the scene and the antennas: measured against Sionna RT on
+  the tracer scenes (``experiments/prior_spread_tracer.py``), per mechanism and per band of
+  distance from the site (the error 68.27% of the tuning pixels stay within,
+  [`measured_spreads()`][rainuav.radio.measured.prior.measured_spreads]): 0.3 dB in line of
+  sight near the site to 4.6 dB beyond 700 m, 0.5-3.7 dB diffracted or reflected, 1.7-4.8 dB in
+  deep shadow;
+- the site database's error, which the engine cannot know (the transmit power, the real
+  antenna patterns, cables, the airframe): 12.7 dB, chosen on real flights (AERPAW's, at the
+  validation heights 30 and 70 m; ``experiments/aerpaw_flights.py``), added in quadrature.
+  A truth whose sites are known exactly (a simulated one) takes ``model_db=0``.
+
 The sample spreads are the standard deviation of the power in dB of a Ricean envelope of K = 7
 dB (2.9 dB) and of a Rayleigh one (5.57 dB: ``10 / ln 10 * pi / sqrt 6``), computed in
 [`fading_std_db()`][rainuav.radio.measured.prior.fading_std_db]; a receiver that averages
@@ -37,9 +52,7 @@ over a wide band (RSRP over every resource element) sees less. The local-mean sp
 published shadow fading of aerial users, the spread of a statistical model's map around the
 truth. A physics map knows more than a statistical model where its scene is right, and less
 where the scene or the antennas are wrong: the spreads a user should trust are the ones checked
-on held-out data ("How far to trust a map": the real flights, the tracer's scenes), and
-[`prior_spread()`][rainuav.radio.measured.prior.prior_spread] takes a ``model_db`` that adds the
-engine's own error in quadrature."""
+on held-out data ("How far to trust a map": the real flights, the tracer's scenes)."""
 
 from __future__ import annotations
 
@@ -53,15 +66,21 @@ from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
 
 __all__ = [
     "LOS_EXCESS_DB",
+    "MEASURED",
     "MECHANISMS",
     "SHADOW_EXCESS_DB",
+    "SITE_DB",
     "SPREADS",
+    "SPREAD_DISTANCES_M",
     "Spread",
     "excess_at",
     "excess_loss_db",
     "fading_std_db",
+    "measured_spreads",
     "mechanism_of",
     "prior_spread",
+    "site_distance_at",
+    "site_distance_m",
     "spreads_of",
 ]
 
@@ -77,12 +96,21 @@ MECHANISMS = ("line of sight", "diffraction, reflection", "deep shadow")
 class Spread:
     """The prior's two spreads for one mechanism, dB, and where they come from."""
 
-    local_db: float
-    """The local mean's standard deviation, dB."""
+    local_db: float | tuple[float, ...]
+    """The local mean's standard deviation, dB: one value, or one at each of
+    [`SPREAD_DISTANCES_M`][rainuav.radio.measured.prior.SPREAD_DISTANCES_M] from the site
+    (linear between, constant beyond)."""
     sample_db: float
     """One sample's standard deviation around the local mean, dB."""
     source: str
-    """The published tables the values come from."""
+    """Where the values come from."""
+
+    def local_at(self, distance_m: Any) -> np.ndarray:
+        """The local mean's spread at each distance from the site, m, dB."""
+        d = np.asarray(distance_m, dtype=float)
+        if isinstance(self.local_db, tuple):
+            return np.interp(d, SPREAD_DISTANCES_M, self.local_db)
+        return np.full(d.shape, float(self.local_db))
 
 
 def fading_std_db(k_db: float | None, draws: int = 400_000, seed: int = 0) -> float:
@@ -97,6 +125,11 @@ def fading_std_db(k_db: float | None, draws: int = 400_000, seed: int = 0) -> fl
     return float(np.std(10 * np.log10(np.abs(h) ** 2)))
 
 
+SPREAD_DISTANCES_M = (50.0, 150.0, 300.0, 550.0, 1000.0)
+"""The distances from the site, m, at which a measured table gives its local-mean spreads
+(each the middle of a band: 0-100, 100-200, 200-400, 400-700 and beyond 700 m)."""
+_BAND_EDGES_M = (0.0, 100.0, 200.0, 400.0, 700.0, np.inf)
+
 SPREADS: dict[str, Spread] = {
     "line of sight": Spread(
         4.2, 2.9, "3GPP TR 36.777 Table B-2 (RMa-AV LOS); TR 38.901 Table 7.5-6 (RMa LOS K 7 dB)"
@@ -106,7 +139,30 @@ SPREADS: dict[str, Spread] = {
     ),
     "deep shadow": Spread(8.0, 5.6, "3GPP TR 36.777 Table B-2 (UMi-AV NLOS); Rayleigh fading"),
 }
-"""The prior's spreads by mechanism (module docstring)."""
+"""The published spreads by mechanism (module docstring): a statistical model's."""
+
+MEASURED: dict[str, Spread] = {
+    "line of sight": Spread(
+        (0.3, 0.7, 1.1, 1.9, 4.6), SPREADS["line of sight"].sample_db,
+        "the ray engine against Sionna RT (tuning pixels); fading as published",
+    ),
+    "diffraction, reflection": Spread(
+        (0.5, 3.4, 3.7, 3.7, 3.7), SPREADS["diffraction, reflection"].sample_db,
+        "the ray engine against Sionna RT (tuning pixels); fading as published",
+    ),
+    "deep shadow": Spread(
+        (1.7, 2.3, 4.8, 4.8, 4.8), SPREADS["deep shadow"].sample_db,
+        "the ray engine against Sionna RT (tuning pixels); fading as published",
+    ),
+}  # fmt: skip
+"""The engine's own local-mean error by mechanism and distance from the site, where it knows
+the scene and the antennas (module docstring, "Measured"): the default table."""
+
+SITE_DB = 12.7
+"""The site database's error (transmit power, antenna pattern, cables, the airframe), dB, added
+in quadrature to the local mean's spread of a map whose sites were never measured: chosen on
+real flights (module docstring, "Measured"). Pass ``model_db=0`` for a scene whose sites are
+known exactly (a simulated truth)."""
 
 
 def excess_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np.ndarray:
@@ -124,31 +180,63 @@ def excess_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np
     return np.where(p > RSS_FLOOR_DBM + 1.0, fs - p, np.nan)
 
 
+def site_distance_at(scn: Any, cell: Any, x: Any, y: Any, z: Any) -> np.ndarray:
+    """The distance from the antenna of the cell index ``cell`` to the points (``x``, ``y``,
+    ``z``: east, north, height above sea level, m), m."""
+    from rainuav.radio.measured.calibrate import _cells, _View
+
+    site, c = _cells(scn)[int(cell)]
+    v = _View(scn, site, c, x, y, z)
+    return np.hypot(v.rho, v.dz)
+
+
+def _pixel_points(rm: Any, pixels: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray]:
+    from rainuav.radio.scene.terrain import flight_heights
+
+    shape = np.shape(rm.rss_dbm)[1:]
+    r, c = np.indices(shape) if pixels is None else (np.asarray(pixels[0]), np.asarray(pixels[1]))
+    x, y = np.asarray(rm.x_m)[c].ravel(), np.asarray(rm.y_m)[r].ravel()
+    z = np.broadcast_to(flight_heights(rm.scenario), shape)[r, c].ravel()
+    return (r, c), x, y, z
+
+
 def excess_loss_db(rm: Any, pixels: Any = None) -> np.ndarray:
     """Each cell's excess loss over free space from its antenna, dB, at every pixel of the map
     ``rm`` at its flight height, (M, H, W), or at the ``pixels`` (rows, columns) alone, (M, N)
     (module docstring); NaN where the cell does not reach."""
-    from rainuav.radio.scene.terrain import flight_heights
-
     scn = rm.scenario
     rss = np.asarray(rm.rss_dbm, dtype=float)
-    shape = rss.shape[1:]
-    r, c = np.indices(shape) if pixels is None else (np.asarray(pixels[0]), np.asarray(pixels[1]))
-    x, y = np.asarray(rm.x_m)[c].ravel(), np.asarray(rm.y_m)[r].ravel()
-    z = np.broadcast_to(flight_heights(scn), shape)[r, c].ravel()
+    (r, c), x, y, z = _pixel_points(rm, pixels)
     out = np.stack([excess_at(scn, k, x, y, z, rss[k][r, c].ravel()) for k in range(len(rss))])
     return out.reshape(len(rss), *np.shape(r))
 
 
+def site_distance_m(rm: Any, pixels: Any = None) -> np.ndarray:
+    """Each cell's distance from its antenna, m, at every pixel of the map ``rm`` at its flight
+    height, (M, H, W), or at the ``pixels`` (rows, columns) alone, (M, N)."""
+    scn = rm.scenario
+    m = len(rm.rss_dbm)
+    (r, _), x, y, z = _pixel_points(rm, pixels)
+    out = np.stack([site_distance_at(scn, k, x, y, z) for k in range(m)])
+    return out.reshape(m, *np.shape(r))
+
+
 def spreads_of(
-    excess_db: Any, model_db: float = 0.0, spreads: dict[str, Spread] | None = None
+    excess_db: Any, distance_m: Any, model_db: float = 0.0, spreads: dict[str, Spread] | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """The local mean's and one sample's spreads, dB, of pixels or points of excess losses
-    ``excess_db`` (module docstring), ``model_db`` added to the first in quadrature."""
-    table = spreads or SPREADS
+    ``excess_db`` at ``distance_m`` from their site (module docstring), ``model_db`` added to
+    the first in quadrature; ``spreads``: the table (default
+    [`MEASURED`][rainuav.radio.measured.prior.MEASURED])."""
+    table = MEASURED if spreads is None else spreads
     mech = mechanism_of(excess_db)
-    local = np.array([table[k].local_db for k in MECHANISMS])[mech]
-    sample = np.array([table[k].sample_db for k in MECHANISMS])[mech]
+    dist = np.broadcast_to(np.asarray(distance_m, dtype=float), mech.shape)
+    local = np.zeros(mech.shape)
+    sample = np.zeros(mech.shape)
+    for k, name in enumerate(MECHANISMS):
+        m = mech == k
+        local[m] = table[name].local_at(dist[m])
+        sample[m] = table[name].sample_db
     return np.hypot(local, model_db), sample
 
 
@@ -162,13 +250,49 @@ def mechanism_of(excess_db: Any) -> np.ndarray:
     return out
 
 
+def measured_spreads(
+    error_db: Any, excess_db: Any, distance_m: Any, *, min_pixels: int = 50,
+    floor_db: float = 0.3, source: str = "measured",
+) -> dict[str, Spread]:  # fmt: skip
+    """A table of local-mean spreads measured from a prediction's errors (``error_db``, truth
+    minus prediction) at points of excess losses ``excess_db`` and distances ``distance_m``
+    (module docstring, "Measured"): per mechanism and distance band, the error that 68.27% of
+    the points stay within (bands of fewer than ``min_pixels`` points take their neighbours'),
+    at least ``floor_db`` and never falling with distance; the sample spreads the published
+    ones. A mechanism without enough points anywhere keeps the published spread."""
+    e = np.abs(np.asarray(error_db, dtype=float)).ravel()
+    mech = mechanism_of(excess_db).ravel()
+    d = np.asarray(distance_m, dtype=float).ravel()
+    ok = np.isfinite(e) & np.isfinite(d)
+    out = {}
+    for k, name in enumerate(MECHANISMS):
+        row = np.full(len(SPREAD_DISTANCES_M), np.nan)
+        for j in range(len(row)):
+            m = ok & (mech == k) & (d >= _BAND_EDGES_M[j]) & (d < _BAND_EDGES_M[j + 1])
+            if m.sum() >= min_pixels:
+                row[j] = np.percentile(e[m], 68.27)
+        have = ~np.isnan(row)
+        if not have.any():
+            out[name] = SPREADS[name]
+            continue
+        row = np.interp(SPREAD_DISTANCES_M, np.asarray(SPREAD_DISTANCES_M)[have], row[have])
+        row = np.maximum.accumulate(np.maximum(row, floor_db))
+        out[name] = Spread(tuple(round(float(v), 2) for v in row), SPREADS[name].sample_db,
+                           source)  # fmt: skip
+    return out
+
+
 def prior_spread(
-    rm: Any, model_db: float = 0.0, spreads: dict[str, Spread] | None = None, pixels: Any = None
-) -> tuple[np.ndarray, np.ndarray]:
+    rm: Any, model_db: float = SITE_DB, spreads: dict[str, Spread] | None = None,
+    pixels: Any = None,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The physics map ``rm``'s two spreads at every pixel of every cell, (M, H, W) each (at the
     ``pixels`` (rows, columns) alone: (M, N)), dB: the local mean's and one sample's (module
-    docstring), by each pixel's mechanism; ``model_db`` (0-30 dB) is added to the local mean's
-    in quadrature (an engine's own error, measured on held-out data)."""
+    docstring), by each pixel's mechanism and distance from its site; ``model_db`` (0-30 dB,
+    default the site database's error [`SITE_DB`][rainuav.radio.measured.prior.SITE_DB]) is
+    added to the local mean's in quadrature; ``spreads``: the table (default
+    [`MEASURED`][rainuav.radio.measured.prior.MEASURED];
+    [`SPREADS`][rainuav.radio.measured.prior.SPREADS] for the published one)."""
     if not 0.0 <= model_db <= 30.0:
         raise InvalidInputError(f"model_db must lie within 0..30 dB (got {model_db:g})")
-    return spreads_of(excess_loss_db(rm, pixels), model_db, spreads)
+    return spreads_of(excess_loss_db(rm, pixels), site_distance_m(rm, pixels), model_db, spreads)
