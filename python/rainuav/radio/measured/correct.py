@@ -50,6 +50,7 @@ from rainuav.radio.measured.fitting import MIN_FIELD_POINTS, Correction, fit_cor
 from rainuav.radio.measured.heldout import cross_validate_log
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.measured.pattern import elevation_deg
+from rainuav.radio.measured.prior import prior_spread
 from rainuav.radio.measured.residual import ResidualField
 from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
@@ -119,8 +120,11 @@ def correct_map(
         for c in range(len(cal)):
             g = corr.receive.at(elevation_deg(scn, c, gx.ravel(), gy.ravel(), gzb.ravel()))
             cal[c] = np.where(reached[c], cal[c] + g.reshape(gx.shape), cal[c])
+    scale = None  # a scaled field's scale: the engine's own spread at every pixel
+    if any(f.scaled for f in corr.fields.values()):
+        scale = prior_spread(rm, model_db=0.0)[0]
     for c, f in corr.fields.items():
-        mean, std[c] = f.on_grid(rm.x_m, rm.y_m, h)
+        mean, std[c] = f.on_grid(rm.x_m, rm.y_m, h, None if scale is None else scale[c])
         sample[c] = f.sample_db
         cal[c] = np.where(reached[c], cal[c] + mean, cal[c])
     for fc in corr.fits:  # the fitted offsets' own uncertainty, independent of the residual's
@@ -166,5 +170,5 @@ def _field_dict(c: int, f: ResidualField) -> dict[str, Any]:
         "cell": c, "amplitude_db": f.amplitude_db, "noise_db": f.noise_db,
         "sample_db": f.sample_db, "length_m": f.length_m,
         "height_length_m": f.length_m / f.height_ratio if f.height_ratio else None,
-        "bins": f.bins, "bin_m": f.bin_m,
+        "bins": f.bins, "bin_m": f.bin_m, "scaled": f.scaled,
     }  # fmt: skip

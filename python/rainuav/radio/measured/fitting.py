@@ -15,6 +15,7 @@ import numpy as np
 from rainuav.radio.measured.calibrate import BOUNDS, calibrate, calibrated_at, calibration_std_db
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.measured.pattern import ElevationGain, elevation_deg, fit_gain
+from rainuav.radio.measured.prior import engine_spread_at
 from rainuav.radio.measured.residual import ResidualField, fit_residual, sample_spread
 from rainuav.radio.outputs.mapdata import RadioMap
 
@@ -37,9 +38,21 @@ def _heights(rm: RadioMap, log: MeasurementLog) -> np.ndarray:
     return log.z_m if rm.scenario.area.msl else log.alt_m
 
 
+def _scale_at(scn: Any, log: MeasurementLog, prior: np.ndarray) -> np.ndarray:
+    """The engine's own spread at each row (its cell's prior power there), dB: the scale a
+    residual field may follow ([`rainuav.radio.measured.residual`][rainuav.radio.measured.residual],
+    "Scaled")."""
+    out = np.ones(len(log))
+    for c in np.unique(log.cell):
+        m = log.cell == c
+        out[m] = engine_spread_at(scn, c, log.x_m[m], log.y_m[m], log.z_m[m], prior[m])
+    return out
+
+
 def _fields(
     rm: RadioMap, log: MeasurementLog, resid: np.ndarray, step: float, seed: int,
     like: dict[int, ResidualField] | None = None, max_points: int | None = None,
+    scale: np.ndarray | None = None,
 ) -> dict[int, ResidualField]:  # fmt: skip
     a = rm.scenario.area
     pts = np.column_stack([log.x_m, log.y_m, _heights(rm, log)])
@@ -52,6 +65,7 @@ def _fields(
         out[int(c)] = fit_residual(
             pts[m], resid[m], size_m=a.resolution_m, step_m=step, extent_m=extent, seed=seed,
             like=None if like is None else like[int(c)],
+            scale=None if scale is None else scale[m],
             **({} if max_points is None else {"max_points": max_points}),
         )  # fmt: skip
     return out
@@ -99,16 +113,17 @@ class Correction:
         local = np.full(len(log), self.other_local_db)
         sample = np.full(len(log), self.other_sample_db)
         pts = np.column_stack([log.x_m, log.y_m, log.z_m if self.msl else log.alt_m])
+        scale = _scale_at(scn, log, prior)
         for c, f in (self.fields if fields else (far or self.fields)).items():
             m = log.cell == c
             if not m.any():
                 continue
             sample[m] = f.sample_db
             if fields:
-                mean[m] += f.mean(pts[m])
-                local[m] = f.std(pts[m])
+                mean[m] += f.mean(pts[m], scale[m])
+                local[m] = f.std(pts[m], scale[m])
             else:
-                local[m] = f.far_db
+                local[m] = f.far_at(int(m.sum()), scale[m])
         for fc in self.fits:
             m = log.cell == fc.cell
             if fc.offsets and m.any():
@@ -137,7 +152,8 @@ def fit_correction(
         gain = fit_gain(el, resid)
         resid = resid - gain.at(el)
     fields = _fields(rm, log, resid, level_step_m, seed,
-                     None if like is None else like.fields, max_points)  # fmt: skip
+                     None if like is None else like.fields, max_points,
+                     _scale_at(scn, log, prior))  # fmt: skip
     pooled = float(np.sqrt(np.mean((log.rss_dbm - prior) ** 2)))
     if like is not None:
         sample = like.other_sample_db

@@ -73,6 +73,7 @@ __all__ = [
     "SPREADS",
     "SPREAD_DISTANCES_M",
     "Spread",
+    "engine_spread_at",
     "excess_at",
     "excess_loss_db",
     "fading_std_db",
@@ -280,6 +281,16 @@ def measured_spreads(
         out[name] = Spread(tuple(round(float(v), 2) for v in row), SPREADS[name].sample_db,
                            source)  # fmt: skip
     return out
+
+
+def engine_spread_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np.ndarray:
+    """The engine's own local-mean spread ([`MEASURED`][rainuav.radio.measured.prior.MEASURED],
+    no site error) at the points (``x``, ``y``, ``z``: east, north, height above sea level, m)
+    whose powers of the cell index ``cell`` are ``power_dbm``, dB: how sure the physics is
+    there, by mechanism and distance (the scale of a corrected map's residual field,
+    [`rainuav.radio.measured.residual`][rainuav.radio.measured.residual])."""
+    ex = excess_at(scn, cell, x, y, z, power_dbm)
+    return spreads_of(ex, site_distance_at(scn, cell, x, y, z), 0.0)[0]
 
 
 def prior_spread(

@@ -25,6 +25,16 @@ explains. The hyperparameters maximise the marginal likelihood on at most ``MAX_
 the measurements the mean returns to 0 (the calibrated map) and the standard deviation to
 ``sqrt(amplitude^2 + nugget^2)``: the calibrated map's own spread, learned from the log.
 
+**Scaled.** Where the caller knows how far the map is likely off at each point (the prior's
+spread by mechanism and distance: a shadow is less sure than a lit street), the field may be
+that scale times a stationary field, ``r(x) = s(x) W(x)``: fitted on the bins' residuals over
+their scale (each bin's noise over its scale squared), its mean and deviation are ``s(x)`` times
+``W``'s, so far from every measurement the deviation returns to the amplitude times the
+pixel's own scale. Both models are fitted and the one of higher marginal likelihood of the
+residuals themselves kept (the scaled one's less the Jacobian, the sum of ``log s`` over its
+bins): the data choose, not an assumption. ``mean()``, ``std()`` and ``on_grid()`` then take
+the scale at their points.
+
 **Standard deviation.** ``std()`` is the uncertainty of the local mean (the 10 m average the
 map predicts) at a point: the field's posterior deviation and the nugget in quadrature. One
 future sample there spreads by that and ``sample_db`` in quadrature."""
@@ -136,12 +146,27 @@ class ResidualField:
     """The bins' width, m (the map's pixel, or larger where thinned)."""
     nugget_is_sample: bool = False
     """Whether the log showed no sample spread (one row a bin), so the nugget stands for it."""
+    scaled: bool = False
+    """Whether the field is the residual over a scale known at every point (module docstring,
+    "Scaled"): its mean and deviation are then in units of that scale, which the callers
+    multiply by."""
 
     def _x(self, pts: np.ndarray) -> np.ndarray:
         return _features(pts, self.height_ratio)
 
-    def mean(self, pts: np.ndarray, chunk: int = 20000) -> np.ndarray:
-        """The field at the points (N, 3): east, north, height, dB."""
+    def _scale(self, n: int, scale: Any) -> Any:
+        if not self.scaled:
+            return 1.0
+        if scale is None:
+            raise ValueError("a scaled field needs the scale at its points")
+        return np.broadcast_to(np.asarray(scale, dtype=float), (n,))
+
+    def mean(self, pts: np.ndarray, scale: Any = None) -> np.ndarray:
+        """The field at the points (N, 3): east, north, height, dB (``scale``: the scale at
+        each, (N,), for a scaled field)."""
+        return self._mean_w(pts) * self._scale(len(pts), scale)
+
+    def _mean_w(self, pts: np.ndarray, chunk: int = 20000) -> np.ndarray:
         out = [self.gp.predict(self._x(pts[i : i + chunk])) for i in range(0, len(pts), chunk)]
         return np.concatenate(out) if out else np.zeros(0)
 
@@ -154,10 +179,18 @@ class ResidualField:
             else float(np.hypot(self.amplitude_db, self.noise_db))
         )
 
-    def std(self, pts: np.ndarray, chunk: int = 4000) -> np.ndarray:
+    def far_at(self, n: int, scale: Any = None) -> np.ndarray:
+        """The local mean's deviation far from every measurement at ``n`` points, dB
+        (``scale`` at each for a scaled field)."""
+        return np.full(n, self.far_db) * self._scale(n, scale)
+
+    def std(self, pts: np.ndarray, scale: Any = None) -> np.ndarray:
         """The local mean's standard deviation at the points (N, 3), dB (module docstring):
         the field's posterior deviation with the nugget (scikit-learn's predictive deviation
-        of a kernel with a white term)."""
+        of a kernel with a white term); ``scale``: the scale at each, for a scaled field."""
+        return self._std_w(pts) * self._scale(len(pts), scale)
+
+    def _std_w(self, pts: np.ndarray, chunk: int = 4000) -> np.ndarray:
         nugget = self.noise_db**2 if self.nugget_is_sample else 0.0
         out = []
         for i in range(0, len(pts), chunk):
@@ -165,12 +198,24 @@ class ResidualField:
             out.append(np.sqrt(np.maximum(s**2 - nugget, 0.0)))
         return np.concatenate(out) if out else np.zeros(0)
 
-    def on_grid(self, x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray) -> tuple[Any, Any]:
+    def on_grid(
+        self, x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray, scale: Any = None
+    ) -> tuple[Any, Any]:
         """The mean and standard deviation over the pixel centres ``x_m`` (W,), ``y_m`` (H,) at
-        heights ``h_m`` (H, W). Both vary over the field's length scales, many pixels: they are
-        computed every ``k`` pixels (``k`` a quarter of the shorter length scale across the
-        ground, in pixels, and at least enough for ``GRID_POINTS`` nodes; the last row and column
-        always) and bilinear between."""
+        heights ``h_m`` (H, W) (``scale``: each pixel's, (H, W), for a scaled field). Both vary
+        over the field's length scales, many pixels: they are computed every ``k`` pixels
+        (``k`` a quarter of the shorter length scale across the ground, in pixels, and at least
+        enough for ``GRID_POINTS`` nodes; the last row and column always) and bilinear between;
+        a scaled field's are then multiplied by each pixel's scale."""
+        mean, std = self._grid(x_m, y_m, h_m)
+        if self.scaled:
+            if scale is None:
+                raise ValueError("a scaled field needs the scale at its points")
+            u = np.broadcast_to(np.asarray(scale, dtype=float), np.shape(mean))
+            return mean * u, std * u
+        return mean, std
+
+    def _grid(self, x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray) -> tuple[Any, Any]:
         gx, gy = np.meshgrid(x_m, y_m)
         h_m = np.broadcast_to(np.asarray(h_m, dtype=float), gx.shape)
         px = float(abs(x_m[1] - x_m[0])) if len(x_m) > 1 else 1.0
@@ -185,7 +230,7 @@ class ResidualField:
         near = tree.query(self._x(pts) / self.length_m, distance_upper_bound=FAR)[0] < FAR
         mean = np.zeros(len(pts))
         std = np.full(len(pts), self.far_db)
-        mean[near], std[near] = self.mean(pts[near]), self.std(pts[near])
+        mean[near], std[near] = self._mean_w(pts[near]), self._std_w(pts[near])
         mean, std = mean.reshape(len(ri), len(ci)), std.reshape(len(ri), len(ci))
         if k == 1:
             return mean, std
@@ -213,12 +258,15 @@ def fit_residual(
     seed: int = 0,
     like: ResidualField | None = None,
     max_points: int | None = None,
+    scale: np.ndarray | None = None,
 ) -> ResidualField:
     """The residual field of one cell from its rows at ``pts`` (N, 3: east, north, height) and
     their residuals, dB (module docstring). ``size_m``/``step_m``: the bins; ``extent_m``: the
     area's size (the longest length scale is 5 times it); ``like``: a field whose
     hyperparameters and sample spread to reuse (a cross-validation fold), else fitted here;
-    ``max_points``: the most bins it is conditioned on (default ``MAX_POINTS``)."""
+    ``max_points``: the most bins it is conditioned on (default ``MAX_POINTS``); ``scale``:
+    each row's scale (N,), positive, dB (module docstring, "Scaled"): the scaled field is
+    fitted beside the stationary one and kept where its marginal likelihood is higher."""
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.gaussian_process import GaussianProcessRegressor
 
@@ -236,28 +284,40 @@ def fit_residual(
             break
         bm *= 2
     alpha = np.maximum(sample**2 / count, 1e-6)
+    sb = np.ones(len(bv))
+    if scale is not None:
+        inv, _ = bin_index(pts[:, 0], pts[:, 1], pts[:, 2], bm, step_m)
+        sb = np.sqrt(np.bincount(inv, weights=np.asarray(scale, float) ** 2) / count)
     if like is not None:
-        kernel, ratio = like.gp.kernel_, like.height_ratio
+        kernel, ratio, scaled = like.gp.kernel_, like.height_ratio, like.scaled
+        scaled = scaled and scale is not None
     else:
         in_height = np.ptp(np.round(bp[:, 2] / step_m)) >= 1
-        k0 = _kernel(float(np.var(bv)), extent_m / 10, (2 * size_m, 5 * extent_m))
         pick = np.random.default_rng(seed).permutation(len(bv))[:MAX_FIT]
         best = None
-        for ratio in HEIGHT_RATIOS if in_height else (0.0,):
-            with warnings.catch_warnings():  # a bound reached is a result (a flat field, say)
-                warnings.simplefilter("ignore", ConvergenceWarning)
-                g = GaussianProcessRegressor(k0, alpha=alpha[pick], random_state=seed)
-                g.fit(_features(bp[pick], ratio), bv[pick])
-            if best is None or g.log_marginal_likelihood_value_ > best[0]:
-                best = (g.log_marginal_likelihood_value_, g.kernel_, ratio)
+        for scaled in (False, True) if scale is not None else (False,):
+            u = sb if scaled else np.ones(len(bv))
+            y, a = bv / u, alpha / u**2
+            # the likelihood of the residuals themselves: that of y less the scale's Jacobian
+            jac = float(np.sum(np.log(u[pick])))
+            k0 = _kernel(float(np.var(y)), extent_m / 10, (2 * size_m, 5 * extent_m))
+            for ratio in HEIGHT_RATIOS if in_height else (0.0,):
+                with warnings.catch_warnings():  # a bound reached is a result (a flat field)
+                    warnings.simplefilter("ignore", ConvergenceWarning)
+                    g = GaussianProcessRegressor(k0, alpha=a[pick], random_state=seed)
+                    g.fit(_features(bp[pick], ratio), y[pick])
+                lml = g.log_marginal_likelihood_value_ - jac
+                if best is None or lml > best[0]:
+                    best = (lml, g.kernel_, ratio, scaled)
         assert best is not None
-        _, kernel, ratio = best
-    gp = GaussianProcessRegressor(kernel, alpha=alpha, optimizer=None)
-    gp.fit(_features(bp, ratio), bv)
+        _, kernel, ratio, scaled = best
+    u = sb if scaled else np.ones(len(bv))
+    gp = GaussianProcessRegressor(kernel, alpha=alpha / u**2, optimizer=None)
+    gp.fit(_features(bp, ratio), bv / u)
     nugget = float(np.sqrt(kernel.k2.noise_level))
     return ResidualField(
         gp=gp, height_ratio=float(ratio),
         amplitude_db=float(np.sqrt(kernel.k1.k1.constant_value)), noise_db=nugget,
         sample_db=nugget if unseen else float(sample), nugget_is_sample=bool(unseen),
-        length_m=float(kernel.k1.k2.length_scale), bins=len(bv), bin_m=bm,
+        length_m=float(kernel.k1.k2.length_scale), bins=len(bv), bin_m=bm, scaled=bool(scaled),
     )  # fmt: skip
