@@ -19,8 +19,9 @@ import numpy as np
 import pytest
 from rainuav.radio import Area, build_radio_map, presets
 from rainuav.radio.measured import correct_map
-from rainuav.radio.measured.calibrate import calibrate, calibrated_at, prior_at
+from rainuav.radio.measured.calibrate import calibrate, calibrated_at
 from rainuav.radio.measured.fitting import _fields
+from rainuav.radio.measured.levels import prior_at
 from rainuav.radio.measured.synthetic import perturbed_sites, sample_log
 
 SHARE = 0.025  # 5 lines of 200 pixels x 5 cells = 5 000 rows

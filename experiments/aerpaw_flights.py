@@ -37,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 from rainuav.radio.measured import read_log
-from rainuav.radio.measured.calibrate import prior_at
 from rainuav.radio.measured.heldout import cross_validate_log
+from rainuav.radio.measured.levels import prior_at
 from rainuav.radio.measured.prior import (
     MEASURED,
     SITE_DB,

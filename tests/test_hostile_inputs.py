@@ -1199,8 +1199,8 @@ def test_a_log_at_two_hundred_heights_is_bounded_and_said(tmp_path, capsys) -> N
     cross-validation with nothing shown: it is refused naming alt_m and the flag that coarsens
     the step, before any level map is built; with that flag it is corrected, with progress
     shown, and its folds are at most ``MAX_FOLDS``."""
-    from rainuav.radio.measured.calibrate import MAX_LEVEL_MAPS
     from rainuav.radio.measured.heldout import MAX_FOLDS, designs
+    from rainuav.radio.measured.levels import MAX_LEVEL_MAPS
     from rainuav.radio.measured.log import read_log
     from rainuav.radio.outputs.maps import build_radio_map
 

@@ -19,7 +19,8 @@ import pytest
 from rainuav.errors import InvalidInputError
 from rainuav.radio import Area, build_radio_map, presets
 from rainuav.radio.measured import correct_map, read_log, rss_from_rsrp
-from rainuav.radio.measured.calibrate import calibrate, prior_at
+from rainuav.radio.measured.calibrate import calibrate
+from rainuav.radio.measured.levels import prior_at
 from rainuav.radio.measured.synthetic import (
     flight_line_pixels,
     perturbed_sites,

@@ -1,5 +1,6 @@
 """Maps that learn from what is measured: a drive-test or flight log in
-([`log`][rainuav.radio.measured.log]), the site parameters it says are wrong fitted
+([`log`][rainuav.radio.measured.log]), the prior at its points
+([`levels`][rainuav.radio.measured.levels]), the site parameters it says are wrong fitted
 ([`calibrate`][rainuav.radio.measured.calibrate]), what is still off estimated as a field with its
 uncertainty ([`residual`][rainuav.radio.measured.residual]), and the corrected map out
 ([`correct`][rainuav.radio.measured.correct]:

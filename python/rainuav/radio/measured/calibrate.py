@@ -1,10 +1,5 @@
-"""The map where the log was measured, and the site parameters the log says are wrong.
-
-**The prior at the log's points.** A map is one flight level; a log is wherever the UAV flew.
-[`prior_at()`][rainuav.radio.measured.calibrate.prior_at] reads each cell's power at every logged
-point: bilinear in the map's pixels, and linear in height between maps built at levels
-``level_step_m`` apart that bracket the point (the map itself where every point lies within half
-a step of its altitude).
+"""The site parameters a log says are wrong, fitted per cell (the prior at the log's points
+comes from [`prior_at()`][rainuav.radio.measured.levels.prior_at]).
 
 **Calibration.** A site database gets some things wrong: the transmit power, the tilt, the
 azimuth, the antenna height. [`calibrate()`][rainuav.radio.measured.calibrate.calibrate] fits,
@@ -32,7 +27,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import itertools
-import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -40,7 +34,6 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from rainuav._sampling import bilinear
 from rainuav.errors import InvalidInputError
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.outputs.mapdata import RadioMap
@@ -50,14 +43,12 @@ from rainuav.radio.scene.terrain import surface_at
 
 __all__ = [
     "BOUNDS",
-    "MAX_LEVEL_MAPS",
     "CellFit",
     "calibrate",
     "calibrated_at",
     "calibrated_maps",
     "calibration_std_db",
     "gain_change_db",
-    "prior_at",
 ]
 
 BOUNDS: dict[str, tuple[float, float]] = {
@@ -78,65 +69,6 @@ SCAN_EVALUATIONS = 60
 TABLE_STEP_DEG = 0.25
 SOFT_L1_SCALE_DB = 4.0
 GAIN_FLOOR_DB = -80.0
-MAX_LEVEL_MAPS = 40
-"""The most maps [`prior_at()`][rainuav.radio.measured.calibrate.prior_at] builds at a log's
-heights (a 400 m span at the default 10 m step); a log spanning more is refused, naming a coarser
-``level_step_m``."""
-
-
-def _level_coordinate(scn: Scenario, log: MeasurementLog) -> np.ndarray:
-    return log.z_m if scn.area.msl else log.alt_m
-
-
-def prior_at(
-    rm: RadioMap,
-    log: MeasurementLog,
-    level_step_m: float = 10.0,
-    build: Any = None,
-    progress: bool = False,
-) -> np.ndarray:
-    """Each logged row's cell power in the prior, dBm, (N,) (module docstring). ``build``: the
-    function that builds a map of a scenario (default
-    [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map], cached); ``progress``: one
-    line on standard error per map built. A log whose heights need more than
-    [`MAX_LEVEL_MAPS`][rainuav.radio.measured.calibrate.MAX_LEVEL_MAPS] maps is refused."""
-    scn = rm.scenario
-    at = _level_coordinate(scn, log)
-    if np.all(np.abs(at - rm.altitude_m) <= level_step_m / 2):
-        return _bilinear(rm, log)
-    if build is None:
-        from rainuav.radio.outputs.maps import build_radio_map as build
-    from rainuav.radio.outputs.levelmaps import level_scenario
-
-    low = np.floor(at / level_step_m) * level_step_m
-    frac = (at - low) / level_step_m
-    high = low + level_step_m
-    low = np.maximum(low, 0.5)  # the lowest map flies 0.5 m up (an area's least altitude)
-    out = np.zeros(len(log))
-    levels = sorted({*low.tolist(), *high[frac > 0].tolist()})
-    if len(levels) > MAX_LEVEL_MAPS:
-        raise InvalidInputError(
-            f"{log.source or 'the log'}: its alt_m spans {float(at.min()):g}..{float(at.max()):g} "
-            f"m, {len(levels)} maps {level_step_m:g} m apart; at most {MAX_LEVEL_MAPS} (a level "
-            f"step of {np.ceil(float(np.ptp(at)) / (MAX_LEVEL_MAPS - 2)):g} m or more, radiomap "
-            "--level-step-m, or the log cut to the heights that matter)"
-        )
-    maps: dict[float, RadioMap] = {}
-    for k, lev in enumerate(levels):
-        if progress:
-            print(f"the log's heights: map {k + 1}/{len(levels)} at {lev:g} m", file=sys.stderr,
-                  flush=True)  # fmt: skip
-        maps[lev] = rm if abs(lev - rm.altitude_m) < 1e-9 else build(level_scenario(scn, lev))
-    for lev, m in maps.items():
-        v = _bilinear(m, log)
-        out += np.where(low == lev, (1 - frac) * v, 0.0) + np.where(high == lev, frac * v, 0.0)
-    return out
-
-
-def _bilinear(rm: RadioMap, log: MeasurementLog) -> np.ndarray:
-    """Each row's cell in ``rm``, bilinear between pixel centres (the navigation's sampler)."""
-    return bilinear(np.asarray(rm.rss_dbm, dtype=np.float64), rm.extent_m, log.x_m, log.y_m,
-                    log.cell)  # fmt: skip
 
 
 def _site_z(scn: Scenario, site: Site) -> float:
@@ -340,7 +272,7 @@ def calibrate(
 ) -> list[CellFit]:
     """Fits each measured cell's ``params`` offsets to the log (module docstring); ``prior``:
     each row's power in the prior map
-    ([`prior_at()`][rainuav.radio.measured.calibrate.prior_at]). ``near``: an earlier fit of
+    ([`prior_at()`][rainuav.radio.measured.levels.prior_at]). ``near``: an earlier fit of
     the same cells (on more of the log) to start from alone, where it fitted the same
     parameters (a cross-validation fold)."""
     bad = [p for p in params if p not in BOUNDS]

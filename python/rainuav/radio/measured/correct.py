@@ -2,7 +2,7 @@
 [`correct_map()`][rainuav.radio.measured.correct.correct_map].
 
 1. The prior at the log's points
-   ([`prior_at()`][rainuav.radio.measured.calibrate.prior_at]).
+   ([`prior_at()`][rainuav.radio.measured.levels.prior_at]).
 2. Per cell, the site parameters fitted to the log
    ([`calibrate()`][rainuav.radio.measured.calibrate.calibrate]) and the map moved by them.
 3. Per cell, the residual (measured minus calibrated) as a Gaussian-process field
@@ -44,10 +44,10 @@ from rainuav.radio.measured.calibrate import (
     BOUNDS,
     calibrated_maps,
     calibration_std_db,
-    prior_at,
 )
 from rainuav.radio.measured.fitting import MIN_FIELD_POINTS, Correction, fit_correction
 from rainuav.radio.measured.heldout import cross_validate_log
+from rainuav.radio.measured.levels import prior_at
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.measured.pattern import elevation_deg
 from rainuav.radio.measured.prior import prior_spread
