@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from rainuav.cml import compare, stats
+from rainuav.cml import compare, rain_spread, stats
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "tutorials"))
 from radiomap_in_rain import made_by
@@ -69,6 +69,19 @@ def main() -> None:
         band = f"{g['band_ghz'][0]}-{g['band_ghz'][1]}"
         one = "{bias_db:+7.2f} {rmse_db:6.2f} {r:6.3f}"
         print(f"{band:>10} {g['pol']:>4} {a['n']:>7} | {one.format(**a)} | {one.format(**b)}")
+    spread = rain_spread(res)
+    res["rain_spread"] = spread
+    h = spread["held_out"]
+    bands = []
+    for b in h["by_band"]:
+        lo, hi = b["loss_db"]
+        bands.append(f"{lo:g}-{'' if hi is None else f'{hi:g}'} dB "
+                     f"{100 * b['within_one_sigma']:.0f}%")  # fmt: skip
+    print("the spread of a rain loss, tuned on the even links: "
+          + ", ".join(f"{v:.2f}" for v in spread["tuned"]) + " dB by band; on the odd links "
+          f"({h['intervals']} intervals): {100 * h['within_one_sigma']:.1f}% within one sigma, "
+          f"{100 * h['within_two_sigma']:.1f}% within two, CRPS {h['crps_db']:.2f} dB (no "
+          f"spread: {h['crps_no_spread_db']:.2f}); by band: " + ", ".join(bands))  # fmt: skip
     if args.figure:
         figure(args.figure, res)
     if args.json:

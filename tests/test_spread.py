@@ -31,6 +31,7 @@ from rainuav.radio.measured.prior import (
     mechanism_of,
     prior_spread,
     site_distance_m,
+    spreads_of,
 )
 from rainuav.radio.measured.scores import COVERAGE_GAUSSIAN, crps_gaussian, score
 from rainuav.radio.measured.synthetic import sample_log
@@ -317,3 +318,26 @@ def test_a_residual_whose_size_follows_the_scale_is_fitted_scaled_and_only_then(
     e0 = resid[te] - stationary.mean(pts[te])
     sd0 = stationary.std(pts[te])
     assert np.mean(np.abs(e0[shadow]) <= sd0[shadow]) < got
+
+
+def test_a_map_in_rain_adds_the_spread_of_its_rain_loss(worlds) -> None:
+    """The same ``uma`` map in 25 mm/h of rain: each pixel's rain loss is the clear map's power
+    less the wet one's (at least 0 dB, and some pixels lose more than 8 dB at 28 GHz), its
+    spread the band's of ``RAIN_SPREAD_DB`` (a loss of 3 dB: 2.36 dB), and the local mean's
+    spread is the clear map's and that in quadrature (within 1e-9 dB); a map in clear air has
+    no rain loss. The band table itself is checked on real links in tests/test_cml_links.py."""
+    from rainuav.radio.measured.prior import RAIN_SPREAD_DB, rain_loss_db, rain_spread_db
+
+    prior, _ = worlds
+    assert rain_loss_db(prior) is None
+    wet = build_radio_map(presets.with_rain(prior.scenario, 25.0), cache=False)
+    loss = rain_loss_db(wet)
+    assert loss is not None and loss.shape == wet.rss_dbm.shape
+    reached = wet.rss_dbm > -200
+    assert np.all(loss >= 0) and np.percentile(loss[reached], 99) > 8.0
+    assert rain_spread_db(np.array([0.0, 0.3, 3.0, 40.0])) == pytest.approx(
+        [0.0, RAIN_SPREAD_DB[0], 2.36, RAIN_SPREAD_DB[-1]]
+    )
+    local, _ = prior_spread(wet)
+    dry, _ = spreads_of(excess_loss_db(wet), site_distance_m(wet), SITE_DB)
+    assert np.allclose(local, np.hypot(dry, rain_spread_db(loss)), atol=1e-9)

@@ -68,6 +68,8 @@ __all__ = [
     "LOS_EXCESS_DB",
     "MEASURED",
     "MECHANISMS",
+    "RAIN_LOSS_DB",
+    "RAIN_SPREAD_DB",
     "SHADOW_EXCESS_DB",
     "SITE_DB",
     "SPREADS",
@@ -80,6 +82,8 @@ __all__ = [
     "measured_spreads",
     "mechanism_of",
     "prior_spread",
+    "rain_loss_db",
+    "rain_spread_db",
     "site_distance_at",
     "site_distance_m",
     "spreads_of",
@@ -283,6 +287,40 @@ def measured_spreads(
     return out
 
 
+RAIN_LOSS_DB = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
+"""The edges of the bands of rain loss, dB, of
+[`RAIN_SPREAD_DB`][rainuav.radio.measured.prior.RAIN_SPREAD_DB] (0-0.5, 0.5-1, ..., beyond 16)."""
+RAIN_SPREAD_DB = (0.26, 0.77, 1.39, 2.36, 3.82, 6.69, 17.13)
+"""The spread of a predicted rain loss in each band of ``RAIN_LOSS_DB``, dB: the error that
+68.27% of real links' five-minute rain losses in the band stay within, predicted by the medium
+from radar rain (pycomlink's 500 German links, those of even index;
+``rainuav.cml.rain_spread``). About 0.6 times the loss up to 16 dB."""
+
+
+def rain_spread_db(loss_db: Any) -> np.ndarray:
+    """The spread of predicted rain losses ``loss_db``, dB (their band's; 0 for no loss)."""
+    a = np.nan_to_num(np.asarray(loss_db, dtype=float))
+    out = np.asarray(RAIN_SPREAD_DB)[np.searchsorted(RAIN_LOSS_DB, a, side="right")]
+    return np.where(a > 0, out, 0.0)
+
+
+def rain_loss_db(rm: Any, pixels: Any = None) -> np.ndarray | None:
+    """Each cell's loss to rain at every pixel of the map ``rm``, dB, (M, H, W) (at the
+    ``pixels`` alone: (M, N)): the same scenario's map in clear air (built, or from the cache)
+    less this one; None for a map in clear air."""
+    scn = rm.scenario
+    med = scn.medium
+    if med.kind == "clear" or (med.kind == "homogeneous" and med.rain_rate_mm_h == 0):
+        return None
+    from rainuav.radio.outputs.maps import build_radio_map
+    from rainuav.radio.scene.weather import Medium
+
+    clear = np.asarray(build_radio_map(scn.replace(medium=Medium(kind="clear"))).rss_dbm, float)
+    wet = np.asarray(rm.rss_dbm, dtype=float)
+    loss = np.where(wet > RSS_FLOOR_DBM + 1.0, np.maximum(clear - wet, 0.0), 0.0)
+    return loss if pixels is None else loss[:, pixels[0], pixels[1]]
+
+
 def engine_spread_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np.ndarray:
     """The engine's own local-mean spread ([`MEASURED`][rainuav.radio.measured.prior.MEASURED],
     no site error) at the points (``x``, ``y``, ``z``: east, north, height above sea level, m)
@@ -303,7 +341,15 @@ def prior_spread(
     default the site database's error [`SITE_DB`][rainuav.radio.measured.prior.SITE_DB]) is
     added to the local mean's in quadrature; ``spreads``: the table (default
     [`MEASURED`][rainuav.radio.measured.prior.MEASURED];
-    [`SPREADS`][rainuav.radio.measured.prior.SPREADS] for the published one)."""
+    [`SPREADS`][rainuav.radio.measured.prior.SPREADS] for the published one). A map in rain
+    adds the spread of its rain loss
+    ([`rain_spread_db()`][rainuav.radio.measured.prior.rain_spread_db] of
+    [`rain_loss_db()`][rainuav.radio.measured.prior.rain_loss_db]) in quadrature."""
     if not 0.0 <= model_db <= 30.0:
         raise InvalidInputError(f"model_db must lie within 0..30 dB (got {model_db:g})")
-    return spreads_of(excess_loss_db(rm, pixels), site_distance_m(rm, pixels), model_db, spreads)
+    local, sample = spreads_of(excess_loss_db(rm, pixels), site_distance_m(rm, pixels), model_db,
+                               spreads)  # fmt: skip
+    rain = rain_loss_db(rm, pixels)
+    if rain is not None:
+        local = np.hypot(local, rain_spread_db(rain))
+    return local, sample
