@@ -7,8 +7,12 @@ carries them (``rss_std_db``, the local mean's, and ``rss_sample_std_db``, one s
 physics map has its prior's by mechanism
 ([`rainuav.radio.measured.prior`][rainuav.radio.measured.prior]). A link's outage happens sample by
 sample, so a draw of one cell's power is Gaussian in dB with both spreads in quadrature
-(``sample=False``: the local mean's alone, an outage of the average), independent between cells;
-a draw is capped at 100 dBm, the maps' own ceiling. The serving cell, the
+(``sample=False``: the local mean's alone, an outage of the average), independent between cells
+but for a physics map's site database error
+([`SITE_DB`][rainuav.radio.measured.prior.SITE_DB]), drawn once a draw for every cell: what the
+UAV's antenna, airframe and receiver add is the same for every cell, and independent errors of
+that size would promise a diversity (some cell always strong) that no network has. A draw is
+capped at 100 dBm, the maps' own ceiling. The serving cell, the
 interference and so the SINR follow from all of them together (a draw may change which cell
 serves), so the probability is estimated by drawing:
 ``DRAWS`` draws of every cell's power at each pixel (one seed, so the same map gives the same
@@ -26,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from rainuav.errors import InvalidInputError
+from rainuav.radio.measured.prior import SITE_DB
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
 
 __all__ = ["DRAWS", "map_spreads", "outage_probability", "path_outage"]
@@ -61,6 +66,8 @@ def outage_probability(
         raise InvalidInputError(f"draws must lie within 1..1000000 (got {draws})")
     rss = np.asarray(rm.rss_dbm, dtype=float)
     local, one = map_spreads(rm, pixels)  # at the pixels asked for alone
+    common = 0.0 if getattr(rm, "rss_std_db", None) is not None else SITE_DB
+    local = np.sqrt(np.maximum(local**2 - common**2, 0.0))  # the rest, cell by cell
     sd = np.hypot(local, one) if sample else local
     m = rss.shape[0]
     if pixels is None:
@@ -78,8 +85,10 @@ def outage_probability(
         k = mean[:, s].shape[1]
         # float32 draws: a power's tenth of a dB is far below its deviation, and half the time
         z = rng.standard_normal((draws, m, k), dtype=np.float32)
-        d = np.minimum(mean[None, :, s].astype(np.float32) + dev[None, :, s].astype(np.float32) * z,
-                       np.float32(100.0))  # fmt: skip
+        d = mean[None, :, s].astype(np.float32) + dev[None, :, s].astype(np.float32) * z
+        if common:  # one draw a pixel for every cell
+            d += np.float32(common) * rng.standard_normal((draws, 1, k), dtype=np.float32)
+        d = np.minimum(d, np.float32(100.0))
         p = np.where(reached[None, :, s], np.exp(d * np.float32(np.log(10) / 10)), 0.0)
         sinr = sir_from_power(p.transpose(1, 0, 2).reshape(m, -1), noise)[2]
         out[s] = (sinr.reshape(draws, k) < min_db).mean(axis=0)
