@@ -29,7 +29,7 @@ def figure(path: Path, res: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    meas, ours, p838, _ = res["_arrays"]
+    meas, ours, p838 = res["_arrays"][:3]
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.8), layout="constrained", sharey=True)
     top = float(np.percentile(np.concatenate([meas, ours, p838]), 99.5))
     for axis, pred, title in ((ax[0], ours, "rainuav's medium"), (ax[1], p838, "ITU-R P.838-3")):
