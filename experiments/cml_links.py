@@ -17,7 +17,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from rainuav.cml import compare, rain_spread, stats
+from rainuav.cml import compare, stats
+from rainuav.radio.measured.prior import rain_spread_scores
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "tutorials"))
 from radiomap_in_rain import made_by
@@ -69,7 +70,8 @@ def main() -> None:
         band = f"{g['band_ghz'][0]}-{g['band_ghz'][1]}"
         one = "{bias_db:+7.2f} {rmse_db:6.2f} {r:6.3f}"
         print(f"{band:>10} {g['pol']:>4} {a['n']:>7} | {one.format(**a)} | {one.format(**b)}")
-    spread = rain_spread(res)
+    meas, ours, _, _, link = res["_arrays"]
+    spread = rain_spread_scores(meas, ours, link)
     res["rain_spread"] = spread
     h = spread["held_out"]
     bands = []

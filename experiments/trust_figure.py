@@ -13,7 +13,7 @@ Four predictive distributions, each on data no choice of its spread saw:
 - the physics map alone against Sionna RT at the held-back sites of the city scenes (the
   measured table, sites known exactly; ``experiments/prior_spread_tracer.py``);
 - a rain loss predicted from radar rain on pycomlink's links of odd index
-  (``rainuav.cml.rain_spread``).
+  (``rainuav.radio.measured.prior.rain_spread_scores``).
 
 A curve above the Gaussian's is too wide at that k, below it too sure.
 """

@@ -37,9 +37,10 @@ def test_the_medium_is_as_close_to_real_links_as_p838() -> None:
     # The shipped spread of a rain loss (measured on the even links of all 500) on these
     # links' odd ones, which it never saw: 71% within one sigma and 97% within two here (68.0%
     # and 96.5% on the 250 odd links of 500); held to 55-80% and 88-99%.
-    from rainuav.cml import rain_spread
+    from rainuav.radio.measured.prior import rain_spread_scores
 
-    held = rain_spread(res)["held_out"]
+    meas, ours, _, _, link = res["_arrays"]
+    held = rain_spread_scores(meas, ours, link)["held_out"]
     assert 0.55 <= held["within_one_sigma"] <= 0.80, held
     assert 0.88 <= held["within_two_sigma"] <= 0.99, held
     assert held["crps_db"] < held["crps_no_spread_db"]

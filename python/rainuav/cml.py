@@ -26,7 +26,6 @@ the processing is the tutorial's, the medium the package's defaults.
 
 from __future__ import annotations
 
-import itertools
 import os
 from typing import Any
 
@@ -38,7 +37,6 @@ __all__ = [
     "compare",
     "measured_attenuation",
     "predictions",
-    "rain_spread",
     "stats",
 ]
 
@@ -140,43 +138,4 @@ def compare(links: int = 500) -> dict[str, Any]:
                                   "p838": stats(p838[sel], meas[sel])})  # fmt: skip
     out["all"] = {"rainuav": stats(ours, meas), "p838": stats(p838, meas)}
     out["_arrays"] = (meas, ours, p838, f, k)
-    return out
-
-
-def rain_spread(res: dict[str, Any]) -> dict[str, Any]:
-    """The spread of the medium's rain loss, measured on the links of ``compare()``'s result
-    ``res``: per band of predicted loss (``rainuav.radio.measured.prior.RAIN_LOSS_DB``'s
-    bands), the error (measured minus predicted) that 68.27% of the five-minute intervals stay
-    within, on the links of even index (``tuned``); and the shipped table
-    (``rainuav.radio.measured.prior.RAIN_SPREAD_DB``) scored on the links of odd index, which it
-    never saw (``held_out``: intervals, shares within one and two sigma, CRPS, dB)."""
-    from rainuav.radio.measured.prior import RAIN_LOSS_DB, rain_spread_db
-    from rainuav.radio.measured.scores import crps_gaussian
-
-    meas, ours, _, _, link = res["_arrays"]
-    err = meas - ours
-    tune = link % 2 == 0
-    edges = (0.0, *RAIN_LOSS_DB, np.inf)
-    tuned = []
-    for lo, hi in itertools.pairwise(edges):
-        m = tune & (ours >= lo) & (ours < hi)
-        tuned.append(float(np.percentile(np.abs(err[m]), 68.27)) if m.sum() >= 50 else None)
-    held = ~tune
-    sd = rain_spread_db(ours[held])
-    e = err[held]
-    out: dict[str, Any] = {"tuned": tuned, "held_out": {
-        "intervals": int(held.sum()),
-        "within_one_sigma": float(np.mean(np.abs(e) <= sd)),
-        "within_two_sigma": float(np.mean(np.abs(e) <= 2 * sd)),
-        "crps_db": float(np.mean(crps_gaussian(e, 0.0, sd))),
-        "crps_no_spread_db": float(np.mean(np.abs(e))),
-    }}  # fmt: skip
-    by_band = []
-    for lo, hi in itertools.pairwise(edges):
-        m = (ours[held] >= lo) & (ours[held] < hi)
-        if m.sum():
-            by_band.append({"loss_db": [lo, None if np.isinf(hi) else hi],
-                            "intervals": int(m.sum()),
-                            "within_one_sigma": float(np.mean(np.abs(e[m]) <= sd[m]))})  # fmt: skip
-    out["held_out"]["by_band"] = by_band
     return out

@@ -56,6 +56,7 @@ on held-out data ("How far to trust a map": the real flights, the tracer's scene
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from typing import Any
 
@@ -84,6 +85,7 @@ __all__ = [
     "prior_spread",
     "rain_loss_db",
     "rain_spread_db",
+    "rain_spread_scores",
     "site_distance_at",
     "site_distance_m",
     "spreads_of",
@@ -294,7 +296,8 @@ RAIN_SPREAD_DB = (0.26, 0.77, 1.39, 2.36, 3.82, 6.69, 17.13)
 """The spread of a predicted rain loss in each band of ``RAIN_LOSS_DB``, dB: the error that
 68.27% of real links' five-minute rain losses in the band stay within, predicted by the medium
 from radar rain (pycomlink's 500 German links, those of even index;
-``rainuav.cml.rain_spread``). About 0.6 times the loss up to 16 dB."""
+[`rain_spread_scores()`][rainuav.radio.measured.prior.rain_spread_scores]). About 0.6 times
+the loss up to 16 dB."""
 
 
 def rain_spread_db(loss_db: Any) -> np.ndarray:
@@ -302,6 +305,46 @@ def rain_spread_db(loss_db: Any) -> np.ndarray:
     a = np.nan_to_num(np.asarray(loss_db, dtype=float))
     out = np.asarray(RAIN_SPREAD_DB)[np.searchsorted(RAIN_LOSS_DB, a, side="right")]
     return np.where(a > 0, out, 0.0)
+
+
+def rain_spread_scores(
+    measured_db: Any, predicted_db: Any, link: Any
+) -> dict[str, Any]:  # fmt: skip
+    """The spread of predicted rain losses measured on real links: ``measured_db`` and
+    ``predicted_db`` the losses of each interval, ``link`` its link's index (as
+    ``rainuav.cml.compare`` gives them in ``_arrays``). Per band of predicted loss
+    (``RAIN_LOSS_DB``), the error (measured minus predicted) that 68.27% of the intervals of the
+    links of even index stay within (``tuned``: what ``RAIN_SPREAD_DB`` holds); and
+    ``RAIN_SPREAD_DB`` scored on the links of odd index, which it never saw (``held_out``:
+    intervals, shares within one and two sigma, CRPS with and without the spread, dB, and the
+    share within one sigma by band)."""
+    from rainuav.radio.measured.scores import crps_gaussian
+
+    meas, ours = np.asarray(measured_db, float), np.asarray(predicted_db, float)
+    err = meas - ours
+    tune = np.asarray(link) % 2 == 0
+    edges = (0.0, *RAIN_LOSS_DB, np.inf)
+    tuned = []
+    for lo, hi in itertools.pairwise(edges):
+        m = tune & (ours >= lo) & (ours < hi)
+        tuned.append(float(np.percentile(np.abs(err[m]), 68.27)) if m.sum() >= 50 else None)
+    held = ~tune
+    sd, e, pred = rain_spread_db(ours[held]), err[held], ours[held]
+    by_band = []
+    for lo, hi in itertools.pairwise(edges):
+        m = (pred >= lo) & (pred < hi)
+        if m.any():
+            by_band.append({"loss_db": [lo, None if np.isinf(hi) else hi],
+                            "intervals": int(m.sum()),
+                            "within_one_sigma": float(np.mean(np.abs(e[m]) <= sd[m]))})  # fmt: skip
+    return {"tuned": tuned, "held_out": {
+        "intervals": int(held.sum()),
+        "within_one_sigma": float(np.mean(np.abs(e) <= sd)),
+        "within_two_sigma": float(np.mean(np.abs(e) <= 2 * sd)),
+        "crps_db": float(np.mean(crps_gaussian(e, 0.0, sd))),
+        "crps_no_spread_db": float(np.mean(np.abs(e))),
+        "by_band": by_band,
+    }}  # fmt: skip
 
 
 def rain_loss_db(rm: Any, pixels: Any = None) -> np.ndarray | None:
