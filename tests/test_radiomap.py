@@ -303,8 +303,16 @@ def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
     assert "SINR median" in proc.stdout and "PE share" in proc.stdout
     rm = RadioMap.load(out / "radiomap.npz")
     assert rm.scenario.medium.rain_rate_mm_h == 10.0
-    for png in ("rss.png", "sir.png", "sinr.png", "serving.png"):
+    for png in ("rss.png", "sir.png", "sinr.png", "serving.png", "rss_std.png",
+                "rss_sample_std.png"):  # fmt: skip
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
+    # A physics map says how sure it is: its prior's spreads, in the file (not a corrected map)
+    # and equal to what prior_spread computes of the map (the rain's spread included).
+    from rainuav.radio.measured.prior import prior_spread
+
+    assert rm.prior_rss_dbm is None and not (out / "correction.png").exists()
+    local, sample = prior_spread(rm)
+    assert np.allclose(rm.rss_std_db, local) and np.allclose(rm.rss_sample_std_db, sample)
 
 
 @pytest.mark.slow

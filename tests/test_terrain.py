@@ -718,10 +718,21 @@ def test_maps_out_as_geotiff_read_back_at_the_right_place(tmp_path: Path) -> Non
     out = tmp_path / "maps"
     assert radiomap.main(["--config", str(toml), "--out", str(out), "--no-cache"]) == 0
     rm = build_radio_map(scn, cache=False)
+    from rainuav.radio.measured.prior import prior_spread
+
+    local, sample = prior_spread(rm)
     tif = out / "radiomap.tif"
     with rasterio.open(tif) as src:
-        assert src.descriptions == ("sinr_db", "rss_serving_dbm", "serving_cell", "not_flyable")
-        assert src.nodata == NODATA and src.count == 4 and (src.height, src.width) == (40, 60)
+        # the four bands of every map, and the prior's two spreads a physics map carries
+        assert src.descriptions == (
+            "sinr_db",
+            "rss_serving_dbm",
+            "serving_cell",
+            "not_flyable",
+            "rss_serving_std_db",
+            "rss_serving_sample_std_db",
+        )
+        assert src.nodata == NODATA and src.count == 6 and (src.height, src.width) == (40, 60)
         bands = src.read()
         # Three pixels by their centres' latitude and longitude.
         g = Georef(ORIGIN.lat_deg, ORIGIN.lon_deg)
@@ -738,13 +749,23 @@ def test_maps_out_as_geotiff_read_back_at_the_right_place(tmp_path: Path) -> Non
             k = rm.serving_cell[i, j]
             assert bands[2, r, c] == (k if k >= 0 else NODATA)
             assert np.float32(rm.rss_dbm[k, i, j]) == bands[1, r, c]
+            if k >= 0:  # the prior's spreads of the serving cell
+                assert np.float32(local[k, i, j]) == bands[4, r, c]
+                assert np.float32(sample[k, i, j]) == bands[5, r, c]
         assert bands[3].sum() == rm.not_flyable.sum() == 35
     # `rio info` as its console script runs it (rasterio.rio.main:main_group).
     rio = "import sys; from rasterio.rio.main import main_group; sys.exit(main_group())"
     info = subprocess.run([sys.executable, "-c", rio, "info", str(tif)],
                           capture_output=True, text=True, check=True)  # fmt: skip
     meta = json.loads(info.stdout)
-    assert meta["descriptions"] == ["sinr_db", "rss_serving_dbm", "serving_cell", "not_flyable"]
+    assert meta["descriptions"] == [
+        "sinr_db",
+        "rss_serving_dbm",
+        "serving_cell",
+        "not_flyable",
+        "rss_serving_std_db",
+        "rss_serving_sample_std_db",
+    ]
     assert meta["nodata"] == NODATA
     assert 'PROJECTION["Azimuthal_Equidistant"]' in meta["crs"]
     assert 'PARAMETER["latitude_of_center",47.3]' in meta["crs"]

@@ -258,12 +258,14 @@ def _build(args: argparse.Namespace) -> int:
     rm = build_radio_map(scn, cache=not args.no_cache, progress=True)
     if args.measurements is not None:
         rm = _corrected(args, rm)
+    else:  # a physics map says how sure it is too: its prior's spreads
+        from rainuav.radio.measured.prior import with_prior_spreads
+
+        rm = with_prior_spreads(rm)
     begin_folder(args.out, "radiomap.npz")
-    kinds: tuple[str, ...] = ("sinr", "sir", "serving", "rss")
-    if rm.rss_std_db is not None:
-        kinds += ("rss_std", "correction")
-        if rm.rss_sample_std_db is not None:
-            kinds += ("rss_sample_std",)
+    kinds: tuple[str, ...] = ("sinr", "sir", "serving", "rss", "rss_std", "rss_sample_std")
+    if rm.prior_rss_dbm is not None:
+        kinds += ("correction",)
     pngs = [save_map_png(rm, kind, args.out / f"{kind}.png") for kind in kinds]
     if rm.fit is not None:
         import json

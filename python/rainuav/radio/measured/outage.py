@@ -42,8 +42,9 @@ DRAWS = 256
 def map_spreads(rm: Any, pixels: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """The local mean's and one sample's standard deviation of every cell's power at every
     pixel of the map ``rm``, dB, (M, H, W) each (at the ``pixels`` (rows, columns) alone:
-    (M, N)): a corrected map's own (a map saved without the sample spread: 0 for it), else the
-    prior's by mechanism ([`prior_spread()`][rainuav.radio.measured.prior.prior_spread])."""
+    (M, N)): those the map carries (a corrected map's own, or a physics map's prior ones
+    written with it; a map saved without the sample spread: 0 for it), else the prior's by
+    mechanism ([`prior_spread()`][rainuav.radio.measured.prior.prior_spread])."""
     if getattr(rm, "rss_std_db", None) is not None:
         local = np.asarray(rm.rss_std_db, dtype=float)
         sample = getattr(rm, "rss_sample_std_db", None)
@@ -66,7 +67,7 @@ def outage_probability(
         raise InvalidInputError(f"draws must lie within 1..1000000 (got {draws})")
     rss = np.asarray(rm.rss_dbm, dtype=float)
     local, one = map_spreads(rm, pixels)  # at the pixels asked for alone
-    common = 0.0 if getattr(rm, "rss_std_db", None) is not None else SITE_DB
+    common = SITE_DB if getattr(rm, "prior_rss_dbm", None) is None else 0.0  # a physics map
     local = np.sqrt(np.maximum(local**2 - common**2, 0.0))  # the rest, cell by cell
     sd = np.hypot(local, one) if sample else local
     m = rss.shape[0]

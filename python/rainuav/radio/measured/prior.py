@@ -89,6 +89,7 @@ __all__ = [
     "site_distance_at",
     "site_distance_m",
     "spreads_of",
+    "with_prior_spreads",
 ]
 
 LOS_EXCESS_DB = 3.0
@@ -305,6 +306,19 @@ def rain_spread_db(loss_db: Any) -> np.ndarray:
     a = np.nan_to_num(np.asarray(loss_db, dtype=float))
     out = np.asarray(RAIN_SPREAD_DB)[np.searchsorted(RAIN_LOSS_DB, a, side="right")]
     return np.where(a > 0, out, 0.0)
+
+
+def with_prior_spreads(rm: Any) -> Any:
+    """The physics map ``rm`` carrying its prior's two spreads
+    ([`prior_spread()`][rainuav.radio.measured.prior.prior_spread], the defaults) as
+    ``rss_std_db`` and ``rss_sample_std_db``, so that its file, GeoTIFF and figures say how sure
+    it is (``prior_rss_dbm`` stays None: a physics map, not a corrected one)."""
+    import dataclasses
+
+    if rm.prior_rss_dbm is not None:
+        raise InvalidInputError("the map is corrected by measurements: it has its own spreads")
+    local, sample = prior_spread(rm)
+    return dataclasses.replace(rm, rss_std_db=local, rss_sample_std_db=sample)
 
 
 def rain_spread_scores(

@@ -1,6 +1,6 @@
 """Radio maps out as GeoTIFF, as GIS tools (QGIS, GDAL) read them.
 
-One file, four float32 bands over the map's pixels, north-up, in the scenario's own projection (its
+One file, four to six float32 bands over the map's pixels, north-up, in the scenario's own projection (its
 [`rainuav.geo.Georef`][rainuav.geo.Georef]: an azimuthal equidistant projection on WGS 84 centred on
 the origin, written as the file's CRS), with band descriptions and units:
 
@@ -9,8 +9,10 @@ the origin, written as the file's CRS), with band descriptions and units:
 3. ``serving_cell``: the index of the serving cell (nodata where no cell reaches);
 4. ``not_flyable``: 1 where the UAV may not fly (terrain or obstacles within the clearance
    of the flight height), else 0;
-5. ``rss_serving_std_db`` (a map corrected by measurements alone,
-   [`rainuav.radio.measured`][rainuav.radio.measured]): the standard deviation of band 2, dB.
+5. ``rss_serving_std_db`` (a map that carries its spreads: a map corrected by measurements,
+   [`rainuav.radio.measured`][rainuav.radio.measured], or a physics map written by
+   ``radiomap`` with its prior's): the standard deviation of band 2's local mean, dB;
+6. ``rss_serving_sample_std_db`` (the same maps): one sample's around it, dB.
 
 The nodata value is [`NODATA`][rainuav.radio.outputs.maptiff.NODATA]. Written to a temporary file
 and renamed: a reader never sees half a file. Needs rasterio (the ``geo`` extra)."""
@@ -39,9 +41,9 @@ BANDS = (
 )
 """Band names (descriptions) and units, in order."""
 STD_BAND = ("rss_serving_std_db", "dB")
-"""The fifth band of a map corrected by measurements: the serving cell's local-mean spread."""
+"""The fifth band of a map that carries its spreads: the serving cell's local-mean spread."""
 SAMPLE_BAND = ("rss_serving_sample_std_db", "dB")
-"""The sixth band of a map corrected by measurements: one sample's spread around it."""
+"""The sixth band of a map that carries its spreads: one sample's spread around it."""
 
 
 def _bands(rm: Any, slice_index: int | None) -> np.ndarray:

@@ -56,7 +56,9 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
             ax.legend(handles=[floor], loc="upper right", fontsize="small", framealpha=0.8)
     elif kind in ("rss_std", "rss_sample_std", "correction"):
         if rm.rss_std_db is None or (kind == "rss_sample_std" and rm.rss_sample_std_db is None):
-            raise InvalidInputError(f"kind {kind!r} needs a map corrected by measurements")
+            raise InvalidInputError(f"kind {kind!r} needs a map that carries its spreads")
+        if kind == "correction" and rm.prior_rss_dbm is None:
+            raise InvalidInputError("kind 'correction' needs a map corrected by measurements")
         data, label, cmap, lo, hi = _measured(rm, kind)
         im = ax.imshow(data, origin="lower", extent=rm.extent_m, cmap=cmap, vmin=lo, vmax=hi)
     elif kind == "serving":
