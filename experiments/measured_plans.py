@@ -34,6 +34,7 @@ from rainuav.nav import planner
 from rainuav.nav.field import SignalField, pixel_index
 from rainuav.nav.task import NavConfig
 from rainuav.radio.measured import correct_map, outage_probability
+from rainuav.radio.measured.outage import path_outage_draws
 from rainuav.radio.measured.synthetic import sample_log
 from rainuav.radio.scene.presets import SINR_THRESHOLDS_DB
 
@@ -57,6 +58,18 @@ def outage_on(truth, prob: np.ndarray, path: np.ndarray, thr: float) -> tuple[fl
     realised one (the share of its moves ending below ``thr`` on the truth)."""
     r, c = pixel_index(truth.sinr_db.shape, truth.extent_m, path[1:, 0], path[1:, 1])
     return float(np.mean(prob[r, c])), float(np.mean(truth.sinr_db[r, c] < thr))
+
+
+def interval_on(rm, truth, path: np.ndarray, thr: float) -> tuple[bool, float]:
+    """Whether the path's realised outage share on the truth lies within the 5-95% interval of
+    its share drawn whole on the map ``rm`` (``path_outage_draws``, of the local mean), and the
+    realised share's distance from the drawn mean in drawn standard deviations."""
+    r, c = pixel_index(truth.sinr_db.shape, truth.extent_m, path[1:, 0], path[1:, 1])
+    got = path_outage_draws(rm, (r, c), thr, draws=500, sample=False)
+    real = float(np.mean(truth.sinr_db[r, c] < thr))
+    inside = got["outage_share_p5"] <= real <= got["outage_share_p95"]
+    z = (real - got["expected_outage_share"]) / max(got["spread_along_path"], 1e-9)
+    return inside, z
 
 
 def run(seeds: list[int], n_starts: int) -> list[dict]:
@@ -92,11 +105,16 @@ def run(seeds: list[int], n_starts: int) -> list[dict]:
                 excess = np.array(costs) / np.array(best) - 1.0
                 pred, real = zip(*(outage_on(truth, shown, p.path_m, thr) for p in ps),
                                  strict=True)  # fmt: skip
+                inside, z = zip(*(interval_on(mean_map, truth, p.path_m, thr) for p in ps),
+                                strict=True)  # fmt: skip
                 rows.append({"world": w, "lines": lines, "share": lines / 200, "plan": kind,
                              "excess_mean": float(excess.mean()),
                              "excess_median": float(np.median(excess)),
                              "predicted_outage": float(np.mean(pred)),
                              "realised_outage": float(np.mean(real)),
+                             "plans": len(ps),
+                             "within_90_interval": float(np.mean(inside)),
+                             "within_one_spread": float(np.mean(np.abs(z) <= 1.0)),
                              "seconds": time.perf_counter() - t0})  # fmt: skip
                 r = rows[-1]
                 print(f"world {w}, {lines:2d} lines ({lines / 2:.1f}%), plan on the "
@@ -104,7 +122,10 @@ def run(seeds: list[int], n_starts: int) -> list[dict]:
                       f"+{100 * excess.mean():.1f}% (median +{100 * np.median(excess):.1f}%) "
                       f"over the truth's own plan; outage predicted "
                       f"{100 * r['predicted_outage']:.1f}%, realised "
-                      f"{100 * r['realised_outage']:.1f}%", flush=True)  # fmt: skip
+                      f"{100 * r['realised_outage']:.1f}%; realised within the drawn 5-95% "
+                      f"interval for {100 * r['within_90_interval']:.0f}% of the plans, within "
+                      f"one spread for {100 * r['within_one_spread']:.0f}%",
+                      flush=True)  # fmt: skip
     return rows
 
 

@@ -51,8 +51,9 @@ def pixels(name: str, freq_hz: float, altitude_m: float, samples: int) -> dict[s
     """Every pixel the tracer covers (both halves of its rays, outside the buildings), per site:
     the tracer's minus the engine's power (``error_db``), the engine's excess loss over free
     space (``excess_db``), the distance from the site (``distance_m``), the site's index
-    (``site``) and the tracer's own standard error of its mean in dB, from the difference of its
-    two halves (``truth_se_db``: half that difference, the standard error of a mean of two)."""
+    (``site``), the tracer's own standard error of its mean in dB, from the difference of its
+    two halves (``truth_se_db``: half that difference, the standard error of a mean of two), and
+    the pixel's centre (``x_m``, ``y_m``)."""
     scn = tracer.isotropic_scenario(scene(name, freq_hz, altitude_m))
     ours = 10 * np.log10(np.maximum(tracer.engine_gain(scn), 1e-30))
     tm = tracer.tracer_gain(scn, samples=samples)
@@ -66,7 +67,7 @@ def pixels(name: str, freq_hz: float, altitude_m: float, samples: int) -> dict[s
     gx, gy = np.meshgrid(x, y)
     gz = np.broadcast_to(flight_heights(scn), gx.shape)
     out: dict[str, list] = {k: [] for k in ("error_db", "excess_db", "distance_m", "site",
-                                            "truth_se_db")}  # fmt: skip
+                                            "truth_se_db", "x_m", "y_m")}  # fmt: skip
     for s in range(ours.shape[0]):
         site = scn.sites[s]
         ex = excess_at(scn, s, gx.ravel(), gy.ravel(), gz.ravel(), ours[s].ravel())
@@ -77,6 +78,8 @@ def pixels(name: str, freq_hz: float, altitude_m: float, samples: int) -> dict[s
         out["distance_m"].append(d[sel])
         out["site"].append(np.full(int(sel.sum()), s))
         out["truth_se_db"].append(np.abs(halves[s]).ravel()[sel] / 2)
+        out["x_m"].append(gx.ravel()[sel])
+        out["y_m"].append(gy.ravel()[sel])
     return {k: np.concatenate(v) for k, v in out.items()}
 
 

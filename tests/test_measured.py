@@ -372,6 +372,9 @@ def test_fly_plans_on_the_corrected_map_and_reports_the_expected_outage(tmp_path
     m = summary["measurements"]
     assert 0.0 <= m["expected_outage_share"] <= 1.0
     assert m["spread_correlated"] >= m["spread_independent"] >= 0.0
+    along = summary["outage_chance"]["along_path"]
+    assert 0.0 <= along["outage_share_p5"] <= along["outage_share_p95"] <= 1.0
+    assert along["spread_along_path"] >= 0.0
     fit = json.loads((out / "fit.json").read_text())
     zh2 = [f for f in fit["calibration"] if names[f["cell"]].startswith("ZH-002") and f["offsets"]]
     assert zh2

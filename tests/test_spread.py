@@ -372,3 +372,38 @@ def test_a_physics_maps_outage_draws_the_site_error_once_for_every_cell(worlds) 
         want = float(np.mean(sinr < 10.0))
         se = np.sqrt(want * (1 - want) * (1 / draws + 1 / n))
         assert abs(got[j] - want) <= 4 * se + 1e-3, (j, got[j], want)
+
+
+def test_a_paths_outage_drawn_whole_agrees_with_its_pixels_and_lies_between_the_bounds(
+    worlds,
+) -> None:
+    """A straight path of 60 pixels across the physics map: the share of outage drawn whole
+    along it (``path_outage_draws``) has the mean of its pixels' outage probabilities (within
+    four standard errors of the two estimates), and its spread lies between the bounds of
+    independent and fully correlated pixels (the site error shared by every pixel makes it wider
+    than the independent bound); on a corrected map the residual field correlates neighbouring
+    pixels (the correlation matrix is the field's share of the variance times its Matern)."""
+    from rainuav.radio.measured.outage import _along, path_outage, path_outage_draws
+
+    prior, truth = worlds
+    r = np.full(60, 40)
+    c = np.arange(10, 70)
+    prob = outage_probability(prior, 10.0, pixels=(r, c), draws=20_000)
+    got = path_outage_draws(prior, (r, c), 10.0, draws=4000)
+    bounds = path_outage(prob)
+    se = np.sqrt(got["spread_along_path"] ** 2 / 4000 + 0.25 / 20_000 / 60)
+    assert abs(got["expected_outage_share"] - bounds["expected_outage_share"]) <= 4 * se + 1e-3
+    assert bounds["spread_independent"] < got["spread_along_path"]
+    assert got["spread_along_path"] <= bounds["spread_correlated"] * 1.05
+    assert got["outage_share_p5"] <= got["expected_outage_share"] <= got["outage_share_p95"]
+    log = sample_log(truth, 0.02, cells=3, seed=5)
+    cm = correct_map(prior, log, cross_validate=False)
+    f = cm.fit["residual"][0]
+    xy = np.column_stack([prior.x_m[c], prior.y_m[r]])
+    k = _along(cm, int(f["cell"]), xy)
+    share = f["amplitude_db"] ** 2 / (f["amplitude_db"] ** 2 + f["noise_db"] ** 2)
+    d = abs(xy[1, 0] - xy[0, 0]) / f["length_m"]
+    want = share * (1 + np.sqrt(3) * d) * np.exp(-np.sqrt(3) * d)
+    assert k[0, 0] == pytest.approx(1.0) and k[0, 1] == pytest.approx(want)
+    drawn = path_outage_draws(cm, (r, c), 10.0, draws=500)
+    assert 0.0 <= drawn["outage_share_p5"] <= drawn["outage_share_p95"] <= 1.0

@@ -172,13 +172,18 @@ def fly_place(
         **(buildings_near_route(scn, path) or {}),
     }  # fmt: skip
     if isinstance(rm, RadioMap):  # outage as a probability, from the map's spreads
-        from rainuav.radio.measured.outage import outage_probability, path_outage
+        from rainuav.radio.measured.outage import (
+            outage_probability,
+            path_outage,
+            path_outage_draws,
+        )
 
         r, c = pixel_index(rm.sinr_db.shape, rm.extent_m, path[1:, 0], path[1:, 1])
         prob = outage_probability(rm, min_db, pixels=(r, c), draws=4096)  # the path's pixels
         summary["outage_chance"] = {
             "spreads": "the prior's by mechanism" if rm.fit is None else "the measurements'",
             **path_outage(prob),
+            "along_path": path_outage_draws(rm, (r, c), min_db),
         }
         if rm.fit is not None:
             summary["measurements"] = {"log": rm.fit["log"],

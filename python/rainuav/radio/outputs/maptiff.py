@@ -1,8 +1,8 @@
 """Radio maps out as GeoTIFF, as GIS tools (QGIS, GDAL) read them.
 
-One file, four to six float32 bands over the map's pixels, north-up, in the scenario's own projection (its
-[`rainuav.geo.Georef`][rainuav.geo.Georef]: an azimuthal equidistant projection on WGS 84 centred on
-the origin, written as the file's CRS), with band descriptions and units:
+One file, four to six float32 bands over the map's pixels, north-up, in the scenario's own
+projection (its [`rainuav.geo.Georef`][rainuav.geo.Georef]: an azimuthal equidistant projection
+on WGS 84 centred on the origin, written as the file's CRS), with band descriptions and units:
 
 1. ``sinr_db``: SINR, dB;
 2. ``rss_serving_dbm``: the received power of the serving cell, dBm;
