@@ -112,17 +112,18 @@ def path_outage(prob: np.ndarray) -> dict[str, float]:
     }
 
 
-def _along(rm: Any, cell: int, xy: np.ndarray) -> np.ndarray:
+def _along(rm: Any, cell: int, xy: np.ndarray) -> np.ndarray | None:
     """The correlation of one cell's local-mean errors between the path's pixels ``xy`` (N, 2),
     besides any error shared by every pixel: a corrected map's residual field (its fitted
     Matern 3/2 over its length across the ground, the field's share of the variance; the
     nugget's share independent), else independent pixels (a physics map's engine error, whose
-    correlation is not measured; its site error is shared, drawn apart)."""
+    correlation is not measured; its site error is shared, drawn apart): None for independent
+    pixels."""
     n = len(xy)
     fields = {int(f["cell"]): f for f in ((getattr(rm, "fit", None) or {}).get("residual") or [])}
     f = fields.get(cell)
     if f is None or not f.get("length_m"):
-        return np.eye(n)
+        return None
     amp2, nug2 = f["amplitude_db"] ** 2, f["noise_db"] ** 2
     share = amp2 / (amp2 + nug2) if amp2 + nug2 > 0 else 0.0
     d = np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1)) / f["length_m"]
@@ -148,20 +149,29 @@ def path_outage_draws(
     common = SITE_DB if getattr(rm, "prior_rss_dbm", None) is None else 0.0
     local = np.sqrt(np.maximum(local**2 - common**2, 0.0))
     m, n = rss.shape
+    if n == 0:  # a path of no moves
+        return {"expected_outage_share": 0.0, "spread_along_path": 0.0,
+                "outage_share_p5": 0.0, "outage_share_p95": 0.0}  # fmt: skip
     xy = np.column_stack([np.asarray(rm.x_m)[c], np.asarray(rm.y_m)[r]])
     rng = np.random.default_rng(seed)
-    d = np.empty((draws, m, n))
-    for k in range(m):
-        chol = np.linalg.cholesky(_along(rm, k, xy) + 1e-9 * np.eye(n))
-        d[:, k] = rss[k] + local[k] * (rng.standard_normal((draws, n)) @ chol.T)
-    if common:
-        d += common * rng.standard_normal((draws, 1, 1))
-    if sample:
-        d += one[None] * rng.standard_normal((draws, m, n))
+    along = [_along(rm, k, xy) for k in range(m)]
+    chol = [None if a is None else np.linalg.cholesky(a + 1e-9 * np.eye(n)) for a in along]
     reached = rss > RSS_FLOOR_DBM + 1.0
-    p = np.where(reached[None], 10 ** (np.minimum(d, 100.0) / 10), 0.0)
-    sinr = sir_from_power(p.transpose(1, 0, 2).reshape(m, -1), rm.scenario.noise_power_dbm)[2]
-    share = (sinr.reshape(draws, n) < min_db).mean(axis=1)
+    share = np.empty(draws)
+    step = max(1, int(4e6 // (m * n)))  # draws at a time: a long path in bounded memory
+    for i in range(0, draws, step):
+        b = min(step, draws - i)
+        d = np.empty((b, m, n))
+        for k in range(m):
+            z = rng.standard_normal((b, n))
+            d[:, k] = rss[k] + local[k] * (z if chol[k] is None else z @ chol[k].T)
+        if common:
+            d += common * rng.standard_normal((b, 1, 1))
+        if sample:
+            d += one[None] * rng.standard_normal((b, m, n))
+        p = np.where(reached[None], 10 ** (np.minimum(d, 100.0) / 10), 0.0)
+        sinr = sir_from_power(p.transpose(1, 0, 2).reshape(m, -1), rm.scenario.noise_power_dbm)[2]
+        share[i : i + b] = (sinr.reshape(b, n) < min_db).mean(axis=1)
     return {
         "expected_outage_share": float(share.mean()),
         "spread_along_path": float(share.std()),
