@@ -88,8 +88,12 @@ def _measured(rm: Any, kind: str) -> tuple[Any, str, str, float, float | None]:
     ii, jj = np.indices(rm.serving_cell.shape)
     s = np.maximum(rm.serving_cell, 0)
     if kind == "rss_std":
-        return (rm.rss_std_db[s, ii, jj], "local-mean RSS std, serving cell [dB]", "magma", 0.0,
-                None)  # fmt: skip
+        data = rm.rss_std_db[s, ii, jj]
+        if rm.prior_rss_dbm is None:  # a physics map's prior: the site error sets the floor
+            lo, hi = (float(np.percentile(data, q)) for q in (1, 99))
+            return (data, "prior local-mean RSS std, serving cell [dB]", "magma", lo,
+                    max(hi, lo + 1.0))  # fmt: skip
+        return data, "local-mean RSS std, serving cell [dB]", "magma", 0.0, None
     if kind == "rss_sample_std":
         return (rm.rss_sample_std_db[s, ii, jj], "one sample's RSS std, serving cell [dB]",
                 "magma", 0.0, None)  # fmt: skip
