@@ -132,9 +132,10 @@ def build_parser() -> argparse.ArgumentParser:
         "'none' (default: all four)",
     )  # fmt: skip
     ap.add_argument(
-        "--receive-pattern", choices=("off", "elevation"), default="off",
+        "--receive-pattern", choices=("off", "elevation", "heading", "both"), default="off",
         help="with --measurements: 'elevation' fits the UAV's receive gain by elevation before "
-        "the residual field (fit.json's held-out scores say whether it helped; default off)",
+        "the residual field, 'heading' its gain against its heading (a log with heading_deg), "
+        "'both' the two (fit.json's held-out scores say whether it helped; default off)",
     )  # fmt: skip
     ap.add_argument(
         "--level-step-m", type=float, default=None, metavar="M",

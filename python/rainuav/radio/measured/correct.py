@@ -58,7 +58,7 @@ from rainuav.radio.scene.terrain import flight_heights
 
 __all__ = ["MIN_FIELD_POINTS", "RECEIVE_PATTERNS", "Correction", "correct_map", "fit_correction"]
 
-RECEIVE_PATTERNS = ("off", "elevation")
+RECEIVE_PATTERNS = ("off", "elevation", "heading", "both")
 """What ``correct_map``'s ``receive_pattern`` may be."""
 
 
@@ -82,9 +82,11 @@ def correct_map(
     height bins; ``seed``: the draw of the hyperparameters' fitting subset; ``build``: how maps at
     the log's heights are built (default the cached
     [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map]); ``receive_pattern``:
-    ``"off"`` or ``"elevation"`` (the UAV's receive gain by elevation fitted before the fields,
+    ``"off"``, ``"elevation"`` (the UAV's receive gain by elevation fitted before the fields,
     [`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern]; the held-out scores then
-    fit it in every fold, so ``fit.json`` says whether it helped); ``progress``: a line on
+    fit it in every fold, so ``fit.json`` says whether it helped), ``"heading"`` (its gain
+    against the heading, for a log with ``heading_deg``: on the map, a spread added to one
+    sample's) or ``"both"``; ``progress``: a line on
     standard error per map built at the log's heights, per stage and per held-out fold."""
     if receive_pattern not in RECEIVE_PATTERNS:
         raise InvalidInputError(
@@ -97,12 +99,13 @@ def correct_map(
         raise InvalidInputError(f"level_step_m must lie within 1..500 m (got {level_step_m:g})")
     scn = rm.scenario
     prior = prior_at(rm, log, level_step_m, build, progress=progress)
-    receive = receive_pattern == "elevation"
+    receive = receive_pattern in ("elevation", "both")
+    heading = receive_pattern in ("heading", "both")
     if progress:
         print(f"fitting {len(log)} rows: calibration and residual fields", file=sys.stderr,
               flush=True)  # fmt: skip
     corr = fit_correction(rm, log, prior, params=params, level_step_m=level_step_m, seed=seed,
-                          receive=receive)  # fmt: skip
+                          receive=receive, heading=heading)  # fmt: skip
     if not corr.fields:
         raise InvalidInputError(
             f"{log.source or 'the log'}: no cell has {MIN_FIELD_POINTS} usable rows; too few "
@@ -130,6 +133,8 @@ def correct_map(
     for fc in corr.fits:  # the fitted offsets' own uncertainty, independent of the residual's
         if fc.offsets:
             std[fc.cell] = np.hypot(std[fc.cell], calibration_std_db(scn, fc, gx, gy, gz))
+    if corr.heading is not None:  # the heading a pixel is flown at is not known: a spread
+        sample = np.hypot(sample, corr.heading.spread_db)
     cal = np.where(reached, np.clip(cal, RSS_FLOOR_DBM, 100.0), RSS_FLOOR_DBM)
     power = np.where(reached, 10.0 ** (cal / 10.0), 0.0)
     serving, sir, sinr = sir_from_power(power, scn.noise_power_dbm)
@@ -144,7 +149,8 @@ def correct_map(
         "unmeasured_cells_std_db": corr.other_local_db,
         "unmeasured_cells_sample_std_db": corr.other_sample_db,
         "receive_pattern": {"choice": receive_pattern}
-        | ({} if corr.receive is None else {"elevation_gain": corr.receive.to_dict()}),
+        | ({} if corr.receive is None else {"elevation_gain": corr.receive.to_dict()})
+        | ({} if corr.heading is None else {"heading_gain": corr.heading.to_dict()}),
     }
     if cross_validate:
         fit["cross_validation"] = cross_validate_log(
@@ -156,6 +162,7 @@ def correct_map(
             seed=seed,
             whole=corr,
             receive=receive,
+            heading=heading,
             progress=progress,
         )
     return dataclasses.replace(

@@ -12,9 +12,17 @@ from typing import Any
 
 import numpy as np
 
+from rainuav.errors import InvalidInputError
 from rainuav.radio.measured.calibrate import BOUNDS, calibrate, calibrated_at, calibration_std_db
 from rainuav.radio.measured.log import MeasurementLog
-from rainuav.radio.measured.pattern import ElevationGain, elevation_deg, fit_gain
+from rainuav.radio.measured.pattern import (
+    ElevationGain,
+    HeadingGain,
+    elevation_deg,
+    fit_gain,
+    fit_heading_gain,
+    relative_azimuth_deg,
+)
 from rainuav.radio.measured.prior import engine_spread_at
 from rainuav.radio.measured.residual import ResidualField, fit_residual, sample_spread
 from rainuav.radio.outputs.mapdata import RadioMap
@@ -31,6 +39,7 @@ def _take(log: MeasurementLog, m: np.ndarray) -> MeasurementLog:
         cell=log.cell[m], rss_dbm=log.rss_dbm[m], flight=log.flight[m],
         time_s=None if log.time_s is None else log.time_s[m],
         sinr_db=None if log.sinr_db is None else log.sinr_db[m],
+        heading_deg=None if log.heading_deg is None else log.heading_deg[m],
     )  # fmt: skip
 
 
@@ -93,12 +102,20 @@ class Correction:
     receive: ElevationGain | None = None
     """The UAV's receive gain by elevation, where one was fitted
     ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern])."""
+    heading: HeadingGain | None = None
+    """The UAV's receive gain against its heading, where one was fitted (the same module)."""
 
     def receive_at(self, log: MeasurementLog) -> np.ndarray:
-        """The receive gain at the rows of ``log``, dB (0 without one)."""
-        if self.receive is None:
-            return np.zeros(len(log))
-        return self.receive.at(elevation_deg(self.scenario, log.cell, log.x_m, log.y_m, log.z_m))
+        """The receive gain at the rows of ``log``, dB (0 without one; the heading's where the
+        log gives the heading)."""
+        scn = self.scenario
+        out = np.zeros(len(log))
+        if self.receive is not None:
+            out += self.receive.at(elevation_deg(scn, log.cell, log.x_m, log.y_m, log.z_m))
+        if self.heading is not None and log.heading_deg is not None:
+            rel = relative_azimuth_deg(scn, log.cell, log.x_m, log.y_m, log.heading_deg)
+            out += self.heading.at(rel)
+        return out
 
     def predict(
         self, log: MeasurementLog, prior: np.ndarray, *, fields: bool = True,
@@ -137,11 +154,13 @@ def fit_correction(
     rm: RadioMap, log: MeasurementLog, prior: np.ndarray, *,
     params: Sequence[str] = tuple(BOUNDS), level_step_m: float = 10.0, seed: int = 0,
     like: Correction | None = None, max_points: int | None = None, receive: bool = False,
+    heading: bool = False,
 ) -> Correction:  # fmt: skip
     """Steps 2-3 of the module docstring on ``log``, whose rows' prior powers are ``prior``:
     the offsets, the fields and the spreads of the cells without one. ``like``: a correction
     of more of the log whose hyperparameters to reuse (a cross-validation fold);
-    ``receive``: fit the UAV's receive gain by elevation before the fields
+    ``receive``: fit the UAV's receive gain by elevation before the fields, ``heading``: its
+    gain against its heading (the log needs ``heading_deg``)
     ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern])."""
     scn = rm.scenario
     fits = calibrate(scn, log, prior, params, near=None if like is None else like.fits)
@@ -151,6 +170,16 @@ def fit_correction(
         el = elevation_deg(scn, log.cell, log.x_m, log.y_m, log.z_m)
         gain = fit_gain(el, resid)
         resid = resid - gain.at(el)
+    by_heading = None
+    if heading:
+        if log.heading_deg is None or not np.isfinite(log.heading_deg).any():
+            raise InvalidInputError(
+                f"{log.source or 'the log'}: a receive gain against the heading needs a "
+                "heading_deg column"
+            )
+        rel = relative_azimuth_deg(scn, log.cell, log.x_m, log.y_m, log.heading_deg)
+        by_heading = fit_heading_gain(rel, resid)
+        resid = resid - by_heading.at(rel)
     fields = _fields(rm, log, resid, level_step_m, seed,
                      None if like is None else like.fields, max_points,
                      _scale_at(scn, log, prior))  # fmt: skip
@@ -163,4 +192,4 @@ def fit_correction(
         h = _heights(rm, log)
         sample = sample_spread(log.x_m, log.y_m, h, resid, scn.area.resolution_m, level_step_m)
         sample = 0.0 if not np.isfinite(sample) else sample
-    return Correction(scn, fits, fields, pooled, sample, bool(scn.area.msl), gain)
+    return Correction(scn, fits, fields, pooled, sample, bool(scn.area.msl), gain, by_heading)

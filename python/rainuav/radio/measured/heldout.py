@@ -122,19 +122,20 @@ def cross_validate_log(
     rm: RadioMap, log: MeasurementLog, prior: np.ndarray, *,
     params: Sequence[str] = tuple(BOUNDS), level_step_m: float = 10.0, seed: int = 0,
     whole: Correction | None = None, baselines: bool = True, receive: bool = False,
-    progress: bool = False,
+    heading: bool = False, progress: bool = False,
 ) -> dict[str, Any]:  # fmt: skip
     """Every held-out design of the log (module docstring, step 5), scored: per design, its
     folds and, per method, the scores of single samples and of local means
     ([`score()`][rainuav.radio.measured.scores.score]). ``whole``: the correction of the
     whole log (its hyperparameters are reused; fitted here if None); ``receive``: the corrected
-    and calibrated maps fit the UAV's receive gain by elevation in every fold; ``progress``: one
+    and calibrated maps fit the UAV's receive gain by elevation in every fold, ``heading``: its
+    gain against the heading (each held-out row predicted with its own heading); ``progress``: one
     line on standard error per fold."""
     scn = rm.scenario
     step = level_step_m
     if whole is None:
         whole = fit_correction(rm, log, prior, params=params, level_step_m=step, seed=seed,
-                               receive=receive)  # fmt: skip
+                               receive=receive, heading=heading)  # fmt: skip
     heights = _heights(rm, log)
     pts = np.column_stack([log.x_m, log.y_m, heights])
     z = log.z_m
@@ -169,7 +170,7 @@ def cross_validate_log(
                             np.full(len(te), smp))  # fmt: skip
             fc = fit_correction(rm, tr, prior[train], params=params, level_step_m=step,
                                 seed=seed, like=whole, max_points=CV_MAX_POINTS,
-                                receive=receive)  # fmt: skip
+                                receive=receive, heading=heading)  # fmt: skip
             got["corrected"] = fc.predict(te, prior[test])
             got["calibrated"] = fc.predict(te, prior[test], fields=False, far=whole.fields)
             if baselines:

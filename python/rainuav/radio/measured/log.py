@@ -13,7 +13,9 @@ and a trailing unit in brackets, so ``RSRP (dBm)`` is ``rsrp``):
 - the level: ``rsrp_dbm`` (reference-signal received power, per resource element) or
   ``rss_dbm`` (the cell's power over the whole band, the map's own quantity);
 - optional: ``time`` (seconds, or an ISO 8601 instant), ``sinr_db``, ``flight`` (which
-  flight or drive a row belongs to: the calibration's cross-validation leaves one out).
+  flight or drive a row belongs to: the calibration's cross-validation leaves one out),
+  ``heading_deg`` (where the UAV's nose points, degrees clockwise from north, as autopilots log
+  it; a row without one is kept, its heading unknown).
 
 Drive-test tools name these columns their own way; [`ALIASES`][rainuav.radio.measured.log.ALIASES]
 maps the common ones (``Latitude``, ``Longitude``, ``Altitude``, ``RSRP``, ``Cell``...).
@@ -79,6 +81,7 @@ ALIASES: dict[str, tuple[str, ...]] = {
     "sinr_db": ("sinr_db", "sinr", "rs_sinr", "ss_sinr"),
     "time": ("time", "timestamp", "time_s", "datetime", "utc"),
     "flight": ("flight", "flight_id", "drive", "log", "mission"),
+    "heading_deg": ("heading_deg", "heading", "yaw_deg", "yaw", "hdg"),
 }
 """Each column rainuav reads and the header names it accepts for it (after lower-casing, dropping
 a bracketed unit and turning spaces and dashes into underscores)."""
@@ -118,6 +121,9 @@ class MeasurementLog:
     sinr_db: npt.NDArray[np.float64] | None = None
     """The SINR the receiver reported, dB, where the log has a ``sinr_db`` column (kept for the
     user; the fit uses the per-cell power: a SINR depends on every cell and on the load)."""
+    heading_deg: npt.NDArray[np.float64] | None = None
+    """Where the UAV's nose pointed, degrees clockwise from north (NaN where a row gave none),
+    where the log has a ``heading_deg`` column."""
     rows: int = 0
     """Data rows in the file."""
     skipped: dict[str, int] = field(default_factory=dict)
@@ -331,7 +337,14 @@ def _to_log(
         x_m=x[use], y_m=y[use], z_m=z, alt_m=above, cell=cell[use], rss_dbm=level[use],
         flight=flight, time_s=t, rows=n, skipped=dict(skipped), source=str(p),
         sinr_db=column("sinr_db")[use] if "sinr_db" in cols else None,
+        heading_deg=_headings(column("heading_deg")[use]) if "heading_deg" in cols else None,
     )  # fmt: skip
+
+
+def _headings(h: np.ndarray) -> np.ndarray:
+    """Headings in 0..360 degrees; NaN where a value is missing or outside -360..720."""
+    ok = np.isfinite(h) & (h >= -360.0) & (h <= 720.0)
+    return np.where(ok, np.mod(np.where(ok, h, 0.0), 360.0), np.nan)
 
 
 def _no_row(

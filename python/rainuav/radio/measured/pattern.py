@@ -1,4 +1,4 @@
-"""The UAV's receive pattern in elevation, learned from a log.
+"""The UAV's receive pattern in elevation, and against its heading, learned from a log.
 
 A map's receiver is isotropic; a real UAV's antenna, under its airframe and its batteries, is
 not, and how much it receives from a cell depends on where the cell lies below it. Over a log
@@ -18,7 +18,18 @@ It is asked for (``correct_map(..., receive_pattern="elevation")``, ``radiomap
 --receive-pattern elevation``), not assumed: the held-out scores then fit it in every fold, and
 say whether it lowered the error. On AERPAW's flights it lowers the calibrated map's held-out
 RMSE by 0.5-0.7 dB and raises the corrected map's by 0.1-0.2 dB (the residual field already
-takes the trend with height), so it is off by default (the page "How far to trust a map")."""
+takes the trend with height), so it is off by default (the page "How far to trust a map").
+
+**Against the heading.** Where the log has the UAV's heading (``heading_deg``), the airframe's
+shadow is a gain by the azimuth under which the UAV sees the cell relative to its nose,
+``phi = bearing to the cell - heading``: a Fourier series of ``HARMONICS`` orders without a
+constant (the power offset takes that), ``g(phi) = sum_k a_k cos k phi + b_k sin k phi``,
+fitted by least squares with a small ridge, shared by every cell
+([`HeadingGain`][rainuav.radio.measured.pattern.HeadingGain]). A map does not know which way
+the UAV will point at a pixel, so on the map the gain is a spread, not a shift: its root mean
+square over the heading, ``sqrt(sum_k (a_k^2 + b_k^2) / 2)``, added to one sample's spread in
+quadrature. Asked for as ``receive_pattern="heading"`` (or ``"both"``), like the elevation's;
+the held-out scores predict each held-out row with its own heading."""
 
 from __future__ import annotations
 
@@ -27,12 +38,24 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SMOOTHING", "STEP_DEG", "ElevationGain", "elevation_deg", "fit_gain"]
+__all__ = [
+    "HARMONICS",
+    "SMOOTHING",
+    "STEP_DEG",
+    "ElevationGain",
+    "HeadingGain",
+    "elevation_deg",
+    "fit_gain",
+    "fit_heading_gain",
+    "relative_azimuth_deg",
+]
 
 STEP_DEG = 5.0
 """The knots' spacing, degrees."""
 SMOOTHING = 1e-3
 """The second differences' penalty, per row."""
+HARMONICS = 2
+"""The orders of the heading gain's Fourier series."""
 
 
 @dataclass(frozen=True)
@@ -91,3 +114,60 @@ def fit_gain(elevation: Any, resid: Any) -> ElevationGain:
     d = np.diff(np.eye(len(knots)), 2, axis=0)
     a = b.T @ b + SMOOTHING * len(e) * (d.T @ d) + 1e-6 * len(e) * np.eye(len(knots))
     return ElevationGain(knots, np.linalg.solve(a, b.T @ r))
+
+
+@dataclass(frozen=True)
+class HeadingGain:
+    """A receive gain by the azimuth of the cell relative to the UAV's nose, dB (module
+    docstring): ``cos_db[k]`` and ``sin_db[k]`` the coefficients of order ``k + 1``."""
+
+    cos_db: np.ndarray
+    sin_db: np.ndarray
+
+    def at(self, relative_deg: Any) -> np.ndarray:
+        """The gain at the relative azimuths (degrees; NaN, an unknown heading: 0), dB."""
+        phi = np.radians(np.asarray(relative_deg, dtype=float))
+        k = np.arange(1, len(self.cos_db) + 1)
+        g = np.cos(np.multiply.outer(phi, k)) @ self.cos_db
+        g = g + np.sin(np.multiply.outer(phi, k)) @ self.sin_db
+        return np.nan_to_num(g)
+
+    @property
+    def spread_db(self) -> float:
+        """The gain's root mean square over every heading, dB: its spread on a map."""
+        return float(np.sqrt(np.sum(self.cos_db**2 + self.sin_db**2) / 2))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"cos_db": self.cos_db.tolist(), "sin_db": self.sin_db.tolist(),
+                "spread_db": self.spread_db}  # fmt: skip
+
+
+def relative_azimuth_deg(scn: Any, cell: Any, x: Any, y: Any, heading_deg: Any) -> np.ndarray:
+    """The azimuth under which the UAV at (``x``, ``y``: east, north, m) heading
+    ``heading_deg`` (clockwise from north) sees each point's ``cell``'s site, relative to its
+    nose, degrees clockwise (NaN where the heading is)."""
+    from rainuav.radio.measured.calibrate import _cells
+
+    cells = _cells(scn)
+    x, y = (np.asarray(v, dtype=float) for v in (x, y))
+    cell = np.broadcast_to(np.asarray(cell, dtype=np.int64), x.shape)
+    bearing = np.empty(x.shape)
+    for c in np.unique(cell):
+        m = cell == c
+        site = cells[int(c)][0]
+        bearing[m] = np.degrees(np.arctan2(site.x_m - x[m], site.y_m - y[m]))
+    return np.mod(bearing - np.asarray(heading_deg, dtype=float), 360.0)
+
+
+def fit_heading_gain(relative_deg: Any, resid: Any) -> HeadingGain:
+    """The heading gain that best explains the residuals ``resid`` (dB) of rows seen at
+    ``relative_deg`` (degrees; rows of an unknown heading, NaN, are left out), (module
+    docstring)."""
+    phi = np.radians(np.asarray(relative_deg, dtype=float))
+    r = np.asarray(resid, dtype=float)
+    ok = np.isfinite(phi) & np.isfinite(r)
+    k = np.arange(1, HARMONICS + 1)
+    b = np.hstack([np.cos(np.multiply.outer(phi[ok], k)), np.sin(np.multiply.outer(phi[ok], k))])
+    a = b.T @ b + 1e-3 * max(int(ok.sum()), 1) * np.eye(2 * HARMONICS)
+    coef = np.linalg.solve(a, b.T @ (r[ok] - r[ok].mean()))
+    return HeadingGain(coef[:HARMONICS], coef[HARMONICS:])
