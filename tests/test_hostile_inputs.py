@@ -1252,6 +1252,24 @@ def test_a_runs_config_as_a_preset_starts_from_the_preset_it_records(tmp_path, c
                 "extends or preset")  # fmt: skip
 
 
+def test_a_heading_gain_asked_of_a_log_without_headings_is_one_line(tmp_path, capsys) -> None:
+    """``radiomap --receive-pattern heading`` with a log that has no heading_deg column: one
+    line naming the log and the column, nothing written."""
+    toml = tiny_scenario().to_toml(tmp_path / "s.toml")
+    rng = np.random.default_rng(1)
+    rows = ["x_m,y_m,alt_m,cell,rss_dbm"] + [
+        f"{rng.uniform(20, 380):.1f},{rng.uniform(20, 380):.1f},100,0,{-70 + rng.normal():.1f}"
+        for _ in range(200)
+    ]
+    log = tmp_path / "nohead.csv"
+    log.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "o"
+    rc, err = run_cli(radiomap, ["--config", toml, "--measurements", log, "--receive-pattern",
+                                 "heading", "--out", out], capsys)  # fmt: skip
+    refused("--receive-pattern heading without headings", rc, err, "nohead.csv", "heading_deg")
+    assert not (out / "radiomap.npz").exists()
+
+
 def test_the_corpus_totals(capsys) -> None:
     total = sum(TALLY.values())
     with capsys.disabled():
