@@ -28,6 +28,7 @@ from rainuav.radio.reference.tracer import (
     inside_buildings,
     interactions,
     load_sionna,
+    repeatable,
     tracer_scene,
 )
 from rainuav.radio.scene.scenario import Scenario
@@ -47,9 +48,15 @@ def path_gain(
     [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]) at the centre of
     every ``step``-th pixel (in both directions) outside the buildings, (S, H, W); other pixels are
     0 (not covered). Two runs of ``samples // 2`` candidate rays a site, seeded ``2 seed`` and
-    ``2 seed + 1``, are the two halves."""
+    ``2 seed + 1``, are the two halves; on one thread
+    ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]), the same every run."""
     if step < 1:
         raise ValueError(f"step is a whole number of pixels >= 1 (got {step})")
+    with repeatable():
+        return _path_gain(scn, samples, max_depth, seed, step)
+
+
+def _path_gain(scn: Scenario, samples: int, max_depth: int, seed: int, step: int) -> TracerMap:
     mi, rt = load_sionna()
     scene = tracer_scene(scn)
     images = add_transmitters(scene, scn)
