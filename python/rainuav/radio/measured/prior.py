@@ -38,7 +38,7 @@ model's; a physics map's own error is two things that these tables keep apart:
   the tracer scenes (``experiments/prior_spread_tracer.py``), per mechanism and per band of
   distance from the site (the error 68.27% of the tuning pixels stay within,
   [`measured_spreads()`][rainuav.radio.measured.prior.measured_spreads]): 0.3 dB in line of
-  sight near the site to 4.6 dB beyond 700 m, 0.5-3.7 dB diffracted or reflected, 1.7-4.8 dB in
+  sight near the site to 4.6 dB beyond 700 m, 0.5-3.7 dB diffracted or reflected, 1.7-4.7 dB in
   deep shadow;
 - the site database's error, which the engine cannot know (the transmit power, the real
   antenna patterns, cables, the airframe): 12.7 dB, chosen on real flights (AERPAW's, at the
@@ -159,7 +159,7 @@ MEASURED: dict[str, Spread] = {
         "the ray engine against Sionna RT (tuning pixels); fading as published",
     ),
     "deep shadow": Spread(
-        (1.7, 2.3, 4.8, 4.8, 4.8), SPREADS["deep shadow"].sample_db,
+        (1.7, 2.3, 4.7, 4.7, 4.7), SPREADS["deep shadow"].sample_db,
         "the ray engine against Sionna RT (tuning pixels); fading as published",
     ),
 }  # fmt: skip
