@@ -10,12 +10,10 @@ against itself, so that the antennas and the spreading cancel and what remains i
 buildings do (shadows, diffraction, wall reflections).
 
 - The tracer's map is a Monte Carlo estimate; it is run twice with half the rays each (two seeds)
-  and their mean is the reference; their difference estimates its noise per pixel. On the CPU,
-  Dr.Jit's LLVM backend sums the rays' contributions on several threads in an order that changes
-  from run to run, so two runs of one seed differ (by 3.9 dB at the 99th percentile of the pixels
-  of the `district` scene, 0.005 dB at the median); it is therefore run on one thread
-  ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]): the same seed gives the same
-  map, at about twice the time on 2 cores.
+  and their mean is the reference; their difference estimates its noise per pixel. It runs on one
+  Dr.Jit thread ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]: on several, the
+  rays are summed in an order that changes, and two runs of one seed differed by 3.9 dB at the
+  99th percentile of `district`'s pixels): the same seed, the same map, twice the time.
 - A pixel counts where the tracer covers it (both halves received something, with and without
   buildings), its halves agree within ``2 MAX_NOISE_DB``, and the UAV is outside every building;
   building effects below ``FLOOR_DB`` are compared as ``FLOOR_DB``.
@@ -321,13 +319,6 @@ def tracer_gain(
     ground, and a pixel's gain is the sum of both (incoherent: the pixel mean of the ground's
     fringes, as the ray engine takes it). On one thread
     ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]): the same seed, the same map."""
-    with repeatable():
-        return _tracer_gain(scn, samples, max_depth, diffraction, seed)
-
-
-def _tracer_gain(
-    scn: Scenario, samples: int, max_depth: int, diffraction: bool, seed: int
-) -> TracerMap:
     mi, rt = load_sionna()
     scene = tracer_scene(scn)
     images = add_transmitters(scene, scn)
@@ -335,22 +326,18 @@ def _tracer_gain(
     h, w = a.shape
     res = ((a.x_max_m - a.x_min_m) / w, (a.y_max_m - a.y_min_m) / h)
     solver = rt.RadioMapSolver()
+    centre = (0.5 * (a.x_min_m + a.x_max_m), 0.5 * (a.y_min_m + a.y_max_m), a.altitude_m)
     halves = []
     for half in range(2):
-        rm = solver(
-            scene,
-            center=mi.Point3f(
-                0.5 * (a.x_min_m + a.x_max_m), 0.5 * (a.y_min_m + a.y_max_m), a.altitude_m
-            ),
-            orientation=mi.Point3f(0.0, 0.0, 0.0),
-            size=mi.Point2f(a.x_max_m - a.x_min_m, a.y_max_m - a.y_min_m),
-            cell_size=mi.Point2f(*res),
-            samples_per_tx=max(1, samples // 2),
-            seed=2 * seed + half,
-            **interactions(max_depth, diffraction),
-        )
-        g = np.asarray(rm.path_gain.numpy(), dtype=float).reshape(images, len(scn.sites), h, w)
-        halves.append(g.sum(axis=0))
+        with repeatable():
+            rm = solver(
+                scene, center=mi.Point3f(*centre), orientation=mi.Point3f(0.0, 0.0, 0.0),
+                size=mi.Point2f(a.x_max_m - a.x_min_m, a.y_max_m - a.y_min_m),
+                cell_size=mi.Point2f(*res), samples_per_tx=max(1, samples // 2),
+                seed=2 * seed + half, **interactions(max_depth, diffraction),
+            )  # fmt: skip
+            g = np.asarray(rm.path_gain.numpy(), dtype=float)
+        halves.append(g.reshape(images, len(scn.sites), h, w).sum(axis=0))
     return TracerMap(halves[0], halves[1])
 
 
