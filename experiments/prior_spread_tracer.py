@@ -58,7 +58,7 @@ def pixels(name: str, freq_hz: float, altitude_m: float, samples: int) -> dict[s
     ours = 10 * np.log10(np.maximum(tracer.engine_gain(scn), 1e-30))
     tm = tracer.tracer_gain(scn, samples=samples)
     ok = tm.covered & ~tracer.inside_buildings(scn)[None]
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # uncovered pixels: -inf, NaN
         truth = 10 * np.log10(tm.gain)
         halves = 10 * np.log10(tm.half_a) - 10 * np.log10(tm.half_b)
     a = scn.area

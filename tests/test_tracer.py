@@ -90,3 +90,27 @@ def test_the_tracer_gives_the_same_map_for_the_same_seed() -> None:
     assert dr.thread_count() == before
     assert np.array_equal(a.half_a, b.half_a) and np.array_equal(a.half_b, b.half_b)
     assert not np.array_equal(a.half_a, c.half_a)
+
+
+def test_the_shipped_engine_spreads_are_what_the_tuning_pixels_measure() -> None:
+    """``rainuav.radio.measured.prior.MEASURED`` is the table ``measured_spreads`` makes of the
+    engine's errors against the tracer on the tuning pixels (every scene but the held-back ones,
+    and the held-back ones' first site; ``experiments/prior_spread_tracer.py``, which prints
+    both): each value within 0.06 dB (the table keeps one decimal)."""
+    import sys
+    from pathlib import Path
+
+    here = str(Path(__file__).resolve().parents[1] / "experiments")
+    sys.path.insert(0, here)
+    try:
+        from prior_spread_tracer import pixels, split
+    finally:
+        sys.path.remove(here)
+    from rainuav.radio.measured.prior import MEASURED, MECHANISMS, measured_spreads
+    from rainuav.radio.reference.tracer_scenes import SCENES
+
+    data = {name: pixels(name, 3.5e9, 20.0, 8_000_000) for name in SCENES}
+    tune = split(data, True)
+    got = measured_spreads(tune["error_db"], tune["excess_db"], tune["distance_m"])
+    for m in MECHANISMS:
+        assert got[m].local_db == pytest.approx(MEASURED[m].local_db, abs=0.06), m
