@@ -696,6 +696,11 @@ def test_fly_refuses_a_start_where_it_may_not_fly(tmp_path: Path, capsys) -> Non
 # -- maps out as GeoTIFF ---------------------------------------------------------------------------
 
 
+SIX_BANDS = ("sinr_db", "rss_serving_dbm", "serving_cell", "not_flyable", "rss_serving_std_db",
+             "rss_serving_sample_std_db")  # fmt: skip
+"""A physics map's GeoTIFF bands from radiomap: every map's four and the prior's two spreads."""
+
+
 @pytest.mark.slow
 def test_maps_out_as_geotiff_read_back_at_the_right_place(tmp_path: Path) -> None:
     # A georeferenced map written by `radiomap` (the walled height map, so some pixels are not
@@ -724,14 +729,7 @@ def test_maps_out_as_geotiff_read_back_at_the_right_place(tmp_path: Path) -> Non
     tif = out / "radiomap.tif"
     with rasterio.open(tif) as src:
         # the four bands of every map, and the prior's two spreads a physics map carries
-        assert src.descriptions == (
-            "sinr_db",
-            "rss_serving_dbm",
-            "serving_cell",
-            "not_flyable",
-            "rss_serving_std_db",
-            "rss_serving_sample_std_db",
-        )
+        assert src.descriptions == SIX_BANDS
         assert src.nodata == NODATA and src.count == 6 and (src.height, src.width) == (40, 60)
         bands = src.read()
         # Three pixels by their centres' latitude and longitude.
@@ -758,14 +756,7 @@ def test_maps_out_as_geotiff_read_back_at_the_right_place(tmp_path: Path) -> Non
     info = subprocess.run([sys.executable, "-c", rio, "info", str(tif)],
                           capture_output=True, text=True, check=True)  # fmt: skip
     meta = json.loads(info.stdout)
-    assert meta["descriptions"] == [
-        "sinr_db",
-        "rss_serving_dbm",
-        "serving_cell",
-        "not_flyable",
-        "rss_serving_std_db",
-        "rss_serving_sample_std_db",
-    ]
+    assert meta["descriptions"] == list(SIX_BANDS)
     assert meta["nodata"] == NODATA
     assert 'PROJECTION["Azimuthal_Equidistant"]' in meta["crs"]
     assert 'PARAMETER["latitude_of_center",47.3]' in meta["crs"]

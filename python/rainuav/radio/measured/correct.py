@@ -50,7 +50,7 @@ from rainuav.radio.measured.heldout import cross_validate_log
 from rainuav.radio.measured.levels import prior_at
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.measured.pattern import elevation_deg
-from rainuav.radio.measured.prior import prior_spread
+from rainuav.radio.measured.prior import engine_spread
 from rainuav.radio.measured.residual import ResidualField
 from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
@@ -123,9 +123,9 @@ def correct_map(
         for c in range(len(cal)):
             g = corr.receive.at(elevation_deg(scn, c, gx.ravel(), gy.ravel(), gzb.ravel()))
             cal[c] = np.where(reached[c], cal[c] + g.reshape(gx.shape), cal[c])
-    scale = None  # a scaled field's scale: the engine's own spread at every pixel
+    scale = None  # a scaled field's scale: the engine's own spread, as at the log's rows
     if any(f.scaled for f in corr.fields.values()):
-        scale = prior_spread(rm, model_db=0.0)[0]
+        scale = engine_spread(rm)
     for c, f in corr.fields.items():
         mean, std[c] = f.on_grid(rm.x_m, rm.y_m, h, None if scale is None else scale[c])
         sample[c] = f.sample_db

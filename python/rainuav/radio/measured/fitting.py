@@ -130,17 +130,19 @@ class Correction:
         local = np.full(len(log), self.other_local_db)
         sample = np.full(len(log), self.other_sample_db)
         pts = np.column_stack([log.x_m, log.y_m, log.z_m if self.msl else log.alt_m])
-        scale = _scale_at(scn, log, prior)
-        for c, f in (self.fields if fields else (far or self.fields)).items():
+        used = self.fields if fields else (far or self.fields)
+        scale = _scale_at(scn, log, prior) if any(f.scaled for f in used.values()) else None
+        for c, f in used.items():
             m = log.cell == c
             if not m.any():
                 continue
             sample[m] = f.sample_db
+            at = None if scale is None else scale[m]
             if fields:
-                mean[m] += f.mean(pts[m], scale[m])
-                local[m] = f.std(pts[m], scale[m])
+                mean[m] += f.mean(pts[m], at)
+                local[m] = f.std(pts[m], at)
             else:
-                local[m] = f.far_at(int(m.sum()), scale[m])
+                local[m] = f.far_at(int(m.sum()), at)
         for fc in self.fits:
             m = log.cell == fc.cell
             if fc.offsets and m.any():

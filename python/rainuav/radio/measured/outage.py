@@ -57,6 +57,15 @@ def map_spreads(rm: Any, pixels: Any = None) -> tuple[np.ndarray, np.ndarray]:
     return prior_spread(rm, pixels=pixels)
 
 
+def _drawn_spreads(rm: Any, pixels: Any) -> tuple[np.ndarray, np.ndarray, float]:
+    """How a draw spreads each cell's power (module docstring): the local mean's spread drawn
+    cell by cell, one sample's, and the part shared by every cell (a physics map's site error,
+    taken out of the first in quadrature; 0 for a corrected map)."""
+    local, one = map_spreads(rm, pixels)
+    common = SITE_DB if getattr(rm, "prior_rss_dbm", None) is None else 0.0
+    return np.sqrt(np.maximum(local**2 - common**2, 0.0)), one, common
+
+
 def outage_probability(
     rm: Any, min_db: float, seed: int = 0, draws: int = DRAWS, pixels: Any = None,
     sample: bool = True,
@@ -66,9 +75,7 @@ def outage_probability(
     if not 1 <= draws <= 1_000_000:
         raise InvalidInputError(f"draws must lie within 1..1000000 (got {draws})")
     rss = np.asarray(rm.rss_dbm, dtype=float)
-    local, one = map_spreads(rm, pixels)  # at the pixels asked for alone
-    common = SITE_DB if getattr(rm, "prior_rss_dbm", None) is None else 0.0  # a physics map
-    local = np.sqrt(np.maximum(local**2 - common**2, 0.0))  # the rest, cell by cell
+    local, one, common = _drawn_spreads(rm, pixels)  # at the pixels asked for alone
     sd = np.hypot(local, one) if sample else local
     m = rss.shape[0]
     if pixels is None:
@@ -145,9 +152,7 @@ def path_outage_draws(
         raise InvalidInputError(f"draws must lie within 10..100000 (got {draws})")
     r, c = np.asarray(pixels[0]), np.asarray(pixels[1])
     rss = np.asarray(rm.rss_dbm, dtype=float)[:, r, c]
-    local, one = map_spreads(rm, (r, c))
-    common = SITE_DB if getattr(rm, "prior_rss_dbm", None) is None else 0.0
-    local = np.sqrt(np.maximum(local**2 - common**2, 0.0))
+    local, one, common = _drawn_spreads(rm, (r, c))
     m, n = rss.shape
     if n == 0:  # a path of no moves
         return {"expected_outage_share": 0.0, "spread_along_path": 0.0,

@@ -76,6 +76,7 @@ __all__ = [
     "SPREADS",
     "SPREAD_DISTANCES_M",
     "Spread",
+    "engine_spread",
     "engine_spread_at",
     "excess_at",
     "excess_loss_db",
@@ -386,6 +387,13 @@ def engine_spread_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any
     [`rainuav.radio.measured.residual`][rainuav.radio.measured.residual])."""
     ex = excess_at(scn, cell, x, y, z, power_dbm)
     return spreads_of(ex, site_distance_at(scn, cell, x, y, z), 0.0)[0]
+
+
+def engine_spread(rm: Any) -> np.ndarray:
+    """The engine's own local-mean spread at every pixel of every cell of the map ``rm``, dB,
+    (M, H, W): [`engine_spread_at()`][rainuav.radio.measured.prior.engine_spread_at] over the
+    map's pixels (no site error, no rain)."""
+    return spreads_of(excess_loss_db(rm), site_distance_m(rm), 0.0)[0]
 
 
 def prior_spread(

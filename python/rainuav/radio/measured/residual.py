@@ -154,12 +154,13 @@ class ResidualField:
     def _x(self, pts: np.ndarray) -> np.ndarray:
         return _features(pts, self.height_ratio)
 
-    def _scale(self, n: int, scale: Any) -> Any:
+    def _scale(self, shape: Any, scale: Any) -> Any:
+        """1 for a stationary field; a scaled field's ``scale`` at its points, of ``shape``."""
         if not self.scaled:
             return 1.0
         if scale is None:
             raise ValueError("a scaled field needs the scale at its points")
-        return np.broadcast_to(np.asarray(scale, dtype=float), (n,))
+        return np.broadcast_to(np.asarray(scale, dtype=float), shape)
 
     def mean(self, pts: np.ndarray, scale: Any = None) -> np.ndarray:
         """The field at the points (N, 3): east, north, height, dB (``scale``: the scale at
@@ -208,12 +209,8 @@ class ResidualField:
         enough for ``GRID_POINTS`` nodes; the last row and column always) and bilinear between;
         a scaled field's are then multiplied by each pixel's scale."""
         mean, std = self._grid(x_m, y_m, h_m)
-        if self.scaled:
-            if scale is None:
-                raise ValueError("a scaled field needs the scale at its points")
-            u = np.broadcast_to(np.asarray(scale, dtype=float), np.shape(mean))
-            return mean * u, std * u
-        return mean, std
+        u = self._scale(np.shape(mean), scale)
+        return mean * u, std * u
 
     def _grid(self, x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray) -> tuple[Any, Any]:
         gx, gy = np.meshgrid(x_m, y_m)
