@@ -1282,3 +1282,26 @@ def test_the_corpus_totals(capsys) -> None:
     assert set(TALLY) <= {"refused", "accepted"}
     if total:
         assert TALLY["refused"] > 0
+
+
+@pytest.mark.parametrize(
+    "record",
+    [
+        {"cell": 0},
+        {"cell": 0, "length_m": "x", "amplitude_db": 1, "noise_db": 1},
+        {"cell": 0, "length_m": -5, "amplitude_db": 1, "noise_db": 1},
+    ],
+)
+def test_a_crafted_residual_record_is_refused_by_the_path_draw(record) -> None:
+    """A map handed over may carry any ``fit_json``: a residual record without its numbers, or
+    with a negative length, is one line from ``path_outage_draws``, not a KeyError."""
+    import dataclasses
+
+    from rainuav.radio.measured.outage import path_outage_draws
+
+    rm = synthetic_map()
+    crafted = dataclasses.replace(rm, fit={"residual": [record]},
+                                  prior_rss_dbm=np.asarray(rm.rss_dbm, dtype=float))  # fmt: skip
+    px = (np.array([1, 2]), np.array([3, 4]))
+    api_refused("a crafted residual", lambda: path_outage_draws(crafted, px, 0.0, draws=20),
+                "residual of cell 0")  # fmt: skip

@@ -119,6 +119,29 @@ def path_outage(prob: np.ndarray) -> dict[str, float]:
     }
 
 
+def _field_of(rm: Any, cell: int) -> tuple[float, float, float] | None:
+    """The cell's residual field as the map's ``fit`` records it (length, amplitude and nugget:
+    m, dB, dB), None where it has none; a record that is not numbers is refused, naming it (a
+    map handed over may carry anything in its ``fit_json``)."""
+    fit = getattr(rm, "fit", None)
+    rows = fit.get("residual") if isinstance(fit, dict) else None
+    for f in rows if isinstance(rows, list) else []:
+        if not isinstance(f, dict) or f.get("cell") != cell:
+            continue
+        try:
+            got = tuple(float(f[k]) for k in ("length_m", "amplitude_db", "noise_db"))
+        except (KeyError, TypeError, ValueError) as err:
+            raise InvalidInputError(f"the map's fit: residual of cell {cell} is not a field "
+                                    f"record ({err})") from err  # fmt: skip
+        if not (np.isfinite(got).all() and got[0] > 0 and min(got[1:]) >= 0):
+            raise InvalidInputError(
+                f"the map's fit: residual of cell {cell} must have a positive length_m and "
+                "non-negative amplitude_db and noise_db"
+            )
+        return got  # type: ignore[return-value]
+    return None
+
+
 def _along(rm: Any, cell: int, xy: np.ndarray) -> np.ndarray | None:
     """The correlation of one cell's local-mean errors between the path's pixels ``xy`` (N, 2),
     besides any error shared by every pixel: a corrected map's residual field (its fitted
@@ -127,13 +150,13 @@ def _along(rm: Any, cell: int, xy: np.ndarray) -> np.ndarray | None:
     correlation is not measured; its site error is shared, drawn apart): None for independent
     pixels."""
     n = len(xy)
-    fields = {int(f["cell"]): f for f in ((getattr(rm, "fit", None) or {}).get("residual") or [])}
-    f = fields.get(cell)
-    if f is None or not f.get("length_m"):
+    f = _field_of(rm, cell)
+    if f is None:
         return None
-    amp2, nug2 = f["amplitude_db"] ** 2, f["noise_db"] ** 2
+    length, amp, nug = f
+    amp2, nug2 = amp**2, nug**2
     share = amp2 / (amp2 + nug2) if amp2 + nug2 > 0 else 0.0
-    d = np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1)) / f["length_m"]
+    d = np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1)) / length
     matern = (1 + np.sqrt(3) * d) * np.exp(-np.sqrt(3) * d)
     return share * matern + (1 - share) * np.eye(n)
 
