@@ -2,7 +2,7 @@
 
     python experiments/tracer_compare.py [--scenes urban district] [--freqs-ghz 3.5 4.9 28]
         [--altitudes 20 100] [--pols v h] [--samples 8e6] [--reference map|paths] [--step N]
-        [--json FILE] [--figure FILE]
+        [--coefficient p526 sionna] [--json FILE] [--figure FILE]
 
 For each scene ([`rainuav.radio.reference.tracer_scenes`][rainuav.radio.reference.tracer_scenes]; by
 default the held-back ones, on which no choice of the methods was made), frequency, UAV altitude and
@@ -19,7 +19,10 @@ their difference for the first case's first site. ``--reference paths``: against
 solver at the centre of every ``--step``-th pixel
 ([`rainuav.radio.reference.tracer_paths`][rainuav.radio.reference.tracer_paths]: its exact paths,
 where the radio map is a Monte Carlo estimate that is dark and scattered in deep shadows; its
-"noise" is then the difference between two candidate searches).
+"noise" is then the difference between two candidate searches). ``--coefficient``: the
+tracer's wedge coefficient, ITU-R P.526-15's (``p526``, which a full-wave solution supports on a
+concrete corner: ``experiments/wedge_fullwave.py``) and its own as released (``sionna``); by
+default both, one row each, side by side.
 """
 
 from __future__ import annotations
@@ -89,13 +92,18 @@ def main() -> None:
         "--step", type=int, default=1,
         help="with --reference paths: every STEP-th pixel in both directions",
     )  # fmt: skip
+    ap.add_argument(
+        "--coefficient", nargs="+", default=["p526", "sionna"], choices=["p526", "sionna"],
+        help="the tracer's wedge coefficient: ITU-R P.526-15's, its own as released, or both "
+             "(one row each, side by side)",
+    )  # fmt: skip
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--figure", type=Path, default=None)
     args = ap.parse_args()
     samples = int(args.samples)
     print(f"# {platform.processor() or platform.machine()}, {samples:.0e} rays a site, "
           f"engine {args.engine}, reference {args.reference} (step {args.step})")  # fmt: skip
-    head = "scene     GHz  alt pol site pixels shadow  med   p90   bias light agree noise"
+    head = "scene     GHz  alt pol site coef   pixels shadow  med   p90   bias light agree noise"
     print(head)
     rows = []
     for name in args.scenes:
@@ -103,18 +111,25 @@ def main() -> None:
             for alt in args.altitudes:
                 for pol in args.pols:
                     t = time.perf_counter()
-                    a = compare(
-                        scene(name, f * 1e9, alt, pol), samples=samples, engine=args.engine,
-                        reference=args.reference, step=args.step,
-                    )  # fmt: skip
-                    for k, r in enumerate(a.rows()):
-                        rows.append({"scene": name, "freq_ghz": f, "altitude_m": alt,
-                                     "pol": pol, "site": k, **r})  # fmt: skip
-                        print(f"{name:8} {f:5.1f} {alt:4.0f}  {pol}  {k:3d} {r['pixels']:6.0f} "
-                              f"{r['shadow_pixels']:6.0f} {r['shadow_median']:5.2f} "
-                              f"{r['shadow_p90']:5.2f} {r['shadow_bias']:6.2f} "
-                              f"{r['light_median']:5.2f} {r['classes_agree']:5.3f} "
-                              f"{r['noise_median']:5.2f}", flush=True)  # fmt: skip
+                    both = {
+                        c: compare(
+                            scene(name, f * 1e9, alt, pol), samples=samples,
+                            engine=args.engine, reference=args.reference, step=args.step,
+                            coefficient=c,
+                        ).rows()
+                        for c in args.coefficient
+                    }  # fmt: skip
+                    for k in range(len(next(iter(both.values())))):
+                        for c, found in both.items():
+                            r = found[k]
+                            rows.append({"scene": name, "freq_ghz": f, "altitude_m": alt,
+                                         "pol": pol, "site": k, "coefficient": c, **r})  # fmt: skip
+                            print(f"{name:8} {f:5.1f} {alt:4.0f}  {pol}  {k:3d} {c:6} "
+                                  f"{r['pixels']:6.0f} {r['shadow_pixels']:6.0f} "
+                                  f"{r['shadow_median']:5.2f} {r['shadow_p90']:5.2f} "
+                                  f"{r['shadow_bias']:6.2f} {r['light_median']:5.2f} "
+                                  f"{r['classes_agree']:5.3f} {r['noise_median']:5.2f}",
+                                  flush=True)  # fmt: skip
                     print(f"#   {time.perf_counter() - t:.1f} s", flush=True)
     if args.json is not None:
         args.json.write_text(json.dumps(rows, indent=1))

@@ -57,7 +57,8 @@ LONGEST_FIRST = (
 # Files that share an expensive start run on one worker: the reference ray tracer's (its LLVM
 # backend starts once a process: the two main tracer files took 67 s in one process, 76 s in two).
 TOGETHER = dict.fromkeys(
-    ("test_tracer.py", "test_tracer_paths.py", "test_tracer_wedge.py"), "tracer"
+    ("test_tracer.py", "test_tracer_paths.py", "test_tracer_wedge.py", "test_wedge_fullwave.py"),
+    "tracer",
 )
 
 

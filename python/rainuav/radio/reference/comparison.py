@@ -31,6 +31,7 @@ def compare(
     engine: str = "ray",
     reference: str = "map",
     step: int = 1,
+    coefficient: str = "p526",
 ) -> Agreement:
     """The building effect of the ray engine (or ``engine``:
     [`engine_gain()`][rainuav.radio.reference.tracer.engine_gain]) against the tracer's on ``scn``
@@ -39,12 +40,20 @@ def compare(
     a PEC one. ``reference``: ``"map"``, the tracer's radio map
     ([`tracer_gain()`][rainuav.radio.reference.tracer.tracer_gain]), or ``"paths"``, its path
     solver at every ``step``-th pixel's centre
-    ([`path_gain()`][rainuav.radio.reference.tracer_paths.path_gain])."""
+    ([`path_gain()`][rainuav.radio.reference.tracer_paths.path_gain]). ``coefficient``: the
+    tracer's wedge coefficient, the standard's (``"p526"``) or its own as released
+    (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge])."""
     if reference not in ("map", "paths"):
         raise ValueError(f"reference is 'map' or 'paths' (got {reference!r})")
+    from rainuav.radio.reference.tracer_wedge import COEFFICIENTS
+
+    if coefficient not in COEFFICIENTS:
+        raise ValueError(f"coefficient is one of {', '.join(COEFFICIENTS)} (got {coefficient!r})")
     with_b = isotropic_scenario(scn, ground=ground)
     without = isotropic_scenario(scn, buildings=False, ground=ground)
-    kw: dict[str, Any] = {"samples": samples, "seed": seed, "max_depth": max_depth}
+    kw: dict[str, Any] = {
+        "samples": samples, "seed": seed, "max_depth": max_depth, "coefficient": coefficient,
+    }  # fmt: skip
     gain: Any = tracer_gain
     if reference == "paths":
         gain = path_gain

@@ -91,8 +91,10 @@ is then good to about this."""
 
 def load_sionna() -> tuple[Any, Any]:
     """Imports Mitsuba and Sionna RT on a GPU where one is present, else on the CPU through LLVM,
-    with the wedge coefficient of [`tracer_wedge`][rainuav.radio.reference.tracer_wedge]: returns
-    ``(mitsuba, sionna.rt)``. Raises ImportError naming what is missing."""
+    with the wedge coefficient of [`tracer_wedge`][rainuav.radio.reference.tracer_wedge] (the
+    first time; [`coefficient()`][rainuav.radio.reference.tracer_wedge.coefficient] runs it with
+    its own as released): returns ``(mitsuba, sionna.rt)``. Raises ImportError naming what is
+    missing."""
     if "DRJIT_LIBLLVM_PATH" not in os.environ:
         for p in LLVM_PATHS:
             if os.path.exists(p):
@@ -118,9 +120,9 @@ def load_sionna() -> tuple[Any, Any]:
             )
     import sionna.rt as rt
 
-    from rainuav.radio.reference.tracer_wedge import install
+    from rainuav.radio.reference.tracer_wedge import install_default
 
-    install()
+    install_default()
     return mi, rt
 
 
@@ -310,6 +312,7 @@ def tracer_gain(
     max_depth: int = 2,
     diffraction: bool = True,
     seed: int = 0,
+    coefficient: str = "p526",
 ) -> TracerMap:
     """Sionna RT's path gain of each site of
     [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]'s ``scn`` at every
@@ -318,7 +321,18 @@ def tracer_gain(
     extends as deep below the ground as it stands above it, each site has its image below the
     ground, and a pixel's gain is the sum of both (incoherent: the pixel mean of the ground's
     fringes, as the ray engine takes it). On one thread
-    ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]): the same seed, the same map."""
+    ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]): the same seed, the same map.
+    ``coefficient``: the wedge coefficient it diffracts with, the standard's (``"p526"``) or its
+    own as released (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge])."""
+    from rainuav.radio.reference.tracer_wedge import coefficient as using
+
+    with using(coefficient):
+        return _tracer_gain(scn, samples, max_depth, diffraction, seed)
+
+
+def _tracer_gain(
+    scn: Scenario, samples: int, max_depth: int, diffraction: bool, seed: int
+) -> TracerMap:
     mi, rt = load_sionna()
     scene = tracer_scene(scn)
     images = add_transmitters(scene, scn)

@@ -43,16 +43,21 @@ def path_gain(
     max_depth: int = 2,
     seed: int = 0,
     step: int = 1,
+    coefficient: str = "p526",
 ) -> TracerMap:
     """The path solver's gain (linear) of each site of ``scn`` (an
     [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]) at the centre of
     every ``step``-th pixel (in both directions) outside the buildings, (S, H, W); other pixels are
     0 (not covered). Two runs of ``samples // 2`` candidate rays a site, seeded ``2 seed`` and
     ``2 seed + 1``, are the two halves; on one thread
-    ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]), the same every run."""
+    ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]), the same every run.
+    ``coefficient``: the wedge coefficient, the standard's (``"p526"``) or the tracer's own as
+    released (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge])."""
     if step < 1:
         raise ValueError(f"step is a whole number of pixels >= 1 (got {step})")
-    with repeatable():
+    from rainuav.radio.reference.tracer_wedge import coefficient as using
+
+    with repeatable(), using(coefficient):
         return _path_gain(scn, samples, max_depth, seed, step)
 
 

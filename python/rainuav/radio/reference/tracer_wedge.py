@@ -31,10 +31,12 @@ path solver.
 
 from __future__ import annotations
 
+import contextlib
 import inspect
+from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["install"]
+__all__ = ["COEFFICIENTS", "coefficient", "install", "install_default", "installed"]
 
 _SIGNATURE = ["self", "to_world", "ki_local", "ko_local", "si", "eta", "wavenumber"]
 
@@ -101,17 +103,63 @@ def _p526_diffraction_matrix(
     return jones_matrix_from_real_imag(w_out @ real @ w_in, w_out @ imag @ w_in)
 
 
-def install() -> None:
-    """Makes Sionna RT diffract at wedges with the coefficient above (module docstring).
-    Raises ImportError where the tracer's version has no such method to replace."""
+COEFFICIENTS = ("p526", "sionna")
+"""The wedge coefficients the tracer can run with: ``"p526"``, the one above (the default), and
+``"sionna"``, Sionna RT 2.2's own, as released."""
+
+_RELEASED: dict[str, Any] = {}
+"""Sionna RT's own ``_diffraction_matrix``, kept the first time it is replaced."""
+
+
+def install(coefficient: str = "p526") -> None:
+    """Makes Sionna RT diffract at wedges with ``coefficient`` (one of
+    [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]): the standard's
+    (module docstring) or the tracer's own as released. Raises ValueError for another name and
+    ImportError where the tracer's version has no such method to replace."""
+    if coefficient not in COEFFICIENTS:
+        raise ValueError(f"coefficient is one of {', '.join(COEFFICIENTS)} (got {coefficient!r})")
     from sionna.rt.radio_materials.radio_material import RadioMaterial
 
     own = getattr(RadioMaterial, "_diffraction_matrix", None)
-    if own is _p526_diffraction_matrix:
-        return
-    if own is None or list(inspect.signature(own).parameters) != _SIGNATURE:
-        raise ImportError(
-            "this sionna-rt has no RadioMaterial._diffraction_matrix(to_world, ki_local, "
-            "ko_local, si, eta, wavenumber) to replace: the tracer needs sionna-rt 2.2"
-        )
-    RadioMaterial._diffraction_matrix = _p526_diffraction_matrix
+    if "own" not in _RELEASED:
+        if own is None or list(inspect.signature(own).parameters) != _SIGNATURE:
+            raise ImportError(
+                "this sionna-rt has no RadioMaterial._diffraction_matrix(to_world, ki_local, "
+                "ko_local, si, eta, wavenumber) to replace: the tracer needs sionna-rt 2.2"
+            )
+        _RELEASED["own"] = own
+    RadioMaterial._diffraction_matrix = (
+        _p526_diffraction_matrix if coefficient == "p526" else _RELEASED["own"]
+    )
+
+
+def install_default() -> None:
+    """Installs the standard's coefficient the first time the tracer is loaded; later calls
+    leave in place whichever coefficient runs now (a
+    [`coefficient()`][rainuav.radio.reference.tracer_wedge.coefficient] block's)."""
+    if "own" not in _RELEASED:
+        install("p526")
+
+
+def installed() -> str:
+    """The coefficient the tracer diffracts with now (``"sionna"`` before any
+    [`install()`][rainuav.radio.reference.tracer_wedge.install])."""
+    from sionna.rt.radio_materials.radio_material import RadioMaterial
+
+    own = getattr(RadioMaterial, "_diffraction_matrix", None)
+    return "p526" if own is _p526_diffraction_matrix else "sionna"
+
+
+@contextlib.contextmanager
+def coefficient(name: str) -> Iterator[None]:
+    """Runs the tracer with the wedge coefficient ``name`` (one of
+    [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]) within the block,
+    and puts back the one it had after."""
+    if name not in COEFFICIENTS:
+        raise ValueError(f"coefficient is one of {', '.join(COEFFICIENTS)} (got {name!r})")
+    before = installed()
+    install(name)
+    try:
+        yield
+    finally:
+        install(before)
