@@ -116,11 +116,22 @@ def full_wave(vertical: bool) -> tuple[np.ndarray, float, float]:
 
 def tracer(vertical: bool, source: tuple[float, float]) -> np.ndarray:
     """|D| by Sionna RT's path solver (module docstring)."""
+    import os
+
+    for lib in (
+        "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1", "/usr/lib/x86_64-linux-gnu/libLLVM-19.so",
+        "/usr/lib/aarch64-linux-gnu/libLLVM.so.19.1", "/usr/lib/llvm-19/lib/libLLVM.so.1",
+    ):  # fmt: skip
+        if os.path.exists(lib):  # Debian's libllvm19: Dr.Jit's CPU backend
+            os.environ.setdefault("DRJIT_LIBLLVM_PATH", lib)
     import mitsuba as mi
 
-    if mi.variant() is None:
-        mi.set_variant(*[v for v in ("cuda_ad_mono_polarized", "llvm_ad_mono_polarized")
-                         if v in mi.variants()][:1])  # fmt: skip
+    for variant in ("cuda_ad_mono_polarized", "llvm_ad_mono_polarized"):
+        try:  # a GPU where there is one, else the CPU
+            mi.set_variant(variant)
+            break
+        except (ImportError, AttributeError, RuntimeError):
+            continue
     import sionna.rt as rt
 
     scene = rt.load_scene()
@@ -143,7 +154,7 @@ def tracer(vertical: bool, source: tuple[float, float]) -> np.ndarray:
     pol = "V" if vertical else "H"
     scene.tx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
     scene.rx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
-    sx, sy = source
+    sx, sy = (float(v) for v in source)
     scene.add(rt.Transmitter(name="tx", position=mi.Point3f(sx, sy, 20.0)))
     px, py = place(PHI)
     for n, (a, b) in enumerate(zip(px, py, strict=True)):
