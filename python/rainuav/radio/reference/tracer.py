@@ -91,10 +91,9 @@ is then good to about this."""
 
 def load_sionna() -> tuple[Any, Any]:
     """Imports Mitsuba and Sionna RT on a GPU where one is present, else on the CPU through LLVM,
-    with the wedge coefficient of [`tracer_wedge`][rainuav.radio.reference.tracer_wedge] (the
-    first time; [`coefficient()`][rainuav.radio.reference.tracer_wedge.coefficient] runs it with
-    its own as released): returns ``(mitsuba, sionna.rt)``. Raises ImportError naming what is
-    missing."""
+    with P.526's wedge coefficient ([`tracer_wedge`][rainuav.radio.reference.tracer_wedge]; the
+    first time: a [`coefficient()`][rainuav.radio.reference.tracer_wedge.coefficient] block
+    keeps its own): returns ``(mitsuba, sionna.rt)``. Raises ImportError naming what is missing."""
     if "DRJIT_LIBLLVM_PATH" not in os.environ:
         for p in LLVM_PATHS:
             if os.path.exists(p):
@@ -326,13 +325,6 @@ def tracer_gain(
     own as released (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge])."""
     from rainuav.radio.reference.tracer_wedge import coefficient as using
 
-    with using(coefficient):
-        return _tracer_gain(scn, samples, max_depth, diffraction, seed)
-
-
-def _tracer_gain(
-    scn: Scenario, samples: int, max_depth: int, diffraction: bool, seed: int
-) -> TracerMap:
     mi, rt = load_sionna()
     scene = tracer_scene(scn)
     images = add_transmitters(scene, scn)
@@ -343,7 +335,7 @@ def _tracer_gain(
     centre = (0.5 * (a.x_min_m + a.x_max_m), 0.5 * (a.y_min_m + a.y_max_m), a.altitude_m)
     halves = []
     for half in range(2):
-        with repeatable():
+        with repeatable(), using(coefficient):
             rm = solver(
                 scene, center=mi.Point3f(*centre), orientation=mi.Point3f(0.0, 0.0, 0.0),
                 size=mi.Point2f(a.x_max_m - a.x_min_m, a.y_max_m - a.y_min_m),
