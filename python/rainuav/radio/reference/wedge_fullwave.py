@@ -34,6 +34,8 @@ it on a small case.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -120,6 +122,15 @@ def _fresnel(eps: complex, graze: np.ndarray, soft: bool) -> np.ndarray:
 def fdfd_total(case: WedgeCase, phi: np.ndarray, soft: bool) -> np.ndarray:
     """The full-wave field at ``phi`` (rad from the lit face) over the source's in free space
     (complex; ``exp(+j w t)``, as the UTD's), by ceviche's FDFD (module docstring)."""
+    free = dataclasses.replace(case, material="air")
+    points = tuple(np.asarray(phi, dtype=float))
+    return _fdfd(case, points, soft) / _fdfd(free, points, soft)
+
+
+@functools.lru_cache(maxsize=8)
+def _fdfd(case: WedgeCase, phi: tuple[float, ...], soft: bool) -> np.ndarray:
+    # The field at phi with the block (free space where case.material is "air"); the free
+    # space's solve is shared by the materials of one grid.
     from ceviche import fdfd_ez, fdfd_hz
     from scipy.interpolate import RegularGridInterpolator
 
@@ -127,18 +138,12 @@ def fdfd_total(case: WedgeCase, phi: np.ndarray, soft: bool) -> np.ndarray:
     xx, yy = np.meshgrid(x, x, indexing="ij")
     src = np.zeros(xx.shape)
     src[np.argmin(abs(x - sx)), np.argmin(abs(x - sy))] = 1.0
-    omega = 2.0 * math.pi * case.freq_hz
+    eps = 1.0 + 0.0j if case.material == "air" else case.eps
+    eps_grid = np.where((xx < 0.0) & (yy < 0.0), eps, 1.0 + 0.0j)
     solver = fdfd_ez if soft else fdfd_hz
-    pts = np.c_[case.points(phi)]
-
-    def solve(eps: np.ndarray) -> np.ndarray:
-        # ceviche returns (Hx, Hy, Ez) or (Ex, Ey, Hz): the field along the edge is last.
-        u = solver(omega, dl, eps, [PML_CELLS, PML_CELLS]).solve(src)[2]
-        return RegularGridInterpolator((x, x), u)(pts)
-
-    free = solve(np.ones(xx.shape, dtype=complex))
-    block = np.where((xx < 0.0) & (yy < 0.0), case.eps, 1.0 + 0.0j)
-    return solve(block) / free
+    # ceviche returns (Hx, Hy, Ez) or (Ex, Ey, Hz): the field along the edge is last.
+    u = solver(2.0 * math.pi * case.freq_hz, dl, eps_grid, [PML_CELLS, PML_CELLS]).solve(src)[2]
+    return RegularGridInterpolator((x, x), u)(np.c_[case.points(np.array(phi))])
 
 
 def exact_pec(case: WedgeCase, phi: np.ndarray, soft: bool) -> np.ndarray:
