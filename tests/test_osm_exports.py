@@ -151,23 +151,11 @@ def test_a_geometry_collection_keeps_its_polygons(tmp_path: Path) -> None:
 
 def osmium_export(pbf: str, out: Path) -> Path:
     """The buildings and building parts of an .osm.pbf as GeoJSON, as ``osmium export``
-    writes them (areas assembled by libosmium; every tag a property; ids w<way>/r<relation>)."""
-    osmium = pytest.importorskip("osmium")
-    factory = osmium.geom.GeoJSONFactory()
-    feats = []
-    proc = (
-        osmium.FileProcessor(pbf)
-        .with_areas()
-        .with_filter(osmium.filter.EntityFilter(osmium.osm.AREA))
-        .with_filter(osmium.filter.KeyFilter("building", "building:part"))
-    )
-    for area in proc:
-        fid = f"{'w' if area.from_way() else 'r'}{area.orig_id()}"
-        geom = json.loads(factory.create_multipolygon(area))
-        feats.append({"type": "Feature", "id": fid, "properties": dict(area.tags),
-                      "geometry": geom})  # fmt: skip
-    out.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
-    return out
+    writes them ([`export_buildings()`][rainuav.ground.osm.export_buildings])."""
+    pytest.importorskip("osmium")
+    from rainuav.ground.osm import export_buildings
+
+    return export_buildings(pbf, out)
 
 
 def test_a_real_helsinki_extract_reads_whole(tmp_path: Path) -> None:

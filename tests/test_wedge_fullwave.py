@@ -126,5 +126,6 @@ def test_the_real_city_squares_are_read_as_exports_are_read() -> None:
         assert found is not None and len(found.footprints) >= 40, name
         assert len({round(f.height_m) for f in found.footprints}) >= 5, name
         for s in scn.sites:
-            assert not any(f.polygon.contains(shapely.Point(s.x_m, s.y_m)) for f in found.footprints)
+            at = shapely.Point(s.x_m, s.y_m)
+            assert not any(f.polygon.contains(at) for f in found.footprints), (name, s)
         assert 0.05 < inside_buildings(scn).mean() < 0.6, name

@@ -15,6 +15,7 @@ __all__ = [
     "MAX_HEIGHT_M",
     "STOREY_HEIGHT_M",
     "Unreadable",
+    "export_buildings",
     "feature_heights",
     "is_part",
     "parse_length",
@@ -143,3 +144,35 @@ def is_part(props: dict[str, Any]) -> bool:
     """Whether a feature is a Simple 3D Buildings part (``building:part`` set, not ``no``)."""
     v = props.get("building:part")
     return v not in (None, "", "no", False)
+
+
+def export_buildings(pbf: str, out: Any) -> Any:
+    """Writes the buildings and building parts of the OpenStreetMap extract ``pbf`` (.osm.pbf)
+    to ``out`` as GeoJSON, as ``osmium export`` writes them (areas assembled by libosmium; every
+    tag a property; ids ``w<way>``/``r<relation>``), whole or not at all (a temporary file, then
+    renamed); returns ``out``. Needs pyosmium (the test extra); raises ImportError naming it."""
+    import json
+    import os
+    from pathlib import Path
+
+    try:
+        import osmium
+    except ImportError as err:  # pragma: no cover - depends on the machine
+        raise ImportError("exporting an .osm.pbf needs pyosmium: pip install osmium") from err
+    factory = osmium.geom.GeoJSONFactory()
+    proc = (
+        osmium.FileProcessor(pbf)
+        .with_areas()
+        .with_filter(osmium.filter.EntityFilter(osmium.osm.AREA))
+        .with_filter(osmium.filter.KeyFilter("building", "building:part"))
+    )
+    feats = [
+        {"type": "Feature", "id": f"{'w' if a.from_way() else 'r'}{a.orig_id()}",
+         "properties": dict(a.tags), "geometry": json.loads(factory.create_multipolygon(a))}
+        for a in proc
+    ]  # fmt: skip
+    out = Path(out)
+    tmp = out.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+    tmp.replace(out)
+    return out

