@@ -40,7 +40,7 @@ from rainuav.radio.measured.prior import (
 )
 from rainuav.radio.measured.scores import crps_gaussian
 from rainuav.radio.reference import tracer
-from rainuav.radio.reference.tracer_scenes import HELD_BACK, SCENES, scene
+from rainuav.radio.reference.tracer_scenes import HELD_BACK, SPREAD_SCENES, scene
 from rainuav.radio.scene.terrain import flight_heights
 
 TUNING_SITES = 1
@@ -117,7 +117,7 @@ def main() -> None:
     ap.add_argument("--markdown", action="store_true", help="print the page's table too")
     args = ap.parse_args()
     f, h, n = args.freq_ghz * 1e9, args.altitude, int(args.samples)
-    data = {name: pixels(name, f, h, n) for name in SCENES}
+    data = {name: pixels(name, f, h, n) for name in SPREAD_SCENES}
     tune = split(data, True)
     tuned = measured_spreads(tune["error_db"], tune["excess_db"], tune["distance_m"],
                              source="tuning pixels")  # fmt: skip

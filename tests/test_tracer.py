@@ -94,9 +94,9 @@ def test_the_tracer_gives_the_same_map_for_the_same_seed() -> None:
 
 def test_the_shipped_engine_spreads_are_what_the_tuning_pixels_measure() -> None:
     """``rainuav.radio.measured.prior.MEASURED`` is the table ``measured_spreads`` makes of the
-    engine's errors against the tracer on the tuning pixels (every scene but the held-back ones,
-    and the held-back ones' first site; ``experiments/prior_spread_tracer.py``, which prints
-    both): each value within 0.06 dB (the table keeps one decimal)."""
+    engine's errors against the tracer on the tuning pixels (every scene of ``SPREAD_SCENES`` but
+    the held-back ones, and the held-back ones' first site; ``experiments/prior_spread_tracer.py``,
+    which prints both): each value within 0.06 dB (the table keeps one decimal)."""
     import sys
     from pathlib import Path
 
@@ -107,9 +107,9 @@ def test_the_shipped_engine_spreads_are_what_the_tuning_pixels_measure() -> None
     finally:
         sys.path.remove(here)
     from rainuav.radio.measured.prior import MEASURED, MECHANISMS, measured_spreads
-    from rainuav.radio.reference.tracer_scenes import SCENES
+    from rainuav.radio.reference.tracer_scenes import SPREAD_SCENES
 
-    data = {name: pixels(name, 3.5e9, 20.0, 8_000_000) for name in SCENES}
+    data = {name: pixels(name, 3.5e9, 20.0, 8_000_000) for name in SPREAD_SCENES}
     tune = split(data, True)
     got = measured_spreads(tune["error_db"], tune["excess_db"], tune["distance_m"])
     for m in MECHANISMS:

@@ -21,7 +21,7 @@ from pathlib import Path
 from rainuav.radio.scene.area import Area, FootprintsFile
 from rainuav.radio.scene.scenario import Building, Origin, Scenario, Site
 
-__all__ = ["HELD_BACK", "HELSINKI", "REAL", "SCENES", "TEST_SCENES", "scene"]
+__all__ = ["HELD_BACK", "HELSINKI", "REAL", "SCENES", "SPREAD_SCENES", "TEST_SCENES", "scene"]
 
 
 def _area(x0: float, x1: float, y0: float, y1: float, altitude_m: float, res: float) -> Area:
@@ -270,6 +270,11 @@ SCENES = {
     "helsinki_b": _helsinki_b,
 }
 """The comparison's scenes: ``name(freq_hz, altitude_m, polarization) -> Scenario``."""
+
+SPREAD_SCENES = tuple(name for name in SCENES if name not in REAL)
+"""The scenes the prior's measured spreads are made from (``experiments/prior_spread_tracer.py``;
+the held-back ones by their first site only); the real city's squares are held back from them
+too."""
 
 
 def scene(
