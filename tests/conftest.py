@@ -47,18 +47,18 @@ settings.load_profile("rainuav")
 # only that balance.
 LONGEST_FIRST = (
     "test_tracer_paths.py", "test_tracer.py", "test_tracer_wedge.py", "test_study.py",
-    "test_agent_train.py", "test_measured.py", "test_tutorials.py", "test_levels_learner.py",
-    "test_hostile_inputs.py", "test_terrain.py", "test_engines.py", "test_one_network.py",
-    "test_radiomap.py", "test_levels.py", "test_buildings.py", "test_levels_storms.py",
-    "test_readme.py", "test_geotiff.py", "test_timemap.py", "test_places.py",
+    "test_agent_train.py", "test_measured.py", "test_wedge_fullwave.py", "test_tutorials.py",
+    "test_levels_learner.py", "test_hostile_inputs.py", "test_terrain.py", "test_engines.py",
+    "test_one_network.py", "test_radiomap.py", "test_levels.py", "test_buildings.py",
+    "test_levels_storms.py", "test_readme.py", "test_geotiff.py", "test_timemap.py",
+    "test_places.py",
 )  # fmt: skip
 
 
 # Files that share an expensive start run on one worker: the reference ray tracer's (its LLVM
 # backend starts once a process: the two main tracer files took 67 s in one process, 76 s in two).
 TOGETHER = dict.fromkeys(
-    ("test_tracer.py", "test_tracer_paths.py", "test_tracer_wedge.py", "test_wedge_fullwave.py"),
-    "tracer",
+    ("test_tracer.py", "test_tracer_paths.py", "test_tracer_wedge.py"), "tracer"
 )
 
 
