@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import re
+from pathlib import Path
 from typing import Any
 
 __all__ = [
@@ -146,14 +147,13 @@ def is_part(props: dict[str, Any]) -> bool:
     return v not in (None, "", "no", False)
 
 
-def export_buildings(pbf: str, out: Any) -> Any:
+def export_buildings(pbf: str, out: str | Path) -> Path:
     """Writes the buildings and building parts of the OpenStreetMap extract ``pbf`` (.osm.pbf)
     to ``out`` as GeoJSON, as ``osmium export`` writes them (areas assembled by libosmium; every
     tag a property; ids ``w<way>``/``r<relation>``), whole or not at all (a temporary file, then
     renamed); returns ``out``. Needs pyosmium (the test extra); raises ImportError naming it."""
     import json
     import os
-    from pathlib import Path
 
     try:
         import osmium

@@ -45,10 +45,9 @@ def compare(
     (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge])."""
     if reference not in ("map", "paths"):
         raise ValueError(f"reference is 'map' or 'paths' (got {reference!r})")
-    from rainuav.radio.reference.tracer_wedge import COEFFICIENTS
+    from rainuav.radio.reference.tracer_wedge import checked
 
-    if coefficient not in COEFFICIENTS:
-        raise ValueError(f"coefficient is one of {', '.join(COEFFICIENTS)} (got {coefficient!r})")
+    checked(coefficient)  # before the engine's maps, not after
     with_b = isotropic_scenario(scn, ground=ground)
     without = isotropic_scenario(scn, buildings=False, ground=ground)
     kw: dict[str, Any] = {

@@ -36,7 +36,7 @@ import inspect
 from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["COEFFICIENTS", "coefficient", "install", "install_default", "installed"]
+__all__ = ["COEFFICIENTS", "checked", "coefficient", "install", "install_default", "installed"]
 
 _SIGNATURE = ["self", "to_world", "ki_local", "ko_local", "si", "eta", "wavenumber"]
 
@@ -107,6 +107,16 @@ COEFFICIENTS = ("p526", "sionna")
 """The wedge coefficients the tracer can run with: ``"p526"``, the one above (the default), and
 ``"sionna"``, Sionna RT 2.2's own, as released."""
 
+
+def checked(name: str) -> str:
+    """``name`` where it is one of
+    [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]; else ValueError naming
+    them."""
+    if name not in COEFFICIENTS:
+        raise ValueError(f"coefficient is one of {', '.join(COEFFICIENTS)} (got {name!r})")
+    return name
+
+
 _RELEASED: dict[str, Any] = {}
 """Sionna RT's own ``_diffraction_matrix``, kept the first time it is replaced."""
 
@@ -116,8 +126,7 @@ def install(coefficient: str = "p526") -> None:
     [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]): the standard's
     (module docstring) or the tracer's own as released. Raises ValueError for another name and
     ImportError where the tracer's version has no such method to replace."""
-    if coefficient not in COEFFICIENTS:
-        raise ValueError(f"coefficient is one of {', '.join(COEFFICIENTS)} (got {coefficient!r})")
+    checked(coefficient)
     from sionna.rt.radio_materials.radio_material import RadioMaterial
 
     own = getattr(RadioMaterial, "_diffraction_matrix", None)
@@ -154,9 +163,12 @@ def installed() -> str:
 def coefficient(name: str) -> Iterator[None]:
     """Runs the tracer with the wedge coefficient ``name`` (one of
     [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]) within the block,
-    and puts back the one it had after."""
-    if name not in COEFFICIENTS:
-        raise ValueError(f"coefficient is one of {', '.join(COEFFICIENTS)} (got {name!r})")
+    and puts back the one it had after. The tracer is loaded first
+    ([`load_sionna()`][rainuav.radio.reference.tracer.load_sionna], which installs the default):
+    else RuntimeError, since the coefficient it had would not yet be the default."""
+    checked(name)
+    if "own" not in _RELEASED:
+        raise RuntimeError("load the tracer first: rainuav.radio.reference.tracer.load_sionna()")
     before = installed()
     install(name)
     try:
