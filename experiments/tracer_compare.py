@@ -2,7 +2,7 @@
 
     python experiments/tracer_compare.py [--scenes urban district] [--freqs-ghz 3.5 4.9 28]
         [--altitudes 20 100] [--pols v h] [--samples 8e6] [--reference map|paths] [--step N]
-        [--coefficient p526 sionna] [--json FILE] [--figure FILE]
+        [--coefficient p526 sionna] [--runs N] [--sites K ...] [--json FILE] [--figure FILE]
 
 For each scene ([`rainuav.radio.reference.tracer_scenes`][rainuav.radio.reference.tracer_scenes]; by
 default the held-back ones, on which no choice of the methods was made), frequency, UAV altitude and
@@ -19,7 +19,9 @@ their difference for the first case's first site. ``--reference paths``: against
 solver at the centre of every ``--step``-th pixel
 ([`rainuav.radio.reference.tracer_paths`][rainuav.radio.reference.tracer_paths]: its exact paths,
 where the radio map is a Monte Carlo estimate that is dark and scattered in deep shadows; its
-"noise" is then the difference between two candidate searches). ``--coefficient``: the
+"noise" is then the difference between two candidate searches; ``--runs``: how many runs of its
+candidate search, combined as the union of the paths they find, the halves the unions of the even
+and of the odd runs). ``--sites``: only these sites of each scene. ``--coefficient``: the
 tracer's wedge coefficient, ITU-R P.526-15's (``p526``, which a full-wave solution supports on a
 concrete corner: ``experiments/wedge_fullwave.py``) and its own as released (``sionna``); by
 default both, one row each, side by side.
@@ -97,12 +99,18 @@ def main() -> None:
         help="the tracer's wedge coefficient: ITU-R P.526-15's, its own as released, or both "
              "(one row each, side by side)",
     )  # fmt: skip
+    ap.add_argument(
+        "--runs", type=int, default=2,
+        help="with --reference paths: the path solver's runs (even), their paths' union",
+    )  # fmt: skip
+    ap.add_argument("--sites", type=int, nargs="+", default=None, help="only these sites")
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--figure", type=Path, default=None)
     args = ap.parse_args()
     samples = int(args.samples)
     print(f"# {platform.processor() or platform.machine()}, {samples:.0e} rays a site, "
-          f"engine {args.engine}, reference {args.reference} (step {args.step})")  # fmt: skip
+          f"engine {args.engine}, reference {args.reference} (step {args.step}, "
+          f"{args.runs} runs)")  # fmt: skip
     head = "scene     GHz  alt pol site coef   pixels shadow  med   p90   bias light agree noise"
     print(head)
     rows = []
@@ -111,17 +119,19 @@ def main() -> None:
             for alt in args.altitudes:
                 for pol in args.pols:
                     t = time.perf_counter()
+                    scn = scene(name, f * 1e9, alt, pol)
+                    sites = list(range(len(scn.sites))) if args.sites is None else args.sites
+                    scn = scn.replace(sites=[scn.sites[k] for k in sites])
                     both = {
                         c: compare(
-                            scene(name, f * 1e9, alt, pol), samples=samples,
-                            engine=args.engine, reference=args.reference, step=args.step,
-                            coefficient=c,
+                            scn, samples=samples, engine=args.engine, reference=args.reference,
+                            step=args.step, coefficient=c, runs=args.runs,
                         ).rows()
                         for c in args.coefficient
                     }  # fmt: skip
-                    for k in range(len(next(iter(both.values())))):
+                    for i, k in enumerate(sites):
                         for c, found in both.items():
-                            r = found[k]
+                            r = found[i]
                             rows.append({"scene": name, "freq_ghz": f, "altitude_m": alt,
                                          "pol": pol, "site": k, "coefficient": c, **r})  # fmt: skip
                             print(f"{name:8} {f:5.1f} {alt:4.0f}  {pol}  {k:3d} {c:6} "

@@ -1290,6 +1290,20 @@ def test_the_corpus_totals(capsys) -> None:
         {"cell": 0},
         {"cell": 0, "length_m": "x", "amplitude_db": 1, "noise_db": 1},
         {"cell": 0, "length_m": -5, "amplitude_db": 1, "noise_db": 1},
+        {
+            "cell": 0,
+            "length_m": 5,
+            "amplitude_db": 1,
+            "noise_db": 1,
+            "components": [{"amplitude_db": "x", "east_m": 5, "north_m": 5}],
+        },
+        {
+            "cell": 0,
+            "length_m": 5,
+            "amplitude_db": 1,
+            "noise_db": 1,
+            "components": [{"amplitude_db": 1, "east_m": -5, "north_m": 5}],
+        },
     ],
 )
 def test_a_crafted_residual_record_is_refused_by_the_path_draw(record) -> None:

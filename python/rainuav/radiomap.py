@@ -138,6 +138,11 @@ def build_parser() -> argparse.ArgumentParser:
         "'both' the two (fit.json's held-out scores say whether it helped; default off)",
     )  # fmt: skip
     ap.add_argument(
+        "--residual-kernel", choices=("one-scale", "two-scale"), default=None,
+        help="with --measurements: the residual field's kernel; 'two-scale' adds a field over "
+        "tens of metres to the smooth one (default one-scale)",
+    )  # fmt: skip
+    ap.add_argument(
         "--level-step-m", type=float, default=None, metavar="M",
         help="with --measurements: the height between the maps built at the log's heights, "
         "1..500 m (default 10; at most 40 maps, so a log spanning more needs a coarser step)",
@@ -236,6 +241,7 @@ def _build(args: argparse.Namespace) -> int:
         scn.area.check()
     fitted = {"--calibrate": args.calibrate is not None,
               "--receive-pattern": args.receive_pattern != "off",
+              "--residual-kernel": args.residual_kernel is not None,
               "--level-step-m": args.level_step_m is not None}  # fmt: skip
     if args.measurements is None and any(fitted.values()):
         flag = next(k for k, v in fitted.items() if v)
@@ -317,6 +323,7 @@ def _corrected(args: argparse.Namespace, rm: Any) -> Any:
     log = read_log(args.measurements, rm.scenario, altitude_reference=ref)
     print(log.summary(), file=sys.stderr)
     out = correct_map(rm, log, params=names, receive_pattern=args.receive_pattern,
+                      kernel=args.residual_kernel or "one-scale",
                       level_step_m=args.level_step_m or 10.0, progress=True)  # fmt: skip
     assert out.fit is not None
     print(held_out_line(out.fit["cross_validation"]))

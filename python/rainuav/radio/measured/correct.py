@@ -51,7 +51,7 @@ from rainuav.radio.measured.levels import prior_at
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.measured.pattern import elevation_deg
 from rainuav.radio.measured.prior import engine_spread
-from rainuav.radio.measured.residual import ResidualField
+from rainuav.radio.measured.residual import KERNELS, ResidualField
 from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
 from rainuav.radio.scene.terrain import flight_heights
@@ -72,6 +72,7 @@ def correct_map(
     cross_validate: bool = True,
     build: Any = None,
     receive_pattern: str = "off",
+    kernel: str = "one-scale",
     progress: bool = False,
 ) -> RadioMap:
     """``rm`` corrected by ``log`` (module docstring): ``rss_dbm``, the serving cell, SIR and
@@ -86,13 +87,17 @@ def correct_map(
     [`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern]; the held-out scores then
     fit it in every fold, so ``fit.json`` says whether it helped), ``"heading"`` (its gain
     against the heading, for a log with ``heading_deg``: on the map, a spread added to one
-    sample's) or ``"both"``; ``progress``: a line on
+    sample's) or ``"both"``; ``kernel``: the residual fields' kernel, ``"one-scale"`` or
+    ``"two-scale"`` ([`rainuav.radio.measured.residual`][rainuav.radio.measured.residual],
+    "Two scales"); ``progress``: a line on
     standard error per map built at the log's heights, per stage and per held-out fold."""
     if receive_pattern not in RECEIVE_PATTERNS:
         raise InvalidInputError(
             f"receive_pattern must be one of {', '.join(RECEIVE_PATTERNS)} "
             f"(got {receive_pattern!r})"
         )
+    if kernel not in KERNELS:
+        raise InvalidInputError(f"kernel must be one of {', '.join(KERNELS)} (got {kernel!r})")
     if rm.prior_rss_dbm is not None:
         raise InvalidInputError("the map is already corrected by measurements: correct its prior")
     if not 1.0 <= level_step_m <= 500.0:
@@ -105,7 +110,7 @@ def correct_map(
         print(f"fitting {len(log)} rows: calibration and residual fields", file=sys.stderr,
               flush=True)  # fmt: skip
     corr = fit_correction(rm, log, prior, params=params, level_step_m=level_step_m, seed=seed,
-                          receive=receive, heading=heading)  # fmt: skip
+                          receive=receive, heading=heading, kernel=kernel)  # fmt: skip
     if not corr.fields:
         raise InvalidInputError(
             f"{log.source or 'the log'}: no cell has {MIN_FIELD_POINTS} usable rows; too few "
@@ -148,6 +153,7 @@ def correct_map(
         "residual": [_field_dict(c, f) for c, f in corr.fields.items()],
         "unmeasured_cells_std_db": corr.other_local_db,
         "unmeasured_cells_sample_std_db": corr.other_sample_db,
+        "residual_kernel": kernel,
         "receive_pattern": {"choice": receive_pattern}
         | ({} if corr.receive is None else {"elevation_gain": corr.receive.to_dict()})
         | ({} if corr.heading is None else {"heading_gain": corr.heading.to_dict()}),
@@ -176,6 +182,12 @@ def _field_dict(c: int, f: ResidualField) -> dict[str, Any]:
     return {
         "cell": c, "amplitude_db": f.amplitude_db, "noise_db": f.noise_db,
         "sample_db": f.sample_db, "length_m": f.length_m,
-        "height_length_m": f.length_m / f.height_ratio if f.height_ratio else None,
-        "bins": f.bins, "bin_m": f.bin_m, "scaled": f.scaled,
+        "height_length_m": (f.length_m / f.height_ratio
+                            if f.height_ratio and not f.components else None),
+        "bins": f.bins, "bin_m": f.bin_m, "scaled": f.scaled, "kernel": f.kernel,
+        "components": [
+            {"amplitude_db": a, "east_m": e, "north_m": n,
+             "height_m": h if np.isfinite(h) else None}
+            for a, e, n, h in f.components
+        ],
     }  # fmt: skip

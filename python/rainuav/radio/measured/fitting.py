@@ -61,7 +61,7 @@ def _scale_at(scn: Any, log: MeasurementLog, prior: np.ndarray) -> np.ndarray:
 def _fields(
     rm: RadioMap, log: MeasurementLog, resid: np.ndarray, step: float, seed: int,
     like: dict[int, ResidualField] | None = None, max_points: int | None = None,
-    scale: np.ndarray | None = None,
+    scale: np.ndarray | None = None, kernel: str = "one-scale",
 ) -> dict[int, ResidualField]:  # fmt: skip
     a = rm.scenario.area
     pts = np.column_stack([log.x_m, log.y_m, _heights(rm, log)])
@@ -74,7 +74,7 @@ def _fields(
         out[int(c)] = fit_residual(
             pts[m], resid[m], size_m=a.resolution_m, step_m=step, extent_m=extent, seed=seed,
             like=None if like is None else like[int(c)],
-            scale=None if scale is None else scale[m],
+            scale=None if scale is None else scale[m], kernel=kernel,
             **({} if max_points is None else {"max_points": max_points}),
         )  # fmt: skip
     return out
@@ -156,13 +156,14 @@ def fit_correction(
     rm: RadioMap, log: MeasurementLog, prior: np.ndarray, *,
     params: Sequence[str] = tuple(BOUNDS), level_step_m: float = 10.0, seed: int = 0,
     like: Correction | None = None, max_points: int | None = None, receive: bool = False,
-    heading: bool = False,
+    heading: bool = False, kernel: str = "one-scale",
 ) -> Correction:  # fmt: skip
     """Steps 2-3 of the module docstring on ``log``, whose rows' prior powers are ``prior``:
     the offsets, the fields and the spreads of the cells without one. ``like``: a correction
     of more of the log whose hyperparameters to reuse (a cross-validation fold);
     ``receive``: fit the UAV's receive gain by elevation before the fields, ``heading``: its
-    gain against its heading (the log needs ``heading_deg``)
+    gain against its heading (the log needs ``heading_deg``); ``kernel``: the residual fields'
+    (one of [`KERNELS`][rainuav.radio.measured.residual.KERNELS]; a ``like``'s own where given)
     ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern])."""
     scn = rm.scenario
     fits = calibrate(scn, log, prior, params, near=None if like is None else like.fits)
@@ -184,7 +185,7 @@ def fit_correction(
         resid = resid - by_heading.at(rel)
     fields = _fields(rm, log, resid, level_step_m, seed,
                      None if like is None else like.fields, max_points,
-                     _scale_at(scn, log, prior))  # fmt: skip
+                     _scale_at(scn, log, prior), kernel)  # fmt: skip
     pooled = float(np.sqrt(np.mean((log.rss_dbm - prior) ** 2)))
     if like is not None:
         sample = like.other_sample_db

@@ -122,7 +122,7 @@ def cross_validate_log(
     rm: RadioMap, log: MeasurementLog, prior: np.ndarray, *,
     params: Sequence[str] = tuple(BOUNDS), level_step_m: float = 10.0, seed: int = 0,
     whole: Correction | None = None, baselines: bool = True, receive: bool = False,
-    heading: bool = False, progress: bool = False,
+    heading: bool = False, progress: bool = False, kernel: str = "one-scale",
 ) -> dict[str, Any]:  # fmt: skip
     """Every held-out design of the log (module docstring, step 5), scored: per design, its
     folds and, per method, the scores of single samples and of local means
@@ -130,12 +130,13 @@ def cross_validate_log(
     whole log (its hyperparameters are reused; fitted here if None); ``receive``: the corrected
     and calibrated maps fit the UAV's receive gain by elevation in every fold, ``heading``: its
     gain against the heading (each held-out row predicted with its own heading); ``progress``: one
-    line on standard error per fold."""
+    line on standard error per fold; ``kernel``: the residual fields' where ``whole`` is None
+    (else ``whole``'s)."""
     scn = rm.scenario
     step = level_step_m
     if whole is None:
         whole = fit_correction(rm, log, prior, params=params, level_step_m=step, seed=seed,
-                               receive=receive, heading=heading)  # fmt: skip
+                               receive=receive, heading=heading, kernel=kernel)  # fmt: skip
     heights = _heights(rm, log)
     pts = np.column_stack([log.x_m, log.y_m, heights])
     z = log.z_m

@@ -156,9 +156,35 @@ def _along(rm: Any, cell: int, xy: np.ndarray) -> np.ndarray | None:
     length, amp, nug = f
     amp2, nug2 = amp**2, nug**2
     share = amp2 / (amp2 + nug2) if amp2 + nug2 > 0 else 0.0
-    d = np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1)) / length
-    matern = (1 + np.sqrt(3) * d) * np.exp(-np.sqrt(3) * d)
+    delta = (xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1)
+    parts = _components_of(rm, cell) or [(amp, length, length)]
+    matern = np.zeros((n, n))
+    for a, east, north in parts:  # a two-scale field: each Matern by its share of the variance
+        d = np.hypot(delta[0] / east, delta[1] / north)
+        matern += a**2 / max(amp2, 1e-12) * (1 + np.sqrt(3) * d) * np.exp(-np.sqrt(3) * d)
     return share * matern + (1 - share) * np.eye(n)
+
+
+def _components_of(rm: Any, cell: int) -> list[tuple[float, float, float]]:
+    """A two-scale field's components as the map's ``fit`` records them (amplitude, lengths
+    east and north), empty for one scale or a record without them."""
+    fit = getattr(rm, "fit", None)
+    rows = fit.get("residual") if isinstance(fit, dict) else None
+    for f in rows if isinstance(rows, list) else []:
+        if isinstance(f, dict) and f.get("cell") == cell:
+            try:
+                got = [(float(c["amplitude_db"]), float(c["east_m"]), float(c["north_m"]))
+                       for c in f.get("components") or []]  # fmt: skip
+            except (KeyError, TypeError, ValueError) as err:
+                raise InvalidInputError(
+                    f"the map's fit: residual of cell {cell} has a component that is not "
+                    f"numbers ({err})"
+                ) from err
+            if not all(np.isfinite(g).all() and g[1] > 0 and g[2] > 0 for g in got):
+                raise InvalidInputError(f"the map's fit: residual of cell {cell} has a "
+                                        "component without positive lengths")  # fmt: skip
+            return got
+    return []
 
 
 def path_outage_draws(

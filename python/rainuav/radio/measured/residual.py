@@ -35,6 +35,18 @@ residuals themselves kept (the scaled one's less the Jacobian, the sum of ``log 
 bins): the data choose, not an assumption. ``mean()``, ``std()`` and ``on_grid()`` then take
 the scale at their points.
 
+**Two scales.** A real log shows structure at two scales at once: a smooth trend over hundreds
+of metres, and structure over a few tens of metres (the airframe's attitude along the path, a
+row of trees, the ground's reflection) that repeats at the same place on flights at other
+heights. One Matern takes the second for noise: its nugget. ``kernel="two-scale"`` fits
+``C1 Matern(long) + C2 Matern(short) + White``, each Matern with its own length east, north and
+in height (``KERNELS``). Short lags must be seen for the likelihood to tell a short field from a
+nugget, so its fitting subset is ``MAX_FIT`` bins nearest to ``CLUSTERS`` centres drawn with the
+seed and ``MAX_FIT`` more drawn at random (long lags), and its field is conditioned on up to
+``TWO_SCALE_MAX_POINTS`` bins, so the map's own pixels resolve the short field. It is asked
+for, not the default: on AERPAW's flights it wins at held-out heights and loses a little over
+held-out stretches (the page "How far to trust a map").
+
 **Standard deviation.** ``std()`` is the uncertainty of the local mean (the 10 m average the
 map predicts) at a point: the field's posterior deviation and the nugget in quadrature. One
 future sample there spreads by that and ``sample_db`` in quadrature."""
@@ -53,8 +65,11 @@ if TYPE_CHECKING:  # scikit-learn is imported where a field is fitted (it takes 
     from sklearn.gaussian_process import GaussianProcessRegressor
 
 __all__ = [
+    "CLUSTERS",
+    "KERNELS",
     "MAX_FIT",
     "MAX_POINTS",
+    "TWO_SCALE_MAX_POINTS",
     "ResidualField",
     "bin_index",
     "bin_points",
@@ -66,6 +81,14 @@ MAX_POINTS = 2500
 """The most bins one cell's field is conditioned on."""
 MAX_FIT = 150
 """The most bins its hyperparameters are fitted on."""
+KERNELS = ("one-scale", "two-scale")
+"""The residual fields' kernels (module docstring): one Matern with a nugget, or two."""
+TWO_SCALE_MAX_POINTS = 5000
+"""The most bins a two-scale field is conditioned on."""
+CLUSTERS = 3
+"""The centres a two-scale field's fitting subset gathers its neighbouring bins around."""
+SHORT_MAX_M = 100.0
+"""The longest length scale of a two-scale field's short component, m."""
 HEIGHT_RATIOS = (1.0, 3.0, 10.0)
 """The ratios of the ground's length scale to the height's that are tried (the likeliest kept)."""
 FAR = 4.0
@@ -150,6 +173,20 @@ class ResidualField:
     """Whether the field is the residual over a scale known at every point (module docstring,
     "Scaled"): its mean and deviation are then in units of that scale, which the callers
     multiply by."""
+    kernel: str = "one-scale"
+    """Its kernel (``KERNELS``)."""
+    components: tuple[tuple[float, float, float, float], ...] = ()
+    """A two-scale field's components, long first: amplitude (dB) and length scales east, north
+    and in height (m) of each (empty for one scale: ``amplitude_db``, ``length_m`` and
+    ``height_ratio`` say it)."""
+
+    @property
+    def reach_m(self) -> float:
+        """The longest length scale across the ground, m: farther than ``FAR`` of them from
+        every measurement, the field is its prior."""
+        if not self.components:
+            return self.length_m
+        return max(max(c[1], c[2]) for c in self.components)
 
     def _x(self, pts: np.ndarray) -> np.ndarray:
         return _features(pts, self.height_ratio)
@@ -223,8 +260,9 @@ class ResidualField:
         pts = np.column_stack([gx[sub].ravel(), gy[sub].ravel(), h_m[sub].ravel()])
         # Farther than FAR length scales from every measurement the field is its prior (a
         # correlation under 1%): mean 0, deviation the amplitude.
-        tree = cKDTree(self.gp.X_train_ / self.length_m)
-        near = tree.query(self._x(pts) / self.length_m, distance_upper_bound=FAR)[0] < FAR
+        reach = self.reach_m
+        tree = cKDTree(self.gp.X_train_ / reach)
+        near = tree.query(self._x(pts) / reach, distance_upper_bound=FAR)[0] < FAR
         mean = np.zeros(len(pts))
         std = np.full(len(pts), self.far_db)
         mean[near], std[near] = self._mean_w(pts[near]), self._std_w(pts[near])
@@ -245,6 +283,45 @@ def _kernel(spread: float, length: float, bounds: tuple[float, float]) -> Any:
     ) + WhiteKernel(1.0, (1e-3, 1e2))
 
 
+def _two_scale_kernel(spread: float, length: float, bounds: tuple[float, float], dims: int) -> Any:
+    """The two-scale kernel (module docstring) on ``dims`` features (east, north[, height], m)."""
+    from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
+
+    half = max(spread, 0.25) / 2
+    long = [length, length, length / 3][:dims]
+    short = [30.0] * dims
+    return (
+        ConstantKernel(half, (1e-4, 1e4)) * Matern(long, (bounds[0] / 2, bounds[1]), nu=1.5)
+        + ConstantKernel(half, (1e-4, 1e4)) * Matern(short, (bounds[0] / 2, SHORT_MAX_M), nu=1.5)
+        + WhiteKernel(1.0, (1e-3, 1e2))
+    )
+
+
+def _fit_subset(bp: np.ndarray, seed: int, local: bool) -> np.ndarray:
+    """The bins the hyperparameters are fitted on: ``MAX_FIT`` drawn at random; for a two-scale
+    field (``local``) also the ``MAX_FIT`` nearest to ``CLUSTERS`` random centres (short lags)."""
+    rng = np.random.default_rng(seed)
+    order = rng.permutation(len(bp))
+    if not local:
+        return order[:MAX_FIT]
+    tree = cKDTree(bp[:, :2])
+    near = [tree.query(bp[c, :2], k=min(MAX_FIT // CLUSTERS, len(bp)))[1]
+            for c in order[:CLUSTERS]]  # fmt: skip
+    near_bins = np.unique(np.concatenate(near))
+    rest = order[~np.isin(order, near_bins)][:MAX_FIT]
+    return np.unique(np.r_[near_bins, rest])
+
+
+def _components(kernel: Any) -> tuple[tuple[float, float, float, float], ...]:
+    """A two-scale kernel's components, long first: amplitude, lengths east, north, height."""
+    out = []
+    for part in (kernel.k1.k1, kernel.k1.k2):
+        ls = np.atleast_1d(part.k2.length_scale).astype(float)
+        out.append((float(np.sqrt(part.k1.constant_value)), float(ls[0]), float(ls[1]),
+                    float(ls[2]) if len(ls) > 2 else float("inf")))  # fmt: skip
+    return tuple(sorted(out, key=lambda c: -max(c[1], c[2])))
+
+
 def fit_residual(
     pts: np.ndarray,
     resid: np.ndarray,
@@ -256,6 +333,7 @@ def fit_residual(
     like: ResidualField | None = None,
     max_points: int | None = None,
     scale: np.ndarray | None = None,
+    kernel: str = "one-scale",
 ) -> ResidualField:
     """The residual field of one cell from its rows at ``pts`` (N, 3: east, north, height) and
     their residuals, dB (module docstring). ``size_m``/``step_m``: the bins; ``extent_m``: the
@@ -263,7 +341,8 @@ def fit_residual(
     hyperparameters and sample spread to reuse (a cross-validation fold), else fitted here;
     ``max_points``: the most bins it is conditioned on (default ``MAX_POINTS``); ``scale``:
     each row's scale (N,), positive, dB (module docstring, "Scaled"): the scaled field is
-    fitted beside the stationary one and kept where its marginal likelihood is higher."""
+    fitted beside the stationary one and kept where its marginal likelihood is higher;
+    ``kernel``: one of ``KERNELS`` (a ``like`` field's own where given)."""
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.gaussian_process import GaussianProcessRegressor
 
@@ -273,7 +352,14 @@ def fit_residual(
         sample, unseen = like.sample_db, like.nugget_is_sample
     if unseen:
         sample = 0.0  # one row a bin: the spread is not seen (the nugget takes it)
+    if like is not None:
+        kernel = like.kernel
+    if kernel not in KERNELS:
+        raise ValueError(f"kernel must be one of {', '.join(KERNELS)} (got {kernel!r})")
+    two = kernel == "two-scale"
     max_points = MAX_POINTS if max_points is None else max_points
+    if two:  # the short field needs the pixels: the map's own bins, in every fold alike
+        max_points = TWO_SCALE_MAX_POINTS
     bm = size_m
     while True:
         bp, bv, count = bin_points(pts[:, 0], pts[:, 1], pts[:, 2], resid, bm, step_m)
@@ -286,19 +372,26 @@ def fit_residual(
         inv, _ = bin_index(pts[:, 0], pts[:, 1], pts[:, 2], bm, step_m)
         sb = np.sqrt(np.bincount(inv, weights=np.asarray(scale, float) ** 2) / count)
     if like is not None:
-        kernel, ratio, scaled = like.gp.kernel_, like.height_ratio, like.scaled
+        kern, ratio, scaled = like.gp.kernel_, like.height_ratio, like.scaled
         scaled = scaled and scale is not None
     else:
         in_height = np.ptp(np.round(bp[:, 2] / step_m)) >= 1
-        pick = np.random.default_rng(seed).permutation(len(bv))[:MAX_FIT]
+        pick = _fit_subset(bp, seed, two)
         best = None
         for scaled in (False, True) if scale is not None else (False,):
             u = sb if scaled else np.ones(len(bv))
             y, a = bv / u, alpha / u**2
             # the likelihood of the residuals themselves: that of y less the scale's Jacobian
             jac = float(np.sum(np.log(u[pick])))
-            k0 = _kernel(float(np.var(y)), extent_m / 10, (2 * size_m, 5 * extent_m))
-            for ratio in HEIGHT_RATIOS if in_height else (0.0,):
+            bounds = (2 * size_m, 5 * extent_m)
+            if two:  # lengths of their own in height: the features in metres
+                ratios: tuple[float, ...] = (1.0,) if in_height else (0.0,)
+                dims = 3 if in_height else 2
+                k0 = _two_scale_kernel(float(np.var(y)), extent_m / 10, bounds, dims)
+            else:
+                ratios = HEIGHT_RATIOS if in_height else (0.0,)
+                k0 = _kernel(float(np.var(y)), extent_m / 10, bounds)
+            for ratio in ratios:
                 with warnings.catch_warnings():  # a bound reached is a result (a flat field)
                     warnings.simplefilter("ignore", ConvergenceWarning)
                     g = GaussianProcessRegressor(k0, alpha=a[pick], random_state=seed)
@@ -307,14 +400,22 @@ def fit_residual(
                 if best is None or lml > best[0]:
                     best = (lml, g.kernel_, ratio, scaled)
         assert best is not None
-        _, kernel, ratio, scaled = best
+        _, kern, ratio, scaled = best
     u = sb if scaled else np.ones(len(bv))
-    gp = GaussianProcessRegressor(kernel, alpha=alpha / u**2, optimizer=None)
+    gp = GaussianProcessRegressor(kern, alpha=alpha / u**2, optimizer=None)
     gp.fit(_features(bp, ratio), bv / u)
-    nugget = float(np.sqrt(kernel.k2.noise_level))
+    nugget = float(np.sqrt(kern.k2.noise_level))
+    if two:
+        comps = _components(kern)
+        amplitude = float(np.sqrt(sum(c[0] ** 2 for c in comps)))
+        length = min(min(c[1], c[2]) for c in comps)
+    else:
+        comps = ()
+        amplitude = float(np.sqrt(kern.k1.k1.constant_value))
+        length = float(kern.k1.k2.length_scale)
     return ResidualField(
-        gp=gp, height_ratio=float(ratio),
-        amplitude_db=float(np.sqrt(kernel.k1.k1.constant_value)), noise_db=nugget,
+        gp=gp, height_ratio=float(ratio), amplitude_db=amplitude, noise_db=nugget,
         sample_db=nugget if unseen else float(sample), nugget_is_sample=bool(unseen),
-        length_m=float(kernel.k1.k2.length_scale), bins=len(bv), bin_m=bm, scaled=bool(scaled),
+        length_m=length, bins=len(bv), bin_m=bm, scaled=bool(scaled), kernel=kernel,
+        components=comps,
     )  # fmt: skip

@@ -32,6 +32,7 @@ def compare(
     reference: str = "map",
     step: int = 1,
     coefficient: str = "p526",
+    runs: int = 2,
 ) -> Agreement:
     """The building effect of the ray engine (or ``engine``:
     [`engine_gain()`][rainuav.radio.reference.tracer.engine_gain]) against the tracer's on ``scn``
@@ -42,7 +43,8 @@ def compare(
     solver at every ``step``-th pixel's centre
     ([`path_gain()`][rainuav.radio.reference.tracer_paths.path_gain]). ``coefficient``: the
     tracer's wedge coefficient, the standard's (``"p526"``) or its own as released
-    (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge])."""
+    (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge]); ``runs``: the path
+    solver's runs, combined as the union of their paths (its module docstring)."""
     if reference not in ("map", "paths"):
         raise ValueError(f"reference is 'map' or 'paths' (got {reference!r})")
     from rainuav.radio.reference.tracer_wedge import checked
@@ -57,6 +59,7 @@ def compare(
     if reference == "paths":
         gain = path_gain
         kw["step"] = step
+        kw["runs"] = runs
     return agreement(
         engine_gain(with_b, engine),
         engine_gain(without, engine),

@@ -215,16 +215,16 @@ def _prism_mesh(mi: Any, name: str, polygon: Any, base: float, top: float) -> An
 
 @dataclass(frozen=True)
 class TracerMap:
-    """The tracer's path gain (linear) of each site at every pixel, (S, H, W), from two halves of
-    its rays."""
+    """The tracer's gain (linear) of each site at every pixel, (S, H, W), from two ray halves."""
 
     half_a: np.ndarray
     half_b: np.ndarray
+    whole: np.ndarray | None = None  # the estimate, where not the halves' mean (a union of paths)
 
     @property
     def gain(self) -> np.ndarray:
-        """The estimate: the mean of the halves."""
-        return 0.5 * (self.half_a + self.half_b)
+        """The estimate: the mean of the halves (or ``whole``)."""
+        return 0.5 * (self.half_a + self.half_b) if self.whole is None else self.whole
 
     @property
     def covered(self) -> np.ndarray:

@@ -9,8 +9,19 @@ shadow pixels, 9.9 dB at the 90th percentile, 1.7 dB darker at the median, where
 the map's rays differ by about 0.9 dB). The path solver finds each path's candidates by shooting
 rays too, but then solves its geometry exactly for each receiver (the image method; the diffraction
 point on the edge by Keller's law), so a path once found has its exact power at the pixel's centre,
-the point the ray engine evaluates. Its own uncertainty is a path it did not find: two runs with
-different seeds (the two "halves") estimate it, as the radio map's halves do.
+the point the ray engine evaluates. Its own uncertainty is a path it did not find.
+
+**Runs, and their union.** Which paths a run finds depends on its rays: a diffraction is a
+candidate only where a ray hits a face near the edge, the point it projects to on the edge is
+sampled, and the path is kept for a receiver only where that point sees it. One run of many rays
+misses some diffracted paths in deep shadows, and a run of other rays finds them: on the real
+square `helsinki_b` (site 0, 3.5 GHz, 20 m), 3% of the receivers gain more than 10 dB from 1e6 to
+16e6 candidate rays and 2% from 4e6 to 16e6. A path once found is exact, so runs combine as the
+union of the distinct paths they found, not as a mean: ``runs`` runs of ``samples // runs`` rays,
+seeded apart, each path known by its delay (to ``DELAY_KEY_S``: two distinct paths of one link
+do not have the same length to a tenth of a millimetre). The two halves are the unions of the
+even and of the odd runs; where they differ, a path was found by one half alone (the estimate's
+noise, as the radio map's halves say theirs); the estimate is the union of all the runs.
 
 What is summed is every path's power, ``|a|^2`` over the paths (incoherent: the pixel mean of
 their interference, as the engine takes it), with the same isotropic antennas, polarisation,
@@ -33,7 +44,10 @@ from rainuav.radio.reference.tracer import (
 )
 from rainuav.radio.scene.scenario import Scenario
 
-__all__ = ["path_gain"]
+__all__ = ["DELAY_KEY_S", "path_gain", "union_power"]
+
+DELAY_KEY_S = 3e-13
+"""How close two paths' delays are for them to be one path (module docstring): 0.09 mm."""
 
 
 def path_gain(
@@ -44,24 +58,48 @@ def path_gain(
     seed: int = 0,
     step: int = 1,
     coefficient: str = "p526",
+    runs: int = 2,
 ) -> TracerMap:
     """The path solver's gain (linear) of each site of ``scn`` (an
     [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]) at the centre of
     every ``step``-th pixel (in both directions) outside the buildings, (S, H, W); other pixels are
-    0 (not covered). Two runs of ``samples // 2`` candidate rays a site, seeded ``2 seed`` and
-    ``2 seed + 1``, are the two halves; on one thread
+    0 (not covered). ``runs`` runs (even, at least 2) of ``samples // runs`` candidate rays a site,
+    seeded ``runs seed`` to ``runs seed + runs - 1``, combined as the union of their paths (module
+    docstring: the halves the unions of the even and of the odd runs, the estimate that of all);
+    on one thread
     ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]), the same every run.
     ``coefficient``: the wedge coefficient, the standard's (``"p526"``) or the tracer's own as
     released (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge])."""
     if step < 1:
         raise ValueError(f"step is a whole number of pixels >= 1 (got {step})")
+    if runs < 2 or runs % 2:
+        raise ValueError(f"runs is an even number >= 2 (got {runs})")
     from rainuav.radio.reference.tracer_wedge import coefficient as using
 
     with repeatable(), using(coefficient):
-        return _path_gain(scn, samples, max_depth, seed, step)
+        return _path_gain(scn, samples, max_depth, seed, step, runs)
 
 
-def _path_gain(scn: Scenario, samples: int, max_depth: int, seed: int, step: int) -> TracerMap:
+def union_power(found: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """The power of the union of the distinct paths of several runs (module docstring): each run
+    its paths' delays and powers, (L, P) each for its L links (an invalid path's power 0); per
+    link the sum of one power per distinct delay (to ``DELAY_KEY_S``), (L,)."""
+    tau = np.concatenate([t for t, _ in found], axis=1)
+    power = np.concatenate([p for _, p in found], axis=1)
+    out = np.zeros(len(tau))
+    for k in range(len(tau)):
+        ok = power[k] > 0
+        if not ok.any():
+            continue
+        key = np.round(tau[k][ok] / DELAY_KEY_S).astype(np.int64)
+        _, first = np.unique(key, return_index=True)
+        out[k] = power[k][ok][first].sum()
+    return out
+
+
+def _path_gain(
+    scn: Scenario, samples: int, max_depth: int, seed: int, step: int, runs: int
+) -> TracerMap:
     mi, rt = load_sionna()
     scene = tracer_scene(scn)
     images = add_transmitters(scene, scn)
@@ -74,22 +112,30 @@ def _path_gain(scn: Scenario, samples: int, max_depth: int, seed: int, step: int
     for n, (i, j) in enumerate(zip(ii, jj, strict=True)):
         scene.add(rt.Receiver(name=f"rx{n}", position=mi.Point3f(float(x[j]), float(y[i]), z)))
     solver = rt.PathSolver()
-    halves = []
-    for half in range(2):
+    found = []
+    for run in range(runs):
         paths = solver(
             scene,
             max_num_paths_per_src=10**7,
-            samples_per_src=max(1, samples // 2),
+            samples_per_src=max(1, samples // runs),
             synthetic_array=False,
-            seed=2 * seed + half,
+            seed=runs * seed + run,
             **interactions(max_depth),
         )
         re, im = (np.asarray(v, dtype=float) for v in paths.a)
-        valid = np.asarray(paths.valid.numpy(), dtype=bool)
-        power = (re**2 + im**2) * valid.reshape(re.shape)
-        # (receivers, rx antennas, transmitters, tx antennas, paths) -> (receivers, transmitters)
-        per = power.sum(axis=(1, 3, 4)).reshape(len(ii), images, len(scn.sites)).sum(axis=1)
+        valid = np.asarray(paths.valid.numpy(), dtype=bool).reshape(re.shape)
+        # (receivers, rx antennas, transmitters, tx antennas, paths): one antenna each side
+        power = ((re**2 + im**2) * valid)[:, 0, :, 0, :]
+        tau = np.asarray(paths.tau, dtype=float).reshape(re.shape)[:, 0, :, 0, :]
+        found.append((tau.reshape(-1, tau.shape[-1]), power.reshape(-1, power.shape[-1])))
+
+    def gain(which: list[int]) -> np.ndarray:
+        per = union_power([found[k] for k in which])
+        # (receivers, transmitters: each site's images) -> (sites, receivers)
+        per = per.reshape(len(ii), images, len(scn.sites)).sum(axis=1)
         g = np.zeros((len(scn.sites), h, w))
         g[:, ii, jj] = per.T
-        halves.append(g)
-    return TracerMap(halves[0], halves[1])
+        return g
+
+    return TracerMap(gain(list(range(0, runs, 2))), gain(list(range(1, runs, 2))),
+                     whole=gain(list(range(runs))))  # fmt: skip
