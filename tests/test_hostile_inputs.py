@@ -1124,7 +1124,8 @@ def test_a_resumed_run_with_a_spoiled_log_is_one_line(run_copy, tmp_path, capsys
 def test_calibrate_without_measurements_is_refused(tmp_path, capsys) -> None:
     """``radiomap --calibrate foo`` without ``--measurements`` was silently ignored."""
     toml = tiny_scenario().to_toml(tmp_path / "s.toml")
-    for flag in (["--calibrate", "power_db"], ["--receive-pattern", "elevation"]):
+    for flag in (["--calibrate", "power_db"], ["--receive-pattern", "elevation"],
+                 ["--residual-kernel", "two-scale"]):  # fmt: skip
         rc, err = run_cli(radiomap, ["--config", toml, *flag, "--out", tmp_path / "o"], capsys)
         refused(f"radiomap {flag[0]} alone", rc, err, flag[0], "--measurements")
         assert not (tmp_path / "o").exists()

@@ -448,3 +448,27 @@ def test_a_world_of_a_corrected_map_flies_the_chance_of_outage(corrected, worlds
     assert np.array_equal(physics.field.outage_p, outage_probability(worlds[0], thr))
     unsure = lambda q: float(np.mean((q > 0.05) & (q < 0.95)))  # noqa: E731
     assert unsure(physics.field.outage_p) > unsure(world.field.outage_p)
+
+
+def test_a_two_scale_correction_maps_both_spreads_and_records_its_components(worlds) -> None:
+    """``correct_map(..., kernel="two-scale")`` on the ``uma`` worlds (a log of 2% of the pixels,
+    two cells a pixel): every field is two-scale with two components (long first), the map's
+    local-mean spread is finite and positive wherever the cell reaches, and the corrected map is
+    closer to the truth than the prior at the pixels no line crossed, where the prior is more
+    than 8 dB off (median |error|, the serving cell)."""
+    prior, truth, _ = worlds
+    log = sample_log(truth, 0.02, cells=2, seed=5)
+    cm = correct_map(prior, log, cross_validate=False, kernel="two-scale")
+    assert cm.fit["residual_kernel"] == "two-scale"
+    for f in cm.fit["residual"]:
+        assert f["kernel"] == "two-scale" and len(f["components"]) == 2, f
+        a, b = f["components"]
+        assert max(a["east_m"], a["north_m"]) >= max(b["east_m"], b["north_m"]), f
+    reached = prior.rss_dbm > -200.0
+    std = np.asarray(cm.rss_std_db)
+    assert np.isfinite(std[reached]).all() and (std[reached] > 0).all()
+    held = _held(truth.serving_cell.shape, 0.02)
+    off = held & (np.abs(_serving(prior.rss_dbm, truth) - _serving(truth.rss_dbm, truth)) > 8.0)
+    before = np.median(np.abs(_serving(prior.rss_dbm, truth) - _serving(truth.rss_dbm, truth))[off])
+    after = np.median(np.abs(_serving(cm.rss_dbm, truth) - _serving(truth.rss_dbm, truth))[off])
+    assert off.sum() > 100 and after < before, (after, before, off.sum())
