@@ -119,9 +119,12 @@ def path_outage(prob: np.ndarray) -> dict[str, float]:
     }
 
 
-def _field_of(rm: Any, cell: int) -> tuple[float, float, float] | None:
+def _field_of(
+    rm: Any, cell: int
+) -> tuple[float, float, float, list[tuple[float, float, float]]] | None:
     """The cell's residual field as the map's ``fit`` records it (length, amplitude and nugget:
-    m, dB, dB), None where it has none; a record that is not numbers is refused, naming it (a
+    m, dB, dB; and a two-scale field's components: amplitude, lengths east and north, empty for
+    one scale), None where it has none; a record that is not numbers is refused, naming it (a
     map handed over may carry anything in its ``fit_json``)."""
     fit = getattr(rm, "fit", None)
     rows = fit.get("residual") if isinstance(fit, dict) else None
@@ -130,6 +133,8 @@ def _field_of(rm: Any, cell: int) -> tuple[float, float, float] | None:
             continue
         try:
             got = tuple(float(f[k]) for k in ("length_m", "amplitude_db", "noise_db"))
+            parts = [(float(c["amplitude_db"]), float(c["east_m"]), float(c["north_m"]))
+                     for c in f.get("components") or []]  # fmt: skip
         except (KeyError, TypeError, ValueError) as err:
             raise InvalidInputError(f"the map's fit: residual of cell {cell} is not a field "
                                     f"record ({err})") from err  # fmt: skip
@@ -138,53 +143,33 @@ def _field_of(rm: Any, cell: int) -> tuple[float, float, float] | None:
                 f"the map's fit: residual of cell {cell} must have a positive length_m and "
                 "non-negative amplitude_db and noise_db"
             )
-        return got  # type: ignore[return-value]
+        if not all(np.isfinite(p).all() and p[1] > 0 and p[2] > 0 for p in parts):
+            raise InvalidInputError(f"the map's fit: residual of cell {cell} has a "
+                                    "component without positive lengths")  # fmt: skip
+        return got[0], got[1], got[2], parts
     return None
 
 
 def _along(rm: Any, cell: int, xy: np.ndarray) -> np.ndarray | None:
     """The correlation of one cell's local-mean errors between the path's pixels ``xy`` (N, 2),
     besides any error shared by every pixel: a corrected map's residual field (its fitted
-    Matern 3/2 over its length across the ground, the field's share of the variance; the
-    nugget's share independent), else independent pixels (a physics map's engine error, whose
-    correlation is not measured; its site error is shared, drawn apart): None for independent
-    pixels."""
+    Matern 3/2 over its length across the ground, or a two-scale field's two Materns each by its
+    share, the field's share of the variance; the nugget's share independent), else independent
+    pixels (a physics map's engine error, whose correlation is not measured; its site error is
+    shared, drawn apart): None for independent pixels."""
     n = len(xy)
     f = _field_of(rm, cell)
     if f is None:
         return None
-    length, amp, nug = f
+    length, amp, nug, parts = f
     amp2, nug2 = amp**2, nug**2
     share = amp2 / (amp2 + nug2) if amp2 + nug2 > 0 else 0.0
     delta = (xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1)
-    parts = _components_of(rm, cell) or [(amp, length, length)]
     matern = np.zeros((n, n))
-    for a, east, north in parts:  # a two-scale field: each Matern by its share of the variance
+    for a, east, north in parts or [(amp, length, length)]:
         d = np.hypot(delta[0] / east, delta[1] / north)
         matern += a**2 / max(amp2, 1e-12) * (1 + np.sqrt(3) * d) * np.exp(-np.sqrt(3) * d)
     return share * matern + (1 - share) * np.eye(n)
-
-
-def _components_of(rm: Any, cell: int) -> list[tuple[float, float, float]]:
-    """A two-scale field's components as the map's ``fit`` records them (amplitude, lengths
-    east and north), empty for one scale or a record without them."""
-    fit = getattr(rm, "fit", None)
-    rows = fit.get("residual") if isinstance(fit, dict) else None
-    for f in rows if isinstance(rows, list) else []:
-        if isinstance(f, dict) and f.get("cell") == cell:
-            try:
-                got = [(float(c["amplitude_db"]), float(c["east_m"]), float(c["north_m"]))
-                       for c in f.get("components") or []]  # fmt: skip
-            except (KeyError, TypeError, ValueError) as err:
-                raise InvalidInputError(
-                    f"the map's fit: residual of cell {cell} has a component that is not "
-                    f"numbers ({err})"
-                ) from err
-            if not all(np.isfinite(g).all() and g[1] > 0 and g[2] > 0 for g in got):
-                raise InvalidInputError(f"the map's fit: residual of cell {cell} has a "
-                                        "component without positive lengths")  # fmt: skip
-            return got
-    return []
 
 
 def path_outage_draws(

@@ -86,15 +86,10 @@ def union_power(found: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
     link the sum of one power per distinct delay (to ``DELAY_KEY_S``), (L,)."""
     tau = np.concatenate([t for t, _ in found], axis=1)
     power = np.concatenate([p for _, p in found], axis=1)
-    out = np.zeros(len(tau))
-    for k in range(len(tau)):
-        ok = power[k] > 0
-        if not ok.any():
-            continue
-        key = np.round(tau[k][ok] / DELAY_KEY_S).astype(np.int64)
-        _, first = np.unique(key, return_index=True)
-        out[k] = power[k][ok][first].sum()
-    return out
+    link, k = np.nonzero(power > 0)
+    key = np.column_stack([link, np.round(tau[link, k] / DELAY_KEY_S).astype(np.int64)])
+    _, first = np.unique(key, axis=0, return_index=True)  # one path per (link, delay)
+    return np.bincount(link[first], weights=power[link, k][first], minlength=len(tau))
 
 
 def _path_gain(
