@@ -472,3 +472,30 @@ def test_a_two_scale_correction_maps_both_spreads_and_records_its_components(wor
     before = np.median(np.abs(_serving(prior.rss_dbm, truth) - _serving(truth.rss_dbm, truth))[off])
     after = np.median(np.abs(_serving(cm.rss_dbm, truth) - _serving(truth.rss_dbm, truth))[off])
     assert off.sum() > 100 and after < before, (after, before, off.sum())
+
+
+def test_an_auto_correction_chooses_each_cells_kernel_and_chooses_again_in_a_fold(worlds) -> None:
+    """``correct_map(..., kernel="auto")`` (a log of 1% of the pixels, two cells a pixel): each
+    field's kernel is the candidate of the higher held-out density, both recorded in
+    ``fit.json``; a cross-validation fold (``fit_correction(..., like=...)`` on half the rows)
+    scores both candidates again on its own rows, with the whole log's hyperparameters."""
+    from rainuav.radio.measured.fitting import _take, fit_correction
+
+    prior, truth, _ = worlds
+    log = sample_log(truth, 0.01, cells=2, seed=6)
+    cm = correct_map(prior, log, cross_validate=False, kernel="auto")
+    assert cm.fit["residual_kernel"] == "auto"
+    for f in cm.fit["residual"]:
+        s = f["kernel_scores"]
+        assert set(s) == {"one-scale", "two-scale"} and all(np.isfinite(list(s.values()))), f
+        assert f["kernel"] == max(s, key=s.get), f
+    p = prior_at(prior, log, 10.0)
+    whole = fit_correction(prior, log, p, kernel="auto")
+    half = np.arange(len(log)) % 2 == 0
+    fold = fit_correction(prior, _take(log, half), p[half], like=whole)
+    for c, f in fold.fields.items():
+        w = whole.fields[c]
+        assert f.candidates is not None and set(f.candidates) == set(w.candidates or {}), c
+        assert f.kernel_scores != w.kernel_scores, c
+        for k, cand in f.candidates.items():
+            assert cand.gp.kernel_ == w.candidates[k].gp.kernel_, (c, k)

@@ -138,9 +138,10 @@ def build_parser() -> argparse.ArgumentParser:
         "'both' the two (fit.json's held-out scores say whether it helped; default off)",
     )  # fmt: skip
     ap.add_argument(
-        "--residual-kernel", choices=("one-scale", "two-scale"), default=None,
+        "--residual-kernel", choices=("one-scale", "two-scale", "auto"), default=None,
         help="with --measurements: the residual field's kernel; 'two-scale' adds a field over "
-        "tens of metres to the smooth one (default one-scale)",
+        "tens of metres to the smooth one, 'auto' keeps the one that predicts the log's "
+        "held-out blocks better (default one-scale)",
     )  # fmt: skip
     ap.add_argument(
         "--level-step-m", type=float, default=None, metavar="M",

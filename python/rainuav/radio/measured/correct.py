@@ -45,13 +45,14 @@ from rainuav.radio.measured.calibrate import (
     calibrated_maps,
     calibration_std_db,
 )
+from rainuav.radio.measured.choice import KERNEL_CHOICES
 from rainuav.radio.measured.fitting import MIN_FIELD_POINTS, Correction, fit_correction
 from rainuav.radio.measured.heldout import cross_validate_log
 from rainuav.radio.measured.levels import prior_at
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.measured.pattern import elevation_deg
 from rainuav.radio.measured.prior import engine_spread
-from rainuav.radio.measured.residual import KERNELS, ResidualField
+from rainuav.radio.measured.residual import ResidualField
 from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
 from rainuav.radio.scene.terrain import flight_heights
@@ -89,15 +90,19 @@ def correct_map(
     against the heading, for a log with ``heading_deg``: on the map, a spread added to one
     sample's) or ``"both"``; ``kernel``: the residual fields' kernel, ``"one-scale"`` or
     ``"two-scale"`` ([`rainuav.radio.measured.residual`][rainuav.radio.measured.residual],
-    "Two scales"); ``progress``: a line on
+    "Two scales"), or ``"auto"``: each cell's kernel chosen by its held-out density over blocks
+    of the log (both recorded; [`rainuav.radio.measured.choice`][rainuav.radio.measured.choice]);
+    ``progress``: a line on
     standard error per map built at the log's heights, per stage and per held-out fold."""
     if receive_pattern not in RECEIVE_PATTERNS:
         raise InvalidInputError(
             f"receive_pattern must be one of {', '.join(RECEIVE_PATTERNS)} "
             f"(got {receive_pattern!r})"
         )
-    if kernel not in KERNELS:
-        raise InvalidInputError(f"kernel must be one of {', '.join(KERNELS)} (got {kernel!r})")
+    if kernel not in KERNEL_CHOICES:
+        raise InvalidInputError(
+            f"kernel must be one of {', '.join(KERNEL_CHOICES)} (got {kernel!r})"
+        )
     if rm.prior_rss_dbm is not None:
         raise InvalidInputError("the map is already corrected by measurements: correct its prior")
     if not 1.0 <= level_step_m <= 500.0:
@@ -185,6 +190,8 @@ def _field_dict(c: int, f: ResidualField) -> dict[str, Any]:
         "height_length_m": (f.length_m / f.height_ratio
                             if f.height_ratio and not f.components else None),
         "bins": f.bins, "bin_m": f.bin_m, "scaled": f.scaled, "kernel": f.kernel,
+        "kernel_scores": None if f.kernel_scores is None else {
+            k: v if np.isfinite(v) else None for k, v in f.kernel_scores.items()},
         "components": [
             {"amplitude_db": a, "east_m": e, "north_m": n,
              "height_m": h if np.isfinite(h) else None}

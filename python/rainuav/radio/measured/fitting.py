@@ -14,6 +14,7 @@ import numpy as np
 
 from rainuav.errors import InvalidInputError
 from rainuav.radio.measured.calibrate import BOUNDS, calibrate, calibrated_at, calibration_std_db
+from rainuav.radio.measured.choice import AUTO, chosen, kernel_scores
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.measured.pattern import (
     ElevationGain,
@@ -24,7 +25,7 @@ from rainuav.radio.measured.pattern import (
     relative_azimuth_deg,
 )
 from rainuav.radio.measured.prior import engine_spread_at
-from rainuav.radio.measured.residual import ResidualField, fit_residual, sample_spread
+from rainuav.radio.measured.residual import KERNELS, ResidualField, fit_residual, sample_spread
 from rainuav.radio.outputs.mapdata import RadioMap
 
 __all__ = ["MIN_FIELD_POINTS", "Correction", "fit_correction"]
@@ -71,12 +72,26 @@ def _fields(
         m = log.cell == c
         if m.sum() < MIN_FIELD_POINTS or (like is not None and int(c) not in like):
             continue
-        out[int(c)] = fit_residual(
-            pts[m], resid[m], size_m=a.resolution_m, step_m=step, extent_m=extent, seed=seed,
-            like=None if like is None else like[int(c)],
-            scale=None if scale is None else scale[m], kernel=kernel,
-            **({} if max_points is None else {"max_points": max_points}),
-        )  # fmt: skip
+        was = None if like is None else like[int(c)]
+        sc = None if scale is None else scale[m]
+
+        def one(k: str, was: ResidualField | None, m: np.ndarray = m, sc: Any = sc) -> Any:
+            return fit_residual(
+                pts[m], resid[m], size_m=a.resolution_m, step_m=step, extent_m=extent,
+                seed=seed, like=was, scale=sc, kernel=k,
+                **({} if max_points is None else {"max_points": max_points}),
+            )  # fmt: skip
+
+        if was is not None and was.candidates:  # a fold of a log that chose: choose again
+            cands = {k: one(k, f) for k, f in was.candidates.items()}
+        elif was is None and kernel == AUTO:
+            cands = {k: one(k, None) for k in KERNELS}
+        else:
+            out[int(c)] = one(kernel, was)
+            continue
+        got = kernel_scores(cands, pts[m], resid[m], step_m=step, seed=seed, scale=sc)
+        out[int(c)] = dataclasses.replace(cands[chosen(got)], kernel_scores=got,
+                                          candidates=cands)  # fmt: skip
     return out
 
 
@@ -163,7 +178,10 @@ def fit_correction(
     of more of the log whose hyperparameters to reuse (a cross-validation fold);
     ``receive``: fit the UAV's receive gain by elevation before the fields, ``heading``: its
     gain against its heading (the log needs ``heading_deg``); ``kernel``: the residual fields'
-    (one of [`KERNELS`][rainuav.radio.measured.residual.KERNELS]; a ``like``'s own where given)
+    (one of [`KERNELS`][rainuav.radio.measured.residual.KERNELS], or ``"auto"``: each cell's
+    chosen by its held-out density,
+    [`rainuav.radio.measured.choice`][rainuav.radio.measured.choice]; a ``like``'s own where
+    given, chosen again on this log where ``like`` chose)
     ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern])."""
     scn = rm.scenario
     fits = calibrate(scn, log, prior, params, near=None if like is None else like.fits)

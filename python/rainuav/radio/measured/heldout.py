@@ -131,7 +131,8 @@ def cross_validate_log(
     and calibrated maps fit the UAV's receive gain by elevation in every fold, ``heading``: its
     gain against the heading (each held-out row predicted with its own heading); ``progress``: one
     line on standard error per fold; ``kernel``: the residual fields' where ``whole`` is None
-    (else ``whole``'s)."""
+    (else ``whole``'s; ``"auto"``: each fold chooses again on its own rows, and the result's
+    ``kernels`` says what each fold chose)."""
     scn = rm.scenario
     step = level_step_m
     if whole is None:
@@ -154,6 +155,7 @@ def cross_validate_log(
         if baselines:
             methods += ["knn", "kriging"]
         pred = {k: [np.full(len(log), np.nan) for _ in range(3)] for k in methods}
+        kernels: dict[str, dict[str, str]] = {}
         for k, g in enumerate(np.unique(group)):
             if progress:
                 print(f"held out: one {name} of {len(np.unique(group))} ({k + 1})",
@@ -173,6 +175,7 @@ def cross_validate_log(
                                 seed=seed, like=whole, max_points=CV_MAX_POINTS,
                                 receive=receive, heading=heading)  # fmt: skip
             got["corrected"] = fc.predict(te, prior[test])
+            kernels[str(g)] = {str(c): f.kernel for c, f in fc.fields.items()}
             got["calibrated"] = fc.predict(te, prior[test], fields=False, far=whole.fields)
             if baselines:
                 got["knn"] = _knn(tr, te, (heights[train], heights[test]), whole.other_sample_db)
@@ -198,6 +201,7 @@ def cross_validate_log(
         res: dict[str, Any] = {"folds": len(np.unique(group)), "rows": len(log)}
         res |= scores(np.ones(len(log), bool))
         res["per_fold"] = {str(g): scores(group == g) for g in np.unique(group)}
+        res["kernels"] = kernels  # per fold, each cell's residual kernel (chosen there: "auto")
         out[name] = res
     first = next(iter(out))
     out["left_out"] = first

@@ -182,6 +182,12 @@ class ResidualField:
     """A two-scale field's components, long first: amplitude (dB) and length scales east, north
     and in height (m) of each (empty for one scale: ``amplitude_db``, ``length_m`` and
     ``height_ratio`` say it)."""
+    kernel_scores: dict[str, float] | None = None
+    """Where the log chose the kernel (``kernel="auto"``,
+    [`rainuav.radio.measured.choice`][rainuav.radio.measured.choice]): each candidate's held-out
+    log predictive density per bin."""
+    candidates: dict[str, ResidualField] | None = None
+    """Those candidates' fields, so that a cross-validation fold chooses again on its own rows."""
 
     @property
     def reach_m(self) -> float:
