@@ -20,7 +20,8 @@ The score is the mean over the held-out bins of ``log N(y; mu, sigma^2 + a)``: `
 (the sample spread squared over its rows), in dB, with a scaled field's Jacobian (its residual
 is ``s(x)`` times its field's). Both candidates are scored on the same bins (the coarser of
 their two bin widths), and the higher score is kept; ``fit.json`` records both. The choice is
-made again on each cross-validation fold's own rows, so a held-out score never rests on a
+made again on each cross-validation fold's own rows (the candidates' hyperparameters, the
+fold's rows; only the one kept is conditioned on them), so a held-out score never rests on a
 choice that saw it."""
 
 from __future__ import annotations
@@ -31,8 +32,8 @@ from rainuav.radio.measured.residual import (
     KERNELS,
     ResidualField,
     _features,
-    bin_index,
     bin_points,
+    bin_scale,
 )
 
 __all__ = [
@@ -74,27 +75,26 @@ def block_folds(bp: np.ndarray, step_m: float, seed: int) -> list[np.ndarray]:
 
 def held_out_density(
     field: ResidualField, pts: np.ndarray, resid: np.ndarray, *, bin_m: float, step_m: float,
-    seed: int = 0, scale: np.ndarray | None = None,
+    seed: int = 0, scale: np.ndarray | None = None, folds: list[np.ndarray] | None = None,
 ) -> float:  # fmt: skip
     """The mean held-out log predictive density of ``field``'s kernel (its hyperparameters
     fixed) over the blocks of the rows at ``pts`` (N, 3) with residuals ``resid`` (N,), dB,
     binned ``bin_m`` wide and ``step_m`` tall (module docstring); ``scale``: each row's scale
-    (N,), for a scaled field. NaN where the log has fewer than two blocks."""
+    (N,), for a scaled field; ``folds``: the bins' blocks where already drawn (else
+    [`block_folds()`][rainuav.radio.measured.choice.block_folds] with ``seed``). NaN where the
+    log has fewer than two blocks."""
     from sklearn.gaussian_process import GaussianProcessRegressor
 
     bp, bv, count = bin_points(pts[:, 0], pts[:, 1], pts[:, 2], resid, bin_m, step_m)
+    if field.scaled and scale is None:
+        raise ValueError("a scaled field needs the scale at its rows")
     sample = 0.0 if field.nugget_is_sample else field.sample_db
     alpha = np.maximum(sample**2 / count, 1e-6)
-    u = np.ones(len(bv))
-    if field.scaled:
-        if scale is None:
-            raise ValueError("a scaled field needs the scale at its rows")
-        inv, _ = bin_index(pts[:, 0], pts[:, 1], pts[:, 2], bin_m, step_m)
-        u = np.sqrt(np.bincount(inv, weights=np.asarray(scale, float) ** 2) / count)
+    u = bin_scale(pts, scale if field.scaled else None, bin_m, step_m, count)
     y, a = bv / u, alpha / u**2
     x = _features(bp, field.height_ratio)
     total, n = 0.0, 0
-    for test in block_folds(bp, step_m, seed):
+    for test in block_folds(bp, step_m, seed) if folds is None else folds:
         train = ~test
         if train.sum() < 2 or not test.any():
             continue
@@ -114,10 +114,12 @@ def kernel_scores(
 ) -> dict[str, float]:  # fmt: skip
     """Each candidate's held-out log predictive density per bin
     ([`held_out_density()`][rainuav.radio.measured.choice.held_out_density]), all on the same
-    bins: the coarsest of the candidates' widths."""
+    bins (the coarsest of the candidates' widths) and the same blocks."""
     bin_m = max(f.bin_m for f in fields.values())
+    bp, _, _ = bin_points(pts[:, 0], pts[:, 1], pts[:, 2], resid, bin_m, step_m)
+    folds = block_folds(bp, step_m, seed)
     return {
-        k: held_out_density(f, pts, resid, bin_m=bin_m, step_m=step_m, seed=seed, scale=scale)
+        k: held_out_density(f, pts, resid, bin_m=bin_m, step_m=step_m, scale=scale, folds=folds)
         for k, f in fields.items()
     }
 

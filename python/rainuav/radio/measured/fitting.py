@@ -82,16 +82,19 @@ def _fields(
                 **({} if max_points is None else {"max_points": max_points}),
             )  # fmt: skip
 
-        if was is not None and was.candidates:  # a fold of a log that chose: choose again
-            cands = {k: one(k, f) for k, f in was.candidates.items()}
+        if was is not None and was.candidates:  # a fold of a log that chose: choose again, on
+            # this log's rows with the candidates' hyperparameters; condition the one kept
+            cands = was.candidates
+            got = kernel_scores(cands, pts[m], resid[m], step_m=step, seed=seed, scale=sc)
+            field = one(chosen(got), cands[chosen(got)])
         elif was is None and kernel == AUTO:
             cands = {k: one(k, None) for k in KERNELS}
+            got = kernel_scores(cands, pts[m], resid[m], step_m=step, seed=seed, scale=sc)
+            field = cands[chosen(got)]
         else:
             out[int(c)] = one(kernel, was)
             continue
-        got = kernel_scores(cands, pts[m], resid[m], step_m=step, seed=seed, scale=sc)
-        out[int(c)] = dataclasses.replace(cands[chosen(got)], kernel_scores=got,
-                                          candidates=cands)  # fmt: skip
+        out[int(c)] = dataclasses.replace(field, kernel_scores=got, candidates=cands)
     return out
 
 

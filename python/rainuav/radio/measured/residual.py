@@ -75,6 +75,7 @@ __all__ = [
     "ResidualField",
     "bin_index",
     "bin_points",
+    "bin_scale",
     "fit_residual",
     "sample_spread",
 ]
@@ -139,6 +140,18 @@ def sample_spread(
     if dof < 1:
         return float("nan")
     return float(np.sqrt(np.sum((v - mean[inv]) ** 2) / dof))
+
+
+def bin_scale(
+    pts: np.ndarray, scale: np.ndarray | None, size_m: float, step_m: float, count: np.ndarray
+) -> np.ndarray:
+    """Each bin's scale (module docstring, "Scaled"): the root mean square of its rows' ``scale``
+    (N,), over the bins of ``bin_points`` with their row counts ``count`` (B,); ones where
+    ``scale`` is None."""
+    if scale is None:
+        return np.ones(len(count))
+    inv, _ = bin_index(pts[:, 0], pts[:, 1], pts[:, 2], size_m, step_m)
+    return np.sqrt(np.bincount(inv, weights=np.asarray(scale, float) ** 2) / count)
 
 
 def _features(pts: np.ndarray, ratio: float) -> np.ndarray:
@@ -376,10 +389,7 @@ def fit_residual(
             break
         bm *= 2
     alpha = np.maximum(sample**2 / count, 1e-6)
-    sb = np.ones(len(bv))
-    if scale is not None:
-        inv, _ = bin_index(pts[:, 0], pts[:, 1], pts[:, 2], bm, step_m)
-        sb = np.sqrt(np.bincount(inv, weights=np.asarray(scale, float) ** 2) / count)
+    sb = bin_scale(pts, scale, bm, step_m, count)
     if like is not None:
         kern, ratio, scaled = like.gp.kernel_, like.height_ratio, like.scaled
         scaled = scaled and scale is not None
