@@ -1,0 +1,94 @@
+"""The documentation's formulas (``docs/hooks/math.py``): TeX on the pages becomes MathML when
+the site is built, so they render with no script and no network. Every formula of the physics
+and conventions pages converts; a formula the converter cannot read fails with the page named;
+and no formula is left as ASCII in a code span there (a code span holds a name, a command or a
+value: the test lists the spans that look like formulas)."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+from pathlib import Path
+
+import pytest
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+PAGES = ("physics.md", "conventions.md")
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def _hook():
+    spec = importlib.util.spec_from_file_location("docs_math", DOCS / "hooks" / "math.py")
+    assert spec and spec.loader
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _formulas(text: str) -> list[tuple[str, bool]]:
+    """The page's ``$$...$$`` blocks and ``$...$`` inline formulas, as arithmatex finds them
+    (outside code spans and fences)."""
+    text = re.sub(r"```.*?```", "", text, flags=re.S)
+    text = re.sub(r"`[^`]*`", "", text)
+    blocks = re.findall(r"^\s*\$\$\n(.*?)\n\s*\$\$\s*$", text, flags=re.S | re.M)
+    text = re.sub(r"^\s*\$\$\n.*?\n\s*\$\$\s*$", "", text, flags=re.S | re.M)
+    inline = re.findall(r"(?<![\\$])\$(?!\$)(.+?)(?<![\\$])\$", text, flags=re.S)
+    return [(b, True) for b in blocks] + [(i, False) for i in inline]
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_every_formula_on_the_page_becomes_mathml(page: str) -> None:
+    hook = _hook()
+    found = _formulas((DOCS / page).read_text())
+    assert len(found) > (100 if page == "physics.md" else 10), len(found)
+    for tex, display in found:
+        out = hook.mathml(tex, display, page)
+        assert out.startswith("<math") and out.endswith("</math>"), tex
+        assert f'display="{"block" if display else "inline"}"' in out
+
+
+def test_arithmatex_marks_become_mathml_in_the_built_page() -> None:
+    hook = _hook()
+    page = (
+        '<p>A <span class="arithmatex">\\(k_0 = 2\\pi f / c\\)</span> and</p>\n'
+        '<div class="arithmatex">\\[\\gamma = k R^\\alpha &lt; 1\\]</div>'
+    )
+    out = hook.formulas_to_mathml(page, "p.md")
+    assert out.count("<math") == 2 and 'arithmatex">\\(' not in out
+    assert '<span class="arithmatex"><math' in out and '<div class="arithmatex"><math' in out
+    assert "&#x0003C;" in out or "&lt;" in out  # the escaped "<" is read as the operator
+
+
+@pytest.mark.parametrize(
+    ("tex", "says"),
+    [
+        (r"\frac{a}{b", "unbalanced braces"),
+        (r"a = \notacommand b", r"cannot read \notacommand"),
+        (r"\begin{aligned} a &= b \end{aligned}", "cannot read an alignment & outside an array"),
+    ],
+)
+def test_a_formula_it_cannot_read_fails_naming_the_page(tex: str, says: str) -> None:
+    hook = _hook()
+    with pytest.raises(ValueError, match=re.escape(f"guide/x.md: {says}")):
+        hook.mathml(tex, False, "guide/x.md")
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_no_formula_is_left_as_ascii_in_a_code_span(page: str) -> None:
+    text = re.sub(r"```.*?```", "", (DOCS / page).read_text(), flags=re.S)
+    spans = re.findall(r"`([^`]+)`", text)
+    # A name (`rss_std_db`, `--ground`, `rainuav.radio...`), a command, an assignment of an
+    # option or a value (`roughness_m = 0`, `-10`, `74.319 - 19.932j`) is not a formula.
+    name = re.compile(r"^(python |-)?[\w.:/=\"\- ,]*$")
+    looks = [s for s in spans if not name.match(s) and re.search(r"[\^*]|\bsqrt|\bexp\(", s)]
+    assert not looks, looks
+
+
+def test_a_block_arithmatex_did_not_read_fails_the_build() -> None:
+    # A $$ block in a list item indented by two spaces stays text: the hook refuses the page,
+    # where $$ inside code (a shell's variable) is left alone.
+    hook = _hook()
+    assert hook.formulas_to_mathml("<pre><code>echo $$</code></pre>", "p.md")
+    with pytest.raises(ValueError, match=r"p\.md: a \$\$ block arithmatex did not read"):
+        hook.formulas_to_mathml("<li>the field\n$$\nD = 1\n$$</li>", "p.md")
