@@ -1,5 +1,7 @@
-"""The documentation's formulas (``docs/hooks/math.py``): TeX on the pages becomes MathML when
-the site is built, so they render with no script and no network. Every formula of the physics
+"""The documentation site opens offline (``docs/hooks/offline.py``: a page that loads a script, a
+style sheet or a font from the network fails the build), and its formulas
+(``docs/hooks/math.py``): TeX on the pages becomes MathML when the site is built, so they render
+with no script and no network. Every formula of the physics
 and conventions pages converts; a formula the converter cannot read fails with the page named;
 and no formula is left as ASCII in a code span there (a code span holds a name, a command or a
 value: the test lists the spans that look like formulas)."""
@@ -18,8 +20,8 @@ PAGES = ("physics.md", "conventions.md")
 pytestmark = pytest.mark.timeout(60)
 
 
-def _hook():
-    spec = importlib.util.spec_from_file_location("docs_math", DOCS / "hooks" / "math.py")
+def _hook(name: str = "math"):
+    spec = importlib.util.spec_from_file_location(f"docs_{name}", DOCS / "hooks" / f"{name}.py")
     assert spec and spec.loader
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
@@ -92,3 +94,22 @@ def test_a_block_arithmatex_did_not_read_fails_the_build() -> None:
     assert hook.formulas_to_mathml("<pre><code>echo $$</code></pre>", "p.md")
     with pytest.raises(ValueError, match=r"p\.md: a \$\$ block arithmatex did not read"):
         hook.formulas_to_mathml("<li>the field\n$$\nD = 1\n$$</li>", "p.md")
+
+
+def test_a_page_that_loads_from_the_network_is_found() -> None:
+    # What the theme wrote before the site was made to open offline: Google's fonts and the
+    # offline plugin's worker polyfill from a CDN; links to other sites are not fetched.
+    hook = _hook("offline")
+    page = (
+        '<link rel="preconnect" href="https://fonts.gstatic.com" crossorigin>'
+        '<link rel="stylesheet" href="https://fonts.googleapis.com/css?family=Roboto">'
+        '<script src="https://unpkg.com/iframe-worker/shim"></script>'
+        '<script src="../javascripts/iframe-worker.js"></script>'
+        '<a href="https://github.com/rainuav/rainuav">GitHub</a>'
+    )
+    assert hook.network_fetches(page) == [
+        "fonts.gstatic.com",
+        "fonts.googleapis.com/css?family=Roboto",
+        "unpkg.com/iframe-worker/shim",
+    ]
+    assert hook.network_fetches('<link rel="stylesheet" href="../assets/main.css">') == []
