@@ -16,8 +16,9 @@ Layers, bottom up (each imports only the ones below it):
 - [`rainuav.rl`][rainuav.rl]: the dueling double DQN and its training loop (torch), given a world.
 
 Entry points: ``python -m rainuav.train``, ``rainuav.evaluate``, ``rainuav.radiomap``,
-``rainuav.validate``, ``rainuav.study``. Physics conventions: ``docs/physics.md`` (time dependence
-``exp(+j w t)``, lossy media have ``Im eps <= 0``)."""
+``rainuav.validate``, ``rainuav.study``. Physics conventions: the
+[physics reference][0-conventions] (time dependence ``exp(+j w t)``, lossy media have
+``Im eps <= 0``)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """Antenna gain patterns: gain in dBi at (azimuth, elevation) in the antenna's own frame.
 
-Conventions (docs/physics.md section 7): azimuth from the antenna's boresight azimuth, counter-
-clockwise (toward +y when the boresight is +x), degrees, wrapped to [-180, 180); elevation
-positive up, degrees. Every pattern is vectorised (numpy broadcasting over the two angle
+Conventions ([physics reference, section 7][7-antennas]): azimuth from the antenna's boresight
+azimuth, counter-clockwise (toward +y when the boresight is +x), degrees, wrapped to [-180, 180);
+elevation positive up, degrees. Every pattern is vectorised (numpy broadcasting over the two angle
 arrays) and returns float64 dBi.
 
 - [`tr38901_element()`][rainuav.antenna.tr38901_element]: the 3GPP TR 38.901 sector element (Table
@@ -10,7 +10,8 @@ arrays) and returns float64 dBi.
 - [`uniform_array()`][rainuav.antenna.uniform_array]: a uniform vertical array of that element
   (rows, spacing in wavelengths, electrical tilt by phase progression), optionally with columns;
   gain = element + array factor, normalised so that the pattern integrates to 4 pi over the sphere.
-- [`gaussian()`][rainuav.antenna.gaussian]: the paper's beam (docs/physics.md section 4), optionally
+- [`gaussian()`][rainuav.antenna.gaussian]: the paper's beam ([physics reference, section
+  4][4-the-split-step-parabolic-equation]), optionally
   with a sidelobe floor (then normalised to 4 pi as well: a floor adds power in every direction).
 - [`tabulated()`][rainuav.antenna.tabulated]: a measured or computed table, bilinear in (azimuth,
   elevation).
@@ -136,9 +137,9 @@ class UniformArray:
     apart, steered by phase progression to elevation ``electrical_tilt_deg`` (positive up: a 10
     degree downtilt is -10), and ``columns`` side by side ``column_spacing`` wavelengths apart
     (broadside). Gain in dBi: ``element + 10 log10(|AF_v|^2 |AF_h|^2) + norm_db`` with ``|AF_v|^2 =
-    |sum_n exp(j 2 pi n d (sin e - sin e0))|^2 / rows`` (docs/physics.md section 7) and ``|AF_h|^2 =
-    |sum_m exp(j 2 pi m d_h cos e sin ph)|^2 / columns``; ``norm_db`` makes the pattern integrate to
-    4 pi over the sphere."""
+    |sum_n exp(j 2 pi n d (sin e - sin e0))|^2 / rows`` ([physics reference, section 7][7-antennas])
+    and ``|AF_h|^2 = |sum_m exp(j 2 pi m d_h cos e sin ph)|^2 / columns``; ``norm_db`` makes the
+    pattern integrate to 4 pi over the sphere."""
 
     element: TR38901Element = field(default_factory=TR38901Element)
     rows: int = 8
@@ -202,12 +203,12 @@ def uniform_array(
 # -- the paper's Gaussian beam ----------------------------------------------------------------
 @dataclass(frozen=True)
 class GaussianBeam:
-    """The paper's beam in the far field (docs/physics.md sections 4 and 7):
-    ``G = G0 exp(-4 ln2 (ph / bw_h)^2) exp(-4 ln2 ((e - tilt) / bw_v)^2)`` with
-    ``G0 = 4 ln2 / (sin(bw_h / 2) sin(bw_v / 2))`` (the PE source's directivity). With
-    ``floor_db`` the gain never falls below ``G0 - floor_db`` (a stand-in for sidelobes and
-    back lobes), and the whole pattern is scaled so it integrates to 4 pi (``norm_db``, the
-    power the floor takes from the main beam)."""
+    """The paper's beam in the far field ([physics reference, sections
+    4][4-the-split-step-parabolic-equation] and [7][7-antennas]): ``G = G0 exp(-4 ln2 (ph / bw_h)^2)
+    exp(-4 ln2 ((e - tilt) / bw_v)^2)`` with ``G0 = 4 ln2 / (sin(bw_h / 2) sin(bw_v / 2))`` (the PE
+    source's directivity). With ``floor_db`` the gain never falls below ``G0 - floor_db`` (a
+    stand-in for sidelobes and back lobes), and the whole pattern is scaled so it integrates to 4 pi
+    (``norm_db``, the power the floor takes from the main beam)."""
 
     beamwidth_h_deg: float = 4.333
     beamwidth_v_deg: float = 4.333

@@ -1,6 +1,6 @@
 """The rain medium: effective permittivity and specific attenuation of rain.
 
-Two models (``docs/physics.md`` section 3):
+Two models ([physics reference, section 3][3-the-rain-medium]):
 
 - ``"forward-scattering"`` (default): van de Hulst's effective index from each drop's Mie
   forward-scattering amplitude, integrated over the drop-size distribution. Valid across

@@ -1,4 +1,5 @@
-"""3-D split-step parabolic-equation propagation (``docs/physics.md`` section 4).
+"""3-D split-step parabolic-equation propagation ([physics reference, section
+4][4-the-split-step-parabolic-equation]).
 
 Frame of one transmitter: z = range (the march axis), x = cross-range, y = height. Fields are
 ``u[ix, iy]`` (complex64) on ``x = (ix - nx//2) dx_m``, ``y = iy dy_m``; with a ground, row
@@ -140,7 +141,9 @@ def march(
 
     Args:
         u0: (nx, ny) aperture at z = 0 (converted to complex64). ``u0[ix, iy]``.
-        dx_m, dy_m: cross-range and height spacings; ``dz_m``: range step (all > 0).
+        dx_m: cross-range spacing, m (> 0).
+        dy_m: height spacing, m (> 0).
+        dz_m: range step, m (> 0).
         steps: number of range steps (>= 1).
         freq_hz: frequency (1e6-1e12 Hz).
         n: refractive index: a complex scalar (homogeneous, e.g. rain from
@@ -330,10 +333,10 @@ def gaussian_beam(
     elevation_deg: float,
     beamwidth_deg: float,
 ) -> Complex64Array:
-    """Gaussian-beam aperture (docs/physics.md section 4): centred at ``x = 0`` (column nx//2) and
-    ``y = height_m``, tilted up by ``elevation_deg``, with far-field half-power full width
-    ``beamwidth_deg``: ``exp(-j k0 sin(el) (y - h)) exp(-a^2 (x^2 + (y - h)^2) / (2 ln 2))``,
-    ``a = k0 sin(beamwidth / 2)``. Returns (nx, ny) complex64."""
+    """Gaussian-beam aperture ([physics reference, section 4][4-the-split-step-parabolic-equation]):
+    centred at ``x = 0`` (column nx//2) and ``y = height_m``, tilted up by ``elevation_deg``, with
+    far-field half-power full width ``beamwidth_deg``: ``exp(-j k0 sin(el) (y - h)) exp(-a^2 (x^2 +
+    (y - h)^2) / (2 ln 2))``, ``a = k0 sin(beamwidth / 2)``. Returns (nx, ny) complex64."""
     return _core.gaussian_beam(
         int(nx),
         int(ny),

@@ -1,6 +1,7 @@
-"""The ground under the radio maps (``docs/physics.md`` section 12): the terrain read from a digital
-elevation model ([`rainuav.ground.dem`][rainuav.ground.dem]), on which obstacles stand. Below the
-radio layer: the engines read heights and profiles from it, never the other way round."""
+"""The ground under the radio maps ([physics reference, section
+12][12-terrain-buildings-diffraction-and-reflections]): the terrain read from a digital elevation
+model ([`rainuav.ground.dem`][rainuav.ground.dem]), on which obstacles stand. Below the radio layer:
+the engines read heights and profiles from it, never the other way round."""
 
 from rainuav.ground.dem import (
     HEIGHT_RANGE_M,

@@ -3,7 +3,8 @@ one flight level (four moves) or, given a field with flight levels (a
 [`SignalField`][rainuav.nav.field.SignalField] with ``altitudes_m``), among them (six: a climb and a
 descent besides; [`rainuav.nav.levels`][rainuav.nav.levels]). One class.
 
-Semantics (the planner and the tests rely on them; docs/physics.md section 6):
+Semantics (the planner and the tests rely on them; [physics reference, section
+6][6-the-navigation-task]):
 
 - Signal at a position: bilinear interpolation of the map (H, W) whose sample [i, j] sits at
   ``x = x_min + (j + 0.5) (x_max - x_min) / W``, ``y = y_min + (i + 0.5) (y_max - y_min) / H``;
@@ -73,9 +74,47 @@ def _index(name: str, value: Any, n: int) -> int:
 class UAVNavEnv(gym.Env):
     """UAV navigation over a SINR or SIR map, on one level or among several.
 
-    One level: ``Discrete(4)``, registered as ``rainuav/UAVNav-v0``. Given a field with flight
-    levels (``altitudes_m``): among them, ``Discrete(6)``, registered as
-    ``rainuav/UAVLevels-v0``."""
+    | | one level | among flight levels |
+    |---|---|---|
+    | registered id | ``rainuav/UAVNav-v0`` | ``rainuav/UAVLevels-v0`` |
+    | action space | ``Discrete(4)`` | ``Discrete(6)`` |
+    | observation space | ``Box(0, 1, (2,), float32)`` | ``Box(0, 1, (3,), float32)`` |
+    | make | ``gym.make("rainuav/UAVNav-v0")`` | ``gym.make("rainuav/UAVLevels-v0")`` |
+
+    - **Actions**: 0 = +x (east), 1 = +y (north), 2 = -x, 3 = -y, one move of ``step_m``; among
+      levels 4 climbs and 5 descends one level.
+    - **Observation** (``observation="position"``): the position scaled to the area, then among
+      levels the level over the highest, then, where the signal moves, the clock over
+      ``max_steps`` (one more dimension). ``observation="weather"``: a ``Dict`` of the
+      weather's grids around the UAV and the destination
+      ([`WeatherView`][rainuav.nav.views.WeatherView]).
+    - **Reward** ([`rainuav.nav.task`][rainuav.nav.task]): -1 a move less ``mu`` times the
+      signal's shortfall below ``min_db`` where and when the move lands (a climb or descent
+      lasts its duration in moves and earns that many times as much); ``goal_reward`` on
+      arrival; ``-out_of_bounds_penalty`` on leaving the area or entering a pixel the UAV may
+      not fly.
+    - **Starting state**: the task's ``start_m``, ``reset(options={"start_m": (x, y)})``, or a
+      flyable start drawn from the generator that ``reset(seed=...)`` seeds.
+    - **Episode end**: terminated on arrival within ``tol_m`` of ``goal_m`` or on leaving the
+      area; truncated when the clock reaches ``max_steps``.
+    - **Info**: ``signal_db``, ``serving_cell``, ``position_m``, ``outage``, ``arrived``,
+      ``t_s``; among levels ``level`` and ``altitude_m``.
+
+    The moves are deterministic, so [`planner.optimal()`][rainuav.nav.planner.optimal] gives the
+    exact optimum from any start: the yardstick a policy is scored against.
+
+    Examples:
+        ```python
+        from rainuav.nav import UAVNavEnv, planner
+        from rainuav.radio import build_radio_map, presets
+
+        env = UAVNavEnv(build_radio_map(presets.uma(engine="ray")), goal_m=(1400.0, 1600.0))
+        obs, info = env.reset(seed=0)
+        obs, reward, terminated, truncated, info = env.step(0)  # one move east
+        plan = planner.optimal(env, info["position_m"])
+        print(len(plan.actions), "moves to the destination, return", round(plan.return_, 1))
+        ```
+    """
 
     metadata = {"render_modes": []}  # noqa: RUF012 - gymnasium's convention
 
@@ -98,19 +137,37 @@ class UAVNavEnv(gym.Env):
         start_level: int | None = None,
         **task: Any,
     ) -> None:
-        """A map (``radio_map``, one raw array with ``extent_m``, or a built ``field``: a signal in
-        time, a bank of worlds, one drawn per episode, or any of them among flight levels) and the
-        task: a
-        whole ``config`` ([`NavConfig`][rainuav.nav.task.NavConfig]), its fields as keywords
-        (``goal_m``, ``max_steps``, ...: over ``config``'s where both are given), and ``signal`` and
-        ``min_db`` (which win over both). ``observation``:
-        [`OBSERVATIONS`][rainuav.nav.env.OBSERVATIONS] (``view`` sets the weather's grids; among
-        levels its ``layers`` are the levels); ``random_goal``: a destination per episode
-        ([`rainuav.nav.views.sample_goal()`][rainuav.nav.views.sample_goal]; needs the weather
-        observation, which shows it). Among levels: ``climb_m_s`` and ``descend_m_s`` (the
-        vertical speeds, [`level_durations()`][rainuav.nav.levelfield.level_durations]) and
-        ``start_level``, where every flight starts (default: the lowest level flyable at the
-        start)."""
+        """Builds the environment over a map and a task.
+
+        Args:
+            radio_map: A built map ([`RadioMap`][rainuav.radio.RadioMap], a series in time,
+                or levels), whose SINR (or SIR) the UAV flies.
+            sinr_db: A raw SINR array (dB; with ``extent_m``) in place of a map.
+            sir_db: A raw SIR array (dB; with ``extent_m``).
+            extent_m: ``(x_min, x_max, y_min, y_max)`` of a raw array, m.
+            signal: ``"sinr_db"`` or ``"sir_db"``: the signal flown (wins over ``config``).
+            min_db: The outage threshold, dB (wins over ``config``).
+            config: The whole task ([`NavConfig`][rainuav.nav.task.NavConfig]).
+            field: A built field in place of a map: a signal in time, a bank of worlds (one
+                drawn per episode), or either among flight levels.
+            observation: One of [`OBSERVATIONS`][rainuav.nav.env.OBSERVATIONS].
+            view: The weather's grids ([`WeatherView`][rainuav.nav.views.WeatherView]; among
+                levels its ``layers`` are the levels).
+            random_goal: A destination drawn per episode
+                ([`sample_goal()`][rainuav.nav.views.sample_goal]; needs the weather
+                observation, which shows it).
+            climb_m_s: The climb speed among levels, m/s
+                ([`level_durations()`][rainuav.nav.levelfield.level_durations]).
+            descend_m_s: The descent speed among levels, m/s.
+            start_level: Where every flight starts among levels (default: the lowest level
+                flyable at the start).
+            **task: Fields of [`NavConfig`][rainuav.nav.task.NavConfig] (``goal_m``,
+                ``max_steps``, ...), over ``config``'s where both are given.
+
+        Raises:
+            InvalidInputError: Both a map and a field, a map of another kind, an observation
+                or a start that is not allowed (the message names it).
+        """
         super().__init__()
         cfg = make_config(config, **task)
         if radio_map is not None:

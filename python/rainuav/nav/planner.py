@@ -106,7 +106,35 @@ def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
 
 
 def optimal(env: UAVNavEnv, start_m: npt.ArrayLike) -> Plan:
-    """The exact optimal plan from ``start_m``."""
+    """The exact optimal plan from one start, by dynamic programming.
+
+    The task's moves are deterministic on a lattice, so the plan that maximises the return
+    (the fewest moves, the least outage) is found exactly: over the map, or in space and time
+    where the env's signal moves (the flight taking off at time 0). It is the yardstick a
+    learned policy is scored against, never its teacher.
+
+    Args:
+        env: The environment on one level (among levels:
+            [`optimal_among_levels()`][rainuav.nav.planner.optimal_among_levels]).
+        start_m: The start ``(x, y)``, m, inside the area.
+
+    Returns:
+        The [`Plan`][rainuav.nav.planner.Plan]: its return, its positions and its actions.
+
+    Raises:
+        InvalidInputError: ``env`` is not a [`UAVNavEnv`][rainuav.nav.UAVNavEnv] on one level,
+            or its reward or world cannot be planned on.
+
+    Examples:
+        ```python
+        from rainuav.nav import UAVNavEnv, planner
+        from rainuav.radio import build_radio_map, presets
+
+        env = UAVNavEnv(build_radio_map(presets.uma(engine="ray")), goal_m=(1400.0, 1600.0))
+        plan = planner.optimal(env, (200.0, 300.0))
+        print(len(plan.actions), "moves, return", round(plan.return_, 1))
+        ```
+    """
     return optimal_many(env, np.asarray(start_m, dtype=np.float64)[None])[0]
 
 

@@ -1,4 +1,5 @@
-"""The navigation task: its configuration, moves and rewards (docs/physics.md section 6).
+"""The navigation task: its configuration, moves and rewards ([physics reference, section
+6][6-the-navigation-task]).
 
 - Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y, each one ``step_m`` long.
 - The signal S is the map's SINR (``signal="sinr"``, default) or SIR (``"sir"``, the
@@ -17,7 +18,8 @@
   the new position and the instant the move ends ([`rainuav.nav.field`][rainuav.nav.field]; a single
   map does not change in time, so time changes nothing there).
 - A flight's **cost** is its return without the arrival reward, negated: the moves plus the
-  weighted shortfall (docs/physics.md section 6, [`flight_cost()`][rainuav.nav.task.flight_cost]).
+  weighted shortfall ([physics reference, section 6][6-the-navigation-task],
+  [`flight_cost()`][rainuav.nav.task.flight_cost]).
 """
 
 from __future__ import annotations
@@ -63,9 +65,10 @@ command, checked where the task is read)."""
 
 @dataclass
 class NavConfig:
-    """The navigation task (defaults: the paper's Table I and docs/physics.md section 6): the one
-    place its settings live. The environment owns it; a world spec holds it as ``task`` (the
-    ``[task]`` table of a run's ``config.toml``, the flags ``--task.NAME`` of ``rainuav.train``)."""
+    """The navigation task (defaults: the paper's Table I and [physics reference, section
+    6][6-the-navigation-task]): the one place its settings live. The environment owns it; a world
+    spec holds it as ``task`` (the ``[task]`` table of a run's ``config.toml``, the flags
+    ``--task.NAME`` of ``rainuav.train``)."""
 
     goal_m: tuple[float, float] = (1400.0, 1600.0)
     """Destination, m."""
@@ -180,8 +183,9 @@ def base_reward(signal_db: Any, cfg: NavConfig, outage_p: Any = None) -> Any:
 
 def flight_cost(returns: Any, arrived: Any, cfg: NavConfig) -> Any:
     """The cost of flights with these undiscounted ``returns``: the return without the arrival
-    reward, negated (moves plus weighted shortfall, docs/physics.md section 6). Meaningful for
-    flights that arrived (a flight that left the area also pays ``out_of_bounds_penalty``)."""
+    reward, negated (moves plus weighted shortfall, [physics reference, section
+    6][6-the-navigation-task]). Meaningful for flights that arrived (a flight that left the area
+    also pays ``out_of_bounds_penalty``)."""
     return -(np.asarray(returns, dtype=np.float64) - cfg.goal_reward * np.asarray(arrived))
 
 

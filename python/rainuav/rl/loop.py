@@ -124,17 +124,52 @@ def train(
     yardstick: bool = False,
     callbacks: Sequence[Callback] = (),
 ) -> dict[str, Any]:
-    """Runs the whole job in ``world`` (built by the caller from the configuration's world part,
-    [`rainuav.world.build_world()`][rainuav.world.build_world]; tests hand in small synthetic
-    worlds; its task must be the configuration's) and returns the metrics; the world's signal is
-    saved with the run. ``stop_after`` ends the call, as an interruption would, at the first
-    checkpoint with at least that many finished episodes (``resume=True`` then continues exactly);
-    it returns ``{}``. Sets no process-wide state that outlives the call (torch's thread count and
-    determinism are restored). ``yardstick``: allow an evaluation storm (a per-storm network trained
-    on the very storm a generalist is judged on, as the specialist it is compared with; not on the
-    CLI). ``callbacks``: more [`Callback`][rainuav.rl.callbacks.Callback]s, called after the run's
-    own (one whose ``on_step`` returns True ends training, which then finishes as at its last
-    episode)."""
+    """Trains a dueling double DQN in a world and evaluates it against the exact optimum.
+
+    The run writes its folder (``cfg.out``: the checkpoint, the policy, ``metrics.json``, the
+    log and the figures; the world's signal is saved with it) and sets no process-wide state
+    that outlives the call (torch's thread count and determinism are restored).
+
+    Args:
+        cfg: The whole run ([`TrainConfig`][rainuav.rl.config.TrainConfig]).
+        world: Built from the configuration's world part by
+            [`rainuav.world.build_world()`][rainuav.world.build_world] (tests hand in small
+            synthetic worlds); its task must be the configuration's.
+        resume: Continue the run in ``cfg.out`` from its checkpoint, exactly.
+        progress: A progress line on standard error.
+        stop_after: End the call, as an interruption would, at the first checkpoint with at
+            least that many finished episodes (``resume=True`` then continues exactly).
+        yardstick: Allow an evaluation storm (a per-storm network trained on the very storm a
+            generalist is judged on, as the specialist it is compared with; not on the CLI).
+        callbacks: More [`Callback`][rainuav.rl.callbacks.Callback]s, called after the run's
+            own (one whose ``on_step`` returns True ends training, which then finishes as at its
+            last episode).
+
+    Returns:
+        The metrics (``metrics.json``'s contents: success rate and excess cost over the exact
+        optimum on the evaluation starts, beside the baselines'); ``{}`` after ``stop_after``.
+
+    Raises:
+        InvalidInputError: A world that is not the configuration's, or a resume without a
+            checkpoint or with another configuration.
+        TrainingDivergedError: The loss, weights or returns stopped being finite (nothing
+            non-finite is saved).
+
+    Examples:
+        ```python
+        import tempfile
+
+        from rainuav.nav.task import NavConfig
+        from rainuav.rl import DQNConfig, TrainConfig, train
+        from rainuav.world import build_world
+
+        cfg = TrainConfig(scenario="uma", engine="ray", out=tempfile.mkdtemp(), eval_starts=4,
+                          validate_every=0, task=NavConfig(goal_m=(1400.0, 1600.0), max_steps=200),
+                          dqn=DQNConfig(episodes=20, learning_starts=100))
+        metrics = train(cfg, build_world(cfg), progress=False)
+        print(metrics["episodes"], "episodes; greedy success", metrics["success_rate"])
+        ```
+    """
     check_config(cfg)
     if cfg.scenario == "storm" and not cfg.scenario_file and not yardstick:
         check_storm_seed(cfg.storm_seed, training=True)

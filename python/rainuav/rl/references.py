@@ -53,7 +53,7 @@ def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
 def relative_gap(optimum: np.ndarray, returns: np.ndarray) -> np.ndarray:
     """Per start, the share of the exact optimum's return the policy gave up (a secondary
     figure: the arrival reward in both returns makes it look about 4x smaller than the extra
-    cost it stands for, docs/physics.md section 6)."""
+    cost it stands for, [physics reference, section 6][6-the-navigation-task])."""
     return (optimum - returns) / np.maximum(np.abs(optimum), 1e-9)
 
 

@@ -1,4 +1,5 @@
-"""The grid of one cell's PE march and the cone it carries (docs/physics.md section 4).
+"""The grid of one cell's PE march and the cone it carries ([physics reference, section
+4][4-the-split-step-parabolic-equation]).
 
 The cone: the widest directions (as direction cosines across range and in height) where the
 cell's pattern is within ``pe.dynamic_range_db`` of its peak, narrowed until the march fits

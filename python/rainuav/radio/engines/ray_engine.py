@@ -1,5 +1,5 @@
-"""The ray engine: every cell's received power at every pixel from two rays (docs/physics.md
-section 8), the per-pixel work in Rust (``rainuav_core::rays``).
+"""The ray engine: every cell's received power at every pixel from two rays ([physics reference,
+section 8][8-rays-over-flat-ground]), the per-pixel work in Rust (``rainuav_core::rays``).
 
 For each cell and pixel: the line-of-sight ray and the ray reflected by the ground, each with the
 cell's antenna gain in its own departure direction
@@ -15,9 +15,10 @@ edge, and the ground reflects off the line fitted over its first Fresnel zone, w
 terrain's roughness, faded where its legs are half hidden
 ([`departures()`][rainuav.radio.engines.ray_engine.departures]); the walls reflect once and twice
 and the buildings' corners diffract round them
-([`rainuav.radio.engines.wall_rays`][rainuav.radio.engines.wall_rays]; docs/physics.md sections 8
-and 12). Each pixel holds the mean power over its area (ground-reflection fringes finer than a pixel
-are averaged, not aliased).
+([`rainuav.radio.engines.wall_rays`][rainuav.radio.engines.wall_rays]; [physics reference, sections
+8][8-rays-over-flat-ground] and [12][12-terrain-buildings-diffraction-and-reflections]). Each pixel
+holds the mean power over its area (ground-reflection fringes finer than a pixel are averaged, not
+aliased).
 
 With ``weights``, [`ray_power()`][rainuav.radio.engines.ray_engine.ray_power] also returns the power
 of the part of each pattern the weights select: what the PE would carry in the hybrid engine

@@ -1,9 +1,9 @@
-"""The rays that building walls reflect (docs/physics.md section 12), for the ray engine: each
-site's rays traced once in the core (`rainuav._core.ray_walls`: the image method per wall, the
-specular point within the wall, both legs clear), then each cell's antenna gain toward each ray's
-specular point, the powers added incoherently per pixel
-([`wall_terms()`][rainuav.radio.engines.wall_rays.wall_terms]). Also the obstacles (buildings and
-the height map) as the core's ray functions take them
+"""The rays that building walls reflect ([physics reference, section
+12][12-terrain-buildings-diffraction-and-reflections]), for the ray engine: each site's rays traced
+once in the core (`rainuav._core.ray_walls`: the image method per wall, the specular point within
+the wall, both legs clear), then each cell's antenna gain toward each ray's specular point, the
+powers added incoherently per pixel ([`wall_terms()`][rainuav.radio.engines.wall_rays.wall_terms]).
+Also the obstacles (buildings and the height map) as the core's ray functions take them
 ([`obstacle_args()`][rainuav.radio.engines.wall_rays.obstacle_args]).
 
 **Rain** on a wall's ray is the mean specific attenuation of the site-pixel line times the
@@ -100,11 +100,11 @@ def wall_terms(
     weights: Sequence[Weight | None] | None = None,
     rays: tuple[WallRays, dict[int, int]] | None = None,
 ) -> np.ndarray | None:
-    """Each cell's rays reflected by walls at every pixel (docs/physics.md section 12), (M, H, W,
-    2): their clear-air power (mW, each with the cell's gain toward its specular point; added
-    incoherently) and their power-weighted mean length (m); with ``weights``, the part of
-    each pattern they select. None where ``scn`` has no walls (``rays``: from
-    `_wall_rays`, traced here if not given)."""
+    """Each cell's rays reflected by walls at every pixel ([physics reference, section
+    12][12-terrain-buildings-diffraction-and-reflections]), (M, H, W, 2): their clear-air power (mW,
+    each with the cell's gain toward its specular point; added incoherently) and their
+    power-weighted mean length (m); with ``weights``, the part of each pattern they select. None
+    where ``scn`` has no walls (``rays``: from `_wall_rays`, traced here if not given)."""
     traced = trace_walls(scn, jobs, x_m, y_m) if rays is None else rays
     if traced is None:
         return None

@@ -66,14 +66,43 @@ def build_radio_map(
 def build_radio_map(
     scn: Scenario, *, cache: bool = True, progress: bool = False, times_s: Any = None
 ) -> RadioMap | RadioMapSeries:
-    """Builds (or loads from the cache) the radio map of ``scn`` with its engine (with ``times_s``,
-    the maps of its moving weather at those instants:
-    [`rainuav.radio.outputs.timemap.build_radio_map_series()`][rainuav.radio.outputs.timemap.build_radio_map_series]):
-    ``"pe"`` marches each cell's pattern inside its cone; ``"ray"`` traces two rays per cell and
-    pixel; ``"hybrid"`` lets the PE carry each pattern inside its cone and the rays the rest (the PE
-    needs a ``pec`` ground or none: over a soil the hybrid is the ray engine; a cell whose cone
-    carries under 1% of its power at every pixel is not marched). ``RadioMap.pe_share`` records, per
-    cell and pixel, the share of the power the PE carried."""
+    """Builds the radio map of a scenario, or loads it from the cache.
+
+    The scenario's engine makes it: ``"pe"`` marches each cell's pattern inside its cone;
+    ``"ray"`` traces two rays per cell and pixel; ``"hybrid"`` lets the PE carry each pattern
+    inside its cone and the rays the rest (the PE needs a ``pec`` ground or none: over a soil the
+    hybrid is the ray engine; a cell whose cone carries under 1% of its power at every pixel is
+    not marched). ``RadioMap.pe_share`` records, per cell and pixel, the share of the power the
+    PE carried.
+
+    Args:
+        scn: The network, weather, ground and output grid
+            ([`Scenario`][rainuav.radio.Scenario]; [`presets`][rainuav.radio.scene.presets]
+            makes the shipped ones).
+        cache: Read and write the map cache (``RAINUAV_CACHE_DIR``); the same scenario is then
+            built once.
+        progress: One line on standard error per cell marched.
+        times_s: Instants (s from take-off) of a moving weather: the maps at each, by
+            [`build_radio_map_series()`][rainuav.radio.outputs.timemap.build_radio_map_series].
+
+    Returns:
+        The [`RadioMap`][rainuav.radio.RadioMap] (every cell's received power ``rss_dbm``, the
+        serving cell, SIR and SINR in dB), or with ``times_s`` a
+        [`RadioMapSeries`][rainuav.radio.RadioMapSeries].
+
+    Raises:
+        InvalidInputError: The map would not fit in the memory available (the message names
+            what sets its size and how to shrink it).
+
+    Examples:
+        ```python
+        import numpy as np
+        from rainuav.radio import build_radio_map, presets
+
+        rm = build_radio_map(presets.uma(rain_rate_mm_h=25.0, engine="ray"))
+        print(rm.sinr_db.shape, f"median SINR {np.median(rm.sinr_db):.1f} dB")
+        ```
+    """
     if times_s is not None:
         from rainuav.radio.outputs.timemap import build_radio_map_series
 

@@ -1,4 +1,5 @@
-"""Serving cell, SIR and SINR from every cell's received power (docs/physics.md section 5)."""
+"""Serving cell, SIR and SINR from every cell's received power ([physics reference, section
+5][5-radio-maps-sir-and-association])."""
 
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
 """The ray engine's building effect against Sionna RT's, on one scene: the tracer's radio map
 ([`rainuav.radio.reference.tracer`][rainuav.radio.reference.tracer]) or its path solver at the
 pixel centres ([`rainuav.radio.reference.tracer_paths`][rainuav.radio.reference.tracer_paths]) as
-the reference (docs/physics.md section 12)."""
+the reference ([physics reference, section
+12][12-terrain-buildings-diffraction-and-reflections])."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Sionna RT, a full ray tracer, as an independent reference for the building physics
-(docs/physics.md section 12).
+([physics reference, section 12][12-terrain-buildings-diffraction-and-reflections]).
 
 The same scene in both: a scenario's buildings (boxes and footprints, merged as the ray engine
 reads them) become closed meshes in the tracer; each site radiates from one isotropic antenna of the

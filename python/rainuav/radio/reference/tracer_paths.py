@@ -1,6 +1,7 @@
 """Sionna RT's path solver at the pixel centres: the tracer's exact paths, as a reference for the
 building effect beside (and in the shadows in place of) its Monte Carlo radio map
-([`rainuav.radio.reference.tracer`][rainuav.radio.reference.tracer], docs/physics.md section 12).
+([`rainuav.radio.reference.tracer`][rainuav.radio.reference.tracer], [physics reference, section
+12][12-terrain-buildings-diffraction-and-reflections]).
 
 The radio map estimates each cell's power from the rays that happen to cross it; in a deep shadow
 few diffracted rays do, and the estimate is dark and scattered there (on the canyon test scene,

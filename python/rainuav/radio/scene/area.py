@@ -148,8 +148,8 @@ class TerrainFile:
     roughness_m: float = DEM_ROUGHNESS_M
     """The ground's roughness the DEM does not resolve, m (standard deviation; 0-100), added in
     quadrature to the terrain's own within a ground reflection's first Fresnel zone
-    (docs/physics.md section 8): heights in whole metres do not know the ground better than
-    1/sqrt(12) m, and trees and clutter are rougher still."""
+    ([physics reference, section 8][8-rays-over-flat-ground]): heights in whole metres do not know
+    the ground better than 1/sqrt(12) m, and trees and clutter are rougher still."""
 
 
 @dataclass

@@ -1,7 +1,7 @@
-"""A scenario's buildings as the radio layer uses them (docs/physics.md section 12): the boxes of
-``Scenario.buildings`` and the footprints of ``Scenario.footprints``
-([`rainuav.ground.footprints`][rainuav.ground.footprints]) as one set of prisms standing on the
-terrain, their walls, and the pixels they touch.
+"""A scenario's buildings as the radio layer uses them ([physics reference, section
+12][12-terrain-buildings-diffraction-and-reflections]): the boxes of ``Scenario.buildings`` and the
+footprints of ``Scenario.footprints`` ([`rainuav.ground.footprints`][rainuav.ground.footprints]) as
+one set of prisms standing on the terrain, their walls, and the pixels they touch.
 
 - **One kind of obstacle.** A box is the four-cornered footprint; both are
   `rainuav._core.Prisms` for the ray engine (profiles, diffraction, visibility) and for

@@ -1,11 +1,11 @@
 """A cell (one sector of a site) and its antenna: which pattern it radiates with, where it
 points, and its gain toward any direction in the global frame.
 
-Conventions (docs/physics.md section 7): ``azimuth_deg`` is the boresight direction counter-
-clockwise from +x (east); ``tilt_deg`` is the mechanical tilt, the boresight elevation
+Conventions ([physics reference, section 7][7-antennas]): ``azimuth_deg`` is the boresight direction
+counter-clockwise from +x (east); ``tilt_deg`` is the mechanical tilt, the boresight elevation
 (positive up). A cell's gain toward a global direction (azimuth ``a``, elevation ``e``) is its
-pattern's gain at ``(a - azimuth_deg, e - tilt_deg)``: the tilt shifts the pattern in
-elevation (exact in the boresight's vertical plane, and what the PE source does with a tilt).
+pattern's gain at ``(a - azimuth_deg, e - tilt_deg)``: the tilt shifts the pattern in elevation
+(exact in the boresight's vertical plane, and what the PE source does with a tilt).
 
 Antennas (``Cell.antenna``; [`rainuav.antenna`][rainuav.antenna] holds the patterns):
 

@@ -7,8 +7,9 @@ Conventions (documented choices the design paper leaves open):
 - A cell's ``azimuth_deg`` is its boresight direction in the horizontal plane, counter-
   clockwise from +x (0 = east, 90 = north); ``tilt_deg`` is its elevation (positive up).
 - Transmit power defaults to 46 dBm per cell (a 40 W macro sector); the receiver noise is
-  thermal noise over ``bandwidth_hz`` plus ``noise_figure_db`` (docs/physics.md section 9), by
-  default 10 MHz and 9 dB: -104 + 9 = -95 dBm (``noise_dbm`` overrides it).
+  thermal noise over ``bandwidth_hz`` plus ``noise_figure_db`` ([physics reference, section
+  9][9-noise-and-sinr]), by default 10 MHz and 9 dB: -104 + 9 = -95 dBm (``noise_dbm`` overrides
+  it).
 - Rain fills every column from the ground up; it varies horizontally (rain cells, rate maps)
   but not with height below the flight altitude.
 """
@@ -95,7 +96,8 @@ class Building:
 
 @dataclass
 class PESettings:
-    """How each cell's parabolic-equation march is gridded (docs/physics.md section 4)."""
+    """How each cell's parabolic-equation march is gridded ([physics reference, section
+    4][4-the-split-step-parabolic-equation])."""
 
     dynamic_range_db: float = 40.0
     """The grid resolves every direction where the beam is within this many dB of its peak."""
@@ -150,7 +152,7 @@ class Scenario:
     """Receiver noise figure, dB (0-30)."""
     noise_dbm: float | None = None
     """Receiver noise power, dBm, overriding ``-174 + 10 log10(bandwidth_hz) +
-    noise_figure_db`` (docs/physics.md section 9) when set."""
+    noise_figure_db`` ([physics reference, section 9][9-noise-and-sinr]) when set."""
     area: Area = field(default_factory=Area)
     """The airspace."""
     sites: list[Site] = field(default_factory=list)
@@ -177,11 +179,12 @@ class Scenario:
     """The terrain (``[terrain] file = "dem.tif"``; needs ``origin``): heights are then above
     it (a site's antenna over the terrain at the site; the UAV over the terrain under it, or
     above sea level: ``area.altitude_reference``), and buildings and ``height_map_m`` stand on
-    it (docs/physics.md section 12). None: a flat ground at 0."""
+    it ([physics reference, section 12][12-terrain-buildings-diffraction-and-reflections]). None: a
+    flat ground at 0."""
     footprints: FootprintsFile | None = None
     """Buildings from a footprint file (``[footprints] file = "buildings.geojson"``; needs
     ``origin``): prisms standing on the terrain beside ``buildings``; they diffract, block and
-    reflect (docs/physics.md section 12)."""
+    reflect ([physics reference, section 12][12-terrain-buildings-diffraction-and-reflections])."""
 
     def __post_init__(self) -> None:
         self.check()

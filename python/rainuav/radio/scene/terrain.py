@@ -1,6 +1,7 @@
-"""A scenario's ground as the radio layer uses it (docs/physics.md section 12): its terrain on the
-area's nodes ([`rainuav.ground`][rainuav.ground]), the heights the ray engine takes, the flight
-height over every pixel and the pixels that are not flyable.
+"""A scenario's ground as the radio layer uses it ([physics reference, section
+12][12-terrain-buildings-diffraction-and-reflections]): its terrain on the area's nodes
+([`rainuav.ground`][rainuav.ground]), the heights the ray engine takes, the flight height over every
+pixel and the pixels that are not flyable.
 
 - A site's antenna stands ``height_m`` above the terrain at the site; the UAV flies
   ``area.altitude_m`` above the terrain under it (``area.altitude_reference = "ground"``, the

@@ -115,8 +115,9 @@ class Medium:
     wind_speed_m_s: float = 0.0
     """Wind across the path, m/s."""
     wind_model: str = "canting"
-    """How wind acts: 'canting' (drops cant by atan(v_wind / v_t); docs/physics.md) or 'paper' (the
-    paper's 1/cos factor, for reproducing it only; rainuav.medium)."""
+    """How wind acts: 'canting' (drops cant by atan(v_wind / v_t);
+    [physics reference, section 3][3-the-rain-medium]) or 'paper' (the paper's 1/cos factor, for
+    reproducing it only; rainuav.medium)."""
 
     def at(self, t_s: float) -> Medium:
         """The weather at time ``t_s``, s: every rain cell moved and grown
