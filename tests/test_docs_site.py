@@ -1,5 +1,6 @@
-"""The documentation site opens offline (``docs/hooks/offline.py``: a page that loads a script, a
-style sheet or a font from the network fails the build), and its formulas
+"""The documentation site's checks of every built page (``docs/hooks/pages.py``: a page that
+loads from the network, links from the server's root, or shows a broken table or raw TeX fails
+the build), and its formulas
 (``docs/hooks/math.py``): TeX on the pages becomes MathML when the site is built, so they render
 with no script and no network. Every formula of the physics
 and conventions pages converts; a formula the converter cannot read fails with the page named;
@@ -99,7 +100,7 @@ def test_a_block_arithmatex_did_not_read_fails_the_build() -> None:
 def test_a_page_that_loads_from_the_network_is_found() -> None:
     # What the theme wrote before the site was made to open offline: Google's fonts and the
     # offline plugin's worker polyfill from a CDN; links to other sites are not fetched.
-    hook = _hook("offline")
+    hook = _hook("pages")
     page = (
         '<link rel="preconnect" href="https://fonts.gstatic.com" crossorigin>'
         '<link rel="stylesheet" href="https://fonts.googleapis.com/css?family=Roboto">'
@@ -113,3 +114,19 @@ def test_a_page_that_loads_from_the_network_is_found() -> None:
         "unpkg.com/iframe-worker/shim",
     ]
     assert hook.network_fetches('<link rel="stylesheet" href="../assets/main.css">') == []
+
+
+def test_root_links_broken_tables_and_raw_tex_are_found() -> None:
+    # What the site showed before: a table cut by a blank line (raw "|" text), a formula in
+    # a list item that arithmatex did not read, root-absolute links; code is left alone.
+    hook = _hook("pages")
+    page = (
+        '<a href="/assets/x.css">x</a><p>| test | within 0.01 dB | yes |</p>'
+        "<p>the field $F(X) = 2j \\sqrt{X}$ here</p><pre><code>echo $HOME \\n</code></pre>"
+        '<a href="../physics.html">ok</a><a href="https://github.com/x">ok</a>'
+    )
+    found = hook.problems(page)
+    assert len(found) == 3, found
+    assert "links to /assets/x.css from the root" in found[0]
+    assert found[1].startswith("a table that did not render") and "formula left as text" in found[2]
+    assert hook.problems('<a href="/assets/x.css">x</a>', is_404=True) == []
