@@ -65,6 +65,11 @@ def main(argv: list[str]) -> int:
             sys.stderr.write(res.stdout + res.stderr)
             raise SystemExit(f"docs/gallery.py: {path.name} failed (exit {res.returncode})")
         print(f"gallery: {path.name} in {time.perf_counter() - t0:.1f} s")
+    # The page "Plan a flight at your place": its command, run here, gives its figure and table.
+    res = subprocess.run([sys.executable, str(ROOT / "docs" / "tutorials" / "your_place.py"),
+                          "--out", str(FIGURES)], cwd=ROOT, timeout=600)  # fmt: skip
+    if res.returncode != 0:
+        raise SystemExit(f"docs/gallery.py: your_place.py failed (exit {res.returncode})")
     return 0
 
 

@@ -395,6 +395,11 @@ def test_fly_through_the_shipped_radar_file(tmp_path) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["weather_moves"] is True
     assert summary["cost"] <= summary["straight_line_cost"] + 1e-9
+    # The plan's outage with its spread, each move on the slice it lands in: a share between
+    # 0 and 1, the independent spread below the fully correlated one.
+    chance = summary["outage_chance"]
+    assert 0.0 <= chance["expected_outage_share"] <= 1.0
+    assert 0.0 <= chance["spread_independent"] <= chance["spread_correlated"] <= 0.5
     assert main([*argv, "--altitudes", "100:100:1", "--out", str(tmp_path / "band")]) == 0
     band = json.loads((tmp_path / "band" / "summary.json").read_text())
     assert band["weather_moves"] is True and band["moves"] == summary["moves"]

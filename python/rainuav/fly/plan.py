@@ -39,7 +39,7 @@ from rainuav.radio.engines import for_time
 from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.maps import build_radio_map
 from rainuav.radio.outputs.maptiff import write_map_geotiff
-from rainuav.radio.outputs.timemap import build_radio_map_series, series_times
+from rainuav.radio.outputs.timemap import RadioMapSeries, build_radio_map_series, series_times
 from rainuav.radio.scene import presets
 from rainuav.radio.scene.buildings import buildings_near_route
 from rainuav.radio.scene.scenario import Scenario
@@ -171,13 +171,13 @@ def fly_place(
         "area_m": [a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m],
         **(buildings_near_route(scn, path) or {}),
     }  # fmt: skip
-    if isinstance(rm, RadioMap):  # outage as a probability, from the map's spreads
-        from rainuav.radio.measured.outage import (
-            outage_probability,
-            path_outage,
-            path_outage_draws,
-        )
+    from rainuav.radio.measured.outage import (
+        outage_probability,
+        path_outage,
+        path_outage_draws,
+    )
 
+    if isinstance(rm, RadioMap):  # outage as a probability, from the map's spreads
         r, c = pixel_index(rm.sinr_db.shape, rm.extent_m, path[1:, 0], path[1:, 1])
         prob = outage_probability(rm, min_db, pixels=(r, c), draws=4096)  # the path's pixels
         summary["outage_chance"] = {
@@ -189,8 +189,31 @@ def fly_place(
             summary["measurements"] = {"log": rm.fit["log"],
                                        "cross_validation": rm.fit["cross_validation"],
                                        **path_outage(prob)}  # fmt: skip
+    elif isinstance(rm, RadioMapSeries):  # a weather that moves: each move on its own slice
+        summary["outage_chance"] = {
+            "spreads": "the prior's by mechanism, each move on the map of the slice it lands in",
+            **path_outage(series_outage(rm, path[1:], t_s[1:], min_db)),
+        }
     _write(place, out, ll, path, t_s, sinr, serving, min_db, summary, rm, mission)
     return summary
+
+
+def series_outage(
+    rm: RadioMapSeries, path: np.ndarray, t_s: np.ndarray, min_db: float
+) -> np.ndarray:
+    """The outage probability of each move of a flight through a weather that moves: the move
+    ending at ``path[k]`` (local metres) at ``t_s[k]`` read on the slice of ``rm`` nearest that
+    instant, with that slice's prior spreads (the maps are 5 s apart, a few moves)."""
+    from rainuav.radio.measured.outage import outage_probability
+
+    slot = np.abs(t_s[:, None] - rm.t_s[None, :]).argmin(axis=1)
+    prob = np.empty(len(path))
+    for k in np.unique(slot):
+        m = rm.at(float(rm.t_s[k]))
+        on = slot == k
+        r, c = pixel_index(m.sinr_db.shape, m.extent_m, path[on, 0], path[on, 1])
+        prob[on] = outage_probability(m, min_db, pixels=(r, c), draws=4096)
+    return prob
 
 
 def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, float]:

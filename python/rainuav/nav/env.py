@@ -3,25 +3,16 @@ one flight level (four moves) or, given a field with flight levels (a
 [`SignalField`][rainuav.nav.field.SignalField] with ``altitudes_m``), among them (six: a climb and a
 descent besides; [`rainuav.nav.levels`][rainuav.nav.levels]). One class.
 
-Semantics (the planner and the tests rely on them; [physics reference, section
-6][6-the-navigation-task]):
+Its specification (spaces, reward, episode end, ids): [the guide's navigation
+page][the-environments-specification]. Besides (the planner and the tests rely on them;
+[physics reference, section 6][6-the-navigation-task]):
 
 - Signal at a position: bilinear interpolation of the map (H, W) whose sample [i, j] sits at
   ``x = x_min + (j + 0.5) (x_max - x_min) / W``, ``y = y_min + (i + 0.5) (y_max - y_min) / H``;
-  beyond the outermost centres the edge values hold. The map is a RadioMap's ``sinr_db``
-  (``signal="sinr"``, default) or ``sir_db`` (``"sir"``, the paper's), or a raw array.
-- Observation: position scaled to [0, 1]^2 (float32); among levels the level over the highest
-  index; where the signal changes in time (a
-  [`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]) the clock over
-  ``max_steps``. Actions: 0 = +x, 1 = +y, 2 = -x, 3 = -y (4: climb, 5: descend).
+  beyond the outermost centres the edge values hold. ``min_db`` defaults to the map's own
+  threshold (``RadioMap.default_min_db``), else 10 dB.
 - Time: a move takes ``step_m / speed_m_s`` s (a climb or descent its whole ticks) and earns the
   signal at the new position and the instant it ends; every episode takes off at time 0.
-- Moves and rewards: [`rainuav.nav.task`][rainuav.nav.task] (shortfall below ``min_db`` by default,
-  ``goal_reward`` on arrival, ``out_of_bounds_penalty`` on leaving the area, truncated after
-  ``max_steps``). ``min_db`` defaults to the map's own threshold (a preset's documented SINR
-  threshold, ``RadioMap.default_min_db``), else 10 dB.
-- ``info``: ``signal_db``, ``serving_cell`` (-1 where the map names none), ``position_m``
-  (among levels ``level`` and ``altitude_m``), ``outage``, ``arrived`` and ``t_s`` (s).
 - Positions are kept as the start plus an integer number of steps in x and y, so every visited
   point lies exactly on the start's lattice (the exact planner's state space).
 
@@ -74,34 +65,11 @@ def _index(name: str, value: Any, n: int) -> int:
 class UAVNavEnv(gym.Env):
     """UAV navigation over a SINR or SIR map, on one level or among several.
 
-    | | one level | among flight levels |
-    |---|---|---|
-    | registered id | ``rainuav/UAVNav-v0`` | ``rainuav/UAVLevels-v0`` |
-    | action space | ``Discrete(4)`` | ``Discrete(6)`` |
-    | observation space | ``Box(0, 1, (2,), float32)`` | ``Box(0, 1, (3,), float32)`` |
-    | make | ``gym.make("rainuav/UAVNav-v0")`` | ``gym.make("rainuav/UAVLevels-v0")`` |
-
-    - **Actions**: 0 = +x (east), 1 = +y (north), 2 = -x, 3 = -y, one move of ``step_m``; among
-      levels 4 climbs and 5 descends one level.
-    - **Observation** (``observation="position"``): the position scaled to the area, then among
-      levels the level over the highest, then, where the signal moves, the clock over
-      ``max_steps`` (one more dimension). ``observation="weather"``: a ``Dict`` of the
-      weather's grids around the UAV and the destination
-      ([`WeatherView`][rainuav.nav.views.WeatherView]).
-    - **Reward** ([`rainuav.nav.task`][rainuav.nav.task]): -1 a move less ``mu`` times the
-      signal's shortfall below ``min_db`` where and when the move lands (a climb or descent
-      lasts its duration in moves and earns that many times as much); ``goal_reward`` on
-      arrival; ``-out_of_bounds_penalty`` on leaving the area or entering a pixel the UAV may
-      not fly.
-    - **Starting state**: the task's ``start_m``, ``reset(options={"start_m": (x, y)})``, or a
-      flyable start drawn from the generator that ``reset(seed=...)`` seeds.
-    - **Episode end**: terminated on arrival within ``tol_m`` of ``goal_m`` or on leaving the
-      area; truncated when the clock reaches ``max_steps``.
-    - **Info**: ``signal_db``, ``serving_cell``, ``position_m``, ``outage``, ``arrived``,
-      ``t_s``; among levels ``level`` and ``altitude_m``.
-
-    The moves are deterministic, so [`planner.optimal()`][rainuav.nav.planner.optimal] gives the
-    exact optimum from any start: the yardstick a policy is scored against.
+    Registered as ``rainuav/UAVNav-v0`` (``Discrete(4)``) and, among flight levels, as
+    ``rainuav/UAVLevels-v0`` (``Discrete(6)``). Its spaces, reward, starting state, episode end
+    and ``info``: [the environment's specification][the-environments-specification] (the
+    guide's navigation page). The moves are deterministic, so
+    [`planner.optimal()`][rainuav.nav.planner.optimal] gives the exact optimum from any start.
 
     Examples:
         ```python
@@ -110,7 +78,6 @@ class UAVNavEnv(gym.Env):
 
         env = UAVNavEnv(build_radio_map(presets.uma(engine="ray")), goal_m=(1400.0, 1600.0))
         obs, info = env.reset(seed=0)
-        obs, reward, terminated, truncated, info = env.step(0)  # one move east
         plan = planner.optimal(env, info["position_m"])
         print(len(plan.actions), "moves to the destination, return", round(plan.return_, 1))
         ```
@@ -140,33 +107,26 @@ class UAVNavEnv(gym.Env):
         """Builds the environment over a map and a task.
 
         Args:
-            radio_map: A built map ([`RadioMap`][rainuav.radio.RadioMap], a series in time,
-                or levels), whose SINR (or SIR) the UAV flies.
-            sinr_db: A raw SINR array (dB; with ``extent_m``) in place of a map.
-            sir_db: A raw SIR array (dB; with ``extent_m``).
+            radio_map: A built map ([`RadioMap`][rainuav.radio.RadioMap], in time or levels).
+            sinr_db: A raw SINR array, dB, in place of a map (with ``extent_m``).
+            sir_db: A raw SIR array, dB (with ``extent_m``).
             extent_m: ``(x_min, x_max, y_min, y_max)`` of a raw array, m.
-            signal: ``"sinr_db"`` or ``"sir_db"``: the signal flown (wins over ``config``).
+            signal: ``"sinr"`` or ``"sir"``: the signal flown (wins over ``config``).
             min_db: The outage threshold, dB (wins over ``config``).
             config: The whole task ([`NavConfig`][rainuav.nav.task.NavConfig]).
             field: A built field in place of a map: a signal in time, a bank of worlds (one
                 drawn per episode), or either among flight levels.
             observation: One of [`OBSERVATIONS`][rainuav.nav.env.OBSERVATIONS].
-            view: The weather's grids ([`WeatherView`][rainuav.nav.views.WeatherView]; among
-                levels its ``layers`` are the levels).
-            random_goal: A destination drawn per episode
-                ([`sample_goal()`][rainuav.nav.views.sample_goal]; needs the weather
-                observation, which shows it).
-            climb_m_s: The climb speed among levels, m/s
-                ([`level_durations()`][rainuav.nav.levelfield.level_durations]).
+            view: The weather's grids ([`WeatherView`][rainuav.nav.views.WeatherView]).
+            random_goal: A destination drawn per episode (the weather observation shows it).
+            climb_m_s: The climb speed among levels, m/s.
             descend_m_s: The descent speed among levels, m/s.
-            start_level: Where every flight starts among levels (default: the lowest level
-                flyable at the start).
+            start_level: The level every flight starts at (default: the lowest flyable).
             **task: Fields of [`NavConfig`][rainuav.nav.task.NavConfig] (``goal_m``,
                 ``max_steps``, ...), over ``config``'s where both are given.
 
         Raises:
-            InvalidInputError: Both a map and a field, a map of another kind, an observation
-                or a start that is not allowed (the message names it).
+            InvalidInputError: An input not allowed (the message names it).
         """
         super().__init__()
         cfg = make_config(config, **task)
@@ -469,13 +429,8 @@ class UAVNavEnv(gym.Env):
         return info
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """One move: ``action`` 0 = +x, 1 = +y, 2 = -x, 3 = -y (an integer), among levels 4 a
-        climb and 5 a descent of one level, which lasts its duration in ticks and earns that many
-        times the move's reward. Returns ``(observation, reward, terminated, truncated, info)``:
-        the reward of the task ([`rainuav.nav.task`][rainuav.nav.task]: -1 less the SINR shortfall
-        where and when the move lands, the arrival reward, or the penalty for leaving the area
-        or entering a pixel the UAV may not fly), ``terminated`` on arrival or leaving,
-        ``truncated`` when the clock reaches ``max_steps``; ``info`` as
+        """One move (``action`` an integer, [the specification][the-environments-specification]):
+        ``(observation, reward, terminated, truncated, info)``, ``info`` as
         [`reset()`][rainuav.nav.env.UAVNavEnv.reset]'s."""
         a = check_action(action, int(self.action_space.n))
         if not self._ready:
