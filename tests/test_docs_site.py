@@ -130,3 +130,20 @@ def test_root_links_broken_tables_and_raw_tex_are_found() -> None:
     assert "links to /assets/x.css from the root" in found[0]
     assert found[1].startswith("a table that did not render") and "formula left as text" in found[2]
     assert hook.problems('<a href="/assets/x.css">x</a>', is_404=True) == []
+
+
+def test_a_summary_is_the_whole_first_sentence() -> None:
+    # The API reference's summary tables show a docstring's first line: the griffe extension
+    # puts the whole first sentence there (brackets, code and "e.g." do not end it).
+    hook = _hook("summaries")
+    doc = (
+        "The field a task flies on: the ``signal`` map (e.g. a preset's. map) of ``radio_map``,\n"
+        "or the one raw array given (``sinr_db``. or ``sir_db``). Then more.\n\nArgs:\n    x: y."
+    )
+    out = hook.with_summary_line(doc)
+    first = out.split("\n")[0]
+    assert first.endswith("(``sinr_db``. or ``sir_db``).") and first.startswith("The field")
+    assert out.split("\n")[1] == "Then more." and out.endswith("Args:\n    x: y.")
+    one = "One line.\nThen another line."
+    assert hook.with_summary_line(one) == one  # the first line is the sentence already
+    assert hook.with_summary_line("One line. Then another\nline.") == one
