@@ -1,7 +1,7 @@
 """The gallery: runs every example of ``examples/gallery/`` (``make docs`` does, before the
-site is built), its figure into ``docs/gallery/`` (built, not kept in the repository), and
-writes ``docs/gallery.md``: each example's title, what it shows, its figure, the command and
-the code.
+site is built), its figure into ``docs/gallery/`` (built, not kept in the repository) with the
+script and a notebook of it to download, and writes ``docs/gallery.md``: a grid of the figures,
+then each example's title, what it shows, its figure, the command, the downloads and the code.
 
     python docs/gallery.py            # run the examples and write the page
     python docs/gallery.py --page     # the page alone (tests/test_docs.py checks it is current)
@@ -10,6 +10,7 @@ the code.
 from __future__ import annotations
 
 import ast
+import json
 import subprocess
 import sys
 import time
@@ -31,32 +32,86 @@ def scripts() -> list[Path]:
     return [EXAMPLES / f"{name}.py" for name in ORDER]
 
 
+def _anchor(title: str) -> str:
+    """The heading's id, as the table of contents makes it."""
+    keep = "".join(ch if ch.isalnum() or ch in " -_" else "" for ch in title.lower())
+    return "-".join(keep.split())
+
+
 def page() -> str:
+    titles = []
+    for path in scripts():
+        doc = ast.get_docstring(ast.parse(path.read_text())) or path.stem
+        titles.append((path, *doc.partition("\n")[::2]))
     parts = [
         "# Gallery\n",
         "Short examples that run as they are, each with the figure it draws (made by "
         "`make docs`). Run one from the clone's root; it writes into `gallery/` under the "
-        "current folder (`--out` elsewhere), never into `docs/`.\n",
+        "current folder (`--out` elsewhere), never into `docs/`. Each can be downloaded as a "
+        "script or as a notebook (run it from the clone's root too).\n",
+        '<div class="grid cards" markdown>\n',
+        *(
+            f"-   [![{t.rstrip('.')}](gallery/{p.stem}.png)](#{_anchor(t.rstrip('.'))})\n\n"
+            f"    [{t.rstrip('.')}](#{_anchor(t.rstrip('.'))})\n"
+            for p, t, _ in titles
+        ),
+        "</div>\n",
     ]
-    for path in scripts():
-        doc = ast.get_docstring(ast.parse(path.read_text())) or path.stem
-        title, _, body = doc.partition("\n")
+    for path, title, body in titles:
         rel = path.relative_to(ROOT).as_posix()
         parts += [
             f"## {title.rstrip('.')}\n",
             body.strip() + "\n",
             f"![{title.rstrip('.')}](gallery/{path.stem}.png)\n",
             f"```sh\npython {rel}\n```\n",
+            f"Download: [the script](gallery/{path.stem}.py), "
+            f"[the notebook](gallery/{path.stem}.ipynb).\n",
             f'??? example "The code: `{rel}`"\n\n    ```python\n    --8<-- "{rel}"\n    ```\n',
         ]
     return "\n".join(parts)
+
+
+def notebook(path: Path) -> dict:
+    """The example at ``path`` as a notebook (nbformat 4): its title and text, a cell that sets
+    it up as the script would be run from the clone's root, and the script itself."""
+    source = path.read_text()
+    doc = ast.get_docstring(ast.parse(source)) or path.stem
+    rel = path.relative_to(ROOT).as_posix()
+    setup = (
+        "# Run from the clone's root: the example reads examples/ and writes into gallery/.\n"
+        f"import sys\n\n__file__ = {rel!r}\nsys.argv = [__file__]\n"
+        f"sys.path.insert(0, {path.parent.relative_to(ROOT).as_posix()!r})"
+    )
+
+    def cell(kind: str, text: str) -> dict:
+        lines = text.splitlines(keepends=True)
+        extra = {} if kind == "markdown" else {"execution_count": None, "outputs": []}
+        return {"cell_type": kind, "metadata": {}, "source": lines, **extra}
+
+    title, _, body = doc.partition("\n")
+    return {
+        "nbformat": 4, "nbformat_minor": 5,
+        "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3",
+                                    "language": "python"},
+                     "language_info": {"name": "python"}},
+        "cells": [cell("markdown", f"# {title.rstrip('.')}\n\n{body.strip()}\n"),
+                  cell("code", setup), cell("code", source.rstrip("\n"))],
+    }  # fmt: skip
+
+
+def downloads() -> None:
+    """Each example's script and notebook into ``FIGURES``, beside its figure."""
+    FIGURES.mkdir(exist_ok=True)
+    for path in scripts():
+        (FIGURES / path.name).write_text(path.read_text())
+        (FIGURES / f"{path.stem}.ipynb").write_text(json.dumps(notebook(path), indent=1) + "\n")
 
 
 def main(argv: list[str]) -> int:
     PAGE.write_text(page())
     if "--page" in argv:
         return 0
-    FIGURES.mkdir(exist_ok=True)
+    downloads()
     for path in scripts():
         t0 = time.perf_counter()
         res = subprocess.run([sys.executable, str(path), "--out", str(FIGURES)], cwd=ROOT,

@@ -147,3 +147,33 @@ def test_a_summary_is_the_whole_first_sentence() -> None:
     one = "One line.\nThen another line."
     assert hook.with_summary_line(one) == one  # the first line is the sentence already
     assert hook.with_summary_line("One line. Then another\nline.") == one
+
+
+def test_a_gallery_notebook_runs_as_a_kernel_would_run_it(tmp_path) -> None:
+    # docs/gallery.py writes each example as a notebook too: run its code cells one by one in
+    # one namespace, from the clone's root, as a notebook's kernel does (here writing into a
+    # folder of the test's: the script's --out).
+    import json
+    import subprocess
+    import sys
+
+    spec = importlib.util.spec_from_file_location("docs_gallery", DOCS / "gallery.py")
+    assert spec and spec.loader
+    gallery = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gallery)
+    nb = gallery.notebook(DOCS.parent / "examples" / "gallery" / "rain_against_p838.py")
+    (tmp_path / "nb.ipynb").write_text(json.dumps(nb))
+    assert [c["cell_type"] for c in nb["cells"]] == ["markdown", "code", "code"]
+    kernel = (
+        "import json, sys\n"
+        f"cells = json.load(open({str(tmp_path / 'nb.ipynb')!r}))['cells']\n"
+        "ns = {'__name__': '__main__'}\n"
+        "for k, c in enumerate(cells):\n"
+        "    if c['cell_type'] == 'code':\n"
+        "        exec(compile(''.join(c['source']), f'<cell {k}>', 'exec'), ns)\n"
+        f"        sys.argv[1:] = ['--out', {str(tmp_path / 'out')!r}]\n"
+    )
+    run = subprocess.run([sys.executable, "-c", kernel], cwd=DOCS.parent, capture_output=True,
+                         text=True, timeout=120)  # fmt: skip
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert (tmp_path / "out" / "rain_against_p838.png").stat().st_size > 10_000
