@@ -136,9 +136,15 @@ def test_the_gallery_page_is_current_and_examples_write_outside_docs() -> None:
 
 
 def test_the_site_shows_the_package_version() -> None:
+    # The site takes the package's version when it is built (docs/hooks/version.py): the footer
+    # and the home page's {{ version }}; the citation files say the same.
     version = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
-    assert f"rainuav {version}" in (ROOT / "mkdocs.yml").read_text()
-    assert f"rainuav {version}" in (DOCS / "index.md").read_text()
+    hook = _load("hooks/version")
+    assert hook.version() == version
+    assert hook.on_page_markdown("rainuav {{ version }}", None, None, None) == f"rainuav {version}"
+    assert "rainuav {{ version }}" in (DOCS / "index.md").read_text()
+    assert f"version: {version}" in (ROOT / "CITATION.cff").read_text()
+    assert f'version = "{version}"' in (ROOT / "Cargo.toml").read_text()
 
 
 def test_shared_figures_agree_between_pages() -> None:
