@@ -3,8 +3,9 @@ built, into the footer and wherever a page writes ``{{ version }}``."""
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
+
+import tomllib
 
 ROOT = Path(__file__).resolve().parents[2]
 
