@@ -46,6 +46,7 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=Path("figures"))
     args = ap.parse_args()
 
+    # --8<-- [start:steps]
     # 1. The network and the area: the shipped sites file (three tri-sector sites in Zurich),
     #    and a take-off point and destination that set the area (with a 300 m margin).
     resolution = 40.0 if args.small else 10.0
@@ -70,6 +71,7 @@ def main() -> None:
               f"outage {100 * np.mean(rm.sinr_db < threshold):.1f}% of the area")  # fmt: skip
     p5, p50, p95 = np.percentile(change, [5, 50, 95])
     print(f"rain changes the SINR by {p5:+.2f} / {p50:+.2f} / {p95:+.2f} dB (p5 / median / p95)")
+    # --8<-- [end:steps]
 
     # 4. The figure: both maps and the change, with the sites.
     a = clear.area

@@ -40,6 +40,7 @@ def main() -> None:
     out = args.out.resolve()
     storms = out / "storms"
 
+    # --8<-- [start:steps]
     # 1. Train one network over the storm distribution (the default command: about 25-60 min
     #    on 2 cores; it resumes with --resume if stopped).
     small_train = [
@@ -73,6 +74,8 @@ def main() -> None:
     summary = json.loads((out / "flight" / "summary.json").read_text())
     print({k: summary[k] for k in ("flown_by", "excess_over_optimum", "outage_share",
                                    "flight_time_s", "waypoints")})  # fmt: skip
+
+    # --8<-- [end:steps]
 
 
 if __name__ == "__main__":
