@@ -67,9 +67,12 @@ def test_no_reference_leaves_the_repository() -> None:
             if p.name == "gallery.md" and target.startswith("gallery/"):
                 # A figure `make docs` draws: the example that draws it exists.
                 target = f"../examples/gallery/{Path(target).stem}.py"
-            elif p.parent.name == "tutorials" and target.startswith("../gallery/"):
-                # A tutorial's figure `make docs` draws by running the tutorial's own script.
-                target = f"{Path(target).stem}.py"
+            elif target.startswith("../gallery/"):
+                # A figure `make docs` draws: by a gallery example, or by a tutorial's script.
+                stem = Path(target).stem
+                tutorial = DOCS / "tutorials" / f"{stem}.py"
+                example = ROOT / "examples" / "gallery" / f"{stem}.py"
+                target = str(tutorial if tutorial.exists() else example)
             assert (p.parent / target).resolve().exists(), (p.name, target)
 
 

@@ -68,7 +68,10 @@ def test_relative_links_resolve(path: Path) -> None:
         if path.name == "gallery.md" and target.startswith("gallery/"):
             # A figure `make docs` draws: the example that draws it exists.
             target = f"../examples/gallery/{Path(target).stem}.py"
-        elif path.parent.name == "tutorials" and target.startswith("../gallery/"):
-            # A tutorial's figure `make docs` draws by running the tutorial's own script.
-            target = f"{Path(target).stem}.py"
+        elif target.startswith("../gallery/"):
+            # A figure `make docs` draws: by a gallery example, or by a tutorial's script.
+            stem = Path(target).stem
+            tutorial = ROOT / "docs" / "tutorials" / f"{stem}.py"
+            example = ROOT / "examples" / "gallery" / f"{stem}.py"
+            target = str(tutorial if tutorial.exists() else example)
         assert (path.parent / target).exists(), (path.name, target)
