@@ -34,8 +34,8 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -57,6 +57,9 @@ from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
 from rainuav.radio.scene.terrain import flight_heights
 
+if TYPE_CHECKING:
+    from rainuav.radio.scene.scenario import Scenario
+
 __all__ = ["MIN_FIELD_POINTS", "RECEIVE_PATTERNS", "Correction", "correct_map", "fit_correction"]
 
 RECEIVE_PATTERNS = ("off", "elevation", "heading", "both")
@@ -71,7 +74,7 @@ def correct_map(
     level_step_m: float = 10.0,
     seed: int = 0,
     cross_validate: bool = True,
-    build: Any = None,
+    build: Callable[[Scenario], RadioMap] | None = None,
     receive_pattern: str = "off",
     kernel: str = "one-scale",
     progress: bool = False,

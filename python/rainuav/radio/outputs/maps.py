@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, overload
+from typing import TYPE_CHECKING, overload
 
 import numpy as np
 
@@ -31,6 +31,8 @@ from rainuav.radio.scene.scenario import Scenario
 from rainuav.radio.scene.terrain import map_mask
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
+
     from rainuav.radio.outputs.timemap import RadioMapSeries
 
 __all__ = ["FORMAT_VERSION", "RadioMap", "build_radio_map"]
@@ -61,10 +63,14 @@ def build_radio_map(
 ) -> RadioMap: ...
 @overload
 def build_radio_map(
-    scn: Scenario, *, cache: bool = ..., progress: bool = ..., times_s: Any
+    scn: Scenario, *, cache: bool = ..., progress: bool = ..., times_s: npt.ArrayLike
 ) -> RadioMapSeries: ...
 def build_radio_map(
-    scn: Scenario, *, cache: bool = True, progress: bool = False, times_s: Any = None
+    scn: Scenario,
+    *,
+    cache: bool = True,
+    progress: bool = False,
+    times_s: npt.ArrayLike | None = None,
 ) -> RadioMap | RadioMapSeries:
     """Builds the radio map of a scenario, or loads it from the cache.
 
