@@ -130,6 +130,10 @@ def test_root_links_broken_tables_and_raw_tex_are_found() -> None:
     assert "links to /assets/x.css from the root" in found[0]
     assert found[1].startswith("a table that did not render") and "formula left as text" in found[2]
     assert hook.problems('<a href="/assets/x.css">x</a>', is_404=True) == []
+    assert hook.problems("<table><tr><th></th><th>why</th></tr></table>") == [
+        "a table column without a heading: 'why'"
+    ]
+    assert hook.problems("<table><tr><th><code>rain_cell</code></th></tr></table>") == []
 
 
 def test_a_summary_is_the_whole_first_sentence() -> None:

@@ -6,7 +6,8 @@
   but on the 404 page, which a server shows at any path and which takes its links from
   ``site_url``;
 - its tables and formulas rendered: no paragraph that starts with a table's ``|`` (a table
-  broken by a blank line or a missing header), and no TeX left as text outside code.
+  broken by a blank line or a missing header), no column without a heading, and no TeX left
+  as text outside code.
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ _FETCHED = re.compile(
 _ROOTED = re.compile(r"\b(?:href|src)=\"(/[^/\"][^\"]*)\"")
 _CODE = re.compile(r"<(pre|code)\b.*?</\1>", re.S)
 _BROKEN_TABLE = re.compile(r"<p>\s*\|[^<]*\|")
+_EMPTY_HEADING = re.compile(r"<tr>(?:(?!</tr>).)*?<th\b[^>]*>\s*</th>.*?</tr>", re.S)
+_TAG = re.compile(r"<[^>]+>")
 _RAW_TEX = re.compile(r"\$[^$<>]{0,200}?\\[A-Za-z]+")
 
 
@@ -37,6 +40,10 @@ def problems(page_html: str, is_404: bool = False) -> list[str]:
     text = _CODE.sub("", page_html)
     out += [
         f"a table that did not render: {m.group(0)[3:60]!r}" for m in _BROKEN_TABLE.finditer(text)
+    ]
+    out += [
+        f"a table column without a heading: {' '.join(_TAG.sub(' ', m[0]).split())[:80]!r}"
+        for m in _EMPTY_HEADING.finditer(page_html)
     ]
     out += [f"a formula left as text: {m[0][:60]!r}" for m in _RAW_TEX.finditer(text)]
     return out

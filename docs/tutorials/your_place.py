@@ -56,7 +56,7 @@ def table(summary: dict, wall_s: float, machine: str) -> str:
         ("the straight line's cost over the exact optimum",
          f"{100 * summary['excess_of_straight_line']:.1f}%"),
     ]  # fmt: skip
-    lines = ["| | this run |", "|---|---|", *[f"| {k} | {v} |" for k, v in rows]]
+    lines = ["| what | this run |", "|---|---|", *[f"| {k} | {v} |" for k, v in rows]]
     return "\n".join(lines) + "\n"
 
 
