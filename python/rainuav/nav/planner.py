@@ -57,17 +57,40 @@ def _as_env(env: UAVNavEnv) -> UAVNavEnv:
 
 
 def optimal_many(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
-    """Exact optimal plans from each start (N, 2), computed in parallel; in space-time where
-    the env's signal changes in time (every flight taking off at time 0)."""
+    """Exact optimal plans from many starts, computed in parallel.
+
+    In space and time where the env's signal changes in time (every flight taking off at 0).
+
+    Args:
+        env: The environment on one level.
+        starts_m: The starts, (N, 2), m.
+
+    Returns:
+        One [`Plan`][rainuav.nav.planner.Plan] a start, in their order.
+
+    Raises:
+        InvalidInputError: ``env`` is not a [`UAVNavEnv`][rainuav.nav.UAVNavEnv] on one level.
+    """
     env = _as_env(env)
     return plan_on(env.field, env.cfg, starts_m)
 
 
 def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
-    """Exact optimal plans of the task ``cfg`` (``min_db`` resolved) on ``field`` (a
-    [`SignalField`][rainuav.nav.field.SignalField]: a map or a series in time) from each start. With
-    ``cfg.reward == "chance"`` the plan reads the field's ``outage_p`` (a move costs ``1 + mu P``
-    where it ends)."""
+    """Exact optimal plans of a task on a field, without an environment.
+
+    Args:
+        field: A [`SignalField`][rainuav.nav.field.SignalField]: a map or a series in time.
+        cfg: The task, ``min_db`` resolved. With ``cfg.reward == "chance"`` the plan reads the
+            field's ``outage_p`` (a move costs ``1 + mu P`` where it ends).
+        starts_m: The starts, (N, 2), m.
+
+    Returns:
+        One [`Plan`][rainuav.nav.planner.Plan] a start.
+
+    Raises:
+        InvalidInputError: A reward or a field the planner cannot plan on (a bank of worlds,
+            several levels, ``"chance"`` without ``outage_p``).
+    """
     starts = np.ascontiguousarray(np.asarray(starts_m, dtype=np.float64).reshape(-1, 2))
     task = {
         "step_m": float(cfg.step_m),
@@ -139,8 +162,21 @@ def optimal(env: UAVNavEnv, start_m: npt.ArrayLike) -> Plan:
 
 
 def straight_line(env: UAVNavEnv, start_m: npt.ArrayLike) -> Plan:
-    """The straight-line baseline: every move reduces the larger remaining coordinate gap to
-    the goal (x first on ties), ignoring the signal."""
+    """The straight-line baseline, flown in the environment.
+
+    Every move reduces the larger remaining coordinate gap to the goal (x first on ties),
+    ignoring the signal, until the flight arrives, leaves the area or runs out of moves.
+
+    Args:
+        env: The environment on one level.
+        start_m: The start ``(x, y)``, m.
+
+    Returns:
+        The [`Plan`][rainuav.nav.planner.Plan] flown, with the return the task gave it.
+
+    Raises:
+        InvalidInputError: ``env`` is not a [`UAVNavEnv`][rainuav.nav.UAVNavEnv] on one level.
+    """
     env = _as_env(env)
     start = np.asarray(start_m, dtype=np.float64).reshape(1, 2)
     goal = np.asarray(env.cfg.goal_m)
@@ -190,15 +226,34 @@ def optimal_levels(
     climb_m_s: float = CLIMB_M_S,
     descend_m_s: float = DESCEND_M_S,
 ) -> list[LevelPlan]:
-    """Exact optimal plans with altitude as a decision (``rainuav_core::planlevels``): the signal of
-    each level (L, H, W) at ``altitudes_m`` (L,), or in time (T, L, H, W) at the instants ``t_s``
-    (T,; every flight taking off at 0); the task ``cfg`` (``min_db`` resolved); starts (N, 2) at
-    ``start_levels`` (N,; -1: the level whose optimum is best, the take-off's climb left to the
-    autopilot). Six moves: the plane's four, and a climb or descent of one level, which lasts its
-    duration in ticks ([`level_durations()`][rainuav.nav.levelfield.level_durations]) and earns that
-    many times the base reward where and when it lands. The horizon ``cfg.max_steps`` is in ticks. A
+    """Exact optimal plans with altitude as a decision (``rainuav_core::planlevels``).
+
+    Six moves: the plane's four, and a climb or descent of one level, which lasts its duration
+    in ticks ([`level_durations()`][rainuav.nav.levelfield.level_durations]) and earns that many
+    times the base reward where and when it lands. The horizon ``cfg.max_steps`` is in ticks. A
     flight arrives at the destination's horizontal position at any level; leaving the band or
-    entering a not-flyable cell ((L, H', W') ``not_flyable``) ends it as leaving the area does."""
+    entering a not-flyable cell ends it as leaving the area does.
+
+    Args:
+        signal_db: The signal of each level, (L, H, W), or in time, (T, L, H, W), dB.
+        altitudes_m: The levels' heights, (L,), m.
+        extent_m: ``(x_min, x_max, y_min, y_max)`` of the maps, m.
+        cfg: The task, ``min_db`` resolved.
+        starts_m: The starts, (N, 2), m.
+        start_levels: The level of each start, (N,) indices; -1: the level whose optimum is
+            best (the take-off's climb left to the autopilot).
+        t_s: The instants of a signal in time, (T,), s (every flight taking off at 0).
+        not_flyable: Cells the UAV may not enter, (L, H', W') booleans.
+        climb_m_s: The climb speed, m/s.
+        descend_m_s: The descent speed, m/s.
+
+    Returns:
+        One [`LevelPlan`][rainuav.nav.planner.LevelPlan] a start.
+
+    Raises:
+        InvalidInputError: Shapes that do not match, a signal that is not finite, a start or
+            level outside the band (the message names it).
+    """
     sig = np.asarray(signal_db, dtype=np.float64)
     alts = np.asarray(altitudes_m, dtype=np.float64).reshape(-1)
     if sig.ndim == 3:
@@ -251,10 +306,24 @@ def optimal_levels(
 def optimal_among_levels(
     env: UAVNavEnv, starts_m: npt.ArrayLike, start_levels: npt.ArrayLike | None = None
 ) -> list[LevelPlan]:
-    """[`optimal_levels()`][rainuav.nav.planner.optimal_levels] on the levels environment's signal
-    and task (its levels' maps, or maps in time, and masks) from each start (N, 2), at
-    ``start_levels`` (N,; default where the env starts a flight there:
-    [`UAVNavEnv.start_level_at()`][rainuav.nav.env.UAVNavEnv.start_level_at])."""
+    """Exact optimal plans among flight levels, on an environment's levels and task.
+
+    [`optimal_levels()`][rainuav.nav.planner.optimal_levels] on the environment's signal (its
+    levels' maps, or maps in time, and masks), task and vertical speeds.
+
+    Args:
+        env: The environment among flight levels.
+        starts_m: The starts, (N, 2), m.
+        start_levels: The level of each start, (N,) indices (-1: the best level); default
+            where the environment starts a flight there
+            ([`UAVNavEnv.start_level_at()`][rainuav.nav.env.UAVNavEnv.start_level_at]).
+
+    Returns:
+        One [`LevelPlan`][rainuav.nav.planner.LevelPlan] a start.
+
+    Raises:
+        InvalidInputError: ``env`` does not fly among levels.
+    """
     if not (isinstance(env, UAVNavEnv) and env.level_axis):
         raise InvalidInputError(f"env must be a UAVNavEnv among levels (got {type(env).__name__})")
     starts = np.asarray(starts_m, dtype=np.float64).reshape(-1, 2)

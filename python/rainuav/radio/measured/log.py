@@ -191,10 +191,28 @@ def read_log(
     altitude_reference: str = "ground",
     subcarrier_khz: float = 15.0,
 ) -> MeasurementLog:
-    """Reads the log at ``path`` into ``scn``'s frame (module docstring): positions in the
-    scenario's metres, heights above the ground and above sea level, cells as map indices,
-    power as the map's ``rss_dbm``. ``cell_names``: the ``site_id:k`` name of each map cell
-    ([`rainuav.world.place`][rainuav.world.place] gives them). Bad rows are counted and skipped."""
+    """Reads a measurement log (CSV) into a scenario's frame.
+
+    The module docstring gives the columns: positions become the scenario's metres, heights
+    above the ground and above sea level, cells map indices, and power the map's ``rss_dbm``.
+    Bad rows are counted and skipped (``MeasurementLog.summary()`` says how many, and why).
+
+    Args:
+        path: The CSV file.
+        scn: The scenario of the map it will correct (with an ``[origin]`` for ``lat``/``lon``).
+        cell_names: The ``site_id:k`` name of each map cell
+            ([`rainuav.world.place`][rainuav.world.place] gives them), for a ``cell`` column of
+            names.
+        altitude_reference: What ``alt_m`` is above: ``"ground"`` or ``"msl"``.
+        subcarrier_khz: The subcarrier spacing an RSRP column was measured at, kHz.
+
+    Returns:
+        The [`MeasurementLog`][rainuav.radio.measured.log.MeasurementLog].
+
+    Raises:
+        InvalidInputError: A file that cannot be read, is empty or too long, lacks a column it
+            needs, or has no usable row (the message names the file and the column).
+    """
     p = Path(path)
     if altitude_reference not in ("ground", "msl"):
         raise InvalidInputError(

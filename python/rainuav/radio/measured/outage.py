@@ -70,8 +70,25 @@ def outage_probability(
     rm: Any, min_db: float, seed: int = 0, draws: int = DRAWS, pixels: Any = None,
     sample: bool = True,
 ) -> np.ndarray:  # fmt: skip
-    """P(SINR < ``min_db``) at every pixel of the map ``rm``, (H, W), or at the ``pixels``
-    (rows, columns) alone, (N,) (module docstring); ``sample`` False: of the local mean."""
+    """The probability that the SINR is below a threshold, at every pixel of a map.
+
+    Every cell's power is drawn from the map's two spreads (module docstring; a physics map's
+    site error drawn once for every cell), and the SINR of each draw compared with ``min_db``.
+
+    Args:
+        rm: The map: a corrected one with its own spreads, or a physics map (its prior's).
+        min_db: The SINR threshold, dB.
+        seed: The draws' seed.
+        draws: Draws per pixel (1-1 000 000).
+        pixels: ``(rows, columns)`` to draw at alone; default every pixel.
+        sample: One sample's outage (both spreads); False: the local mean's (its spread alone).
+
+    Returns:
+        The probability, (H, W), or (N,) at the ``pixels``.
+
+    Raises:
+        InvalidInputError: ``draws`` out of its range.
+    """
     if not 1 <= draws <= 1_000_000:
         raise InvalidInputError(f"draws must lie within 1..1000000 (got {draws})")
     rss = np.asarray(rm.rss_dbm, dtype=float)
@@ -104,11 +121,19 @@ def outage_probability(
 
 
 def path_outage(prob: np.ndarray) -> dict[str, float]:
-    """The outage share expected along a path whose moves end where the outage probabilities are
-    ``prob``, and its spread: between the pixels' outcomes independent (``spread_independent``,
-    ``sqrt(sum p (1 - p)) / n``) and fully correlated (``spread_correlated``,
-    ``sum sqrt(p (1 - p)) / n``, the largest it can be); a map's errors are correlated over its
-    residual fields' length scales, so the truth lies between."""
+    """The outage share a path expects, and its spread between two bounds.
+
+    A map's errors are correlated over its residual fields' length scales, so the spread of the
+    share lies between that of independent pixels and that of fully correlated ones.
+
+    Args:
+        prob: The outage probability where each move ends, (N,).
+
+    Returns:
+        ``expected_outage_share`` (the mean probability), ``spread_independent``
+        (``sqrt(sum p (1 - p)) / n``) and ``spread_correlated`` (``sum sqrt(p (1 - p)) / n``,
+        the largest it can be).
+    """
     p = np.asarray(prob, dtype=float)
     n = max(p.size, 1)
     q = p * (1 - p)
@@ -176,12 +201,27 @@ def path_outage_draws(
     rm: Any, pixels: Any, min_db: float, *, draws: int = 2000, seed: int = 0,
     sample: bool = True,
 ) -> dict[str, float]:  # fmt: skip
-    """The outage share of a path whose moves end at the ``pixels`` (rows, columns) of the map
-    ``rm``, drawn whole ``draws`` times: each cell's local-mean errors correlated along the path
-    (``_along``: a corrected map's residual field; a physics map's site error shared by every
-    pixel and every cell), one sample's fading independent at every pixel (``sample`` False:
-    the local mean alone). Returns the expected share, its standard deviation over the draws and
-    the 5th and 95th percentiles: the plan's outage with its spread."""
+    """The outage share of a path, drawn whole: the plan's outage with its spread.
+
+    Each draw gives every cell's local-mean errors correlated along the path (a corrected map's
+    residual field; a physics map's site error shared by every pixel and every cell) and one
+    sample's fading independent at every pixel.
+
+    Args:
+        rm: The map.
+        pixels: ``(rows, columns)`` where the path's moves end.
+        min_db: The SINR threshold, dB.
+        draws: Draws of the whole path (10-100 000).
+        seed: The draws' seed.
+        sample: One sample's outage; False: the local mean's alone.
+
+    Returns:
+        ``expected_outage_share``, ``spread_along_path`` (its standard deviation over the
+        draws), ``outage_share_p5`` and ``outage_share_p95``.
+
+    Raises:
+        InvalidInputError: ``draws`` out of its range.
+    """
     if not 10 <= draws <= 100_000:
         raise InvalidInputError(f"draws must lie within 10..100000 (got {draws})")
     r, c = np.asarray(pixels[0]), np.asarray(pixels[1])

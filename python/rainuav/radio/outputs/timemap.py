@@ -267,19 +267,35 @@ def _static_terms(
 
 def build_radio_map_series(
     scn: Scenario,
-    times_s: Any,
+    times_s: npt.ArrayLike,
     *,
     cache: bool = True,
     progress: bool = False,
     clear_parts: Callable[[], EngineParts] | None = None,
     cache_tag: str = "",
 ) -> RadioMapSeries:
-    """The maps of ``scn`` at the instants ``times_s`` (strictly increasing, s), engine ``"ray"``
-    (module docstring). Memory is checked before anything is allocated. With ``cache``, a series of
-    the same scenario, instants and engine code is read from the map cache
-    ([`rainuav.radio.outputs.cache`][rainuav.radio.outputs.cache]) and a new one is kept there.
-    ``clear_parts``: the hybrid's parts in clear air from elsewhere (called only if the series is
-    built), kept in the cache under ``cache_tag`` apart from the series built alone."""
+    """Builds the radio maps of a scenario's moving weather at several instants.
+
+    The module docstring gives the method. Memory is checked before anything is allocated.
+
+    Args:
+        scn: The scenario, its weather at time 0 (``scn.medium.at(t)`` the weather at ``t``).
+        times_s: The instants, strictly increasing, s.
+        cache: Read a series of the same scenario, instants and engine code from the map cache
+            ([`rainuav.radio.outputs.cache`][rainuav.radio.outputs.cache]), and keep a new one.
+        progress: A line on standard error per instant.
+        clear_parts: The hybrid's parts in clear air from elsewhere (called only if the series
+            is built).
+        cache_tag: The cache's name for a series built from ``clear_parts``, apart from one
+            built alone.
+
+    Returns:
+        The [`RadioMapSeries`][rainuav.radio.RadioMapSeries].
+
+    Raises:
+        InvalidInputError: Instants that are not strictly increasing or finite, or a series
+            that would not fit in memory.
+    """
     if not engine_of(scn).traces:
         raise InvalidInputError(
             f"maps in time need engine 'ray' or 'hybrid' (got {scn.engine!r}: a PE march per "
