@@ -51,8 +51,8 @@ def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
 def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Encoder:
     """The encoder (and network) for ``env``'s observation
     ([`rainuav.rl.networks`][rainuav.rl.networks]): the weather-reading one where the env shows the
-    weather, else the position one (with the env's fixed destination; among levels with the level
-    and six actions)."""
+    weather, else the position one (with the env's fixed destination; among levels with the level);
+    the actions are the env's action space's."""
     if env.view is not None:
         x0, x1, y0, y1 = env.field.extent
         geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
@@ -63,8 +63,9 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Enc
         gx, gy = env.cfg.goal_m
         goal = ((gx - x0) / (x1 - x0), (gy - y0) / (y1 - y0))
         dims = int(env.observation_space.shape[0])  # type: ignore[index]
+        n = int(env.action_space.n)  # type: ignore[union-attr]  # six: a climb and a descent
         return PositionEncoder(d, env.cfg.max_steps, goal, step, dims,
-                               gives_time=env.field.varies, n_actions=6)  # fmt: skip
+                               gives_time=env.field.varies, n_actions=n)  # fmt: skip
     goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())
     dims = int(env.observation_space.shape[0])  # type: ignore[index]
     return PositionEncoder(d, env.cfg.max_steps, goal, step, dims)
