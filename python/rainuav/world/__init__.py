@@ -359,10 +359,22 @@ def build_world(
     progress: bool = False,
     cache: bool = True,
 ) -> World:
-    """The world of ``spec`` (a WorldSpec, or a configuration extending one): its scenario's
-    map, or maps in time where its weather moves, built or taken from the cache, and its task
-    (``task``, where given, in place of the spec's; ``scenario`` in place of its preset;
-    ``cache=False``: a storm flown once, not kept in the map cache)."""
+    """Builds the world a configuration describes: its map (or maps in time) and its task.
+
+    Args:
+        spec: A [`WorldSpec`][rainuav.world.WorldSpec], or a configuration extending one
+            ([`TrainConfig`][rainuav.rl.config.TrainConfig]).
+        task: A task in place of the spec's.
+        scenario: A scenario in place of the spec's preset.
+        progress: A line on standard error per map built.
+        cache: Read and keep the maps in the map cache (False: a storm flown once).
+
+    Returns:
+        The [`World`][rainuav.world.World]: the map, or maps in time where the weather moves.
+
+    Raises:
+        InvalidInputError: A scenario, weather or task that cannot be built (names the field).
+    """
     check_spec(spec)
     scn = make_scenario(spec, scenario)
     task = task_of(spec) if task is None else task

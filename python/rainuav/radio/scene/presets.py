@@ -81,9 +81,18 @@ def _medium(rain_rate_mm_h: float) -> Medium:
 
 
 def with_rain(scn: Scenario, rain_rate_mm_h: float) -> Scenario:
-    """``scn`` with homogeneous rain at ``rain_rate_mm_h`` (0: clear air) in place of its
-    weather. Only the rain field changes: the scenario's rain model, drop-size distribution,
-    drop shape, temperature and wind stay as they were."""
+    """A scenario with homogeneous rain in place of its weather.
+
+    Only the rain field changes: the scenario's rain model, drop-size distribution, drop
+    shape, temperature and wind stay as they were.
+
+    Args:
+        scn: The scenario.
+        rain_rate_mm_h: The rain rate, mm/h (0: clear air).
+
+    Returns:
+        The scenario in that rain.
+    """
     kind = "clear" if rain_rate_mm_h == 0 else "homogeneous"
     weather = dataclasses.replace(
         scn.medium,
@@ -104,7 +113,19 @@ PAPER_FLOOR_DB = 40.0
 
 
 def paper(rain_rate_mm_h: float = 25.0, freq_hz: float = 4.9e9, **overrides: Any) -> Scenario:
-    """The paper's scenario (module docstring)."""
+    """The design paper's scenario: its sites, Gaussian beams, area and altitude.
+
+    The module docstring gives the layout.
+
+    Args:
+        rain_rate_mm_h: Homogeneous rain, mm/h (the paper's 25 by default; 0: clear air).
+        freq_hz: The carrier, Hz.
+        **overrides: Fields of the [`Scenario`][rainuav.radio.Scenario] in place of the
+            preset's.
+
+    Returns:
+        The [`Scenario`][rainuav.radio.Scenario].
+    """
     sites = [
         Site(
             x_m=1000 * x,
@@ -160,7 +181,26 @@ buildings are what the PE is for, keeps the default."""
 
 
 def uma(rain_rate_mm_h: float = 0.0, freq_hz: float = 4.9e9, **overrides: Any) -> Scenario:
-    """Seven sites x three TR 38.901 array sectors (module docstring)."""
+    """The urban macro network: seven sites, three TR 38.901 array sectors each.
+
+    The module docstring gives the layout, the antennas and the area.
+
+    Args:
+        rain_rate_mm_h: Homogeneous rain, mm/h (0: clear air).
+        freq_hz: The carrier, Hz.
+        **overrides: Fields of the [`Scenario`][rainuav.radio.Scenario] in place of the
+            preset's (``engine="ray"``, ``ground=...``, ...).
+
+    Returns:
+        The [`Scenario`][rainuav.radio.Scenario].
+
+    Examples:
+        ```python
+        from rainuav.radio import build_radio_map, presets
+
+        rm = build_radio_map(presets.uma(rain_rate_mm_h=25.0, freq_hz=28e9, engine="ray"))
+        ```
+    """
     fields: dict[str, Any] = {
         "name": "uma",
         "freq_hz": freq_hz,
