@@ -341,6 +341,21 @@ def test_rust_files_keep_the_size_discipline() -> None:
     assert not stale, f"take these off RUST_OVER (split, or gone): {stale}"
 
 
+def test_the_rust_core_is_three_layers_that_do_not_import_one_another() -> None:
+    # crates/rainuav-core/src: the rain medium, propagation and planning, each a module with
+    # its folder; at the root only the shared error type and memory check. The bindings
+    # (crates/rainuav-py) join the layers; no layer reaches into another.
+    src = REPO / "crates" / "rainuav-core" / "src"
+    layers = ("medium", "propagation", "planning")
+    roots = {p.stem for p in src.glob("*.rs")}
+    assert roots == {"lib", "error", "memory", *layers}, roots
+    for layer in layers:
+        files = [src / f"{layer}.rs", *(src / layer).rglob("*.rs")]
+        for other in (x for x in layers if x != layer):
+            hits = [str(f.relative_to(src)) for f in files if f"crate::{other}" in f.read_text()]
+            assert not hits, f"{layer} imports {other}: {hits}"
+
+
 def test_engines_are_asked_what_they_do_not_their_names() -> None:
     """The propagation engines are known by name in one place
     ([`rainuav.radio.engines`][rainuav.radio.engines]); elsewhere code asks an engine what it

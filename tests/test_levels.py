@@ -1,5 +1,5 @@
 """Altitude as a decision: maps at several flight altitudes and the exact planner among them
-(rainuav_core::planlevels), against the planner in the plane and against a brute force."""
+(rainuav_core::planning::planlevels), against the planner in the plane and against a brute force."""
 
 from __future__ import annotations
 

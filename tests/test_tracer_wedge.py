@@ -8,13 +8,13 @@
   area times the height (faces outward).
 - One diffraction at a block's corner, through the tracer's own path solver, equals the UTD
   coefficient of ITU-R P.526-15 section 6 as the ray engine computes it
-  (``rainuav_core::diffraction::utd_wedge``, itself within 0.1 dB of the exact wedge series:
-  ``tests/test_wedge_exact.py``), for the field along the edge (soft) and across it (hard), on a
-  conducting block and on a concrete one. Tolerance 0.2 dB on the conducting block (the tracer
+  (``rainuav_core::propagation::diffraction::utd_wedge``, itself within 0.1 dB of the exact wedge
+  series: ``tests/test_wedge_exact.py``), for the field along the edge (soft) and across it (hard),
+  on a conducting block and on a concrete one. Tolerance 0.2 dB on the conducting block (the tracer
   computes in single precision; its "metal" conducts 1e7 S/m, not infinitely) and 0.5 dB on the
-  concrete one (the tracer's walls are 0.3 m slabs, the engine's half-spaces: at 4.9 GHz the
-  slab's far face returns less than -50 dB). Sionna RT 2.2's own coefficient gives the soft value
-  for both polarisations: 25 dB off at the first point for the hard one.
+  concrete one (the tracer's walls are 0.3 m slabs, the engine's half-spaces: at 4.9 GHz the slab's
+  far face returns less than -50 dB). Sionna RT 2.2's own coefficient gives the soft value for both
+  polarisations: 25 dB off at the first point for the hard one.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
-"""The UTD coefficient of a wedge (ITU-R P.526-15 section 6, `rainuav_core::diffraction::utd_wedge`)
-against the exact solution of a plane wave on a perfectly conducting wedge: the eigenfunction
-series (Bowman, Senior and Uslenghi, Electromagnetic and Acoustic Scattering by Simple Shapes,
-chapter 6), summed with SciPy's Bessel functions of fractional order.
+"""The UTD coefficient of a wedge (ITU-R P.526-15 section 6,
+`rainuav_core::propagation::diffraction::utd_wedge`) against the exact solution of a plane wave on a
+perfectly conducting wedge: the eigenfunction series (Bowman, Senior and Uslenghi, Electromagnetic
+and Acoustic Scattering by Simple Shapes, chapter 6), summed with SciPy's Bessel functions of
+fractional order.
 
 For a wedge of exterior angle ``n pi`` (free space for ``0 < phi < n pi``) and a plane wave from
 ``phi1`` (``exp(+j w t)``: ``u_i = exp(j k rho cos(phi - phi1))``), the total field is

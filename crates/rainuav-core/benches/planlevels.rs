@@ -6,8 +6,8 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use ndarray::{Array4, Axis};
-use rainuav_core::planlevels::{LevelTask, LevelTimeline};
-use rainuav_core::planner::{NavTask, RewardKind};
+use rainuav_core::planning::planlevels::{LevelTask, LevelTimeline};
+use rainuav_core::planning::planner::{NavTask, RewardKind};
 
 const LEVELS: usize = 7;
 const SLICES: usize = 61;

@@ -4,7 +4,7 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use num_complex::Complex64;
-use rainuav_core::pwe::{
+use rainuav_core::propagation::pwe::{
     Ground, MarchSpec, Marcher, Propagator, Recording, StepMedium, StepObstacle, gaussian_beam,
 };
 

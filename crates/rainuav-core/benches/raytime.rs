@@ -6,8 +6,8 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use ndarray::{Array2, Array4};
-use rainuav_core::rays::{RainField, Raster, RayGround, RayPolarization, RayScene};
-use rainuav_core::raytime::{polar_mean_gamma, slice_power};
+use rainuav_core::propagation::rays::{RainField, Raster, RayGround, RayPolarization, RayScene};
+use rainuav_core::propagation::raytime::{polar_mean_gamma, slice_power};
 
 fn field() -> Array2<f64> {
     // A 300 m Gaussian cell over a light background, dB/m.
@@ -31,7 +31,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| polar_mean_gamma(&r, [1000.0, 1000.0], &x, &y))
     });
     g.bench_function("line_per_pixel", |b| {
-        b.iter(|| rainuav_core::raytime::line_per_pixel(&r, [1000.0, 1000.0], &x, &y))
+        b.iter(|| rainuav_core::propagation::raytime::line_per_pixel(&r, [1000.0, 1000.0], &x, &y))
     });
     g.finish();
     let scene = RayScene {

@@ -7,7 +7,7 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use rainuav_core::obstacles::{Building, Prisms};
+use rainuav_core::propagation::obstacles::{Building, Prisms};
 
 fn stream(seed: u64) -> impl FnMut() -> f64 {
     let mut s = seed;

@@ -1,45 +1,33 @@
 //! # rainuav-core
 //!
-//! The pure-Rust physics of rainuav: water permittivity, drop-size distributions, drop
-//! shapes, Mie scattering, Gauss-Legendre quadrature, the effective medium of rain and
-//! ITU-R P.838-3. Conventions follow `docs/physics.md`: time dependence `exp(+j w t)`,
-//! lossy media have `Im eps <= 0`, drop diameters in mm.
+//! The pure-Rust core of rainuav, in three layers that do not import one another (the Python
+//! bindings join them; `tests/test_layout.py` checks it):
+//!
+//! - [`medium`]: the rain medium (water permittivity, drop sizes and shapes, Mie scattering,
+//!   the effective medium of rain, ITU-R P.838-3);
+//! - [`propagation`]: the split-step parabolic equation and the ray engine (ground, terrain,
+//!   buildings; rain along every path);
+//! - [`planning`]: the exact planners, in space, time and among flight levels.
+//!
+//! Conventions follow `docs/physics.md`: time dependence `exp(+j w t)`, lossy media have
+//! `Im eps <= 0`, drop diameters in mm.
 //!
 //! ```
 //! use rainuav_core::medium::{MediumOptions, RainKernel};
 //! // Specific attenuation of 25 mm/h Marshall-Palmer rain at 28 GHz, horizontal polarisation.
 //! let kernel = RainKernel::new(28e9, &MediumOptions::default()).unwrap();
 //! let gamma = kernel.evaluate(25.0).unwrap().gamma_db_per_km;
-//! let itu = rainuav_core::p838::specific_attenuation(28e9, 25.0, 0.0, 0.0);
+//! let itu = rainuav_core::medium::p838::specific_attenuation(28e9, 25.0, 0.0, 0.0);
 //! // Above 10 GHz the model is within 0.8-1.3 of P.838-3 over 12.5-150 mm/h (README table,
 //! // `python -m rainuav.validate rain`); here 1.08.
 //! assert!(gamma / itu > 0.8 && gamma / itu < 1.3, "{}", gamma / itu);
 //! ```
 
-pub mod corners;
-pub mod diffraction;
-pub mod drops;
-pub mod dsd;
 pub mod error;
-mod grid;
 pub mod medium;
 pub mod memory;
-pub mod mie;
-pub mod obstacles;
-pub mod p838;
-pub mod path;
-pub mod planlevels;
-pub mod planner;
-pub mod pwe;
-pub mod quadrature;
-pub mod rays;
-pub mod raytime;
-pub mod sampling;
-pub mod sight;
-mod tiers;
-pub mod walls;
-pub mod walls2;
-pub mod water;
+pub mod planning;
+pub mod propagation;
 
 pub use error::{CoreError, Result};
 

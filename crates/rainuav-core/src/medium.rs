@@ -1,6 +1,8 @@
-//! Effective medium of rain (docs/physics.md section 3): the paper's quasi-static model and the
-//! forward-scattering (Mie, van de Hulst) model, integrated over a drop-size distribution
-//! on a composite Gauss-Legendre rule.
+//! The rain medium, one layer: water's permittivity ([`water`]), drop sizes ([`dsd`]), shapes
+//! and fall speed ([`drops`]), Mie scattering ([`mie`]), the quadrature ([`quadrature`]) and
+//! ITU-R P.838-3 ([`p838`]), and here the effective medium of rain (docs/physics.md section 3):
+//! the paper's quasi-static model and the forward-scattering (Mie, van de Hulst) model,
+//! integrated over a drop-size distribution on a composite Gauss-Legendre rule.
 //!
 //! Everything that depends only on the frequency and the options (water permittivity,
 //! Mie amplitudes, shape and wind factors on the quadrature nodes) is collected once in a
@@ -14,12 +16,19 @@
 //! large drops (it ignores how shape changes the resonances); against ITU-R P.838-3 it
 //! brings the H/V split to the right sign and size (see the tests and README).
 
-use crate::drops::{Shape, depolarisation_factors, polarisability, terminal_velocity_m_s};
-use crate::dsd::{DIAMETER_RANGE_MM, Dsd};
+pub mod drops;
+pub mod dsd;
+pub mod mie;
+pub mod p838;
+pub mod quadrature;
+pub mod water;
+
 use crate::error::{CoreError, Result, check_range};
-use crate::mie::mie_forward_with;
-use crate::quadrature::{CompositeRule, panel_edges};
-use crate::water::{check_temperature, water_permittivity};
+use crate::medium::drops::{Shape, depolarisation_factors, polarisability, terminal_velocity_m_s};
+use crate::medium::dsd::{DIAMETER_RANGE_MM, Dsd};
+use crate::medium::mie::mie_forward_with;
+use crate::medium::quadrature::{CompositeRule, panel_edges};
+use crate::medium::water::{check_temperature, water_permittivity};
 use crate::{SPEED_OF_LIGHT_M_S, wavenumber};
 use ndarray::{Array1, ArrayView1};
 use num_complex::Complex64;
@@ -264,7 +273,7 @@ impl RainKernel {
         check_freq(freq_hz)?;
         opts.validate()?;
         let (dmin, dmax) = DIAMETER_RANGE_MM;
-        let mut breaks = vec![crate::drops::SPHEROID_FROM_MM];
+        let mut breaks = vec![drops::SPHEROID_FROM_MM];
         breaks.extend(opts.dsd.breakpoints_mm());
         let edges = panel_edges(dmin, dmax, &breaks, max_panel_width_mm(freq_hz));
         let rule = CompositeRule::new(&edges, opts.nodes_per_panel)?;

@@ -3,9 +3,9 @@
 //! physical monotonicity of rain attenuation.
 
 use proptest::prelude::*;
+use rainuav_core::medium::p838;
+use rainuav_core::medium::quadrature::{CompositeRule, gauss_legendre, panel_edges};
 use rainuav_core::medium::{MediumOptions, RainKernel};
-use rainuav_core::p838;
-use rainuav_core::quadrature::{CompositeRule, gauss_legendre, panel_edges};
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]

@@ -2,7 +2,7 @@
 
 use ndarray::Array2;
 use num_complex::{Complex32, Complex64};
-use rainuav_core::pwe::{
+use rainuav_core::propagation::pwe::{
     Ground, MarchSpec, Marcher, Propagator, Recording, StepMedium, StepObstacle,
 };
 use rainuav_core::wavenumber;

@@ -14,7 +14,7 @@ fn knife_edge_loss_db<'py>(
     nu: PyReadonlyArray1<'py, f64>,
 ) -> Bound<'py, numpy::PyArray1<f64>> {
     nu.as_array()
-        .mapv(rainuav_core::diffraction::knife_edge_loss_db)
+        .mapv(rainuav_core::propagation::diffraction::knife_edge_loss_db)
         .into_pyarray(py)
 }
 
@@ -46,7 +46,9 @@ fn utd_wedge<'py>(
     }
     Ok(phi2
         .as_array()
-        .mapv(|p| rainuav_core::diffraction::utd_wedge(n, phi1, p, l_m, sin_beta0, k, r0, rn))
+        .mapv(|p| {
+            rainuav_core::propagation::diffraction::utd_wedge(n, phi1, p, l_m, sin_beta0, k, r0, rn)
+        })
         .into_pyarray(py))
 }
 
@@ -86,8 +88,13 @@ fn bullington_loss(
         )));
     }
     let profile: Vec<(f64, f64)> = d.iter().copied().zip(h.iter().copied()).collect();
-    let b =
-        rainuav_core::diffraction::bullington(&profile, d_total_m, h_ts_m, h_rs_m, wavelength_m);
+    let b = rainuav_core::propagation::diffraction::bullington(
+        &profile,
+        d_total_m,
+        h_ts_m,
+        h_rs_m,
+        wavelength_m,
+    );
     let (ed, eh) = b.edge.unwrap_or((f64::NAN, f64::NAN));
     Ok((b.loss_db, b.knife_edge_db, ed, eh))
 }

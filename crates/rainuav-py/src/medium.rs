@@ -7,8 +7,8 @@ use num_complex::Complex64;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
-use rainuav_core::drops::{self, Shape};
-use rainuav_core::dsd::Dsd;
+use rainuav_core::medium::drops::{self, Shape};
+use rainuav_core::medium::dsd::Dsd;
 use rainuav_core::medium::{self, MediumOptions, RainKernel};
 use std::sync::Arc;
 
@@ -24,10 +24,10 @@ fn water_permittivity<'py>(
     let out = detached(py, || {
         f.iter().try_for_each(|&v| medium::check_freq(v))?;
         t.iter()
-            .try_for_each(|&v| rainuav_core::water::check_temperature(v))?;
+            .try_for_each(|&v| medium::water::check_temperature(v))?;
         Ok(f.iter()
             .zip(t.iter())
-            .map(|(&f, &t)| rainuav_core::water::water_permittivity(f, t))
+            .map(|(&f, &t)| medium::water::water_permittivity(f, t))
             .collect::<Array1<Complex64>>())
     })?;
     Ok(out.into_pyarray(py))
@@ -270,7 +270,7 @@ fn itu_p838<'py>(
         r.iter().try_for_each(|&v| medium::check_rain_rate(v))?;
         Ok(f.iter()
             .zip(r.iter())
-            .map(|(&f, &r)| rainuav_core::p838::specific_attenuation(f, r, tilt_deg, elevation_deg))
+            .map(|(&f, &r)| medium::p838::specific_attenuation(f, r, tilt_deg, elevation_deg))
             .collect::<Array1<f64>>())
     })?;
     Ok(out.into_pyarray(py))
@@ -288,14 +288,14 @@ fn mie_forward(m: Complex64, x: f64) -> PyResult<(Complex64, f64, f64)> {
     }
     rainuav_core::error::check_range("x", x, 1e-8, 1e4, "must be finite and within 1e-8..1e4")
         .map_err(to_py)?;
-    let r = rainuav_core::mie::mie_forward(m, x);
+    let r = medium::mie::mie_forward(m, x);
     Ok((r.s0, r.qext, r.qsca))
 }
 
 /// Gauss-Legendre nodes and weights on [-1, 1] (Golub-Welsch).
 #[pyfunction]
 fn gauss_legendre<'py>(py: Python<'py>, n: usize) -> PyResult<RealPair<'py>> {
-    let (x, w) = rainuav_core::quadrature::gauss_legendre(n).map_err(to_py)?;
+    let (x, w) = medium::quadrature::gauss_legendre(n).map_err(to_py)?;
     Ok((x.into_pyarray(py), w.into_pyarray(py)))
 }
 

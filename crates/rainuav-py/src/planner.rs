@@ -10,8 +10,8 @@ use numpy::{
 };
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
-use rainuav_core::planlevels::{LevelTask, LevelTimeline};
-use rainuav_core::planner::NavTask;
+use rainuav_core::planning::planlevels::{LevelTask, LevelTimeline};
+use rainuav_core::planning::planner::NavTask;
 
 /// The instants of a signal in time, a contiguous 1-D array.
 fn instants<'a>(t_s: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
@@ -25,7 +25,7 @@ fn instants<'a>(t_s: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
 }
 
 /// The signal at many points, each between two slices of a stack (S, H, W): bilinear in
-/// space, linear in time (`rainuav_core::sampling::sample_slices`). The 1-D arrays must be
+/// space, linear in time (`rainuav_core::planning::sampling::sample_slices`). The 1-D arrays must be
 /// contiguous; `x` and `y` of one length, `k0`, `k1` and `f` one value per row of consecutive
 /// points (as many as the points, or a divisor of their number).
 #[pyfunction]
@@ -56,7 +56,7 @@ fn sample_slices<'py>(
     let (k0s, k1s, fs) = (flat("k0", &k0)?, flat("k1", &k1)?, flat("f", &f)?);
     let view = slices.as_array();
     let out = detached(py, || {
-        rainuav_core::sampling::sample_slices(&view, extent_m, xs, ys, k0s, k1s, fs)
+        rainuav_core::planning::sampling::sample_slices(&view, extent_m, xs, ys, k0s, k1s, fs)
     })?;
     Ok(Array1::from(out).into_pyarray(py))
 }
@@ -70,7 +70,7 @@ type LevelPlanOut<'py> = (
     Bound<'py, PyArray1<u64>>,
 );
 
-/// Exact plans with altitude as a decision (`rainuav_core::planlevels`): the signal of each
+/// Exact plans with altitude as a decision (`rainuav_core::planning::planlevels`): the signal of each
 /// level `sinr_db` (K, L, H, W) at the instants `t_s` (K,; one slice: a signal that does not
 /// change), lowest level first, and optionally each level's not-flyable pixels `blocked`
 /// (L, H', W'); `starts` (N, 3): x, y and the start level (-1: the best). Six moves (the
@@ -164,7 +164,7 @@ fn plan_optimal_levels<'py>(
     for r in st.rows() {
         let l = r[2];
         if l == -1.0 {
-            pts.push(([r[0], r[1]], rainuav_core::planlevels::ANY_LEVEL));
+            pts.push(([r[0], r[1]], rainuav_core::planning::planlevels::ANY_LEVEL));
             continue;
         }
         if !(l.is_finite() && l >= 0.0 && l.fract() == 0.0 && (l as usize) < nl) {

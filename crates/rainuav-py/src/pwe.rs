@@ -8,7 +8,7 @@ use numpy::{
 };
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
-use rainuav_core::pwe::{
+use rainuav_core::propagation::pwe::{
     self, C32, Ground, MarchSpec, Marcher, Propagator, Recording, StepMedium, StepObstacle,
 };
 

@@ -11,7 +11,7 @@ use numpy::{
 };
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
-use rainuav_core::rays::{
+use rainuav_core::propagation::rays::{
     Building, KnownPaths, Prisms as CorePrisms, RainField, Raster, RayGround, RayPolarization,
     RayScene, RayTransmitter,
 };

@@ -6,7 +6,7 @@ use numpy::{
     IntoPyArray, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray4, PyReadwriteArray3,
 };
 use pyo3::prelude::*;
-use rainuav_core::rays::{RainField, Raster};
+use rainuav_core::propagation::rays::{RainField, Raster};
 
 use crate::rays::parse_sites;
 
@@ -16,7 +16,7 @@ use crate::rays::parse_sites;
 /// cell's site), and the power at any instant from its rain (`power`): weather in time.
 #[pyclass(frozen, module = "rainuav._core")]
 struct RaySlicer {
-    inner: rainuav_core::raytime::RaySlicer,
+    inner: rainuav_core::propagation::raytime::RaySlicer,
 }
 
 #[pymethods]
@@ -43,7 +43,14 @@ impl RaySlicer {
         let y = y_m.as_array().to_vec();
         let t = terms.as_array();
         let inner = detached(py, || {
-            rainuav_core::raytime::RaySlicer::new(t, &sites, &site_of, &x, &y, node_spacing_m)
+            rainuav_core::propagation::raytime::RaySlicer::new(
+                t,
+                &sites,
+                &site_of,
+                &x,
+                &y,
+                node_spacing_m,
+            )
         })?;
         Ok(RaySlicer { inner })
     }
@@ -75,7 +82,7 @@ impl RaySlicer {
             };
             let p = self.inner.power(rain)?;
             if let Some(v) = db_view {
-                rainuav_core::raytime::to_dbm(p.view(), rss_floor_dbm, v)?;
+                rainuav_core::propagation::raytime::to_dbm(p.view(), rss_floor_dbm, v)?;
             }
             Ok(p)
         })?;

@@ -6,13 +6,13 @@ use num_complex::Complex64;
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
-use rainuav_core::rays::{RainField, RayGround, RayScene};
-use rainuav_core::walls::Wall;
+use rainuav_core::propagation::rays::{RainField, RayGround, RayScene};
+use rainuav_core::propagation::walls::Wall;
 
 use crate::rays::{Prisms, obstacles, parse_polarization, parse_sites, raster};
 
 /// Every ray that `walls` reflect from each site to the map's pixels (image method, first
-/// and second order: `rainuav_core::walls`, `rainuav_core::walls2`): `walls` (K, 6) `[ax, ay, bx, by, base, top]` (outward normal on the right of
+/// and second order: `rainuav_core::propagation::walls`, `rainuav_core::propagation::walls2`): `walls` (K, 6) `[ax, ay, bx, by, base, top]` (outward normal on the right of
 /// `a -> b`; base and top above the terrain), `wall_eps` (K, 2) each wall's complex
 /// permittivity (real, imaginary <= 0), `sites` (S, 3) x, y, height above the terrain.
 /// Returns `(site, pixel, az_deg, el_deg, factor, length_m, kind)`, one entry a ray: its site,
@@ -20,7 +20,7 @@ use crate::rays::{Prisms, obstacles, parse_polarization, parse_sites, raster};
 /// mW for isotropic antennas, its length and its kind (1: one wall, 2: two walls, 3: a corner,
 /// alone or after a wall). With `prism_eps` (P, 2: each prism's wall
 /// permittivity), also the rays the prisms' corners diffract into the pixels they hide
-/// (`rainuav_core::corners`), after the wall rays of the same site.
+/// (`rainuav_core::propagation::corners`), after the wall rays of the same site.
 #[pyfunction]
 #[pyo3(signature = (sites, x_m, y_m, walls, wall_eps, *, altitude_m, freq_hz, polarization,
     buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=None,
@@ -144,7 +144,7 @@ fn ray_walls<'py>(
     let site: Vec<i64> = rays.iter().map(|(k, _, _)| *k as i64).collect();
     let pixel: Vec<i64> = rays.iter().map(|(_, _, r)| r.pixel as i64).collect();
     let kind: Vec<i64> = rays.iter().map(|(_, t, _)| *t as i64).collect();
-    let col = |f: fn(&rainuav_core::walls::WallRay) -> f64| -> Vec<f64> {
+    let col = |f: fn(&rainuav_core::propagation::walls::WallRay) -> f64| -> Vec<f64> {
         rays.iter().map(|(_, _, r)| f(r)).collect()
     };
     Ok((

@@ -6,9 +6,9 @@ rasterio (GDAL) and pyproj onto the nodes of a scenario's area.
 corner) are projected into the DEM's CRS (local metres -> latitude and longitude through the
 scenario's [`rainuav.geo.Georef`][rainuav.geo.Georef] -> the DEM's CRS) and read **bilinearly
 between the DEM's cell centres** (GDAL's convention: a value belongs to its cell's centre). Between
-the nodes the ray engine is bilinear again (``rainuav_core::rays::Raster``). Only the window of the
-file over the area is read, and its memory is checked before reading, so a continent-sized file
-costs what the area costs.
+the nodes the ray engine is bilinear again (``rainuav_core::propagation::rays::Raster``). Only the
+window of the file over the area is read, and its memory is checked before reading, so a
+continent-sized file costs what the area costs.
 
 **Refused, in one line naming the file:** a file that is not a raster; no CRS; a rotated or flipped
 transform; a band unit that is not metres (where the file states one); the area not inside the file;

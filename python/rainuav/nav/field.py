@@ -7,7 +7,7 @@ over worlds x instants x levels x north x east (``field(x, y, t_s, world, level=
 ``field.serving_cell(x, y, t_s, level)``, ``field.varies``, ``field.altitudes_m``): one map (time
 is ignored), maps at instants ``t_s`` (a storm that moves), linear in time between them, or a
 bank of worlds, on one level or among flight levels. The exact planners
-(``rainuav_core::planlevels``) read it operation for operation as ``SignalField.__call__``
+(``rainuav_core::planning::planlevels``) read it operation for operation as ``SignalField.__call__``
 does."""
 
 from __future__ import annotations
@@ -88,8 +88,8 @@ class SignalField:
     L, H, W), P worlds' maps at the K instants ``t_s`` on the L levels at ``altitudes_m``. Bilinear
     in space within a slice (`rainuav._sampling.bilinear`), linear in time between the two
     slices around an instant, held before the first and after the last
-    (``rainuav_core::planlevels``' signal in time, operation for operation); a point of a bank
-    reads its own world, a point among levels its own level. Made by:
+    (``rainuav_core::planning::planlevels``' signal in time, operation for operation); a point of a
+    bank reads its own world, a point among levels its own level. Made by:
 
     - ``SignalField(values_db (H, W), extent_m, ...)``: one map (time is ignored);
     - [`SignalField.series`][rainuav.nav.field.SignalField.series]`(values_db (K, H, W), t_s,

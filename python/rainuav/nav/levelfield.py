@@ -71,7 +71,7 @@ LevelField = SignalField
 
 class LevelStepper:
     """Many UAVs among levels stepped at once (the module's rules), exactly as
-    ``rainuav_core::planlevels`` replays a plan: the one batched stepper (the plane's,
+    ``rainuav_core::planning::planlevels`` replays a plan: the one batched stepper (the plane's,
     [`rainuav.nav.batch.BatchStepper`][rainuav.nav.batch.BatchStepper], is this one over its
     single level). It reads a [`SignalField`][rainuav.nav.field.SignalField] (``extent``,
     ``levels``, ``blocked(x, y, level)``, ``field(x, y, t_s, world, level)``).

@@ -30,7 +30,7 @@ The environment is [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv] given a field with f
 ...)`` is the same
 class built with the arguments it has always taken. The exact optimum of this task is
 [`rainuav.nav.planner.optimal_levels()`][rainuav.nav.planner.optimal_levels]
-(``rainuav_core::planlevels``), which reads the signal operation for operation as
+(``rainuav_core::planning::planlevels``), which reads the signal operation for operation as
 [`LevelStepper`][rainuav.nav.levelfield.LevelStepper] does; its plans replayed here earn its returns
 (tested)."""
 

@@ -5,10 +5,10 @@ undiscounted return is a dynamic programme (in Rust; many starts run in parallel
 yardstick for learned policies. Where the signal changes in time (a
 [`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]) the programme's rewards depend
 on the step: it is then the exact optimum on the space-time lattice, the storm's motion known.
-One programme in Rust (``rainuav_core::planlevels``) solves every case: the plane in space, in
-space and time, and among flight levels (the plane is its case of one level). The baselines a
-user would try instead (the plan of the weather at take-off, re-planning on the weather of the
-moment) are in [`rainuav.nav.baselines`][rainuav.nav.baselines]."""
+One programme in Rust (``rainuav_core::planning::planlevels``) solves every case: the plane in
+space, in space and time, and among flight levels (the plane is its case of one level). The
+baselines a user would try instead (the plan of the weather at take-off, re-planning on the weather
+of the moment) are in [`rainuav.nav.baselines`][rainuav.nav.baselines]."""
 
 from __future__ import annotations
 
@@ -226,7 +226,7 @@ def optimal_levels(
     climb_m_s: float = CLIMB_M_S,
     descend_m_s: float = DESCEND_M_S,
 ) -> list[LevelPlan]:
-    """Exact optimal plans with altitude as a decision (``rainuav_core::planlevels``).
+    """Exact optimal plans with altitude as a decision (``rainuav_core::planning::planlevels``).
 
     Six moves: the plane's four, and a climb or descent of one level, which lasts its duration
     in ticks ([`level_durations()`][rainuav.nav.levelfield.level_durations]) and earns that many

@@ -1,5 +1,6 @@
 """The ray engine: every cell's received power at every pixel from two rays ([physics reference,
-section 8][8-rays-over-flat-ground]), the per-pixel work in Rust (``rainuav_core::rays``).
+section 8][8-rays-over-flat-ground]), the per-pixel work in Rust
+(``rainuav_core::propagation::rays``).
 
 For each cell and pixel: the line-of-sight ray and the ray reflected by the ground, each with the
 cell's antenna gain in its own departure direction
@@ -344,9 +345,9 @@ def ray_slicer(
 ) -> _core.RaySlicer:
     """Every cell's rays over the map traced once in clear air (``terms``, default
     [`ray_terms()`][rainuav.radio.engines.ray_engine.ray_terms]), with each site's fan of lines for
-    the rain (``rainuav_core::raytime``): ``slicer.power(**rain_args(scn_at_t))`` is the received
-    power (M, H, W) of the weather of any instant, the rain integrated once per site for every pixel
-    at once and shared by the site's cells and both rays."""
+    the rain (``rainuav_core::propagation::raytime``): ``slicer.power(**rain_args(scn_at_t))`` is
+    the received power (M, H, W) of the weather of any instant, the rain integrated once per site
+    for every pixel at once and shared by the site's cells and both rays."""
     places: dict[tuple[float, float, float], int] = {}
     site_of = [places.setdefault((s.x_m, s.y_m, s.height_m), len(places)) for s, _ in jobs]
     return _core.RaySlicer(

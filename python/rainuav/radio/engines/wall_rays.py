@@ -69,8 +69,8 @@ def trace_walls(
 ) -> tuple[WallRays, dict[int, int]] | None:
     """Every ray the walls of ``scn`` reflect from each distinct site of ``jobs`` to each
     pixel, and the rays the buildings' corners and the roofs' edges beside the line diffract into
-    the pixels they hide from it (`rainuav_core::corners`), and each site's index; None without
-    walls."""
+    the pixels they hide from it (`rainuav_core::propagation::corners`), and each site's index; None
+    without walls."""
     walls, eps = wall_args(scn)
     if walls.shape[0] == 0:
         return None

@@ -7,10 +7,10 @@ direct, reflected and interference parts
 ([`rainuav.radio.engines.ray_engine.ray_terms()`][rainuav.radio.engines.ray_engine.ray_terms]). Each
 slice then integrates the rain of its instant once per site, from the site to every pixel at once
 (cumulative integrals along lines fanning out from the site, read between lines:
-``rainuav_core::raytime``), shared by the site's cells and by both rays (the reflection point lies
-on the same horizontal line, and rain fills every column below the flight altitude), and attenuates
-the parts with it. A slice is the static ray-engine map of the frozen weather at its instant to
-within 0.05 dB (tested: the fan of lines replaces a line per pixel).
+``rainuav_core::propagation::raytime``), shared by the site's cells and by both rays (the reflection
+point lies on the same horizontal line, and rain fills every column below the flight altitude), and
+attenuates the parts with it. A slice is the static ray-engine map of the frozen weather at its
+instant to within 0.05 dB (tested: the fan of lines replaces a line per pixel).
 
 **The hybrid engine in time.** Where the PE carries part of a cell's pattern, it is marched
 once, in clear air, and its power at each pixel is attenuated at every instant like the direct
