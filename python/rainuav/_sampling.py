@@ -90,3 +90,14 @@ class _Weights:
             c00, c01, c10, c11 = (flat.take(base + c) for c in self.corners)
         tx, ty, sx, sy = self.tx, self.ty, self.sx, self.sy
         return c00 * sx * sy + c01 * tx * sy + c10 * sx * ty + c11 * tx * ty
+
+
+def pixel_index(
+    shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any
+) -> tuple[Any, Any]:
+    """The (row, column) of the pixel holding each point ``(x, y)`` (clamped to the map)."""
+    x0, x1, y0, y1 = extent
+    h, w = shape[-2:]
+    j = np.clip(np.floor((np.asarray(x, dtype=np.float64) - x0) / (x1 - x0) * w), 0, w - 1)
+    i = np.clip(np.floor((np.asarray(y, dtype=np.float64) - y0) / (y1 - y0) * h), 0, h - 1)
+    return i.astype(np.int64), j.astype(np.int64)

@@ -172,6 +172,7 @@ def fly_place(
         **(buildings_near_route(scn, path) or {}),
     }  # fmt: skip
     from rainuav.radio.measured.outage import (
+        flight_outage_in_time,
         outage_probability,
         path_outage,
         path_outage_draws,
@@ -192,28 +193,10 @@ def fly_place(
     elif isinstance(rm, RadioMapSeries):  # a weather that moves: each move on its own slice
         summary["outage_chance"] = {
             "spreads": "the prior's by mechanism, each move on the map of the slice it lands in",
-            **path_outage(series_outage(rm, path[1:], t_s[1:], min_db)),
+            **path_outage(flight_outage_in_time(rm, path[1:], t_s[1:], min_db)),
         }
     _write(place, out, ll, path, t_s, sinr, serving, min_db, summary, rm, mission)
     return summary
-
-
-def series_outage(
-    rm: RadioMapSeries, path: np.ndarray, t_s: np.ndarray, min_db: float
-) -> np.ndarray:
-    """The outage probability of each move of a flight through a weather that moves: the move
-    ending at ``path[k]`` (local metres) at ``t_s[k]`` read on the slice of ``rm`` nearest that
-    instant, with that slice's prior spreads (the maps are 5 s apart, a few moves)."""
-    from rainuav.radio.measured.outage import outage_probability
-
-    slot = np.abs(t_s[:, None] - rm.t_s[None, :]).argmin(axis=1)
-    prob = np.empty(len(path))
-    for k in np.unique(slot):
-        m = rm.at(float(rm.t_s[k]))
-        on = slot == k
-        r, c = pixel_index(m.sinr_db.shape, m.extent_m, path[on, 0], path[on, 1])
-        prob[on] = outage_probability(m, min_db, pixels=(r, c), draws=4096)
-    return prob
 
 
 def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, float]:

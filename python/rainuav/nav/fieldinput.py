@@ -11,6 +11,7 @@ import numpy as np
 import numpy.typing as npt
 
 from rainuav._checks import as_real_array
+from rainuav._sampling import pixel_index
 from rainuav.errors import InvalidInputError
 
 __all__ = [
@@ -57,17 +58,6 @@ def checked_values(
         serving = sv.astype(np.int64)
     extent = (float(e[0]), float(e[1]), float(e[2]), float(e[3]))
     return np.ascontiguousarray(v), extent, serving
-
-
-def pixel_index(
-    shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any
-) -> tuple[Any, Any]:
-    """The (row, column) of the pixel holding each point ``(x, y)`` (clamped to the map)."""
-    x0, x1, y0, y1 = extent
-    h, w = shape[-2:]
-    j = np.clip(np.floor((np.asarray(x, dtype=np.float64) - x0) / (x1 - x0) * w), 0, w - 1)
-    i = np.clip(np.floor((np.asarray(y, dtype=np.float64) - y0) / (y1 - y0) * h), 0, h - 1)
-    return i.astype(np.int64), j.astype(np.int64)
 
 
 def checked_probability(p: Any, shape: tuple[int, int]) -> np.ndarray:

@@ -33,7 +33,14 @@ from rainuav.errors import InvalidInputError
 from rainuav.radio.measured.prior import SITE_DB
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
 
-__all__ = ["DRAWS", "map_spreads", "outage_probability", "path_outage", "path_outage_draws"]
+__all__ = [
+    "DRAWS",
+    "flight_outage_in_time",
+    "map_spreads",
+    "outage_probability",
+    "path_outage",
+    "path_outage_draws",
+]
 
 DRAWS = 256
 """Draws per pixel (a whole 200 x 200 map of 21 cells in about 10 s on 2 cores)."""
@@ -64,6 +71,91 @@ def _drawn_spreads(rm: Any, pixels: Any) -> tuple[np.ndarray, np.ndarray, float]
     local, one = map_spreads(rm, pixels)
     common = SITE_DB if getattr(rm, "prior_rss_dbm", None) is None else 0.0
     return np.sqrt(np.maximum(local**2 - common**2, 0.0)), one, common
+
+
+def _outage_of(
+    mean: np.ndarray, dev: np.ndarray, common: float, noise_dbm: float, min_db: float,
+    draws: int, seed: int,
+) -> np.ndarray:  # fmt: skip
+    """P(SINR < ``min_db``) of points whose cells' powers are ``mean`` (M, N), dB, each drawn
+    with its own deviation ``dev`` (M, N) and ``common`` shared by every cell (module
+    docstring)."""
+    rng = np.random.default_rng(seed)
+    m, n = mean.shape
+    reached = mean > RSS_FLOOR_DBM + 1.0
+    out = np.empty(n)
+    chunk = max(1, int(4e7 // (draws * m)))
+    for i in range(0, n, chunk):
+        s = slice(i, i + chunk)
+        k = mean[:, s].shape[1]
+        # float32 draws: a power's tenth of a dB is far below its deviation, and half the time
+        z = rng.standard_normal((draws, m, k), dtype=np.float32)
+        d = mean[None, :, s].astype(np.float32) + dev[None, :, s].astype(np.float32) * z
+        if common:  # one draw a pixel for every cell
+            d += np.float32(common) * rng.standard_normal((draws, 1, k), dtype=np.float32)
+        d = np.minimum(d, np.float32(100.0))
+        p = np.where(reached[None, :, s], np.exp(d * np.float32(np.log(10) / 10)), 0.0)
+        sinr = sir_from_power(p.transpose(1, 0, 2).reshape(m, -1), noise_dbm)[2]
+        out[s] = (sinr.reshape(draws, k) < min_db).mean(axis=0)
+    return out
+
+
+def flight_outage_in_time(
+    series: Any, path_m: Any, t_s: Any, min_db: float, *, draws: int = 4096, seed: int = 0
+) -> np.ndarray:
+    """The outage probability of each move of a flight through a weather that moves.
+
+    The move ending at ``path_m[k]`` at ``t_s[k]`` is read on the slice of ``series`` nearest
+    that instant (the slices are 5 s apart in a flight plan: a few moves), with that slice's
+    prior spreads, as [`outage_probability()`][rainuav.radio.measured.outage.outage_probability]
+    draws them on that slice's map; the geometry of the spreads (each cell's free-space power and
+    distance at the path's pixels) and the clear-air map are computed once for every slice.
+
+    Args:
+        series: A [`RadioMapSeries`][rainuav.radio.RadioMapSeries] (a physics map in time).
+        path_m: Where each move ends, (N, 2), m.
+        t_s: When each move ends, (N,), s.
+        min_db: The SINR threshold, dB.
+        draws: Draws per move (1-1 000 000).
+        seed: The draws' seed.
+
+    Returns:
+        One sample's outage probability at each move, (N,).
+
+    Raises:
+        InvalidInputError: ``draws`` out of its range.
+    """
+    from rainuav._sampling import pixel_index
+    from rainuav.radio.measured.prior import composed_prior_spread, free_space_db, site_distance_m
+
+    if not 1 <= draws <= 1_000_000:
+        raise InvalidInputError(f"draws must lie within 1..1000000 (got {draws})")
+    path = np.asarray(path_m, dtype=float).reshape(-1, 2)
+    slot = np.abs(np.asarray(t_s, float)[:, None] - np.asarray(series.t_s)[None, :]).argmin(1)
+    first = series.at(float(series.t_s[0]))  # the grid and the geometry of every slice
+    r, c = pixel_index(first.sinr_db.shape, first.extent_m, path[:, 0], path[:, 1])
+    power = np.asarray(series.rss_dbm, dtype=float)[slot, :, r, c].T  # (M, N): each move's slice
+    reached = power > RSS_FLOOR_DBM + 1.0
+    excess = np.where(reached, free_space_db(first, (r, c)) - power, np.nan)
+    clear = _clear_air_power(first, (r, c))
+    rain = None if clear is None else np.where(reached, np.maximum(clear - power, 0.0), 0.0)
+    local, one = composed_prior_spread(excess, site_distance_m(first, (r, c)), rain)
+    common = SITE_DB
+    dev = np.hypot(np.sqrt(np.maximum(local**2 - common**2, 0.0)), one)
+    return _outage_of(power, dev, common, first.scenario.noise_power_dbm, min_db, draws, seed)
+
+
+def _clear_air_power(rm: Any, pixels: Any) -> np.ndarray | None:
+    """Each cell's power at the ``pixels`` of ``rm``'s scenario in clear air, (M, N) dBm
+    (built, or from the cache); None where the scenario is in clear air already."""
+    from rainuav.radio.outputs.maps import build_radio_map
+    from rainuav.radio.scene.weather import Medium
+
+    med = rm.scenario.medium
+    if med.kind == "clear" or (med.kind == "homogeneous" and med.rain_rate_mm_h == 0):
+        return None
+    clear = build_radio_map(rm.scenario.replace(medium=Medium(kind="clear")))
+    return np.asarray(clear.rss_dbm, dtype=float)[:, pixels[0], pixels[1]]
 
 
 def outage_probability(
@@ -99,24 +191,7 @@ def outage_probability(
         mean, dev = rss.reshape(m, -1), sd.reshape(m, -1)
     else:
         mean, dev = rss[:, pixels[0], pixels[1]], sd
-    rng = np.random.default_rng(seed)
-    n = mean.shape[1]
-    reached = mean > RSS_FLOOR_DBM + 1.0
-    out = np.empty(n)
-    chunk = max(1, int(4e7 // (draws * m)))
-    noise = rm.scenario.noise_power_dbm
-    for i in range(0, n, chunk):
-        s = slice(i, i + chunk)
-        k = mean[:, s].shape[1]
-        # float32 draws: a power's tenth of a dB is far below its deviation, and half the time
-        z = rng.standard_normal((draws, m, k), dtype=np.float32)
-        d = mean[None, :, s].astype(np.float32) + dev[None, :, s].astype(np.float32) * z
-        if common:  # one draw a pixel for every cell
-            d += np.float32(common) * rng.standard_normal((draws, 1, k), dtype=np.float32)
-        d = np.minimum(d, np.float32(100.0))
-        p = np.where(reached[None, :, s], np.exp(d * np.float32(np.log(10) / 10)), 0.0)
-        sinr = sir_from_power(p.transpose(1, 0, 2).reshape(m, -1), noise)[2]
-        out[s] = (sinr.reshape(draws, k) < min_db).mean(axis=0)
+    out = _outage_of(mean, dev, common, rm.scenario.noise_power_dbm, min_db, draws, seed)
     return out if pixels is not None else out.reshape(rss.shape[1:])
 
 

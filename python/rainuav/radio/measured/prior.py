@@ -209,6 +209,15 @@ def _pixel_points(rm: Any, pixels: Any) -> tuple[Any, np.ndarray, np.ndarray, np
     return (r, c), x, y, z
 
 
+def free_space_db(rm: Any, pixels: Any = None) -> np.ndarray:
+    """Each cell's free-space power with its antenna gain, dBm, at the ``pixels`` of the map
+    ``rm`` (or every pixel), (M, N) or (M, H, W): the power a pixel's excess loss is taken from."""
+    (r, _), x, y, z = _pixel_points(rm, pixels)
+    zero = np.zeros_like(x)
+    out = np.stack([excess_at(rm.scenario, k, x, y, z, zero) for k in range(len(rm.rss_dbm))])
+    return out.reshape(len(rm.rss_dbm), *np.shape(r))
+
+
 def excess_loss_db(rm: Any, pixels: Any = None) -> np.ndarray:
     """Each cell's excess loss over free space from its antenna, dB, at every pixel of the map
     ``rm`` at its flight height, (M, H, W), or at the ``pixels`` (rows, columns) alone, (M, N)
@@ -412,9 +421,17 @@ def prior_spread(
     [`rain_loss_db()`][rainuav.radio.measured.prior.rain_loss_db]) in quadrature."""
     if not 0.0 <= model_db <= 30.0:
         raise InvalidInputError(f"model_db must lie within 0..30 dB (got {model_db:g})")
-    local, sample = spreads_of(excess_loss_db(rm, pixels), site_distance_m(rm, pixels), model_db,
-                               spreads)  # fmt: skip
-    rain = rain_loss_db(rm, pixels)
-    if rain is not None:
-        local = np.hypot(local, rain_spread_db(rain))
+    return composed_prior_spread(excess_loss_db(rm, pixels), site_distance_m(rm, pixels),
+                                 rain_loss_db(rm, pixels), model_db, spreads)  # fmt: skip
+
+
+def composed_prior_spread(
+    excess_db: Any, distance_m: Any, rain_db: Any, model_db: float = SITE_DB,
+    spreads: dict[str, Spread] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """[`prior_spread()`][rainuav.radio.measured.prior.prior_spread] from its parts: the excess
+    loss, the distance from the site and the loss to rain (None: clear air), dB and m."""
+    local, sample = spreads_of(excess_db, distance_m, model_db, spreads)
+    if rain_db is not None:
+        local = np.hypot(local, rain_spread_db(rain_db))
     return local, sample
