@@ -70,7 +70,13 @@ def _drawn_spreads(rm: Any, pixels: Any) -> tuple[np.ndarray, np.ndarray, float]
     taken out of the first in quadrature; 0 for a corrected map)."""
     local, one = map_spreads(rm, pixels)
     common = SITE_DB if getattr(rm, "prior_rss_dbm", None) is None else 0.0
-    return np.sqrt(np.maximum(local**2 - common**2, 0.0)), one, common
+    return _less(local, common), one, common
+
+
+def _less(local: np.ndarray, common: float) -> np.ndarray:
+    """The part of the local mean's spread ``local`` drawn cell by cell: ``common`` (drawn once
+    for every cell) taken out in quadrature."""
+    return np.sqrt(np.maximum(local**2 - common**2, 0.0))
 
 
 def _outage_of(
@@ -126,7 +132,14 @@ def flight_outage_in_time(
         InvalidInputError: ``draws`` out of its range.
     """
     from rainuav._sampling import pixel_index
-    from rainuav.radio.measured.prior import composed_prior_spread, free_space_db, site_distance_m
+    from rainuav.radio.measured.prior import (
+        clear_air_power_dbm,
+        composed_prior_spread,
+        excess_of,
+        free_space_db,
+        rain_loss_of,
+        site_distance_m,
+    )
 
     if not 1 <= draws <= 1_000_000:
         raise InvalidInputError(f"draws must lie within 1..1000000 (got {draws})")
@@ -135,27 +148,12 @@ def flight_outage_in_time(
     first = series.at(float(series.t_s[0]))  # the grid and the geometry of every slice
     r, c = pixel_index(first.sinr_db.shape, first.extent_m, path[:, 0], path[:, 1])
     power = np.asarray(series.rss_dbm, dtype=float)[slot, :, r, c].T  # (M, N): each move's slice
-    reached = power > RSS_FLOOR_DBM + 1.0
-    excess = np.where(reached, free_space_db(first, (r, c)) - power, np.nan)
-    clear = _clear_air_power(first, (r, c))
-    rain = None if clear is None else np.where(reached, np.maximum(clear - power, 0.0), 0.0)
+    excess = excess_of(free_space_db(first, (r, c)), power)
+    clear = clear_air_power_dbm(first)
+    rain = None if clear is None else rain_loss_of(clear[:, r, c], power)
     local, one = composed_prior_spread(excess, site_distance_m(first, (r, c)), rain)
-    common = SITE_DB
-    dev = np.hypot(np.sqrt(np.maximum(local**2 - common**2, 0.0)), one)
-    return _outage_of(power, dev, common, first.scenario.noise_power_dbm, min_db, draws, seed)
-
-
-def _clear_air_power(rm: Any, pixels: Any) -> np.ndarray | None:
-    """Each cell's power at the ``pixels`` of ``rm``'s scenario in clear air, (M, N) dBm
-    (built, or from the cache); None where the scenario is in clear air already."""
-    from rainuav.radio.outputs.maps import build_radio_map
-    from rainuav.radio.scene.weather import Medium
-
-    med = rm.scenario.medium
-    if med.kind == "clear" or (med.kind == "homogeneous" and med.rain_rate_mm_h == 0):
-        return None
-    clear = build_radio_map(rm.scenario.replace(medium=Medium(kind="clear")))
-    return np.asarray(clear.rss_dbm, dtype=float)[:, pixels[0], pixels[1]]
+    dev = np.hypot(_less(local, SITE_DB), one)
+    return _outage_of(power, dev, SITE_DB, first.scenario.noise_power_dbm, min_db, draws, seed)
 
 
 def outage_probability(

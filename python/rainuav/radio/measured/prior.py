@@ -185,8 +185,13 @@ def excess_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np
     lam = 299_792_458.0 / scn.freq_hz
     d = np.maximum(np.hypot(v.rho, v.dz), lam)
     fs = c.tx_power_dbm + v.g0 - 20 * np.log10(4 * np.pi * d / lam)
+    return excess_of(fs, power_dbm)
+
+
+def excess_of(free_space_dbm: Any, power_dbm: Any) -> np.ndarray:
+    """The excess loss of powers ``power_dbm`` over ``free_space_dbm``, dB; NaN at the floor."""
     p = np.asarray(power_dbm, dtype=float)
-    return np.where(p > RSS_FLOOR_DBM + 1.0, fs - p, np.nan)
+    return np.where(p > RSS_FLOOR_DBM + 1.0, free_space_dbm - p, np.nan)
 
 
 def site_distance_at(scn: Any, cell: Any, x: Any, y: Any, z: Any) -> np.ndarray:
@@ -210,8 +215,7 @@ def _pixel_points(rm: Any, pixels: Any) -> tuple[Any, np.ndarray, np.ndarray, np
 
 
 def free_space_db(rm: Any, pixels: Any = None) -> np.ndarray:
-    """Each cell's free-space power with its antenna gain, dBm, at the ``pixels`` of the map
-    ``rm`` (or every pixel), (M, N) or (M, H, W): the power a pixel's excess loss is taken from."""
+    """Each cell's free-space power with its antenna gain at the ``pixels`` of ``rm``, dBm."""
     (r, _), x, y, z = _pixel_points(rm, pixels)
     zero = np.zeros_like(x)
     out = np.stack([excess_at(rm.scenario, k, x, y, z, zero) for k in range(len(rm.rss_dbm))])
@@ -222,11 +226,8 @@ def excess_loss_db(rm: Any, pixels: Any = None) -> np.ndarray:
     """Each cell's excess loss over free space from its antenna, dB, at every pixel of the map
     ``rm`` at its flight height, (M, H, W), or at the ``pixels`` (rows, columns) alone, (M, N)
     (module docstring); NaN where the cell does not reach."""
-    scn = rm.scenario
-    rss = np.asarray(rm.rss_dbm, dtype=float)
-    (r, c), x, y, z = _pixel_points(rm, pixels)
-    out = np.stack([excess_at(scn, k, x, y, z, rss[k][r, c].ravel()) for k in range(len(rss))])
-    return out.reshape(len(rss), *np.shape(r))
+    (r, c), *_ = _pixel_points(rm, pixels)
+    return excess_of(free_space_db(rm, pixels), np.asarray(rm.rss_dbm, dtype=float)[:, r, c])
 
 
 def site_distance_m(rm: Any, pixels: Any = None) -> np.ndarray:
@@ -375,6 +376,22 @@ def rain_loss_db(rm: Any, pixels: Any = None) -> np.ndarray | None:
     """Each cell's loss to rain at every pixel of the map ``rm``, dB, (M, H, W) (at the
     ``pixels`` alone: (M, N)): the same scenario's map in clear air (built, or from the cache)
     less this one; None for a map in clear air."""
+    clear = clear_air_power_dbm(rm)
+    if clear is None:
+        return None
+    wet = np.asarray(rm.rss_dbm, dtype=float)
+    at = (slice(None),) if pixels is None else (slice(None), pixels[0], pixels[1])
+    return rain_loss_of(clear[at], wet[at])
+
+
+def rain_loss_of(clear_dbm: Any, wet_dbm: Any) -> np.ndarray:
+    """The loss to rain of powers ``wet_dbm`` against ``clear_dbm``, dB; 0 at the floor."""
+    wet = np.asarray(wet_dbm, dtype=float)
+    return np.where(wet > RSS_FLOOR_DBM + 1.0, np.maximum(clear_dbm - wet, 0.0), 0.0)
+
+
+def clear_air_power_dbm(rm: Any) -> np.ndarray | None:
+    """Each cell's power over ``rm``'s pixels in clear air, dBm (built or cached); None if clear."""
     scn = rm.scenario
     med = scn.medium
     if med.kind == "clear" or (med.kind == "homogeneous" and med.rain_rate_mm_h == 0):
@@ -382,10 +399,7 @@ def rain_loss_db(rm: Any, pixels: Any = None) -> np.ndarray | None:
     from rainuav.radio.outputs.maps import build_radio_map
     from rainuav.radio.scene.weather import Medium
 
-    clear = np.asarray(build_radio_map(scn.replace(medium=Medium(kind="clear"))).rss_dbm, float)
-    wet = np.asarray(rm.rss_dbm, dtype=float)
-    loss = np.where(wet > RSS_FLOOR_DBM + 1.0, np.maximum(clear - wet, 0.0), 0.0)
-    return loss if pixels is None else loss[:, pixels[0], pixels[1]]
+    return np.asarray(build_radio_map(scn.replace(medium=Medium(kind="clear"))).rss_dbm, float)
 
 
 def engine_spread_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np.ndarray:
@@ -429,8 +443,7 @@ def composed_prior_spread(
     excess_db: Any, distance_m: Any, rain_db: Any, model_db: float = SITE_DB,
     spreads: dict[str, Spread] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """[`prior_spread()`][rainuav.radio.measured.prior.prior_spread] from its parts: the excess
-    loss, the distance from the site and the loss to rain (None: clear air), dB and m."""
+    """[`prior_spread()`][rainuav.radio.measured.prior.prior_spread] from its parts."""
     local, sample = spreads_of(excess_db, distance_m, model_db, spreads)
     if rain_db is not None:
         local = np.hypot(local, rain_spread_db(rain_db))
