@@ -147,7 +147,8 @@ def flight_outage_in_time(
     slot = np.abs(np.asarray(t_s, float)[:, None] - np.asarray(series.t_s)[None, :]).argmin(1)
     first = series.at(float(series.t_s[0]))  # the grid and the geometry of every slice
     r, c = pixel_index(first.sinr_db.shape, first.extent_m, path[:, 0], path[:, 1])
-    power = np.asarray(series.rss_dbm, dtype=float)[slot, :, r, c].T  # (M, N): each move's slice
+    # (M, N): each move on its slice; indexed first, so the whole series is never copied
+    power = np.asarray(series.rss_dbm)[slot, :, r, c].astype(np.float64).T
     excess = excess_of(free_space_db(first, (r, c)), power)
     clear = clear_air_power_dbm(first)
     rain = None if clear is None else rain_loss_of(clear[:, r, c], power)
