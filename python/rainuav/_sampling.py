@@ -101,3 +101,29 @@ def pixel_index(
     j = np.clip(np.floor((np.asarray(x, dtype=np.float64) - x0) / (x1 - x0) * w), 0, w - 1)
     i = np.clip(np.floor((np.asarray(y, dtype=np.float64) - y0) / (y1 - y0) * h), 0, h - 1)
     return i.astype(np.int64), j.astype(np.int64)
+
+
+def lerp_rows(g: np.ndarray, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Rows ``g[k0]`` and ``g[k1]`` mixed by ``f`` per row, as the fields mix slices."""
+    out = g[k0]  # a copy; the rows between two slices are mixed in place
+    mix = k0 != k1
+    if mix.any():
+        fm = f[mix][:, None]
+        out[mix] = (1.0 - fm) * out[mix] + fm * g[k1[mix]]
+    return out
+
+
+class PointCache:
+    """Samples of every slice at fixed points (a UAV's whole-area grid), kept per points."""
+
+    def __init__(self) -> None:
+        self.rows: dict[bytes, np.ndarray] = {}
+
+    def get(self, db: np.ndarray, extent: Any, points: np.ndarray) -> np.ndarray:
+        key = points.tobytes()
+        if key not in self.rows:
+            k = np.arange(int(np.prod(db.shape[:-2])))[:, None]
+            flat = db.reshape(-1, *db.shape[-2:])
+            vals = bilinear(flat, extent, points[:, 0], points[:, 1], k)
+            self.rows[key] = vals.reshape(*db.shape[:-2], len(points))
+        return self.rows[key]

@@ -86,9 +86,17 @@ def open_raster(path: str | os.PathLike[str], what: str) -> Any:
 
 
 def file_digest(path: str | os.PathLike[str]) -> str:
-    """The SHA-256 of a file's contents (hex): the radio-map cache keys on it. Hashed once per
-    version of the file (its path, size and modification time), however often a map build
-    asks."""
+    """The SHA-256 of a file's contents: the radio-map cache keys on it.
+
+    The file is hashed once per version (its path, size and modification time), however often a map
+    build asks.
+
+    Args:
+        path: The file.
+
+    Returns:
+        The digest, as hexadecimal text.
+    """
     st = os.stat(path)
     return _digest(os.path.realpath(path), st.st_size, st.st_mtime_ns)
 
@@ -106,10 +114,19 @@ def _digest(path: str, size: int, mtime_ns: int) -> str:
 def terrain_nodes(
     bounds: tuple[float, float, float, float], shape: tuple[int, int]
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The terrain's nodes over ``bounds`` (x_min, x_max, y_min, y_max, m) mapped as ``shape``
-    (H, W) pixels: east (nx,) and north (ny,) coordinates, the same whole number of nodes per
-    pixel each way, at most [`MAX_NODE_SPACING_M`][rainuav.ground.dem.MAX_NODE_SPACING_M] apart,
-    every pixel corner among them."""
+    """The nodes the terrain is sampled on for a map.
+
+    The same whole number of nodes per pixel each way, at most
+    [`MAX_NODE_SPACING_M`][rainuav.ground.dem.MAX_NODE_SPACING_M] apart, every pixel corner among
+    them.
+
+    Args:
+        bounds: The area, `(x_min, x_max, y_min, y_max)`, m.
+        shape: The map's (H, W) pixels.
+
+    Returns:
+        `(east, north)`: the nodes' coordinates (nx,) and (ny,), m.
+    """
     x0, x1, y0, y1 = bounds
     hh, ww = shape
     k = max(1, math.ceil(max((x1 - x0) / ww, (y1 - y0) / hh) / MAX_NODE_SPACING_M - 1e-9))
@@ -142,8 +159,16 @@ class Terrain:
         return (self.x0_m, self.dx_m, self.y0_m, self.dy_m)
 
     def at(self, x: Any, y: Any) -> np.ndarray:
-        """Heights (m) at the points ``(x, y)`` (m), bilinear between nodes, held beyond the
-        outermost (the core's reading)."""
+        """Terrain heights at points, bilinear between nodes, held beyond the outermost (the core's
+        reading).
+
+        Args:
+            x: East, m (any shape).
+            y: North, m (broadcastable with `x`).
+
+        Returns:
+            Heights, m.
+        """
         h = self.heights_m
         fx = np.clip((np.asarray(x, float) - self.x0_m) / self.dx_m, 0, h.shape[1] - 1)
         fy = np.clip((np.asarray(y, float) - self.y0_m) / self.dy_m, 0, h.shape[0] - 1)
@@ -159,9 +184,21 @@ class Terrain:
         )
 
     def pixel_max(self, shape: tuple[int, int]) -> np.ndarray:
-        """The highest terrain within each pixel of the map of ``shape`` (H, W) whose nodes these
-        are ([`terrain_nodes()`][rainuav.ground.dem.terrain_nodes]): the largest node on the pixel's
-        closed square (bilinear between nodes has its extremes at nodes)."""
+        """The highest terrain within each pixel of the map these nodes are for.
+
+        The largest node on the pixel's closed square (bilinear between nodes has its extremes at
+        nodes).
+
+        Args:
+            shape: The map's (H, W) ([`terrain_nodes()`][rainuav.ground.dem.terrain_nodes] gave the
+                nodes of it).
+
+        Returns:
+            (H, W) heights, m.
+
+        Raises:
+            ValueError: Nodes that are not those of a map of `shape`.
+        """
         hh, ww = shape
         h = self.heights_m
         k = (h.shape[1] - 1) // ww
@@ -186,10 +223,24 @@ def read_dem(
     bounds: tuple[float, float, float, float],
     shape: tuple[int, int],
 ) -> Terrain:
-    """The terrain of the DEM GeoTIFF at ``path`` on the nodes
-    ([`terrain_nodes()`][rainuav.ground.dem.terrain_nodes]) of the area ``bounds`` (x_min, x_max,
-    y_min, y_max: metres of ``georef``'s local frame) mapped as ``shape`` (H, W) pixels (module
-    docstring: how, and what is refused)."""
+    """The terrain of a DEM GeoTIFF on the nodes of a map's area.
+
+    The module's docstring says how the DEM is resampled and what is refused.
+
+    Args:
+        path: The GeoTIFF.
+        georef: The scenario's local frame ([`Georef`][rainuav.geo.Georef]).
+        bounds: The area, `(x_min, x_max, y_min, y_max)` in metres of the local frame.
+        shape: The map's (H, W) pixels.
+
+    Returns:
+        The [`Terrain`][rainuav.ground.dem.Terrain] on
+        [`terrain_nodes()`][rainuav.ground.dem.terrain_nodes] of the area.
+
+    Raises:
+        InvalidInputError: A file that cannot be read, does not cover the area, has no data over it,
+            heights not in metres or out of range, or an area its CRS cannot hold (the file named).
+    """
     from rasterio.windows import Window
     from scipy.ndimage import map_coordinates
 

@@ -12,19 +12,35 @@ __all__ = ["BatchStepper"]
 
 
 class BatchStepper(LevelStepper):
-    """The one batched stepper ([`LevelStepper`][rainuav.nav.levelfield.LevelStepper]) over the
-    plane's single level, where every move lasts one tick (many UAVs are stepped through
-    [`UAVNavEnv.step_batch()`][rainuav.nav.env.UAVNavEnv.step_batch], every ``level`` 0), with
-    the plane's shield: the moves that can still arrive in time."""
+    """The one batched stepper over the plane's single level, with the plane's shield.
+
+    The stepper is [`LevelStepper`][rainuav.nav.levelfield.LevelStepper] on one level, where every
+    move lasts one tick (many UAVs are stepped through
+    [`step_batch()`][rainuav.nav.batched.BatchedFlights.step_batch], every `level` 0); the shield
+    gives the moves that can still arrive in time."""
 
     def __init__(self, field: SignalField, cfg: NavConfig):
+        """Builds the stepper over a field and a task.
+
+        Args:
+            field: The signal flown (one level).
+            cfg: The navigation task (its `min_db` resolved).
+        """
         super().__init__(field, cfg, [], [])
 
     def moves_to_goal(self, position: np.ndarray, goal: np.ndarray | None = None) -> np.ndarray:
-        """Fewest moves from each (N, 2) position to a point of its lattice within ``tol_m``
-        of the destination (``goal`` (N, 2) or the task's) and inside the area (a monotone
-        lattice path between two points of the rectangle stays in it); ``inf`` where the
-        lattice has no such point."""
+        """The fewest moves from each position to its destination.
+
+        The destination is reached at a point of the position's lattice within `tol_m` of it and
+        inside the area (a monotone lattice path between two points of the rectangle stays in it).
+
+        Args:
+            position: Positions (N, 2), m.
+            goal: Destinations (N, 2); None: the task's.
+
+        Returns:
+            (N,) float: the number of moves, `inf` where the lattice has no such point.
+        """
         cfg = self.cfg
         g = self.goal if goal is None else np.asarray(goal, dtype=np.float64).reshape(-1, 1, 2)
         x0, x1, y0, y1 = self.field.extent
@@ -44,10 +60,19 @@ class BatchStepper(LevelStepper):
     def safe_actions(
         self, position: np.ndarray, t: np.ndarray, goal: np.ndarray | None = None
     ) -> np.ndarray:
-        """(N, 4) bool: the moves after which the UAV is still in the area and can still
-        arrive within ``max_steps`` (a shield: Alshiekh et al., AAAI 2018) at its ``goal``
-        (N, 2; default the task's). Where no move qualifies (a start too far to arrive in
-        time) every move is allowed."""
+        """The moves after which each UAV is still in the area and can still arrive in time.
+
+        A shield (Alshiekh et al., AAAI 2018): where no move qualifies (a start too far to arrive
+        within `max_steps`) every move is allowed.
+
+        Args:
+            position: Positions (N, 2), m.
+            t: Moves made so far (N,).
+            goal: Destinations (N, 2); None: the task's.
+
+        Returns:
+            (N, 4) bool, one column a move.
+        """
         p = np.asarray(position, dtype=np.float64).reshape(-1, 1, 2)
         left = self.cfg.max_steps - np.asarray(t).reshape(-1, 1) - 1  # moves left after this one
         x0, x1, y0, y1 = self.field.extent

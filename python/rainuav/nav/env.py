@@ -32,6 +32,7 @@ import numpy.typing as npt
 from rainuav._checks import as_real_array
 from rainuav.errors import InvalidInputError
 from rainuav.nav.batch import BatchStepper
+from rainuav.nav.batched import BatchedFlights
 from rainuav.nav.field import SignalField
 from rainuav.nav.levelfield import (
     CLIMB_M_S,
@@ -42,7 +43,7 @@ from rainuav.nav.levelfield import (
     signal_field,
 )
 from rainuav.nav.task import LoiteringWarning, NavConfig, check_action, check_config, make_config
-from rainuav.nav.views import WeatherView, sample_goal, sample_start_for
+from rainuav.nav.views import WeatherView
 
 __all__ = ["DEFAULT_MIN_DB", "OBSERVATIONS", "UAVNavEnv", "check_action", "signal_field"]
 
@@ -62,7 +63,7 @@ def _index(name: str, value: Any, n: int) -> int:
     return int(value)
 
 
-class UAVNavEnv(gym.Env):
+class UAVNavEnv(BatchedFlights, gym.Env):
     """UAV navigation over a SINR or SIR map, on one level or among several.
 
     Registered as ``rainuav/UAVNav-v0`` (``Discrete(4)``) and, among flight levels, as
@@ -222,116 +223,6 @@ class UAVNavEnv(gym.Env):
         """The flight levels' altitudes, m, lowest first (the altitude axis); None: one level."""
         return self.field.altitudes_m
 
-    # -- many UAVs at once: the interface the learner uses -----------------------------------
-    def observe_batch(
-        self, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None
-    ) -> Any:
-        """The observation of UAVs at ``pos`` (N, 2) on ``level`` (N,) after ``t`` (N,) ticks,
-        heading for ``goal`` (N, 2; default the task's) in the worlds ``world`` (N,) where the env
-        shows the weather. Position observation: the position scaled to [0, 1]^2, among levels the
-        level over the highest index, and where the signal moves ``t`` over ``max_steps``
-        (float32; works on (..., 2) positions). Weather observation: the
-        [`WeatherView`][rainuav.nav.views.WeatherView] dict, batched for (N, 2) positions, one for
-        a (2,) position."""
-        if self.view is not None:
-            assert self.cfg.min_db is not None
-            t_s = self.stepper.time_s(np.broadcast_to(t, np.shape(pos)[:-1] or (1,)))
-            g = self.cfg.goal_m if goal is None else goal
-            return self.view.observe_field(self.field, t_s, pos, level, t, g, world,
-                                           self.cfg.min_db, self.cfg.max_steps)  # fmt: skip
-        x0, x1, y0, y1 = self.field.extent
-        p = np.asarray(pos, dtype=np.float64)
-        parts = [(p - np.array([x0, y0])) / np.array([x1 - x0, y1 - y0])]
-        if self.level_axis:
-            top = max(self.levels - 1, 1)
-            parts.append((np.asarray(level, dtype=np.float64) / top)[..., None])
-        if self.field.varies:
-            parts.append((np.asarray(t, dtype=np.float64) / self.cfg.max_steps)[..., None])
-        lead = np.broadcast_shapes(*(q.shape[:-1] for q in parts))
-        return np.concatenate([np.broadcast_to(q, (*lead, q.shape[-1])) for q in parts], -1).astype(
-            np.float32
-        )
-
-    def observe(self, pos: Any, t: Any = 0, goal: Any = None, world: Any = None) -> Any:
-        """[`observe_batch()`][rainuav.nav.env.UAVNavEnv.observe_batch] on level 0."""
-        return self.observe_batch(pos, 0, t, goal, world)
-
-    def step_batch(
-        self, start: Any, offset: Any, level: Any, t: Any, action: Any, goal: Any = None,
-        world: Any = None,
-    ) -> dict[str, np.ndarray]:  # fmt: skip
-        """One move of every UAV: the batched stepper's result
-        ([`LevelStepper.step()`][rainuav.nav.levelfield.LevelStepper.step]), ``t`` the new
-        clock in ticks (one a move on one level)."""
-        if not self.banked:
-            world = None
-        r = LevelStepper.step(self.stepper, start, offset, level, t, action, goal, world)
-        r["t"] = r.pop("tick")
-        return r
-
-    def exploration_moves(self, level: Any) -> np.ndarray | None:
-        """The moves an exploring UAV draws from: None on one level (every move); among levels
-        (N, 6) bool, all but a climb from the top and a descent from the bottom (random moves
-        would end a sixth of the early flights at once; the network's own are never restricted)."""
-        if not self.level_axis:
-            return None
-        level = np.asarray(level)
-        ok = np.ones((len(level), LEVEL_ACTIONS), dtype=bool)
-        ok[:, 4] = level < self.levels - 1
-        ok[:, 5] = level > 0
-        return ok
-
-    def lowest_flyable(self, x: float, y: float) -> int:
-        """The lowest level the UAV may fly at over ``(x, y)``."""
-        ok = self.field.flyable(x, y)
-        if not ok.any():
-            raise InvalidInputError(f"({x:g}, {y:g}) is not flyable at any level")
-        return int(np.flatnonzero(ok)[0])
-
-    def start_level_at(self, p: Any) -> int:
-        """The level a flight from ``p`` starts at: ``start_level`` where given, 0 on one level,
-        else the lowest flyable there."""
-        if self.start_level is not None:
-            return int(self.start_level)
-        return self.lowest_flyable(float(p[0]), float(p[1])) if self.level_axis else 0
-
-    # -- helpers ----------------------------------------------------------------------------
-    def sample_start(self, rng: np.random.Generator, goal: Any = None) -> np.ndarray:
-        """Uniform in the area, farther than tol_m from the destination (``goal``, default
-        the task's) and flyable (at some level)."""
-        x0, x1, y0, y1 = self.field.extent
-        g = np.asarray(self.cfg.goal_m if goal is None else goal)
-        for _ in range(100_000):
-            p = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1)])
-            if np.hypot(*(p - g)) > self.cfg.tol_m and self.field.flyable(*p).any():
-                return p
-        raise InvalidInputError(
-            f"no flyable start farther than tol_m = {self.cfg.tol_m} m from the destination "
-            f"in the area {self.field.extent}"
-        )
-
-    def draw_task(
-        self, rng: np.random.Generator, goal: Any = None
-    ) -> tuple[np.ndarray, np.ndarray, int]:
-        """A new episode's (start, destination, world): the world uniform among a bank's (0
-        otherwise), then the destination (``goal`` where given; drawn,
-        [`sample_goal()`][rainuav.nav.views.sample_goal], where ``random_goal``; else the task's),
-        then the start ([`sample_start()`][rainuav.nav.env.UAVNavEnv.sample_start], or within reach
-        of a drawn destination, flyable at some level)."""
-        world = int(rng.integers(self.field.worlds)) if self.banked else 0
-        if goal is None and not self.random_goal:
-            return self.sample_start(rng), np.asarray(self.cfg.goal_m, dtype=np.float64), world
-        g = sample_goal(rng, self.field.extent) if goal is None else np.asarray(goal, float)
-        for _ in range(1000):
-            p = sample_start_for(rng, self.field.extent, g, self.cfg)
-            if self.field.flyable(*p).any():
-                return p, g, world
-        raise InvalidInputError(f"no flyable start within reach of the destination {tuple(g)}")
-
-    def signal(self, x: Any, y: Any, t_s: Any, world: Any = 0, level: Any = 0) -> Any:
-        """The signal at ``(x, y)`` at ``t_s`` (in a bank, of world ``world``; on ``level``)."""
-        return self.field(x, y, t_s, world, level=level)
-
     @property
     def position_m(self) -> np.ndarray:
         return self._pos.copy()
@@ -340,17 +231,25 @@ class UAVNavEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Starts an episode at time 0 and returns the observation and ``info``.
+        """Starts an episode at time 0.
 
-        ``seed`` seeds the environment's generator (Gymnasium's rule: once, then it carries
-        on). ``options``: ``start_m`` (x, y in metres, inside the area and flyable; default
-        the task's ``start_m``, else a start drawn from the generator); among levels
-        ``start_level`` (an index into the altitudes, flyable at the start; default
-        [`start_level_at()`][rainuav.nav.env.UAVNavEnv.start_level_at]); with
-        ``observation="weather"``, ``goal_m`` (a destination in place of the drawn one) and
-        ``world`` (which storm of a bank). ``info`` holds ``signal_db`` at the start,
-        ``serving_cell``, ``position_m``, among levels ``level`` and ``altitude_m``, ``outage``,
-        ``arrived`` and ``t_s``."""
+        Args:
+            seed: Seeds the environment's generator (Gymnasium's rule: once, then it carries on).
+            options: Optional keys: `start_m` (x, y in metres, inside the area and flyable; default
+                the task's `start_m`, else a start drawn from the generator); among levels
+                `start_level` (an index into the altitudes, flyable at the start; default
+                [`start_level_at()`][rainuav.nav.batched.BatchedFlights.start_level_at]); with
+                `observation="weather"`, `goal_m` (a destination in place of the drawn one) and
+                `world` (which storm of a bank).
+
+        Returns:
+            `(observation, info)`; `info` holds `signal_db` at the start, `serving_cell`,
+            `position_m`, among levels `level` and `altitude_m`, `outage`, `arrived` and `t_s`.
+
+        Raises:
+            InvalidInputError: Options that are not a dict, or a start, level or destination that is
+                not allowed (named).
+        """
         super().reset(seed=seed)
         if options is not None and not isinstance(options, dict):
             raise InvalidInputError(f"options must be a dict (got {type(options).__name__})")
@@ -429,9 +328,19 @@ class UAVNavEnv(gym.Env):
         return info
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """One move (``action`` an integer, [the specification][the-environments-specification]):
-        ``(observation, reward, terminated, truncated, info)``, ``info`` as
-        [`reset()`][rainuav.nav.env.UAVNavEnv.reset]'s."""
+        """One move.
+
+        Args:
+            action: An integer move ([the specification][the-environments-specification]: 0 east, 1
+                north, 2 west, 3 south; among levels 4 climbs and 5 descends).
+
+        Returns:
+            `(observation, reward, terminated, truncated, info)`, `info` as
+            [`reset()`][rainuav.nav.env.UAVNavEnv.reset]'s.
+
+        Raises:
+            InvalidInputError: `step()` before `reset()`, or an action outside the action space.
+        """
         a = check_action(action, int(self.action_space.n))
         if not self._ready:
             raise InvalidInputError("step() before reset(): call reset() to start an episode")

@@ -12,13 +12,12 @@ does."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from rainuav._sampling import bilinear, in_time
+from rainuav._sampling import PointCache, bilinear, in_time, lerp_rows
 from rainuav.errors import InvalidInputError
 from rainuav.nav.fieldinput import (
     checked_altitudes,
@@ -27,6 +26,7 @@ from rainuav.nav.fieldinput import (
     checked_values,
     pixel_index,
 )
+from rainuav.nav.fieldmakers import FieldMakers
 
 __all__ = [
     "SignalBank",
@@ -41,46 +41,37 @@ __all__ = [
 
 
 def blocked_at(field: Any, x: Any, y: Any) -> np.ndarray:
-    """Whether the pixel holding each point ``(x, y)`` may not be entered (on the lowest level).
+    """Whether each point lies in a pixel a UAV may not enter.
 
-    The field's ``not_flyable`` mask; False everywhere without one."""
+    Args:
+        field: A [`SignalField`][rainuav.nav.field.SignalField] (or anything with a `blocked`
+            method).
+        x: East, m.
+        y: North, m.
+
+    Returns:
+        bool, of the broadcast shape of `x` and `y` (level 0 among levels).
+    """
     return field.blocked(x, y, 0)
 
 
 def read_signal(field: Any, x: Any, y: Any, t_s: Any, world: Any = None) -> Any:
-    """The signal of ``field`` at ``(x, y)`` at ``t_s``, in a bank of world ``world``.
+    """The signal a field gives at points and instants, in any world.
 
-    ``field``: a map, maps in time or a bank (``world`` default 0)."""
+    Args:
+        field: A [`SignalField`][rainuav.nav.field.SignalField].
+        x: East, m.
+        y: North, m.
+        t_s: Time, s.
+        world: The world of a bank, one or one per point; None: world 0.
+
+    Returns:
+        The signal, dB, of the broadcast shape of the points.
+    """
     return field(x, y, t_s, world)
 
 
-def _lerp(g: np.ndarray, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """Rows ``g[k0]`` and ``g[k1]`` mixed by ``f`` per row, as the fields mix slices."""
-    out = g[k0]  # a copy; the rows between two slices are mixed in place
-    mix = k0 != k1
-    if mix.any():
-        fm = f[mix][:, None]
-        out[mix] = (1.0 - fm) * out[mix] + fm * g[k1[mix]]
-    return out
-
-
-class _PointCache:
-    """Samples of every slice at fixed points (a UAV's whole-area grid), kept per points."""
-
-    def __init__(self) -> None:
-        self.rows: dict[bytes, np.ndarray] = {}
-
-    def get(self, db: np.ndarray, extent: Any, points: np.ndarray) -> np.ndarray:
-        key = points.tobytes()
-        if key not in self.rows:
-            k = np.arange(int(np.prod(db.shape[:-2])))[:, None]
-            flat = db.reshape(-1, *db.shape[-2:])
-            vals = bilinear(flat, extent, points[:, 0], points[:, 1], k)
-            self.rows[key] = vals.reshape(*db.shape[:-2], len(points))
-        return self.rows[key]
-
-
-class SignalField:
+class SignalField(FieldMakers):
     """The signal in dB (SINR or SIR) the UAV flies through, whatever its axes.
 
     A map, maps in time, a bank of worlds, each on one level or on several flight levels. Over
@@ -89,20 +80,15 @@ class SignalField:
     in space within a slice (`rainuav._sampling.bilinear`), linear in time between the two
     slices around an instant, held before the first and after the last
     (``rainuav_core::planning::planlevels``' signal in time, operation for operation); a point of a
-    bank reads its own world, a point among levels its own level. Made by:
-
-    - ``SignalField(values_db (H, W), extent_m, ...)``: one map (time is ignored);
-    - [`SignalField.series`][rainuav.nav.field.SignalField.series]`(values_db (K, H, W), t_s,
-      extent_m, ...)` (also `SignalSeries`): maps in time, a storm that moves;
-    - [`SignalField.bank`][rainuav.nav.field.SignalField.bank]`(values_db (P, K, H, W), t_s,
-      extent_m)` (also `SignalBank`): several worlds in one array, each point reading its own;
-      the UAVs of one training batch fly different storms through one call, and a world's slot
-      is replaced in place ([`put()`][rainuav.nav.field.SignalField.put]) when the learner moves
-      on;
-    - with ``altitudes_m`` (L,), each of these with a level axis before north and east (``(L,
-      H, W)``, ``(K, L, H, W)``, ``(P, K, L, H, W)``): the flight levels, lowest first, a UAV
-      flies among ([`from_stack()`][rainuav.nav.field.SignalField.from_stack]; a band of one
-      level is flown with six moves as well).
+    bank reads its own world, a point among levels its own level. Made by the constructor (one
+    map, time ignored) and by its makers: [`series()`][rainuav.nav.fieldmakers.FieldMakers.series]
+    (also `SignalSeries`: maps in time, a storm that moves),
+    [`bank()`][rainuav.nav.fieldmakers.FieldMakers.bank] (also `SignalBank`: several worlds in
+    one array, the storms of one training batch, each renewed in place by
+    [`put()`][rainuav.nav.field.SignalField.put]), and among flight levels
+    [`from_stack()`][rainuav.nav.fieldmakers.FieldMakers.from_stack] and
+    [`of_levels()`][rainuav.nav.fieldmakers.FieldMakers.of_levels] (a level axis before north and
+    east; a band of one level is flown with six moves as well).
 
     ``db`` is the values as given. ``name`` is the array's name in error messages;
     ``serving_cell`` (the shape of ``db``; maps and series) is read at the nearest pixel of the
@@ -123,8 +109,24 @@ class SignalField:
         banked: bool = False,
         altitudes_m: npt.ArrayLike | None = None,
     ):
-        """One map; with ``t_s``, maps in time; ``banked``: a bank (use the makers); with
-        ``altitudes_m``, on those levels."""
+        """One map; with `t_s`, maps in time; with `altitudes_m`, on those levels.
+
+        Args:
+            values_db: The signal, dB: (H, W); (K, H, W) with `t_s`; (P, K, H, W) banked; a level
+                axis (L) before north and east with `altitudes_m`.
+            extent_m: `(x_min, x_max, y_min, y_max)`, m.
+            name: The array's name in error messages.
+            serving_cell: The serving cell, of the shape of `values_db`, optional.
+            not_flyable: The pixels a UAV may not enter, (H, W) or (L, H, W), optional.
+            outage_p: The chance of outage (H, W), one map only, optional.
+            t_s: The instants (K,), s, strictly increasing.
+            banked: A bank of worlds (use [`bank()`][rainuav.nav.fieldmakers.FieldMakers.bank]).
+            altitudes_m: The levels' altitudes (L,), m, lowest first.
+
+        Raises:
+            InvalidInputError: An array of the wrong shape or with values that are not finite,
+                instants that do not increase, or altitudes that do not match the level axis.
+        """
         lv = "L, " if altitudes_m is not None else ""
         dims = f"(P, K, {lv}H, W)" if banked else f"({lv}H, W)" if t_s is None else f"(K, {lv}H, W)"
         self.db, self.extent, self.serving = checked_values(
@@ -151,91 +153,8 @@ class SignalField:
         self.varies = k > 1
         """Whether the signal changes in time."""
         self.outage_p = None if outage_p is None else checked_probability(outage_p, (h, w))
-        self._points = _PointCache()
+        self._points = PointCache()
         self._last_brackets: tuple[Any, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
-
-    @classmethod
-    def series(
-        cls,
-        values_db: npt.ArrayLike,
-        t_s: npt.ArrayLike,
-        extent_m: tuple[float, float, float, float],
-        name: str = "sinr_db",
-        serving_cell: npt.ArrayLike | None = None,
-        not_flyable: npt.ArrayLike | None = None,
-    ) -> SignalField:
-        """Maps ``values_db`` (K, H, W) at the instants ``t_s`` (K,), s, strictly increasing;
-        ``serving_cell`` (K, H, W), optional."""
-        return cls(values_db, extent_m, name, serving_cell, not_flyable, t_s=t_s)
-
-    @classmethod
-    def bank(
-        cls,
-        values_db: npt.ArrayLike,
-        t_s: npt.ArrayLike,
-        extent_m: tuple[float, float, float, float],
-        altitudes_m: npt.ArrayLike | None = None,
-        name: str = "sinr_db",
-    ) -> SignalField:
-        """Several worlds' signals, ``values_db`` (P, K, H, W), or (P, K, L, H, W) on the levels
-        ``altitudes_m``, at the common instants ``t_s`` (K,) over one extent, each read as its
-        own series (a one-instant bank is P still maps; flat open ground: no pixel closed)."""
-        return cls(values_db, extent_m, name, t_s=t_s, banked=True, altitudes_m=altitudes_m)
-
-    @classmethod
-    def from_stack(
-        cls,
-        signal_db: npt.ArrayLike,
-        altitudes_m: npt.ArrayLike,
-        extent_m: tuple[float, float, float, float],
-        *,
-        t_s: npt.ArrayLike | None = None,
-        not_flyable: npt.ArrayLike | None = None,
-        serving_cell: npt.ArrayLike | None = None,
-    ) -> SignalField:
-        """The levels at ``altitudes_m`` from a stack (L, H, W), or (T, L, H, W) at the instants
-        ``t_s``; ``not_flyable`` (L, H, W) and ``serving_cell`` (the stack's shape) optional."""
-        sig = np.asarray(signal_db, dtype=np.float64)
-        if sig.ndim not in (3, 4):
-            raise InvalidInputError(
-                f"signal_db must be (L, H, W) or (T, L, H, W) (got {sig.shape})"
-            )
-        if (sig.ndim == 4) != (t_s is not None):
-            raise InvalidInputError("t_s goes with a (T, L, H, W) stack, and only with one")
-        return cls(sig, extent_m, "sinr_db", serving_cell, not_flyable, t_s=t_s,
-                   altitudes_m=altitudes_m)  # fmt: skip
-
-    @classmethod
-    def of_levels(cls, fields: Sequence[SignalField], altitudes_m: npt.ArrayLike) -> SignalField:
-        """The levels at ``altitudes_m`` from one field a level (all of one kind, over one
-        area; a copy)."""
-        if not fields or not all(
-            isinstance(f, SignalField) and f.altitudes_m is None for f in fields
-        ):
-            raise InvalidInputError("fields must be SignalFields of one level each")
-        if len({(f.banked, f.varies) for f in fields}) != 1:
-            raise InvalidInputError(
-                "fields must be all maps, all maps in time (SignalSeries) or all banks (SignalBank)"
-            )
-        if len({f.db.shape for f in fields}) != 1 or len({f.t_s.tobytes() for f in fields}) != 1:
-            raise InvalidInputError(
-                "the levels' fields must hold as many worlds and instants, of one size"
-            )
-        if len({f.extent for f in fields}) != 1:
-            raise InvalidInputError("the levels' fields must cover one area (one extent)")
-        f0 = fields[0]
-        axis = f0.db.ndim - 2
-        stack = np.stack([f.db for f in fields], axis=axis)
-        masks = [f.not_flyable for f in fields]
-        mask = (
-            None
-            if all(m is None for m in masks)
-            else np.stack([np.zeros(f0.db.shape[-2:], bool) if m is None else m for m in masks])
-        )
-        servings = [f.serving for f in fields]
-        serving = None if any(s is None for s in servings) else np.stack(servings, axis=axis)
-        return cls(stack, f0.extent, f0.name, serving, mask, t_s=f0.t_s if f0.varies or
-                   f0.banked else None, banked=f0.banked, altitudes_m=altitudes_m)  # fmt: skip
 
     @property
     def worlds(self) -> int:
@@ -243,8 +162,15 @@ class SignalField:
         return self.values.shape[0]
 
     def put(self, world: int, values_db: npt.ArrayLike) -> None:
-        """Replaces world ``world``'s maps ((K, H, W), among levels (K, L, H, W)) of a bank
-        (checked: the bank's shape, finite)."""
+        """Replaces one world of a bank, in place.
+
+        Args:
+            world: The world's index.
+            values_db: Its maps, (K, H, W), among levels (K, L, H, W): finite, the bank's shape.
+
+        Raises:
+            InvalidInputError: A field that is not a bank, or maps of another shape or not finite.
+        """
         if not self.banked:
             raise InvalidInputError("put renews a world of a bank (SignalField.bank) only")
         v = np.asarray(values_db, dtype=np.float64)
@@ -253,17 +179,32 @@ class SignalField:
                 f"{self.name} must be finite, of shape {self.db.shape[1:]} (got {v.shape})"
             )
         self.db[world] = v
-        self._points = _PointCache()  # samples of the old storm are stale
+        self._points = PointCache()  # samples of the old storm are stale
 
     def member(self, world: int) -> SignalField:
-        """World ``world``'s signal on its own (a copy)."""
+        """One world of a bank on its own (a copy).
+
+        Args:
+            world: The world's index.
+
+        Returns:
+            Its [`SignalField`][rainuav.nav.field.SignalField].
+        """
         v = self.db[world].copy()
         t_s = None if not self.varies else self.t_s
         return SignalField(v[0] if t_s is None else v, self.extent, self.name, t_s=t_s,
                            altitudes_m=self.altitudes_m)  # fmt: skip
 
     def level(self, k: int) -> SignalField:
-        """Level ``k``'s signal as a field of one level (a copy)."""
+        """One level's signal as a field of one level (a copy).
+
+        Args:
+            k: The level's index.
+
+        Returns:
+            Its [`SignalField`][rainuav.nav.field.SignalField] (the field itself where it has one
+            level).
+        """
         if self.altitudes_m is None:
             return self
         axis = self.db.ndim - 3
@@ -275,10 +216,18 @@ class SignalField:
                            t_s=t_s, banked=self.banked)  # fmt: skip
 
     def brackets(self, tau: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """For each instant of ``tau``: the slices around it and the later one's weight
-        ``(k0, k1, f)``; ``k0 == k1`` at a slice's own instant and beyond the first or the
-        last (``Timeline::bracket``). Read-only arrays; the last instants' brackets are kept
-        and given again (an observation asks for the same instants twice)."""
+        """The slices around each instant and the later one's weight.
+
+        `k0 == k1` at a slice's own instant and beyond the first or the last (the Rust core's
+        `Timeline::bracket`). The last instants' brackets are kept and given again (an observation
+        asks for the same instants twice).
+
+        Args:
+            tau: Instants, s (any shape).
+
+        Returns:
+            `(k0, k1, f)`, read-only arrays of the shape of `tau`.
+        """
         tau = np.asarray(tau, dtype=np.float64)
         key = tau.tobytes()  # the instants, whatever their shape
         if self._last_brackets is not None and self._last_brackets[0] == key:
@@ -322,8 +271,19 @@ class SignalField:
         return k0, k1, f
 
     def chance(self, x: Any, y: Any, t_s: Any = None) -> Any:
-        """The probability of outage at the points ``(x, y)``, bilinear as the map (the task's
-        ``"chance"`` reward); needs ``outage_p``."""
+        """The probability of outage at points, bilinear as the map (the task's "chance" reward).
+
+        Args:
+            x: East, m.
+            y: North, m.
+            t_s: Ignored (one map).
+
+        Returns:
+            The probability, of the broadcast shape of `x` and `y`.
+
+        Raises:
+            InvalidInputError: The field has no `outage_p`.
+        """
         if self.outage_p is None:
             raise InvalidInputError(
                 "reward 'chance' needs a field with outage_p (a map corrected by measurements, "
@@ -332,9 +292,18 @@ class SignalField:
         return bilinear(self.outage_p, self.extent, x, y)
 
     def serving_cell(self, x: Any, y: Any, t_s: Any = 0.0, level: Any = None) -> Any:
-        """The serving cell at the pixel holding ``(x, y)`` in the latest slice at or before
-        ``t_s`` (a number, or one per point; a map ignores it), on ``level`` (among levels;
-        default 0); -1 where none is named."""
+        """The serving cell at the pixel holding each point, in the latest slice at or before the
+        instant.
+
+        Args:
+            x: East, m.
+            y: North, m.
+            t_s: Time, s, a number or one per point (a map ignores it).
+            level: The level among levels, one or one per point; None: 0.
+
+        Returns:
+            int64 of the points' shape; -1 where no cell is named.
+        """
         among = self.altitudes_m is not None
         parts = [np.asarray(x), np.asarray(y)]
         if self.varies:
@@ -354,7 +323,16 @@ class SignalField:
         return self.serving[at]
 
     def blocked(self, x: Any, y: Any, level: Any = 0) -> np.ndarray:
-        """Whether the pixel holding ``(x, y)`` may not be entered (on ``level`` among levels)."""
+        """Whether the pixel holding each point may not be entered.
+
+        Args:
+            x: East, m.
+            y: North, m.
+            level: The level among levels, one or one per point.
+
+        Returns:
+            bool, of the points' shape.
+        """
         mask = self.not_flyable
         if mask is None:
             return np.zeros(np.broadcast(np.asarray(x), np.asarray(y)).shape, dtype=bool)
@@ -364,13 +342,33 @@ class SignalField:
         return mask[np.broadcast_to(level, np.broadcast(i, j, np.asarray(level)).shape), i, j]
 
     def flyable(self, x: float, y: float) -> np.ndarray:
-        """(L,) bool: the levels a UAV may fly at over ``(x, y)``."""
+        """The levels a UAV may fly at over a point.
+
+        Args:
+            x: East, m.
+            y: North, m.
+
+        Returns:
+            (L,) bool.
+        """
         every = np.arange(self.levels)
         return ~self.blocked(np.full(self.levels, x), np.full(self.levels, y), every)
 
     def frozen(self, t_s: float = 0.0) -> SignalField:
-        """The weather of ``t_s`` held still: the one map the signal gives at that instant
-        (what a tool that ignores the storm's motion plans on; a map: itself)."""
+        """The weather of one instant held still: the one map the signal gives then.
+
+        What a tool that ignores the storm's motion plans on.
+
+        Args:
+            t_s: The instant, s.
+
+        Returns:
+            A field of one map (a map returns itself).
+
+        Raises:
+            InvalidInputError: The field is a bank (take one world with
+                [`member()`][rainuav.nav.field.SignalField.member]).
+        """
         if self.banked:
             raise InvalidInputError("frozen: a bank holds several worlds; take one (member)")
         if not self.varies:
@@ -381,20 +379,30 @@ class SignalField:
                            altitudes_m=self.altitudes_m)  # fmt: skip
 
     def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
-        """(N, M), among levels (N, L, M): the signal at the fixed points (M, 2) at each of the
-        N instants ``t_s`` (of world ``world[n]``), as `__call__` gives it; every slice is sampled
-        once per set of points (until [`put()`][rainuav.nav.field.SignalField.put])."""
+        """The signal at fixed points at many instants, as `__call__` gives it.
+
+        Every slice is sampled once per set of points (until
+        [`put()`][rainuav.nav.field.SignalField.put]).
+
+        Args:
+            points: The points (M, 2), m.
+            t_s: N instants, s.
+            world: The world of each instant (N,), in a bank; None: world 0.
+
+        Returns:
+            (N, M), among levels (N, L, M).
+        """
         g = self._points.get(self.values, self.extent, np.asarray(points, dtype=np.float64))
         g = g.reshape(-1, g.shape[-1])
         n = np.size(t_s)
         if self.altitudes_m is None:
             if len(g) == 1:
                 return np.broadcast_to(g[0], (n, g.shape[-1]))
-            return _lerp(g, *self._rows(np.atleast_1d(t_s), world))
+            return lerp_rows(g, *self._rows(np.atleast_1d(t_s), world))
         t = np.atleast_1d(t_s)
         return np.stack(
             [
-                _lerp(g, *self._rows(t, 0 if world is None else world, k))
+                lerp_rows(g, *self._rows(t, 0 if world is None else world, k))
                 for k in range(self.levels)
             ],
             axis=1,
@@ -402,18 +410,26 @@ class SignalField:
 
 
 SignalSeries = SignalField.series
-"""Maps in time: [`SignalField.series`][rainuav.nav.field.SignalField.series]."""
+"""Maps in time: [`SignalField.series`][rainuav.nav.fieldmakers.FieldMakers.series]."""
 
 SignalBank = SignalField.bank
-"""A bank of worlds: [`SignalField.bank`][rainuav.nav.field.SignalField.bank]."""
+"""A bank of worlds: [`SignalField.bank`][rainuav.nav.fieldmakers.FieldMakers.bank]."""
 
 SirField = SignalField
 """The old name (the field is whichever signal the task flies on)."""
 
 
 def field_digest(field: SignalField) -> str:
-    """A digest of what a field flies (its values, area, instants, levels and closed pixels):
-    a run records it, so that a map swapped into its folder is refused, not flown."""
+    """A digest of what a field flies: its values, area, instants, levels and closed pixels.
+
+    A run records it, so that a map swapped into its folder is refused, not flown.
+
+    Args:
+        field: The field.
+
+    Returns:
+        The SHA-256 digest, as hexadecimal text.
+    """
     import hashlib
 
     h = hashlib.sha256()

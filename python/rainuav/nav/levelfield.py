@@ -64,9 +64,9 @@ def level_durations(
 
 LevelField = SignalField
 """The old name of a field among levels: a [`SignalField`][rainuav.nav.field.SignalField] with
-``altitudes_m`` ([`SignalField.from_stack`][rainuav.nav.field.SignalField.from_stack],
-[`SignalField.bank`][rainuav.nav.field.SignalField.bank] with altitudes,
-[`SignalField.of_levels`][rainuav.nav.field.SignalField.of_levels])."""
+``altitudes_m`` ([`SignalField.from_stack`][rainuav.nav.fieldmakers.FieldMakers.from_stack],
+[`SignalField.bank`][rainuav.nav.fieldmakers.FieldMakers.bank] with altitudes,
+[`SignalField.of_levels`][rainuav.nav.fieldmakers.FieldMakers.of_levels])."""
 
 
 class LevelStepper:
@@ -81,6 +81,15 @@ class LevelStepper:
     """
 
     def __init__(self, field: SignalField, cfg: NavConfig, climb: list[int], descend: list[int]):
+        """Builds the stepper over a field and a task.
+
+        Args:
+            field: The signal flown.
+            cfg: The navigation task (its `min_db` resolved).
+            climb: The climb across each gap between neighbouring levels, lowest first, in ticks
+                ([`level_durations()`][rainuav.nav.levelfield.level_durations]; []: one tick).
+            descend: The descent across each gap, lowest first, in ticks ([]: one tick).
+        """
         self.field, self.cfg = field, cfg
         top = field.levels - 1
         # Ticks of the climb and descent from each level (past the band: the last gap on
@@ -90,7 +99,14 @@ class LevelStepper:
         self.goal = np.asarray(cfg.goal_m, dtype=np.float64)
 
     def time_s(self, tick: Any) -> np.ndarray:
-        """The instant after ``tick`` ticks, s (``0 + tick * move_s``, as the core)."""
+        """The instant after some ticks, s (`0 + tick * move_s`, as the core).
+
+        Args:
+            tick: Ticks.
+
+        Returns:
+            Times, s, of the shape of `tick`.
+        """
         return 0.0 + np.asarray(tick).astype(np.float64) * self.cfg.move_s
 
     def step(
@@ -103,11 +119,22 @@ class LevelStepper:
         goal: np.ndarray | None = None,
         world: np.ndarray | None = None,
     ) -> dict[str, np.ndarray]:
-        """One move for every UAV: new ``offset``, ``level``, ``tick``, ``position``
-        (clamped), ``reward``, ``terminated``, ``truncated``, ``signal_db``, ``out``,
-        ``arrived``, ``duration`` (ticks) and ``t_s`` (the landing instant). ``goal``
-        (N, 2): each UAV's destination (default the task's); ``world`` (N,): in a field of
-        banks, the world each UAV flies."""
+        """One move for every UAV.
+
+        Args:
+            start: Each UAV's start (N, 2), m.
+            offset: Its whole moves from the start (N, 2) in x and y.
+            level: Its level (N,).
+            tick: Its clock (N,), ticks.
+            action: Its move (N,).
+            goal: Its destination (N, 2); None: the task's.
+            world: In a bank, the world it flies (N,).
+
+        Returns:
+            Arrays (N,) or (N, 2): the new `offset`, `level`, `tick`, `position` (clamped),
+            `reward`, `terminated`, `truncated`, `signal_db`, `out`, `arrived`, `duration` (ticks)
+            and `t_s` (the landing instant).
+        """
         cfg, f = self.cfg, self.field
         a = np.asarray(action, dtype=np.int64)
         level = np.asarray(level, dtype=np.int64)

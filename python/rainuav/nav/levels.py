@@ -67,8 +67,23 @@ class UAVLevelsEnv(UAVNavEnv):
         random_goal: bool = False,
         **task: Any,
     ) -> None:
-        """The levels' ``field`` and the task ``config`` (``min_db`` None: 10 dB); the rest as
-        [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv]'s."""
+        """Builds the environment among the levels of a field.
+
+        Args:
+            field: A [`SignalField`][rainuav.nav.field.SignalField] among flight levels (with
+                `altitudes_m`).
+            config: The task ([`NavConfig`][rainuav.nav.task.NavConfig]); its `min_db` None: 10 dB.
+            climb_m_s: The climb speed, m/s.
+            descend_m_s: The descent speed, m/s.
+            start_level: The level every flight starts at (default: the lowest flyable).
+            observation: As [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv]'s.
+            view: As [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv]'s.
+            random_goal: As [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv]'s.
+            **task: Fields of [`NavConfig`][rainuav.nav.task.NavConfig], over `config`'s.
+
+        Raises:
+            InvalidInputError: A field without flight levels, or an input `UAVNavEnv` refuses.
+        """
         if not isinstance(field, SignalField) or field.altitudes_m is None:
             raise InvalidInputError(
                 f"field must be a SignalField among flight levels, with altitudes_m (got "

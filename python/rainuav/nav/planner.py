@@ -316,7 +316,7 @@ def optimal_among_levels(
         starts_m: The starts, (N, 2), m.
         start_levels: The level of each start, (N,) indices (-1: the best level); default
             where the environment starts a flight there
-            ([`UAVNavEnv.start_level_at()`][rainuav.nav.env.UAVNavEnv.start_level_at]).
+            ([`UAVNavEnv.start_level_at()`][rainuav.nav.batched.BatchedFlights.start_level_at]).
 
     Returns:
         One [`LevelPlan`][rainuav.nav.planner.LevelPlan] a start.

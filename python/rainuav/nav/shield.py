@@ -39,16 +39,27 @@ def shield_moves(
     visited: Sequence[set[tuple[int, int]]],
     goal: np.ndarray | None = None,
 ) -> np.ndarray:
-    """(N, 4) bool: the moves the shield allows. First the safe moves (still in the area and able to
-    arrive within ``max_steps``,
-    [`rainuav.nav.batch.BatchStepper.safe_actions()`][rainuav.nav.batch.BatchStepper.safe_actions]);
-    among them, the moves to a position the flight has not visited (``visited``: each flight's
-    lattice offsets so far), where there is one. The second rule applies where every move costs at
-    least 1 (``"shortfall"`` and ``"outage"`` with ``mu >= 0``, ``"linear"`` with ``mu <= 0``):
+    """The moves the shield allows each UAV.
+
+    First the safe moves (still in the area and able to arrive within `max_steps`,
+    [`safe_actions()`][rainuav.nav.batch.BatchStepper.safe_actions]); among them, the moves to a
+    position the flight has not visited, where there is one. The second rule applies where every
+    move costs at least 1 ("shortfall" and "outage" with `mu >= 0`, "linear" with `mu <= 0`):
     cutting a loop out of a path then gains at least its length, so an optimal flight never revisits
     a position and the rule only removes moves no optimal flight makes. Elsewhere (the paper's
-    ``"linear"`` with ``mu > 0``: loitering can pay) only the first rule applies. ``goal`` (N, 2):
-    each flight's destination (default: the task's)."""
+    "linear" with `mu > 0`: loitering can pay) only the first rule applies.
+
+    Args:
+        env: The environment flown.
+        pos: Positions (N, 2), m.
+        t: Moves made so far (N,).
+        offset: Each flight's lattice offset from its start (N, 2).
+        visited: Each flight's lattice offsets so far.
+        goal: Each flight's destination (N, 2); None: the task's.
+
+    Returns:
+        (N, 4) bool, one column a move.
+    """
     allowed = env.stepper.safe_actions(pos, t, goal)
     loops_can_pay = env.cfg.mu > 0 if env.cfg.reward == "linear" else env.cfg.mu < 0
     if loops_can_pay:

@@ -166,8 +166,21 @@ def check_config(
 
 
 def base_reward(signal_db: Any, cfg: NavConfig, outage_p: Any = None) -> Any:
-    """b(q') from the signal (SINR or SIR, dB) at the new position, or for ``"chance"`` from the
-    probability of outage there, ``outage_p``; ``cfg.min_db`` must be resolved (not None)."""
+    """The reward term b(q') of a move, from the signal where it lands.
+
+    Args:
+        signal_db: The signal (SINR or SIR, dB) at the new position.
+        cfg: The task; its `min_db` must be resolved (not None).
+        outage_p: For the reward "chance", the probability of outage there.
+
+    Returns:
+        b(q'), of the shape of `signal_db`: the shortfall below `min_db`, the outage indicator, the
+        outage probability or the linear reward, as `cfg.reward` names ([physics reference, section
+        6][6-the-navigation-task]).
+
+    Raises:
+        InvalidInputError: `min_db` unresolved, or the reward "chance" without `outage_p`.
+    """
     if cfg.min_db is None:
         raise InvalidInputError("min_db is unresolved: build the task through UAVNavEnv")
     if cfg.reward == "chance":
@@ -182,10 +195,20 @@ def base_reward(signal_db: Any, cfg: NavConfig, outage_p: Any = None) -> Any:
 
 
 def flight_cost(returns: Any, arrived: Any, cfg: NavConfig) -> Any:
-    """The cost of flights with these undiscounted ``returns``: the return without the arrival
-    reward, negated (moves plus weighted shortfall, [physics reference, section
-    6][6-the-navigation-task]). Meaningful for flights that arrived (a flight that left the area
-    also pays ``out_of_bounds_penalty``)."""
+    """The cost of flights: the return without the arrival reward, negated.
+
+    Moves plus the weighted shortfall ([physics reference, section 6][6-the-navigation-task]).
+    Meaningful for flights that arrived (a flight that left the area also pays
+    `out_of_bounds_penalty`).
+
+    Args:
+        returns: The flights' undiscounted returns.
+        arrived: Whether each arrived.
+        cfg: The task.
+
+    Returns:
+        The costs, of the shape of `returns`.
+    """
     return -(np.asarray(returns, dtype=np.float64) - cfg.goal_reward * np.asarray(arrived))
 
 

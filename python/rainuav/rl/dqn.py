@@ -1,7 +1,8 @@
 """The dueling double DQN with multi-step returns (the paper's Algorithm 1), in torch.
 
-Reads top to bottom: the network, the N-step sliding window, the replay memory, the double-Q target
-and the agent (observe, act, learn, sync). Hyperparameters:
+Reads top to bottom: the double-Q target, the memory a run needs, and the agent (observe, act,
+learn, sync); the networks are [`rainuav.rl.networks`][rainuav.rl.networks], the N-step window and
+the replay memory [`rainuav.rl.replay`][rainuav.rl.replay]. Hyperparameters:
 [`DQNConfig`][rainuav.rl.config.DQNConfig]. Every choice beyond the paper's Table I, and what it
 measured, is in ``docs/guide/learning.md``."""
 
@@ -9,7 +10,6 @@ from __future__ import annotations
 
 import functools
 import math
-from collections import deque
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -21,6 +21,7 @@ from torch import nn
 from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig, random_streams
 from rainuav.rl.networks import MoveGeometry, PositionEncoder, WeatherEncoder
+from rainuav.rl.replay import NStepWindow, Replay
 
 Encoder = PositionEncoder | WeatherEncoder
 """How an env's observation becomes the network's input, and the network
@@ -34,125 +35,6 @@ def best_action(q: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
     if allowed is not None:
         q = np.where(allowed, q, -np.inf)
     return q.argmax(axis=1)
-
-
-class NStepWindow:
-    """Algorithm 1's sliding window W of the last N1 transitions.
-
-    ``push`` returns the transitions that leave the window, each as
-    ``(obs, action, R, next_obs, discount, done)`` with ``R = sum_i gamma^i r_i`` over up to
-    N1 rewards, ``next_obs`` the state to bootstrap from, ``discount = gamma^k`` (k rewards
-    summed) and ``done`` whether the episode terminated (then there is no bootstrap). At an
-    episode end the window flushes: terminated -> no bootstrap; truncated -> bootstrap from
-    the last state.
-    """
-
-    def __init__(self, n: int, gamma: float) -> None:
-        if n < 1:
-            raise ValueError(f"n_step must be >= 1 (got {n})")
-        self.n, self.gamma = n, gamma
-        self.buf: deque[tuple[Any, int, float]] = deque()
-
-    def _emit(self, next_obs: Any, done: bool) -> tuple[Any, int, float, Any, float, bool]:
-        obs, a, _ = self.buf[0]
-        ret = 0.0
-        for i, (_, _, r) in enumerate(self.buf):
-            ret += self.gamma**i * r
-        disc = self.gamma ** len(self.buf)
-        self.buf.popleft()
-        return obs, a, ret, next_obs, disc, done
-
-    def push(
-        self,
-        obs: Any,
-        action: int,
-        reward: float,
-        next_obs: Any,
-        terminated: bool,
-        truncated: bool,
-    ) -> list[tuple[Any, int, float, Any, float, bool]]:
-        self.buf.append((obs, action, reward))
-        out = []
-        if terminated or truncated:
-            while self.buf:
-                out.append(self._emit(next_obs, terminated))
-        elif len(self.buf) == self.n:
-            out.append(self._emit(next_obs, False))
-        return out
-
-
-class Replay:
-    """Uniform replay memory of capacity C (a ring buffer)."""
-
-    def __init__(self, capacity: int, obs_dim: int = 2) -> None:
-        self.capacity = capacity
-        self.obs = np.zeros((capacity, obs_dim), np.float32)
-        self.action = np.zeros(capacity, np.int64)
-        self.ret = np.zeros(capacity, np.float32)
-        self.next_obs = np.zeros((capacity, obs_dim), np.float32)
-        self.discount = np.zeros(capacity, np.float32)
-        self.done = np.zeros(capacity, np.float32)
-        self.size = 0
-        self.pos = 0
-
-    def add(self, obs: Any, a: int, ret: float, next_obs: Any, disc: float, done: bool) -> None:
-        i = self.pos
-        self.obs[i], self.action[i], self.ret[i] = obs, a, ret
-        self.next_obs[i], self.discount[i], self.done[i] = next_obs, disc, float(done)
-        self.pos = (self.pos + 1) % self.capacity
-        self.size = min(self.size + 1, self.capacity)
-
-    def sample(self, rng: np.random.Generator, batch: int) -> dict[str, np.ndarray]:
-        idx = rng.integers(0, self.size, size=batch)
-        return {
-            "obs": self.obs[idx],
-            "action": self.action[idx],
-            "ret": self.ret[idx],
-            "next_obs": self.next_obs[idx],
-            "discount": self.discount[idx],
-            "done": self.done[idx],
-        }
-
-    _ARRAYS = ("obs", "action", "ret", "next_obs", "discount", "done")
-
-    def state_dict(self) -> dict[str, Any]:
-        """The memory's filled rows and counters, as a checkpoint saves them (the rows not yet
-        filled are zeros and are not written: a short run's checkpoint holds what it collected,
-        not the whole capacity)."""
-        n = self.size
-        return {
-            **{k: getattr(self, k)[:n].copy() for k in self._ARRAYS},
-            "size": self.size,
-            "pos": self.pos,
-        }
-
-    def load_state_dict(self, d: dict[str, Any]) -> None:
-        """Restores a [`state_dict()`][rainuav.rl.dqn.Replay.state_dict] (or the whole arrays, as
-        older checkpoints hold them); arrays of another shape or type, or counters out of range,
-        raise ValueError (a checkpoint is checked before it is trusted)."""
-        size, pos = d["size"], d["pos"]
-        if not all(isinstance(v, int | np.integer) for v in (size, pos)) or not (
-            0 <= size <= self.capacity and 0 <= pos < self.capacity
-        ):
-            raise ValueError(f"replay size and pos must be integers in 0..{self.capacity}")
-        for k in self._ARRAYS:
-            mine, v = getattr(self, k), d[k]
-            rows = {int(size), mine.shape[0]}
-            if (
-                not isinstance(v, np.ndarray)
-                or v.dtype != mine.dtype
-                or v.shape[1:] != mine.shape[1:]
-                or v.shape[0] not in rows
-            ):
-                raise ValueError(
-                    f"replay.{k} must be a {mine.dtype} array of {int(size)} or {mine.shape[0]} "
-                    f"rows of shape {mine.shape[1:]}"
-                )
-        for k in self._ARRAYS:
-            full = np.zeros_like(getattr(self, k))
-            full[: len(d[k])] = d[k]
-            setattr(self, k, full)
-        self.size, self.pos = int(size), int(pos)
 
 
 def double_q_target(
@@ -196,14 +78,21 @@ def memory_needed(
 
 
 class Agent:
-    """Online and target networks, replay, optimiser and the exploration schedule."""
+    """The dueling double DQN's learner: online and target networks, replay, optimiser and
+    exploration."""
 
     def __init__(self, cfg: DQNConfig, seed: int, device: torch.device, encoder: Encoder) -> None:
-        """``seed``: the run's seed (the network's initial weights; exploration and replay sampling
-        draw from its ``"agent"`` stream,
-        [`rainuav.rl.config.random_streams()`][rainuav.rl.config.random_streams]); ``encoder``: how
-        the env's observations become the network's input, and the network
-        ([`rainuav.rl.networks`][rainuav.rl.networks])."""
+        """Builds the networks, the replay and the optimiser.
+
+        Args:
+            cfg: The learner's settings ([`DQNConfig`][rainuav.rl.config.DQNConfig]).
+            seed: The run's seed: the network's initial weights; exploration and replay sampling
+                draw from its "agent" stream
+                ([`random_streams()`][rainuav.rl.config.random_streams]).
+            device: Where the networks run (CUDA when present, else the CPU).
+            encoder: How the env's observations become the network's input, and the network
+                ([`rainuav.rl.networks`][rainuav.rl.networks]).
+        """
         self.cfg = cfg
         self.device = device
         self.encoder = encoder
@@ -229,22 +118,45 @@ class Agent:
         return torch.optim.Adam(self.online.parameters(), lr=self.cfg.lr, fused=True)
 
     def epsilon(self, episode: Any) -> Any:
-        """eps0 * eps_decay^episode (works on arrays of episode indices)."""
+        """The exploration rate after some episodes: `eps0 * eps_decay ** episode`.
+
+        Args:
+            episode: Episode indices (a number or an array).
+
+        Returns:
+            Epsilon, of the shape of `episode`.
+        """
         return self.cfg.eps0 * self.cfg.eps_decay ** np.asarray(episode, dtype=np.float64)
 
     def observe(self, env_obs: Any, t: Any) -> np.ndarray:
-        """The network's (N, dim) input from a batch of the env's observations after ``t``
-        moves (the encoder's)."""
+        """The network's input from a batch of the env's observations.
+
+        Args:
+            env_obs: The env's observations of N UAVs.
+            t: Each UAV's moves so far (N,).
+
+        Returns:
+            (N, dim) float32, as the encoder makes it.
+        """
         return self.encoder(env_obs, t)
 
     def act(
         self, obs: np.ndarray, episodes: np.ndarray, explore_among: np.ndarray | None = None
     ) -> np.ndarray:
         """Epsilon-greedy actions for a batch of UAVs, each at its own episode's epsilon.
-        Always draws one uniform and one action per UAV, so the random stream does not
-        depend on the network's choices. ``explore_among`` (N, A) bool: the actions an
-        exploring UAV draws from (uniformly; default all); the greedy choice is the
-        network's own, among all actions."""
+
+        One uniform and one action are always drawn per UAV, so the random stream does not depend on
+        the network's choices; the greedy choice is the network's own, among all actions.
+
+        Args:
+            obs: The network's input (N, dim).
+            episodes: Each UAV's episode index (N,).
+            explore_among: The actions an exploring UAV draws from, uniformly, (N, A) bool; None:
+                all.
+
+        Returns:
+            (N,) int64 actions.
+        """
         n = len(obs)
         explore = self.rng.random(n) < self.epsilon(episodes)
         if explore_among is None:
@@ -255,16 +167,40 @@ class Agent:
         return np.where(explore, random_a, self.greedy(obs))
 
     def q_values(self, obs: np.ndarray) -> np.ndarray:
-        """The online network's (N, A) action values."""
+        """The online network's action values.
+
+        Args:
+            obs: The network's input (N, dim).
+
+        Returns:
+            (N, A) float action values.
+        """
         with torch.inference_mode():
             x = torch.as_tensor(np.atleast_2d(obs), dtype=torch.float32, device=self.device)
             return self.online(x).cpu().numpy()
 
     def greedy(self, obs: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
-        """The action of highest Q, among the ``allowed`` (N, A) ones when given."""
+        """The action of highest value for each UAV.
+
+        Args:
+            obs: The network's input (N, dim).
+            allowed: The actions to choose among, (N, A) bool; None: all.
+
+        Returns:
+            (N,) int64 actions.
+        """
         return best_action(self.q_values(obs), allowed)
 
     def learn(self) -> float | None:
+        """One gradient step on a batch drawn from the replay, once it holds enough transitions.
+
+        The target is double Q-learning's (the online network picks the next action, the target
+        network values it) over the n-step return; the loss is Huber or squared error, with the
+        gradient's norm clipped at `grad_clip`.
+
+        Returns:
+            The batch's loss, or None before `learning_starts` transitions (or a batch) are stored.
+        """
         if self.replay.size < max(self.cfg.learning_starts, self.cfg.batch_size):
             return None
         b = self.replay.sample(self.rng, self.cfg.batch_size)
@@ -294,9 +230,16 @@ class Agent:
         return float(loss.detach())
 
     def schedule(self, finished: int) -> None:
-        """The schedules after ``finished`` episodes: the learning rate
-        ([`anneal()`][rainuav.rl.dqn.Agent.anneal]), the target network's sync every
-        ``target_sync_episodes``, and the running mean of the weights past ``average_from``."""
+        """The schedules after some episodes: learning rate, target sync and the weights' running
+        mean.
+
+        The learning rate follows [`anneal()`][rainuav.rl.dqn.Agent.anneal]; the target network is
+        synchronised every `target_sync_episodes`; the running mean of the weights starts past
+        `average_from`.
+
+        Args:
+            finished: The episodes finished so far.
+        """
         self.anneal(finished)
         if finished % self.cfg.target_sync_episodes == 0:
             self.sync()
@@ -304,8 +247,11 @@ class Agent:
             self.accumulate_average()
 
     def anneal(self, finished: int) -> None:
-        """Sets the learning rate for ``finished`` episodes done: cosine from ``lr`` to
-        ``lr_final`` over the run (``lr_final = 0``: ``lr`` throughout)."""
+        """Sets the learning rate: a cosine from `lr` to `lr_final` over the run.
+
+        Args:
+            finished: The episodes finished so far (`lr_final = 0`: `lr` throughout).
+        """
         c = self.cfg
         final = c.lr_final or c.lr
         frac = min(finished / c.episodes, 1.0)
@@ -327,15 +273,21 @@ class Agent:
                 self.average[k] += (v - self.average[k]) / self.n_averaged
 
     def reported_weights(self) -> dict[str, torch.Tensor]:
-        """The weights the run reports: the running mean once averaging has begun, else the
-        online network's."""
+        """The weights the run reports.
+
+        Returns:
+            The running mean of the online weights once averaging has begun, else the online
+            network's weights.
+        """
         return self.online.state_dict() if self.average is None else self.average
 
     @contextmanager
     def reporting(self) -> Iterator[None]:
-        """Within: the online network holds
-        [`reported_weights()`][rainuav.rl.dqn.Agent.reported_weights] (for greedy checks); its own
-        weights are restored after."""
+        """A context in which the online network holds the reported weights (for greedy checks).
+
+        Yields:
+            Nothing; the online network's own weights are restored after.
+        """
         if self.average is None:
             yield
             return
@@ -347,6 +299,13 @@ class Agent:
             self.online.load_state_dict(own)
 
     def state_dict(self) -> dict[str, Any]:
+        """Everything a resumed run needs: the networks, optimiser, replay, random state and
+        average.
+
+        Returns:
+            A dict of tensors, arrays and plain values (saved with `torch.save`, read with
+            `weights_only=True`).
+        """
         return {
             "online": self.online.state_dict(),
             "target": self.target.state_dict(),
@@ -359,8 +318,16 @@ class Agent:
         }
 
     def load_state_dict(self, d: dict[str, Any], *, to_fly: bool = False) -> None:
-        """Restores a saved agent; ``to_fly``: only what flying reads (the networks and the
-        weight average), not the optimiser, the replay or the exploration's stream."""
+        """Restores a saved agent.
+
+        Args:
+            d: What [`state_dict()`][rainuav.rl.dqn.Agent.state_dict] gave.
+            to_fly: Restore only what flying reads (the networks and the weight average), not the
+                optimiser, the replay or the exploration's stream.
+
+        Raises:
+            ValueError: A weight average that does not hold the online network's tensors.
+        """
         self.online.load_state_dict(d["online"])
         self.target.load_state_dict(d["target"])
         if not to_fly:

@@ -36,8 +36,9 @@ def training_task(
     """A training flight's (start, destination, world). The env's fixed destination and
     [`training_start()`][rainuav.rl.learner.training_start] where the env observes the position (the
     draws of the single-map learner, unchanged); where it observes the weather, the env's draw
-    ([`draw_task()`][rainuav.nav.env.UAVNavEnv.draw_task]: a random destination where the env has
-    them; the task's own one with probability ``task_goals``), its start then moved near the
+    ([`draw_task()`][rainuav.nav.batched.BatchedFlights.draw_task]: a random destination where
+    the env has them; the task's own one with probability ``task_goals``), its start then moved
+    near the
     destination with probability ``goal_starts``."""
     if env.view is None:
         return training_start(env, d, rng), np.asarray(env.cfg.goal_m, dtype=np.float64), 0

@@ -212,9 +212,22 @@ def run_study(
     progress: bool = True,
     ray_address: str | None = None,
 ) -> list[dict[str, Any]]:
-    """Runs every unfinished case of ``study`` into ``out/cases/<case id>`` (in ``workers``
-    local processes, or as Ray tasks with ``ray_address``) and writes ``results.csv`` and
-    ``report.md``; returns the rows in case order."""
+    """Runs every unfinished case of a study and writes its tables.
+
+    Each case runs into `out/cases/<case id>` (a case already finished is read back, so an
+    interrupted study resumes); then `results.csv` and `report.md` are written.
+
+    Args:
+        study: The study ([`load_study()`][rainuav.studies.spec.load_study]).
+        out: The study's folder.
+        workers: Local processes running cases at once.
+        progress: A line on standard error per case.
+        ray_address: Run the cases as Ray tasks: "local" (Ray started here), "auto" (the
+            cluster already running) or a cluster's address; None: local processes.
+
+    Returns:
+        One row of results a case, in case order.
+    """
     cases = study.cases()
     begin_folder(out, "results.csv")  # written again, last, once every case is done
     todo = [c for c in cases if not (out / "cases" / c.id / "result.json").exists()]

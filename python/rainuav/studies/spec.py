@@ -94,7 +94,12 @@ class Study:
     quick: dict[str, Any] = field(default_factory=dict)
 
     def cases(self) -> list[Case]:
-        """Every case, in a fixed order (the index is the row of ``results.csv``)."""
+        """Every case of the study, in a fixed order.
+
+        Returns:
+            The [`Case`][rainuav.studies.spec.Case]s, the grid of the axes' values crossed with the
+            seeds; the index is the row of `results.csv`.
+        """
         combos: list[tuple[str, dict[str, Any], str]] = []
         if self.sweep == "grid":
             names = list(self.axes)
@@ -118,15 +123,27 @@ class Study:
         return out
 
     def axis_fields(self, axis: str) -> set[str]:
-        """The fields an axis sets (its own name, or the keys of its tables)."""
+        """The fields an axis sets.
+
+        Args:
+            axis: The axis's name.
+
+        Returns:
+            Its own name, or the keys of its tables where its values are tables.
+        """
         keys: set[str] = set()
         for v in self.axes.get(axis, []):
             keys |= set(v) if isinstance(v, dict) else {axis}
         return keys
 
     def with_quick(self) -> Study:
-        """The study with its ``[quick]`` changes applied to the base case (an
-        ``eval_starts`` there sets the study's number of evaluation starts)."""
+        """The study with its `[quick]` changes applied to the base case.
+
+        An `eval_starts` there sets the study's number of evaluation starts.
+
+        Returns:
+            A new [`Study`][rainuav.studies.spec.Study].
+        """
         quick = dict(self.quick)
         starts = quick.pop("eval_starts", self.eval_starts)
         return dataclasses.replace(self, base={**self.base, **quick}, eval_starts=starts)
@@ -271,7 +288,18 @@ def parse_study(data: dict[str, Any], where: str) -> Study:
 
 
 def load_study(name_or_path: str | Path) -> Study:
-    """A built-in study by name (``paper``, ``mmwave``) or a study TOML file."""
+    """A built-in study by name, or a study read from a TOML file.
+
+    Args:
+        name_or_path: `paper`, `mmwave`, or the path of a study TOML file.
+
+    Returns:
+        The [`Study`][rainuav.studies.spec.Study], checked.
+
+    Raises:
+        InvalidInputError: An unknown name, an unreadable or malformed file, or a field out of range
+            (named).
+    """
     if str(name_or_path) in BUILT_IN:
         ref = resources.files("rainuav.studies") / f"{name_or_path}.toml"
         with resources.as_file(ref) as path:

@@ -27,25 +27,28 @@ from typing import Any
 
 import tomllib
 
-from rainuav._checks import check_field_kinds
-from rainuav._cli import altitude_band
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField
 from rainuav.nav.levelfield import field_of
-from rainuav.nav.task import NavConfig, check_config, check_task
+from rainuav.nav.task import NavConfig, check_config
 from rainuav.nav.vector import UAVNavVectorEnv
-from rainuav.radio.engines import ENGINES as RADIO_ENGINES
 from rainuav.radio.engines import for_time
 from rainuav.radio.outputs.levelmaps import LevelStack
 from rainuav.radio.outputs.mapdata import RadioMap, default_min_db
 from rainuav.radio.outputs.maps import build_radio_map
 from rainuav.radio.outputs.signals import signal_of
 from rainuav.radio.outputs.timemap import RadioMapSeries, build_radio_map_series, series_times
-from rainuav.radio.scene import presets
 from rainuav.radio.scene.scenario import Scenario
-from rainuav.radio.scene.storms import check_storm_seed
 from rainuav.signals import Signal
+from rainuav.world.spec import (
+    WorldSpec,
+    check_spec,
+    levels_of,
+    make_scenario,
+    spec_of,
+    task_of,
+)
 
 __all__ = [
     "MAP_FILES",
@@ -73,169 +76,8 @@ flight level
 ([`rainuav.radio.outputs.levelmaps.LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack]), or
 a world made of a [`Signal`][rainuav.signals.Signal]."""
 _SOURCES = (RadioMap, RadioMapSeries, LevelStack, Signal)
-ENGINES = ("", *RADIO_ENGINES)
-MAX_POOL = 64
-"""The most storms flown at once (each holds its maps in time: about 20 MB)."""
 SLICE_S = 5.0
 """Time between the maps ``fly`` makes of a weather file with several instants, s."""
-
-
-@dataclass
-class WorldSpec:
-    """What a world is built from: the scenario and its weather, then the task (one docstring
-    line per field = one CLI flag of ``rainuav.train``)."""
-
-    scenario: str = "paper"
-    """Preset scenario ('paper', 'uma', 'rain_cell', 'urban' or 'storm'), unless
-    --scenario-file."""
-    scenario_file: str = ""
-    """A scenario TOML file (overrides --scenario)."""
-    rain_rate_mm_h: float | None = None
-    """Homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the rain
-    model, drop sizes, shape, temperature and wind stay the scenario's; for 'storm', the
-    storm's background rate); unset: the scenario's own weather (the paper preset rains
-    25 mm/h)."""
-    engine: str = ""
-    """Propagation engine: 'hybrid', 'ray' or 'pe'; '' the scenario's own."""
-    freq_ghz: float | None = None
-    """Carrier frequency, GHz (1-100), in place of the scenario's; unset: the scenario's."""
-    storm_seed: int = 0
-    """The random storm of the 'storm' scenario (seeds from 1 000 000 are reserved for
-    evaluation)."""
-    storm_speed_m_s: float | None = None
-    """The 'storm' scenario's speed, m/s, in place of the drawn one (every cell's velocity
-    scaled alike; 0: cells stay put and only grow or decay); unset: as drawn."""
-    slice_s: float = 5.0
-    """Time between the maps of a weather that moves, s (the signal is linear in between)."""
-    observation: str = "position"
-    """What the UAV observes: 'position' (and the time where the weather moves) or 'weather'
-    (the SINR around it and over the area, its position, time and destination:
-    rainuav.nav.views)."""
-    random_goal: bool = False
-    """A destination drawn per episode (rainuav.nav.views.sample_goal; needs --observation
-    weather) in place of the fixed one (the storms presets set it)."""
-    storm_pool: int = 0
-    """Train over the storm distribution: this many storms flown at once, each renewed with
-    a new training storm as training goes (the storms preset sets 16; needs --scenario storm
-    and --observation weather); 0: the one storm of storm_seed."""
-    calm_share: float = 0.0
-    """Of a storm pool's storms, the share flown calm: the storm's uniform background rain
-    alone, its cells left out (rainuav.world.pool.is_calm says which seeds)."""
-    altitudes_m: tuple[float, ...] | str = ""
-    """Flight levels, m: LOW:HIGH:STEP (e.g. 25:115:15) or a list of heights; altitude as a
-    decision, six moves (rainuav.nav.levels: climb and descend one level, each lasting its
-    duration), flights starting at the lowest level (the weather observation then shows every
-    level); '' the scenario's one altitude."""
-    task: NavConfig = dataclasses.field(default_factory=NavConfig)
-    """The navigation task (rainuav.nav.task.NavConfig: destination, moves, reward, outage
-    threshold, horizon), the [task] table of a run's file and the flags --task.NAME."""
-
-    def __post_init__(self) -> None:
-        if isinstance(self.altitudes_m, list):  # as read from a file: a tuple, so specs compare
-            self.altitudes_m = tuple(self.altitudes_m)
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        # A field of the task, or a misspelt one, set here would be silently ignored.
-        if name not in self.__dataclass_fields__:
-            hint = f": the task's, .task.{name}" if name in NavConfig.__dataclass_fields__ else ""
-            raise AttributeError(f"{type(self).__name__} has no field {name!r}{hint}")
-        super().__setattr__(name, value)
-
-
-def spec_of(obj: Any) -> WorldSpec:
-    """The world part of ``obj`` (a WorldSpec, or a configuration that extends one)."""
-    return WorldSpec(**{f.name: getattr(obj, f.name) for f in dataclasses.fields(WorldSpec)})
-
-
-def task_of(spec: WorldSpec) -> NavConfig:
-    """The navigation task a spec names (its ``task``)."""
-    return spec.task
-
-
-def levels_of(spec: Any) -> list[float]:
-    """The flight levels a spec names, m (``altitudes_m``: a LOW:HIGH:STEP band or a list of
-    heights; [] for none), else one line naming the field."""
-    v = spec.altitudes_m
-    if isinstance(v, str):
-        return altitude_band(v, "altitudes_m") if v else []
-    if (
-        isinstance(v, list | tuple)
-        and v
-        and all(
-            isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) for x in v
-        )
-    ):
-        return [float(x) for x in v]
-    raise InvalidInputError(
-        f"altitudes_m must be LOW:HIGH:STEP or a non-empty list of heights, m (got {v!r})"
-    )
-
-
-def check_spec(spec: Any) -> None:
-    """Raises InvalidInputError naming the first field of the spec of the wrong kind or
-    outside its range (the task's as ``task.NAME``)."""
-    check_field_kinds(spec, only=WorldSpec)  # the kinds first: a caller can hand in anything
-    if not isinstance(spec.task, NavConfig):
-        raise InvalidInputError(f"task must be a NavConfig (got {type(spec.task).__name__})")
-    check_field_kinds(spec.task, "task.")
-    check_task(spec.task, "task.")
-    checks = [
-        ("engine", spec.engine in ENGINES, "'', 'hybrid', 'ray' or 'pe'"),
-        ("freq_ghz", spec.freq_ghz is None or 1 <= spec.freq_ghz <= 100, "unset or in [1, 100]"),
-        ("storm_speed_m_s", spec.storm_speed_m_s is None or 0 <= spec.storm_speed_m_s <= 100,
-         "unset or in [0, 100] m/s"),
-        ("slice_s", 0.001 <= spec.slice_s <= 1e6, "in [0.001, 1e6] s"),
-        ("observation", spec.observation in ("position", "weather"), "'position' or 'weather'"),
-        ("random_goal", not spec.random_goal or spec.observation == "weather",
-         "false unless observation = 'weather' (the position alone does not show it)"),
-        ("storm_pool", 0 <= spec.storm_pool <= MAX_POOL, f"in 0..{MAX_POOL}"),
-        ("storm_pool", spec.storm_pool == 0 or (spec.scenario == "storm"
-         and not spec.scenario_file and spec.observation == "weather"),
-         "0 unless scenario = 'storm' and observation = 'weather'"),
-        ("calm_share", 0 <= spec.calm_share <= 1, "in [0, 1] (read by a storm pool alone)"),
-        ("rain_rate_mm_h", spec.rain_rate_mm_h is None or 0 <= spec.rain_rate_mm_h <= 500,
-         "unset or in [0, 500] mm/h"),
-        ("altitudes_m", not spec.altitudes_m or spec.task.signal == "sinr",
-         "'' unless task.signal = 'sinr'"),
-    ]  # fmt: skip
-    for name, ok, allowed in checks:
-        if not ok:
-            raise InvalidInputError(f"{name} must be {allowed} (got {getattr(spec, name)!r})")
-    check_storm_seed(spec.storm_seed)
-    levels_of(spec)
-
-
-def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
-    """The scenario of a spec: the preset (the storm of ``storm_seed`` for 'storm') or the
-    file, or ``scenario`` where given, with ``rain_rate_mm_h``, ``freq_ghz`` and ``engine`` applied
-    if set."""
-    if scenario is not None:
-        scn = scenario
-    elif spec.scenario_file:
-        scn = Scenario.from_toml(spec.scenario_file)
-    elif spec.scenario == "storm":
-        scn = presets.storm(
-            spec.rain_rate_mm_h,
-            seed=check_storm_seed(spec.storm_seed),
-            speed_m_s=spec.storm_speed_m_s,
-        )
-    elif spec.scenario in presets.PRESETS:
-        scn = presets.PRESETS[spec.scenario]()
-    else:
-        raise InvalidInputError(
-            f"scenario must be one of {sorted(presets.PRESETS)} (got {spec.scenario!r})"
-        )
-    if spec.rain_rate_mm_h is not None and (scenario is not None or spec.scenario != "storm"):
-        scn = presets.with_rain(scn, spec.rain_rate_mm_h)
-    if spec.freq_ghz is not None:
-        scn = dataclasses.replace(scn, freq_hz=spec.freq_ghz * 1e9)
-    if spec.engine:
-        scn = dataclasses.replace(scn, engine=spec.engine)
-    if spec.altitudes_m:
-        area = dataclasses.replace(scn.area, altitudes_m=levels_of(spec))
-        area.check("altitudes_m")
-        scn = scn.replace(area=area)
-    return scn
 
 
 @dataclass
@@ -262,8 +104,12 @@ class World:
         return self.field.varies
 
     def env(self) -> Any:
-        """A Gymnasium environment of this world (a fresh one per call): a
-        [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv], on one level or among several."""
+        """A Gymnasium environment of this world, a fresh one per call.
+
+        Returns:
+            A [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv] on this world's field and task, on one level
+            or among several.
+        """
         return UAVNavEnv(
             field=self.field,
             config=self.task,
@@ -272,12 +118,29 @@ class World:
         )
 
     def vector_env(self, num_envs: int, autoreset_mode: Any = "NextStep") -> UAVNavVectorEnv:
-        """``num_envs`` UAVs in this world, batched."""
+        """Several UAVs in this world, stepped as one batch.
+
+        Args:
+            num_envs: How many UAVs.
+            autoreset_mode: Gymnasium's autoreset mode ("NextStep", the default, "SameStep" or
+                "Disabled").
+
+        Returns:
+            A [`UAVNavVectorEnv`][rainuav.nav.vector.UAVNavVectorEnv] of `num_envs` copies of
+            [`env()`][rainuav.world.World.env].
+        """
         return UAVNavVectorEnv(self.env(), num_envs, autoreset_mode)
 
     def save(self, folder: Path) -> Path | None:
-        """Writes the signal's source into ``folder`` ([`MAP_FILES`][rainuav.world.MAP_FILES]),
-        atomically (a storm pool's storms are not saved: their seeds rebuild them)."""
+        """Writes the signal's source into a folder, atomically.
+
+        Args:
+            folder: The run's folder; the file is named by the source's kind
+                ([`MAP_FILES`][rainuav.world.MAP_FILES]).
+
+        Returns:
+            The file written, or None for a storm pool's bank (its seeds rebuild its storms).
+        """
         if self.source is None:
             return None
         kind = next(k for k in _SOURCES if isinstance(self.source, k))
@@ -286,11 +149,28 @@ class World:
 
 
 def world_from(source: Any, task: NavConfig) -> World:
-    """The world of a built map, series or stack of levels, or of a
-    [`Signal`][rainuav.signals.Signal], and a task (``min_db`` unset: the scenario's documented
-    threshold for the signal flown). Every kind is read as one signal
-    ([`signal_of()`][rainuav.radio.outputs.signals.signal_of]) and flown through the field its
-    axes ask for ([`field_of()`][rainuav.nav.levelfield.field_of])."""
+    """The world of a built map (or maps in time, or maps of levels) and a task.
+
+    Every kind of source is read as one signal
+    ([`signal_of()`][rainuav.radio.outputs.signals.signal_of]) and flown through the field its axes
+    ask for ([`field_of()`][rainuav.nav.levelfield.field_of]).
+
+    Args:
+        source: A [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap], a
+            [`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries], a
+            [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack] or a
+            [`Signal`][rainuav.signals.Signal].
+        task: The navigation task; its `min_db` unset takes the scenario's documented threshold for
+            the signal flown.
+
+    Returns:
+        The [`World`][rainuav.world.World], with `task.min_db` resolved (and, for the reward
+        "chance", each pixel's outage probability from the map's spreads).
+
+    Raises:
+        InvalidInputError: A source of another kind, a signal that is not the task's, or the reward
+            "chance" on anything but one radio map's SINR.
+    """
     signal = task.signal
     if isinstance(source, Signal):
         if source.name != f"{signal}_db":
@@ -324,8 +204,14 @@ def world_from(source: Any, task: NavConfig) -> World:
 
 
 def series_instants(spec: Any) -> Any:
-    """The instants a moving weather is mapped at: every ``slice_s`` from 0 over the task's
-    horizon (rounded up to a whole slice)."""
+    """The instants a moving weather is mapped at.
+
+    Args:
+        spec: A spec whose task sets the horizon (`max_steps` moves of `step_m / speed_m_s` s).
+
+    Returns:
+        Times, s: every `slice_s` from 0 over the horizon, rounded up to a whole slice.
+    """
     task = spec.task
     horizon = task.max_steps * task.step_m / task.speed_m_s
     return series_times(math.ceil(horizon / spec.slice_s - 1e-9) * spec.slice_s, spec.slice_s)
@@ -334,14 +220,21 @@ def series_instants(spec: Any) -> Any:
 def level_field(
     scn: Scenario, times_s: Any = None, *, progress: bool = False, cache: bool = True
 ) -> tuple[Any, Any]:
-    """The signal at every level of ``scn``'s ``area.altitudes_m`` as a
-    [`SignalField`][rainuav.nav.field.SignalField] with those altitudes (what the flights among
-    levels read), and the maps it came from:
-    [`rainuav.radio.outputs.levelmaps.build_radio_levels()`][rainuav.radio.outputs.levelmaps.build_radio_levels],
-    or where ``times_s`` are given
-    [`build_radio_level_series()`][rainuav.radio.outputs.levelmaps.build_radio_level_series] (engine
-    'pe' then becomes 'hybrid': a march per cell and instant is refused). ``cache=False``: maps
-    flown once (a storm pool's), not kept in the map cache."""
+    """The signal at every flight level of a scenario, and the maps it came from.
+
+    Args:
+        scn: A scenario whose `area.altitudes_m` lists the levels.
+        times_s: Instants to map a moving weather at
+            ([`build_radio_level_series()`][rainuav.radio.outputs.levelmaps.build_radio_level_series]:
+            engine 'pe' then becomes 'hybrid'); None: one instant
+            ([`build_radio_levels()`][rainuav.radio.outputs.levelmaps.build_radio_levels]).
+        progress: A line on standard error per map built.
+        cache: Read and keep the maps in the map cache (False: maps flown once, a storm pool's).
+
+    Returns:
+        `(field, maps)`: a [`SignalField`][rainuav.nav.field.SignalField] with those altitudes (what
+        flights among levels read) and the levels' maps.
+    """
     from rainuav.radio.outputs.levelmaps import build_radio_level_series, build_radio_levels
 
     if times_s is None:
@@ -389,9 +282,21 @@ def _observed(world: World, spec: Any) -> World:
 
 
 def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: bool = True) -> Any:
-    """The signal's source for the scenario ``scn`` of ``spec``: its map, or where its weather moves
-    its maps at [`series_instants()`][rainuav.world.series_instants] (engine 'pe' then becomes
-    'hybrid': a march per cell and instant is refused); built, or taken from the cache."""
+    """The map (or maps in time, or maps of levels) a spec's scenario gives, built or from the
+    cache.
+
+    Args:
+        spec: The spec (its `altitudes_m`, and its task's horizon where the weather moves).
+        scn: The spec's scenario ([`make_scenario()`][rainuav.world.spec.make_scenario]).
+        progress: A line on standard error per map built.
+        cache: Read and keep the maps in the map cache.
+
+    Returns:
+        A [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack] where the spec has levels, a
+        [`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries] at
+        [`series_instants()`][rainuav.world.series_instants] where the weather moves (engine 'pe'
+        then becomes 'hybrid'), else a [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap].
+    """
     if spec.altitudes_m:  # every level's maps (in time where the weather moves)
         times = series_instants(spec) if scn.medium.moves else None
         return LevelStack.of(level_field(scn, times, progress=progress, cache=cache)[1], scn)
@@ -402,8 +307,15 @@ def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: boo
 
 
 def source_key(spec: Any, scn: Scenario) -> str:
-    """What identifies the source [`build_source()`][rainuav.world.build_source] gives (the
-    scenario, and for a weather that moves its instants)."""
+    """What identifies the source [`build_source()`][rainuav.world.build_source] gives.
+
+    Args:
+        spec: The spec (its task's horizon, where the weather moves).
+        scn: The spec's scenario.
+
+    Returns:
+        The scenario's digest, and for a weather that moves its last instant and their number.
+    """
     if not scn.medium.moves:
         return scn.digest()
     t = series_instants(spec)
@@ -411,8 +323,16 @@ def source_key(spec: Any, scn: Scenario) -> str:
 
 
 def load_world(folder: Path, spec: Any) -> World | None:
-    """The world saved in a run's ``folder`` ([`World.save()`][rainuav.world.World.save]) with the
-    task of ``spec``, or None where the folder holds none."""
+    """The world saved in a run's folder, flown with a spec's task.
+
+    Args:
+        folder: A run's folder, holding one of [`MAP_FILES`][rainuav.world.MAP_FILES]
+            ([`World.save()`][rainuav.world.World.save]).
+        spec: The run's spec: its task, observation and destinations.
+
+    Returns:
+        The [`World`][rainuav.world.World], or None where the folder holds no map.
+    """
     for name, kind in zip(MAP_FILES, _SOURCES, strict=True):
         if (Path(folder) / name).exists():
             return _observed(world_from(kind.load(Path(folder) / name), task_of(spec)), spec)
@@ -437,13 +357,31 @@ def _scenario_name(source: Any) -> str:
 
 
 def in_world(spec: Any, source: Any) -> tuple[Any, World]:
-    """``(spec, world)``: the spec and the world of its task on a map or series already built
-    (tests and scripts that hand ``rainuav.rl.loop.train`` a small synthetic map:
-    ``train(*in_world(cfg, my_map))``)."""
+    """A spec and the world of its task on a map already built.
+
+    For tests and scripts that hand the trainer a small map of their own: `train(*in_world(cfg,
+    my_map))`.
+
+    Args:
+        spec: A spec (or a [`TrainConfig`][rainuav.rl.config.TrainConfig]).
+        source: A map, series, stack of levels or signal
+            ([`world_from()`][rainuav.world.world_from]).
+
+    Returns:
+        `(spec, world)`.
+    """
     return spec, _observed(world_from(source, task_of(spec)), spec)
 
 
 def saved_world(cfg: Any) -> tuple[Any, World | None]:
-    """``(cfg, world)``: a run's configuration and the world saved in its folder ``cfg.out``
-    (None where it holds none), to resume it: ``train(*saved_world(cfg), resume=True)``."""
+    """A run's configuration and the world saved in its folder, to resume it.
+
+    `train(*saved_world(cfg), resume=True)`.
+
+    Args:
+        cfg: The run's configuration; its `out` is the run's folder.
+
+    Returns:
+        `(cfg, world)`, the world None where the folder holds none.
+    """
     return cfg, load_world(Path(cfg.out), cfg)

@@ -79,9 +79,9 @@ class StormPool:
 
     Among flight levels (``spec.altitudes_m``) a storm is the maps of every level in time
     ([`rainuav.radio.outputs.levelmaps.LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack]) and
-    the bank a [`SignalField.bank()`][rainuav.nav.field.SignalField.bank] with their altitudes;
-    the pool's memory (the slots, the storm being mapped and the one being put) is checked once the
-    first storm is mapped."""
+    the bank a [`SignalField.bank()`][rainuav.nav.fieldmakers.FieldMakers.bank] with their
+    altitudes; the pool's memory (the slots, the storm being mapped and the one being put) is
+    checked once the first storm is mapped."""
 
     def __init__(self, spec: Any, seed: int, *, progress: bool = False) -> None:
         check_spec(spec)

@@ -88,8 +88,23 @@ a bracketed unit and turning spaces and dashes into underscores)."""
 
 
 def rss_from_rsrp(rsrp_dbm: Any, bandwidth_hz: float, subcarrier_khz: float = 15.0) -> Any:
-    """The cell's power over the band, dBm, from RSRP (dBm per resource element) for a fully
-    loaded carrier of ``bandwidth_hz`` at ``subcarrier_khz`` spacing (module docstring)."""
+    """The cell's power over the band from its RSRP, for a fully loaded carrier.
+
+    RSRP is the power of one resource element (one subcarrier): the power over the band is
+    `rsrp_dbm + 10 log10(12 N_RB)`, with `N_RB = floor(0.9 B / (12 Delta f))` resource blocks in
+    the bandwidth `B` at spacing `Delta f` (LTE's 90% occupancy).
+
+    Args:
+        rsrp_dbm: RSRP, dBm per resource element (a number or an array).
+        bandwidth_hz: The carrier's bandwidth, Hz.
+        subcarrier_khz: The subcarrier spacing, kHz.
+
+    Returns:
+        The power over the band, dBm, of the shape of `rsrp_dbm`.
+
+    Raises:
+        InvalidInputError: A bandwidth that holds no resource block at that spacing.
+    """
     blocks = math.floor(0.9 * bandwidth_hz / (12 * subcarrier_khz * 1e3) + 1e-9)
     if blocks < 1:
         raise InvalidInputError(
@@ -135,7 +150,11 @@ class MeasurementLog:
         return int(self.x_m.size)
 
     def summary(self) -> str:
-        """One line: the rows used and why the others were skipped."""
+        """What was read, in one line.
+
+        Returns:
+            The rows used and, by reason, how many were skipped.
+        """
         why = ", ".join(f"{n} {k}" for k, n in sorted(self.skipped.items()))
         return f"{self.source}: {len(self)} of {self.rows} rows used" + (f" ({why})" if why else "")
 

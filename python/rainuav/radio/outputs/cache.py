@@ -43,8 +43,12 @@ _ENGINE_MODULES = (
 
 
 def cache_dir() -> Path:
-    """Where maps are cached: $RAINUAV_CACHE_DIR, else $XDG_CACHE_HOME/rainuav, else
-    ~/.cache/rainuav; maps live in its radiomaps/ folder."""
+    """Where maps are cached.
+
+    Returns:
+        `$RAINUAV_CACHE_DIR`, else `$XDG_CACHE_HOME/rainuav`, else `~/.cache/rainuav`; the maps live
+        in its `radiomaps/` folder.
+    """
     env = os.environ.get("RAINUAV_CACHE_DIR")
     if env:
         return Path(env)
@@ -76,7 +80,11 @@ def map_path(scenario_digest: str) -> Path:
 
 
 def clear_cache() -> int:
-    """Deletes every cached map (and leftover temporary files); returns how many files."""
+    """Deletes every cached map, and any temporary file left over.
+
+    Returns:
+        How many files were deleted.
+    """
     folder = cache_dir() / "radiomaps"
     n = 0
     if folder.is_dir():

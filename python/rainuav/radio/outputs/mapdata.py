@@ -120,13 +120,29 @@ class RadioMap:
             self.pe_cone_deg = np.zeros((len(self.rss_dbm), 2))
 
     def default_min_db(self, signal: str = "sinr") -> float:
-        """The outage threshold a navigation task on this map uses unless told otherwise: for
-        SINR the preset's documented one (``presets.SINR_THRESHOLDS_DB``, by the scenario's
-        name); for SIR, and for scenarios of no preset, 10 dB (the paper's minimum SIR)."""
+        """The outage threshold a navigation task on this map uses unless told otherwise.
+
+        Args:
+            signal: "sinr" or "sir".
+
+        Returns:
+            For SINR the preset's documented threshold, dB (`presets.SINR_THRESHOLDS_DB`, by the
+            scenario's name); for SIR, and for scenarios of no preset, 10 dB (the paper's minimum
+            SIR).
+        """
         return default_min_db(self.scenario.name, signal)
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Writes an .npz with the scenario as TOML metadata, atomically."""
+        """Writes the map as an .npz file, atomically.
+
+        The arrays go in as arrays and the scenario as TOML text, so the file is data (no pickles).
+
+        Args:
+            path: The file to write.
+
+        Returns:
+            The path written.
+        """
         arrays = {k: getattr(self, k) for k in self._ARRAYS}
         arrays["extent_m"] = np.asarray(self.extent_m, dtype=np.float64)
         arrays["altitude_m"] = np.float64(self.altitude_m)
@@ -143,10 +159,23 @@ class RadioMap:
     def load(
         cls, path: str | os.PathLike[str], known: tuple[str, Scenario] | None = None
     ) -> RadioMap:
-        """Reads a map written by [`save()`][rainuav.radio.outputs.mapdata.RadioMap.save] (bit-exact
-        round trip). ``known``: ``(digest, scenario)`` the caller looked the file up by (a cache
-        hit): where the file's digest is that one, the map carries the caller's scenario, never the
-        stored one (whose DEM or footprint file may have moved since: the key is their contents)."""
+        """Reads a map written by [`save()`][rainuav.radio.outputs.mapdata.RadioMap.save], checked.
+
+        The round trip is bit-exact.
+
+        Args:
+            path: The .npz file.
+            known: `(digest, scenario)` the caller looked the file up by (a cache hit): where the
+                file's digest is that one, the map carries the caller's scenario, never the stored
+                one (whose DEM or footprint file may have moved since: the key is their contents).
+
+        Returns:
+            The [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap].
+
+        Raises:
+            InvalidInputError: A file that is missing, not a radio map, of another format version,
+                or whose arrays have the wrong shapes or values out of range.
+        """
         need = (*cls._ARRAYS, "extent_m", "altitude_m")
         data, scn = read_npz(path, "radio map", need, FORMAT_VERSION, known)
         if data["extent_m"].shape != (4,):
@@ -184,13 +213,27 @@ class RadioMap:
         )
 
     def plot(self, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
-        """Draws the map in dB (``kind`` 'sir', 'sinr' or 'rss'; ``cell`` selects one cell's
-        RSS, default the strongest) with the sites marked; returns the matplotlib Axes
-        ([`rainuav.radio.outputs.plot.plot_map()`][rainuav.radio.outputs.plot.plot_map])."""
+        """Draws the map in dB with the sites marked.
+
+        Args:
+            kind: "sir", "sinr" or "rss".
+            cell: With "rss", the one cell to draw; None: the strongest cell at each pixel.
+            ax: A matplotlib Axes to draw on; None: a new figure.
+
+        Returns:
+            The matplotlib Axes ([`plot_map()`][rainuav.radio.outputs.plot.plot_map]).
+        """
         return plot_map(self, kind, cell, ax)
 
     def coverage(self, sir_min_db: float = 10.0) -> float:
-        """Share of the area with SIR >= sir_min_db."""
+        """The share of the area where the SIR reaches a threshold.
+
+        Args:
+            sir_min_db: The threshold, dB.
+
+        Returns:
+            The share of pixels with SIR >= `sir_min_db`, in [0, 1].
+        """
         return float(np.mean(self.sir_db >= sir_min_db))
 
 

@@ -19,8 +19,16 @@ RSS_FLOOR_DBM = -250.0
 def sir_from_power(
     power_mw: npt.NDArray[np.float64], noise_dbm: float
 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """Serving cell (argmax), SIR and SINR in dB from received powers (M, H, W) in mW,
-    clipped to [SIR_FLOOR_DB, SIR_CEIL_DB]; the serving cell is -1 where none reaches."""
+    """The serving cell, SIR and SINR from every cell's received power.
+
+    Args:
+        power_mw: Received powers, mW, shape (M, H, W) for M cells.
+        noise_dbm: The receiver's noise power, dBm.
+
+    Returns:
+        `(serving, sir_db, sinr_db)`, each (H, W): the strongest cell's index (-1 where none
+        reaches), and the SIR and SINR in dB, clipped to [`SIR_FLOOR_DB`, `SIR_CEIL_DB`].
+    """
     p = np.asarray(power_mw, dtype=np.float64)
     serving = np.argmax(p, axis=0)
     s = np.take_along_axis(p, serving[None], axis=0)[0]

@@ -110,19 +110,50 @@ class RadioMapSeries:
     timings: dict[str, float] = field(default_factory=dict)
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Writes an .npz (the scenario as TOML inside; no pickles), atomically."""
+        """Writes the series as an .npz file, atomically (the scenario as TOML inside; no pickles).
+
+        Args:
+            path: The file to write.
+
+        Returns:
+            The path written.
+        """
         return _save(self, path)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> RadioMapSeries:
-        """Reads a series written by [`save()`][rainuav.radio.outputs.mapdata.RadioMap.save],
-        checked (shapes, ranges, its scenario); bit-exact round trip."""
+        """Reads a series written by [`save()`][rainuav.radio.outputs.timemap.RadioMapSeries.save].
+
+        The file is checked (shapes, ranges, its scenario); the round trip is bit-exact.
+
+        Args:
+            path: The .npz file.
+
+        Returns:
+            The [`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries].
+
+        Raises:
+            InvalidInputError: A file that is missing or not a series, or whose arrays are
+                inconsistent.
+        """
         return _load(path)
 
     def at(self, t_s: float) -> RadioMap:
-        """The static map at ``t_s``: each cell's received power interpolated linearly in dB
-        between the two slices around ``t_s`` (held beyond the first and the last), then
-        serving cell, SIR and SINR from those powers; at a slice's own instant, that slice."""
+        """The map of one instant, interpolated between the slices around it.
+
+        Each cell's received power is interpolated linearly in dB between the two slices around
+        `t_s` (held beyond the first and the last), then the serving cell, SIR and SINR are computed
+        from those powers. At a slice's own instant it is that slice.
+
+        Args:
+            t_s: Time, s.
+
+        Returns:
+            A [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap].
+
+        Raises:
+            InvalidInputError: `t_s` is not finite.
+        """
         t = as_real_scalar("t_s", t_s)
         if not math.isfinite(t):
             raise InvalidInputError(f"t_s must be finite (got {t_s!r})")

@@ -48,6 +48,15 @@ class Area:
     maps each)."""
 
     def check(self, where: str = "area") -> None:
+        """Checks the area's bounds, resolution and flight levels.
+
+        Args:
+            where: The name the error gives the area ("area", or "scenario.area").
+
+        Raises:
+            InvalidInputError: A bound, resolution or level outside its range, named as
+                `where.FIELD`, or a map of more than 4e7 pixels.
+        """
         for k in ("x_min_m", "x_max_m", "y_min_m", "y_max_m"):
             _num(f"{where}.{k}", getattr(self, k), -1e6, 1e6, " m")
         if not self.x_max_m > self.x_min_m:
@@ -125,7 +134,12 @@ class Area:
         return h, w
 
     def centres(self) -> tuple[np.ndarray, np.ndarray]:
-        """The pixel centres: east coordinates (W,) and north coordinates (H,), m."""
+        """The pixel centres.
+
+        Returns:
+            `(east, north)`: the east coordinates (W,) and the north coordinates (H,) of the pixel
+            centres, m.
+        """
         h, w = self.shape
         x = self.x_min_m + (np.arange(w) + 0.5) * (self.x_max_m - self.x_min_m) / w
         y = self.y_min_m + (np.arange(h) + 0.5) * (self.y_max_m - self.y_min_m) / h

@@ -97,6 +97,15 @@ class Cell:
             self.antenna = "table"  # scenarios written before antennas had a kind
 
     def check(self, where: str) -> None:
+        """Checks the cell's site, antenna and power.
+
+        Args:
+            where: The name the error gives the cell (e.g. "cells[3]").
+
+        Raises:
+            InvalidInputError: A field outside its range, named as `where.FIELD`, or an antenna
+                table of the wrong shape.
+        """
         _num(f"{where}.azimuth_deg", self.azimuth_deg, -360.0, 360.0, " degrees")
         _num(f"{where}.tilt_deg", self.tilt_deg, -45.0, 45.0, " degrees")
         _choice(f"{where}.antenna", self.antenna, ANTENNAS)
@@ -137,7 +146,11 @@ class Cell:
         return self.beamwidth_deg, v
 
     def key(self) -> tuple[Any, ...]:
-        """What the pattern depends on (cells with equal keys share one pattern object)."""
+        """What the cell's antenna pattern depends on.
+
+        Returns:
+            A tuple of the pattern's parameters: cells with equal keys share one pattern object.
+        """
         if self.antenna == "gaussian":
             return ("gaussian", *self.beamwidths_deg, self.floor_db)
         if self.antenna == "tr38901":

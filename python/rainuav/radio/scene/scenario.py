@@ -36,6 +36,7 @@ from rainuav.geo import Georef
 from rainuav.radio.engines import ENGINES as _ENGINES
 from rainuav.radio.scene.area import DEFAULT_MIN_CLEARANCE_M, Area, FootprintsFile, TerrainFile
 from rainuav.radio.scene.cell import Cell, Pattern
+from rainuav.radio.scene.parts import Building, Origin, PESettings, Site
 from rainuav.radio.scene.stochastic import StochasticRain
 from rainuav.radio.scene.weather import Medium, RainCell
 
@@ -62,78 +63,6 @@ __all__ = [
     "Site",
     "TerrainFile",
 ]
-
-
-@dataclass
-class Site:
-    """A base-station site: a mast with one or more cells."""
-
-    x_m: float
-    """East coordinate, m."""
-    y_m: float
-    """North coordinate, m."""
-    height_m: float = 25.0
-    """Antenna height above the ground, m (the paper's 25)."""
-    cells: list[Cell] = field(default_factory=lambda: [Cell()])
-    """The site's cells (sectors)."""
-
-
-@dataclass
-class Building:
-    """A box-shaped building standing on the ground."""
-
-    x0_m: float
-    """West face, m."""
-    x1_m: float
-    """East face, m."""
-    y0_m: float
-    """South face, m."""
-    y1_m: float
-    """North face, m."""
-    height_m: float
-    """Roof height, m."""
-
-
-@dataclass
-class PESettings:
-    """How each cell's parabolic-equation march is gridded ([physics reference, section
-    4][4-the-split-step-parabolic-equation])."""
-
-    dynamic_range_db: float = 40.0
-    """The grid resolves every direction where the beam is within this many dB of its peak."""
-    absorber: float = 0.15
-    """Fraction of each open edge of the domain given to the absorbing taper."""
-    dz_m: float | None = None
-    """Range step, m (default: min(resolution_m, 10))."""
-    top_margin_m: float | None = None
-    """Height above max(flight altitude, site) kept inside the domain (default:
-    max(50, altitude / 2))."""
-    propagator: str = "wide"
-    """'wide' or 'narrow'."""
-    budget_gpoints: float = 1.0
-    """Largest march per cell the hybrid and PE engines may run, in 1e9 grid-point steps
-    (nx x ny x steps): the PE's cone is the pattern's ``dynamic_range_db`` cone, narrowed
-    until the march fits (about 10 s per 1e9 on 2 cores). Raise it to widen the cone."""
-
-    def check(self, where: str = "pe") -> None:
-        _num(f"{where}.dynamic_range_db", self.dynamic_range_db, 10.0, 120.0, " dB")
-        _num(f"{where}.absorber", self.absorber, 0.05, 0.4)
-        if self.dz_m is not None:
-            _num(f"{where}.dz_m", self.dz_m, 0.01, 1000.0, " m")
-        if self.top_margin_m is not None:
-            _num(f"{where}.top_margin_m", self.top_margin_m, 1.0, 1e4, " m")
-        _choice(f"{where}.propagator", self.propagator, ("wide", "narrow"))
-        _num(f"{where}.budget_gpoints", self.budget_gpoints, 1e-3, 1e3, " (1e9 grid-point steps)")
-
-
-@dataclass
-class Origin:
-    """The latitude and longitude (degrees, WGS 84) of a scenario's (0, 0)."""
-
-    lat_deg: float = 0.0
-    """Degrees north (|lat| <= 85)."""
-    lon_deg: float = 0.0
-    """Degrees east (-180..180)."""
 
 
 @dataclass
@@ -288,14 +217,28 @@ class Scenario:
 
     # -- identity ---------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """A plain dict (TOML/JSON-ready; None fields dropped)."""
+        """The scenario as plain data.
+
+        Returns:
+            A dict of its fields (TOML- and JSON-ready; None fields dropped).
+        """
 
         return plain(self)
 
     def digest(self) -> str:
-        """A hash of every field (two scenarios with the same digest describe the same network,
-        weather and airspace). The radio-map cache keys on it together with the engine's fingerprint
-        ([`rainuav.radio.outputs.cache.engine_fingerprint()`][rainuav.radio.outputs.cache.engine_fingerprint])."""
+        """A hash of every field.
+
+        Two scenarios with the same digest describe the same network, weather and airspace. The
+        radio-map cache keys on it together with the engine's fingerprint
+        ([`engine_fingerprint()`][rainuav.radio.outputs.cache.engine_fingerprint]). A terrain or
+        footprints file enters by its content.
+
+        Returns:
+            The digest, as hexadecimal text.
+
+        Raises:
+            InvalidInputError: A terrain or footprints file that cannot be read.
+        """
         d = _digest_form(self)
         if self.terrain is not None:
             # The map follows the DEM's contents, not its name.
@@ -325,22 +268,56 @@ class Scenario:
 
     # -- TOML -------------------------------------------------------------------------------
     def to_toml(self, path: str | Path) -> Path:
-        """Writes the scenario as TOML (atomically)."""
+        """Writes the scenario as TOML, atomically.
+
+        Args:
+            path: The file to write.
+
+        Returns:
+            The path written.
+        """
         text = tomli_w.dumps(self.to_dict())
         return write_atomic(path, lambda tmp: tmp.write_text(text))
 
     def to_toml_string(self) -> str:
+        """The scenario as TOML text.
+
+        Returns:
+            What [`to_toml()`][rainuav.radio.scene.scenario.Scenario.to_toml] writes.
+        """
         return tomli_w.dumps(self.to_dict())
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Scenario:
-        """Builds and validates a scenario from a plain dict (unknown keys are errors)."""
+        """Builds a scenario from plain data, validated.
+
+        Args:
+            d: A dict of fields, as [`to_dict()`][rainuav.radio.scene.scenario.Scenario.to_dict]
+                gives (nested tables as dicts).
+
+        Returns:
+            The [`Scenario`][rainuav.radio.scene.scenario.Scenario].
+
+        Raises:
+            InvalidInputError: An unknown key, or a field of the wrong kind or outside its range
+                (named).
+        """
         return _build(cls, d, "scenario")
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Scenario:
-        """Reads and validates a TOML scenario (a missing, unreadable or malformed file is an
-        InvalidInputError naming it)."""
+        """Reads a scenario from a TOML file, validated.
+
+        Args:
+            path: The file.
+
+        Returns:
+            The [`Scenario`][rainuav.radio.scene.scenario.Scenario].
+
+        Raises:
+            InvalidInputError: A missing, unreadable or malformed file (named), or a field out of
+                range.
+        """
         d = read_toml(path, "scenario file")
         for key in ("terrain", "footprints"):
             t = d.get(key)
@@ -350,7 +327,17 @@ class Scenario:
 
     @classmethod
     def from_toml_string(cls, text: str) -> Scenario:
-        """Reads and validates a TOML scenario from a string."""
+        """Reads a scenario from TOML text, validated.
+
+        Args:
+            text: The scenario as TOML.
+
+        Returns:
+            The [`Scenario`][rainuav.radio.scene.scenario.Scenario].
+
+        Raises:
+            InvalidInputError: Text that is not TOML, an unknown key, or a field out of range.
+        """
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as err:
@@ -367,7 +354,14 @@ class Scenario:
         return Georef(self.origin.lat_deg, self.origin.lon_deg)
 
     def replace(self, **changes: Any) -> Scenario:
-        """A copy with fields changed (validated)."""
+        """A copy with fields changed, validated.
+
+        Args:
+            **changes: New values of fields, by name.
+
+        Returns:
+            The new [`Scenario`][rainuav.radio.scene.scenario.Scenario].
+        """
         return dataclasses.replace(self, **changes)
 
 

@@ -53,10 +53,17 @@ class RainCell:
     (positive: growing, negative: decaying; 0: steady)."""
 
     def at(self, t_s: float) -> RainCell:
-        """The cell at time ``t_s`` (s after the weather's time 0): its centre moved by the
-        velocity, its peak grown or decayed (held within the 500 mm/h the rain model covers);
-        velocity and growth are kept, so ``c.at(a).at(b)`` is ``c.at(a + b)`` (until a peak
-        reaches the bound)."""
+        """The cell at a later time: moved by its velocity, its peak grown or decayed.
+
+        The peak is held within the 500 mm/h the rain model covers. Velocity and growth are kept, so
+        `c.at(a).at(b)` is `c.at(a + b)` (until a peak reaches the bound).
+
+        Args:
+            t_s: Time after the weather's time 0, s.
+
+        Returns:
+            A new [`RainCell`][rainuav.radio.scene.weather.RainCell].
+        """
         # The exponent is capped where the peak is past the bound anyway (no overflow).
         grow = math.exp(min(t_s / self.growth_s, 700.0)) if self.growth_s else 1.0
         return dataclasses.replace(
@@ -72,7 +79,16 @@ class RainCell:
         return bool(self.vx_m_s or self.vy_m_s or self.growth_s)
 
     def rate(self, x: Any, y: Any) -> Any:
+        """The cell's rain rate at points on the ground.
 
+        Args:
+            x: East coordinates, m (any shape).
+            y: North coordinates, m (the shape of `x`).
+
+        Returns:
+            The rate, mm/h, at each point: the peak times the profile of the distance from the
+            centre over the radius.
+        """
         d = np.hypot(np.asarray(x) - self.x_m, np.asarray(y) - self.y_m)
         if self.profile == "gaussian":
             return self.peak_rate_mm_h * np.exp(-((d / self.radius_m) ** 2))
@@ -120,9 +136,18 @@ class Medium:
     reproducing it only; rainuav.medium)."""
 
     def at(self, t_s: float) -> Medium:
-        """The weather at time ``t_s``, s: every rain cell moved and grown
-        ([`RainCell.at()`][rainuav.radio.scene.weather.RainCell.at]); the rest does not change in
-        time. A weather that does not move returns itself."""
+        """The weather at a time, every rain cell moved and grown.
+
+        The rest of the weather (model, drops, temperature, wind) does not change in time; a weather
+        that does not move returns itself.
+
+        Args:
+            t_s: Time, s.
+
+        Returns:
+            The [`Medium`][rainuav.radio.scene.weather.Medium] at `t_s` (each cell as
+            [`RainCell.at()`][rainuav.radio.scene.weather.RainCell.at] gives it).
+        """
         t = _num("t_s", t_s, -1e6, 1e6, " s")
         if self.kind == "map" and self.rate_times_s is not None:
             return self._map_at(t, *self._rate_maps())
@@ -133,8 +158,12 @@ class Medium:
         return dataclasses.replace(self, cells=[c.at(t) for c in self.cells])
 
     def clock(self) -> Callable[[float], Medium]:
-        """[`at()`][rainuav.radio.scene.weather.Medium.at] for many instants of one weather: a
-        rate map in time is read into an array once, not at every instant."""
+        """[`at()`][rainuav.radio.scene.weather.Medium.at] for many instants of one weather.
+
+        Returns:
+            A function of the time, s, giving the weather then; a rate map in time is read into an
+            array once, not at every instant.
+        """
         if self.kind != "map" or self.rate_times_s is None:
             return self.at
         times, maps = self._rate_maps()
@@ -172,8 +201,16 @@ class Medium:
         return self.kind == "cells" and any(c.moves for c in self.cells)
 
     def rain_medium(self, freq_hz: float, polarization: str) -> m.RainMedium:
-        """The effective medium of this weather's rain (model, drops, temperature, wind) at
-        one frequency and polarisation, for any rain rate."""
+        """The effective medium of this weather's rain at one frequency and polarisation.
+
+        Args:
+            freq_hz: Carrier frequency, Hz.
+            polarization: "H" or "V".
+
+        Returns:
+            A [`RainMedium`][rainuav.medium.RainMedium] of this weather's model, drops, temperature
+            and wind, for any rain rate.
+        """
         return m.RainMedium(
             freq_hz,
             model=self.model,  # type: ignore[arg-type]
@@ -186,7 +223,16 @@ class Medium:
         )
 
     def check(self, where: str = "medium") -> None:
+        """Checks the weather: its kind and every field the kind reads.
 
+        Args:
+            where: The name the error gives the weather ("medium", or "scenario.medium").
+
+        Raises:
+            InvalidInputError: A field outside its range, named as `where.FIELD`: a kind without the
+                fields it needs, a cell faster or growing faster than the model allows, a rate map
+                of the wrong shape or outside 0-500 mm/h.
+        """
         _choice(f"{where}.kind", self.kind, ("clear", "homogeneous", "cells", "map", "field"))
         if (self.kind == "field") != (self.field is not None):
             raise InvalidInputError(f"{where}.field is required with kind 'field' (and only then)")
