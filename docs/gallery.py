@@ -21,7 +21,8 @@ EXAMPLES = ROOT / "examples" / "gallery"
 FIGURES = ROOT / "docs" / "gallery"
 PAGE = ROOT / "docs" / "gallery.md"
 ORDER = ("rain_against_p838", "pe_gaussian_beam", "map_in_rain", "outage_by_height",
-         "storm_that_moves", "exact_plan", "osm_footprints", "mission_over_terrain")  # fmt: skip
+         "storm_that_moves", "exact_plan", "study_rain_sweep", "osm_footprints",
+         "mission_over_terrain", "handed_over_run")  # fmt: skip
 """The examples, in the order the page shows them (every script of the folder, checked)."""
 
 

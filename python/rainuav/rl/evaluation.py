@@ -299,6 +299,8 @@ def evaluate_saved_run(
         if world is not None:
             env = world.env()
     except InvalidInputError as err:
+        if own and str(run) in str(err):  # the run's own map file, named already
+            raise
         if own:  # the run's own map file: name it (a damaged map, or one of another place)
             raise InvalidInputError(f"{run / 'radiomap.npz'}: refused: {err}") from err
         where = run / "config.toml"
