@@ -34,9 +34,10 @@ def scripts() -> list[Path]:
 
 
 def _anchor(title: str) -> str:
-    """The heading's id, as the table of contents makes it."""
-    keep = "".join(ch if ch.isalnum() or ch in " -_" else "" for ch in title.lower())
-    return "-".join(keep.split())
+    """The heading's id, as the site's table of contents makes it (Python-Markdown's own)."""
+    from markdown.extensions.toc import slugify
+
+    return slugify(title, "-")
 
 
 def page() -> str:

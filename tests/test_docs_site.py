@@ -151,6 +151,13 @@ def test_a_summary_is_the_whole_first_sentence() -> None:
     one = "One line.\nThen another line."
     assert hook.with_summary_line(one) == one  # the first line is the sentence already
     assert hook.with_summary_line("One line. Then another\nline.") == one
+    # A sentence that starts with a code span is prose too; a list or a table is not.
+    code = "``action`` as an int if it is one\ninteger (a Python one). More."
+    assert hook.with_summary_line(code).split("\n")[0] == (
+        "``action`` as an int if it is one integer (a Python one)."
+    )
+    listed = "- one item\n  goes on. Here."
+    assert hook.with_summary_line(listed) == listed
 
 
 def test_a_gallery_notebook_runs_as_a_kernel_would_run_it(tmp_path) -> None:

@@ -162,7 +162,7 @@ def test_learning_among_levels_end_to_end(tmp_path: Path) -> None:
     # level). The bands hold every seed: success at least 0.2 (an untrained network arrives
     # from none of the starts), excess cost from 0 (no flight beats the exact optimum) to
     # 0.95 of the straight line's. The straight line learns nothing: its figure is exact.
-    # The learner's real measure is the `uma` runs of docs/guide/altitude.md.
+    # The learner's real measure is the `uma` runs of docs/record/altitude.md.
     cfg = dataclasses.replace(small_cfg(tmp_path, EPISODES), eval_starts=30, validate_every=100)
     m = train(cfg, world(cfg), progress=False)
     assert 0.2 <= m["success_rate"] <= 1.0, m

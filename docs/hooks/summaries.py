@@ -43,7 +43,7 @@ def with_summary_line(doc: str) -> str:
     head, sep, rest = doc.partition("\n\n")
     first = first_sentence(head)
     joined = " ".join(line.strip() for line in head.splitlines())
-    if head.split("\n", 1)[0].strip() == first or head.lstrip().startswith(("-", "|", "`")):
+    if head.split("\n", 1)[0].strip() == first or head.lstrip().startswith(("- ", "* ", "|", "```")):
         return doc  # the first line is the sentence already, or the paragraph is no prose
     rest_of_head = joined[len(first) :].strip()
     return first + ("\n" + rest_of_head if rest_of_head else "") + sep + rest

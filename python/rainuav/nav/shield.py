@@ -4,7 +4,7 @@ Rule 1 ([`BatchStepper.safe_actions()`][rainuav.nav.batch.BatchStepper.safe_acti
 after which the UAV is still in the area and can still arrive within ``max_steps``. Rule 2: among
 those, moves onto a position the flight has not visited, where one exists. The shield is a safety
 layer around a policy, not part of it: metrics report the policy alone first (see
-``docs/guide/learning.md``)."""
+``docs/record/learning.md``)."""
 
 from __future__ import annotations
 

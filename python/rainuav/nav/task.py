@@ -114,9 +114,17 @@ class NavConfig:
 
 
 def check_task(cfg: NavConfig, prefix: str = "") -> None:
-    """Raises InvalidInputError naming (after ``prefix``) the first field of ``cfg`` of the
-    wrong kind or out of its range, whatever the map (the area's bounds:
-    [`check_config()`][rainuav.nav.task.check_config])."""
+    """Checks a task's fields, whatever the map.
+
+    The area's bounds are checked by [`check_config()`][rainuav.nav.task.check_config].
+
+    Args:
+        cfg: The task.
+        prefix: What the error puts before a field's name (e.g. "task.").
+
+    Raises:
+        InvalidInputError: The first field of the wrong kind or out of its range, named.
+    """
     for name in ("goal_m", "start_m"):
         v = getattr(cfg, name)
         if name == "start_m" and v is None:
@@ -149,9 +157,17 @@ def check_task(cfg: NavConfig, prefix: str = "") -> None:
 def check_config(
     cfg: NavConfig, extent: tuple[float, float, float, float], prefix: str = ""
 ) -> None:
-    """Raises InvalidInputError naming (after ``prefix``) the first field of ``cfg`` out of range
-    for a map over ``extent`` ([`check_task()`][rainuav.nav.task.check_task], then the points
-    inside the area)."""
+    """Checks a task for a map over an area: its fields, then its points inside the area.
+
+    Args:
+        cfg: The task.
+        extent: The map's `(x_min, x_max, y_min, y_max)`, m.
+        prefix: What the error puts before a field's name (e.g. "task.").
+
+    Raises:
+        InvalidInputError: The first field out of range, named (a destination or start outside the
+            area among them).
+    """
     x0, x1, y0, y1 = extent
     check_task(cfg, prefix)
     g = cfg.goal_m
@@ -213,8 +229,18 @@ def flight_cost(returns: Any, arrived: Any, cfg: NavConfig) -> Any:
 
 
 def make_config(base: NavConfig | None = None, **kw: Any) -> NavConfig:
-    """A NavConfig from keywords, over ``base``'s fields where given (else the defaults);
-    unknown names are errors."""
+    """A task from keywords, over a base task's fields.
+
+    Args:
+        base: The task whose fields the keywords replace; None: the defaults.
+        **kw: Fields of [`NavConfig`][rainuav.nav.task.NavConfig], by name.
+
+    Returns:
+        The new [`NavConfig`][rainuav.nav.task.NavConfig].
+
+    Raises:
+        InvalidInputError: An unknown field name.
+    """
     names = {f.name for f in dataclasses.fields(NavConfig)}
     bad = set(kw) - names
     if bad:
@@ -223,10 +249,21 @@ def make_config(base: NavConfig | None = None, **kw: Any) -> NavConfig:
 
 
 def check_action(action: Any, n: int = 4) -> int:
-    """``action`` as an int if it is one integer in ``0..n-1`` (a Python or numpy integer, or a
-    0-d integer array, as Gymnasium's ``Discrete(n)`` holds); anything else (a float such as
-    1.7, a string, a bool) raises [`InvalidInputError`][rainuav.errors.InvalidInputError], never a
-    silent rounding."""
+    """An action as an int, if it is one integer of the action space.
+
+    A Python or numpy integer, or a 0-d integer array, is taken as Gymnasium's `Discrete(n)` holds
+    it; anything else is refused, never silently rounded.
+
+    Args:
+        action: The action given.
+        n: The number of actions (4 on one level, 6 among levels).
+
+    Returns:
+        The action, in `0..n-1`.
+
+    Raises:
+        InvalidInputError: A float such as 1.7, a string, a bool, or an integer out of range.
+    """
     a = np.asarray(action) if isinstance(action, np.ndarray) else action
     if isinstance(a, np.ndarray):
         ok = a.shape == () and np.issubdtype(a.dtype, np.integer)

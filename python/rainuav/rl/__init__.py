@@ -2,7 +2,7 @@
 ([`config`][rainuav.rl.config]), what it learns from ([`learner`][rainuav.rl.learner]), flights
 ([`collect`][rainuav.rl.collect]), measurement ([`evaluation`][rainuav.rl.evaluation]), the training
 loop ([`loop`][rainuav.rl.loop]) and its figures ([`plots`][rainuav.rl.plots]). The design choices
-and what they measured: ``docs/guide/learning.md``."""
+and what they measured: ``docs/record/learning.md``."""
 
 from __future__ import annotations
 

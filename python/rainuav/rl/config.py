@@ -135,7 +135,7 @@ class TrainConfig(WorldSpec):
     CLI flag."""
 
     preset: str = ""
-    """The preset the run starts from: '' (the defaults: the tuned learner, docs/guide/learning.md),
+    """The preset the run starts from: '' (the tuned defaults: docs/record/learning.md),
     a preset shipped with the package ('paper': Algorithm 1 and Table I literally; 'storms';
     'storm-levels') or a TOML file of fields; the fields given beside it win
     ([`resolve_config()`][rainuav.rl.config.resolve_config])."""

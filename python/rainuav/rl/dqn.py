@@ -4,7 +4,7 @@ Reads top to bottom: the double-Q target, the memory a run needs, and the agent 
 learn, sync); the networks are [`rainuav.rl.networks`][rainuav.rl.networks], the N-step window and
 the replay memory [`rainuav.rl.replay`][rainuav.rl.replay]. Hyperparameters:
 [`DQNConfig`][rainuav.rl.config.DQNConfig]. Every choice beyond the paper's Table I, and what it
-measured, is in ``docs/guide/learning.md``."""
+measured, is in ``docs/record/learning.md``."""
 
 from __future__ import annotations
 

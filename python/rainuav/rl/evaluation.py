@@ -119,7 +119,7 @@ class Validation:
     of (episodes, success, mean excess cost over the optimum) and the online weights with the
     best score are kept (highest success, then lowest mean excess cost: ``score``). With
     ``keep_best`` those weights are the run's result (early stopping; when that pays:
-    ``docs/guide/learning.md``)."""
+    ``docs/record/learning.md``)."""
 
     starts: np.ndarray
     optimum: dict[str, np.ndarray]

@@ -5,7 +5,7 @@ A share of the training flights starts near the destination
 ([`training_start()`][rainuav.rl.learner.training_start]). The environment's reward with its SIR
 part weighted ([`learning_reward()`][rainuav.rl.learner.learning_reward]), plus potential-based
 shaping by the straight-line value ([`shaping_term()`][rainuav.rl.learner.shaping_term]). Why each,
-and what it measured: ``docs/guide/learning.md``."""
+and what it measured: ``docs/record/learning.md``."""
 
 from __future__ import annotations
 
@@ -73,7 +73,7 @@ def training_start(env: UAVNavEnv, d: DQNConfig, rng: np.random.Generator) -> np
     Flights from uniform starts reach the destination's neighbourhood once each, at their
     last move, and late in training almost greedily: the moves into the arrival disc from the
     side a network gets wrong are then hardly ever tried, and a final network can circle
-    one move from the goal (docs/guide/learning.md). Starting a quarter of the flights near it
+    one move from the goal (docs/record/learning.md). Starting a quarter of the flights near it
     gives those moves their own experience. Only a start is chosen: the flight, its rewards
     and the task are the environment's, and nothing here knows the radio map."""
     if d.goal_starts == 0.0 or rng.random() >= d.goal_starts:
@@ -118,7 +118,7 @@ def learning_reward(
     the destination reward on top of its -1, several times the undiscounted price of a move at gamma
     0.998. Weighting the SIR part up restores the balance of the undiscounted return the policy is
     judged by; a position-only policy then loops from a few starts, which the shield breaks (1.25 by
-    default; see ``docs/guide/learning.md``). ``goal`` (N, 2): each UAV's destination (default: the
+    default; see ``docs/record/learning.md``). ``goal`` (N, 2): each UAV's destination (default: the
     task's). Among levels the shaping's potential is the plane's (the moves still needed on the
     lattice, whatever the level): a potential of the state, so the optimum is kept."""
     reward = r["reward"]

@@ -156,7 +156,7 @@ class WeatherQNet(DuelingQNet):
     observation holds (nothing the env does not show), fed to the body and, through one weight per
     feature shared by the moves, straight into the advantage: where destinations are drawn per
     flight the arrival disc is met at any offset from the lattice, and a network that must find the
-    disc's edge from its other inputs circles it (docs/guide/learning.md)."""
+    disc's edge from its other inputs circles it (docs/record/learning.md)."""
 
     def __init__(
         self,
