@@ -65,8 +65,16 @@ FRONT_DOOR = (
     "rainuav.rl",
     "rainuav.studies",
     "rainuav.ground",
+    "rainuav.medium",
+    "rainuav.antenna",
+    "rainuav.geo",
+    "rainuav.signals",
+    "rainuav.missions",
+    "rainuav.radio.outputs.levelmaps",
 )
-"""The packages whose ``__all__`` is what a user imports first (the README's and the guide's)."""
+"""The packages whose ``__all__`` is what a user imports first (the README's and the guide's), and
+the modules the guide's pages call by name (the rain medium, antennas, coordinates, signals,
+missions, maps at several heights)."""
 
 
 def _front_door() -> dict[str, object]:
@@ -88,7 +96,11 @@ def _front_door() -> dict[str, object]:
                         continue
                     for key, member in vars(klass).items():
                         fn = getattr(member, "__func__", member)  # class and static methods
-                        init = key == "__init__" and not dataclasses.is_dataclass(klass)
+                        init = (  # a class's own constructor (not a dataclass's or Protocol's)
+                            key == "__init__"
+                            and not dataclasses.is_dataclass(klass)
+                            and getattr(fn, "__qualname__", "").startswith(klass.__name__)
+                        )
                         if inspect.isfunction(fn) and (not key.startswith("_") or init):
                             found.setdefault(f"{pkg}.{name}.{key}", fn)
     return found

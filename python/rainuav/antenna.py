@@ -54,7 +54,17 @@ _FLOOR_LINEAR = 1e-20
 class Pattern(Protocol):
     """Anything with a vectorised ``gain_dbi(azimuth_deg, elevation_deg)``."""
 
-    def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray: ...
+    def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+        """The gain toward directions, dBi.
+
+        Args:
+            azimuth_deg: Azimuths from the boresight, degrees.
+            elevation_deg: Elevations, degrees (broadcasts with `azimuth_deg`).
+
+        Returns:
+            The gain, dBi, of the broadcast shape.
+        """
+        ...
 
 
 def _angles(azimuth_deg: Any, elevation_deg: Any) -> tuple[FloatArray, FloatArray]:
@@ -74,9 +84,18 @@ def _angles(azimuth_deg: Any, elevation_deg: Any) -> tuple[FloatArray, FloatArra
 
 
 def sphere_mean(pattern: Pattern, n: int = 720) -> float:
-    """Mean linear gain of ``pattern`` over the sphere, ``(1 / 4 pi) integral G dOmega``:
-    Gauss-Legendre in ``sin(elevation)`` (``n`` nodes) times the periodic trapezoid rule in
-    azimuth (``2 n`` nodes), exact for smooth patterns to far below 1e-3 at the default."""
+    """The mean linear gain of a pattern over the sphere, `(1 / 4 pi) integral G dOmega`.
+
+    Gauss-Legendre in `sin(elevation)` (`n` nodes) times the periodic trapezoid rule in azimuth (`2
+    n` nodes): exact for smooth patterns to far below 1e-3 at the default.
+
+    Args:
+        pattern: The pattern.
+        n: Nodes in elevation.
+
+    Returns:
+        The mean gain (1 for an isotropic or lossless normalised pattern).
+    """
     u, w = np.polynomial.legendre.leggauss(n)
     el = np.degrees(np.arcsin(u))
     az = -180.0 + 360.0 * (np.arange(2 * n) + 0.5) / (2 * n)
@@ -106,6 +125,15 @@ class TR38901Element:
         _num("a_max_db", self.a_max_db, 0.0, 100.0, " dB")
 
     def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+        """The element's gain toward directions, dBi (TR 38.901 Table 7.3-1).
+
+        Args:
+            azimuth_deg: Azimuths from the boresight, degrees.
+            elevation_deg: Elevations, degrees (broadcasts with `azimuth_deg`).
+
+        Returns:
+            The gain, dBi, of the broadcast shape.
+        """
         ph, el = _angles(azimuth_deg, elevation_deg)
         a_v = -np.minimum(12.0 * (el / self.hpbw_v_deg) ** 2, self.sla_v_db)
         a_h = -np.minimum(12.0 * (ph / self.hpbw_h_deg) ** 2, self.a_max_db)
@@ -113,8 +141,15 @@ class TR38901Element:
 
 
 def tr38901_element(**overrides: float) -> TR38901Element:
-    """The TR 38.901 sector element (65 degree widths, SLA_V 30 dB, A_max 30 dB, 8 dBi); keyword
-    overrides change a parameter."""
+    """The TR 38.901 sector element (65 degree widths, SLA_V 30 dB, A_max 30 dB, 8 dBi).
+
+    Args:
+        **overrides: Parameters to change, by name (`g_max_dbi`, `hpbw_h_deg`, `hpbw_v_deg`,
+            `sla_v_db`, `a_max_db`).
+
+    Returns:
+        The [`TR38901Element`][rainuav.antenna.TR38901Element].
+    """
     return TR38901Element(**overrides)
 
 
@@ -160,7 +195,15 @@ class UniformArray:
         object.__setattr__(self, "norm_db", -10.0 * math.log10(sphere_mean(self)))
 
     def array_gain_db(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
-        """``10 log10(|AF_v|^2 |AF_h|^2)`` (peak ``10 log10(rows x columns)``)."""
+        """The array factor's gain, `10 log10(|AF_v|^2 |AF_h|^2)` (peak `10 log10(rows x columns)`).
+
+        Args:
+            azimuth_deg: Azimuths from the boresight, degrees.
+            elevation_deg: Elevations, degrees (broadcasts with `azimuth_deg`).
+
+        Returns:
+            dB, of the broadcast shape.
+        """
         ph, el = _angles(azimuth_deg, elevation_deg)
         e, p = np.radians(el), np.radians(ph)
         sin_e0 = math.sin(math.radians(self.electrical_tilt_deg))
@@ -172,6 +215,15 @@ class UniformArray:
         return 10.0 * np.log10(np.maximum(af, _FLOOR_LINEAR))
 
     def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+        """The array's gain toward directions, dBi: the element's and the array factor's.
+
+        Args:
+            azimuth_deg: Azimuths from the boresight, degrees.
+            elevation_deg: Elevations, degrees (broadcasts with `azimuth_deg`).
+
+        Returns:
+            The gain, dBi, of the broadcast shape.
+        """
         return (
             self.element.gain_dbi(azimuth_deg, elevation_deg)
             + self.array_gain_db(azimuth_deg, elevation_deg)
@@ -188,8 +240,19 @@ def uniform_array(
     column_spacing: float = 0.5,
     element: TR38901Element | None = None,
 ) -> UniformArray:
-    """A uniform array of TR 38.901 elements (defaults: 8 rows at half a wavelength, steered
-    10 degrees down, one column)."""
+    """A uniform array of TR 38.901 elements.
+
+    Args:
+        rows: Elements in a column.
+        spacing: The rows' spacing, wavelengths.
+        electrical_tilt_deg: The beam's steering in elevation, degrees (negative: down).
+        columns: Columns of elements.
+        column_spacing: The columns' spacing, wavelengths.
+        element: The element; None: TR 38.901's default.
+
+    Returns:
+        The [`UniformArray`][rainuav.antenna.UniformArray].
+    """
     return UniformArray(
         element=element or TR38901Element(),
         rows=rows,
@@ -232,6 +295,15 @@ class GaussianBeam:
         return 10.0 * math.log10(4 * _LN2 / (sh * sv))
 
     def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+        """The beam's gain toward directions, dBi.
+
+        Args:
+            azimuth_deg: Azimuths from the boresight, degrees.
+            elevation_deg: Elevations, degrees (broadcasts with `azimuth_deg`).
+
+        Returns:
+            The gain, dBi, of the broadcast shape.
+        """
         ph, el = _angles(azimuth_deg, elevation_deg)
         # Exponent in dB: 10 log10(exp(-4 ln2 x^2)) = -(40 ln2 / ln10) x^2 = -12.04 x^2.
         k = 40.0 * _LN2 / math.log(10.0)
@@ -250,8 +322,17 @@ def gaussian(
     tilt_deg: float = 5.0,
     floor_db: float | None = None,
 ) -> GaussianBeam:
-    """The paper's Gaussian beam (5 degrees up, 4.333 degrees wide by default); ``floor_db``
-    below the peak, or None for the pure beam."""
+    """The paper's Gaussian beam.
+
+    Args:
+        beamwidth_deg: The beam's width, degrees.
+        beamwidth_v_deg: The width in elevation, degrees; None: `beamwidth_deg`.
+        tilt_deg: The boresight's elevation, degrees (positive: up).
+        floor_db: A floor this far below the peak, dB; None: the pure beam.
+
+    Returns:
+        The [`GaussianBeam`][rainuav.antenna.GaussianBeam].
+    """
     bv = beamwidth_deg if beamwidth_v_deg is None else beamwidth_v_deg
     return GaussianBeam(beamwidth_deg, bv, tilt_deg, floor_db)
 
@@ -297,6 +378,15 @@ class TabulatedPattern:
             object.__setattr__(self, "norm_db", -10.0 * math.log10(sphere_mean(self)))
 
     def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+        """The table's gain toward directions, dBi: bilinear between nodes, its lowest gain outside.
+
+        Args:
+            azimuth_deg: Azimuths from the boresight, degrees.
+            elevation_deg: Elevations, degrees (broadcasts with `azimuth_deg`).
+
+        Returns:
+            The gain, dBi, of the broadcast shape.
+        """
         ph, el = _angles(azimuth_deg, elevation_deg)
         az, ev, g = self._table
         inside = (ph >= az[0]) & (ph <= az[-1]) & (el >= ev[0]) & (el <= ev[-1])
@@ -316,8 +406,23 @@ class TabulatedPattern:
 def tabulated(
     azimuth_deg: Any, elevation_deg: Any, gain_db: Any, *, normalise: bool = True
 ) -> TabulatedPattern:
-    """A pattern from a table ``gain_db[i][j]`` at ``(azimuth_deg[i], elevation_deg[j])``
-    (the form of [`rainuav.radio.scene.scenario.Pattern`][rainuav.radio.scene.cell.Pattern])."""
+    """A pattern from a table of gains.
+
+    Args:
+        azimuth_deg: The table's azimuths, degrees.
+        elevation_deg: The table's elevations, degrees.
+        gain_db: `gain_db[i][j]` at `(azimuth_deg[i], elevation_deg[j])` (the form of
+            [`Pattern`][rainuav.radio.scene.cell.Pattern]).
+        normalise: Take the table as relative gain, shifted so the pattern integrates to 4 pi;
+            False: as dBi.
+
+    Returns:
+        The [`TabulatedPattern`][rainuav.antenna.TabulatedPattern].
+
+    Raises:
+        InvalidInputError: A table that is not 2-D or not finite, axes that do not increase strictly
+            within their ranges, or axes that do not match the table.
+    """
 
     g = as_real_array("gain_db", gain_db)
     if g.ndim != 2:

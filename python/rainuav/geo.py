@@ -30,7 +30,14 @@ meaning at a pole, and the projection's north turns fast near one."""
 
 
 def pyproj_module() -> Any:
-    """pyproj, or a one-line error saying how to install it."""
+    """pyproj, imported where it is installed.
+
+    Returns:
+        The `pyproj` module.
+
+    Raises:
+        InvalidInputError: pyproj is not installed (the line says how to install it).
+    """
     try:
         import pyproj
     except ImportError as err:
@@ -41,15 +48,35 @@ def pyproj_module() -> Any:
 
 
 def latlon_text(lat: float, lon: float, digits: int = 5) -> str:
-    """A latitude and longitude as people read them: ``33.86880 S, 151.20930 E``."""
+    """A latitude and longitude as people read them: `33.86880 S, 151.20930 E`.
+
+    Args:
+        lat: Degrees north.
+        lon: Degrees east.
+        digits: Decimals.
+
+    Returns:
+        The text.
+    """
     ns = "N" if lat >= 0 else "S"
     ew = "E" if lon >= 0 else "W"
     return f"{abs(lat):.{digits}f} {ns}, {abs(lon):.{digits}f} {ew}"
 
 
 def check_latlon(name: str, lat: Any, lon: Any) -> tuple[np.ndarray, np.ndarray]:
-    """``lat`` and ``lon`` as float arrays, or an error naming ``name`` unless every value is
-    finite, |lat| <= 90 and |lon| <= 180 degrees."""
+    """Latitudes and longitudes as float arrays, checked.
+
+    Args:
+        name: What the error names (a field or a file's column).
+        lat: Degrees north.
+        lon: Degrees east.
+
+    Returns:
+        `(lat, lon)` as float arrays.
+
+    Raises:
+        InvalidInputError: A value that is not finite, |lat| > 90 or |lon| > 180 degrees.
+    """
     la = np.asarray(lat, dtype=np.float64)
     lo = np.asarray(lon, dtype=np.float64)
     if not (np.all(np.isfinite(la)) and np.all(np.isfinite(lo))):
@@ -103,14 +130,36 @@ class Georef:
         return cached
 
     def to_local(self, lat: Any, lon: Any, name: str = "position") -> tuple[Any, Any]:
-        """Metres east and north of the origin of the points (``lat``, ``lon``), degrees."""
+        """Metres east and north of the origin of points given in degrees.
+
+        Args:
+            lat: Latitudes, degrees.
+            lon: Longitudes, degrees.
+            name: What an error names.
+
+        Returns:
+            `(x, y)`, m east and north.
+
+        Raises:
+            InvalidInputError: Coordinates that are not finite or out of range.
+        """
         la, lo = check_latlon(name, lat, lon)
         x, y = self._transformers()[0].transform(lo, la)
         return x, y
 
     def to_latlon(self, x: Any, y: Any) -> tuple[Any, Any]:
-        """Latitude and longitude, degrees, of the points ``x`` m east and ``y`` m north of
-        the origin."""
+        """The latitude and longitude of points given in metres east and north of the origin.
+
+        Args:
+            x: Metres east.
+            y: Metres north.
+
+        Returns:
+            `(lat, lon)`, degrees.
+
+        Raises:
+            InvalidInputError: `x` or `y` not finite.
+        """
         xs, ys = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(ys))):
             raise InvalidInputError("x and y must be finite numbers of metres")
@@ -119,8 +168,17 @@ class Georef:
 
 
 def geodesic_m(lat1: Any, lon1: Any, lat2: Any, lon2: Any) -> Any:
-    """The geodesic distance on the WGS 84 ellipsoid, m (pyproj's ``Geod``: Karney's
-    algorithm), between the points (``lat1``, ``lon1``) and (``lat2``, ``lon2``), degrees."""
+    """The geodesic distance on the WGS 84 ellipsoid (pyproj's `Geod`: Karney's algorithm).
+
+    Args:
+        lat1: The first points' latitudes, degrees.
+        lon1: Their longitudes, degrees.
+        lat2: The second points' latitudes, degrees.
+        lon2: Their longitudes, degrees.
+
+    Returns:
+        The distances, m, of the broadcast shape.
+    """
     la1, lo1 = check_latlon("first point", lat1, lon1)
     la2, lo2 = check_latlon("second point", lat2, lon2)
     _, _, d = pyproj_module().Geod(ellps="WGS84").inv(lo1, la1, lo2, la2)

@@ -73,9 +73,22 @@ DsdLike = str | DropSizeDistribution
 def gamma_dsd(
     n0: float, mu: float, lambda_coeff: float, lambda_exp: float, n0_exp: float = 0.0
 ) -> DropSizeDistribution:
-    """Gamma drop-size distribution ``N = n0 R^n0_exp D^mu exp(-lambda_coeff R^lambda_exp D)``
-    (m^-3 mm^-1, D in mm, R in mm/h). ``mu = 0`` is exponential; Marshall-Palmer is
-    ``gamma_dsd(8000, 0, 4.1, -0.21)``."""
+    """A gamma drop-size distribution.
+
+    `N = n0 R^n0_exp D^mu exp(-lambda_coeff R^lambda_exp D)` in m^-3 mm^-1, D in mm, R in mm/h; `mu
+    = 0` is exponential, and Marshall-Palmer is `gamma_dsd(8000, 0, 4.1, -0.21)`.
+
+    Args:
+        n0: The intercept, m^-3 mm^-1 (times `R^n0_exp`).
+        mu: The shape parameter.
+        lambda_coeff: The slope's coefficient, mm^-1.
+        lambda_exp: The slope's exponent of the rain rate.
+        n0_exp: The intercept's exponent of the rain rate.
+
+    Returns:
+        A `DropSizeDistribution` for
+        [`effective_permittivity()`][rainuav.medium.effective_permittivity]'s `dsd`.
+    """
     return DropSizeDistribution.gamma(
         as_real_scalar("n0", n0),
         as_real_scalar("mu", mu),
@@ -86,10 +99,19 @@ def gamma_dsd(
 
 
 def tabulated_dsd(diameter_mm: ArrayLike, density: ArrayLike) -> DropSizeDistribution:
-    """A measured N(D) (m^-3 mm^-1 at increasing ``diameter_mm``), linearly interpolated and
-    zero outside the table. The table fixes the spectrum's shape; the concentration scales
-    with rain rate as ``R / table_rain_rate_mm_h``, the table's own rain rate from Atlas fall
-    speeds, so calling with that rate reproduces the table exactly."""
+    """A measured drop-size distribution, linearly interpolated and zero outside the table.
+
+    The table fixes the spectrum's shape; the concentration scales with rain rate as `R /
+    table_rain_rate_mm_h`, the table's own rain rate from Atlas fall speeds, so calling with that
+    rate reproduces the table exactly.
+
+    Args:
+        diameter_mm: Drop diameters, mm, increasing.
+        density: N(D) at each, m^-3 mm^-1.
+
+    Returns:
+        A `DropSizeDistribution`.
+    """
     d = np.ascontiguousarray(as_real_array("diameter_mm", diameter_mm).ravel())
     n = np.ascontiguousarray(as_real_array("density", density).ravel())
     return DropSizeDistribution.table(d, n)
@@ -135,15 +157,29 @@ def _shaped(values: Any, shape: tuple[int, ...]) -> Any:
 
 
 def water_permittivity(freq_hz: ArrayLike, temperature_c: ArrayLike = 20.0) -> Any:
-    """Relative permittivity of liquid water (double Debye, ITU-R P.840; ``Im <= 0``).
+    """The relative permittivity of liquid water (double Debye, ITU-R P.840; `Im <= 0`).
 
-    ``freq_hz`` within 1e9-1e12, ``temperature_c`` within 0-40; they broadcast."""
+    Args:
+        freq_hz: Frequency, 1e9-1e12 Hz.
+        temperature_c: Water temperature, 0-40 C (broadcasts with `freq_hz`).
+
+    Returns:
+        The complex permittivity, of the broadcast shape.
+    """
     shape, (f, t) = broadcast_flat(freq_hz=freq_hz, temperature_c=temperature_c)
     return _shaped(_core.water_permittivity(f, t), shape)
 
 
 def marshall_palmer(diameter_mm: ArrayLike, rain_rate_mm_h: ArrayLike) -> Any:
-    """Marshall-Palmer ``N(D) = 8000 exp(-4.1 R^-0.21 D)`` in m^-3 mm^-1 (zero for R = 0)."""
+    """Marshall-Palmer's drop-size distribution `N(D) = 8000 exp(-4.1 R^-0.21 D)`.
+
+    Args:
+        diameter_mm: Drop diameters, mm.
+        rain_rate_mm_h: Rain rate, mm/h (broadcasts with `diameter_mm`; zero for R = 0).
+
+    Returns:
+        N(D), m^-3 mm^-1.
+    """
     shape, (d, r) = broadcast_flat(diameter_mm=diameter_mm, rain_rate_mm_h=rain_rate_mm_h)
     return _shaped(NAMED_DSDS["marshall-palmer"].density(d, r), shape)
 
@@ -184,6 +220,9 @@ def effective_permittivity(
         wind_model: ``"canting"`` (drops cant by ``atan(v_wind / v_t)``; default) or
             ``"paper"`` (the paper's ``1/cos(atan(v_wind / v_t))`` factor, unbounded in strong
             wind; for reproducing the paper only).
+
+    Returns:
+        The complex permittivity, of the broadcast shape of the frequency and the rain rate.
     """
     cfg = _config(model, polarization, shape, temperature_c, wind_speed_m_s, dsd, wind_model)
     out_shape, eps, _, _ = _medium(freq_hz, rain_rate_mm_h, cfg)
@@ -202,8 +241,22 @@ def effective_index(
     dsd: DsdLike = "marshall-palmer",
     wind_model: WindModel = "canting",
 ) -> Any:
-    """Effective refractive index ``n = sqrt(eps)`` of rain (``Im n <= 0``); the keywords
-    are those of [`effective_permittivity()`][rainuav.medium.effective_permittivity]."""
+    """The effective refractive index of rain, `n = sqrt(eps)` (`Im n <= 0`).
+
+    Args:
+        freq_hz: Frequency, 1e9-1e12 Hz.
+        rain_rate_mm_h: Rain rate, 0-500 mm/h.
+        model: As [`effective_permittivity()`][rainuav.medium.effective_permittivity]'s.
+        polarization: As `effective_permittivity()`'s.
+        shape: As `effective_permittivity()`'s.
+        temperature_c: As `effective_permittivity()`'s.
+        wind_speed_m_s: As `effective_permittivity()`'s.
+        dsd: As `effective_permittivity()`'s.
+        wind_model: As `effective_permittivity()`'s.
+
+    Returns:
+        The complex index, of the broadcast shape of the frequency and the rain rate.
+    """
     cfg = _config(model, polarization, shape, temperature_c, wind_speed_m_s, dsd, wind_model)
     out_shape, _, n, _ = _medium(freq_hz, rain_rate_mm_h, cfg)
     return _shaped(n, out_shape)
@@ -221,8 +274,22 @@ def specific_attenuation(
     dsd: DsdLike = "marshall-palmer",
     wind_model: WindModel = "canting",
 ) -> Any:
-    """Specific attenuation of rain in dB/km (power): ``8685.9 k0 |Im n|``. The keywords are
-    those of [`effective_permittivity()`][rainuav.medium.effective_permittivity]."""
+    """The specific attenuation of rain, dB/km of power: `8685.9 k0 |Im n|`.
+
+    Args:
+        freq_hz: Frequency, 1e9-1e12 Hz.
+        rain_rate_mm_h: Rain rate, 0-500 mm/h.
+        model: As [`effective_permittivity()`][rainuav.medium.effective_permittivity]'s.
+        polarization: As `effective_permittivity()`'s.
+        shape: As `effective_permittivity()`'s.
+        temperature_c: As `effective_permittivity()`'s.
+        wind_speed_m_s: As `effective_permittivity()`'s.
+        dsd: As `effective_permittivity()`'s.
+        wind_model: As `effective_permittivity()`'s.
+
+    Returns:
+        dB/km, of the broadcast shape of the frequency and the rain rate.
+    """
     cfg = _config(model, polarization, shape, temperature_c, wind_speed_m_s, dsd, wind_model)
     out_shape, _, _, gamma = _medium(freq_hz, rain_rate_mm_h, cfg)
     return _shaped(gamma, out_shape)
@@ -239,11 +306,19 @@ def itu_p838(
     elevation_deg: float = 0.0,
     tilt_deg: float | None = None,
 ) -> Any:
-    """ITU-R P.838-3 specific attenuation ``k R^alpha`` in dB/km.
+    """ITU-R P.838-3's specific attenuation `k R^alpha`, dB/km.
 
-    ``polarization`` ``"h"`` is tilt 0, ``"v"`` tilt 90 and ``"average"`` tilt 45 (circular:
-    ``k = (kH + kV)/2``). ``tilt_deg``, when given, sets any linear tilt and overrides
-    ``polarization``. ``elevation_deg`` is the path elevation (-90 to 90)."""
+    Args:
+        freq_hz: Frequency, Hz (P.838's 1-1000 GHz).
+        rain_rate_mm_h: Rain rate, mm/h.
+        polarization: "h" (tilt 0), "v" (tilt 90) or "average" (tilt 45; circular: `k = (kH + kV) /
+            2`).
+        elevation_deg: The path's elevation, -90 to 90 degrees.
+        tilt_deg: Any linear polarisation tilt, degrees; overrides `polarization` when given.
+
+    Returns:
+        dB/km, of the broadcast shape of the frequency and the rain rate.
+    """
     tilt = _TILTS[check_choice("polarization", polarization, tuple(_TILTS))]
     if tilt_deg is not None:
         tilt = as_real_scalar("tilt_deg", tilt_deg)
@@ -272,6 +347,18 @@ class RainMedium:
         dsd: DsdLike = "marshall-palmer",
         wind_model: WindModel = "canting",
     ) -> None:
+        """Computes the medium's Mie amplitudes on the quadrature nodes, once.
+
+        Args:
+            freq_hz: Frequency, 1e9-1e12 Hz.
+            model: As [`effective_permittivity()`][rainuav.medium.effective_permittivity]'s.
+            polarization: As `effective_permittivity()`'s.
+            shape: As `effective_permittivity()`'s.
+            temperature_c: As `effective_permittivity()`'s.
+            wind_speed_m_s: As `effective_permittivity()`'s.
+            dsd: As `effective_permittivity()`'s.
+            wind_model: As `effective_permittivity()`'s.
+        """
         self.freq_hz = as_real_scalar("freq_hz", freq_hz)
         cfg = _config(model, polarization, shape, temperature_c, wind_speed_m_s, dsd, wind_model)
         self._kernel = _core.RainMediumKernel(self.freq_hz, cfg)
@@ -282,13 +369,34 @@ class RainMedium:
         return _shaped(eps, r.shape), _shaped(n, r.shape), _shaped(gamma, r.shape)
 
     def permittivity(self, rain_rate_mm_h: ArrayLike) -> Any:
-        """Effective relative permittivity at each rain rate."""
+        """The effective relative permittivity at each rain rate.
+
+        Args:
+            rain_rate_mm_h: Rain rates, mm/h (any shape).
+
+        Returns:
+            The complex permittivity, of the shape of `rain_rate_mm_h`.
+        """
         return self._eval(rain_rate_mm_h)[0]
 
     def refractive_index(self, rain_rate_mm_h: ArrayLike) -> Any:
-        """Effective refractive index at each rain rate."""
+        """The effective refractive index at each rain rate.
+
+        Args:
+            rain_rate_mm_h: Rain rates, mm/h (any shape).
+
+        Returns:
+            The complex index, of the shape of `rain_rate_mm_h`.
+        """
         return self._eval(rain_rate_mm_h)[1]
 
     def specific_attenuation(self, rain_rate_mm_h: ArrayLike) -> Any:
-        """Specific attenuation in dB/km at each rain rate."""
+        """The specific attenuation at each rain rate, dB/km.
+
+        Args:
+            rain_rate_mm_h: Rain rates, mm/h (any shape).
+
+        Returns:
+            dB/km, of the shape of `rain_rate_mm_h`.
+        """
         return self._eval(rain_rate_mm_h)[2]

@@ -65,9 +65,19 @@ LATLON = ("lat", "lon")
 
 
 def corners(path: Any) -> np.ndarray:
-    """Indices of the vertices of ``path`` (T+1, 2), or (T+1, 3) with a height, where the
-    direction of the next move differs from the last one's, with the first and the last
-    vertex: the waypoints that fly the same path (a change of height is a corner too)."""
+    """The vertices of a lattice path where its direction changes: the waypoints that fly it.
+
+    The first and the last vertex are among them; a change of height is a corner too.
+
+    Args:
+        path: The path's vertices (T+1, 2), or (T+1, 3) with a height.
+
+    Returns:
+        The corners' indices into `path`.
+
+    Raises:
+        InvalidInputError: A path that is not a finite (T+1, 2) or (T+1, 3) array.
+    """
     p = np.asarray(path, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] not in (2, 3) or len(p) < 1 or not np.all(np.isfinite(p)):
         raise InvalidInputError(f"path must be a finite (T+1, 2) or (T+1, 3) array (got {p.shape})")
@@ -80,9 +90,18 @@ def corners(path: Any) -> np.ndarray:
 
 
 def expand(points: Any, step_m: float) -> np.ndarray:
-    """The lattice path that flies straight between ``points`` (K, 2) in moves of ``step_m`` (each
-    leg a whole number of moves along one axis, as [`corners()`][rainuav.missions.corners] leaves
-    them)."""
+    """The lattice path that flies straight between points in moves of one step.
+
+    Each leg is a whole number of moves along one axis, as [`corners()`][rainuav.missions.corners]
+    leaves them.
+
+    Args:
+        points: The waypoints (K, 2), m.
+        step_m: The move, m.
+
+    Returns:
+        The path's vertices (T+1, 2), m.
+    """
     pts = np.asarray(points, dtype=np.float64)
     out = [pts[0]]
     for a, b in itertools.pairwise(pts):
@@ -102,8 +121,16 @@ SAMPLES_PER_MOVE = 4
 
 
 def densify(path: Any, step_m: float, samples: int = SAMPLES_PER_MOVE) -> np.ndarray:
-    """The lattice path ``path`` (T+1, 2 or 3; moves of ``step_m``) with ``samples`` points a
-    move: the same straight legs, sampled finely enough to check against the ground."""
+    """A lattice path sampled finely enough to check against the ground: the same straight legs.
+
+    Args:
+        path: The path (T+1, 2 or 3), in moves of `step_m`.
+        step_m: The move, m.
+        samples: Points a move.
+
+    Returns:
+        The sampled path (T samples + 1, of `path`'s columns).
+    """
     p = np.asarray(path, dtype=np.float64)
     if len(p) < 2:
         return p.copy()
@@ -117,13 +144,27 @@ def terrain_waypoints(
     clearance_m: float,
     hold_m: float | None = HOLD_M,
 ) -> np.ndarray:
-    """Indices of the waypoints that fly ``path`` (N, 2 or 3) over terrain: its corners
-    ([`corners()`][rainuav.missions.corners]), and within each straight leg as few more as keep the
-    straight line between two waypoints' heights (``height_amsl_m`` (N,), the planned flight height
-    over each vertex) within ``hold_m`` of the planned height (None: any) and at least
-    ``clearance_m`` above ``top_amsl_m`` (N,), the highest terrain or obstacle under each vertex
-    (greedy: each waypoint as far along the leg as the checks allow). Give a path sampled finely
-    ([`densify()`][rainuav.missions.densify]): the checks are at its vertices."""
+    """The waypoints that fly a path over terrain: its corners, and as few more as the ground asks.
+
+    Within each straight leg, as few more waypoints as keep the straight line between two waypoints'
+    heights within `hold_m` of the planned height and at least `clearance_m` above the highest
+    terrain or obstacle under each vertex (greedy: each waypoint as far along the leg as the checks
+    allow). Give a path sampled finely ([`densify()`][rainuav.missions.densify]): the checks are at
+    its vertices.
+
+    Args:
+        path: The path (N, 2 or 3), m.
+        height_amsl_m: The planned flight height over each vertex (N,), m above mean sea level.
+        top_amsl_m: The highest terrain or obstacle under each vertex (N,), m.
+        clearance_m: The least height above `top_amsl_m`, m.
+        hold_m: How far from the planned height a leg may stray, m; None: any.
+
+    Returns:
+        The waypoints' indices into `path`.
+
+    Raises:
+        InvalidInputError: Heights that are not one a vertex.
+    """
     z = np.asarray(height_amsl_m, dtype=np.float64)
     top = np.asarray(top_amsl_m, dtype=np.float64)
     turns = corners(path)
@@ -152,12 +193,24 @@ def mission_items(
     altitude_m: Any,
     altitudes_amsl_m: Any = None,
 ) -> list[dict[str, Any]]:
-    """The mission: take-off at home to ``altitude_m``, the waypoints (K, 2) of (lat, lon)
-    at ``altitude_m`` above home (one height, or one a waypoint (K,): a flight that
-    changes height), landing at the last one; with ``altitudes_amsl_m`` (K,), take-off and
-    waypoints above mean sea level instead (``MAV_FRAME_GLOBAL``: take-off to the first
-    waypoint's height). Each item: ``command``, ``frame``, ``params`` (7: param1-4,
-    latitude, longitude, altitude)."""
+    """The mission: take-off at home, the waypoints, landing at the last one.
+
+    Each item has `command`, `frame` and `params` (7: param1-4, latitude, longitude, altitude).
+
+    Args:
+        home: `(lat, lon)` of the take-off, degrees.
+        waypoints: The waypoints (K, 2) of (lat, lon), degrees.
+        altitude_m: The height above home, m: one, or one a waypoint (K,) for a flight that changes
+            height.
+        altitudes_amsl_m: Heights above mean sea level (K,), m, in place of `altitude_m`
+            (`MAV_FRAME_GLOBAL`; the take-off climbs to the first waypoint's height).
+
+    Returns:
+        The items, in order.
+
+    Raises:
+        InvalidInputError: Heights outside 0.5-3000 m, or not one a waypoint.
+    """
     wps = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
     if altitudes_amsl_m is None:
         rel_alts = np.asarray(altitude_m, dtype=np.float64).reshape(-1)
@@ -200,9 +253,21 @@ def wpl_text(
     altitudes_amsl_m: Any = None,
     home_amsl_m: float = 0.0,
 ) -> str:
-    """The mission as ``QGC WPL 110`` text: item 0 the home position (frame global, at
-    ``home_amsl_m``), then [`mission_items()`][rainuav.missions.mission_items] (yaw, param 4,
-    written 0: keep the heading)."""
+    """The mission as `QGC WPL 110` text.
+
+    Item 0 is the home position (frame global, at `home_amsl_m`), then
+    [`mission_items()`][rainuav.missions.mission_items] (yaw, param 4, written 0: keep the heading).
+
+    Args:
+        home: `(lat, lon)` of the take-off, degrees.
+        waypoints: The waypoints (K, 2) of (lat, lon), degrees.
+        altitude_m: The height above home, m (one, or one a waypoint).
+        altitudes_amsl_m: Heights above mean sea level (K,), m, in place of `altitude_m`.
+        home_amsl_m: Home's height above mean sea level, m.
+
+    Returns:
+        The file's text.
+    """
     rows = [[0, 1, MAV_FRAME_GLOBAL, MAV_CMD_NAV_WAYPOINT, 0, 0, 0, 0, home[0], home[1],
              float(home_amsl_m), 1]]  # fmt: skip
     items = mission_items(home, waypoints, altitude_m, altitudes_amsl_m)
@@ -224,9 +289,22 @@ def plan_dict(
     altitudes_amsl_m: Any = None,
     home_amsl_m: float = 0.0,
 ) -> dict[str, Any]:
-    """The mission as a QGroundControl ``.plan`` (module docstring): a generic multirotor
-    (``firmwareType`` 0, ``vehicleType`` 2), altitudes relative to home
-    (``globalPlanAltitudeMode`` 1), or above mean sea level with ``altitudes_amsl_m`` (2)."""
+    """The mission as a QGroundControl `.plan` (the module's docstring has the form).
+
+    A generic multirotor (`firmwareType` 0, `vehicleType` 2), altitudes relative to home
+    (`globalPlanAltitudeMode` 1), or above mean sea level with `altitudes_amsl_m` (2).
+
+    Args:
+        home: `(lat, lon)` of the take-off, degrees.
+        waypoints: The waypoints (K, 2) of (lat, lon), degrees.
+        altitude_m: The height above home, m (one, or one a waypoint).
+        speed_m_s: The cruise speed, m/s.
+        altitudes_amsl_m: Heights above mean sea level (K,), m, in place of `altitude_m`.
+        home_amsl_m: Home's height above mean sea level, m.
+
+    Returns:
+        The plan, as JSON-ready data.
+    """
     mode = 1 if altitudes_amsl_m is None else 2
     items = []
     for k, it in enumerate(mission_items(home, waypoints, altitude_m, altitudes_amsl_m), 1):
@@ -269,11 +347,21 @@ def geojson_dict(
     sites: list[dict[str, Any]] | None = None,
     properties: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """A GeoJSON ``FeatureCollection``: the path (N, 2) of (lat, lon) as a ``LineString`` at
-    ``altitude_m`` (one height, or one a vertex) whose properties hold ``properties`` and,
-    per vertex, the lists of
-    ``vertex_properties`` (each of N values); each site (``lat``, ``lon`` and its own fields)
-    as a ``Point``."""
+    """The flight as a GeoJSON `FeatureCollection`: the path as a `LineString`, each site a `Point`.
+
+    Args:
+        latlon: The path (N, 2) of (lat, lon), degrees.
+        altitude_m: Its height, m: one, or one a vertex.
+        vertex_properties: Lists of N values each, one a vertex (the signal, the serving cell, ...).
+        sites: Each site's `lat`, `lon` and its own fields.
+        properties: The path's own properties.
+
+    Returns:
+        The collection, as JSON-ready data.
+
+    Raises:
+        InvalidInputError: A vertex property without one value a vertex.
+    """
     ll = np.asarray(latlon, dtype=np.float64).reshape(-1, 2)
     for name, values in vertex_properties.items():
         if len(values) != len(ll):
@@ -306,9 +394,17 @@ def geojson_dict(
 def kml_text(
     latlon: Any, altitude_m: Any, name: str, sites: list[dict[str, Any]] | None = None
 ) -> str:
-    """KML 2.2 for Google Earth: the path (N, 2) of (lat, lon) as a ``LineString`` at
-    ``altitude_m`` (one height, or one a vertex) above the ground (``relativeToGround``),
-    each site a ``Point``."""
+    """The flight as KML 2.2 for Google Earth: the path as a `LineString`, each site a `Point`.
+
+    Args:
+        latlon: The path (N, 2) of (lat, lon), degrees.
+        altitude_m: Its height above the ground, m (`relativeToGround`): one, or one a vertex.
+        name: The document's name.
+        sites: Each site's `lat`, `lon` and its own fields.
+
+    Returns:
+        The file's text.
+    """
     ll = np.asarray(latlon, dtype=np.float64).reshape(-1, 2)
     z = np.broadcast_to(np.asarray(altitude_m, dtype=np.float64), (len(ll),)).tolist()
     coords = " ".join(

@@ -135,12 +135,27 @@ class Signal:
         serving_cell: npt.ArrayLike | None = None,
         **meta: Any,
     ) -> Signal:
-        """The signal of an array whose axes are named by ``dims``, in any order.
+        """The signal of an array whose axes are named, in any order.
 
-        ``dims`` names each axis once (any of [`AXES`][rainuav.signals.AXES], ``north`` and
-        ``east`` among them); they are moved into the signal's order, the axes it lacks added
-        with size 1. ``serving_cell``, if given, has ``values``' axes.
-        E.g. ``Signal.from_axes(sinr, ("level", "north", "east"), extent, altitudes_m=alts)``."""
+        The axes are moved into the signal's order and the axes it lacks added with size 1; e.g.
+        `Signal.from_axes(sinr, ("level", "north", "east"), extent, altitudes_m=alts)`.
+
+        Args:
+            values: The signal, dB.
+            dims: One name for each axis of `values`, each once, from [`AXES`][rainuav.signals.AXES]
+                (`north` and `east` among them).
+            extent_m: `(x_min, x_max, y_min, y_max)`, m.
+            t_s: The instants of the time axis, s.
+            altitudes_m: The altitudes of the level axis, m.
+            serving_cell: The serving cell, with `values`' axes; None: none named.
+            **meta: The signal's other fields (`name`, `scenario_toml`, ...).
+
+        Returns:
+            The [`Signal`][rainuav.signals.Signal].
+
+        Raises:
+            InvalidInputError: `dims` that do not name each axis once, or do not fit the array.
+        """
         bad = [d for d in dims if d not in AXES]
         if bad or len(set(dims)) != len(dims) or not {"north", "east"} <= set(dims):
             raise InvalidInputError(
@@ -169,10 +184,21 @@ class Signal:
 
     def take(self, *, world: int | None = None, time: int | None = None,
              level: int | None = None) -> Signal:  # fmt: skip
-        """The signal at one world, instant or level.
+        """The signal at one world, instant or level; each given index keeps its axis, with size 1.
 
-        Each given index keeps its axis, with size 1; e.g. ``take(level=0)``: the lowest level's
-        signal."""
+        E.g. `take(level=0)`: the lowest level's signal.
+
+        Args:
+            world: The world's index.
+            time: The instant's index.
+            level: The level's index.
+
+        Returns:
+            A new [`Signal`][rainuav.signals.Signal].
+
+        Raises:
+            InvalidInputError: An index out of its axis.
+        """
         idx: list[Any] = [slice(None)] * len(AXES)
         for k, (axis, i) in enumerate((("world", world), ("time", time), ("level", level))):
             if i is not None:
@@ -192,10 +218,16 @@ class Signal:
         )
 
     def to_xarray(self) -> Any:
-        """The values as an ``xarray.DataArray``, the axes named.
+        """The values as an `xarray.DataArray`, the axes named.
 
-        Its coordinates are the instants, the altitudes and the pixels' centres in m; needs
-        xarray (the ``weather`` extra)."""
+        Its coordinates are the instants, the altitudes and the pixels' centres in m.
+
+        Returns:
+            The `DataArray`.
+
+        Raises:
+            InvalidInputError: xarray is not installed (the `weather` extra).
+        """
         try:
             import xarray as xr
         except ImportError as err:  # pragma: no cover - depends on the installed extras
@@ -214,7 +246,14 @@ class Signal:
         return xr.DataArray(self.values, coords=coords, dims=AXES, name=self.name)
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Writes the signal as one .npz (``signal.npz``; no pickles), atomically."""
+        """Writes the signal as one .npz (`signal.npz`; no pickles), atomically.
+
+        Args:
+            path: The file.
+
+        Returns:
+            The path written.
+        """
         arrays: dict[str, Any] = {
             "values": self.values,
             "t_s": self.t_s,
@@ -240,7 +279,16 @@ class Signal:
     def load(cls, path: str | os.PathLike[str]) -> Signal:
         """Reads a file written by [`save()`][rainuav.signals.Signal.save], bit for bit.
 
-        Every array is checked; anything else is one line naming the file."""
+        Args:
+            path: The file.
+
+        Returns:
+            The [`Signal`][rainuav.signals.Signal], every array checked.
+
+        Raises:
+            InvalidInputError: A file that is not a signal file, of another format version, missing
+                arrays or with arrays out of range (named).
+        """
         data = read_arrays(path, "signal file")
         meta = _signal_meta(data)
         if meta is None:
@@ -274,12 +322,34 @@ def _npz(path: str | os.PathLike[str], what: str, read: Callable[[Any], Any]) ->
 
 
 def read_arrays(path: str | os.PathLike[str], what: str) -> dict[str, np.ndarray]:
-    """Every array of an .npz, read without pickles, or one line naming the file."""
+    """Every array of an .npz, read without pickles.
+
+    Args:
+        path: The file.
+        what: What the error calls the file ("radio map", "signal").
+
+    Returns:
+        The arrays by name.
+
+    Raises:
+        InvalidInputError: A file that is missing or not a readable .npz (named).
+    """
     return _npz(path, what, lambda z: {k: z[k] for k in z.files})
 
 
 def array_names(path: str | os.PathLike[str], what: str) -> set[str]:
-    """The names of an .npz's arrays, none of them read, or one line naming the file."""
+    """The names of an .npz's arrays, none of them read.
+
+    Args:
+        path: The file.
+        what: What the error calls the file.
+
+    Returns:
+        The names.
+
+    Raises:
+        InvalidInputError: A file that is missing or not a readable .npz (named).
+    """
     return _npz(path, what, lambda z: set(z.files))
 
 

@@ -75,7 +75,15 @@ class RadioLevels:
 
 
 def level_scenario(scn: Scenario, altitude_m: float) -> Scenario:
-    """``scn`` flying at ``altitude_m`` alone."""
+    """A scenario flying at one altitude alone.
+
+    Args:
+        scn: The scenario.
+        altitude_m: The altitude, m.
+
+    Returns:
+        `scn` with `area.altitude_m` that altitude and no flight levels.
+    """
     area = dataclasses.replace(scn.area, altitude_m=float(altitude_m), altitudes_m=None)
     return scn.replace(area=area)
 
@@ -83,11 +91,20 @@ def level_scenario(scn: Scenario, altitude_m: float) -> Scenario:
 def build_radio_levels(
     scn: Scenario, *, cache: bool = True, progress: bool = False, one_march: bool = True
 ) -> RadioLevels:
-    """The maps of ``scn`` at each of ``area.levels`` (module docstring). ``one_march``: the
-    hybrid engine over flat ground marches each cell once for every level
-    ([`rainuav.radio.engines.hybrid.engine_parts_levels()`][rainuav.radio.engines.hybrid.engine_parts_levels],
-    [`shares_a_march()`][rainuav.radio.outputs.levelmaps.shares_a_march]); False: once
-    per level."""
+    """The maps of a scenario at each of its flight levels (the module's docstring has how).
+
+    Args:
+        scn: A scenario whose `area.altitudes_m` lists the levels.
+        cache: Read and keep the maps in the map cache.
+        progress: A line on standard error per map built.
+        one_march: The hybrid engine over flat ground marches each cell once for every level
+            ([`engine_parts_levels()`][rainuav.radio.engines.hybrid.engine_parts_levels],
+            [`shares_a_march()`][rainuav.radio.outputs.levelmaps.shares_a_march]); False: once per
+            level.
+
+    Returns:
+        The levels' maps, lowest first.
+    """
     from rainuav.radio.outputs.maps import build_radio_map
 
     levels = scn.area.levels
@@ -110,11 +127,20 @@ def build_radio_levels(
 
 
 def shares_a_march(scn: Scenario) -> bool:
-    """Whether one march per cell serves every level: several levels, the hybrid engine
-    over a perfect conductor or no ground, and flat ground. Over terrain each level's
-    receiver surface follows the ground and marches apart; the 'pe' engine marches each
-    level on its own grid, whose cone is its own (a grid tall enough for the highest level
-    fits the budget with a narrower cone, and the PE alone has no rays for the rest)."""
+    """Whether one march per cell serves every flight level of a scenario.
+
+    It does with several levels, the hybrid engine over a perfect conductor or no ground, and flat
+    ground. Over terrain each level's receiver surface follows the ground and marches apart; the
+    'pe' engine marches each level on its own grid, whose cone is its own (a grid tall enough for
+    the highest level fits the budget with a narrower cone, and the PE alone has no rays for the
+    rest).
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        True where one march serves.
+    """
     from rainuav.radio.engines.ray_engine import SOILS
 
     return (
@@ -190,12 +216,25 @@ def build_radio_level_series(
     progress: bool = False,
     one_march: bool = True,
 ) -> RadioLevelSeries:
-    """The maps in time of ``scn`` at each of ``area.levels``
-    ([`build_radio_map_series()`][rainuav.radio.outputs.timemap.build_radio_map_series] per level),
-    memory checked for the whole stack first. ``one_march``: the hybrid over flat ground marches
-    each cell once in clear air for every level
-    ([`shares_a_march()`][rainuav.radio.outputs.levelmaps.shares_a_march]), as
-    [`build_radio_levels()`][rainuav.radio.outputs.levelmaps.build_radio_levels] does."""
+    """The maps in time of a scenario at each of its flight levels, memory checked first.
+
+    [`build_radio_map_series()`][rainuav.radio.outputs.timemap.build_radio_map_series] per level.
+
+    Args:
+        scn: A scenario whose `area.altitudes_m` lists the levels, in a weather that moves.
+        times_s: The instants, s.
+        cache: Read and keep the maps in the map cache.
+        progress: A line on standard error per map built.
+        one_march: The hybrid over flat ground marches each cell once in clear air for every level
+            ([`shares_a_march()`][rainuav.radio.outputs.levelmaps.shares_a_march]), as
+            [`build_radio_levels()`][rainuav.radio.outputs.levelmaps.build_radio_levels] does.
+
+    Returns:
+        Each level's series, lowest first.
+
+    Raises:
+        InvalidInputError: A stack that would not fit in memory (the sizes named).
+    """
     from rainuav._checks import as_real_array
     from rainuav.radio.outputs.timemap import build_radio_map_series
     from rainuav.radio.scene.terrain import map_mask
@@ -266,8 +305,18 @@ def sample_levels(
     y: np.ndarray,
     levels: np.ndarray,
 ) -> np.ndarray:
-    """``values`` (L, H, W) read at the points ``(x, y)``, each on its level ``levels``:
-    bilinear between pixel centres, as the navigation task reads a map."""
+    """A stack of maps read at points, each on its own level, as the navigation task reads a map.
+
+    Args:
+        values: The maps (L, H, W).
+        extent: `(x_min, x_max, y_min, y_max)`, m.
+        x: East, m (N,).
+        y: North, m (N,).
+        levels: Each point's level index (N,).
+
+    Returns:
+        (N,) values, bilinear between pixel centres.
+    """
     x, y, levels = np.asarray(x, float), np.asarray(y, float), np.asarray(levels)
     out = np.empty(x.shape)
     for k in np.unique(levels):
@@ -298,10 +347,18 @@ class LevelStack:
 
     @classmethod
     def of(cls, source: RadioLevels | RadioLevelSeries, scn: Scenario) -> LevelStack:
-        """The stack of built levels
-        ([`build_radio_levels()`][rainuav.radio.outputs.levelmaps.build_radio_levels] or
-        [`build_radio_level_series()`][rainuav.radio.outputs.levelmaps.build_radio_level_series]) of
-        ``scn``."""
+        """The stack of built levels of a scenario.
+
+        Args:
+            source: What
+                [`build_radio_levels()`][rainuav.radio.outputs.levelmaps.build_radio_levels] or
+                [`build_radio_level_series()`][rainuav.radio.outputs.levelmaps.build_radio_level_series]
+                gave.
+            scn: The scenario.
+
+        Returns:
+            The [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack].
+        """
         if isinstance(source, RadioLevels):
             serving = np.stack([m.serving_cell for m in source.maps]).astype(np.int16)
             sinr = source.sinr_db.astype(np.float32)
@@ -310,7 +367,14 @@ class LevelStack:
                    source.not_flyable, source.extent, source.t_s)  # fmt: skip
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Writes an .npz (the scenario as TOML inside; no pickles), atomically."""
+        """Writes the stack as an .npz (the scenario as TOML inside; no pickles), atomically.
+
+        Args:
+            path: The file.
+
+        Returns:
+            The path written.
+        """
         arrays = {
             "altitudes_m": np.asarray(self.altitudes_m, np.float64),
             "sinr_db": self.sinr_db,
@@ -324,8 +388,21 @@ class LevelStack:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> LevelStack:
-        """Reads a stack written by [`save()`][rainuav.radio.outputs.mapdata.RadioMap.save], checked
-        (shapes, finite values, its scenario's area and levels); bit-exact round trip."""
+        """Reads a stack written by [`save()`][rainuav.radio.outputs.levelmaps.LevelStack.save],
+        checked.
+
+        Shapes, finite values, and its scenario's area and levels are checked; the round trip is
+        bit-exact.
+
+        Args:
+            path: The file.
+
+        Returns:
+            The [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack].
+
+        Raises:
+            InvalidInputError: A file that is not a stack of its scenario's levels (named).
+        """
         need = ("altitudes_m", "sinr_db", "serving_cell", "not_flyable", "extent_m")
         d, scn = read_npz(path, "stack of level maps", need, STACK_VERSION)
         alts, sinr, t = d["altitudes_m"], d["sinr_db"], d.get("t_s")
