@@ -5,6 +5,8 @@ and renamed), and warnings are one line each."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import itertools
 import math
 import re
 import sys
@@ -15,9 +17,12 @@ from typing import Any
 from rainuav.errors import CacheWarning, InvalidInputError, WriteError
 
 __all__ = [
+    "add_fields",
     "altitude_band",
     "attach_negative_values",
     "earlier_name",
+    "field_docs",
+    "fields_from_args",
     "metre_flags",
     "plain_help",
     "run",
@@ -126,3 +131,79 @@ def altitude_band(text: str, name: str = "--altitudes-m") -> list[float]:
     if n > 64:
         raise InvalidInputError(f"{name} gives {n} levels (at most 64)")
     return [lo + k * step for k in range(n)]
+
+
+def field_docs(cls: type) -> dict[str, str]:
+    """The attribute docstrings of a dataclass and of the dataclasses it extends.
+
+    Args:
+        cls: The dataclass.
+
+    Returns:
+        Each field's docstring (the string literal after it), its whitespace collapsed.
+    """
+    import ast
+    import inspect
+    import textwrap
+
+    docs: dict[str, str] = {}
+    for klass in reversed([k for k in cls.__mro__ if dataclasses.is_dataclass(k)]):
+        tree = ast.parse(textwrap.dedent(inspect.getsource(klass)))
+        body = tree.body[0].body  # type: ignore[attr-defined]
+        for a, b in itertools.pairwise(body):
+            if (
+                isinstance(a, ast.AnnAssign)
+                and isinstance(b, ast.Expr)
+                and isinstance(b.value, ast.Constant)
+            ):
+                docs[a.target.id] = " ".join(str(b.value.value).split())  # type: ignore[union-attr]
+    return docs
+
+
+def add_fields(ap: argparse.ArgumentParser, cls: type) -> None:
+    """Adds one flag for each field of a dataclass of options, as ``train`` does for its run.
+
+    The flag is ``--name-with-dashes``; its help is the field's docstring and its default (unless
+    the docstring says it); its type
+    is the field's (``int``, ``float``, ``str``, a path); a ``bool`` field that defaults to False is
+    a switch; a field's ``metadata["choices"]`` are its allowed values.
+
+    Args:
+        ap: The command's parser.
+        cls: The dataclass; its defaults are the flags' defaults.
+    """
+    from pathlib import Path
+
+    from rainuav._checks import field_kind
+
+    kinds: dict[str, Any] = {"int": int, "float": float, "str": str, "Path": Path}
+    docs = field_docs(cls)
+    for f in dataclasses.fields(cls):
+        kind = field_kind(f)[0]
+        flag = f"--{f.name.replace('_', '-')}"
+        shown = "unset" if f.default is None else f.default
+        text = plain_help(docs.get(f.name, ""))
+        if kind == "bool":
+            ap.add_argument(flag, dest=f.name, action="store_true", help=text)
+            continue
+        ap.add_argument(
+            flag,
+            dest=f.name,
+            type=kinds.get(kind, str),
+            default=f.default,
+            choices=f.metadata.get("choices"),
+            help=text if "default" in text else f"{text} (default {shown})",
+        )
+
+
+def fields_from_args(args: argparse.Namespace, cls: type) -> Any:
+    """The dataclass of options a parsed command line gives.
+
+    Args:
+        args: What the parser of [`add_fields()`][rainuav._cli.add_fields] parsed.
+        cls: The dataclass.
+
+    Returns:
+        An instance of `cls` with the flags' values.
+    """
+    return cls(**{f.name: getattr(args, f.name) for f in dataclasses.fields(cls)})

@@ -30,9 +30,11 @@ run's folder for its own map, ``RUN_DIR/eval_<scenario>_<rain>mmh`` for another;
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from rainuav import _cli
@@ -75,36 +77,57 @@ def _world(args: argparse.Namespace) -> object:
     return build
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+@dataclass
+class EvaluateOptions:
+    """What ``python -m rainuav.evaluate`` takes besides the run's folder (one docstring line per
+    field = one flag, generated as ``train``'s are)."""
+
+    scenario: str | None = None
+    """Fly on this preset's map (in its own weather, unless --rain-rate-mm-h)."""
+    rain_rate_mm_h: float | None = None
+    """Homogeneous rain, mm/h."""
+    engine: str | None = dataclasses.field(
+        default=None, metadata={"choices": ("hybrid", "ray", "pe")}
+    )
+    """Propagation engine of the world flown."""
+    storm_seed: int | None = None
+    """Fly through this storm of the 'storm' scenario."""
+    freq_ghz: float | None = None
+    """Carrier frequency, GHz."""
+    storm_seeds: str | None = None
+    """Fly through every storm A-B (inclusive), 20 starts each unless --starts."""
+    random_goals: bool = False
+    """A destination per start (with --storm-seeds, or in the world the flags give)."""
+    starts: int | None = None
+    """Number of fixed starts (default: the run's eval_starts)."""
+    seed: int | None = None
+    """Seed of the starts (default: the run's eval_seed)."""
+    shield: bool = False
+    """Also report shielded flights."""
+    online: bool = False
+    """Fly the last online network, not the one the run reports (the weight average)."""
+    device: str = dataclasses.field(default="cpu", metadata={"choices": ("cpu", "cuda", "auto")})
+    """Where the network runs."""
+    out: Path | None = None
+    """Output folder (default: the run's folder for its own map, a folder in it for another)."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: the run's folder, then a flag for each field of
+    [`EvaluateOptions`][rainuav.evaluate.EvaluateOptions]."""
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.evaluate",
         description=_cli.plain_help(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("run_dir", type=Path)
-    ap.add_argument("--scenario", default=None, help="fly on this preset's map")
-    ap.add_argument("--rain-rate-mm-h", type=float, default=None, help="homogeneous rain, mm/h")
+    _cli.add_fields(ap, EvaluateOptions)
     _cli.earlier_name(ap, "--rain-rate", "rain_rate_mm_h", float)
-    ap.add_argument("--engine", default=None, choices=("hybrid", "ray", "pe"))
-    ap.add_argument("--storm-seed", type=int, default=None, help="fly through this storm")
-    ap.add_argument("--freq-ghz", type=float, default=None, help="carrier frequency, GHz")
-    ap.add_argument("--storm-seeds", default=None, help="fly through every storm A-B (inclusive)")
-    ap.add_argument(
-        "--random-goals",
-        action="store_true",
-        help="a destination per start (with --storm-seeds, or in the world the flags give)",
-    )
-    ap.add_argument("--starts", type=int, default=None, help="number of fixed starts")
-    ap.add_argument("--seed", type=int, default=None, help="seed of the starts")
-    ap.add_argument("--shield", action="store_true", help="also report shielded flights")
-    ap.add_argument(
-        "--online",
-        action="store_true",
-        help="fly the last online network, not the one the run reports (the weight average)",
-    )
-    ap.add_argument("--device", default="cpu", choices=("cpu", "cuda", "auto"))
-    ap.add_argument("--out", type=Path, default=None, help="output folder")
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
     return _cli.run(lambda: _evaluate(args), "the evaluation stopped; nothing was written")
 
 

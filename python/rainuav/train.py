@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import itertools
 import sys
 import textwrap
 from collections.abc import Sequence
@@ -28,28 +27,6 @@ from pathlib import Path
 from typing import Any
 
 from rainuav import _cli
-
-
-def _field_docs(cls: type) -> dict[str, str]:
-    """Attribute docstrings of a dataclass and the dataclasses it extends (the string literal
-    after each field)."""
-    import ast
-    import inspect
-    import textwrap
-
-    docs: dict[str, str] = {}
-    for klass in reversed([k for k in cls.__mro__ if dataclasses.is_dataclass(k)]):
-        tree = ast.parse(textwrap.dedent(inspect.getsource(klass)))
-        body = tree.body[0].body  # type: ignore[attr-defined]
-        for a, b in itertools.pairwise(body):
-            if (
-                isinstance(a, ast.AnnAssign)
-                and isinstance(b, ast.Expr)
-                and isinstance(b.value, ast.Constant)
-            ):
-                text = " ".join(str(b.value.value).split())
-                docs[a.target.id] = text  # type: ignore[union-attr]
-    return docs
 
 
 def _parse_bool(text: str) -> bool:
@@ -120,7 +97,7 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
     ap.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
     hidden = {"help": argparse.SUPPRESS, "default": None}
     for cls, prefix in ((TrainConfig, ""), *((c, f"{n}.") for n, c in SECTIONS.items())):
-        docs = _field_docs(cls)
+        docs = _cli.field_docs(cls)
         for f in dataclasses.fields(cls):
             if f.name in SECTIONS:
                 continue
