@@ -164,9 +164,10 @@ def add_fields(ap: argparse.ArgumentParser, cls: type) -> None:
     """Adds one flag for each field of a dataclass of options, as ``train`` does for its run.
 
     The flag is ``--name-with-dashes``; its help is the field's docstring and its default (unless
-    the docstring says it); its type
+    the docstring says it, or it is None: unset); its type
     is the field's (``int``, ``float``, ``str``, a path); a ``bool`` field that defaults to False is
-    a switch; a field's ``metadata["choices"]`` are its allowed values.
+    a switch; a field's ``metadata["choices"]`` are its allowed values (or a function giving
+    them, called when the parser is built) and ``metadata["metavar"]`` its value's name.
 
     Args:
         ap: The command's parser.
@@ -181,7 +182,6 @@ def add_fields(ap: argparse.ArgumentParser, cls: type) -> None:
     for f in dataclasses.fields(cls):
         kind = field_kind(f)[0]
         flag = f"--{f.name.replace('_', '-')}"
-        shown = "unset" if f.default is None else f.default
         text = plain_help(docs.get(f.name, ""))
         if kind == "bool":
             ap.add_argument(flag, dest=f.name, action="store_true", help=text)
@@ -191,8 +191,11 @@ def add_fields(ap: argparse.ArgumentParser, cls: type) -> None:
             dest=f.name,
             type=kinds.get(kind, str),
             default=f.default,
-            choices=f.metadata.get("choices"),
-            help=text if "default" in text else f"{text} (default {shown})",
+            choices=choices() if callable(choices := f.metadata.get("choices")) else choices,
+            metavar=f.metadata.get("metavar"),
+            help=text
+            if "default" in text or f.default is None
+            else f"{text} (default {f.default})",
         )
 
 

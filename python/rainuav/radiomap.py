@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -30,132 +31,106 @@ from rainuav import _cli
 from rainuav.errors import InvalidInputError
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _presets() -> tuple[str, ...]:
     from rainuav.radio.scene import presets
+
+    return tuple(sorted(presets.PRESETS))
+
+
+def _grounds() -> tuple[str, ...]:
     from rainuav.radio.scene.scenario import GROUNDS
 
+    return GROUNDS
+
+
+@dataclass
+class RadiomapOptions:
+    """What ``python -m rainuav.radiomap`` takes (one docstring line per field = one flag,
+    generated as ``train``'s are)."""
+
+    scenario: str = field(default="paper", metadata={"choices": _presets})
+    """The preset scenario."""
+    config: Path | None = None
+    """A scenario TOML file (overrides --scenario)."""
+    rain_rate_mm_h: float | None = None
+    """Homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the scenario's
+    rain model, drop sizes, shape, temperature and wind are kept)."""
+    rain_file: Path | None = None
+    """Rain rates in time from a NetCDF file, (time, y, x) in mm/h on the area's metres
+    (rainuav.radio.scene.rategrid; needs the 'weather' extra)."""
+    freq_ghz: float | None = None
+    """Carrier frequency, GHz (1-100)."""
+    engine: str | None = field(default=None, metadata={"choices": ("hybrid", "ray", "pe")})
+    """Propagation engine (default: the scenario's, 'hybrid' for the presets)."""
+    storm_seed: int | None = None
+    """With --scenario storm: the storm drawn (default 0; from 1000000: evaluation storms)."""
+    at_s: float | None = None
+    """The weather this many seconds into its motion (moving rain cells; default 0)."""
+    duration_s: float | None = None
+    """Maps in time: the weather's first DURATION seconds, every --slice-s (ray engine), written
+    as radiomap_series.npz and storm.gif."""
+    slice_s: float | None = None
+    """With --duration-s: the step, s (default 5)."""
+    terrain: Path | None = None
+    """A DEM GeoTIFF (any CRS; heights in metres above sea level) under the area: the scenario
+    needs an [origin] (a --config TOML)."""
+    ground: str | None = field(default=None, metadata={"choices": _grounds})
+    """The ground's material: pec, none, or an ITU-R P.527 soil (default: the scenario's;
+    medium-dry over a --terrain DEM)."""
+    footprints: Path | None = None
+    """Building footprints in GeoJSON (longitude/latitude; OpenStreetMap height tags): the
+    scenario needs an [origin] (a --config TOML)."""
+    default_height: float | None = field(default=None, metadata={"metavar": "M"})
+    """The roof of a building whose footprint gives neither a height nor storeys, m (default:
+    the scenario's footprints.default_height_m, 10 m)."""
+    altitude_reference: str | None = field(default=None, metadata={"choices": ("ground", "msl")})
+    """The flight altitude above the terrain under the UAV (ground, the default) or above mean
+    sea level (msl)."""
+    altitudes_m: str | None = field(default=None, metadata={"metavar": "LOW:HIGH:STEP"})
+    """Map a band of flight altitudes, m (e.g. 30:120:15): one map a level
+    (rainuav.radio.outputs.levelmaps)."""
+    measurements: Path | None = field(default=None, metadata={"metavar": "LOG.csv"})
+    """A drive-test or flight log (lat,lon or x_m,y_m, alt_m, cell, rsrp_dbm or rss_dbm): the
+    map calibrated and corrected by it, with each pixel's standard deviation
+    (rainuav.radio.measured); writes fit.json."""
+    calibrate: str | None = field(default=None, metadata={"metavar": "NAMES"})
+    """With --measurements: the site parameters fitted per cell, comma-separated, or 'none'
+    (default: all four)."""
+    receive_pattern: str = field(
+        default="off", metadata={"choices": ("off", "elevation", "heading", "both")}
+    )
+    """With --measurements: 'elevation' fits the UAV's receive gain by elevation before the
+    residual field, 'heading' its gain against its heading (a log with heading_deg), 'both' the
+    two (fit.json's held-out scores say whether it helped; default off)."""
+    residual_kernel: str | None = field(
+        default=None, metadata={"choices": ("one-scale", "two-scale", "auto")}
+    )
+    """With --measurements: the residual field's kernel; 'two-scale' adds a field over tens of
+    metres to the smooth one, 'auto' keeps the one that predicts the log's held-out blocks
+    better (default one-scale)."""
+    level_step_m: float | None = field(default=None, metadata={"metavar": "M"})
+    """With --measurements: the height between the maps built at the log's heights, 1..500 m
+    (default 10; at most 40 maps, so a log spanning more needs a coarser step)."""
+    out: Path = Path("maps")
+    """The output folder."""
+    no_cache: bool = False
+    """Build afresh, do not store."""
+    min_db: float | None = None
+    """The SINR counted as outage in the summaries, dB (default: the preset's; for a scenario
+    file the uma preset's, as fly uses)."""
+    clear_cache: bool = False
+    """Delete every cached map and exit."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: a flag for each field of
+    [`RadiomapOptions`][rainuav.radiomap.RadiomapOptions]."""
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.radiomap", description="Build a radio map and write npz + PNGs."
     )
-    ap.add_argument("--scenario", choices=sorted(presets.PRESETS), default="paper")
-    ap.add_argument("--config", type=Path, help="a scenario TOML file (overrides --scenario)")
-    ap.add_argument(
-        "--rain-rate-mm-h",
-        type=float,
-        default=None,
-        help="homogeneous rain, mm/h, in place of the scenario's weather (0: clear air; the "
-        "scenario's rain model, drop sizes, shape, temperature and wind are kept)",
-    )
+    _cli.add_fields(ap, RadiomapOptions)
     _cli.earlier_name(ap, "--rain-rate", "rain_rate_mm_h", float)
-    ap.add_argument(
-        "--rain-file",
-        type=Path,
-        default=None,
-        help="rain rates in time from a NetCDF file, (time, y, x) in mm/h on the area's metres "
-        "(rainuav.radio.scene.rategrid; needs the 'weather' extra)",
-    )
-    ap.add_argument("--freq-ghz", type=float, default=None, help="carrier frequency, GHz (1-100)")
-    ap.add_argument(
-        "--engine",
-        choices=("hybrid", "ray", "pe"),
-        default=None,
-        help="propagation engine (default: the scenario's, 'hybrid' for the presets)",
-    )
-    ap.add_argument(
-        "--storm-seed",
-        type=int,
-        default=None,
-        help="with --scenario storm: the storm drawn (default 0; from 1000000: evaluation storms)",
-    )
-    ap.add_argument(
-        "--at-s",
-        type=float,
-        default=None,
-        help="the weather this many seconds into its motion (moving rain cells; default 0)",
-    )
-    ap.add_argument(
-        "--duration-s",
-        type=float,
-        default=None,
-        help="maps in time: the weather's first DURATION seconds, every --slice-s (ray "
-        "engine), written as radiomap_series.npz and storm.gif",
-    )
-    ap.add_argument(
-        "--slice-s", type=float, default=None, help="with --duration-s: the step, s (default 5)"
-    )
-    ap.add_argument(
-        "--terrain",
-        type=Path,
-        default=None,
-        help="a DEM GeoTIFF (any CRS; heights in metres above sea level) under the area: the "
-        "scenario needs an [origin] (a --config TOML)",
-    )
-    ap.add_argument(
-        "--ground", choices=GROUNDS, default=None,
-        help="the ground's material: pec, none, or an ITU-R P.527 soil (default: the "
-        "scenario's; medium-dry over a --terrain DEM)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--footprints",
-        type=Path,
-        default=None,
-        help="building footprints in GeoJSON (longitude/latitude; OpenStreetMap height tags): "
-        "the scenario needs an [origin] (a --config TOML)",
-    )
-    ap.add_argument(
-        "--default-height", type=float, default=None, metavar="M",
-        help="the roof of a building whose footprint gives neither a height nor storeys, m "
-        "(default: the scenario's footprints.default_height_m, 10 m)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--altitude-reference",
-        choices=("ground", "msl"),
-        default=None,
-        help="the flight altitude above the terrain under the UAV (ground, the default) or "
-        "above mean sea level (msl)",
-    )
-    ap.add_argument(
-        "--altitudes-m", default=None, metavar="LOW:HIGH:STEP",
-        help="map a band of flight altitudes, m (e.g. 30:120:15): one map a level "
-        "(rainuav.radio.outputs.levelmaps)",
-    )  # fmt: skip
     _cli.earlier_name(ap, "--altitudes", "altitudes_m")
-    ap.add_argument(
-        "--measurements", type=Path, default=None, metavar="LOG.csv",
-        help="a drive-test or flight log (lat,lon or x_m,y_m, alt_m, cell, rsrp_dbm or rss_dbm): "
-        "the map calibrated and corrected by it, with each pixel's standard deviation "
-        "(rainuav.radio.measured); writes fit.json",
-    )  # fmt: skip
-    ap.add_argument(
-        "--calibrate", default=None, metavar="NAMES",
-        help="with --measurements: the site parameters fitted per cell, comma-separated, or "
-        "'none' (default: all four)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--receive-pattern", choices=("off", "elevation", "heading", "both"), default="off",
-        help="with --measurements: 'elevation' fits the UAV's receive gain by elevation before "
-        "the residual field, 'heading' its gain against its heading (a log with heading_deg), "
-        "'both' the two (fit.json's held-out scores say whether it helped; default off)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--residual-kernel", choices=("one-scale", "two-scale", "auto"), default=None,
-        help="with --measurements: the residual field's kernel; 'two-scale' adds a field over "
-        "tens of metres to the smooth one, 'auto' keeps the one that predicts the log's "
-        "held-out blocks better (default one-scale)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--level-step-m", type=float, default=None, metavar="M",
-        help="with --measurements: the height between the maps built at the log's heights, "
-        "1..500 m (default 10; at most 40 maps, so a log spanning more needs a coarser step)",
-    )  # fmt: skip
-    ap.add_argument("--out", type=Path, default=Path("maps"))
-    ap.add_argument("--no-cache", action="store_true", help="build afresh, do not store")
-    ap.add_argument(
-        "--min-db", type=float, default=None,
-        help="the SINR counted as outage in the summaries, dB (default: the preset's; for a "
-        "scenario file the uma preset's, as fly uses)",
-    )  # fmt: skip
-    ap.add_argument("--clear-cache", action="store_true", help="delete every cached map and exit")
     return ap
 
 
