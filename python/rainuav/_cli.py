@@ -167,7 +167,8 @@ def add_fields(ap: argparse.ArgumentParser, cls: type) -> None:
     the docstring says it, or it is None: unset); its type
     is the field's (``int``, ``float``, ``str``, a path); a ``bool`` field that defaults to False is
     a switch; a field's ``metadata["choices"]`` are its allowed values (or a function giving
-    them, called when the parser is built) and ``metadata["metavar"]`` its value's name.
+    them, called when the parser is built), ``metadata["metavar"]`` its value's name,
+    ``metadata["type"]`` a parser of its own and ``metadata["required"]`` a flag that must be given.
 
     Args:
         ap: The command's parser.
@@ -189,8 +190,9 @@ def add_fields(ap: argparse.ArgumentParser, cls: type) -> None:
         ap.add_argument(
             flag,
             dest=f.name,
-            type=kinds.get(kind, str),
+            type=f.metadata.get("type", kinds.get(kind, str)),
             default=f.default,
+            required=f.metadata.get("required", False),
             choices=choices() if callable(choices := f.metadata.get("choices")) else choices,
             metavar=f.metadata.get("metavar"),
             help=text

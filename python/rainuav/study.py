@@ -16,6 +16,7 @@ import argparse
 import os
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from rainuav import _cli
@@ -23,8 +24,26 @@ from rainuav._io import check_out_dir
 from rainuav.errors import InvalidInputError
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    from rainuav.studies import load_study, run_study
+@dataclass
+class StudyOptions:
+    """What ``python -m rainuav.study STUDY`` takes besides the study (one docstring line per
+    field = one flag, generated as ``train``'s are)."""
+
+    out: Path | None = field(default=None, metadata={"required": True})
+    """The study's folder: cases/, report.md and, last, results.csv."""
+    workers: int | None = None
+    """Cases run at once in spawned processes (default: the cores, at most the cases)."""
+    quick: bool = False
+    """Apply the study's [quick] changes (short trainings, the ray engine): a check that the
+    study runs, in minutes."""
+    ray: str | None = field(default=None, metadata={"metavar": "ADDRESS"})
+    """Run each case as a Ray task: 'auto' (the cluster this machine is in), an address
+    (ray://host:10001), or 'local' (a local instance)."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: the study, then a flag for each field of
+    [`StudyOptions`][rainuav.study.StudyOptions]."""
     from rainuav.studies.spec import BUILT_IN
 
     ap = argparse.ArgumentParser(
@@ -34,26 +53,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     names = ", ".join(f"'{n}'" for n in BUILT_IN)
     ap.add_argument("study", help=f"a built-in study ({names}) or a study TOML file")
-    ap.add_argument(
-        "--out", type=Path, required=True,
-        help="the study's folder: cases/, report.md and, last, results.csv",
-    )  # fmt: skip
-    ap.add_argument(
-        "--workers", type=int, default=None,
-        help="cases run at once in spawned processes (default: the cores, at most the cases)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--quick", action="store_true",
-        help="apply the study's [quick] changes (short trainings, the ray engine): a check "
-        "that the study runs, in minutes",
-    )  # fmt: skip
-    ap.add_argument(
-        "--ray",
-        default=None,
-        metavar="ADDRESS",
-        help="run each case as a Ray task: 'auto' (the cluster this machine is in), an "
-        "address (ray://host:10001), or 'local' (a local instance)",
-    )
+    _cli.add_fields(ap, StudyOptions)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    from rainuav.studies import load_study, run_study
+
+    ap = build_parser()
     args = ap.parse_args(argv)
 
     def body() -> int:

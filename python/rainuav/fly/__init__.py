@@ -55,6 +55,7 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from rainuav import _cli
@@ -85,86 +86,91 @@ def _start(text: str) -> tuple[float, ...]:
     return vals
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def _grounds() -> tuple[str, ...]:
     from rainuav.radio.scene.scenario import GROUNDS
 
+    return GROUNDS
+
+
+@dataclass
+class FlyOptions:
+    """What ``python -m rainuav.fly`` takes (one docstring line per field = one flag, generated
+    as ``train``'s are)."""
+
+    sites: Path | None = field(default=None, metadata={"required": True})
+    """Sites file (.csv or .geojson)."""
+    start: tuple[float, ...] | None = field(
+        default=None, metadata={"required": True, "type": _start}
+    )
+    """Take-off point LAT,LON in degrees, south and west negative (--start -33.87,151.21 and
+    --start=-33.87,151.21 both work); with --altitudes-m, LAT,LON,ALTITUDE starts at that level
+    (default: the exact planner chooses the take-off level, and the summary says which)."""
+    goal: tuple[float, float] | None = field(
+        default=None, metadata={"required": True, "type": _latlon}
+    )
+    """Destination LAT,LON, as --start."""
+    area: str | None = None
+    """The area as S,W,N,E in degrees, south and west negative (default: around the start, goal
+    and sites)."""
+    altitude_m: float = 100.0
+    """Flight altitude above ground, m."""
+    freq_ghz: float = 28.0
+    """Carrier frequency, GHz."""
+    rain_rate_mm_h: float = 0.0
+    """Homogeneous rain, mm/h."""
+    weather: Path | None = None
+    """A georeferenced rain file (NetCDF on lat/lon or x/y with a CRS, a GeoTIFF with a band per
+    instant, or a folder of GeoTIFF scans; mm/h or dBZ)."""
+    speed_m_s: float = 10.0
+    """Ground speed, m/s."""
+    min_db: float | None = None
+    """SINR outage threshold, dB."""
+    policy: Path | None = None
+    """Fly a trained network that reads the weather (a run of --observation weather)."""
+    terrain: Path | None = None
+    """A DEM GeoTIFF under the place (any CRS, heights in metres above sea level, as SRTM or
+    Copernicus GLO-30): maps and flights over the ground."""
+    footprints: Path | None = None
+    """Building footprints in GeoJSON (longitude/latitude, OpenStreetMap height tags): buildings
+    that block, diffract and reflect, and that the flight keeps clear of."""
+    default_height: float | None = field(default=None, metadata={"metavar": "M"})
+    """With --footprints: the roof of a building whose footprint gives neither a height nor
+    storeys, m (default 10; central-city buildings are often 18-28 m)."""
+    ground: str | None = field(default=None, metadata={"choices": _grounds})
+    """The ground's material: pec, none, or an ITU-R P.527 soil (default: pec on flat ground,
+    medium-dry over a --terrain DEM)."""
+    engine: str | None = field(default=None, metadata={"choices": ("hybrid", "ray", "pe")})
+    """The radio map's engine (default: hybrid, the PE inside each cell's cone and rays outside;
+    ray: rays alone, seconds instead of minutes)."""
+    altitudes_m: str | None = field(default=None, metadata={"metavar": "LOW:HIGH:STEP"})
+    """Fly a band of heights, m above the ground (e.g. 30:120:15): the flight chooses its
+    height, climbing at 5 m/s and descending at 3 m/s; --altitude-m is then the single height
+    it is compared with."""
+    altitude_reference: str | None = field(default=None, metadata={"choices": ("ground", "msl")})
+    """--altitude-m above the terrain under the UAV (ground, the default) or above mean sea
+    level (msl)."""
+    measurements: Path | None = field(default=None, metadata={"metavar": "LOG.csv"})
+    """A drive-test or flight log (cells as the sites file's site_id:k or the map's index): the
+    map corrected by it before the plan; the summary gives the plan's expected outage and its
+    spread, fit.json the fit (rainuav.radio.measured)."""
+    out: Path | None = field(default=None, metadata={"required": True})
+    """Output folder."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: a flag for each field of [`FlyOptions`][rainuav.fly.FlyOptions]."""
     ap = argparse.ArgumentParser(
         prog="python -m rainuav.fly",
         description=_cli.plain_help(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    ap.add_argument("--sites", type=Path, required=True, help="sites file (.csv or .geojson)")
-    ap.add_argument(
-        "--start", type=_start, required=True,
-        help="take-off point LAT,LON in degrees, south and west negative (--start -33.87,151.21 "
-        "and --start=-33.87,151.21 both work); with --altitudes-m, LAT,LON,ALTITUDE starts at "
-        "that level (default: the exact planner chooses the take-off level, and the summary says "
-        "which)",
-    )  # fmt: skip
-    ap.add_argument("--goal", type=_latlon, required=True, help="destination LAT,LON, as --start")
-    ap.add_argument(
-        "--area", default=None,
-        help="the area as S,W,N,E in degrees, south and west negative (default: around the "
-        "start, goal and sites)",
-    )  # fmt: skip
-    ap.add_argument("--altitude-m", type=float, default=100.0, help="flight altitude above ground")
-    ap.add_argument("--freq-ghz", type=float, default=28.0, help="carrier frequency, GHz")
-    ap.add_argument("--rain-rate-mm-h", type=float, default=0.0, help="homogeneous rain, mm/h")
+    _cli.add_fields(ap, FlyOptions)
     _cli.earlier_name(ap, "--rain-rate", "rain_rate_mm_h", float)
-    ap.add_argument(
-        "--weather", type=Path, default=None,
-        help="a georeferenced rain file (NetCDF on lat/lon or x/y with a CRS, a GeoTIFF with "
-        "a band per instant, or a folder of GeoTIFF scans; mm/h or dBZ)",
-    )  # fmt: skip
-    ap.add_argument("--speed-m-s", type=float, default=10.0, help="ground speed, m/s")
-    ap.add_argument("--min-db", type=float, default=None, help="SINR outage threshold, dB")
-    ap.add_argument(
-        "--policy", type=Path, default=None,
-        help="fly a trained network that reads the weather (a run of --observation weather)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--terrain", type=Path, default=None,
-        help="a DEM GeoTIFF under the place (any CRS, heights in metres above sea level, as "
-        "SRTM or Copernicus GLO-30): maps and flights over the ground",
-    )  # fmt: skip
-    ap.add_argument(
-        "--footprints", type=Path, default=None,
-        help="building footprints in GeoJSON (longitude/latitude, OpenStreetMap height tags): "
-        "buildings that block, diffract and reflect, and that the flight keeps clear of",
-    )  # fmt: skip
-    ap.add_argument(
-        "--default-height", type=float, default=None, metavar="M",
-        help="with --footprints: the roof of a building whose footprint gives neither a height "
-        "nor storeys, m (default 10; central-city buildings are often 18-28 m)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--ground", choices=GROUNDS, default=None,
-        help="the ground's material: pec, none, or an ITU-R P.527 soil (default: pec on flat "
-        "ground, medium-dry over a --terrain DEM)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--engine", choices=("hybrid", "ray", "pe"), default=None,
-        help="the radio map's engine (default: hybrid, the PE inside each cell's cone and "
-        "rays outside; ray: rays alone, seconds instead of minutes)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--altitudes-m", default=None, metavar="LOW:HIGH:STEP",
-        help="fly a band of heights, m above the ground (e.g. 30:120:15): the flight chooses "
-        "its height, climbing at 5 m/s and descending at 3 m/s; --altitude-m is then the "
-        "single height it is compared with",
-    )  # fmt: skip
-    ap.add_argument(
-        "--altitude-reference", choices=("ground", "msl"), default=None,
-        help="--altitude-m above the terrain under the UAV (ground, the default) or above "
-        "mean sea level (msl)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--measurements", type=Path, default=None, metavar="LOG.csv",
-        help="a drive-test or flight log (cells as the sites file's site_id:k or the map's "
-        "index): the map corrected by it before the plan; the summary gives the plan's expected "
-        "outage and its spread, fit.json the fit (rainuav.radio.measured)",
-    )  # fmt: skip
-    ap.add_argument("--out", type=Path, required=True, help="output folder")
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    ap = build_parser()
     args = ap.parse_args(_cli.attach_negative_values(argv, LATLON_FLAGS))
 
     def body() -> int:
