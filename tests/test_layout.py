@@ -452,3 +452,70 @@ def test_generated_commands_take_every_option_from_their_dataclasses() -> None:
     run = {f.name for f in dataclasses.fields(TrainConfig) if f.name not in SECTIONS}
     run |= {f"{n}.{f.name}" for n, c in SECTIONS.items() for f in dataclasses.fields(c)}
     assert shown(train.build_parser(show_all=True)) - {"help_all", "config", "resume"} == run
+
+
+MAX_FUNCTION_LINES = 80
+"""The most lines a function's code may take (its docstring aside) without a reason above it."""
+
+
+def _reason_above(lines: list[str], first: int, marks: tuple[str, ...]) -> bool:
+    """Whether the comments, doc comments and decorators just above line ``first`` (0-based)
+    hold a ``Long:`` reason."""
+    k = first - 1
+    while k >= 0 and lines[k].strip().startswith(marks):
+        if "Long:" in lines[k]:
+            return True
+        k -= 1
+    return False
+
+
+def _long_python_functions() -> list[str]:
+    found = []
+    for name, path in modules().items():
+        lines = path.read_text().splitlines()
+        for node in ast.walk(ast.parse("\n".join(lines))):
+            if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                continue
+            body = node.body
+            doc = isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant)
+            start = body[1].lineno if doc and len(body) > 1 else body[0].lineno
+            first = min([node.lineno, *(d.lineno for d in node.decorator_list)]) - 1
+            if node.end_lineno - start + 1 > MAX_FUNCTION_LINES and not _reason_above(
+                lines, first, ("#", "@")
+            ):
+                found.append(f"{name}.{node.name} ({node.end_lineno - start + 1} lines)")
+    return found
+
+
+def _long_rust_functions() -> list[str]:
+    import re
+
+    found = []
+    fn = re.compile(r"^\s*(pub(\([a-z]+\))?\s+)?(const\s+)?(unsafe\s+)?fn\s+(\w+)")
+    for path in sorted((ROOT.parents[1] / "crates").glob("*/src/**/*.rs")):
+        lines = path.read_text().splitlines()
+        i = 0
+        while i < len(lines):
+            m = fn.match(lines[i])
+            if not m:
+                i += 1
+                continue
+            depth, j, opened = 0, i, False
+            while j < len(lines):
+                depth += lines[j].count("{") - lines[j].count("}")
+                opened = opened or "{" in lines[j]
+                if (opened and depth <= 0) or (not opened and lines[j].rstrip().endswith(";")):
+                    break
+                j += 1
+            if j - i + 1 > MAX_FUNCTION_LINES and not _reason_above(lines, i, ("//", "#[")):
+                found.append(f"{path.relative_to(ROOT.parents[1])}:{i + 1} {m.group(5)}")
+            i = j + 1 if opened else i + 1
+    return found
+
+
+def test_no_function_over_80_lines_without_a_reason_above_it() -> None:
+    """A function in either language whose code runs past 80 lines says why, in a ``Long:``
+    comment above it (Python: a ``#`` line above its ``def`` or decorators; Rust: a ``//`` line
+    among its doc comments and attributes)."""
+    assert not _long_python_functions()
+    assert not _long_rust_functions()

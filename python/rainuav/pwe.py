@@ -117,6 +117,9 @@ def _obstacle(obs: Any, nx: int, ny: int, steps: int | None) -> dict[str, np.nda
     )
 
 
+# Long: every input is checked once, one line each, before the core allocates anything; then
+# the loop feeds the core its chunks. Split, the checked inputs would travel as a dozen
+# arguments between the halves.
 def march(
     u0: npt.ArrayLike,
     *,

@@ -145,6 +145,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     return _cli.run(lambda: _build(args), "the map build stopped; nothing was written")
 
 
+# Long: the command read top to bottom: the scenario and its overrides, the log checked before
+# any build, then the map, its files and its summary in each of its forms (one map, maps in
+# time, levels).
 def _build(args: argparse.Namespace) -> int:
     import numpy as np
 

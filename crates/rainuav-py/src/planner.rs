@@ -82,6 +82,8 @@ type LevelPlanOut<'py> = (
     max_steps, mu, reward, sir_min_db, goal_reward, out_of_bounds_penalty, climb, descend,
     blocked=None))]
 #[allow(clippy::too_many_arguments)]
+// Long: the binding converts and checks its numpy arrays and the task's numbers (each named in its
+// errors) before the core is called; that conversion is most of its length.
 fn plan_optimal_levels<'py>(
     py: Python<'py>,
     sinr_db: PyReadonlyArray4<'py, f64>,

@@ -84,6 +84,8 @@ impl PeMarcher {
         mask_steps=None, heights_fixed=None, heights_steps=None, record_rows, rows_out=None,
         record_column=None, column_out=None, row_offsets=None))]
     #[allow(clippy::too_many_arguments)]
+    // Long: the binding converts and checks the chunk's optional arrays (each named in its errors)
+    // before the core steps; that conversion is most of its length.
     fn advance(
         &mut self,
         py: Python<'_>,

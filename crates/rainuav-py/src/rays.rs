@@ -218,6 +218,8 @@ pub(crate) fn rain_field(
     altitude_msl=false, terrain_roughness_m=0.0, terms_only=false, prisms=None, walls=None, geometry=None,
     geometry_sites=None))]
 #[allow(clippy::too_many_arguments)]
+// Long: the binding converts and checks its numpy arrays (each named in its errors) before the core
+// is called; that conversion is most of its length.
 fn ray_power<'py>(
     py: Python<'py>,
     tx_m: PyReadonlyArray2<'py, f64>,

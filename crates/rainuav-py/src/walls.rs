@@ -26,6 +26,8 @@ use crate::rays::{Prisms, obstacles, parse_polarization, parse_sites, raster};
     buildings, heights, heights_origin_step, terrain=None, terrain_origin_step=None,
     altitude_msl=false, terrain_roughness_m=0.0, prisms=None, prism_eps=None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+// Long: the binding converts and checks its numpy arrays (each named in its errors) before the core
+// is called; that conversion is most of its length.
 fn ray_walls<'py>(
     py: Python<'py>,
     sites: PyReadonlyArray2<'py, f64>,

@@ -169,6 +169,8 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+# Long: the command's flags checked in the order its help lists them, before any map is built;
+# then the place, the flight and the files.
 def main(argv: Sequence[str] | None = None) -> int:
     ap = build_parser()
     args = ap.parse_args(_cli.attach_negative_values(argv, LATLON_FLAGS))

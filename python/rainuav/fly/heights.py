@@ -46,6 +46,9 @@ from rainuav.world import SLICE_S, level_field
 __all__ = ["fly_levels"]
 
 
+# Long: the command's flight among levels read top to bottom (the plan, the baselines at each
+# level, the waypoints over terrain with their holds, the files, the figure); each step writes
+# a part of the summary the next ones extend.
 def fly_levels(
     place, out: Path, *, speed_m_s: float = 10.0, min_db: float | None = None,
     progress: bool = False, start_altitude_m: float | None = None,

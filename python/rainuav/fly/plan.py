@@ -59,6 +59,9 @@ FLIGHT_FILES = ("flight.geojson", "flight.kml", "mission.plan", "mission.waypoin
 holding it is complete."""
 
 
+# Long: the command's flight read top to bottom (the maps, the plan, the straight line and the
+# baselines, the waypoints, the mission files, the figure); each step writes a part of the
+# summary the next ones extend.
 def fly_place(
     place: Place,
     out: Path,

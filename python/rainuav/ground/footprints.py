@@ -211,6 +211,9 @@ def _crs_ok(crs: Any) -> bool:
     return name.endswith("CRS84") or name.replace("::", ":").endswith("EPSG:4326")
 
 
+# Long: one pass over a GeoJSON file in stages (parse, project every vertex at once, heights,
+# outlines and their parts, repairs), each reading the arrays of the ones before and adding to
+# the counts the summary line reports.
 def read_footprints(
     path: str | os.PathLike[str],
     georef: Georef,

@@ -86,6 +86,8 @@ class UAVNavEnv(BatchedFlights, gym.Env):
 
     metadata = {"render_modes": []}  # noqa: RUF012 - gymnasium's convention
 
+    # Long: the environment's constructor checks and resolves every input in one place (a map, raw
+    # arrays or a field; the task; the observation; the levels), as Gymnasium's environments do.
     def __init__(
         self,
         radio_map: Any = None,

@@ -57,6 +57,8 @@ class Place:
     sites: list[dict[str, Any]]
 
 
+# Long: the place in stages (the sites, the box, the area and its pixels, the weather, the
+# terrain and the footprints); each stage works in the frame the ones before fix.
 def place_scenario(
     sites_file: str | Path,
     start: tuple[float, float],

@@ -275,6 +275,8 @@ impl RayScene<'_> {
 
     /// The corners' rays ([`Self::corner_rays`]) and, with `eaves`, the rays the roof edges
     /// beside the line diffract to the same pixels ([`eaves`]).
+    // Long: the corners' and the eaves' rays share one parallel pass over the rows, with the
+    // corners and their images of the site found once for every row.
     pub fn edge_rays(
         &self,
         site: [f64; 3],

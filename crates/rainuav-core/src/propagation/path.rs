@@ -25,6 +25,8 @@ impl RayScene<'_> {
     /// below `floor(lo, hi)` (m above sea level) wherever the line `a + t (b - a)`,
     /// `t in lo..=hi`, passes over their footprint's box: those the caller has shown cannot
     /// change its answer ([`crate::propagation::obstacles::Prisms::near_segment_over`]).
+    // Long: the terrain's samples, the obstacle raster and the faces of the footprints the line
+    // crosses are read in one walk along the line.
     pub fn profile_over(
         &self,
         a: [f64; 2],
@@ -296,6 +298,8 @@ impl RayScene<'_> {
 
     /// [`RayScene::path`], reading the whole profile where `prune` is false (the check that
     /// what it leaves out changes nothing).
+    // Long: the line-of-sight test, each leg's knife edge and Bullington's slopes read the same
+    // profile samples in one pass.
     pub(crate) fn path_over(
         &self,
         tx: [f64; 3],

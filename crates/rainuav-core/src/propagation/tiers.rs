@@ -147,6 +147,8 @@ mod tests {
     use crate::propagation::obstacles::{Building, Prisms};
 
     #[test]
+    // Long: 3 000 random boxes and 300 segments across them, each segment's hand-on checked against
+    // every box it meets.
     fn the_tiers_hand_on_each_prism_met_once_and_leave_a_tier_below_the_line() {
         // 3 000 boxes, roofs 1-200 m (most low, a few towers), some 400 m wide (listed in
         // many buckets): tiers up to the median roof, then doubling. 300 segments across the

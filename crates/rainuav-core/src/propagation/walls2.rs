@@ -184,6 +184,8 @@ impl RayScene<'_> {
 
     /// The ray the walls `w1` then `w2` reflect from the site to pixel `(i, j)`, if any.
     #[allow(clippy::too_many_arguments)]
+    // Long: the two images, both reflection points and the three legs' checks of one double bounce,
+    // each using the one before.
     fn ray2(
         &self,
         site: [f64; 3],

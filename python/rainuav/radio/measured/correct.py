@@ -66,6 +66,8 @@ RECEIVE_PATTERNS = ("off", "elevation", "heading", "both")
 """What ``correct_map``'s ``receive_pattern`` may be."""
 
 
+# Long: the correction's steps in their order (the log's cells, the calibration, the receive
+# pattern, the residual field, the held-out scores, the map's arrays); each reads the one before.
 def correct_map(
     rm: RadioMap,
     log: MeasurementLog,

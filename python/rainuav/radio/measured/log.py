@@ -276,6 +276,8 @@ def _cell_index(raw: list[str], cells: int, names: list[str] | None) -> np.ndarr
     return out
 
 
+# Long: one pass over a log's columns; each filter (outside the area, unknown cells, values not
+# finite or out of range) drops its rows and counts them for the summary line.
 def _to_log(
     p: Path,
     scn: Scenario,

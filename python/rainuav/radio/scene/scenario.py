@@ -119,6 +119,8 @@ class Scenario:
         self.check()
 
     # -- validation -------------------------------------------------------------------------
+    # Long: one check per field of the scenario, in the order of its fields: a flat list, each line
+    # naming its field.
     def check(self) -> None:
         """Checks every field; raises InvalidInputError naming the first bad one."""
         _num("freq_hz", self.freq_hz, 1e9, 1e11, " Hz")

@@ -5,6 +5,8 @@ use super::*;
 
 impl LevelTask<'_> {
     /// The backward programme (module docs) and the replay of its policy.
+    // Long: the backward programme over (tick, level, position) and the replay of its policy share
+    // the value tables and the lattice; split, the tables would pass between the halves.
     pub(super) fn solve(
         &self,
         src: Source<'_, '_, '_>,

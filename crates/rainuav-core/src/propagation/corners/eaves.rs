@@ -282,6 +282,8 @@ impl RayScene<'_> {
     /// The ray roof edge `e` diffracts from the site (`zs` m above sea level) to the pixel `q`
     /// (receiver at `zq`), if it is strong enough (module docs) and both legs are clear.
     #[allow(clippy::too_many_arguments)]
+    // Long: both legs' checks, the edge's coefficients and the power bound share the site's terms
+    // and the edge's geometry.
     pub(super) fn eave_ray(
         &self,
         s: [f64; 2],

@@ -100,6 +100,8 @@ enum ColumnOp {
 
 impl Marcher {
     /// Starts a march from the aperture field `u0` (nx, ny). Checks everything.
+    // Long: every input is checked, then the propagator table, the windows and the buffers are
+    // built once, before the first step.
     pub fn new(spec: MarchSpec, u0: ArrayView2<'_, C32>) -> Result<Self> {
         spec.validate()?;
         if u0.dim() != (spec.nx, spec.ny) {

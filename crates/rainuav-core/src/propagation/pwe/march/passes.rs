@@ -247,6 +247,8 @@ impl Marcher {
     /// One [`ColumnOp`] on every column of the y-spectra (and the `"pec-v"` Nyquist row),
     /// block by block of `COLUMN_BLOCK` columns gathered into contiguous scratch.
     #[allow(unsafe_code)]
+    // Long: the columns' gather into scratch, both FFTs and the operation share one unsafe block
+    // and its buffers; one function keeps the unsafe code in one place.
     pub(super) fn column_op(&mut self, op: ColumnOp) {
         let ptab: &[C32] = match op {
             ColumnOp::Propagate { scaled: true } => {
@@ -358,6 +360,8 @@ impl Marcher {
 
     /// Inverse y transform of every row, then screen, window, obstacles and recording;
     /// then (if `forward_again`) the forward y transform for the next step.
+    // Long: the inverse transform, screen, window, obstacles, recording and the forward transform
+    // of a row share the row's scratch in one pass.
     pub(super) fn row_pass(
         &mut self,
         medium: &StepMedium<'_>,
