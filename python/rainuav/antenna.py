@@ -54,7 +54,7 @@ _FLOOR_LINEAR = 1e-20
 class Pattern(Protocol):
     """Anything with a vectorised ``gain_dbi(azimuth_deg, elevation_deg)``."""
 
-    def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+    def gain_dbi(self, azimuth_deg: npt.ArrayLike, elevation_deg: npt.ArrayLike) -> FloatArray:
         """The gain toward directions, dBi.
 
         Args:
@@ -67,7 +67,9 @@ class Pattern(Protocol):
         ...
 
 
-def _angles(azimuth_deg: Any, elevation_deg: Any) -> tuple[FloatArray, FloatArray]:
+def _angles(
+    azimuth_deg: npt.ArrayLike, elevation_deg: npt.ArrayLike
+) -> tuple[FloatArray, FloatArray]:
     az = as_real_array("azimuth_deg", azimuth_deg)
     el = as_real_array("elevation_deg", elevation_deg)
     if not (np.all(np.isfinite(az)) and np.all(np.isfinite(el))):
@@ -124,7 +126,7 @@ class TR38901Element:
         _num("sla_v_db", self.sla_v_db, 0.0, 100.0, " dB")
         _num("a_max_db", self.a_max_db, 0.0, 100.0, " dB")
 
-    def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+    def gain_dbi(self, azimuth_deg: npt.ArrayLike, elevation_deg: npt.ArrayLike) -> FloatArray:
         """The element's gain toward directions, dBi (TR 38.901 Table 7.3-1).
 
         Args:
@@ -194,7 +196,7 @@ class UniformArray:
         _num("electrical_tilt_deg", self.electrical_tilt_deg, -90.0, 90.0, " degrees")
         object.__setattr__(self, "norm_db", -10.0 * math.log10(sphere_mean(self)))
 
-    def array_gain_db(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+    def array_gain_db(self, azimuth_deg: npt.ArrayLike, elevation_deg: npt.ArrayLike) -> FloatArray:
         """The array factor's gain, `10 log10(|AF_v|^2 |AF_h|^2)` (peak `10 log10(rows x columns)`).
 
         Args:
@@ -214,7 +216,7 @@ class UniformArray:
             af = af * _array_factor(self.columns, psi_h)
         return 10.0 * np.log10(np.maximum(af, _FLOOR_LINEAR))
 
-    def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+    def gain_dbi(self, azimuth_deg: npt.ArrayLike, elevation_deg: npt.ArrayLike) -> FloatArray:
         """The array's gain toward directions, dBi: the element's and the array factor's.
 
         Args:
@@ -294,7 +296,7 @@ class GaussianBeam:
         sv = math.sin(math.radians(self.beamwidth_v_deg) / 2)
         return 10.0 * math.log10(4 * _LN2 / (sh * sv))
 
-    def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+    def gain_dbi(self, azimuth_deg: npt.ArrayLike, elevation_deg: npt.ArrayLike) -> FloatArray:
         """The beam's gain toward directions, dBi.
 
         Args:
@@ -377,7 +379,7 @@ class TabulatedPattern:
         if self.normalise:
             object.__setattr__(self, "norm_db", -10.0 * math.log10(sphere_mean(self)))
 
-    def gain_dbi(self, azimuth_deg: Any, elevation_deg: Any) -> FloatArray:
+    def gain_dbi(self, azimuth_deg: npt.ArrayLike, elevation_deg: npt.ArrayLike) -> FloatArray:
         """The table's gain toward directions, dBi: bilinear between nodes, its lowest gain outside.
 
         Args:
@@ -404,7 +406,11 @@ class TabulatedPattern:
 
 
 def tabulated(
-    azimuth_deg: Any, elevation_deg: Any, gain_db: Any, *, normalise: bool = True
+    azimuth_deg: npt.ArrayLike,
+    elevation_deg: npt.ArrayLike,
+    gain_db: Any,
+    *,
+    normalise: bool = True,
 ) -> TabulatedPattern:
     """A pattern from a table of gains.
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 
@@ -63,7 +64,9 @@ def latlon_text(lat: float, lon: float, digits: int = 5) -> str:
     return f"{abs(lat):.{digits}f} {ns}, {abs(lon):.{digits}f} {ew}"
 
 
-def check_latlon(name: str, lat: Any, lon: Any) -> tuple[np.ndarray, np.ndarray]:
+def check_latlon(
+    name: str, lat: npt.ArrayLike, lon: npt.ArrayLike
+) -> tuple[np.ndarray, np.ndarray]:
     """Latitudes and longitudes as float arrays, checked.
 
     Args:
@@ -129,7 +132,9 @@ class Georef:
             object.__setattr__(self, "_cache", cached)
         return cached
 
-    def to_local(self, lat: Any, lon: Any, name: str = "position") -> tuple[Any, Any]:
+    def to_local(
+        self, lat: npt.ArrayLike, lon: npt.ArrayLike, name: str = "position"
+    ) -> tuple[Any, Any]:
         """Metres east and north of the origin of points given in degrees.
 
         Args:
@@ -147,7 +152,7 @@ class Georef:
         x, y = self._transformers()[0].transform(lo, la)
         return x, y
 
-    def to_latlon(self, x: Any, y: Any) -> tuple[Any, Any]:
+    def to_latlon(self, x: npt.ArrayLike, y: npt.ArrayLike) -> tuple[Any, Any]:
         """The latitude and longitude of points given in metres east and north of the origin.
 
         Args:
@@ -167,7 +172,9 @@ class Georef:
         return lat, lon
 
 
-def geodesic_m(lat1: Any, lon1: Any, lat2: Any, lon2: Any) -> Any:
+def geodesic_m(
+    lat1: npt.ArrayLike, lon1: npt.ArrayLike, lat2: npt.ArrayLike, lon2: npt.ArrayLike
+) -> Any:
     """The geodesic distance on the WGS 84 ellipsoid (pyproj's `Geod`: Karney's algorithm).
 
     Args:

@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
@@ -158,7 +159,7 @@ class Terrain:
         """``(x0, dx, y0, dy)`` as the core's rasters take them."""
         return (self.x0_m, self.dx_m, self.y0_m, self.dy_m)
 
-    def at(self, x: Any, y: Any) -> np.ndarray:
+    def at(self, x: npt.ArrayLike, y: npt.ArrayLike) -> np.ndarray:
         """Terrain heights at points, bilinear between nodes, held beyond the outermost (the core's
         reading).
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.levelfield import LEVEL_ACTIONS, LevelStepper
@@ -35,7 +36,12 @@ class BatchedFlights:
     random_goal: bool
 
     def observe_batch(
-        self, pos: Any, level: Any, t: Any, goal: Any = None, world: Any = None
+        self,
+        pos: npt.ArrayLike,
+        level: npt.ArrayLike,
+        t: npt.ArrayLike,
+        goal: npt.ArrayLike | None = None,
+        world: npt.ArrayLike | None = None,
     ) -> Any:
         """The observation of many UAVs at once.
 
@@ -72,7 +78,13 @@ class BatchedFlights:
             np.float32
         )
 
-    def observe(self, pos: Any, t: Any = 0, goal: Any = None, world: Any = None) -> Any:
+    def observe(
+        self,
+        pos: npt.ArrayLike,
+        t: npt.ArrayLike = 0,
+        goal: npt.ArrayLike | None = None,
+        world: npt.ArrayLike | None = None,
+    ) -> Any:
         """The observation of UAVs on level 0.
 
         Args:
@@ -87,9 +99,15 @@ class BatchedFlights:
         return self.observe_batch(pos, 0, t, goal, world)
 
     def step_batch(
-        self, start: Any, offset: Any, level: Any, t: Any, action: Any, goal: Any = None,
-        world: Any = None,
-    ) -> dict[str, np.ndarray]:  # fmt: skip
+        self,
+        start: npt.ArrayLike,
+        offset: npt.ArrayLike,
+        level: npt.ArrayLike,
+        t: npt.ArrayLike,
+        action: npt.ArrayLike,
+        goal: npt.ArrayLike | None = None,
+        world: npt.ArrayLike | None = None,
+    ) -> dict[str, np.ndarray]:
         """One move of every UAV.
 
         Args:
@@ -114,7 +132,7 @@ class BatchedFlights:
         r["t"] = r.pop("tick")
         return r
 
-    def exploration_moves(self, level: Any) -> np.ndarray | None:
+    def exploration_moves(self, level: npt.ArrayLike) -> np.ndarray | None:
         """The moves an exploring UAV draws from.
 
         Random moves among levels would end a sixth of the early flights at once (a climb from the
@@ -153,7 +171,7 @@ class BatchedFlights:
             raise InvalidInputError(f"({x:g}, {y:g}) is not flyable at any level")
         return int(np.flatnonzero(ok)[0])
 
-    def start_level_at(self, p: Any) -> int:
+    def start_level_at(self, p: npt.ArrayLike) -> int:
         """The level a flight from a point starts at.
 
         Args:
@@ -167,7 +185,9 @@ class BatchedFlights:
             return int(self.start_level)
         return self.lowest_flyable(float(p[0]), float(p[1])) if self.level_axis else 0
 
-    def sample_start(self, rng: np.random.Generator, goal: Any = None) -> np.ndarray:
+    def sample_start(
+        self, rng: np.random.Generator, goal: npt.ArrayLike | None = None
+    ) -> np.ndarray:
         """A start drawn uniformly in the area, away from the destination and flyable.
 
         Args:
@@ -192,7 +212,7 @@ class BatchedFlights:
         )
 
     def draw_task(
-        self, rng: np.random.Generator, goal: Any = None
+        self, rng: np.random.Generator, goal: npt.ArrayLike | None = None
     ) -> tuple[np.ndarray, np.ndarray, int]:
         """A new episode's start, destination and world.
 
@@ -222,7 +242,14 @@ class BatchedFlights:
                 return p, g, world
         raise InvalidInputError(f"no flyable start within reach of the destination {tuple(g)}")
 
-    def signal(self, x: Any, y: Any, t_s: Any, world: Any = 0, level: Any = 0) -> Any:
+    def signal(
+        self,
+        x: npt.ArrayLike,
+        y: npt.ArrayLike,
+        t_s: npt.ArrayLike,
+        world: npt.ArrayLike = 0,
+        level: npt.ArrayLike = 0,
+    ) -> Any:
         """The signal at points and times.
 
         Args:

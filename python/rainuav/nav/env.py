@@ -329,7 +329,7 @@ class UAVNavEnv(BatchedFlights, gym.Env):
             info["world"] = int(self._world[0])
         return info
 
-    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+    def step(self, action: npt.ArrayLike) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """One move.
 
         Args:

@@ -33,42 +33,9 @@ __all__ = [
     "SignalField",
     "SignalSeries",
     "SirField",
-    "blocked_at",
     "field_digest",
     "pixel_index",
-    "read_signal",
 ]
-
-
-def blocked_at(field: Any, x: Any, y: Any) -> np.ndarray:
-    """Whether each point lies in a pixel a UAV may not enter.
-
-    Args:
-        field: A [`SignalField`][rainuav.nav.field.SignalField] (or anything with a `blocked`
-            method).
-        x: East, m.
-        y: North, m.
-
-    Returns:
-        bool, of the broadcast shape of `x` and `y` (level 0 among levels).
-    """
-    return field.blocked(x, y, 0)
-
-
-def read_signal(field: Any, x: Any, y: Any, t_s: Any, world: Any = None) -> Any:
-    """The signal a field gives at points and instants, in any world.
-
-    Args:
-        field: A [`SignalField`][rainuav.nav.field.SignalField].
-        x: East, m.
-        y: North, m.
-        t_s: Time, s.
-        world: The world of a bank, one or one per point; None: world 0.
-
-    Returns:
-        The signal, dB, of the broadcast shape of the points.
-    """
-    return field(x, y, t_s, world)
 
 
 class SignalField(FieldMakers):
@@ -215,7 +182,7 @@ class SignalField(FieldMakers):
         return SignalField(self.db[pick].copy(), self.extent, self.name, serving, mask,
                            t_s=t_s, banked=self.banked)  # fmt: skip
 
-    def brackets(self, tau: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def brackets(self, tau: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The slices around each instant and the later one's weight.
 
         `k0 == k1` at a slice's own instant and beyond the first or the last (the Rust core's
@@ -245,7 +212,14 @@ class SignalField(FieldMakers):
         self._last_brackets = (key, (k0, k1, f))
         return k0, k1, f
 
-    def __call__(self, x: Any, y: Any, t_s: Any = 0.0, world: Any = None, level: Any = None) -> Any:
+    def __call__(
+        self,
+        x: npt.ArrayLike,
+        y: npt.ArrayLike,
+        t_s: npt.ArrayLike = 0.0,
+        world: npt.ArrayLike | None = None,
+        level: npt.ArrayLike | None = None,
+    ) -> Any:
         """The signal at the points ``(x, y)`` at the instants ``t_s`` (a number, or one per
         point; a map ignores it), of world ``world`` (one per point, or one; default 0), on
         ``level`` (among levels; one per point, or one; default 0)."""
@@ -270,7 +244,7 @@ class SignalField(FieldMakers):
             k0, k1 = k0 * nl + lv, k1 * nl + lv
         return k0, k1, f
 
-    def chance(self, x: Any, y: Any, t_s: Any = None) -> Any:
+    def chance(self, x: npt.ArrayLike, y: npt.ArrayLike, t_s: npt.ArrayLike | None = None) -> Any:
         """The probability of outage at points, bilinear as the map (the task's "chance" reward).
 
         Args:
@@ -291,7 +265,13 @@ class SignalField(FieldMakers):
             )
         return bilinear(self.outage_p, self.extent, x, y)
 
-    def serving_cell(self, x: Any, y: Any, t_s: Any = 0.0, level: Any = None) -> Any:
+    def serving_cell(
+        self,
+        x: npt.ArrayLike,
+        y: npt.ArrayLike,
+        t_s: npt.ArrayLike = 0.0,
+        level: npt.ArrayLike | None = None,
+    ) -> Any:
         """The serving cell at the pixel holding each point, in the latest slice at or before the
         instant.
 
@@ -322,7 +302,7 @@ class SignalField(FieldMakers):
             at = (np.maximum(k, 0), *at)
         return self.serving[at]
 
-    def blocked(self, x: Any, y: Any, level: Any = 0) -> np.ndarray:
+    def blocked(self, x: npt.ArrayLike, y: npt.ArrayLike, level: npt.ArrayLike = 0) -> np.ndarray:
         """Whether the pixel holding each point may not be entered.
 
         Args:
@@ -378,7 +358,9 @@ class SignalField(FieldMakers):
         return SignalField(v, self.extent, self.name, not_flyable=self.not_flyable,
                            altitudes_m=self.altitudes_m)  # fmt: skip
 
-    def at_points(self, points: np.ndarray, t_s: Any, world: Any = None) -> np.ndarray:
+    def at_points(
+        self, points: np.ndarray, t_s: npt.ArrayLike, world: npt.ArrayLike | None = None
+    ) -> np.ndarray:
         """The signal at fixed points at many instants, as `__call__` gives it.
 
         Every slice is sampled once per set of points (until

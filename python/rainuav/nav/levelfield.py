@@ -98,7 +98,7 @@ class LevelStepper:
         self.down = np.array([descend[max(k - 1, 0)] if descend else 1 for k in range(top + 1)])
         self.goal = np.asarray(cfg.goal_m, dtype=np.float64)
 
-    def time_s(self, tick: Any) -> np.ndarray:
+    def time_s(self, tick: npt.ArrayLike) -> np.ndarray:
         """The instant after some ticks, s (`0 + tick * move_s`, as the core).
 
         Args:

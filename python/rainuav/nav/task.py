@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 
@@ -181,7 +182,9 @@ def check_config(
             raise InvalidInputError(f"{prefix}start_m must lie inside the area (got {s!r})")
 
 
-def base_reward(signal_db: Any, cfg: NavConfig, outage_p: Any = None) -> Any:
+def base_reward(
+    signal_db: npt.ArrayLike, cfg: NavConfig, outage_p: npt.ArrayLike | None = None
+) -> Any:
     """The reward term b(q') of a move, from the signal where it lands.
 
     Args:
@@ -210,7 +213,7 @@ def base_reward(signal_db: Any, cfg: NavConfig, outage_p: Any = None) -> Any:
     return -1.0 + cfg.mu * 10.0 ** (signal_db / 10.0)
 
 
-def flight_cost(returns: Any, arrived: Any, cfg: NavConfig) -> Any:
+def flight_cost(returns: npt.ArrayLike, arrived: npt.ArrayLike, cfg: NavConfig) -> Any:
     """The cost of flights: the return without the arrival reward, negated.
 
     Moves plus the weighted shortfall ([physics reference, section 6][6-the-navigation-task]).

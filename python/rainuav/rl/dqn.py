@@ -15,6 +15,7 @@ from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import torch
 from torch import nn
 
@@ -117,7 +118,7 @@ class Agent:
         training section)."""
         return torch.optim.Adam(self.online.parameters(), lr=self.cfg.lr, fused=True)
 
-    def epsilon(self, episode: Any) -> Any:
+    def epsilon(self, episode: npt.ArrayLike) -> Any:
         """The exploration rate after some episodes: `eps0 * eps_decay ** episode`.
 
         Args:
@@ -128,7 +129,7 @@ class Agent:
         """
         return self.cfg.eps0 * self.cfg.eps_decay ** np.asarray(episode, dtype=np.float64)
 
-    def observe(self, env_obs: Any, t: Any) -> np.ndarray:
+    def observe(self, env_obs: npt.ArrayLike, t: npt.ArrayLike) -> np.ndarray:
         """The network's input from a batch of the env's observations.
 
         Args:

@@ -203,7 +203,7 @@ def world_from(source: Any, task: NavConfig) -> World:
     return World(source, field, dataclasses.replace(task, min_db=min_db))
 
 
-def series_instants(spec: Any) -> Any:
+def series_instants(spec: WorldSpec) -> Any:
     """The instants a moving weather is mapped at.
 
     Args:
@@ -245,7 +245,7 @@ def level_field(
 
 
 def build_world(
-    spec: Any,
+    spec: WorldSpec,
     *,
     task: NavConfig | None = None,
     scenario: Scenario | None = None,
@@ -276,12 +276,14 @@ def build_world(
     return _observed(world_from(source, task), spec)
 
 
-def _observed(world: World, spec: Any) -> World:
+def _observed(world: World, spec: WorldSpec) -> World:
     """``world`` with the spec's observation and destinations."""
     return dataclasses.replace(world, observation=spec.observation, random_goal=spec.random_goal)
 
 
-def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: bool = True) -> Any:
+def build_source(
+    spec: WorldSpec, scn: Scenario, *, progress: bool = False, cache: bool = True
+) -> Any:
     """The map (or maps in time, or maps of levels) a spec's scenario gives, built or from the
     cache.
 
@@ -306,7 +308,7 @@ def build_source(spec: Any, scn: Scenario, *, progress: bool = False, cache: boo
     return build_radio_map(scn, progress=progress)
 
 
-def source_key(spec: Any, scn: Scenario) -> str:
+def source_key(spec: WorldSpec, scn: Scenario) -> str:
     """What identifies the source [`build_source()`][rainuav.world.build_source] gives.
 
     Args:
@@ -322,7 +324,7 @@ def source_key(spec: Any, scn: Scenario) -> str:
     return f"{scn.digest()}-{t[-1]:g}-{len(t)}"
 
 
-def load_world(folder: Path, spec: Any) -> World | None:
+def load_world(folder: Path, spec: WorldSpec) -> World | None:
     """The world saved in a run's folder, flown with a spec's task.
 
     Args:
@@ -356,7 +358,7 @@ def _scenario_name(source: Any) -> str:
     return str(source.scenario.name)
 
 
-def in_world(spec: Any, source: Any) -> tuple[Any, World]:
+def in_world(spec: WorldSpec, source: Any) -> tuple[Any, World]:
     """A spec and the world of its task on a map already built.
 
     For tests and scripts that hand the trainer a small map of their own: `train(*in_world(cfg,

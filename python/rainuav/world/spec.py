@@ -121,7 +121,7 @@ def task_of(spec: WorldSpec) -> NavConfig:
     return spec.task
 
 
-def levels_of(spec: Any) -> list[float]:
+def levels_of(spec: WorldSpec) -> list[float]:
     """The flight levels a spec names, in metres.
 
     Args:
@@ -149,7 +149,7 @@ def levels_of(spec: Any) -> list[float]:
     )
 
 
-def check_spec(spec: Any) -> None:
+def check_spec(spec: WorldSpec) -> None:
     """Checks every field of a spec, its task's included, before anything is built.
 
     Args:
@@ -190,7 +190,7 @@ def check_spec(spec: Any) -> None:
     levels_of(spec)
 
 
-def make_scenario(spec: Any, scenario: Scenario | None = None) -> Scenario:
+def make_scenario(spec: WorldSpec, scenario: Scenario | None = None) -> Scenario:
     """The scenario a spec names, with the spec's weather, frequency, engine and levels applied.
 
     The scenario is, in this order: `scenario` where given, the spec's `scenario_file`, the storm of

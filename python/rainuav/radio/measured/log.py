@@ -87,7 +87,9 @@ ALIASES: dict[str, tuple[str, ...]] = {
 a bracketed unit and turning spaces and dashes into underscores)."""
 
 
-def rss_from_rsrp(rsrp_dbm: Any, bandwidth_hz: float, subcarrier_khz: float = 15.0) -> Any:
+def rss_from_rsrp(
+    rsrp_dbm: npt.ArrayLike, bandwidth_hz: float, subcarrier_khz: float = 15.0
+) -> Any:
     """The cell's power over the band from its RSRP, for a fully loaded carrier.
 
     RSRP is the power of one resource element (one subcarrier): the power over the band is

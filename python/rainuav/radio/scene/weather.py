@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav import medium as m
 from rainuav._checks import check_choice as _choice
@@ -78,7 +79,7 @@ class RainCell:
         """Whether the cell changes in time (a velocity or a growth)."""
         return bool(self.vx_m_s or self.vy_m_s or self.growth_s)
 
-    def rate(self, x: Any, y: Any) -> Any:
+    def rate(self, x: npt.ArrayLike, y: npt.ArrayLike) -> Any:
         """The cell's rain rate at points on the ground.
 
         Args:
