@@ -71,10 +71,12 @@ FRONT_DOOR = (
     "rainuav.signals",
     "rainuav.missions",
     "rainuav.radio.outputs.levelmaps",
+    "rainuav.radio.measured.prior",
+    "rainuav.radio.measured.outage",
 )
 """The packages whose ``__all__`` is what a user imports first (the README's and the guide's), and
 the modules the guide's pages call by name (the rain medium, antennas, coordinates, signals,
-missions, maps at several heights)."""
+missions, maps at several heights, a map's spreads and its outage)."""
 
 
 def _front_door() -> dict[str, object]:

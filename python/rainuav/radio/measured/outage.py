@@ -47,11 +47,19 @@ DRAWS = 256
 
 
 def map_spreads(rm: Any, pixels: Any = None) -> tuple[np.ndarray, np.ndarray]:
-    """The local mean's and one sample's standard deviation of every cell's power at every
-    pixel of the map ``rm``, dB, (M, H, W) each (at the ``pixels`` (rows, columns) alone:
-    (M, N)): those the map carries (a corrected map's own, or a physics map's prior ones
-    written with it; a map saved without the sample spread: 0 for it), else the prior's by
-    mechanism ([`prior_spread()`][rainuav.radio.measured.prior.prior_spread])."""
+    """The local mean's and one sample's spread of every cell's power at every pixel of a map, dB.
+
+    Those the map carries (a corrected map's own, or a physics map's prior ones written with it; a
+    map saved without the sample spread: 0 for it), else the prior's by mechanism
+    ([`prior_spread()`][rainuav.radio.measured.prior.prior_spread]).
+
+    Args:
+        rm: The map.
+        pixels: `(rows, columns)` to read at alone; None: every pixel.
+
+    Returns:
+        `(local, sample)`, (M, H, W) each, or (M, N) at the `pixels`.
+    """
     if getattr(rm, "rss_std_db", None) is not None:
         local = np.asarray(rm.rss_std_db, dtype=float)
         sample = getattr(rm, "rss_sample_std_db", None)
@@ -132,14 +140,9 @@ def flight_outage_in_time(
         InvalidInputError: ``draws`` out of its range.
     """
     from rainuav._sampling import pixel_index
-    from rainuav.radio.measured.prior import (
-        clear_air_power_dbm,
-        composed_prior_spread,
-        excess_of,
-        free_space_db,
-        rain_loss_of,
-        site_distance_m,
-    )
+    from rainuav.radio.measured.geometry import excess_of, free_space_db, site_distance_m
+    from rainuav.radio.measured.prior import composed_prior_spread
+    from rainuav.radio.measured.rainspread import clear_air_power_dbm, rain_loss_of
 
     if not 1 <= draws <= 1_000_000:
         raise InvalidInputError(f"draws must lie within 1..1000000 (got {draws})")
