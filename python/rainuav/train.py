@@ -8,7 +8,7 @@ each listed on the Learning page; ``--preset paper`` runs Algorithm 1 and Table 
 [`rainuav.rl.config.TrainConfig`][rainuav.rl.config.TrainConfig] is a flag ``--name`` and every
 field of its task, [`rainuav.nav.task.NavConfig`][rainuav.nav.task.NavConfig], a flag
 ``--task.name`` and every field of
-[`rainuav.rl.config.DQNConfig`][rainuav.rl.config.DQNConfig] a flag ``--dqn.name``
+[`rainuav.rl.config.DQNConfig`][rainuav.rl.dqnconfig.DQNConfig] a flag ``--dqn.name``
 (``--help`` lists the run's own, ``--help-all`` all); ``--config run.toml`` reads fields from a
 file; flags win over the file, the file over the preset. ``--resume`` continues an
 interrupted run from its checkpoint (same configuration). The world (map or maps in time, and the

@@ -33,8 +33,19 @@ _ARRAY = "__ndarray__"
 
 
 def to_plain(obj: Any) -> Any:
-    """``obj`` with every numpy array or scalar replaced by ``{"__ndarray__": tensor}``
-    (containers are copied; tensors and plain values pass through)."""
+    """An object with every numpy array or scalar replaced by `{"__ndarray__": tensor}`.
+
+    Containers are copied; tensors and plain values pass through.
+
+    Args:
+        obj: A run's state.
+
+    Returns:
+        What `torch.save` writes and `weights_only=True` reads back.
+
+    Raises:
+        TypeError: A numpy object array (a checkpoint holds no code).
+    """
     if isinstance(obj, np.ndarray | np.generic):
         arr = np.asarray(obj)
         if arr.dtype == object:
@@ -50,8 +61,14 @@ def to_plain(obj: Any) -> Any:
 
 
 def from_plain(obj: Any) -> Any:
-    """The inverse of [`to_plain()`][rainuav.rl.checkpoint.to_plain]: 0-d arrays come back as numpy
-    scalars."""
+    """The inverse of `to_plain()`: 0-d arrays come back as numpy scalars.
+
+    Args:
+        obj: What [`load()`][rainuav.rl.checkpoint.load] read.
+
+    Returns:
+        The state with its numpy arrays.
+    """
     if isinstance(obj, dict):
         if set(obj) == {_ARRAY} and isinstance(obj[_ARRAY], torch.Tensor):
             arr = obj[_ARRAY].numpy()
@@ -65,8 +82,17 @@ def from_plain(obj: Any) -> Any:
 
 
 def non_finite(obj: Any, where: str = "") -> str | None:
-    """The dotted name of the first floating-point tensor or array in ``obj`` holding a NaN or an
-    infinity, or None (plain numbers are a run's records, not weights: not checked)."""
+    """The first floating-point tensor or array of a state holding a NaN or an infinity.
+
+    Plain numbers are a run's records, not weights, and are not checked.
+
+    Args:
+        obj: The state.
+        where: The dotted name of `obj` itself.
+
+    Returns:
+        Its dotted name, or None where every one is finite.
+    """
     if isinstance(obj, torch.Tensor):
         if obj.is_floating_point() or obj.is_complex():
             return None if bool(torch.isfinite(obj).all()) else where or "the value"
@@ -90,8 +116,18 @@ def non_finite(obj: Any, where: str = "") -> str | None:
 
 
 def save(path: str | os.PathLike[str], state: dict[str, Any]) -> Path:
-    """Writes ``state`` (tensors, numpy arrays and plain values) to ``path`` atomically; refused,
-    nothing written, where a tensor or array is not finite (module docstring)."""
+    """Writes a state (tensors, numpy arrays and plain values) atomically.
+
+    Args:
+        path: The file.
+        state: The state.
+
+    Returns:
+        The path written.
+
+    Raises:
+        TrainingDivergedError: A tensor or array that is not finite (nothing is written).
+    """
     bad = non_finite(state)
     if bad is not None:
         raise TrainingDivergedError(
@@ -105,11 +141,22 @@ def save(path: str | os.PathLike[str], state: dict[str, Any]) -> Path:
 def load(
     path: str | os.PathLike[str], required: tuple[str, ...] = (), what: str = "checkpoint"
 ) -> dict[str, Any]:
-    """The dict saved at ``path`` by [`save()`][rainuav.rl.checkpoint.save], read without running
-    code (``weights_only=True``, on the CPU); anything else raises
-    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file: missing, unreadable,
-    not a checkpoint, holding more than tensors and plain data, or lacking one of the ``required``
-    keys."""
+    """A state saved by [`save()`][rainuav.rl.checkpoint.save], read without running code.
+
+    Read with `weights_only=True`, on the CPU.
+
+    Args:
+        path: The file.
+        required: The keys it must hold.
+        what: What the errors call the file ("checkpoint", "policy").
+
+    Returns:
+        The state.
+
+    Raises:
+        InvalidInputError: A file missing, unreadable, not a checkpoint, holding more than tensors
+            and plain data, holding values that are not finite, or lacking a required key.
+    """
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"{what} {p}: no such file")

@@ -1,5 +1,5 @@
 """What a training run depends on: the learner's hyperparameters
-([`DQNConfig`][rainuav.rl.config.DQNConfig]) and the run's settings
+([`DQNConfig`][rainuav.rl.dqnconfig.DQNConfig]) and the run's settings
 ([`TrainConfig`][rainuav.rl.config.TrainConfig]), their checks, their TOML form and the random
 streams derived from the run's one seed."""
 
@@ -11,12 +11,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from rainuav._checks import check_field_kinds
 from rainuav._io import plain, read_toml
 from rainuav.errors import InvalidInputError
 from rainuav.nav.task import NavConfig
+from rainuav.rl.dqnconfig import DQNConfig
+from rainuav.rl.seeds import random_streams
 from rainuav.world import WorldSpec, check_spec
 
 __all__ = [
@@ -41,90 +41,6 @@ __all__ = [
     "resolve_config",
     "to_dict",
 ]
-
-
-@dataclass
-class DQNConfig:
-    """Hyperparameters of the dueling double DQN (defaults: the paper's Table I where given)."""
-
-    episodes: int = 3000
-    """Training episodes (Table I)."""
-    target_sync_episodes: int = 5
-    """N_update: episodes between target-network syncs (Table I)."""
-    eps0: float = 0.5
-    """Initial exploration rate (Table I)."""
-    eps_decay: float = 0.998
-    """Per-episode decay of the exploration rate, eps0 * eps_decay^episode (Table I)."""
-    replay_capacity: int = 100_000
-    """Replay memory size C (Table I)."""
-    batch_size: int = 16
-    """Minibatch size B (Table I)."""
-    gamma: float = 0.998
-    """Discount factor."""
-    n_step: int = 3
-    """N1: length of the multi-step window."""
-    lr: float = 1e-3
-    """Adam learning rate at the start."""
-    lr_final: float = 3e-5
-    """Learning rate after the last episode (cosine decay from lr over the episodes; 0: a
-    constant learning rate, lr throughout)."""
-    average_from: float = 0.8
-    """Fraction of the episodes after which the reported network is the running mean of the
-    online weights, one sample per finished episode (weight averaging); 1: the final online
-    network. Training itself is unchanged: the online network still acts and learns, and the
-    run reports the last online network's figures beside the mean (``online_*``)."""
-    hidden: int = 128
-    """Width of the two hidden layers."""
-    fourier: int = 8
-    """Sine/cosine frequencies per input in the state features (0: none)."""
-    reward_scale: float = 100.0
-    """Rewards are divided by this inside the learner."""
-    grad_clip: float = 10.0
-    """Gradient-norm clip (0: none)."""
-    loss: str = "huber"
-    """TD loss: 'huber' (smooth L1) or 'mse' (the paper's squared error)."""
-    learning_starts: int = 1000
-    """Transitions stored before learning starts."""
-    train_every: int = 4
-    """Environment steps (transitions, summed over lanes) per gradient step."""
-    lanes: int = 16
-    """UAVs flown at once, each its own episode (1: the paper's one-at-a-time loop)."""
-    time_aware: bool = False
-    """Append t / max_steps to the observation and stop bootstrapping at the time limit."""
-    goal_features: int = 4
-    """Goal-relative inputs tanh(d / (step * 4^k)), k < goal_features, per axis (0: none)."""
-    conv: int = 16
-    """Channels of the first convolution of a weather-reading network (the second has twice
-    as many)."""
-    move_features: bool = False
-    """A weather-reading network also reads, for each move, the destination's geometry after
-    it (arrival, progress toward the destination), into its body and straight into the
-    advantage head ([`rainuav.rl.networks.WeatherQNet`][rainuav.rl.networks.WeatherQNet])."""
-    goal_maps: bool = False
-    """A weather-reading network also sees the destination drawn on its grids: on the local window
-    how much nearer each point is to it, on the whole area each cell's distance to it and to the UAV
-    (extra input channels of the convolutions;
-    [`rainuav.rl.networks.WeatherQNet.goal_channels()`][rainuav.rl.networks.WeatherQNet.goal_channels])."""
-    goal_starts: float = 0.25
-    """Fraction of the training episodes that start near the destination (uniform in the
-    square of half side ``GOAL_START_MOVES`` moves around it, outside the arrival disc); the
-    rest, and every validation and evaluation flight, start uniform in the area."""
-    task_goals: float = 0.0
-    """Where the env draws a destination per episode, the fraction of the training episodes
-    flown to the task's own destination instead (a training mixture: validation and
-    evaluation flights keep the env's draws)."""
-    shaping: float = 1.0
-    """Weight of the potential-based shaping -(steps to the goal); 0: the plain rewards."""
-    sir_weight: float = 1.25
-    """Factor on the SIR part of each reward (b + 1) inside the learner; 1: the env's rewards."""
-    level_starts: float = 0.0
-    """Among flight levels, the share of the training flights that take off at a level drawn
-    uniformly among those flyable at the start (the rest, and every validation and evaluation
-    flight, at the lowest flyable level)."""
-    shield: bool = False
-    """Also report greedy flights that keep to moves that stay in the area and can still
-    arrive in max_steps, and avoid positions they already visited while they can
-    (rainuav.nav.shield), as shielded_*; the headline stays the network alone."""
 
 
 @dataclass
@@ -187,8 +103,14 @@ the tuned learner flies 16)."""
 
 
 def check_config(cfg: TrainConfig) -> None:
-    """Raises InvalidInputError naming the first field of the wrong kind or outside its
-    allowed range."""
+    """Checks a run's configuration before anything is built.
+
+    Args:
+        cfg: The run's [`TrainConfig`][rainuav.rl.config.TrainConfig].
+
+    Raises:
+        InvalidInputError: The first field of the wrong kind or outside its allowed range, named.
+    """
     if not isinstance(cfg.dqn, DQNConfig):
         raise InvalidInputError(f"dqn must be a DQNConfig (got {type(cfg.dqn).__name__})")
     check_field_kinds(cfg)
@@ -267,10 +189,17 @@ def _names(cls: type) -> set[str]:
 
 
 def field_name(key: str) -> str | None:
-    """The flat name (``scenario``, ``task.max_steps``, ``dqn.lr``) that ``key`` names in any
-    form [`flat_fields()`][rainuav.rl.config.flat_fields] reads: itself, a task field without
-    its table (``max_steps``) or a [`RENAMED`][rainuav.rl.config.RENAMED] field; ``goal_x_m``
-    and ``goal_y_m`` are parts of ``task.goal_m``. None: no field."""
+    """The flat name a key names in any form [`flat_fields()`][rainuav.rl.config.flat_fields] reads.
+
+    Itself, a task field without its table (`max_steps`) or a [`RENAMED`][rainuav.rl.config.RENAMED]
+    field; `goal_x_m` and `goal_y_m` are parts of `task.goal_m`.
+
+    Args:
+        key: A field's name as a file or a flag gives it.
+
+    Returns:
+        The flat name (`scenario`, `task.max_steps`, `dqn.lr`), or None where it names no field.
+    """
     if key in ("goal_x_m", "goal_y_m"):
         return "task.goal_m"
     section, _, name = key.rpartition(".")
@@ -283,12 +212,23 @@ def field_name(key: str) -> str | None:
 
 
 def flat_fields(data: dict[str, Any], where: str) -> dict[str, Any]:
-    """The fields of a run's TOML table (``[task]`` and ``[dqn]`` sub-tables, or names already
-    flat) as flat names (``scenario``, ``task.max_steps``, ``dqn.lr``). Earlier forms are read
-    too ([`field_name()`][rainuav.rl.config.field_name]): the
-    [`RENAMED`][rainuav.rl.config.RENAMED] fields, a task field at the top (``max_steps``) and
-    the destination as ``goal_x_m`` / ``goal_y_m``. Unknown names, and a field given twice,
-    raise InvalidInputError naming ``where``."""
+    """The fields of a run's TOML table as flat names (`scenario`, `task.max_steps`, `dqn.lr`).
+
+    The `[task]` and `[dqn]` sub-tables, or names already flat; earlier forms are read too
+    ([`field_name()`][rainuav.rl.config.field_name]): the [`RENAMED`][rainuav.rl.config.RENAMED]
+    fields, a task field at the top (`max_steps`) and the destination as `goal_x_m` / `goal_y_m`.
+
+    Args:
+        data: The table, as read from TOML.
+        where: What the errors name (the file).
+
+    Returns:
+        The fields by flat name.
+
+    Raises:
+        InvalidInputError: An unknown name, a sub-table that is not a table, or a field given twice
+            (under two names).
+    """
     out: dict[str, Any] = {}
     unknown: list[str] = []
     goal: dict[int, Any] = {}
@@ -326,11 +266,24 @@ MAX_EXTENDS = 100
 
 
 def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict[str, Any]:
-    """The fields a preset sets, flat (``"scenario"``, ``"dqn.lr"``): a shipped preset by name
-    ([`preset_names()`][rainuav.rl.config.preset_names]) or a TOML file of the form of a run's
-    ``config.toml`` (some fields only), which may start from another preset (``extends =
-    "NAME"``, its own fields winning; a run's ``config.toml`` starts from the ``preset`` it
-    records). An unknown name or a bad file raises InvalidInputError."""
+    """The fields a preset sets, flat (`"scenario"`, `"dqn.lr"`).
+
+    A shipped preset by name ([`preset_names()`][rainuav.rl.config.preset_names]) or a TOML file of
+    the form of a run's `config.toml` (some fields only), which may start from another preset
+    (`extends = "NAME"`, its own fields winning; a run's `config.toml` starts from the `preset` it
+    records).
+
+    Args:
+        name_or_path: A preset's name or a TOML file.
+        _seen: The presets already read on the way (a chain of `extends` is bounded).
+
+    Returns:
+        The fields by flat name.
+
+    Raises:
+        InvalidInputError: An unknown name, a bad file, or an `extends` that chains too far or names
+            no preset.
+    """
     text = str(name_or_path)
     path = PRESET_DIR / f"{text}.toml" if text in preset_names() else Path(text)
     if not path.is_file():
@@ -358,18 +311,34 @@ def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict
 
 
 def preset_learner(name_or_path: str | Path) -> dict[str, Any]:
-    """The [dqn] fields a preset sets (names without ``dqn.``)."""
+    """The `[dqn]` fields a preset sets.
+
+    Args:
+        name_or_path: A preset's name or a TOML file.
+
+    Returns:
+        The learner's fields, by name without `dqn.`.
+    """
     return {k[4:]: v for k, v in preset_fields(name_or_path).items() if k.startswith("dqn.")}
 
 
 def resolve_config(fields: dict[str, Any]) -> TrainConfig:
-    """The run's configuration from flat ``fields`` (TrainConfig names, ``task.<name>`` and
-    ``dqn.<name>`` for the task's and the learner's; the earlier forms that
-    [`flat_fields()`][rainuav.rl.config.flat_fields] reads too): the defaults, then the preset
-    that ``fields["preset"]`` names ([`preset_fields()`][rainuav.rl.config.preset_fields]),
-    then ``fields`` themselves. The one place where a preset and overrides meet (the ``train``
-    command, studies, a run's ``config.toml`` read back); the result records the preset's
-    name."""
+    """The run's configuration from flat fields: the defaults, then the preset, then the fields.
+
+    The one place where a preset and overrides meet (the `train` command, studies, a run's
+    `config.toml` read back); the result records the preset's name.
+
+    Args:
+        fields: Flat fields (TrainConfig names, `task.<name>` and `dqn.<name>`; the earlier forms
+            [`flat_fields()`][rainuav.rl.config.flat_fields] reads too); `fields["preset"]` names
+            the preset ([`preset_fields()`][rainuav.rl.config.preset_fields]).
+
+    Returns:
+        The [`TrainConfig`][rainuav.rl.config.TrainConfig], checked.
+
+    Raises:
+        InvalidInputError: A field of the wrong kind or out of range, or an unknown preset.
+    """
     given = flat_fields(fields, "configuration")
     preset = given.get("preset") or ""
     merged = {**(preset_fields(preset) if preset else {}), **given}
@@ -389,26 +358,56 @@ def resolve_config(fields: dict[str, Any]) -> TrainConfig:
 
 
 def flat(cfg: TrainConfig) -> dict[str, Any]:
-    """The fields of ``cfg`` flat (``task.<name>``, ``dqn.<name>``), as
-    [`resolve_config()`][rainuav.rl.config.resolve_config] takes them (unset fields left
-    out)."""
+    """The fields of a configuration, flat, as `resolve_config()` takes them.
+
+    Args:
+        cfg: The configuration.
+
+    Returns:
+        Its fields by flat name (`task.<name>`, `dqn.<name>`), unset fields left out.
+    """
     return flat_fields(to_dict(cfg), "configuration")
 
 
 def to_dict(cfg: TrainConfig) -> dict[str, Any]:
-    """A plain dict of the run, its ``task`` and ``dqn`` as tables (TOML-ready: unset fields are
-    left out)."""
+    """A run's configuration as plain data, its `task` and `dqn` as tables.
+
+    Args:
+        cfg: The configuration.
+
+    Returns:
+        A TOML-ready dict (unset fields left out).
+    """
     return plain(cfg)
 
 
 def read_config(path: str | Path) -> dict[str, Any]:
-    """The fields of a TOML file, flat ([`flat_fields()`][rainuav.rl.config.flat_fields]); a
-    missing or malformed file and unknown names raise InvalidInputError naming the file."""
+    """The fields of a TOML file, flat ([`flat_fields()`][rainuav.rl.config.flat_fields]).
+
+    Args:
+        path: The file.
+
+    Returns:
+        The fields by flat name.
+
+    Raises:
+        InvalidInputError: A missing or malformed file, or unknown names (the file named).
+    """
     return flat_fields(read_toml(path, "config file"), f"config file {path}")
 
 
 def load_config(path: str | Path) -> TrainConfig:
-    """A TrainConfig from a TOML file (a run's ``config.toml``): its fields over its preset's."""
+    """A run's configuration from a TOML file (a run's `config.toml`): its fields over its preset's.
+
+    Args:
+        path: The file.
+
+    Returns:
+        The [`TrainConfig`][rainuav.rl.config.TrainConfig].
+
+    Raises:
+        InvalidInputError: A file that cannot be read, or fields out of range (named).
+    """
     return resolve_config(read_config(path))
 
 
@@ -421,9 +420,18 @@ stopped)."""
 
 
 def config_diff(saved: dict[str, Any], cfg: TrainConfig, ignore: tuple[str, ...] = ()) -> list[str]:
-    """The fields (``task.x``, ``dqn.x`` for the task's and the learner's) where ``cfg`` differs
-    from the ``saved`` dict of a run (in any form [`flat_fields()`][rainuav.rl.config.flat_fields]
-    reads), as ``"name: saved -> given"``; ``ignore`` names fields allowed to differ."""
+    """The fields where a configuration differs from a run's saved one.
+
+    Args:
+        saved: The run's saved configuration, in any form
+            [`flat_fields()`][rainuav.rl.config.flat_fields] reads.
+        cfg: The configuration given.
+        ignore: Fields allowed to differ.
+
+    Returns:
+        One `"name: saved -> given"` line a field (`task.x`, `dqn.x` for the task's and the
+        learner's).
+    """
 
     def same_form(d: dict[str, Any]) -> dict[str, Any]:  # a point read back is a list
         return {k: tuple(v) if isinstance(v, list) else v for k, v in d.items()}
@@ -435,12 +443,3 @@ def config_diff(saved: dict[str, Any], cfg: TrainConfig, ignore: tuple[str, ...]
         for key in sorted(set(old) | set(new))
         if key not in ignore and old.get(key) != new.get(key)
     ]
-
-
-def random_streams(seed: int) -> dict[str, np.random.SeedSequence]:
-    """Independent seed sequences for every random choice of a run, all from ``seed``
-    (``SeedSequence.spawn``): ``"agent"`` (exploration and replay sampling) and ``"env"``
-    (training starts). Seeding both generators with ``seed`` itself would make them draw the
-    same stream."""
-    agent, env = np.random.SeedSequence(seed).spawn(2)
-    return {"agent": agent, "env": env}

@@ -3,7 +3,7 @@
 Reads top to bottom: the double-Q target, the memory a run needs, and the agent (observe, act,
 learn, sync); the networks are [`rainuav.rl.networks`][rainuav.rl.networks], the N-step window and
 the replay memory [`rainuav.rl.replay`][rainuav.rl.replay]. Hyperparameters:
-[`DQNConfig`][rainuav.rl.config.DQNConfig]. Every choice beyond the paper's Table I, and what it
+[`DQNConfig`][rainuav.rl.dqnconfig.DQNConfig]. Every choice beyond the paper's Table I, and what it
 measured, is in ``docs/record/learning.md``."""
 
 from __future__ import annotations
@@ -86,10 +86,10 @@ class Agent:
         """Builds the networks, the replay and the optimiser.
 
         Args:
-            cfg: The learner's settings ([`DQNConfig`][rainuav.rl.config.DQNConfig]).
+            cfg: The learner's settings ([`DQNConfig`][rainuav.rl.dqnconfig.DQNConfig]).
             seed: The run's seed: the network's initial weights; exploration and replay sampling
                 draw from its "agent" stream
-                ([`random_streams()`][rainuav.rl.config.random_streams]).
+                ([`random_streams()`][rainuav.rl.seeds.random_streams]).
             device: Where the networks run (CUDA when present, else the CPU).
             encoder: How the env's observations become the network's input, and the network
                 ([`rainuav.rl.networks`][rainuav.rl.networks]).
