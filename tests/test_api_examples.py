@@ -73,10 +73,15 @@ FRONT_DOOR = (
     "rainuav.radio.outputs.levelmaps",
     "rainuav.radio.measured.prior",
     "rainuav.radio.measured.outage",
+    "rainuav.rl.config",
+    "rainuav.rl.checkpoint",
+    "rainuav.rl.evaluation",
+    "rainuav.rl.seeds",
 )
 """The packages whose ``__all__`` is what a user imports first (the README's and the guide's), and
 the modules the guide's pages call by name (the rain medium, antennas, coordinates, signals,
-missions, maps at several heights, a map's spreads and its outage)."""
+missions, maps at several heights, a map's spreads and its outage, a run's configuration,
+checkpoints and evaluation)."""
 
 
 def _front_door() -> dict[str, object]:

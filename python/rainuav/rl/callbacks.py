@@ -76,11 +76,22 @@ class RunState:
         return len(self.returns)
 
     def seconds(self) -> float:
-        """Training time so far, s, the calls before this one included."""
+        """Training time so far, s, the calls before this one included.
+
+        Returns:
+            Seconds.
+        """
         return time.perf_counter() - self.t0 + self.train_seconds
 
     def state_dict(self, cfg: TrainConfig) -> dict[str, Any]:
-        """The checkpoint: tensors and plain data only."""
+        """The checkpoint: tensors and plain data only.
+
+        Args:
+            cfg: The run's configuration (recorded, so that a resume or an evaluation checks it).
+
+        Returns:
+            The checkpoint's dict.
+        """
         pool = self.pool
         return {
             "agent": self.agent.state_dict(),
@@ -103,8 +114,16 @@ class RunState:
         }
 
     def load_state_dict(self, saved: dict[str, Any], path: Path, episodes: int) -> None:
-        """Restores a checkpoint of this run (``path``: where it was read, for the messages;
-        ``episodes``: the run's); one that does not fit is refused, naming why."""
+        """Restores a checkpoint of this run.
+
+        Args:
+            saved: The checkpoint.
+            path: Where it was read (for the messages).
+            episodes: The run's episodes.
+
+        Raises:
+            InvalidInputError: A checkpoint that does not fit this run (named why).
+        """
         try:
             self.agent.load_state_dict(saved["agent"])
             self.env.np_random.bit_generator.state = saved["env_rng"]
@@ -134,11 +153,23 @@ class Callback:
     """A behaviour of training besides collecting and learning."""
 
     def on_episode(self, run: RunState, lane: int) -> None:
-        """After lane ``lane``'s episode finished (``run.done`` counts it)."""
+        """Called after one lane's episode finished (`run.done` counts it).
+
+        Args:
+            run: The run's state.
+            lane: The lane whose episode finished.
+        """
 
     def on_step(self, run: RunState, before: int) -> bool:
-        """After a step that finished episodes (``before``: finished before it); True ends the
-        call."""
+        """Called after a step that finished episodes.
+
+        Args:
+            run: The run's state.
+            before: The episodes finished before the step.
+
+        Returns:
+            True to end the call.
+        """
         return False
 
 
@@ -224,8 +255,16 @@ class Checkpoint:
     stop_after: int | None = None
 
     def after(self, run: RunState, before: int, stopping: bool) -> bool:
-        """Saves if due (``stopping``: a callback ends training); True where ``stop_after``
-        ends the call."""
+        """Saves the checkpoint if it is due.
+
+        Args:
+            run: The run's state.
+            before: The episodes finished before the step.
+            stopping: A callback ends training (the checkpoint is then written).
+
+        Returns:
+            True where `stop_after` ends the call.
+        """
         n, every, episodes = run.done, self.cfg.checkpoint_every, self.cfg.dqn.episodes
         if n // every > before // every or n == episodes or stopping:
             self.log.fh.flush()

@@ -172,7 +172,11 @@ PRESET_DIR = Path(__file__).with_name("preset_files")
 
 
 def preset_names() -> list[str]:
-    """The presets shipped with the package (``paper``, ``storms``, ``storm-levels``)."""
+    """The presets shipped with the package.
+
+    Returns:
+        Their names (`paper`, `storms`, `storm-levels`), sorted.
+    """
     return sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
 
 

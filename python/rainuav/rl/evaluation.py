@@ -75,11 +75,22 @@ def evaluate(
     starts: np.ndarray,
     references: dict[str, dict[str, np.ndarray]] | None = None,
 ) -> tuple[dict[str, Any], list]:
-    """The greedy network alone from every start, against the exact planner, beside the
-    baselines (``straight_line_*``; ``frozen_plan_*`` and ``replan_*`` where the weather
-    moves) and the optimum (``optimal_*``). With the
-    agent's shield on, the shielded flights are reported beside them as ``shielded_*`` (the
-    headline stays the network's own). Returns the metrics and the network's flights."""
+    """The greedy network alone from every start, against the exact planner, beside the baselines.
+
+    The baselines are the straight line (`straight_line_*`; `frozen_plan_*` and `replan_*` where the
+    weather moves) and the optimum (`optimal_*`). With the agent's shield on, the shielded flights
+    are reported beside them as `shielded_*` (the headline stays the network's own).
+
+    Args:
+        agent: The agent flown.
+        env: The environment.
+        starts: The fixed starts (N, 2), m.
+        references: The exact planner's and the baselines' flights from these starts, kept by the
+            caller to reuse between calls on the same world and task; None: computed here.
+
+    Returns:
+        `(metrics, flights)`: the figures by name, and the network's flights.
+    """
     refs = references or reference_flights(env, starts)
     opt = refs["optimal"]
     f, rolls = _policy_flights(agent, env, starts, shield=False)
@@ -132,12 +143,28 @@ class Validation:
 
     @staticmethod
     def score(success: float, excess: float | None) -> float:
-        """Lower is better: each missed flight weighs as much as 100% excess cost."""
+        """A check's score: lower is better, a missed flight weighing as much as 100% excess cost.
+
+        Args:
+            success: The share of flights that arrived.
+            excess: Their mean excess cost over the optimum.
+
+        Returns:
+            The score.
+        """
         return (1.0 - success) + (1.0 if excess is None else excess)
 
     def check(self, agent: Agent, env: Env, finished: int) -> tuple[float, float]:
-        """Flies the network alone from the validation starts; returns (success, mean excess
-        cost; 1 where no flight arrived)."""
+        """Flies the network alone from the validation starts.
+
+        Args:
+            agent: The agent.
+            env: The environment.
+            finished: The episodes finished (the check's place in the log).
+
+        Returns:
+            `(success, mean excess cost)`; the excess 1 where no flight arrived.
+        """
         f, _ = _policy_flights(agent, env, self.starts, shield=False)
         m = summarise(f, self.optimum)
         success = m["success_rate"]
@@ -152,6 +179,11 @@ class Validation:
         return success, excess
 
     def state_dict(self) -> dict[str, Any]:
+        """What a checkpoint keeps of the checks: their history and the best network so far.
+
+        Returns:
+            Tensors and plain data.
+        """
         return {
             "best_gap": self.best_gap,
             "best_at": self.best_at,
@@ -160,6 +192,11 @@ class Validation:
         }
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
+        """Restores what [`state_dict()`][rainuav.rl.evaluation.Validation.state_dict] gave.
+
+        Args:
+            d: The saved state.
+        """
         self.best_gap, self.best_at = d["best_gap"], d["best_at"]
         self.best_online, self.history = d["best_online"], list(d["history"])
 
@@ -167,13 +204,22 @@ class Validation:
 def evaluate_run_policy(
     cfg: TrainConfig, agent: Agent, env: Env, checks: Validation
 ) -> tuple[dict[str, Any], list]:
-    """Evaluates the run's policy from the evaluation starts and leaves it in ``agent``.
+    """Evaluates the run's policy from the evaluation starts, and leaves it in the agent.
 
-    ``agent`` comes with its last online weights. The reported network is their mean where the
-    run averaged them (``average_from`` < 1; the last online network is then flown first and
-    reported beside the mean as ``online_*``), else the last online network; with
-    ``keep_best``, the best on validation (the reported network's numbers are then added as
-    ``final_*``)."""
+    The agent comes with its last online weights. The reported network is their mean where the run
+    averaged them (`average_from` < 1; the last online network is then flown first and reported
+    beside the mean as `online_*`), else the last online network; with `keep_best`, the best on
+    validation (the reported network's numbers are then added as `final_*`).
+
+    Args:
+        cfg: The run's configuration.
+        agent: The agent, with its last online weights.
+        env: The environment.
+        checks: The run's validation checks.
+
+    Returns:
+        `(metrics, flights)`, as [`evaluate()`][rainuav.rl.evaluation.evaluate] gives them.
+    """
     starts = eval_starts(env, cfg.eval_starts, cfg.eval_seed)
     refs = reference_flights(env, starts, cfg.replan_every)
     keys = ("success_rate", "mean_excess_cost", "worst_excess_cost", "mean_return")
@@ -197,9 +243,22 @@ def evaluate_run_policy(
 def load_agent(
     path: Path, state: dict[str, Any], cfg: TrainConfig, env: Env, device: str, online: bool
 ) -> tuple[Agent, int, float]:
-    """The agent of a run's checkpoint ``state`` (read from ``path``) for ``env``, holding the
-    network the run reports (or with ``online`` its last online one); with its episodes and
-    training seconds. A checkpoint that does not fit is refused in one line."""
+    """The agent of a run's checkpoint, holding the network the run reports.
+
+    Args:
+        path: Where the checkpoint was read (for the messages).
+        state: The checkpoint.
+        cfg: The run's configuration.
+        env: The environment it flies.
+        device: "cpu", "cuda" or "auto".
+        online: Hold the last online network instead.
+
+    Returns:
+        `(agent, episodes, training seconds)`.
+
+    Raises:
+        InvalidInputError: A checkpoint that does not fit the network of `cfg` and `env`.
+    """
     agent = make_agent(cfg, env, pick_device(device))
     checks = Validation(np.zeros((0, 2)), {})
     try:
@@ -223,9 +282,19 @@ def load_agent(
 
 
 def check_map_digest(state: dict[str, Any], field: Any, run: Path) -> None:
-    """Refuses a run folder whose map is not the one its checkpoint ``state`` was trained on
-    (a map swapped in, or crafted: [`field_digest()`][rainuav.nav.field.field_digest]); a
-    checkpoint that records none (an earlier release) passes."""
+    """Refuses a run folder whose map is not the one its checkpoint was trained on.
+
+    A map swapped in, or crafted ([`field_digest()`][rainuav.nav.field.field_digest]); a checkpoint
+    that records none (an earlier release) passes.
+
+    Args:
+        state: The checkpoint.
+        field: The field the folder's map gives.
+        run: The run's folder.
+
+    Raises:
+        InvalidInputError: The map's digest differs from the checkpoint's.
+    """
     want = state.get("map_digest")
     if isinstance(want, str) and want != field_digest(field):
         raise InvalidInputError(
@@ -247,18 +316,35 @@ def evaluate_saved_run(
     references: dict[Any, Any] | None = None,
     online: bool = False,
 ) -> tuple[dict[str, Any], list, Any]:
-    """Flies a saved training run's policy (the network the run reports: the final one, the weight
-    average with ``average_from``, or with ``keep_best`` the best on validation). In the run's own
-    world by default; ``world`` (built by the caller, e.g. another scenario, rain rate or storm:
-    [`rainuav.world.build_world()`][rainuav.world.build_world]; or a function of the run's
-    configuration that builds it, called once the run's files are read) or ``radio_map`` (another
-    map, with the run's task) fly it elsewhere. ``starts``/``seed``: the number and seed of the
-    fixed starts (default: the run's evaluation starts); ``shield``: report shielded flights beside
-    the network's own; ``online``: fly the last online network instead of the one the run reports
-    (they differ with ``average_from`` < 1 or ``keep_best``; ``metrics["network"]`` says which
-    flew). ``references``: a dict the caller keeps to reuse the exact planner's flights between
-    calls on the same world and task. Returns the metrics, the flights and the environment; writes
-    nothing."""
+    """Flies a saved training run's policy: the network the run reports, in its own world or
+    another.
+
+    The network is the final one, the weight average with `average_from`, or with `keep_best` the
+    best on validation. Nothing is written.
+
+    Args:
+        run_dir: The run's folder.
+        device: "cpu", "cuda" or "auto".
+        world: Another world ([`build_world()`][rainuav.world.build_world]: another scenario, rain
+            rate or storm), or a function of the run's configuration that builds it, called once the
+            run's files are read; None: the run's own.
+        radio_map: Another map, with the run's task.
+        starts: The number of fixed starts (default: the run's evaluation starts).
+        seed: Their seed (default: the run's).
+        shield: Report shielded flights beside the network's own.
+        references: A dict the caller keeps to reuse the exact planner's flights between calls on
+            the same world and task.
+        online: Fly the last online network instead of the one the run reports (`metrics["network"]`
+            says which flew).
+
+    Returns:
+        `(metrics, flights, env)`.
+
+    Raises:
+        InvalidInputError: A folder that is not a run's, files that do not belong together (a
+            `config.toml` or map that is not the run's), both `world` and `radio_map`, or a run over
+            the storm distribution without a world to fly.
+    """
     run = Path(run_dir)
     if starts is not None:
         check_integer("starts", starts, 1, MAX_STARTS)

@@ -45,15 +45,33 @@ PLAN_CHUNK = 1000
 
 
 def eval_starts(env: UAVNavEnv, n: int, seed: int) -> np.ndarray:
-    """``n`` starts drawn uniformly (farther than the tolerance from the goal) from ``seed``."""
+    """Fixed starts drawn uniformly in the area, farther than the tolerance from the destination.
+
+    Args:
+        env: The environment.
+        n: How many.
+        seed: Their seed.
+
+    Returns:
+        (n, 2) starts, m.
+    """
     rng = np.random.default_rng(seed)
     return np.array([env.sample_start(rng) for _ in range(n)], dtype=np.float64).reshape(-1, 2)
 
 
 def relative_gap(optimum: np.ndarray, returns: np.ndarray) -> np.ndarray:
-    """Per start, the share of the exact optimum's return the policy gave up (a secondary
-    figure: the arrival reward in both returns makes it look about 4x smaller than the extra
-    cost it stands for, [physics reference, section 6][6-the-navigation-task])."""
+    """Per start, the share of the exact optimum's return the policy gave up.
+
+    A secondary figure: the arrival reward in both returns makes it look about 4 times smaller than
+    the extra cost it stands for ([physics reference, section 6][6-the-navigation-task]).
+
+    Args:
+        optimum: The optimum's returns (N,).
+        returns: The policy's returns (N,).
+
+    Returns:
+        (N,) shares.
+    """
     return (optimum - returns) / np.maximum(np.abs(optimum), 1e-9)
 
 
@@ -73,11 +91,26 @@ def flights(
     levels: list | None = None,
     ticks: list | None = None,
 ) -> dict[str, Any]:
-    """Per flight: ``return``, ``arrived``, ``cost``
-    ([`rainuav.nav.task.flight_cost()`][rainuav.nav.task.flight_cost]), ``steps`` (moves), the
-    signal along the path (every position after the start): its mean and the share of it below
-    ``min_db`` (per move), and the ``paths`` themselves (for figures). Among levels ``levels`` and
-    ``ticks`` give each point's level and clock."""
+    """Per flight: its return, arrival, cost, moves and the signal along its path.
+
+    The cost is [`flight_cost()`][rainuav.nav.task.flight_cost]; the signal along the path (every
+    position after the start) is summed, and its moves below `min_db` counted.
+
+    Args:
+        env: The environment flown.
+        returns: The flights' returns (N,).
+        arrived: Whether each arrived (N,).
+        paths: Each flight's positions.
+        levels: Among levels, each point's level.
+        ticks: Among levels, each point's clock.
+
+    Returns:
+        `return`, `arrived`, `cost`, `steps` (moves), `signal_sum` and `outage_sum` (N,) each,
+        and the `paths` themselves (for figures).
+
+    Raises:
+        InvalidInputError: Flights among levels without their levels and ticks.
+    """
     time_s = env.stepper.time_s  # the instant of each move, for a signal that changes
     if env.altitudes_m is not None:
         if levels is None or ticks is None:
@@ -100,9 +133,17 @@ def flights(
 
 
 def summarise(f: dict[str, np.ndarray], optimum: dict[str, np.ndarray]) -> dict[str, Any]:
-    """Success, excess cost ``(C - C*) / C*`` over the flights that arrived where the optimum
-    did too (None where none did), return gap, flight time in moves, and the mean signal and
-    outage share over every position flown."""
+    """The figures of a set of flights against the optimum's from the same starts.
+
+    Args:
+        f: The flights ([`flights()`][rainuav.rl.references.flights]).
+        optimum: The optimum's flights.
+
+    Returns:
+        The success rate, the excess cost `(C - C*) / C*` over the flights that arrived where the
+        optimum did too (None where none did), the return gap, the flight time in moves, and the
+        mean signal and outage share over every position flown.
+    """
     both = f["arrived"] & optimum["arrived"]
     excess = (f["cost"][both] - optimum["cost"][both]) / optimum["cost"][both]
     gap = relative_gap(optimum["return"], f["return"])
@@ -127,10 +168,21 @@ def reference_flights(
     starts: np.ndarray,
     replan_every: int = baselines.DEFAULT_REPLAN_EVERY,
 ) -> dict[str, dict[str, Any]]:
-    """The exact planner's flights (the yardstick) and the baselines': the straight line, and where
-    the signal changes in time the plan of the weather at take-off (``frozen_plan``) and re-planning
-    every ``replan_every`` moves (``replan``), each flown through the moving weather. Among levels:
-    [`level_reference_flights()`][rainuav.rl.references.level_reference_flights]."""
+    """The exact planner's flights (the yardstick) and the baselines', from fixed starts.
+
+    The baselines: the straight line and, where the signal changes in time, the plan of the weather
+    at take-off (`frozen_plan`) and re-planning every `replan_every` moves (`replan`), each flown
+    through the moving weather. Among levels:
+    [`level_reference_flights()`][rainuav.rl.references.level_reference_flights].
+
+    Args:
+        env: The environment.
+        starts: The starts (N, 2), m.
+        replan_every: The moves between two plans of the re-planning baseline.
+
+    Returns:
+        Each baseline's flights by name (`optimal`, `straight_line`, ...).
+    """
     if env.altitudes_m is not None:
         return level_reference_flights(env, starts)  # type: ignore[arg-type]
     flown = {"straight_line": [planner.straight_line(env, s) for s in starts]}
@@ -142,10 +194,18 @@ def reference_flights(
 
 
 def optimal_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, Any]:
-    """The exact planner's flights from ``starts`` (among levels: the plan among levels from the
-    level each flight starts at), as
-    [`reference_flights()`][rainuav.rl.references.reference_flights] gives ``optimal``: the
-    yardstick alone, for the checks during training."""
+    """The exact planner's flights alone: the yardstick, for the checks during training.
+
+    Among levels: the plan among levels from the level each flight starts at.
+
+    Args:
+        env: The environment.
+        starts: The starts (N, 2), m.
+
+    Returns:
+        The flights, as [`reference_flights()`][rainuav.rl.references.reference_flights] gives
+        `optimal`.
+    """
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     if env.altitudes_m is not None:
         return _plans(planner.optimal_among_levels(env, starts), env)  # type: ignore[arg-type]
@@ -179,9 +239,22 @@ def _plans(plans: list, env: UAVNavEnv) -> dict[str, Any]:
 
 
 def level_reference_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, dict[str, Any]]:
-    """Among levels (module docstring): ``optimal`` (the exact plan among levels),
-    ``fixed_altitude``, ``best_single_altitude`` and ``straight_line``. A level whose plane
-    cannot hold the task (its destination not flyable) flies no flight that arrives."""
+    """The exact plan among levels and the baselines of one altitude, from fixed starts.
+
+    `optimal` (the exact plan among levels), `fixed_altitude`, `best_single_altitude` and
+    `straight_line` (the module's docstring); a level whose plane cannot hold the task (its
+    destination not flyable) flies no flight that arrives.
+
+    Args:
+        env: The environment among levels.
+        starts: The starts (N, 2), m.
+
+    Returns:
+        Each baseline's flights by name.
+
+    Raises:
+        InvalidInputError: The destination is not flyable at the fixed altitude.
+    """
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     refs = {"optimal": optimal_flights(env, starts)}
     per_level = []
