@@ -25,7 +25,6 @@ than that for one."""
 from __future__ import annotations
 
 import dataclasses
-import functools
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -35,11 +34,14 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from rainuav.errors import InvalidInputError
+from rainuav.radio.measured._view import (
+    _cells,
+    _View,
+)
 from rainuav.radio.measured.log import MeasurementLog
 from rainuav.radio.outputs.mapdata import RadioMap
-from rainuav.radio.scene.cell import Cell, pattern_by_key
+from rainuav.radio.scene.cell import Cell
 from rainuav.radio.scene.scenario import Scenario, Site
-from rainuav.radio.scene.terrain import surface_at
 
 __all__ = [
     "BOUNDS",
@@ -66,91 +68,27 @@ START_GRID = {"tilt_deg": tuple(np.arange(-8.0, 8.5, 1.0)),
 STARTS = 2
 SCAN_POINTS = 100
 SCAN_EVALUATIONS = 60
-TABLE_STEP_DEG = 0.25
 SOFT_L1_SCALE_DB = 4.0
-GAIN_FLOOR_DB = -80.0
-
-
-def _site_z(scn: Scenario, site: Site) -> float:
-    return float(surface_at(scn, np.array([site.x_m]), np.array([site.y_m]))[0]) + site.height_m
-
-
-@functools.lru_cache(maxsize=16)
-def _pattern_table(key: tuple[Any, ...]) -> np.ndarray:
-    """The pattern of cells with ``key`` in its own frame, dBi floored at ``GAIN_FLOOR_DB``,
-    every ``TABLE_STEP_DEG`` in azimuth (-180..180) and elevation (-90..90)."""
-    az = np.arange(-180.0, 180.0 + TABLE_STEP_DEG / 2, TABLE_STEP_DEG)
-    el = np.arange(-90.0, 90.0 + TABLE_STEP_DEG / 2, TABLE_STEP_DEG)
-    g = pattern_by_key(key).gain_dbi(*np.meshgrid(az, el, indexing="ij"))
-    return np.maximum(np.asarray(g, dtype=float), GAIN_FLOOR_DB)
-
-
-def _bilinear_table(t: np.ndarray, az: np.ndarray, el: np.ndarray) -> np.ndarray:
-    fa = (az + 180.0) / TABLE_STEP_DEG
-    fe = (el + 90.0) / TABLE_STEP_DEG
-    ia = np.clip(np.floor(fa).astype(np.int64), 0, t.shape[0] - 2)
-    ie = np.clip(np.floor(fe).astype(np.int64), 0, t.shape[1] - 2)
-    wa, we = fa - ia, fe - ie
-    return ((1 - wa) * ((1 - we) * t[ia, ie] + we * t[ia, ie + 1])
-            + wa * ((1 - we) * t[ia + 1, ie] + we * t[ia + 1, ie + 1]))  # fmt: skip
-
-
-class _View:
-    """One cell seen from a set of points: what the gain change needs that no offset changes."""
-
-    def __init__(
-        self, scn: Scenario, site: Site, cell: Cell, x: Any, y: Any, z: Any, table: bool = False
-    ) -> None:
-        x, y, z = (np.asarray(v, dtype=float) for v in (x, y, z))
-        self.cell, self.table = cell, table
-        self.rho = np.hypot(x - site.x_m, y - site.y_m)
-        self.az = np.degrees(np.arctan2(y - site.y_m, x - site.x_m))
-        self.dz = z - _site_z(scn, site)
-        self.g0 = self._gain(cell, self.dz)
-
-    def _gain(self, cell: Cell, dz: np.ndarray) -> np.ndarray:
-        el = np.clip(np.degrees(np.arctan2(dz, self.rho)) - cell.tilt_deg, -90.0, 90.0)
-        az = (self.az - cell.azimuth_deg + 180.0) % 360.0 - 180.0
-        if not self.table:
-            g = pattern_by_key(cell.key()).gain_dbi(az, el)
-            return np.maximum(np.asarray(g, dtype=float), GAIN_FLOOR_DB)
-        return _bilinear_table(_pattern_table(cell.key()), az, el)
-
-    def change_many(self, offsets: dict[str, np.ndarray]) -> np.ndarray:
-        """``change()`` of a tabulated view for S sets of offsets at once (each (S,)), (S, N)."""
-        s = len(next(iter(offsets.values())))
-
-        def off(name: str) -> np.ndarray:
-            return np.asarray(offsets.get(name, np.zeros(s)), dtype=float)[:, None]
-
-        dz1 = self.dz[None, :] - off("height_m")
-        el = np.clip(
-            np.degrees(np.arctan2(dz1, self.rho)) - (self.cell.tilt_deg + off("tilt_deg")),
-            -90.0, 90.0,
-        )  # fmt: skip
-        az = (self.az - (self.cell.azimuth_deg + off("azimuth_deg")) + 180.0) % 360.0 - 180.0
-        g = _bilinear_table(_pattern_table(self.cell.key()), az, el)
-        spread = 10 * np.log10((self.rho**2 + self.dz**2 + 1e-6) / (self.rho**2 + dz1**2 + 1e-6))
-        return off("power_db") + g - self.g0 + spread
-
-    def change(self, offsets: dict[str, float]) -> np.ndarray:
-        dh = offsets.get("height_m", 0.0)
-        moved = dataclasses.replace(
-            self.cell,
-            azimuth_deg=self.cell.azimuth_deg + offsets.get("azimuth_deg", 0.0),
-            tilt_deg=self.cell.tilt_deg + offsets.get("tilt_deg", 0.0),
-        )
-        dz1 = self.dz - dh
-        spread = 10 * np.log10((self.rho**2 + self.dz**2 + 1e-6) / (self.rho**2 + dz1**2 + 1e-6))
-        return offsets.get("power_db", 0.0) + self._gain(moved, dz1) - self.g0 + spread
 
 
 def gain_change_db(
     scn: Scenario, site: Site, cell: Cell, x: Any, y: Any, z: Any, offsets: dict[str, float]
 ) -> np.ndarray:
-    """The change of the cell's power at the points (x, y, z above sea level), dB, when its
-    parameters move by ``offsets`` (module docstring; names of
-    [`BOUNDS`][rainuav.radio.measured.calibrate.BOUNDS], missing ones 0)."""
+    """The change of a cell's power at points when its parameters move.
+
+    Args:
+        scn: The scenario.
+        site: The cell's site.
+        cell: The cell.
+        x: East, m.
+        y: North, m.
+        z: Height above sea level, m.
+        offsets: The parameters' moves, by the names of
+            [`BOUNDS`][rainuav.radio.measured.calibrate.BOUNDS] (missing ones 0).
+
+    Returns:
+        The change, dB, at each point.
+    """
     return _View(scn, site, cell, x, y, z).change(offsets)
 
 
@@ -176,6 +114,12 @@ class CellFit:
     """RMS of measured minus calibrated prior."""
 
     def to_dict(self) -> dict[str, Any]:
+        """The fit as plain data, for `fit.json`.
+
+        Returns:
+            The cell, the rows used, the fitted offsets, their standard deviations and covariance,
+            the parameters at a bound, and the RMSE before and after.
+        """
         return dataclasses.asdict(self)
 
 
@@ -259,10 +203,6 @@ def _near(names: list[str], c: int, near: list[CellFit] | None) -> np.ndarray | 
     return None
 
 
-def _cells(scn: Scenario) -> list[tuple[Site, Cell]]:
-    return [(s, c) for s in scn.sites for c in s.cells]
-
-
 def calibrate(
     scn: Scenario,
     log: MeasurementLog,
@@ -270,11 +210,23 @@ def calibrate(
     params: Sequence[str] = tuple(BOUNDS),
     near: list[CellFit] | None = None,
 ) -> list[CellFit]:
-    """Fits each measured cell's ``params`` offsets to the log (module docstring); ``prior``:
-    each row's power in the prior map
-    ([`prior_at()`][rainuav.radio.measured.levels.prior_at]). ``near``: an earlier fit of
-    the same cells (on more of the log) to start from alone, where it fitted the same
-    parameters (a cross-validation fold)."""
+    """Fits each measured cell's site parameters to the log (the module's docstring).
+
+    Args:
+        scn: The scenario.
+        log: The log.
+        prior: Each row's power in the prior map, dBm
+            ([`prior_at()`][rainuav.radio.measured.levels.prior_at]).
+        params: The parameters fitted, names of [`BOUNDS`][rainuav.radio.measured.calibrate.BOUNDS].
+        near: An earlier fit of the same cells (on more of the log) to start from alone, where it
+            fitted the same parameters (a cross-validation fold).
+
+    Returns:
+        One [`CellFit`][rainuav.radio.measured.calibrate.CellFit] a measured cell.
+
+    Raises:
+        InvalidInputError: A parameter that is not one of `BOUNDS`.
+    """
     bad = [p for p in params if p not in BOUNDS]
     if bad:
         raise InvalidInputError(
@@ -331,8 +283,17 @@ def calibrate(
 
 
 def calibrated_maps(rm: RadioMap, fits: list[CellFit]) -> np.ndarray:
-    """The map's ``rss_dbm`` (M, H, W) with each fitted cell's parameters moved, dBm (pixels a
-    cell does not reach stay unreached)."""
+    """A map's powers with each fitted cell's parameters moved.
+
+    Pixels a cell does not reach stay unreached.
+
+    Args:
+        rm: The map.
+        fits: The cells' fits.
+
+    Returns:
+        `rss_dbm` (M, H, W), dBm.
+    """
     scn = rm.scenario
     cells = _cells(scn)
     out = np.array(rm.rss_dbm, dtype=float, copy=True)
@@ -351,12 +312,24 @@ def calibrated_maps(rm: RadioMap, fits: list[CellFit]) -> np.ndarray:
 
 
 def calibration_std_db(scn: Scenario, fit: CellFit, x: Any, y: Any, z: Any) -> np.ndarray:
-    """How far the fitted offsets' uncertainty moves the cell's power at the points (x, y, z
-    above sea level), dB: half the change between the offsets one standard deviation either way
-    along each principal axis of their covariance, added in quadrature (sigma points, on the
-    tabulated pattern, the offsets kept within their bounds: where the power is linear in the
-    offsets this is ``sqrt(J C J^T)``, and it stays finite beside a pattern's nulls, whose place a
-    small tilt moves, and for an offset the log hardly constrains)."""
+    """How far the fitted offsets' uncertainty moves a cell's power at points, dB.
+
+    Half the change between the offsets one standard deviation either way along each principal axis
+    of their covariance, added in quadrature (sigma points, on the tabulated pattern, the offsets
+    kept within their bounds): where the power is linear in the offsets this is `sqrt(J C J^T)`, and
+    it stays finite beside a pattern's nulls, whose place a small tilt moves, and for an offset the
+    log hardly constrains.
+
+    Args:
+        scn: The scenario.
+        fit: The cell's fit.
+        x: East, m.
+        y: North, m.
+        z: Height above sea level, m.
+
+    Returns:
+        The deviation, dB, at each point.
+    """
     x = np.asarray(x, dtype=float)
     if not fit.offsets:
         return np.zeros(x.shape)
@@ -381,7 +354,17 @@ def calibration_std_db(scn: Scenario, fit: CellFit, x: Any, y: Any, z: Any) -> n
 def calibrated_at(
     scn: Scenario, log: MeasurementLog, prior: np.ndarray, fits: list[CellFit]
 ) -> np.ndarray:
-    """Each row's power in the calibrated prior, dBm."""
+    """Each row's power in the calibrated prior, dBm.
+
+    Args:
+        scn: The scenario.
+        log: The log.
+        prior: Each row's power in the prior map, dBm.
+        fits: The cells' fits.
+
+    Returns:
+        (N,) powers, dBm.
+    """
     cells = _cells(scn)
     out = np.array(prior, dtype=float, copy=True)
     for f in fits:

@@ -34,7 +34,7 @@ def excess_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np
     Returns:
         Free space (with the antenna's gain) less the power, dB; NaN where a power is the floor's.
     """
-    from rainuav.radio.measured.calibrate import _cells, _View
+    from rainuav.radio.measured._view import _cells, _View
 
     site, c = _cells(scn)[int(cell)]
     v = _View(scn, site, c, x, y, z)
@@ -71,7 +71,7 @@ def site_distance_at(scn: Any, cell: Any, x: Any, y: Any, z: Any) -> np.ndarray:
     Returns:
         The distances, m.
     """
-    from rainuav.radio.measured.calibrate import _cells, _View
+    from rainuav.radio.measured._view import _cells, _View
 
     site, c = _cells(scn)[int(cell)]
     v = _View(scn, site, c, x, y, z)

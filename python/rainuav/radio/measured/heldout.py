@@ -41,8 +41,19 @@ flights (by number) or heights together, in at most this many groups."""
 
 
 def designs(rm: RadioMap, log: MeasurementLog, step: float) -> dict[str, np.ndarray]:
-    """The held-out designs of the log (module docstring, step 5): each design's name and
-    every row's fold, (N,)."""
+    """The held-out designs of a log (the module's docstring, step 5): each row's fold in each.
+
+    One flight left out at a time (or, in a log of one flight, one height), and one stretch of every
+    flight.
+
+    Args:
+        rm: The prior map.
+        log: The log.
+        step: The height of a level, m (the heights of a log of one flight).
+
+    Returns:
+        Each design's name (`flight` or `height`, and `stretch`) and every row's fold (N,).
+    """
     out = {}
     if len(np.unique(log.flight)) >= 2:
         out["flight"] = _at_most(log.flight, MAX_FOLDS)
@@ -124,15 +135,30 @@ def cross_validate_log(
     whole: Correction | None = None, baselines: bool = True, receive: bool = False,
     heading: bool = False, progress: bool = False, kernel: str = "one-scale",
 ) -> dict[str, Any]:  # fmt: skip
-    """Every held-out design of the log (module docstring, step 5), scored: per design, its
-    folds and, per method, the scores of single samples and of local means
-    ([`score()`][rainuav.radio.measured.scores.score]). ``whole``: the correction of the
-    whole log (its hyperparameters are reused; fitted here if None); ``receive``: the corrected
-    and calibrated maps fit the UAV's receive gain by elevation in every fold, ``heading``: its
-    gain against the heading (each held-out row predicted with its own heading); ``progress``: one
-    line on standard error per fold; ``kernel``: the residual fields' where ``whole`` is None
-    (else ``whole``'s; ``"auto"``: each fold chooses again on its own rows, and the result's
-    ``kernels`` says what each fold chose)."""
+    """Every held-out design of a log, scored per method: single samples and local means.
+
+    Args:
+        rm: The prior map.
+        log: The log.
+        prior: Each row's power in the prior map, dBm.
+        params: The site parameters calibrated.
+        level_step_m: The height between the maps built at the log's heights, m.
+        seed: The fits' seed.
+        whole: The correction of the whole log (its hyperparameters are reused); None: fitted here.
+        baselines: Score the baselines too (the nearest samples, ordinary kriging, the prior with
+            its power fitted).
+        receive: The corrected and calibrated maps fit the UAV's receive gain by elevation in every
+            fold.
+        heading: They fit its gain against the heading (each held-out row predicted with its own
+            heading).
+        progress: One line on standard error per fold.
+        kernel: The residual fields' kernel where `whole` is None (else `whole`'s); "auto": each
+            fold chooses again on its own rows.
+
+    Returns:
+        Per design its folds and, per method, the scores
+        ([`score()`][rainuav.radio.measured.scores.score]); `kernels`: what each fold chose.
+    """
     scn = rm.scenario
     step = level_step_m
     if whole is None:
@@ -209,9 +235,16 @@ def cross_validate_log(
 
 
 def held_out_line(cv: dict[str, Any]) -> str:
-    """One line of the held-out scores (``fit.json``'s ``cross_validation``): per design, the
-    rows scored, the single samples' RMSE of the prior, the calibrated and the corrected map and
-    the nearest samples, and the corrected map's coverage at one and two sigma."""
+    """The held-out scores in one line (`fit.json`'s `cross_validation`).
+
+    Args:
+        cv: What [`cross_validate_log()`][rainuav.radio.measured.heldout.cross_validate_log] gave.
+
+    Returns:
+        Per design: the rows scored, the single samples' RMSE of the prior, the calibrated and the
+        corrected map and the nearest samples, and the corrected map's coverage at one and two
+        sigma.
+    """
 
     def f(v: Any, form: str) -> str:
         return "n/a" if v is None else format(v, form)

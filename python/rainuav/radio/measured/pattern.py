@@ -68,17 +68,39 @@ class ElevationGain:
     """The gain at each knot, dB."""
 
     def at(self, elevation_deg: Any) -> np.ndarray:
-        """The gain at the elevations (degrees), dB."""
+        """The gain at elevations, dB.
+
+        Args:
+            elevation_deg: Elevations, degrees.
+
+        Returns:
+            The gain, dB.
+        """
         return np.interp(np.asarray(elevation_deg, dtype=float), self.knots_deg, self.gain_db)
 
     def to_dict(self) -> dict[str, list[float]]:
+        """The gain as plain data, for `fit.json`.
+
+        Returns:
+            Its knots' elevations and gains.
+        """
         return {"knots_deg": self.knots_deg.tolist(), "gain_db": self.gain_db.tolist()}
 
 
 def elevation_deg(scn: Any, cell: Any, x: Any, y: Any, z: Any) -> np.ndarray:
-    """The elevation from the points (``x``, ``y``, ``z``: east, north, height above sea level,
-    m) to the antenna of each point's ``cell`` (an index, or one for all), degrees."""
-    from rainuav.radio.measured.calibrate import _cells, _site_z
+    """The elevation from points to the antenna of each point's cell, degrees.
+
+    Args:
+        scn: The scenario.
+        cell: Each point's cell index, or one for all.
+        x: East, m.
+        y: North, m.
+        z: Height above sea level, m.
+
+    Returns:
+        Elevations, degrees.
+    """
+    from rainuav.radio.measured._view import _cells, _site_z
 
     cells = _cells(scn)
     x, y, z = (np.asarray(v, dtype=float) for v in (x, y, z))
@@ -103,8 +125,16 @@ def _basis(knots: np.ndarray, e: np.ndarray) -> np.ndarray:
 
 
 def fit_gain(elevation: Any, resid: Any) -> ElevationGain:
-    """The gain by elevation that best explains the residuals ``resid`` (dB) of rows seen at
-    ``elevation`` (degrees), (module docstring)."""
+    """The gain by elevation that best explains the residuals of rows seen at some elevations.
+
+    Args:
+        elevation: Each row's elevation to its cell, degrees.
+        resid: Each row's residual, dB.
+
+    Returns:
+        The [`ElevationGain`][rainuav.radio.measured.pattern.ElevationGain] (the module's docstring
+        has the fit).
+    """
     e = np.asarray(elevation, dtype=float)
     r = np.asarray(resid, dtype=float)
     lo = np.floor(e.min() / STEP_DEG) * STEP_DEG
@@ -125,7 +155,15 @@ class HeadingGain:
     sin_db: np.ndarray
 
     def at(self, relative_deg: Any) -> np.ndarray:
-        """The gain at the relative azimuths (degrees; NaN, an unknown heading: 0), dB."""
+        """The gain at azimuths relative to the UAV's nose, dB (0 where the heading is unknown,
+        NaN).
+
+        Args:
+            relative_deg: Relative azimuths, degrees clockwise.
+
+        Returns:
+            The gain, dB.
+        """
         phi = np.radians(np.asarray(relative_deg, dtype=float))
         k = np.arange(1, len(self.cos_db) + 1)
         g = np.cos(np.multiply.outer(phi, k)) @ self.cos_db
@@ -138,15 +176,29 @@ class HeadingGain:
         return float(np.sqrt(np.sum(self.cos_db**2 + self.sin_db**2) / 2))
 
     def to_dict(self) -> dict[str, Any]:
+        """The gain as plain data, for `fit.json`.
+
+        Returns:
+            Its Fourier coefficients (`cos_db`, `sin_db`) and its spread over the heading.
+        """
         return {"cos_db": self.cos_db.tolist(), "sin_db": self.sin_db.tolist(),
                 "spread_db": self.spread_db}  # fmt: skip
 
 
 def relative_azimuth_deg(scn: Any, cell: Any, x: Any, y: Any, heading_deg: Any) -> np.ndarray:
-    """The azimuth under which the UAV at (``x``, ``y``: east, north, m) heading
-    ``heading_deg`` (clockwise from north) sees each point's ``cell``'s site, relative to its
-    nose, degrees clockwise (NaN where the heading is)."""
-    from rainuav.radio.measured.calibrate import _cells
+    """The azimuth under which the UAV sees each point's cell's site, relative to its nose.
+
+    Args:
+        scn: The scenario.
+        cell: Each point's cell index, or one for all.
+        x: The UAV's east, m.
+        y: The UAV's north, m.
+        heading_deg: Its heading, degrees clockwise from north.
+
+    Returns:
+        Degrees clockwise (NaN where the heading is).
+    """
+    from rainuav.radio.measured._view import _cells
 
     cells = _cells(scn)
     x, y = (np.asarray(v, dtype=float) for v in (x, y))
@@ -160,9 +212,17 @@ def relative_azimuth_deg(scn: Any, cell: Any, x: Any, y: Any, heading_deg: Any) 
 
 
 def fit_heading_gain(relative_deg: Any, resid: Any) -> HeadingGain:
-    """The heading gain that best explains the residuals ``resid`` (dB) of rows seen at
-    ``relative_deg`` (degrees; rows of an unknown heading, NaN, are left out), (module
-    docstring)."""
+    """The heading gain that best explains the residuals of rows seen at relative azimuths.
+
+    Rows of an unknown heading (NaN) are left out; the module's docstring has the fit.
+
+    Args:
+        relative_deg: Each row's azimuth to its cell relative to the nose, degrees.
+        resid: Each row's residual, dB.
+
+    Returns:
+        The [`HeadingGain`][rainuav.radio.measured.pattern.HeadingGain].
+    """
     phi = np.radians(np.asarray(relative_deg, dtype=float))
     r = np.asarray(resid, dtype=float)
     ok = np.isfinite(phi) & np.isfinite(r)

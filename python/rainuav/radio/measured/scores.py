@@ -37,8 +37,18 @@ COVERAGE_GAUSSIAN = (0.6827, 0.9545)
 
 
 def crps_gaussian(y: Any, mu: Any, sigma: Any) -> np.ndarray:
-    """The CRPS of the Gaussian forecasts N(``mu``, ``sigma``^2) for the outcomes ``y``, in the
-    units of ``y`` (module docstring); ``sigma`` 0 gives the absolute error."""
+    """The CRPS of Gaussian forecasts N(mu, sigma^2) for outcomes, in the outcomes' units.
+
+    The module's docstring has the closed form; `sigma` 0 gives the absolute error.
+
+    Args:
+        y: The outcomes.
+        mu: The forecasts' means.
+        sigma: Their standard deviations.
+
+    Returns:
+        The CRPS of each, of the broadcast shape.
+    """
     y, mu, sigma = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (y, mu, sigma)))
     out = np.abs(y - mu)
     pos = sigma > 0
@@ -49,8 +59,16 @@ def crps_gaussian(y: Any, mu: Any, sigma: Any) -> np.ndarray:
 
 
 def score(err: Any, sigma: Any) -> dict[str, float | int | None]:
-    """RMSE, bias, coverage at one and two sigma and mean CRPS of the errors ``err`` (measured
-    minus predicted) under the deviations ``sigma``, over the finite pairs (``points``)."""
+    """The scores of errors under their deviations: RMSE, bias, coverage and mean CRPS.
+
+    Args:
+        err: The errors (measured minus predicted).
+        sigma: Their predicted deviations.
+
+    Returns:
+        `points` (the finite pairs scored), `rmse_db`, `bias_db`, `within_one_sigma`,
+        `within_two_sigma` and `crps_db` (None each where no pair is finite).
+    """
     e, s = np.broadcast_arrays(np.asarray(err, dtype=float), np.asarray(sigma, dtype=float))
     ok = np.isfinite(e) & np.isfinite(s)
     if not ok.any():
@@ -72,11 +90,26 @@ def local_means(
     sample_std: np.ndarray, size_m: float, step_m: float, cell: np.ndarray | None = None,
     min_rows: int = 5,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """The held-out rows at ``pts`` (N, 3) of each ``cell`` (N,) averaged over bins ``size_m``
-    wide and ``step_m`` tall, of ``min_rows`` rows or more: each bin's error (measured minus
-    predicted, both averaged over its rows) and its deviation (the rows' mean local deviation
-    and the bin average's standard error, ``sample_std / sqrt(n)``, in quadrature), (B,)
-    each."""
+    """Held-out rows averaged over bins, with their errors and deviations.
+
+    Each bin's error is measured minus predicted, both averaged over its rows; its deviation is the
+    rows' mean local deviation and the bin average's standard error (`sample_std / sqrt(n)`) in
+    quadrature.
+
+    Args:
+        pts: The rows' points (N, 3): east, north, height, m.
+        measured: Their measured powers, dBm.
+        mean: Their predicted powers, dBm.
+        local_std: The local mean's predicted deviation at each, dB.
+        sample_std: One sample's deviation at each, dB.
+        size_m: The bins' width, m.
+        step_m: Their height, m.
+        cell: Each row's cell (N,): a cell's bins are not another's; None: one cell.
+        min_rows: The fewest rows a bin is kept with.
+
+    Returns:
+        `(error, deviation)`, (B,) each.
+    """
     inv, count = bin_index(pts[:, 0], pts[:, 1], pts[:, 2], size_m, step_m, cell)
 
     def avg(a: np.ndarray) -> np.ndarray:
