@@ -77,6 +77,12 @@ FRONT_DOOR = (
     "rainuav.rl.checkpoint",
     "rainuav.rl.evaluation",
     "rainuav.rl.seeds",
+    "rainuav.radio.measured.calibrate",
+    "rainuav.radio.measured.pattern",
+    "rainuav.radio.measured.scores",
+    "rainuav.radio.measured.heldout",
+    "rainuav.radio.measured.residual",
+    "rainuav.radio.measured.bins",
 )
 """The packages whose ``__all__`` is what a user imports first (the README's and the guide's), and
 the modules the guide's pages call by name (the rain medium, antennas, coordinates, signals,

@@ -62,6 +62,8 @@ import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 from scipy.spatial import cKDTree
 
+from rainuav.radio.measured.bins import bin_index, bin_points, bin_scale, sample_spread
+
 if TYPE_CHECKING:  # scikit-learn is imported where a field is fitted (it takes seconds to load)
     from sklearn.gaussian_process import GaussianProcessRegressor
 
@@ -99,59 +101,6 @@ FAR = 4.0
 GRID_POINTS = 625
 """The fewest map pixels the field is computed at where its length scales allow fewer
 ([`ResidualField.on_grid()`][rainuav.radio.measured.residual.ResidualField.on_grid])."""
-
-
-def bin_index(
-    x: np.ndarray, y: np.ndarray, h: np.ndarray, size_m: float, step_m: float,
-    group: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """Which bin ``size_m`` wide and ``step_m`` tall each point (x, y, h) falls in (apart for each
-    ``group``, where given: a cell's bins are not another's): each row's bin (N,) and the bins'
-    row counts (B,)."""
-    cols = [np.floor(x / size_m), np.floor(y / size_m), np.round(h / step_m)]
-    if group is not None:
-        cols.append(np.asarray(group, dtype=float))
-    keys = np.column_stack(cols).astype(np.int64)
-    _, inv, count = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    return inv.ravel(), count
-
-
-def bin_points(
-    x: np.ndarray, y: np.ndarray, h: np.ndarray, v: np.ndarray, size_m: float, step_m: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Averages the values ``v`` at (x, y, h) over bins ``size_m`` wide and ``step_m`` tall:
-    the bins' mean positions (B, 3), mean values (B,) and row counts (B,)."""
-    inv, count = bin_index(x, y, h, size_m, step_m)
-
-    def mean(a: np.ndarray) -> np.ndarray:
-        return np.bincount(inv, weights=a) / count
-
-    return np.column_stack([mean(x), mean(y), mean(h)]), mean(v), count
-
-
-def sample_spread(
-    x: np.ndarray, y: np.ndarray, h: np.ndarray, v: np.ndarray, size_m: float, step_m: float
-) -> float:
-    """The pooled standard deviation of the values ``v`` about their bins' means (module
-    docstring: the sample spread), dB; NaN where no bin has two rows."""
-    inv, count = bin_index(x, y, h, size_m, step_m)
-    mean = np.bincount(inv, weights=v) / count
-    dof = len(v) - len(count)
-    if dof < 1:
-        return float("nan")
-    return float(np.sqrt(np.sum((v - mean[inv]) ** 2) / dof))
-
-
-def bin_scale(
-    pts: np.ndarray, scale: np.ndarray | None, size_m: float, step_m: float, count: np.ndarray
-) -> np.ndarray:
-    """Each bin's scale (module docstring, "Scaled"): the root mean square of its rows' ``scale``
-    (N,), over the bins of ``bin_points`` with their row counts ``count`` (B,); ones where
-    ``scale`` is None."""
-    if scale is None:
-        return np.ones(len(count))
-    inv, _ = bin_index(pts[:, 0], pts[:, 1], pts[:, 2], size_m, step_m)
-    return np.sqrt(np.bincount(inv, weights=np.asarray(scale, float) ** 2) / count)
 
 
 def _features(pts: np.ndarray, ratio: float) -> np.ndarray:
@@ -222,8 +171,15 @@ class ResidualField:
         return np.broadcast_to(np.asarray(scale, dtype=float), shape)
 
     def mean(self, pts: np.ndarray, scale: Any = None) -> np.ndarray:
-        """The field at the points (N, 3): east, north, height, dB (``scale``: the scale at
-        each, (N,), for a scaled field)."""
+        """The field's mean at points, dB.
+
+        Args:
+            pts: The points (N, 3): east, north, height, m.
+            scale: The scale at each (N,), for a scaled field.
+
+        Returns:
+            (N,) dB.
+        """
         return self._mean_w(pts) * self._scale(len(pts), scale)
 
     def _mean_w(self, pts: np.ndarray, chunk: int = 20000) -> np.ndarray:
@@ -240,14 +196,30 @@ class ResidualField:
         )
 
     def far_at(self, n: int, scale: Any = None) -> np.ndarray:
-        """The local mean's deviation far from every measurement at ``n`` points, dB
-        (``scale`` at each for a scaled field)."""
+        """The local mean's deviation far from every measurement, dB.
+
+        Args:
+            n: How many points.
+            scale: The scale at each (N,), for a scaled field.
+
+        Returns:
+            (n,) dB.
+        """
         return np.full(n, self.far_db) * self._scale(n, scale)
 
     def std(self, pts: np.ndarray, scale: Any = None) -> np.ndarray:
-        """The local mean's standard deviation at the points (N, 3), dB (module docstring):
-        the field's posterior deviation with the nugget (scikit-learn's predictive deviation
-        of a kernel with a white term); ``scale``: the scale at each, for a scaled field."""
+        """The local mean's standard deviation at points, dB (the module's docstring).
+
+        The field's posterior deviation with the nugget (scikit-learn's predictive deviation of a
+        kernel with a white term).
+
+        Args:
+            pts: The points (N, 3): east, north, height, m.
+            scale: The scale at each (N,), for a scaled field.
+
+        Returns:
+            (N,) dB.
+        """
         return self._std_w(pts) * self._scale(len(pts), scale)
 
     def _std_w(self, pts: np.ndarray, chunk: int = 4000) -> np.ndarray:
@@ -261,12 +233,22 @@ class ResidualField:
     def on_grid(
         self, x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray, scale: Any = None
     ) -> tuple[Any, Any]:
-        """The mean and standard deviation over the pixel centres ``x_m`` (W,), ``y_m`` (H,) at
-        heights ``h_m`` (H, W) (``scale``: each pixel's, (H, W), for a scaled field). Both vary
-        over the field's length scales, many pixels: they are computed every ``k`` pixels
-        (``k`` a quarter of the shorter length scale across the ground, in pixels, and at least
-        enough for ``GRID_POINTS`` nodes; the last row and column always) and bilinear between;
-        a scaled field's are then multiplied by each pixel's scale."""
+        """The field's mean and standard deviation over a map's pixel centres.
+
+        Both vary over the field's length scales, many pixels: they are computed every `k` pixels
+        (`k` a quarter of the shorter length scale across the ground, in pixels, and at least enough
+        for `GRID_POINTS` nodes; the last row and column always) and bilinear between; a scaled
+        field's are then multiplied by each pixel's scale.
+
+        Args:
+            x_m: The pixel centres' east (W,), m.
+            y_m: Their north (H,), m.
+            h_m: Their heights (H, W), m.
+            scale: Each pixel's scale (H, W), for a scaled field.
+
+        Returns:
+            `(mean, std)`, (H, W) each, dB.
+        """
         mean, std = self._grid(x_m, y_m, h_m)
         u = self._scale(np.shape(mean), scale)
         return mean * u, std * u
@@ -357,14 +339,28 @@ def fit_residual(
     scale: np.ndarray | None = None,
     kernel: str = "one-scale",
 ) -> ResidualField:
-    """The residual field of one cell from its rows at ``pts`` (N, 3: east, north, height) and
-    their residuals, dB (module docstring). ``size_m``/``step_m``: the bins; ``extent_m``: the
-    area's size (the longest length scale is 5 times it); ``like``: a field whose
-    hyperparameters and sample spread to reuse (a cross-validation fold), else fitted here;
-    ``max_points``: the most bins it is conditioned on (default ``MAX_POINTS``); ``scale``:
-    each row's scale (N,), positive, dB (module docstring, "Scaled"): the scaled field is
-    fitted beside the stationary one and kept where its marginal likelihood is higher;
-    ``kernel``: one of ``KERNELS`` (a ``like`` field's own where given)."""
+    """The residual field of one cell, fitted on its rows' residuals (the module's docstring).
+
+    Args:
+        pts: The rows' points (N, 3): east, north, height, m.
+        resid: Their residuals, dB (N,).
+        size_m: The bins' width, m.
+        step_m: Their height, m.
+        extent_m: The area's size, m (the longest length scale is 5 times it).
+        seed: The fit's seed.
+        like: A field whose hyperparameters and sample spread to reuse (a cross-validation fold);
+            None: fitted here.
+        max_points: The most bins it is conditioned on (default `MAX_POINTS`).
+        scale: Each row's scale (N,), positive, dB: the scaled field is fitted beside the stationary
+            one and kept where its marginal likelihood is higher.
+        kernel: One of `KERNELS` (a `like` field's own where given).
+
+    Returns:
+        The [`ResidualField`][rainuav.radio.measured.residual.ResidualField].
+
+    Raises:
+        ValueError: An unknown kernel.
+    """
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.gaussian_process import GaussianProcessRegressor
 
