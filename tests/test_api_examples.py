@@ -83,6 +83,10 @@ FRONT_DOOR = (
     "rainuav.radio.measured.heldout",
     "rainuav.radio.measured.residual",
     "rainuav.radio.measured.bins",
+    "rainuav.nav.views",
+    "rainuav.nav.vector",
+    "rainuav.nav.baselines",
+    "rainuav.envs",
 )
 """The packages whose ``__all__`` is what a user imports first (the README's and the guide's), and
 the modules the guide's pages call by name (the rain medium, antennas, coordinates, signals,

@@ -92,8 +92,26 @@ def make_nav_env(
     slice_s: float | None = None,
     **task: Any,
 ) -> UAVNavEnv:
-    """The navigation environment over a map, a scenario's world or a raw array (module
-    docstring)."""
+    """The navigation environment over a map, a scenario's world or a raw array.
+
+    What `gym.make("rainuav/UAVNav-v0", ...)` calls.
+
+    Args:
+        radio_map: A built map; None: a scenario's, or the raw arrays of `task`.
+        scenario: A preset's name or a [`Scenario`][rainuav.radio.scene.scenario.Scenario].
+        rain_rate_mm_h: Homogeneous rain, mm/h, in place of the scenario's weather.
+        freq_hz: The carrier frequency, Hz, in place of the scenario's.
+        engine: The propagation engine, in place of the scenario's.
+        storm_seed: The storm of the 'storm' preset.
+        slice_s: The time between the maps of a weather that moves, s.
+        **task: [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv]'s keywords and the task's fields.
+
+    Returns:
+        The [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv].
+
+    Raises:
+        InvalidInputError: Both a map and a scenario, or a weather keyword without a scenario.
+    """
     weather = {
         "rain_rate_mm_h": rain_rate_mm_h,
         "freq_hz": freq_hz,
@@ -118,9 +136,20 @@ def make_nav_vector_env(
     autoreset_mode: Any = "NextStep",
     **kw: Any,
 ) -> UAVNavVectorEnv:
-    """``num_envs`` UAVs in one world, batched
-    ([`rainuav.nav.vector.UAVNavVectorEnv`][rainuav.nav.vector.UAVNavVectorEnv]); the other keywords
-    as [`make_nav_env()`][rainuav.envs.make_nav_env]."""
+    """Several UAVs in one world, batched ([`UAVNavVectorEnv`][rainuav.nav.vector.UAVNavVectorEnv]).
+
+    Args:
+        num_envs: How many UAVs.
+        radio_map: A built map, as [`make_nav_env()`][rainuav.envs.make_nav_env]'s.
+        autoreset_mode: Gymnasium's autoreset mode.
+        **kw: The other keywords of `make_nav_env()`.
+
+    Returns:
+        The [`UAVNavVectorEnv`][rainuav.nav.vector.UAVNavVectorEnv].
+
+    Raises:
+        InvalidInputError: `num_envs` not allowed (checked before the map is built).
+    """
     check_num_envs(num_envs)  # before the map is built
     return UAVNavVectorEnv(make_nav_env(radio_map, **kw), num_envs, autoreset_mode)
 
@@ -141,16 +170,33 @@ def make_levels_env(
     random_goal: bool = False,
     **task: Any,
 ) -> Any:
-    """``gym.make("rainuav/UAVLevels-v0", scenario="uma", altitudes_m=[30, 60, 90])``: the
-    navigation task with altitude as a decision
-    ([`rainuav.nav.levels`][rainuav.nav.levels]) over the scenario's maps
-    at each of ``altitudes_m`` (in time where its weather moves, every ``slice_s`` over the
-    horizon); the weather keywords as [`make_nav_env()`][rainuav.envs.make_nav_env], the task's
-    fields as keywords (``min_db`` by default the preset's SINR threshold), the climb and descent
-    speeds (5 and 3 m/s by default) and the start level (default: the lowest flyable at the start);
-    ``observation="weather"`` shows every level's weather
-    ([`rainuav.nav.views.WeatherView`][rainuav.nav.views.WeatherView], one layer a level) and
-    ``random_goal`` draws a destination per episode."""
+    """The navigation task with altitude as a decision: `gym.make("rainuav/UAVLevels-v0", ...)`.
+
+    Over the scenario's maps at each of `altitudes_m` (in time where its weather moves, every
+    `slice_s` over the horizon); [`rainuav.nav.levels`][rainuav.nav.levels] has the task.
+
+    Args:
+        scenario: A preset's name or a [`Scenario`][rainuav.radio.scene.scenario.Scenario].
+        altitudes_m: The flight levels, m, increasing.
+        rain_rate_mm_h: As [`make_nav_env()`][rainuav.envs.make_nav_env]'s.
+        freq_hz: As `make_nav_env()`'s.
+        engine: As `make_nav_env()`'s.
+        storm_seed: As `make_nav_env()`'s.
+        slice_s: As `make_nav_env()`'s.
+        climb_m_s: The climb speed, m/s.
+        descend_m_s: The descent speed, m/s.
+        start_level: The level every flight starts at (default: the lowest flyable at the start).
+        observation: "position", or "weather": every level's weather
+            ([`WeatherView`][rainuav.nav.views.WeatherView], one layer a level).
+        random_goal: A destination drawn per episode.
+        **task: The task's fields (`min_db` by default the preset's SINR threshold).
+
+    Returns:
+        The [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv] among levels.
+
+    Raises:
+        InvalidInputError: A task that does not fly the SINR, or levels not allowed.
+    """
     from rainuav.nav.levels import CLIMB_M_S, DESCEND_M_S
     from rainuav.radio.scene.presets import SINR_THRESHOLDS_DB
     from rainuav.world import level_field, make_scenario, series_instants

@@ -29,8 +29,17 @@ DEFAULT_REPLAN_EVERY = 10
 
 
 def fly_actions(env: UAVNavEnv, starts_m: npt.ArrayLike, actions: list[np.ndarray]) -> list[Plan]:
-    """Each start's action sequence flown through the env's signal (in time), until the
-    episode ends or the actions run out: the path and the return the environment gives."""
+    """Each start's moves flown through the env's signal, until the episode ends or they run out.
+
+    Args:
+        env: The environment.
+        starts_m: The starts (N, 2), m.
+        actions: Each start's moves.
+
+    Returns:
+        One [`Plan`][rainuav.nav.planner.Plan] a start: the path and the return the environment
+        gives.
+    """
     env = _as_env(env)
     starts = np.asarray(starts_m, dtype=np.float64).reshape(-1, 2)
     n = len(starts)
@@ -60,8 +69,17 @@ def fly_actions(env: UAVNavEnv, starts_m: npt.ArrayLike, actions: list[np.ndarra
 
 
 def frozen_plans(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
-    """The exact plan on the weather at take-off held still, flown through the moving weather
-    (the path is the plan's: moves do not depend on the weather; the return is the one flown)."""
+    """The exact plan on the weather at take-off held still, flown through the moving weather.
+
+    The path is the plan's (the moves do not depend on the weather); the return is the one flown.
+
+    Args:
+        env: The environment.
+        starts_m: The starts (N, 2), m.
+
+    Returns:
+        One [`Plan`][rainuav.nav.planner.Plan] a start.
+    """
     env = _as_env(env)
     starts = np.asarray(starts_m, dtype=np.float64).reshape(-1, 2)
     planned = plan_on(env.field.frozen(0.0), env.cfg, starts)
@@ -71,8 +89,18 @@ def frozen_plans(env: UAVNavEnv, starts_m: npt.ArrayLike) -> list[Plan]:
 def replans(
     env: UAVNavEnv, starts_m: npt.ArrayLike, every: int = DEFAULT_REPLAN_EVERY
 ) -> list[Plan]:
-    """Re-planned every ``every`` moves on the weather of that moment held still, over the
-    moves left of the horizon, and flown through the moving weather (module docstring)."""
+    """Plans re-made every few moves on the weather of that moment held still, flown in the storm.
+
+    Each plan is over the moves left of the horizon (the module's docstring).
+
+    Args:
+        env: The environment.
+        starts_m: The starts (N, 2), m.
+        every: The moves between two plans.
+
+    Returns:
+        One [`Plan`][rainuav.nav.planner.Plan] a start.
+    """
     env = _as_env(env)
     every = check_integer("replan_every", every, 1, 100_000)
     starts = np.asarray(starts_m, dtype=np.float64).reshape(-1, 2)

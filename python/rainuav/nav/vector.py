@@ -32,8 +32,18 @@ and the stepper's temporaries, about 300 bytes)."""
 
 
 def check_num_envs(num_envs: Any) -> int:
-    """``num_envs`` if it is an integer >= 1 whose UAVs fit in memory (refused before any
-    allocation, naming the GB), else [`InvalidInputError`][rainuav.errors.InvalidInputError]."""
+    """The number of UAVs of a vector env, if it is allowed.
+
+    Args:
+        num_envs: The number asked for.
+
+    Returns:
+        `num_envs`, an integer >= 1 whose UAVs fit in memory.
+
+    Raises:
+        InvalidInputError: Not an integer >= 1, or UAVs that would not fit (the GB named; refused
+            before any allocation).
+    """
     if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
         raise InvalidInputError(f"num_envs must be an integer >= 1 (got {num_envs!r})")
     if num_envs < 1:
@@ -52,6 +62,18 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         num_envs: int,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     ) -> None:
+        """Several UAVs in one world, stepped as one batch (Gymnasium's `VectorEnv`).
+
+        Args:
+            env: A [`UAVNavEnv`][rainuav.nav.env.UAVNavEnv] on one level, its task's fixed
+                destination.
+            num_envs: How many UAVs.
+            autoreset_mode: Gymnasium's autoreset mode: "NextStep" or "SameStep".
+
+        Raises:
+            InvalidInputError: An env among levels or with random destinations, or another autoreset
+                mode.
+        """
         if not isinstance(env, UAVNavEnv) or env.level_axis:
             raise InvalidInputError(
                 f"env must be a UAVNavEnv on one level (got {type(env).__name__})"
@@ -118,6 +140,18 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Starts every UAV's episode.
+
+        Args:
+            seed: Seeds the UAVs' generator (once, then it carries on).
+            options: `start_m`: one start (2,) or one a UAV (num_envs, 2), m.
+
+        Returns:
+            `(observations, info)`, batched.
+
+        Raises:
+            InvalidInputError: Options that are not a dict, or starts of the wrong shape.
+        """
         if seed is not None:
             self._rng = np.random.default_rng(seed)
         if options is not None and not isinstance(options, dict):
@@ -138,6 +172,17 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
     def step(
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """One move of every UAV; a finished episode restarts as the autoreset mode says.
+
+        Args:
+            actions: One move a UAV (num_envs,), integers in 0..3.
+
+        Returns:
+            `(observations, rewards, terminated, truncated, info)`, batched.
+
+        Raises:
+            InvalidInputError: `step()` before `reset()`, or actions of the wrong number or range.
+        """
         a = np.asarray(actions)
         integers = np.issubdtype(a.dtype, np.integer)  # no silent rounding of 1.7 or 0.5
         if a.shape != (self.num_envs,) or not integers or not np.all((a >= 0) & (a < 4)):

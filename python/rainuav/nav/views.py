@@ -92,7 +92,11 @@ class WeatherView:
         return 5 + int(self.layers > 1)
 
     def space(self) -> gym.spaces.Dict:
-        """The Gymnasium observation space."""
+        """The Gymnasium observation space: a `Dict` of the view's parts.
+
+        Returns:
+            The space.
+        """
         box, n = gym.spaces.Box, self.layers
         parts = {
             "position": box(0.0, 1.0, shape=(2,), dtype=np.float32),
@@ -105,13 +109,24 @@ class WeatherView:
         return gym.spaces.Dict({k: parts[k] for k in KEYS if k in self.sizes})
 
     def local_offsets(self) -> np.ndarray:
-        """(window^2, 2) offsets of the local grid from the UAV, m: row i (south to north),
-        column j (west to east), row-major (read-only: computed once per view)."""
+        """The offsets of the local grid from the UAV, m.
+
+        Row i south to north, column j west to east, row-major; computed once per view.
+
+        Returns:
+            (window^2, 2), read-only.
+        """
         return _local_offsets(self.window, self.window_step_m)
 
     def area_points(self, extent: tuple[float, float, float, float]) -> np.ndarray:
-        """(area^2, 2) centres of the whole-area grid's cells, m, row-major (south to north;
-        read-only: computed once per view and extent)."""
+        """The centres of the whole-area grid's cells, m, row-major (south to north).
+
+        Args:
+            extent: The area, `(x_min, x_max, y_min, y_max)`, m.
+
+        Returns:
+            (area^2, 2), read-only (computed once per view and extent).
+        """
         return _area_points(self.area, tuple(float(v) for v in extent))
 
     def observe(
@@ -125,13 +140,26 @@ class WeatherView:
         area_db: np.ndarray | None = None,
         level_frac: np.ndarray | None = None,
     ) -> dict[str, np.ndarray]:
-        """The observations of N UAVs at ``pos`` (N, 2) heading for ``goal`` (N, 2), at the time
-        fractions ``t_frac`` (N,); ``sample(x, y)`` gives the signal, dB, at points (N, M) (row n:
-        UAV n's world and instant; (N, layers, M) among levels, every level). ``area_db`` (N,
-        [layers,] area^2): the signal at
-        [`area_points()`][rainuav.nav.views.WeatherView.area_points] where the caller has it
-        (sampled once per map), else sampled. ``level_frac`` (N,): among levels, each UAV's level
-        over the highest index."""
+        """The observations of N UAVs from a function that samples the signal.
+
+        Args:
+            sample: `sample(x, y)` gives the signal, dB, at points (N, M): row n is UAV n's world
+                and instant ((N, layers, M) among levels, every level).
+            extent: The area, `(x_min, x_max, y_min, y_max)`, m.
+            pos: The UAVs' positions (N, 2), m.
+            t_frac: Their time over the horizon (N,).
+            goal: Their destinations (N, 2), m.
+            min_db: The outage threshold, dB.
+            area_db: The signal at [`area_points()`][rainuav.nav.views.WeatherView.area_points], (N,
+                [layers,] area^2), where the caller has it (sampled once per map); None: sampled.
+            level_frac: Among levels, each UAV's level over the highest index (N,).
+
+        Returns:
+            The observation's parts by [`KEYS`][rainuav.nav.views.KEYS], batched.
+
+        Raises:
+            InvalidInputError: A view of several levels without `level_frac`.
+        """
         x0, x1, y0, y1 = extent
         lo, span = np.array([x0, y0]), np.array([x1 - x0, y1 - y0])
         pos = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
@@ -167,11 +195,25 @@ class WeatherView:
         self, field: Any, t_s: np.ndarray, pos: Any, level: Any, t: Any, goal: Any, world: Any,
         min_db: float, max_steps: int,
     ) -> dict[str, np.ndarray]:  # fmt: skip
-        """[`observe()`][rainuav.nav.views.WeatherView.observe] of UAVs at ``pos`` (N, 2), or
-        of one at (2,), flying ``field`` (a [`SignalField`][rainuav.nav.field.SignalField]; among
-        levels, its levels are the layers) on
-        ``level`` after ``t`` ticks, at the instants ``t_s`` (N,), for the destinations ``goal``
-        in the worlds ``world`` of a bank."""
+        """The observations of UAVs flying a field
+        ([`observe()`][rainuav.nav.views.WeatherView.observe]).
+
+        Among levels, the field's levels are the view's layers.
+
+        Args:
+            field: The [`SignalField`][rainuav.nav.field.SignalField].
+            t_s: The UAVs' instants (N,), s.
+            pos: Their positions (N, 2), or one UAV's (2,), m.
+            level: Their levels.
+            t: Their clocks, in ticks.
+            goal: Their destinations (N, 2), m.
+            world: Their worlds in a bank; None: world 0.
+            min_db: The outage threshold, dB.
+            max_steps: The horizon, in moves.
+
+        Returns:
+            The observation's parts, batched (one UAV's for a (2,) position).
+        """
         p = np.asarray(pos, dtype=np.float64)
         one = p.ndim == 1
         p = p.reshape(-1, 2)
@@ -199,9 +241,15 @@ class WeatherView:
         return {k: v[0] for k, v in obs.items()} if one else obs
 
     def flat(self, obs: dict[str, Any]) -> np.ndarray:
-        """(N, sum of [`sizes`][rainuav.nav.views.WeatherView.sizes]) float32: the parts of a batch
-        of observations (or of one) concatenated in [`KEYS`][rainuav.nav.views.KEYS] order, the form
-        a replay memory stores."""
+        """A batch of observations (or one) as the flat rows a replay memory stores.
+
+        Args:
+            obs: The observation's parts.
+
+        Returns:
+            (N, sum of [`sizes`][rainuav.nav.views.WeatherView.sizes]) float32, in
+            [`KEYS`][rainuav.nav.views.KEYS] order.
+        """
         first = np.asarray(obs["position"])
         n = 1 if first.ndim == 1 else len(first)
         keys = [k for k in KEYS if k in self.sizes]
@@ -232,9 +280,18 @@ def _area_points(n: int, extent: tuple[float, float, float, float]) -> np.ndarra
 
 
 def sample_goal(rng: np.random.Generator, extent: tuple[float, float, float, float]) -> np.ndarray:
-    """A destination uniform in the area shrunk by
-    [`GOAL_MARGIN_M`][rainuav.nav.views.GOAL_MARGIN_M] on every side (the whole area where it is
-    narrower than twice the margin)."""
+    """A destination uniform in the area shrunk by a margin on every side.
+
+    The margin is [`GOAL_MARGIN_M`][rainuav.nav.views.GOAL_MARGIN_M]; the whole area where it is
+    narrower than twice the margin.
+
+    Args:
+        rng: The generator.
+        extent: The area, `(x_min, x_max, y_min, y_max)`, m.
+
+    Returns:
+        The destination (2,), m.
+    """
     x0, x1, y0, y1 = extent
     mx = GOAL_MARGIN_M if x1 - x0 > 2 * GOAL_MARGIN_M else 0.0
     my = GOAL_MARGIN_M if y1 - y0 > 2 * GOAL_MARGIN_M else 0.0
@@ -248,10 +305,25 @@ def sample_start_for(
     cfg: NavConfig,
     field: Any = None,
 ) -> np.ndarray:
-    """A start uniform in the area, farther than ``tol_m`` from ``goal`` and at most
-    [`REACH`][rainuav.nav.views.REACH] of ``max_steps`` moves from it (Manhattan distance), never in
-    a pixel of ``field``'s not-flyable mask; refused where 1000 draws found none (an area the
-    arrival disc covers)."""
+    """A start uniform in the area, within reach of a destination and flyable.
+
+    Farther than `tol_m` from the destination and at most [`REACH`][rainuav.nav.views.REACH] of
+    `max_steps` moves from it (Manhattan distance), never in a pixel of the field's not-flyable
+    mask.
+
+    Args:
+        rng: The generator.
+        extent: The area, `(x_min, x_max, y_min, y_max)`, m.
+        goal: The destination (2,), m.
+        cfg: The task.
+        field: The field flown (its not-flyable mask); None: open ground.
+
+    Returns:
+        The start (2,), m.
+
+    Raises:
+        InvalidInputError: 1000 draws found none (an area the arrival disc covers).
+    """
     x0, x1, y0, y1 = extent
     reach = REACH * cfg.max_steps * cfg.step_m
     for _ in range(1000):
