@@ -87,6 +87,14 @@ FRONT_DOOR = (
     "rainuav.nav.vector",
     "rainuav.nav.baselines",
     "rainuav.envs",
+    "rainuav.radio.scene.presets",
+    "rainuav.radio.scene.storms",
+    "rainuav.radio.scene.radar",
+    "rainuav.radio.scene.rategrid",
+    "rainuav.radio.scene.sites",
+    "rainuav.cml",
+    "rainuav.ground.osm",
+    "rainuav.ground.footprints",
 )
 """The packages whose ``__all__`` is what a user imports first (the README's and the guide's), and
 the modules the guide's pages call by name (the rain medium, antennas, coordinates, signals,

@@ -47,7 +47,14 @@ WET_RAIN_MM_H = 0.1
 
 
 def load(links: int) -> tuple[Any, Any]:
-    """The links' one-minute levels and their radar rain (pycomlink's example data)."""
+    """The links' one-minute levels and their radar rain (pycomlink's example data).
+
+    Args:
+        links: How many links, from the first.
+
+    Returns:
+        `(cmls, radar)`: the links' dataset and the radar rain along them.
+    """
     import pycomlink.io.examples as examples
     import xarray as xr
 
@@ -58,7 +65,14 @@ def load(links: int) -> tuple[Any, Any]:
 
 
 def measured_attenuation(cmls: Any) -> Any:
-    """Rain attenuation (dB) of every channel and minute, pycomlink's processing (docstring)."""
+    """Each channel's rain attenuation every minute, by pycomlink's processing.
+
+    Args:
+        cmls: The links' dataset.
+
+    Returns:
+        The attenuation, dB.
+    """
     import pycomlink as pycml
 
     tl = (cmls.tsl - cmls.rsl).interpolate_na(dim="time", method="linear", max_gap="5min")
@@ -74,7 +88,17 @@ def measured_attenuation(cmls: Any) -> Any:
 def predictions(
     freq_hz: np.ndarray, pol: np.ndarray, length_km: np.ndarray, rain_mm_h: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Predicted attenuation (dB) from rainuav's medium and from ITU-R P.838-3 (``itur``)."""
+    """The predicted attenuation from rainuav's medium and from ITU-R P.838-3 (`itur`).
+
+    Args:
+        freq_hz: Each link's frequency, Hz.
+        pol: Each link's polarisation ("h" or "v").
+        length_km: Each link's length, km.
+        rain_mm_h: The radar's rain along each link, mm/h.
+
+    Returns:
+        `(rainuav's, P.838's)` attenuation, dB.
+    """
     import itur
 
     from rainuav import medium
@@ -95,7 +119,15 @@ def predictions(
 
 
 def stats(pred: np.ndarray, meas: np.ndarray) -> dict[str, float]:
-    """Bias (mean of predicted minus measured), RMSE and Pearson's correlation, dB."""
+    """Bias (mean of predicted minus measured), RMSE and Pearson's correlation, dB.
+
+    Args:
+        pred: The predictions, dB.
+        meas: The measurements, dB.
+
+    Returns:
+        `n` (the pairs), `bias_db`, `rmse_db` and `r`.
+    """
     e = pred - meas
     r = float(np.corrcoef(pred, meas)[0, 1]) if pred.size > 2 else float("nan")
     return {"n": int(pred.size), "bias_db": float(e.mean()),
@@ -103,9 +135,15 @@ def stats(pred: np.ndarray, meas: np.ndarray) -> dict[str, float]:
 
 
 def compare(links: int = 500) -> dict[str, Any]:
-    """The comparison over the first ``links`` links (module docstring): the counts, a row a band
-    and polarisation (``groups``), all together (``all``), and the compared values (``_arrays``:
-    measured, rainuav's, P.838's, frequency, the link's index)."""
+    """The medium against real links: the counts, a row a band and polarisation, and all together.
+
+    Args:
+        links: How many links, from the first (the module's docstring has the processing).
+
+    Returns:
+        The counts, `groups` (a row a band and polarisation), `all`, and `_arrays` (measured,
+        rainuav's, P.838's, frequency, the link's index).
+    """
     cmls, radar = load(links)
     a = measured_attenuation(cmls)
     a5 = a.resample(time="5min", label="right", closed="right").mean()

@@ -122,8 +122,15 @@ MAX_NAMED = 3
 
 
 def material_permittivity(material: str, freq_hz: float) -> complex:
-    """The complex relative permittivity ``eps_r - j sigma / (omega eps_0)`` of a P.2040
-    material at ``freq_hz``."""
+    """The complex relative permittivity `eps_r - j sigma / (omega eps_0)` of a P.2040 material.
+
+    Args:
+        material: The material's name (P.2040 Table 3).
+        freq_hz: The frequency, Hz.
+
+    Returns:
+        The permittivity.
+    """
     a, b, c, d = MATERIALS[material]
     f_ghz = freq_hz / 1e9
     sigma = c * f_ghz**d
@@ -185,8 +192,11 @@ class Footprints:
     """Each feature skipped because a value could not be read: where it is and why."""
 
     def summary(self) -> str:
-        """One line: what was read and what was left out (the first few skipped features
-        named)."""
+        """What was read and what was left out, in one line (the first few skipped features named).
+
+        Returns:
+            The line.
+        """
         line = (
             f"footprints {self.path}: {len(self.buildings)} buildings from {self.features} "
             f"features ({self.outside} outside the area, {self.not_polygons} not polygons, "
@@ -221,9 +231,23 @@ def read_footprints(
     default_material: str = "concrete",
     default_height_m: float = DEFAULT_HEIGHT_M,
 ) -> Footprints:
-    """The buildings of the GeoJSON file ``path`` within ``bounds`` (x_min, x_max, y_min,
-    y_max in the local metres of ``georef``): module docstring. ``default_height_m``: the roof
-    of a building on the ground with neither a height nor storeys."""
+    """The buildings of a GeoJSON file within an area (the module's docstring has the rules).
+
+    Args:
+        path: The file (longitude/latitude, WGS 84).
+        georef: The scenario's local frame.
+        bounds: The area, `(x_min, x_max, y_min, y_max)` in the local metres.
+        default_material: The walls' material where a footprint names none.
+        default_height_m: The roof of a building on the ground with neither a height nor storeys, m.
+
+    Returns:
+        The [`Footprints`][rainuav.ground.footprints.Footprints].
+
+    Raises:
+        InvalidInputError: A file that cannot be read, is not a GeoJSON FeatureCollection in WGS 84,
+            is nested too deeply or holds too many features, or a default out of range (the file
+            named).
+    """
     import shapely
 
     path = os.fspath(path)

@@ -51,9 +51,20 @@ def _clean(text: Any) -> str:
 
 
 def parse_length(text: Any) -> float:
-    """A length in metres from an OpenStreetMap value: a number (metres), ``"12 m"``, ``"40 ft"``,
-    ``"40'"`` or ``12'6"``, read by ``_clean``'s rules (``"12;15"`` is 12, ``"~20"`` 20, ``"12,5"``
-    12.5, ``"10-12"`` 12). Raises ValueError for anything else (negative numbers included)."""
+    """A length in metres from an OpenStreetMap value.
+
+    A number (metres), `"12 m"`, `"40 ft"`, `"40'"` or `12'6"`, read by `_clean`'s rules (`"12;15"`
+    is 12, `"~20"` 20, `"12,5"` 12.5, `"10-12"` 12).
+
+    Args:
+        text: The tag's value.
+
+    Returns:
+        Metres.
+
+    Raises:
+        ValueError: Anything else (negative numbers included).
+    """
     if isinstance(text, int | float) and not isinstance(text, bool):
         v = float(text)
         if not math.isfinite(v) or v < 0:
@@ -70,9 +81,19 @@ def parse_length(text: Any) -> float:
 
 
 def parse_levels(text: Any) -> float:
-    """A number of storeys from an OpenStreetMap value (``"3"``, ``"2.5"``, ``"2,5"``,
-    ``"3-4"``: the upper end, ``"3;4"``: the first; 0 is a real value). Raises ValueError for
-    anything else (negative numbers included)."""
+    """A number of storeys from an OpenStreetMap value.
+
+    `"3"`, `"2.5"`, `"2,5"`, `"3-4"` (the upper end), `"3;4"` (the first); 0 is a real value.
+
+    Args:
+        text: The tag's value.
+
+    Returns:
+        The storeys.
+
+    Raises:
+        ValueError: Anything else (negative numbers included).
+    """
     if isinstance(text, int | float) and not isinstance(text, bool):
         v = float(text)
     else:
@@ -92,9 +113,18 @@ class Unreadable(ValueError):
 def feature_heights(
     props: dict[str, Any], default_height_m: float
 ) -> tuple[float, float, float | None, bool]:
-    """(roof, bottom, eaves or None, whether the default height was used) of a feature, by the
-    module docstring's rules; raises [`Unreadable`][rainuav.ground.footprints.Unreadable] naming
-    the tag."""
+    """A feature's roof, bottom and eaves by the module docstring's rules.
+
+    Args:
+        props: The feature's tags.
+        default_height_m: The roof of a building with neither a height nor storeys, m.
+
+    Returns:
+        `(roof, bottom, eaves or None, whether the default height was used)`, m.
+
+    Raises:
+        Unreadable: A tag that cannot be read, or a roof not above its bottom (the tag named).
+    """
 
     def read(key: str, parse: Any, what: str, top: float) -> float | None:
         v = props.get(key)
@@ -142,16 +172,35 @@ def feature_heights(
 
 
 def is_part(props: dict[str, Any]) -> bool:
-    """Whether a feature is a Simple 3D Buildings part (``building:part`` set, not ``no``)."""
+    """Whether a feature is a Simple 3D Buildings part (`building:part` set, not `no`).
+
+    Args:
+        props: The feature's tags.
+
+    Returns:
+        True for a part.
+    """
     v = props.get("building:part")
     return v not in (None, "", "no", False)
 
 
 def export_buildings(pbf: str, out: str | Path) -> Path:
-    """Writes the buildings and building parts of the OpenStreetMap extract ``pbf`` (.osm.pbf)
-    to ``out`` as GeoJSON, as ``osmium export`` writes them (areas assembled by libosmium; every
-    tag a property; ids ``w<way>``/``r<relation>``), whole or not at all (a temporary file, then
-    renamed); returns ``out``. Needs pyosmium (the test extra); raises ImportError naming it."""
+    """Writes the buildings and building parts of an OpenStreetMap extract as GeoJSON.
+
+    As `osmium export` writes them (areas assembled by libosmium; every tag a property; ids `w<way>`
+    / `r<relation>`), whole or not at all (a temporary file, then renamed). Needs pyosmium (the test
+    extra).
+
+    Args:
+        pbf: The extract (.osm.pbf).
+        out: The GeoJSON file to write.
+
+    Returns:
+        `out`.
+
+    Raises:
+        ImportError: pyosmium is not installed (named).
+    """
     import json
     import os
 

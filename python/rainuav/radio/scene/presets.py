@@ -220,7 +220,16 @@ RAIN_CELL = RainCell(x_m=1200.0, y_m=1300.0, radius_m=500.0, peak_rate_mm_h=100.
 
 
 def rain_cell(rain_rate_mm_h: float = 5.0, freq_hz: float = 28e9, **overrides: Any) -> Scenario:
-    """``uma`` at 28 GHz with a 100 mm/h rain cell in light rain (module docstring)."""
+    """`uma` at 28 GHz with a 100 mm/h rain cell in light rain (the module's docstring).
+
+    Args:
+        rain_rate_mm_h: The widespread rain around the cell, mm/h.
+        freq_hz: The carrier, Hz.
+        **overrides: Fields of the [`Scenario`][rainuav.radio.Scenario] in place of the preset's.
+
+    Returns:
+        The [`Scenario`][rainuav.radio.Scenario].
+    """
     weather = Medium(kind="cells", rain_rate_mm_h=rain_rate_mm_h, cells=[RAIN_CELL])
     fields: dict[str, Any] = {"name": "rain_cell", "medium": weather}
     fields.update(overrides)
@@ -228,7 +237,16 @@ def rain_cell(rain_rate_mm_h: float = 5.0, freq_hz: float = 28e9, **overrides: A
 
 
 def urban(rain_rate_mm_h: float = 25.0, freq_hz: float = 4.9e9, **overrides: Any) -> Scenario:
-    """The ``uma`` sectors and a block of buildings (shadows at the flight altitude)."""
+    """The `uma` sectors and a block of buildings, whose shadows reach the flight altitude.
+
+    Args:
+        rain_rate_mm_h: Homogeneous rain, mm/h.
+        freq_hz: The carrier, Hz.
+        **overrides: Fields of the [`Scenario`][rainuav.radio.Scenario] in place of the preset's.
+
+    Returns:
+        The [`Scenario`][rainuav.radio.Scenario].
+    """
     buildings = [
         Building(x0_m=x0, x1_m=x0 + 60.0, y0_m=y0, y1_m=y0 + 60.0, height_m=60.0)
         for x0 in (640.0, 740.0, 840.0)
@@ -247,13 +265,24 @@ def storm(
     speed_m_s: float | None = None,
     **overrides: Any,
 ) -> Scenario:
-    """``uma`` at 28 GHz under the random storm of ``seed``
-    ([`draw_storm()`][rainuav.radio.scene.storms.draw_storm]: moving, growing and decaying Gaussian
-    cells over a uniform background; its ``medium.at(t_s)`` is the weather t_s seconds into the
-    storm). ``rain_rate_mm_h`` replaces the drawn background rate; ``speed_m_s`` the storm's speed
-    (every cell's velocity scaled by the same factor, each cell still at its drawn place at
-    mid-storm; 0: cells that stay where they are and only grow or decay). Seeds from 1 000 000 are
-    the evaluation storms."""
+    """`uma` at 28 GHz under a random storm of moving, growing and decaying rain cells.
+
+    The storm of `seed` ([`draw_storm()`][rainuav.radio.scene.storms.draw_storm]: Gaussian cells
+    over a uniform background); its `medium.at(t_s)` is the weather `t_s` seconds into the storm.
+    Seeds from 1 000 000 are the evaluation storms.
+
+    Args:
+        rain_rate_mm_h: The background rate, mm/h, in place of the drawn one.
+        freq_hz: The carrier, Hz.
+        seed: The storm.
+        speed_m_s: The storm's speed, m/s, in place of the drawn one (every cell's velocity scaled
+            by one factor, each cell still at its drawn place at mid-storm; 0: cells that stay where
+            they are and only grow or decay).
+        **overrides: Fields of the [`Scenario`][rainuav.radio.Scenario] in place of the preset's.
+
+    Returns:
+        The [`Scenario`][rainuav.radio.Scenario].
+    """
     weather = draw_storm(seed, (0.0, 2000.0, 0.0, 2000.0), speed_m_s)
     if rain_rate_mm_h is not None:
         weather = dataclasses.replace(weather, rain_rate_mm_h=float(rain_rate_mm_h))

@@ -52,7 +52,14 @@ LON_NAMES = ("lon", "longitude")
 
 
 def dbz_to_rate(dbz: Any) -> Any:
-    """Rain rate, mm/h, of reflectivity ``dbz`` by Marshall-Palmer (module docstring)."""
+    """The rain rate of radar reflectivity by Marshall-Palmer (the module's docstring).
+
+    Args:
+        dbz: Reflectivity, dBZ.
+
+    Returns:
+        Rain rate, mm/h.
+    """
     z = np.asarray(dbz, dtype=np.float64)
     r = (10.0 ** (z / 10.0) / MP_A) ** (1.0 / MP_B)
     return np.where(z < NO_ECHO_DBZ, 0.0, r)
@@ -95,9 +102,27 @@ def read_radar_grid(
     variable: str | None = None,
     max_cells: int = 201,
 ) -> Medium:
-    """The weather of a georeferenced rain file (module docstring) over ``area`` of the
-    scenario tied to the Earth by ``georef``: ``base`` (default: today's rain model) with its
-    rates replaced by the file's, moving where the file has several instants."""
+    """The weather of a georeferenced rain file over a scenario's area (the module's docstring).
+
+    The base weather's rates are replaced by the file's, moving where the file has several instants.
+
+    Args:
+        path: The file: NetCDF on lat/lon or x/y with a CRS, a GeoTIFF with a band per instant, or a
+            folder of GeoTIFF scans; mm/h or dBZ.
+        area: The scenario's area.
+        georef: Ties the area to the Earth.
+        base: The weather whose rates are replaced (default: today's rain model).
+        variable: The file's variable; None: the one (time, y, x) variable.
+        max_cells: The most grid cells a side the file is sampled on.
+
+    Returns:
+        The [`Medium`][rainuav.radio.scene.weather.Medium].
+
+    Raises:
+        InvalidInputError: A file that cannot be read, has no such variable, units other than mm/h
+            or dBZ, values not finite or outside 0-500 mm/h, or does not cover the area (the file
+            named).
+    """
     with open_geotiff(path) if is_geotiff(path) else _open(path) as ds:
         names = [variable] if variable else [k for k, v in ds.data_vars.items() if v.ndim == 3]
         if len(names) != 1 or names[0] not in ds.data_vars:

@@ -74,9 +74,21 @@ def read_rate_grid(
     variable: str | None = None,
     max_cells: int = 201,
 ) -> Medium:
-    """The moving weather of a NetCDF rain-rate file (module docstring) over ``area``: ``base``
-    (default: today's rain model at 20 C, no wind) with its rates replaced by the file's;
-    anything the file lacks or gets wrong is one line naming the file and the field."""
+    """The moving weather of a NetCDF rain-rate file over an area (the module's docstring).
+
+    Args:
+        path: The file: (time, y, x) in mm/h on the area's metres.
+        area: The scenario's area.
+        base: The weather whose rates are replaced (default: today's rain model at 20 C, no wind).
+        variable: The file's variable; None: the one (time, y, x) variable.
+        max_cells: The most grid cells a side the file is sampled on.
+
+    Returns:
+        The [`Medium`][rainuav.radio.scene.weather.Medium].
+
+    Raises:
+        InvalidInputError: Anything the file lacks or gets wrong (the file and the field named).
+    """
     with _open(path) as ds:
         return _read(path, ds, area, base, variable, max_cells)
 
@@ -129,8 +141,17 @@ def _read(
 
 
 def sample_grid(area: Area, max_cells: int) -> tuple[np.ndarray, np.ndarray]:
-    """The centres (x (nx,), y (ny,)) of the grid a rain file is sampled on over ``area``: at
-    most ``max_cells`` a side, square cells, never finer than the map's pixels."""
+    """The centres of the grid a rain file is sampled on over an area.
+
+    At most `max_cells` a side, square cells, never finer than the map's pixels.
+
+    Args:
+        area: The scenario's area.
+        max_cells: The most cells a side.
+
+    Returns:
+        `(x (nx,), y (ny,))`, m.
+    """
     x_c, y_c = area.centres()
     step = max((area.x_max_m - area.x_min_m) / max_cells, (area.y_max_m - area.y_min_m) / max_cells)
     nx = max(1, min(len(x_c), round((area.x_max_m - area.x_min_m) / step)))
@@ -141,8 +162,16 @@ def sample_grid(area: Area, max_cells: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rate_medium(base: Medium | None, rates: np.ndarray, times: np.ndarray) -> Medium:
-    """``base`` (default: today's rain model) with its rates replaced by ``rates`` (T, ny, nx)
-    over the area at the instants ``times`` (T,): a weather that stands still where T is 1."""
+    """A weather whose rates are a grid of rain rates in time.
+
+    Args:
+        base: The weather whose rates are replaced (default: today's rain model).
+        rates: The rates (T, ny, nx), mm/h, over the area.
+        times: Their instants (T,), s (T = 1: a weather that stands still).
+
+    Returns:
+        The [`Medium`][rainuav.radio.scene.weather.Medium].
+    """
     one = len(times) == 1
     medium = dataclasses.replace(
         base or Medium(),

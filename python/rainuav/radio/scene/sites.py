@@ -92,7 +92,18 @@ def _row(where: str, raw: dict[str, Any]) -> SiteRow:
 
 
 def read_site_rows(path: str | os.PathLike[str]) -> list[SiteRow]:
-    """The checked rows of a sites file (``.csv``, or ``.geojson``/``.json``)."""
+    """The checked rows of a sites file (`.csv`, or `.geojson` / `.json`), one a sector.
+
+    Args:
+        path: The file.
+
+    Returns:
+        The rows.
+
+    Raises:
+        InvalidInputError: A file that cannot be read, lacks a column, has no sectors, or a value
+            out of range (the file, the row and the column named).
+    """
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8-sig")
@@ -145,9 +156,23 @@ def _geojson_rows(p: Path, text: str) -> list[SiteRow]:
 
 
 def sites_from_rows(rows: list[SiteRow], georef: Georef, where: str = "sites") -> list[Site]:
-    """The scenario's sites: sectors grouped by ``site_id`` into masts at their position in
-    the scenario's metres (``georef``), each sector's azimuth and tilts converted to
-    rainuav's conventions (module docstring)."""
+    """The scenario's sites: sectors grouped by `site_id` into masts.
+
+    Each mast at its position in the scenario's metres, each sector's azimuth and tilts converted to
+    rainuav's conventions (the module's docstring).
+
+    Args:
+        rows: The sites file's rows.
+        georef: Ties the scenario to the Earth.
+        where: What the errors name (the file).
+
+    Returns:
+        The [`Site`][rainuav.radio.scene.parts.Site]s.
+
+    Raises:
+        InvalidInputError: Rows whose frequency differs, or a site's sectors that disagree on where
+            the mast is.
+    """
     masts: dict[str, list[SiteRow]] = {}
     for r in rows:
         masts.setdefault(r["site_id"], []).append(r)
@@ -181,9 +206,17 @@ def sites_from_rows(rows: list[SiteRow], georef: Georef, where: str = "sites") -
 
 
 def cell_names(rows: list[SiteRow]) -> list[str]:
-    """Each cell's name, ``site_id:k`` (its k-th sector from 1, in the file's order), in the
-    order [`sites_from_rows()`][rainuav.radio.scene.sites.sites_from_rows] makes the cells: what a
-    measurement log's ``cell`` column may give."""
+    """Each cell's name, `site_id:k` (its k-th sector from 1, in the file's order).
+
+    In the order [`sites_from_rows()`][rainuav.radio.scene.sites.sites_from_rows] makes the cells:
+    what a measurement log's `cell` column may give.
+
+    Args:
+        rows: The sites file's rows.
+
+    Returns:
+        The names.
+    """
     masts: dict[str, list[SiteRow]] = {}
     for r in rows:
         masts.setdefault(r["site_id"], []).append(r)

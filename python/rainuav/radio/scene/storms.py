@@ -52,8 +52,19 @@ EFOLD_MIN = (10.0, 30.0)
 
 
 def check_storm_seed(seed: object, training: bool = False) -> int:
-    """``seed`` as an int in 0..2^63-1; with ``training``, below
-    [`EVAL_SEEDS_FROM`][rainuav.radio.scene.storms.EVAL_SEEDS_FROM]."""
+    """A storm seed, checked.
+
+    Args:
+        seed: The seed given.
+        training: Refuse the evaluation storms (from
+            [`EVAL_SEEDS_FROM`][rainuav.radio.scene.storms.EVAL_SEEDS_FROM]).
+
+    Returns:
+        The seed as an int in 0..2^63-1.
+
+    Raises:
+        InvalidInputError: Not such an int, or an evaluation storm where training.
+    """
     hi = EVAL_SEEDS_FROM - 1 if training else MAX_STORM_SEED
     try:
         return check_integer("storm_seed", seed, 0, hi)
@@ -71,11 +82,20 @@ def draw_storm(
     extent_m: tuple[float, float, float, float] = (0.0, 2000.0, 0.0, 2000.0),
     speed_m_s: float | None = None,
 ) -> Medium:
-    """The storm of ``seed`` over the area ``extent_m`` (x0, x1, y0, y1), as a weather whose cells
-    move ([`rainuav.radio.scene.weather.Medium.at()`][rainuav.radio.scene.weather.Medium.at] gives
-    it at any instant; time 0 is the storm's start). The distribution is the module docstring's;
-    ``speed_m_s``, where given, scales every cell's velocity by the factor that makes the storm's
-    speed that (the same draws: 0 keeps each cell at its mid-storm place)."""
+    """The storm of a seed over an area, as a weather whose cells move.
+
+    [`Medium.at()`][rainuav.radio.scene.weather.Medium.at] gives it at any instant; time 0 is the
+    storm's start. The distribution is the module docstring's.
+
+    Args:
+        seed: The storm.
+        extent_m: The area `(x0, x1, y0, y1)`, m.
+        speed_m_s: The storm's speed, m/s, where given: every cell's velocity scaled by one factor
+            (the same draws; 0 keeps each cell at its mid-storm place).
+
+    Returns:
+        The [`Medium`][rainuav.radio.scene.weather.Medium].
+    """
     rng = np.random.default_rng(check_storm_seed(seed))
     if speed_m_s is not None:
         speed_m_s = check_number("speed_m_s", speed_m_s, 0.0, 100.0, " m/s")
