@@ -95,6 +95,9 @@ FRONT_DOOR = (
     "rainuav.cml",
     "rainuav.ground.osm",
     "rainuav.ground.footprints",
+    "rainuav.rl.replay",
+    "rainuav.rl.dqn",
+    "rainuav.rl.setup",
 )
 """The packages whose ``__all__`` is what a user imports first (the README's and the guide's), and
 the modules the guide's pages call by name (the rain medium, antennas, coordinates, signals,

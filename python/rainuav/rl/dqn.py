@@ -32,7 +32,15 @@ __all__ = ["Agent", "Encoder", "NStepWindow", "Replay", "best_action", "double_q
 
 
 def best_action(q: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
-    """Argmax of the (N, A) values ``q``, among the ``allowed`` (N, A) actions when given."""
+    """The action of highest value for each row, among the allowed ones.
+
+    Args:
+        q: Action values (N, A).
+        allowed: The actions to choose among (N, A) bool; None: all.
+
+    Returns:
+        (N,) actions.
+    """
     if allowed is not None:
         q = np.where(allowed, q, -np.inf)
     return q.argmax(axis=1)
@@ -45,8 +53,18 @@ def double_q_target(
     discount: torch.Tensor,
     done: torch.Tensor,
 ) -> torch.Tensor:
-    """Double-Q target ``R + gamma^k (1 - done) Q_target(s', argmax_a Q_online(s', a))`` from
-    the two networks' Q-values at s' (B, A)."""
+    """The double-Q target `R + gamma^k (1 - done) Q_target(s', argmax_a Q_online(s', a))`.
+
+    Args:
+        q_next_online: The online network's values at s' (B, A).
+        q_next_target: The target network's values at s' (B, A).
+        ret: The n-step returns (B,).
+        discount: `gamma^k` (B,).
+        done: 1 where there is no bootstrap (B,).
+
+    Returns:
+        (B,) targets.
+    """
     a_star = q_next_online.argmax(dim=1, keepdim=True)
     return ret + discount * (1.0 - done) * q_next_target.gather(1, a_star).squeeze(1)
 
@@ -54,13 +72,22 @@ def double_q_target(
 def memory_needed(
     cfg: DQNConfig, view: WeatherView | None = None, levels: bool = False
 ) -> dict[str, int]:
-    """Bytes the agent of ``cfg`` allocates, by the field that sets them: ``hidden`` (the
-    float32 weights of the network, seven times over: online, target, gradients, Adam's two
-    moments, the weight average and a copy while reporting) and ``replay_capacity`` (the
-    replay's arrays). ``levels``: altitude as a decision (the level an input, six actions);
-    ``view``: the weather observation where the env gives it (its network
-    is built on the CPU to count its weights, a few ms). Computed from the sizes, so a run
-    that cannot fit is refused before anything is built."""
+    """The bytes the agent of a configuration allocates, by the field that sets them.
+
+    `dqn.hidden` is the float32 weights of the network, seven times over (online, target, gradients,
+    Adam's two moments, the weight average and a copy while reporting); `dqn.replay_capacity` the
+    replay's arrays. Computed from the sizes, so a run that cannot fit is refused before anything is
+    built.
+
+    Args:
+        cfg: The learner's settings.
+        view: The weather observation where the env gives it (its network is built on the CPU to
+            count its weights, a few ms); None: the position observation.
+        levels: Altitude as a decision (the level an input, six actions).
+
+    Returns:
+        Bytes by field name.
+    """
     h = cfg.hidden
     if view is None:
         n_smooth = (3 if cfg.time_aware else 2) + int(levels)
@@ -112,10 +139,15 @@ class Agent:
 
     @functools.cached_property
     def opt(self) -> torch.optim.Adam:
-        """The optimiser, made when first used: a network only flown never makes one (torch's
-        first optimiser imports its compiler, about 1.5 s of a command on 2 cores). The fused
-        Adam kernel: one call instead of ~10 per parameter tensor (timed in BENCHMARKS.md,
-        training section)."""
+        """The optimiser, made when first used: the fused Adam kernel.
+
+        A network only flown never makes one (torch's first optimiser imports its compiler, about
+        1.5 s of a command on 2 cores); the fused kernel is one call instead of about 10 per
+        parameter tensor (timed in BENCHMARKS.md, training section).
+
+        Returns:
+            The `torch.optim.Adam`.
+        """
         return torch.optim.Adam(self.online.parameters(), lr=self.cfg.lr, fused=True)
 
     def epsilon(self, episode: npt.ArrayLike) -> Any:

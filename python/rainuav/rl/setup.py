@@ -24,9 +24,14 @@ __all__ = ["check_fits", "make_agent", "make_encoder", "pick_device", "torch_set
 
 
 def check_fits(cfg: TrainConfig) -> None:
-    """Refuses a run whose agent cannot fit in memory, naming the field and the GB
-    ([`rainuav.rl.dqn.memory_needed()`][rainuav.rl.dqn.memory_needed]); called before any map is
-    built."""
+    """Refuses a run whose agent cannot fit in memory; called before any map is built.
+
+    Args:
+        cfg: The run's configuration ([`memory_needed()`][rainuav.rl.dqn.memory_needed]).
+
+    Raises:
+        InvalidInputError: The field and the GB that do not fit.
+    """
     layers = len(levels_of(cfg)) if cfg.altitudes_m else 1
     view = WeatherView(layers=layers) if cfg.observation == "weather" else None
     need = memory_needed(cfg.dqn, view, levels=bool(cfg.altitudes_m))
@@ -39,8 +44,20 @@ def check_fits(cfg: TrainConfig) -> None:
 
 
 def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
-    """An agent for ``env``: the time limit, the destination and one move in observation units
-    (refused first if it cannot fit in memory: [`check_fits()`][rainuav.rl.setup.check_fits])."""
+    """An agent for an environment: its time limit, destination and one move in observation units.
+
+    Args:
+        cfg: The run's configuration.
+        env: The environment (its spaces and task).
+        device: Where the networks run.
+
+    Returns:
+        The [`Agent`][rainuav.rl.dqn.Agent].
+
+    Raises:
+        InvalidInputError: An agent that cannot fit in memory
+            ([`check_fits()`][rainuav.rl.setup.check_fits]).
+    """
     check_fits(cfg)
     x0, x1, y0, y1 = env.field.extent
     s = env.cfg.step_m
@@ -49,10 +66,20 @@ def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
 
 
 def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Encoder:
-    """The encoder (and network) for ``env``'s observation
-    ([`rainuav.rl.networks`][rainuav.rl.networks]): the weather-reading one where the env shows the
-    weather, else the position one (with the env's fixed destination; among levels with the level);
-    the actions are the env's action space's."""
+    """The encoder (and network) for an environment's observation.
+
+    The weather-reading one where the env shows the weather, else the position one (with the env's
+    fixed destination; among levels with the level); the actions are the env's action space's
+    ([`rainuav.rl.networks`][rainuav.rl.networks]).
+
+    Args:
+        d: The learner's settings.
+        env: The environment.
+        step: One move in the observation's units.
+
+    Returns:
+        The encoder.
+    """
     if env.view is not None:
         x0, x1, y0, y1 = env.field.extent
         geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
@@ -72,7 +99,17 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Enc
 
 
 def pick_device(name: str) -> torch.device:
-    """``"auto"``: CUDA when available, else the CPU."""
+    """The device a name asks for.
+
+    Args:
+        name: "cpu", "cuda" or "auto" (CUDA when available, else the CPU).
+
+    Returns:
+        The `torch.device`.
+
+    Raises:
+        InvalidInputError: "cuda" where CUDA is not available.
+    """
     if name == "auto":
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
     if name == "cuda" and not torch.cuda.is_available():
@@ -96,8 +133,16 @@ def _deterministic(mode: bool, warn_only: bool) -> None:
 
 @contextlib.contextmanager
 def torch_settings(device: torch.device) -> Iterator[None]:
-    """Deterministic algorithms, and on the CPU one thread (the networks are tiny: one thread
-    is faster than two and keeps CPU runs bit-reproducible); restored afterwards."""
+    """A context of deterministic algorithms and, on the CPU, one thread; restored afterwards.
+
+    The networks are tiny: one thread is faster than two and keeps CPU runs bit-reproducible.
+
+    Args:
+        device: Where the networks run.
+
+    Yields:
+        Nothing.
+    """
     threads = torch.get_num_threads()
     deterministic = torch.are_deterministic_algorithms_enabled()
     warn_only = torch.is_deterministic_algorithms_warn_only_enabled()
