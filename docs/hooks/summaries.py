@@ -43,7 +43,8 @@ def with_summary_line(doc: str) -> str:
     head, sep, rest = doc.partition("\n\n")
     first = first_sentence(head)
     joined = " ".join(line.strip() for line in head.splitlines())
-    if head.split("\n", 1)[0].strip() == first or head.lstrip().startswith(("- ", "* ", "|", "```")):
+    not_prose = head.lstrip().startswith(("- ", "* ", "|", "```"))  # a list, a table, code
+    if head.split("\n", 1)[0].strip() == first or not_prose:
         return doc  # the first line is the sentence already, or the paragraph is no prose
     rest_of_head = joined[len(first) :].strip()
     return first + ("\n" + rest_of_head if rest_of_head else "") + sep + rest

@@ -238,9 +238,15 @@ class RadioMap:
 
 
 def default_min_db(scenario_name: str, signal: str = "sinr") -> float:
-    """The outage threshold of a task on ``signal`` over a map of the scenario named
-    ``scenario_name``
-    ([`RadioMap.default_min_db()`][rainuav.radio.outputs.mapdata.RadioMap.default_min_db])."""
+    """The outage threshold of a task on a signal over a map of a named scenario.
+
+    Args:
+        scenario_name: The scenario's name.
+        signal: "sinr" or "sir".
+
+    Returns:
+        dB ([`RadioMap.default_min_db()`][rainuav.radio.outputs.mapdata.RadioMap.default_min_db]).
+    """
     if signal == "sinr":
         return SINR_THRESHOLDS_DB.get(scenario_name, DEFAULT_MIN_DB)
     return DEFAULT_MIN_DB
@@ -261,8 +267,19 @@ def _fit_of(path: Any, raw: np.ndarray | None) -> dict[str, Any] | None:
 def write_npz(
     path: str | os.PathLike[str], arrays: dict[str, Any], scn: Scenario, version: int
 ) -> Path:
-    """Writes ``arrays`` with ``scn`` as TOML and the format ``version`` as one .npz (no
-    pickles), atomically: how maps and map series are saved."""
+    """Writes arrays, a scenario as TOML and a format version as one .npz (no pickles), atomically.
+
+    How maps and map series are saved.
+
+    Args:
+        path: The file.
+        arrays: The arrays by name.
+        scn: The scenario.
+        version: The file's format version.
+
+    Returns:
+        The path written.
+    """
     meta = {
         "format_version": np.int64(version),
         "scenario_toml": np.asarray(scn.to_toml_string()),
@@ -283,13 +300,24 @@ def read_npz(
     version: int,
     known: tuple[str, Scenario] | None = None,
 ) -> tuple[dict[str, np.ndarray], Scenario]:
-    """The arrays and the scenario of an .npz written by
-    [`write_npz()`][rainuav.radio.outputs.mapdata.write_npz] (never unpickled), or
-    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file: unreadable, missing an
-    array of ``need``, of another format ``version``, or a scenario that is not valid (``what``: the
-    kind of file, for the message). ``known``: ``(digest, scenario)`` the caller looked the file up
-    by (the map cache); where the file's stored digest is that one, its scenario is that scenario
-    and its TOML is not parsed again (seconds for a radar weather's rate maps)."""
+    """The arrays and the scenario of an .npz written by `write_npz()`, never unpickled.
+
+    Args:
+        path: The file.
+        what: The kind of file, for the messages.
+        need: The arrays it must hold.
+        version: The format version this rainuav reads.
+        known: `(digest, scenario)` the caller looked the file up by (the map cache): where the
+            file's stored digest is that one, its scenario is that scenario and its TOML is not
+            parsed again (seconds for a radar weather's rate maps).
+
+    Returns:
+        `(arrays, scenario)`.
+
+    Raises:
+        InvalidInputError: A file unreadable, missing an array of `need`, of another format version,
+            or with a scenario that is not valid (named).
+    """
     data = read_arrays(path, what)
     missing = {*need, "scenario_toml"} - set(data)
     if missing:
@@ -319,9 +347,19 @@ def check_arrays(
     shapes: dict[str, tuple[int, ...]],
     ranges: dict[str, tuple[float, float]],
 ) -> None:
-    """Each array of ``shapes`` numeric, of its shape and finite, each of ``ranges`` within
-    its bounds, and ``x_m``, ``y_m`` the pixel centres of ``scn``'s area; else
-    [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file and the array."""
+    """Checks a file's arrays: shapes, finite values, ranges, and the pixel centres of the area.
+
+    Args:
+        path: The file, for the messages.
+        data: The arrays by name.
+        scn: The file's scenario.
+        shapes: The shape each array must have.
+        ranges: The bounds each array must lie within.
+
+    Raises:
+        InvalidInputError: An array not numeric, of another shape, not finite, out of its bounds, or
+            pixel centres that are not the area's (the file and the array named).
+    """
     for k, shape in shapes.items():
         a = data[k]
         if a.shape != shape or a.dtype.kind not in "fiu":
@@ -343,11 +381,20 @@ def check_arrays(
 
 
 def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> None:
-    """A map's arrays as [`build_radio_map()`][rainuav.radio.outputs.maps.build_radio_map] writes
-    them, or [`InvalidInputError`][rainuav.errors.InvalidInputError] naming the file and the array:
-    shapes from the scenario, types, and values finite and in their physical ranges (SIR and SINR
+    """Checks a map's arrays as `build_radio_map()` writes them.
+
+    Shapes from the scenario, types, and values finite and in their physical ranges (SIR and SINR
     within [SIR_FLOOR_DB, SIR_CEIL_DB], RSS within [RSS_FLOOR_DBM, 100] dBm, serving cells and sites
-    that exist, PE shares in [0, 1], pixel centres where the area puts them)."""
+    that exist, PE shares in [0, 1], pixel centres where the area puts them).
+
+    Args:
+        path: The file, for the messages.
+        data: The arrays by name.
+        scn: The file's scenario.
+
+    Raises:
+        InvalidInputError: An array that fails a check (the file and the array named).
+    """
     h, w = scn.area.shape
     m = len(data["cell_site"]) if data["cell_site"].ndim == 1 else -1  # the map's own cells
     shapes = {
@@ -361,8 +408,15 @@ def check_map_arrays(path: Any, data: dict[str, np.ndarray], scn: Scenario) -> N
 
 
 def map_ranges(cells: int, scn: Scenario) -> dict[str, tuple[float, float]]:
-    """The physical ranges of a map's (or a series') power, SIR, SINR, serving cell and
-    cell sites, for ``cells`` cells of ``scn``."""
+    """The physical ranges of a map's (or a series') power, SIR, SINR, serving cell and sites.
+
+    Args:
+        cells: The map's cells.
+        scn: The scenario.
+
+    Returns:
+        `(low, high)` by array name.
+    """
     return {
         "sir_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
         "sinr_db": (SIR_FLOOR_DB, SIR_CEIL_DB),
@@ -373,9 +427,15 @@ def map_ranges(cells: int, scn: Scenario) -> dict[str, tuple[float, float]]:
 
 
 def store(rm: Any, path: Path) -> None:
-    """Keeps ``rm`` (a map or a map series: anything with ``save``) in the cache at ``path``; a
-    cache that cannot be written is a [`CacheWarning`][rainuav.errors.CacheWarning] (the map is the
-    caller's all the same)."""
+    """Keeps a map (or a map series: anything with `save`) in the cache.
+
+    A cache that cannot be written is a [`CacheWarning`][rainuav.errors.CacheWarning]: the map is
+    the caller's all the same.
+
+    Args:
+        rm: The map.
+        path: Its cache file.
+    """
     try:
         rm.save(path)
     except OSError as err:

@@ -218,8 +218,18 @@ _BUILT: dict[str, Buildings] = {}
 
 
 def scenario_buildings(scn: Scenario) -> Buildings | None:
-    """The buildings of ``scn`` (boxes and footprints; read once per file contents, area and
-    sites), or None where it has neither."""
+    """The buildings of a scenario: boxes and footprints, read once per file contents, area and
+    sites.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        The buildings, or None where it has neither.
+
+    Raises:
+        InvalidInputError: A footprints file that cannot be read (named).
+    """
     if not scn.buildings and scn.footprints is None:
         return None
     import json
@@ -245,8 +255,14 @@ def scenario_buildings(scn: Scenario) -> Buildings | None:
 
 
 def wall_args(scn: Scenario) -> tuple[np.ndarray, np.ndarray]:
-    """The walls (K, 6) and their permittivities (K, 2: real, imaginary) at ``scn``'s
-    frequency, as `rainuav._core.ray_walls` takes them."""
+    """The walls and their permittivities at a scenario's frequency, as the core takes them.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        `(walls (K, 6), permittivities (K, 2): real, imaginary)`.
+    """
     b = scenario_buildings(scn)
     if b is None or b.walls.shape[0] == 0:
         return np.zeros((0, 6)), np.zeros((0, 2))
@@ -254,8 +270,16 @@ def wall_args(scn: Scenario) -> tuple[np.ndarray, np.ndarray]:
 
 
 def prism_eps(scn: Scenario) -> np.ndarray | None:
-    """Each merged building's wall permittivity (P, 2: real, imaginary) at ``scn``'s frequency,
-    in the order of its prisms (what the corners diffract with); None without buildings."""
+    """Each merged building's wall permittivity at a scenario's frequency, in its prisms' order.
+
+    What the corners diffract with.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        (P, 2): real, imaginary; None without buildings.
+    """
     b = scenario_buildings(scn)
     if b is None or len(b.footprints) == 0:
         return None
@@ -273,11 +297,20 @@ def _permittivities(materials: Sequence[str], freq_hz: float) -> np.ndarray:
 def pixels_touched_max(
     scn: Scenario, shape: tuple[int, int] | None = None, at_least_m: float = 0.0
 ) -> np.ndarray:
-    """The tallest building (m above the terrain) whose footprint overlaps each pixel of the
-    area (an overlap of positive area: footprints intersected with pixels as polygons; a
-    pixel a footprint only touches along an edge or at a corner does not count), (H, W),
-    among those at least ``at_least_m`` tall (0 where none is). Every (footprint, pixel of
-    its bounding box) pair is tested in one vectorised shapely call."""
+    """The tallest building whose footprint overlaps each pixel of the area, m above the terrain.
+
+    An overlap of positive area (footprints intersected with pixels as polygons; a pixel a footprint
+    only touches along an edge or at a corner does not count). Every (footprint, pixel of its
+    bounding box) pair is tested in one vectorised shapely call.
+
+    Args:
+        scn: The scenario.
+        shape: The map's (H, W); None: the area's.
+        at_least_m: Buildings lower than this are left out, m.
+
+    Returns:
+        (H, W), m (0 where none is).
+    """
     import shapely
 
     a = scn.area
@@ -320,9 +353,18 @@ NEAR_ROUTE_M = 100.0
 
 
 def buildings_near_route(scn: Scenario, path: np.ndarray) -> dict[str, int] | None:
-    """How many of ``scn``'s buildings stand within
-    [`NEAR_ROUTE_M`][rainuav.radio.scene.buildings.NEAR_ROUTE_M] of ``path`` (N, 2), and how many of
-    those stand at the default height (their clearance a guess); None without buildings."""
+    """How many buildings stand near a route, and how many of those at the default height.
+
+    Near is within [`NEAR_ROUTE_M`][rainuav.radio.scene.buildings.NEAR_ROUTE_M]; a building at the
+    default height has a clearance that is a guess.
+
+    Args:
+        scn: The scenario.
+        path: The route (N, 2), m.
+
+    Returns:
+        `buildings_near_route` and `buildings_near_route_at_default_height`; None without buildings.
+    """
     b = scenario_buildings(scn)
     if b is None:
         return None
@@ -339,7 +381,15 @@ def buildings_near_route(scn: Scenario, path: np.ndarray) -> dict[str, int] | No
 
 
 def default_height_warning(summary: dict[str, Any], default_height_m: float) -> str | None:
-    """A warning line where most buildings near the route stand at the default height."""
+    """A warning line where most buildings near the route stand at the default height.
+
+    Args:
+        summary: A flight's summary (its counts of buildings near the route).
+        default_height_m: The default height, m.
+
+    Returns:
+        The line, or None.
+    """
     n = summary.get("buildings_near_route") or 0
     k = summary.get("buildings_near_route_at_default_height") or 0
     if n == 0 or 2 * k <= n:

@@ -165,8 +165,14 @@ class Cell:
 
 @functools.lru_cache(maxsize=64)
 def pattern_by_key(key: tuple[Any, ...]) -> antenna.Pattern:
-    """The pattern of any cell whose [`Cell.key()`][rainuav.radio.scene.cell.Cell.key] is ``key``
-    (built once, cached)."""
+    """The pattern of any cell whose `Cell.key()` is a key (built once, cached).
+
+    Args:
+        key: The key.
+
+    Returns:
+        The pattern.
+    """
     kind = key[0]
     if kind == "gaussian":
         _, bh, bv, floor = key
@@ -181,20 +187,45 @@ def pattern_by_key(key: tuple[Any, ...]) -> antenna.Pattern:
 
 
 def cell_pattern(cell: Cell) -> antenna.Pattern:
-    """The cell's pattern in its own frame, dBi (shared between cells with equal antennas)."""
+    """The cell's pattern in its own frame, dBi (shared between cells with equal antennas).
+
+    Args:
+        cell: The cell.
+
+    Returns:
+        The pattern.
+    """
     return pattern_by_key(cell.key())
 
 
 def gain_linear(cell: Cell, azimuth_deg: Any, elevation_deg: Any) -> np.ndarray:
-    """The cell's linear gain toward global directions (degrees; module docstring)."""
+    """The cell's linear gain toward global directions (the module's docstring).
+
+    Args:
+        cell: The cell.
+        azimuth_deg: Global azimuths, degrees.
+        elevation_deg: Elevations, degrees.
+
+    Returns:
+        The linear gain, of the broadcast shape.
+    """
     el = np.clip(np.asarray(elevation_deg, dtype=float) - cell.tilt_deg, -90.0, 90.0)
     az = np.asarray(azimuth_deg, dtype=float) - cell.azimuth_deg
     return np.asarray(10.0 ** (cell_pattern(cell).gain_dbi(az, el) / 10.0))
 
 
 def weight_at(weight: Weight, cell: Cell, az: np.ndarray, el: np.ndarray) -> np.ndarray:
-    """``weight`` in the directions of global azimuth ``az`` and elevation ``el`` (degrees)
-    from ``cell``."""
+    """A weight in global directions from a cell.
+
+    Args:
+        weight: The weight.
+        cell: The cell.
+        az: Global azimuths, degrees.
+        el: Elevations, degrees.
+
+    Returns:
+        The weight, of the broadcast shape.
+    """
     e = np.radians(el)
     a = np.radians(az - cell.azimuth_deg)
     return weight(np.cos(e) * np.sin(a), np.sin(e), np.cos(e) * np.cos(a))

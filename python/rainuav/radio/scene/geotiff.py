@@ -38,7 +38,14 @@ SUFFIXES = (".tif", ".tiff")
 
 
 def is_geotiff(path: str | os.PathLike[str]) -> bool:
-    """Whether ``path`` is read as GeoTIFF: a ``.tif``/``.tiff`` file, or a folder."""
+    """Whether a path is read as GeoTIFF: a `.tif` / `.tiff` file, or a folder.
+
+    Args:
+        path: The path.
+
+    Returns:
+        True for GeoTIFF.
+    """
     p = Path(path)
     return p.is_dir() or p.suffix.lower() in SUFFIXES
 
@@ -109,9 +116,21 @@ def _bands(path: Path) -> tuple[np.ndarray, list[np.datetime64], str, Any, Any]:
 
 
 def open_geotiff(path: str | os.PathLike[str]) -> Any:
-    """The GeoTIFF file or folder at ``path`` (module docstring) as an xarray Dataset in CF
-    form: ``rain`` (time, y, x) with its ``units`` and a ``grid_mapping`` variable ``crs``
-    holding the CRS as WKT, ``x``/``y`` the pixel centres, ``time`` the instants, sorted."""
+    """A GeoTIFF file or folder as an xarray Dataset in CF form (the module's docstring).
+
+    `rain` (time, y, x) with its `units`, a `grid_mapping` variable `crs` holding the CRS as WKT,
+    `x` / `y` the pixel centres, `time` the instants, sorted.
+
+    Args:
+        path: A file, or a folder of scans.
+
+    Returns:
+        The Dataset.
+
+    Raises:
+        InvalidInputError: No such file, a folder without GeoTIFF files, or files whose grid, CRS or
+            units differ.
+    """
     import xarray as xr
 
     p = Path(path)

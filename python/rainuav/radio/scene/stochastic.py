@@ -75,11 +75,26 @@ class StochasticRain:
     """The instant this weather shows, s after the field's time 0."""
 
     def at(self, t_s: float) -> StochasticRain:
-        """The field ``t_s`` seconds on (moved and evolved; motion kept)."""
+        """The field some seconds on: moved and evolved, its motion kept.
+
+        Args:
+            t_s: Seconds after the field's instant.
+
+        Returns:
+            A new [`StochasticRain`][rainuav.radio.scene.stochastic.StochasticRain].
+        """
         return dataclasses.replace(self, t_s=self.t_s + t_s)
 
     def check(self, where: str = "medium.field") -> None:
-        """Raises InvalidInputError naming the first field out of range."""
+        """Checks the field's settings.
+
+        Args:
+            where: The name the error gives the field.
+
+        Raises:
+            InvalidInputError: The first field out of range (a lifetime too short, a speed over 60
+                m/s, ...), named.
+        """
         check_integer(f"{where}.seed", self.seed, 0, 2**63 - 1)
         _num(f"{where}.mean_rate_mm_h", self.mean_rate_mm_h, 0.0, 200.0, " mm/h")
         _num(f"{where}.wet_fraction", self.wet_fraction, 0.01, 1.0, "")
@@ -119,8 +134,20 @@ def _pysteps() -> Any:
 
 @functools.lru_cache(maxsize=16)
 def noise_field(seed: int, knot: int, n: int, beta: float) -> np.ndarray:
-    """The Gaussian noise of knot ``knot`` (n x n, zero mean, unit variance, 2-D power
-    spectrum ``|k|^-beta``) of a field seeded ``seed``; cached (read-only)."""
+    """The Gaussian noise of one knot of a field: zero mean, unit variance, 2-D spectrum
+    `|k|^-beta`.
+
+    Cached (read-only).
+
+    Args:
+        seed: The field's seed.
+        knot: The knot's index in time.
+        n: The nodes a side.
+        beta: The spectrum's exponent.
+
+    Returns:
+        (n, n).
+    """
     fft = _pysteps()
     k = np.hypot(*np.meshgrid(np.fft.fftfreq(n) * n, np.fft.fftfreq(n) * n))
     with np.errstate(divide="ignore"):
@@ -133,13 +160,30 @@ def noise_field(seed: int, knot: int, n: int, beta: float) -> np.ndarray:
 
 
 def nodes(side_m: float) -> int:
-    """Noise nodes along a side of the square: about 10 m apart, a power of two, at most
-    [`MAX_GRID`][rainuav.radio.scene.stochastic.MAX_GRID]."""
+    """The noise nodes along a side of the square: about 10 m apart, a power of two.
+
+    At most [`MAX_GRID`][rainuav.radio.scene.stochastic.MAX_GRID].
+
+    Args:
+        side_m: The side, m.
+
+    Returns:
+        The number of nodes.
+    """
     return int(min(MAX_GRID, 2 ** math.ceil(math.log2(max(side_m / 10.0, 16.0)))))
 
 
 def field_rates(f: StochasticRain, x: Any, y: Any) -> np.ndarray:
-    """The rain rate (mm/h) of ``f`` at its instant ``f.t_s`` at the points ``(x, y)`` (m)."""
+    """The rain rate of a field at its instant at points, mm/h.
+
+    Args:
+        f: The field (at its `t_s`).
+        x: East, m.
+        y: North, m.
+
+    Returns:
+        Rates, mm/h.
+    """
     from scipy.special import ndtri
     from scipy.stats import norm
 

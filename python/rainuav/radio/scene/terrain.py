@@ -55,8 +55,14 @@ def _read(
 
 
 def scenario_terrain(scn: Scenario) -> Terrain | None:
-    """The terrain of ``scn`` on its area's nodes (read once per file contents and area), or
-    None for a flat ground at 0."""
+    """The terrain of a scenario on its area's nodes, read once per file contents and area.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        The [`Terrain`][rainuav.ground.dem.Terrain], or None for a flat ground at 0.
+    """
     if scn.terrain is None or scn.origin is None:
         return None
     a = scn.area
@@ -75,16 +81,31 @@ is a mirror no real ground is; its reflection is further weighted by the terrain
 
 
 def ground_over(terrain: bool, ground: str | None, current: str) -> str:
-    """The ground a map uses: ``ground`` where one is named, else
-    [`DEM_GROUND`][rainuav.radio.scene.terrain.DEM_GROUND] over a DEM (``terrain``), else
-    ``current``."""
+    """The ground a map uses.
+
+    Args:
+        terrain: Whether the scenario has a DEM.
+        ground: The ground named, or None.
+        current: The scenario's ground otherwise.
+
+    Returns:
+        `ground` where one is named, else [`DEM_GROUND`][rainuav.radio.scene.terrain.DEM_GROUND]
+        over a DEM, else `current`.
+    """
     if ground is not None:
         return ground
     return DEM_GROUND if terrain else current
 
 
 def core_args(scn: Scenario) -> dict[str, Any]:
-    """The terrain and the altitude reference as the core's ray functions take them."""
+    """The terrain and the altitude reference as the core's ray functions take them.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        The keyword arguments.
+    """
     t = scenario_terrain(scn)
     if t is None:
         return {"terrain": None, "altitude_msl": scn.area.msl}
@@ -98,16 +119,31 @@ def core_args(scn: Scenario) -> dict[str, Any]:
 
 
 def flight_heights(scn: Scenario) -> np.ndarray:
-    """The UAV's height above sea level over every pixel centre, (H, W), m."""
+    """The UAV's height above sea level over every pixel centre.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        (H, W), m.
+    """
     x, y = scn.area.centres()
     gx, gy = np.meshgrid(x, y)
     return flight_heights_at(scn, gx, gy)
 
 
 def obstacle_pixel_max(scn: Scenario, at_least_m: float = 0.0) -> np.ndarray:
-    """The tallest obstacle (buildings: boxes and footprints, intersected with each pixel as
-    polygons; and ``height_map_m``; m above the terrain) touching each pixel, (H, W); the
-    buildings lower than ``at_least_m`` left out."""
+    """The tallest obstacle touching each pixel, m above the terrain.
+
+    Buildings (boxes and footprints, intersected with each pixel as polygons) and `height_map_m`.
+
+    Args:
+        scn: The scenario.
+        at_least_m: Buildings lower than this are left out, m.
+
+    Returns:
+        (H, W), m.
+    """
     from rainuav.radio.scene.buildings import pixels_touched_max
 
     a = scn.area
@@ -132,7 +168,14 @@ def obstacle_pixel_max(scn: Scenario, at_least_m: float = 0.0) -> np.ndarray:
 
 
 def not_flyable(scn: Scenario) -> np.ndarray:
-    """The pixels the UAV may not enter, (H, W) bool (module docstring)."""
+    """The pixels the UAV may not enter (the module's docstring).
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        (H, W) bool.
+    """
     a = scn.area
     t = scenario_terrain(scn)
     ground = np.zeros(a.shape) if t is None else t.pixel_max(a.shape)
@@ -146,10 +189,15 @@ def not_flyable(scn: Scenario) -> np.ndarray:
 
 
 def map_mask(scn: Scenario) -> np.ndarray | None:
-    """The not-flyable pixels a map of ``scn`` carries:
-    [`not_flyable()`][rainuav.radio.scene.terrain.not_flyable] where anything stands on the ground
-    (terrain, buildings, a height map), None over flat open ground (where every pixel is
-    flyable)."""
+    """The not-flyable pixels a map of a scenario carries.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        [`not_flyable()`][rainuav.radio.scene.terrain.not_flyable] where anything stands on the
+        ground (terrain, buildings, a height map); None over flat open ground (every pixel flyable).
+    """
     if (
         scn.terrain is None
         and not scn.buildings
@@ -161,14 +209,30 @@ def map_mask(scn: Scenario) -> np.ndarray | None:
 
 
 def floor_m(scn: Scenario) -> float:
-    """The lowest terrain over the area's nodes, m above sea level (0 without a terrain): the
-    parabolic equation's grids start there."""
+    """The lowest terrain over the area's nodes: the parabolic equation's grids start there.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        m above sea level (0 without a terrain).
+    """
     t = scenario_terrain(scn)
     return 0.0 if t is None else float(t.heights_m.min())
 
 
 def site_height_above_floor(scn: Scenario, x_m: float, y_m: float, height_m: float) -> float:
-    """A site's antenna height above [`floor_m()`][rainuav.radio.scene.terrain.floor_m], m."""
+    """A site's antenna height above [`floor_m()`][rainuav.radio.scene.terrain.floor_m].
+
+    Args:
+        scn: The scenario.
+        x_m: The site's east, m.
+        y_m: Its north, m.
+        height_m: The antenna's height above the ground there, m.
+
+    Returns:
+        m.
+    """
     t = scenario_terrain(scn)
     if t is None:
         return float(height_m)
@@ -176,13 +240,31 @@ def site_height_above_floor(scn: Scenario, x_m: float, y_m: float, height_m: flo
 
 
 def surface_at(scn: Scenario, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The terrain's height above sea level at the points ``(x, y)`` (0 without a terrain)."""
+    """The terrain's height above sea level at points (0 without a terrain).
+
+    Args:
+        scn: The scenario.
+        x: East, m.
+        y: North, m.
+
+    Returns:
+        Heights, m.
+    """
     t = scenario_terrain(scn)
     return np.zeros(np.shape(x)) if t is None else t.at(x, y)
 
 
 def flight_heights_at(scn: Scenario, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The UAV's height above sea level over the points ``(x, y)``, m."""
+    """The UAV's height above sea level over points.
+
+    Args:
+        scn: The scenario.
+        x: East, m.
+        y: North, m.
+
+    Returns:
+        Heights, m.
+    """
     a = scn.area
     if a.msl or scn.terrain is None:
         return np.full(np.shape(x), float(a.altitude_m))
