@@ -18,19 +18,36 @@ __all__ = ["flight_figure", "plot_flight"]
 
 
 def plot_flight(rm: Any, path: np.ndarray, place: Any, where: Path, heights: Any = None) -> None:
-    """Writes ``flight.png`` ([`flight_figure()`][rainuav.fly.figure.flight_figure]) to
-    ``where``, atomically."""
+    """Writes `flight.png` ([`flight_figure()`][rainuav.fly.figure.flight_figure]), atomically.
+
+    Args:
+        rm: The map flown (or maps in time).
+        path: The flight's path (N, 2), m.
+        place: The place.
+        where: The file.
+        heights: Among levels, `(t_s, altitude_m, outage)` a vertex.
+    """
     fig = flight_figure(rm, path, place, heights)
     write_atomic(where, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
 
 
 def flight_figure(rm: Any, path: np.ndarray, place: Any, heights: Any = None) -> Any:
-    """The figure of ``flight.png`` (a matplotlib Figure): the path over the SINR at take-off (a
-    series: its first instant), the rain at take-off outlined, the buildings' footprints, the pixels
-    the UAV may not fly (hatched), the waypoints, the sites, the start and the destination; the
-    legend below the map, where it hides nothing. ``heights``: ``(t_s, altitude_m, outage)`` per
-    vertex of a flight among levels, drawn below as its height against time, the moves in outage
-    marked."""
+    """The figure of `flight.png`: the path over the SINR at take-off, with what the UAV must avoid.
+
+    The rain at take-off outlined, the buildings' footprints, the pixels the UAV may not fly
+    (hatched), the waypoints, the sites, the start and the destination; the legend below the map,
+    where it hides nothing.
+
+    Args:
+        rm: The map flown (a series: its first instant).
+        path: The flight's path (N, 2), m.
+        place: The place.
+        heights: Among levels, `(t_s, altitude_m, outage)` a vertex, drawn below as the height
+            against time with the moves in outage marked.
+
+    Returns:
+        The matplotlib Figure.
+    """
     from matplotlib.figure import Figure
 
     if heights is None:

@@ -53,9 +53,24 @@ def fly_levels(
     place, out: Path, *, speed_m_s: float = 10.0, min_db: float | None = None,
     progress: bool = False, start_altitude_m: float | None = None,
 ) -> dict:  # fmt: skip
-    """Plans and writes the flight among ``place``'s levels (module docstring), from the level
-    ``start_altitude_m`` (default: the planner's choice, the level whose optimum is best among
-    those the start may be flown at, which the summary names); returns the summary."""
+    """Plans and writes the flight among a place's levels (the module's docstring).
+
+    Args:
+        place: The place, with `area.altitudes_m`.
+        out: The output folder.
+        speed_m_s: The ground speed, m/s.
+        min_db: The SINR's outage threshold, dB.
+        progress: A line on standard error per map built.
+        start_altitude_m: The level to start at; None: the planner's choice, the level whose optimum
+            is best among those the start may be flown at (the summary names it).
+
+    Returns:
+        The summary.
+
+    Raises:
+        InvalidInputError: A start or destination off the map, a start level the UAV may not fly, or
+            no flight that reaches the destination.
+    """
     scn = place.scenario
     if scn.area.msl and scn.terrain is not None:
         raise InvalidInputError(

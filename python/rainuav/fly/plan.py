@@ -74,18 +74,34 @@ def fly_place(
     start_altitude_m: float | None = None,
     measurements: Path | None = None,
 ) -> dict:
-    """Builds the place's map, plans the exact optimum and the straight line from the start, writes
-    [`FLIGHT_FILES`][rainuav.fly.plan.FLIGHT_FILES] into ``out`` (each atomically) and returns
-    the summary. ``min_db``: the outage threshold of the SINR (default: the ``uma`` preset's, whose
-    radio settings the place takes). ``flyer``: flies the place's env (with the weather observation)
-    from its start and returns the path and whether it arrived, in place of the exact optimum (which
-    stays the yardstick: ``excess_over_optimum``); ``flown_by`` names it in the summary.
-    ``start_altitude_m``: with ``area.altitudes_m``, the level to start at
-    ([`rainuav.fly.heights.fly_levels()`][rainuav.fly.heights.fly_levels]). ``measurements``: a
-    drive-test or flight log that corrects the map before the plan
-    ([`rainuav.radio.measured`][rainuav.radio.measured]); the summary then gives the plan's
-    expected outage share and its spread from the corrected map's deviation, and ``fit.json`` the
-    fit."""
+    """Builds a place's map, plans the flight and writes its files.
+
+    [`FLIGHT_FILES`][rainuav.fly.plan.FLIGHT_FILES] go into `out`, each atomically.
+
+    Args:
+        place: The place ([`place_scenario()`][rainuav.world.place.place_scenario]).
+        out: The output folder.
+        speed_m_s: The ground speed, m/s.
+        min_db: The SINR's outage threshold, dB (default: the `uma` preset's, whose radio settings
+            the place takes).
+        progress: A line on standard error per map built.
+        flyer: Flies the place's env (with the weather observation) from its start and returns the
+            path and whether it arrived, in place of the exact optimum (which stays the yardstick:
+            `excess_over_optimum`).
+        flown_by: The flyer's name in the summary.
+        start_altitude_m: Among levels, the level to start at
+            ([`fly_levels()`][rainuav.fly.heights.fly_levels]).
+        measurements: A drive-test or flight log that corrects the map before the plan
+            ([`rainuav.radio.measured`][rainuav.radio.measured]); the summary then gives the plan's
+            expected outage and its spread, `fit.json` the fit.
+
+    Returns:
+        The summary (`summary.json`).
+
+    Raises:
+        InvalidInputError: A start or destination off the map, no flight that reaches the
+            destination, or a log or a policy with flight levels.
+    """
     a = place.scenario.area
     if measurements is not None and (a.altitudes_m or place.scenario.medium.moves):
         raise InvalidInputError("--measurements corrects one map: not with --altitudes-m or a "
@@ -203,12 +219,19 @@ def fly_place(
 
 
 def mission_heights(scn: Scenario, path: np.ndarray) -> tuple[np.ndarray, Any, float]:
-    """The mission's waypoints along ``path`` (K, 2: local metres), their heights above mean sea
-    level (None over flat open ground: the flight altitude relative to home) and home's height: over
-    terrain, [`rainuav.missions.terrain_waypoints()`][rainuav.missions.terrain_waypoints] on the
-    path sampled [`rainuav.missions.SAMPLES_PER_MOVE`][rainuav.missions.SAMPLES_PER_MOVE] times a
-    move, with the planned flight height and the highest terrain or obstacle of the pixel under each
-    sample."""
+    """The mission's waypoints along a path, their heights and home's height.
+
+    Over terrain, [`terrain_waypoints()`][rainuav.missions.terrain_waypoints] on the path sampled
+    [`SAMPLES_PER_MOVE`][rainuav.missions.SAMPLES_PER_MOVE] times a move, with the planned flight
+    height and the highest terrain or obstacle of the pixel under each sample.
+
+    Args:
+        scn: The place's scenario.
+        path: The path (K, 2), local metres.
+
+    Returns:
+        `(waypoints, heights or None over flat open ground (relative to home), home's height)`.
+    """
     t = scenario_terrain(scn)
     if t is None:
         return path[corners(path)], None, 0.0

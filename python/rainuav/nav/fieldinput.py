@@ -32,9 +32,20 @@ def checked_values(
 ) -> tuple[np.ndarray, tuple[float, float, float, float], np.ndarray | None]:
     """The values, the extent and the serving cells of a field, checked.
 
-    The values with the axes ``dims`` (``"(H, W)"``, ``"(K, L, H, W)"``...), finite; the extent;
-    the serving cells of the values' shape, if given. Anything else: one line naming the
-    field."""
+    Args:
+        values_db: The values, dB, with the axes `dims`.
+        extent_m: `(x_min, x_max, y_min, y_max)`, m.
+        name: The values' name in the messages.
+        serving_cell: The serving cells, of the values' shape; None: none.
+        dims: The axes the values must have (`"(H, W)"`, `"(K, L, H, W)"`, ...).
+
+    Returns:
+        `(values, extent, serving cells or None)`.
+
+    Raises:
+        InvalidInputError: Values of another rank or not finite, an extent that is not four
+            increasing bounds, or serving cells of another shape (named).
+    """
     ndim = dims.count(",") + 1
     v = np.asarray(values_db, dtype=np.float64)
     if v.ndim != ndim or min(v.shape) < 1:
@@ -61,7 +72,18 @@ def checked_values(
 
 
 def checked_probability(p: Any, shape: tuple[int, int]) -> np.ndarray:
-    """``p`` as a read-only (H, W) float array of probabilities in [0, 1]."""
+    """Probabilities of outage, checked.
+
+    Args:
+        p: The probabilities.
+        shape: The map's (H, W).
+
+    Returns:
+        A read-only (H, W) float array.
+
+    Raises:
+        InvalidInputError: Another shape, or values outside [0, 1].
+    """
     a = np.asarray(p, dtype=np.float64)
     if a.shape != shape or not np.all((a >= 0) & (a <= 1)):
         raise InvalidInputError(
@@ -73,7 +95,18 @@ def checked_probability(p: Any, shape: tuple[int, int]) -> np.ndarray:
 
 
 def checked_mask(mask: Any, shape: tuple[int, ...]) -> np.ndarray | None:
-    """``mask`` as a read-only bool array of the map's pixels ((H, W) or (L, H, W)), or None."""
+    """A not-flyable mask, checked.
+
+    Args:
+        mask: The mask, or None.
+        shape: The map's (H, W), or (L, H, W) among levels.
+
+    Returns:
+        A read-only bool array, or None.
+
+    Raises:
+        InvalidInputError: Another shape, or values that are not bool or integer.
+    """
     if mask is None:
         return None
     m = np.asarray(mask)
@@ -88,7 +121,18 @@ def checked_mask(mask: Any, shape: tuple[int, ...]) -> np.ndarray | None:
 
 
 def checked_altitudes(altitudes_m: Any, levels: int) -> np.ndarray:
-    """The levels' altitudes: one a level, increasing."""
+    """The levels' altitudes, checked: one a level, increasing.
+
+    Args:
+        altitudes_m: The altitudes, m.
+        levels: The field's levels.
+
+    Returns:
+        The altitudes as a float array.
+
+    Raises:
+        InvalidInputError: Not one a level, or not increasing.
+    """
     alts = as_real_array("altitudes_m", altitudes_m).reshape(-1)
     if alts.size != levels or alts.size == 0:
         raise InvalidInputError(

@@ -45,10 +45,24 @@ def level_durations(
     climb_m_s: float = CLIMB_M_S,
     descend_m_s: float = DESCEND_M_S,
 ) -> tuple[list[int], list[int]]:
-    """How long each climb and each descent between neighbouring levels lasts, in ticks of
-    the flight's clock (one horizontal move, ``cfg.move_s``): the gap over the climb or
-    descent speed, rounded up to whole moves (at least one). With the defaults, 15 m gaps
-    and 1 s moves: 3 and 5 exactly."""
+    """How long each climb and each descent between neighbouring levels lasts, in ticks of the
+    clock.
+
+    A tick is one horizontal move, `cfg.move_s`: the gap over the climb or descent speed, rounded up
+    to whole moves (at least one). With the defaults, 15 m gaps and 1 s moves: 3 and 5 exactly.
+
+    Args:
+        altitudes_m: The levels, m, increasing.
+        cfg: The task.
+        climb_m_s: The climb speed, m/s.
+        descend_m_s: The descent speed, m/s.
+
+    Returns:
+        `(climbs, descents)`, one a gap, lowest first.
+
+    Raises:
+        InvalidInputError: A speed outside 0.1-100 m/s.
+    """
     gaps = np.diff(np.asarray(altitudes_m, dtype=np.float64))
     for name, v in (("climb_m_s", climb_m_s), ("descend_m_s", descend_m_s)):
         if not (np.isfinite(v) and 0.1 <= v <= 100.0):
@@ -186,13 +200,21 @@ class LevelStepper:
 def field_of(signal: Signal, *, levels: bool = False) -> SignalField:
     """The field the environment and the planner read of one signal, by its axes' sizes.
 
-    For a [`Signal`][rainuav.signals.Signal], one level gives a map
-    ([`SignalField`][rainuav.nav.field.SignalField]), maps in time
-    ([`SignalSeries`][rainuav.nav.field.SignalSeries]) or, with several worlds, a bank
-    ([`SignalBank`][rainuav.nav.field.SignalBank]); several levels give the same with a level
-    axis and ``altitudes_m`` (``levels=True``: whatever their number, a band of one level flown
-    with six moves). The values are the signal's, bit for bit.
-    A bank flies over open ground: a signal of several worlds with a closed pixel is refused."""
+    One level gives a map, maps in time or, with several worlds, a bank; several levels give the
+    same with a level axis and `altitudes_m`. The values are the signal's, bit for bit; a bank flies
+    over open ground.
+
+    Args:
+        signal: The [`Signal`][rainuav.signals.Signal].
+        levels: A field among levels whatever the number of levels (a band of one level is flown
+            with six moves).
+
+    Returns:
+        The [`SignalField`][rainuav.nav.field.SignalField].
+
+    Raises:
+        InvalidInputError: Not a signal, or a signal of several worlds with a closed pixel.
+    """
     if not isinstance(signal, Signal):
         raise InvalidInputError(f"signal must be a rainuav.signals.Signal (got {type(signal)})")
     v, name, mask, srv = signal.values, signal.name, signal.not_flyable, signal.serving_cell
@@ -224,8 +246,22 @@ def field_of(signal: Signal, *, levels: bool = False) -> SignalField:
 def signal_field(
     radio_map: Any, sinr_db: Any, sir_db: Any, extent_m: Any, signal: str | None
 ) -> SignalField:
-    """The field a task flies on: the ``signal`` map of ``radio_map``, or the one raw array
-    given (``sinr_db`` or ``sir_db``, which then names the signal)."""
+    """The field a task flies on: a map's signal, or the one raw array given.
+
+    Args:
+        radio_map: A built map, or None.
+        sinr_db: A raw SINR array (with `extent_m`), or None.
+        sir_db: A raw SIR array (with `extent_m`), or None.
+        extent_m: The raw array's `(x_min, x_max, y_min, y_max)`, m.
+        signal: "sinr" or "sir"; None: the raw array's, or the SINR of a map.
+
+    Returns:
+        The [`SignalField`][rainuav.nav.field.SignalField].
+
+    Raises:
+        InvalidInputError: Neither or both of a map and an array, an array without its extent, or a
+            signal the input does not hold.
+    """
     if signal is not None and signal not in SIGNALS:
         raise InvalidInputError(f"signal must be one of {SIGNALS} (got {signal!r})")
     raw = {k: v for k, v in (("sinr", sinr_db), ("sir", sir_db)) if v is not None}

@@ -9,7 +9,7 @@ callbacks ([`rainuav.rl.callbacks`][rainuav.rl.callbacks]: log, stages, validati
 checkpoint and the wall-clock budget); the run's state is one object,
 [`RunState`][rainuav.rl.callbacks.RunState], which the checkpoint saves and a resumed run
 restores. The run ends with
-[`finish()`][rainuav.rl.loop.finish] (evaluation, ``policy.pt``, ``metrics.json``, figures).
+[`finish()`][rainuav.rl.report.finish] (evaluation, ``policy.pt``, ``metrics.json``, figures).
 
 Outputs in ``cfg.out``: ``config.toml``, the world's signal (``radiomap.npz``, or
 ``radiomap_series.npz`` for a weather that moves, ``radiolevels.npz`` among flight levels),
@@ -22,7 +22,6 @@ uninterrupted run), and at the end
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import time
 from collections.abc import Sequence
@@ -60,11 +59,10 @@ from rainuav.rl.evaluation import (
     Validation,
     check_map_digest,
     eval_starts,
-    evaluate_run_policy,
 )
 from rainuav.rl.learner import learner_ends, learning_reward, training_level, training_task
-from rainuav.rl.plots import plot_policy, plot_returns, plot_stages, plot_storm_flights
 from rainuav.rl.references import optimal_flights
+from rainuav.rl.report import finish
 from rainuav.rl.runlog import RunLog
 from rainuav.rl.setup import check_fits, make_agent, pick_device, torch_settings
 from rainuav.world import World, build_world, task_of
@@ -84,8 +82,12 @@ __all__ = [
 
 # -- setup ------------------------------------------------------------------------------------
 def save_checkpoint(path: Path, state: dict[str, Any]) -> None:
-    """Tensors and plain data only ([`rainuav.rl.checkpoint`][rainuav.rl.checkpoint]), to a
-    temporary file, then rename."""
+    """Writes a checkpoint: tensors and plain data only, to a temporary file, then renamed.
+
+    Args:
+        path: The file.
+        state: The run's state ([`rainuav.rl.checkpoint`][rainuav.rl.checkpoint]).
+    """
     checkpoint.save(path, state)
 
 
@@ -97,9 +99,19 @@ CHECKPOINT_KEYS = (
 
 
 def load_checkpoint(path: Path, cfg: TrainConfig) -> dict[str, Any]:
-    """The checkpoint at ``path`` (read as data:
-    [`rainuav.rl.checkpoint.load()`][rainuav.rl.checkpoint.load]), refused if its run's
-    configuration differs from ``cfg`` (the differing fields are named)."""
+    """The checkpoint of a run to resume, read as data.
+
+    Args:
+        path: The file ([`load()`][rainuav.rl.checkpoint.load]).
+        cfg: The configuration resumed with.
+
+    Returns:
+        The checkpoint's state.
+
+    Raises:
+        InvalidInputError: No checkpoint there, one that is not a run's, or a run's configuration
+            that differs from `cfg` (the fields named).
+    """
     if not path.exists():
         raise InvalidInputError(f"--resume: no checkpoint at {path}")
     state = checkpoint.load(path, CHECKPOINT_KEYS)
@@ -208,14 +220,25 @@ def train(
 def storm_slot(
     pool: StormPool, lanes: Lanes, k: int, per_storm: np.ndarray, storm_episodes: int
 ) -> int:
-    """The storm of the pool lane ``k``'s next episode flies, counted in ``per_storm``.
+    """The storm of the pool a lane's next episode flies.
 
-    Of the storms that have had ``storm_episodes`` episodes, the one with the fewest UAVs in flight
+    Of the storms that have had `storm_episodes` episodes, the one with the fewest UAVs in flight
     drains: it takes no new episode (unless it is the only storm), so it stays the emptiest, and
     once no UAV flies it any more it is renewed
     ([`StormPool.renew()`][rainuav.world.pool.StormPool.renew]); one at a time, so the others keep
     the UAVs flying. The lane takes the storm with the fewest UAVs in flight (the first on ties), so
-    with as many storms as lanes each UAV has its own."""
+    with as many storms as lanes each UAV has its own.
+
+    Args:
+        pool: The storm pool.
+        lanes: The UAVs in flight.
+        k: The lane.
+        per_storm: The episodes each storm has had (counted here).
+        storm_episodes: The episodes a storm flies before it is renewed.
+
+    Returns:
+        The storm's slot.
+    """
     others = lanes.active.copy()
     others[k] = False
     load = np.bincount(lanes.world[others], minlength=len(per_storm))
@@ -244,15 +267,29 @@ def run_loop(
     pool: StormPool | None = None,
     callbacks: Sequence[Callback] = (),
 ) -> dict[str, Any]:
-    """Algorithm 1 over ``cfg.dqn.episodes`` episodes, ``lanes`` UAVs at a time; from ``saved`` (a
-    checkpoint's state) when resuming. Each pass collects a move of every UAV in flight
-    ([`collect()`][rainuav.rl.loop.collect]), learns ([`update()`][rainuav.rl.loop.update]), and
-    per finished episode updates the agent's schedules, calls the callbacks
-    ([`rainuav.rl.callbacks`][rainuav.rl.callbacks]: log, stages, validation) and relaunches the
-    lane; after a pass that finished some, the log, the budget and the checkpoint. Returns
-    [`finish()`][rainuav.rl.loop.finish]'s metrics, or ``{}`` when stopped at ``stop_after``.
-    ``pool``: the storms the UAVs fly ([`storm_slot()`][rainuav.rl.loop.storm_slot]); validation,
-    stages and the evaluation then fly ``ref_env`` (default: ``env``)."""
+    """Algorithm 1 over `cfg.dqn.episodes` episodes, `lanes` UAVs at a time.
+
+    Each pass collects a move of every UAV in flight ([`collect()`][rainuav.rl.loop.collect]),
+    learns ([`update()`][rainuav.rl.loop.update]), and per finished episode updates the agent's
+    schedules, calls the callbacks ([`rainuav.rl.callbacks`][rainuav.rl.callbacks]: log, stages,
+    validation) and relaunches the lane; after a pass that finished some, the log, the budget and
+    the checkpoint.
+
+    Args:
+        cfg: The run's configuration.
+        agent: The agent.
+        env: The environment trained in.
+        out: The run's folder.
+        saved: A checkpoint's state to resume from; None: a new run.
+        progress: A progress bar.
+        stop_after: End the call after this many episodes (a test of resuming); None: the run's.
+        ref_env: The environment validation, stages and the evaluation fly (default: `env`).
+        pool: The storms the UAVs fly ([`storm_slot()`][rainuav.rl.loop.storm_slot]).
+        callbacks: Callbacks beside the run's own.
+
+    Returns:
+        [`finish()`][rainuav.rl.report.finish]'s metrics, or `{}` when stopped at `stop_after`.
+    """
     d = cfg.dqn
     ref = env if ref_env is None else ref_env
     n_val = cfg.validate_starts if cfg.validate_every else 0
@@ -319,9 +356,17 @@ def run_loop(
 
 
 def collect(run: RunState, cfg: TrainConfig) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """One move of every UAV in flight: observe, act (epsilon-greedy), step, and hand each UAV's
-    finished N-step transitions to the replay. Returns the lanes that moved and the step's
-    results."""
+    """One move of every UAV in flight: observe, act (epsilon-greedy), step.
+
+    Each UAV's finished N-step transitions go to the replay.
+
+    Args:
+        run: The run's state.
+        cfg: The run's configuration.
+
+    Returns:
+        `(lanes that moved, the step's results)`.
+    """
     env, agent, lanes, d = run.env, run.agent, run.lanes, cfg.dqn
     idx = np.flatnonzero(lanes.active)
     pos = lanes.start[idx] + env.cfg.step_m * lanes.offset[idx]
@@ -345,8 +390,15 @@ def collect(run: RunState, cfg: TrainConfig) -> tuple[np.ndarray, dict[str, np.n
 
 
 def update(run: RunState, moves: int) -> None:
-    """The gradient steps ``moves`` new transitions pay for: one (sample, double-Q target, loss,
-    optimiser step) per ``train_every``."""
+    """The gradient steps new transitions pay for: one per `train_every`.
+
+    Args:
+        run: The run's state.
+        moves: The transitions collected since the last update.
+
+    Raises:
+        TrainingDivergedError: A loss that is not finite ([`diverged()`][rainuav.rl.loop.diverged]).
+    """
     every = run.agent.cfg.train_every
     run.pending += moves
     for _ in range(run.pending // every):
@@ -359,8 +411,17 @@ def update(run: RunState, moves: int) -> None:
 
 
 def diverged(agent: Agent, loss: float) -> TrainingDivergedError:
-    """The one-line error of a training whose loss stopped being finite: the gradient step and
-    the settings that usually cause it."""
+    """The one-line error of a training whose loss stopped being finite.
+
+    It names the gradient step and the settings that usually cause it.
+
+    Args:
+        agent: The agent.
+        loss: The loss.
+
+    Returns:
+        The [`TrainingDivergedError`][rainuav.errors.TrainingDivergedError] to raise.
+    """
     c = agent.cfg
     return TrainingDivergedError(
         f"training diverged at gradient step {agent.updates}: the loss is {loss} (dqn.lr "
@@ -368,41 +429,3 @@ def diverged(agent: Agent, loss: float) -> TrainingDivergedError:
         f"{c.reward_scale:g}); lower dqn.lr, keep dqn.grad-clip above 0 or use the huber loss. "
         "Nothing of this step was saved"
     )
-
-
-def finish(
-    cfg: TrainConfig,
-    agent: Agent,
-    env: UAVNavEnv,
-    returns: list[float],
-    stages: list,
-    train_seconds: float,
-    out: Path,
-    checks: Validation,
-    pool: StormPool | None = None,
-) -> dict[str, Any]:
-    """Evaluates the run
-    ([`rainuav.rl.evaluation.evaluate_run_policy()`][rainuav.rl.evaluation.evaluate_run_policy]),
-    saves the evaluated network's weights to ``policy.pt``, draws the figures and writes
-    ``metrics.json`` last."""
-    metrics, rolls = evaluate_run_policy(cfg, agent, env, checks)
-    policy = {k: v.detach().cpu() for k, v in agent.online.state_dict().items()}
-    save_checkpoint(out / "policy.pt", {"online": policy, "config": to_dict(cfg)})
-    metrics["training_seconds"] = train_seconds
-    metrics["episodes"] = len(returns)
-    metrics["device"] = str(agent.device)
-    if pool is not None:  # where the training time went, and which storms it flew
-        metrics["storms_flown"] = len(pool.flown)
-        metrics["storm_map_seconds"] = pool.map_seconds
-        metrics["storm_wait_seconds"] = pool.wait_seconds
-        metrics["evaluated_on_storm_seed"] = VALIDATION_SEEDS[0]
-    plot_returns(returns, out / "returns.png", checks.history)
-    plot_policy(env, metrics, rolls[:40], out / "trajectories.png")
-    if env.field.varies and env.altitudes_m is None:  # (among levels: trajectories.png)
-        plot_storm_flights(env, rolls[:6], out / "storm_flights.png")
-    if stages:
-        plot_stages(env, stages, out / "stages.png")
-    # last: a folder that holds metrics.json is complete (a stop before it leaves none)
-    text = json.dumps(metrics, indent=2)
-    write_atomic(out / "metrics.json", lambda t: t.write_text(text + "\n"))
-    return metrics

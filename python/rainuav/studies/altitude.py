@@ -46,8 +46,17 @@ def _outage(sinr: np.ndarray, extent: Any, path: np.ndarray, lv: np.ndarray, thr
 def altitude_row(
     scn: Scenario, cfg: NavConfig, starts: np.ndarray, env_100m: Any = None
 ) -> dict[str, Any]:
-    """The case's altitude figures (module docstring) from ``starts`` (N, 2); with
-    ``env_100m`` (the case's environment at 100 m), the straight line there too."""
+    """A case's altitude figures (the module's docstring).
+
+    Args:
+        scn: The case's scenario.
+        cfg: Its task.
+        starts: The starts (N, 2), m.
+        env_100m: The case's environment at 100 m, for the straight line there; None: left out.
+
+    Returns:
+        The figures by column name.
+    """
     stack = build_radio_levels(scn)
     sinr, blocked, ext = stack.sinr_db, stack.not_flyable, stack.extent
     alts = stack.altitudes_m

@@ -22,10 +22,18 @@ QUANTITIES = {
 
 
 def plot_maps(cases: list[Case], path: Path, quantity: str = "sinr") -> bool:
-    """Writes ``path`` (PNG): one row per distinct scenario (first seed of each case), its
-    map of ``quantity`` (``"sinr"`` or ``"rss"``, the best cell's received power; shared
-    colour scale) and its difference from the first case's (the base). Returns False when
-    there is only one map (nothing to compare)."""
+    """Writes a PNG of a study's maps and their differences from the base case's.
+
+    The first seed of each case; one colour scale for the maps.
+
+    Args:
+        cases: The study's cases.
+        path: The PNG.
+        quantity: "sinr", or "rss" (the best cell's received power).
+
+    Returns:
+        False where there is only one map (nothing to compare).
+    """
     from matplotlib.figure import Figure
 
     from rainuav.radio.outputs.maps import build_radio_map

@@ -47,9 +47,18 @@ def _fly(
 
 
 def read_result(path: Path) -> dict[str, Any]:
-    """A case's ``result.json`` or ``transfer.json``; one that is not a JSON table (a study folder
-    handed over with a damaged file) raises [`InvalidInputError`][rainuav.errors.InvalidInputError]
-    naming it."""
+    """A case's `result.json` or `transfer.json`.
+
+    Args:
+        path: The file.
+
+    Returns:
+        Its table.
+
+    Raises:
+        InvalidInputError: A file that is not a JSON table (a study folder handed over with a
+            damaged file; named, with how to rerun the case).
+    """
     try:
         row = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, ValueError) as err:
@@ -69,8 +78,16 @@ def _title(m: dict[str, Any]) -> str:
 
 
 def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, Any]]:
-    """Case (f) for every map-axis case (module docstring): computes what is missing, returns
-    ``{case id: its transfer figures}`` for every case that has them."""
+    """Case (f) for every map-axis case (the module's docstring), computing what is missing.
+
+    Args:
+        study: The study.
+        cases: Its cases.
+        out: The study's folder.
+
+    Returns:
+        `{case id: its transfer figures}` for every case that has them.
+    """
     from matplotlib.figure import Figure
 
     from rainuav.radio.outputs.maps import RadioMap
@@ -130,9 +147,19 @@ def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, 
 
 
 def plot_learned(cases: list[Case], rows: dict[str, dict[str, Any]], out: Path) -> bool:
-    """``trajectories.png``: each case's network (first seed of each case) from the same
-    [`FIGURE_STARTS`][rainuav.studies.policies.FIGURE_STARTS] starts over its own map, the exact
-    optimum dashed. False (and no file) when no case has a run."""
+    """Writes `trajectories.png`: each case's network from the same starts over its own map.
+
+    The first seed of each case, from the [`FIGURE_STARTS`][rainuav.studies.policies.FIGURE_STARTS]
+    starts, the exact optimum dashed.
+
+    Args:
+        cases: The study's cases.
+        rows: Their results by case id.
+        out: The study's folder.
+
+    Returns:
+        False (and no file) when no case has a run.
+    """
     import math
 
     from matplotlib.figure import Figure

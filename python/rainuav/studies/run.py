@@ -53,9 +53,19 @@ case's ``result.json``)."""
 def run_case(
     case: Case, compute: list[str], eval_starts: int, folder: str, radio_map: Any = None
 ) -> dict[str, Any]:
-    """Computes one case into ``folder`` and returns its row (also ``result.json``).
-    ``radio_map``: the case's map (or maps in time) when the caller has it (Ray passes it
-    from the object store); else it is built or taken from the cache."""
+    """Computes one case into its folder, `result.json` written last.
+
+    Args:
+        case: The case.
+        compute: What to compute (`map`, `optimal`, `learned`, `altitudes`).
+        eval_starts: The evaluation starts.
+        folder: The case's folder.
+        radio_map: The case's map (or maps in time) where the caller has it (Ray passes it from the
+            object store); None: built or taken from the cache.
+
+    Returns:
+        The case's row.
+    """
     from rainuav.rl.evaluation import eval_starts as starts_of
     from rainuav.rl.evaluation import reference_flights, summarise
     from rainuav.rl.loop import train
@@ -286,8 +296,16 @@ def _fmt(v: Any) -> str:
 
 
 def write_tables(study: Study, rows: list[dict[str, Any]], out: Path) -> None:
-    """``results.csv`` (one row per case) and ``report.md`` (the table, then per axis the
-    change of each figure against the base case, mean and spread over seeds)."""
+    """Writes `results.csv` (one row a case) and `report.md`.
+
+    The report has the table, then per axis the change of each figure against the base case, mean
+    and spread over seeds.
+
+    Args:
+        study: The study.
+        rows: The cases' rows, in case order.
+        out: The study's folder.
+    """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(COLUMNS)

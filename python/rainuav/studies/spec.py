@@ -150,14 +150,33 @@ class Study:
 
 
 def train_config(fields: dict[str, Any], seed: int, out: str) -> TrainConfig:
-    """The TrainConfig of a case (scenario overrides left out): its preset, if it names one,
-    then its fields ([`rainuav.rl.config.resolve_config()`][rainuav.rl.config.resolve_config])."""
+    """The training configuration of a case (its scenario's overrides left out).
+
+    Its preset, if it names one, then its fields
+    ([`resolve_config()`][rainuav.rl.config.resolve_config]).
+
+    Args:
+        fields: The case's fields.
+        seed: Its seed.
+        out: Its run's folder.
+
+    Returns:
+        The [`TrainConfig`][rainuav.rl.config.TrainConfig].
+    """
     kept = {k: v for k, v in fields.items() if k not in SCENARIO_FIELDS}
     return resolve_config({**kept, "seed": seed, "out": out})
 
 
 def case_scenario(fields: dict[str, Any], cfg: TrainConfig) -> Scenario:
-    """The scenario of a case: the run's (preset or file, rain rate), then the overrides."""
+    """The scenario of a case: the run's (preset or file, rain rate), then the overrides.
+
+    Args:
+        fields: The case's fields (`freq_ghz`, `wind_m_s`, `engine`, ... among them).
+        cfg: The case's training configuration.
+
+    Returns:
+        The [`Scenario`][rainuav.radio.scene.scenario.Scenario].
+    """
     scn = make_scenario(cfg)
     if fields.get("freq_ghz") is not None:
         scn = dataclasses.replace(scn, freq_hz=float(fields["freq_ghz"]) * 1e9)
@@ -210,7 +229,19 @@ def _check_case(where: str, fields: dict[str, Any]) -> None:
 
 
 def parse_study(data: dict[str, Any], where: str) -> Study:
-    """A Study from a TOML table, checked (every case's configuration included)."""
+    """A study from a TOML table, checked (every case's configuration included).
+
+    Args:
+        data: The table.
+        where: What the errors name (the file).
+
+    Returns:
+        The [`Study`][rainuav.studies.spec.Study].
+
+    Raises:
+        InvalidInputError: An unknown field, an empty or repeating axis, bad seeds, compute or
+            sweep, too many cases, or a case that repeats another (named).
+    """
     unknown = sorted(set(data) - _TOP)
     if unknown:
         raise InvalidInputError(f"{where}: unknown field {unknown[0]!r} (allowed: {sorted(_TOP)})")

@@ -78,22 +78,44 @@ def place_scenario(
     default_height_m: float | None = None,
     ground: str | None = None,
 ) -> Place:
-    """The place (module docstring); ``start`` and ``goal`` are (lat, lon) in degrees. Bad input
-    is refused in one line naming the argument in backticks (`` `box` ``), as the ``fly`` command
-    translates it into its flag (``--area``). ``weather``:
-    a georeferenced rain file ([`rainuav.radio.scene.radar`][rainuav.radio.scene.radar], mm/h or
-    dBZ, one instant or several) in place of homogeneous rain. ``box``: the area as (south latitude,
-    west longitude, north latitude, east longitude), degrees, in place of the box around the start,
-    the destination and the sites; the start and the destination must lie in it. ``terrain``: a DEM
-    GeoTIFF under the place ([`rainuav.ground.dem`][rainuav.ground.dem]), with the flight altitude
-    above the terrain (``altitude_reference="ground"``, the default) or above sea level (``"msl"``).
-    ``footprints``: building footprints in GeoJSON
-    ([`rainuav.ground.footprints`][rainuav.ground.footprints]) standing on it. ``altitudes_m``: the
-    flight levels a flight chooses among (``area.altitudes_m``). ``engine``: the maps' engine
-    (default the preset's, hybrid). ``default_height_m``: the roof of a footprint with neither a
-    height nor storeys (``[footprints] default_height_m``, default 10 m). ``ground``: the ground's
-    material (default: the preset's PEC on flat ground, medium-dry over a DEM:
-    [`ground_over()`][rainuav.radio.scene.terrain.ground_over])."""
+    """A real place as a scenario: sites, a start and a destination in degrees.
+
+    The module's docstring has how. Bad input is refused in one line naming the argument in
+    backticks (`` `box` ``), as the `fly` command translates it into its flag (`--area`).
+
+    Args:
+        sites_file: The sites file (.csv or .geojson).
+        start: The take-off point (lat, lon), degrees.
+        goal: The destination (lat, lon), degrees.
+        altitude_m: The flight altitude, m (above the terrain, or above sea level with
+            `altitude_reference="msl"`).
+        freq_ghz: The carrier, GHz (the sites file's where it gives one).
+        rain_rate_mm_h: Homogeneous rain, mm/h.
+        weather: A georeferenced rain file
+            ([`rainuav.radio.scene.radar`][rainuav.radio.scene.radar], mm/h or dBZ, one instant or
+            several) in place of homogeneous rain.
+        resolution_m: The map's pixel, m.
+        box: The area as (south latitude, west longitude, north latitude, east longitude), degrees,
+            in place of the box around the start, the destination and the sites; the start and the
+            destination must lie in it.
+        terrain: A DEM GeoTIFF under the place ([`rainuav.ground.dem`][rainuav.ground.dem]).
+        altitude_reference: "ground" (the default) or "msl".
+        footprints: Building footprints in GeoJSON
+            ([`rainuav.ground.footprints`][rainuav.ground.footprints]) standing on it.
+        altitudes_m: The flight levels a flight chooses among (`area.altitudes_m`).
+        engine: The maps' engine (default the preset's, hybrid).
+        default_height_m: The roof of a footprint with neither a height nor storeys (default 10 m).
+        ground: The ground's material (default: PEC on flat ground, medium-dry over a DEM:
+            [`ground_over()`][rainuav.radio.scene.terrain.ground_over]).
+
+    Returns:
+        The [`Place`][rainuav.world.place.Place]: its scenario, frame and points.
+
+    Raises:
+        InvalidInputError: A file that is missing, a box that is not S < N and W < E or that leaves
+            out the start or the destination, points that straddle the date line, a frequency other
+            than the sites file's, or `default_height_m` without footprints.
+    """
     rows = read_site_rows(sites_file)
     _check_leg(start, goal)
     freqs = {r["freq_ghz"] for r in rows if "freq_ghz" in r}

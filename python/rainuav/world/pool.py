@@ -50,17 +50,33 @@ CALM_STREAM = 0xCA1A
 
 
 def is_calm(storm_seed: int, share: float) -> bool:
-    """Whether a storm pool with ``calm_share = share`` flies storm ``storm_seed`` calm: one
-    uniform draw of ``numpy.random.default_rng([storm_seed, CALM_STREAM])`` below ``share``
-    (a function of the seed, so a resumed pool rebuilds the same worlds)."""
+    """Whether a storm pool flies a storm calm (a function of the seed: a resumed pool rebuilds it).
+
+    One uniform draw of `numpy.random.default_rng([storm_seed, CALM_STREAM])` below `share`.
+
+    Args:
+        storm_seed: The storm.
+        share: The pool's `calm_share`.
+
+    Returns:
+        True for a calm storm.
+    """
     if share <= 0:
         return False
     return bool(np.random.default_rng([storm_seed, CALM_STREAM]).random() < share)
 
 
 def calm(scn: Scenario) -> Scenario:
-    """The storm scenario ``scn`` with its cells left out: its uniform background rain
-    alone (U(0, 10) mm/h in the storm distribution), the same over the whole flight."""
+    """A storm scenario with its cells left out: its uniform background rain alone.
+
+    U(0, 10) mm/h in the storm distribution, the same over the whole flight.
+
+    Args:
+        scn: The storm's scenario.
+
+    Returns:
+        The calm scenario.
+    """
     medium = dataclasses.replace(scn.medium, kind="homogeneous", cells=[])
     return dataclasses.replace(scn, medium=medium)
 
@@ -84,6 +100,16 @@ class StormPool:
     checked once the first storm is mapped."""
 
     def __init__(self, spec: Any, seed: int, *, progress: bool = False) -> None:
+        """A pool of training storms, the first mapped at once and the next in a background thread.
+
+        Args:
+            spec: The run's spec (its `storm_pool`, `calm_share`, levels and task).
+            seed: The run's seed (the storms' seed stream).
+            progress: A line on standard error per storm mapped.
+
+        Raises:
+            InvalidInputError: `storm_pool` below 1.
+        """
         check_spec(spec)
         if spec.storm_pool < 1:
             raise InvalidInputError("a storm pool needs storm_pool >= 1")
@@ -137,8 +163,14 @@ class StormPool:
         )
 
     def renew(self, slot: int) -> int:
-        """Puts the next storm in world ``slot`` (waiting for its maps if they are not done)
-        and starts mapping the one after; returns the new storm's seed."""
+        """Puts the next storm in a slot, waiting for its maps, and starts mapping the one after.
+
+        Args:
+            slot: The world's slot in the bank.
+
+        Returns:
+            The new storm's seed.
+        """
         t0 = time.perf_counter()
         storm_seed, world = self._next.result()
         self.wait_seconds += time.perf_counter() - t0
@@ -161,9 +193,18 @@ class StormPool:
         }
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        """Restores a [`state_dict()`][rainuav.world.pool.StormPool.state_dict]: maps again the
-        storms of the slots that differ (maps are a function of their seed) and the next one.
-        Anything malformed raises ValueError."""
+        """Restores a [`state_dict()`][rainuav.world.pool.StormPool.state_dict].
+
+        The storms of the slots that differ are mapped again (maps are a function of their seed),
+        and the next one.
+
+        Args:
+            d: The saved state.
+
+        Raises:
+            ValueError: Anything malformed (seeds that are not training storms, lists of another
+                length).
+        """
         seeds, nxt = d["seeds"], d["next_seed"]
         ok = isinstance(seeds, list) and len(seeds) == len(self.seeds)
         if not ok or not all(isinstance(k, int) and 0 <= k < TRAINING_SEEDS[1] for k in seeds):

@@ -63,14 +63,26 @@ ENGINES: dict[str, Engine] = {
 
 
 def engine_of(scn: Any) -> Engine:
-    """The [`Engine`][rainuav.radio.engines.Engine] of a scenario (anything with an ``engine``
-    name; a name itself)."""
+    """The [`Engine`][rainuav.radio.engines.Engine] of a scenario.
+
+    Args:
+        scn: Anything with an `engine` name, or a name itself.
+
+    Returns:
+        The engine.
+    """
     return ENGINES[scn if isinstance(scn, str) else scn.engine]
 
 
 def for_time(scn: Any) -> Any:
-    """``scn`` as it is mapped in time: itself where its engine traces rays, else with the
-    engine that maps its requests in time
-    ([`Engine.in_time`][rainuav.radio.engines.Engine.in_time])."""
+    """A scenario as it is mapped in time.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        Itself where its engine traces rays, else with the engine that maps its requests in time
+        ([`Engine.in_time`][rainuav.radio.engines.Engine.in_time]).
+    """
     e = engine_of(scn)
     return scn if e.traces else dataclasses.replace(scn, engine=e.in_time)

@@ -111,8 +111,19 @@ def _dynamic_range_cone(key: tuple[Any, ...], tilt_deg: float, dr_db: float) -> 
 
 
 def cone_weight(sine_h: float, sine_v: float, sx: Any, sy: Any) -> Any:
-    """The share of a pattern the PE carries at direction cosines (sx, sy): 1 inside
-    ``CONE_FULL`` of the cone, cos^2 down to 0 at its edge, 0 beyond; separable."""
+    """The share of a pattern the PE carries at direction cosines.
+
+    1 inside `CONE_FULL` of the cone, cos^2 down to 0 at its edge, 0 beyond; separable.
+
+    Args:
+        sine_h: The cone's half width across, as a sine.
+        sine_v: Its half height, as a sine.
+        sx: Direction cosines across.
+        sy: Direction cosines up.
+
+    Returns:
+        The share, of the broadcast shape.
+    """
 
     def one(t: Any) -> Any:
         u = np.clip((np.abs(t) - CONE_FULL) / (1 - CONE_FULL), 0.0, 1.0)
@@ -122,10 +133,22 @@ def cone_weight(sine_h: float, sine_v: float, sx: Any, sy: Any) -> Any:
 
 
 def march_grid(scn: Scenario, site: Site, cell: Cell) -> MarchGrid | None:
-    """The march grid of one cell, or None if the cell points away from the whole area. The
-    cone is the pattern's ``pe.dynamic_range_db`` cone, narrowed in steps of 15% until the
-    march fits ``pe.budget_gpoints``; a budget too small for a 0.5 degree cone is an
-    InvalidInputError."""
+    """The march grid of one cell, or None if the cell points away from the whole area.
+
+    The cone is the pattern's `pe.dynamic_range_db` cone, narrowed in steps of 15% until the march
+    fits `pe.budget_gpoints`.
+
+    Args:
+        scn: The scenario.
+        site: The cell's site.
+        cell: The cell.
+
+    Returns:
+        The grid, or None.
+
+    Raises:
+        InvalidInputError: A budget too small for a 0.5 degree cone.
+    """
     sh, sv = _dynamic_range_cone(cell.key(), cell.tilt_deg, scn.pe.dynamic_range_db)
     while True:
         grid = _grid(scn, site, cell, sh, sv)

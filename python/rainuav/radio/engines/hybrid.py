@@ -26,7 +26,14 @@ __all__ = ["EngineParts", "engine_parts", "engine_parts_levels", "inside_cone"]
 
 
 def inside_cone(grid: MarchGrid) -> Weight:
-    """The PE's share of a pattern: the cone weight in front of the antenna, 0 behind."""
+    """The PE's share of a pattern: the cone weight in front of the antenna, 0 behind.
+
+    Args:
+        grid: The cell's march grid.
+
+    Returns:
+        The weight, a function of the direction cosines.
+    """
 
     def weight(sx: np.ndarray, sy: np.ndarray, sz: np.ndarray) -> np.ndarray:
         return np.asarray(np.where(sz > 0, cone_weight(grid.sine_h, grid.sine_v, sx, sy), 0.0))
@@ -61,9 +68,21 @@ def engine_parts(
     y_m: np.ndarray,
     progress: bool = False,
 ) -> EngineParts:
-    """The rays' and the PE's powers of ``scn``'s engine at the pixel centres: the PE marches
-    for engines 'pe' and 'hybrid' over a 'pec' ground or none; the hybrid does not march a
-    cell whose cone carries under 1% of its power at every pixel."""
+    """The rays' and the PE's powers of a scenario's engine at the pixel centres.
+
+    The PE marches for engines 'pe' and 'hybrid' over a 'pec' ground or none; the hybrid does not
+    march a cell whose cone carries under 1% of its power at every pixel.
+
+    Args:
+        scn: The scenario.
+        cells: Its `(site, cell)` pairs.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+        progress: A line on standard error per march.
+
+    Returns:
+        The parts the map is summed from.
+    """
     h, w = y_m.size, x_m.size
     use_pe = engine_of(scn).marches and scn.ground not in SOILS
     grids = [march_grid(scn, site, cell) if use_pe else None for site, cell in cells]
@@ -117,12 +136,23 @@ def engine_parts_levels(
     y_m: np.ndarray,
     progress: bool = False,
 ) -> list[EngineParts]:
-    """[`engine_parts()`][rainuav.radio.engines.hybrid.engine_parts] at several flight altitudes
-    (``scns``: the scenario at each, lowest first; engine 'pe' or 'hybrid' over flat ground), each
-    cell marched once: its grid is the one of the highest level (its top clears every level), every
-    level's two rows are recorded after each step, and the rays' part inside the cone at each level
-    uses that grid's cone. A cell whose cone carries under 1% of its power at every pixel of every
-    level is not marched."""
+    """`engine_parts()` at several flight altitudes, each cell marched once.
+
+    Its grid is the one of the highest level (its top clears every level), every level's two rows
+    are recorded after each step, and the rays' part inside the cone at each level uses that grid's
+    cone. A cell whose cone carries under 1% of its power at every pixel of every level is not
+    marched.
+
+    Args:
+        scns: The scenario at each level, lowest first (engine 'pe' or 'hybrid' over flat ground).
+        cells: Their `(site, cell)` pairs.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+        progress: A line on standard error per march.
+
+    Returns:
+        Each level's parts, lowest first.
+    """
     top = scns[-1]
     heights = [s.area.altitude_m for s in scns]
     h, w = y_m.size, x_m.size

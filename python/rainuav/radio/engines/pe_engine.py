@@ -95,8 +95,18 @@ def _step_points(site: Site, grid: MarchGrid) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rain_rate_at(scn: Scenario, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Rain rate (mm/h) of the scenario's medium at global points (a weather in time: at its
-    time 0, as for moving rain cells)."""
+    """The rain rate of the scenario's weather at global points, mm/h.
+
+    A weather in time is read at its time 0, as for moving rain cells.
+
+    Args:
+        scn: The scenario.
+        x: East, m.
+        y: North, m.
+
+    Returns:
+        Rates, mm/h.
+    """
     m = scn.medium
     if m.kind == "map" and m.rate_times_s is not None:
         m = m.at(0.0)
@@ -183,9 +193,18 @@ def _receiver_rows(scn: Scenario, site: Site, grid: MarchGrid) -> tuple[np.ndarr
 def march_cell(
     scn: Scenario, site: Site, cell: Cell, grid: MarchGrid, timings: dict[str, float] | None = None
 ) -> np.ndarray:
-    """Received power (mW, isotropic receiver) at the flight altitude, (steps, nx). Adds the
-    seconds spent on the source, the medium and obstacle screens, and the march to
-    ``timings``."""
+    """The received power at the flight altitude of one cell's march (mW, isotropic receiver).
+
+    Args:
+        scn: The scenario.
+        site: The cell's site.
+        cell: The cell.
+        grid: Its march grid.
+        timings: Seconds added by part (the source, the medium and obstacle screens, the march).
+
+    Returns:
+        (steps, nx) mW.
+    """
     rows, frac, offsets = [grid.alt_row, grid.alt_row + 1], grid.alt_frac, None
     if scn.terrain is not None:
         offsets, frac_rows = _receiver_rows(scn, site, grid)
@@ -199,8 +218,20 @@ def march_cell(
 
 
 def level_rows(grid: MarchGrid, heights_m: Any) -> tuple[list[int], list[float]]:
-    """The rows around each height above the grid's floor (flat ground) and the fraction to
-    the upper one: ``(rows, fracs)``, two rows a height."""
+    """The rows around each height above the grid's floor, and the fraction to the upper one.
+
+    Flat ground: two rows a height.
+
+    Args:
+        grid: The march grid.
+        heights_m: The heights, m.
+
+    Returns:
+        `(rows, fracs)`.
+
+    Raises:
+        InvalidInputError: A height below the grid.
+    """
     rows, fracs = [], []
     for z in np.asarray(heights_m, dtype=float).reshape(-1):
         fy = (z - grid.y0_m) / grid.dy_m
@@ -220,9 +251,25 @@ def march_cell_levels(
     heights_m: Any,
     timings: dict[str, float] | None = None,
 ) -> np.ndarray:
-    """Received power (mW) at each of ``heights_m`` (over flat ground), (L, steps, nx), from
-    one march on ``grid`` (which must reach the highest): the rows around every height
-    recorded after each step."""
+    """The received power at several heights over flat ground from one march.
+
+    The rows around every height are recorded after each step; the grid must reach the highest.
+
+    Args:
+        scn: The scenario.
+        site: The cell's site.
+        cell: The cell.
+        grid: Its march grid.
+        heights_m: The heights, m.
+        timings: Seconds added by part.
+
+    Returns:
+        (L, steps, nx) mW.
+
+    Raises:
+        InvalidInputError: Terrain under the march (one march for several heights needs flat
+            ground).
+    """
     if scn.terrain is not None:
         raise InvalidInputError("one march for several heights needs flat ground (no terrain)")
     rows, fracs = level_rows(grid, heights_m)
@@ -310,11 +357,24 @@ def resample(
     x_m: np.ndarray,
     y_m: np.ndarray,
 ) -> np.ndarray:
-    """A cell's (steps, nx) power onto the map grid (H, W): the mean over a pixel's length
-    along range (the ground-reflection fringes run across range: they are averaged, not
-    aliased), sampled bilinearly at the pixel centres; zero where the cell's march does not
-    reach. Across range the pattern is sampled at the centre, as the rays do (a box there
-    would raise the steep flanks of a beam by up to 1.5 dB over the rays' point value)."""
+    """A cell's march power onto the map's pixels.
+
+    The mean over a pixel's length along range (the ground-reflection fringes run across range: they
+    are averaged, not aliased), sampled bilinearly at the pixel centres; zero where the cell's march
+    does not reach. Across range the pattern is sampled at the centre, as the rays do (a box there
+    would raise the steep flanks of a beam by up to 1.5 dB over the rays' point value).
+
+    Args:
+        scn: The scenario.
+        site: The cell's site.
+        grid: Its march grid.
+        power: The march's power (steps, nx), mW.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+
+    Returns:
+        (H, W) mW.
+    """
     power = _box(power, round(scn.area.resolution_m / grid.dz_m), 0)
     gx, gy = np.meshgrid(x_m - site.x_m, y_m - site.y_m)
     c, s = math.cos(grid.azimuth_rad), math.sin(grid.azimuth_rad)

@@ -27,7 +27,6 @@ of the part of each pattern the weights select: what the PE would carry in the h
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -35,8 +34,14 @@ import numpy as np
 
 from rainuav import _core
 from rainuav._threads import each
-from rainuav.radio.engines.grid import C0_M_S
-from rainuav.radio.engines.pe_engine import rain_rate_at
+from rainuav.radio.engines.ray_media import (
+    SOILS,
+    _node_spacing,
+    gamma_field,
+    gamma_table,
+    ground_permittivity,
+    rain_args,
+)
 from rainuav.radio.engines.wall_rays import obstacle_args, trace_walls, wall_terms
 from rainuav.radio.scene.cell import Cell, Weight, gain_linear, weight_at
 from rainuav.radio.scene.scenario import Scenario, Site
@@ -55,65 +60,6 @@ __all__ = [
     "ray_slicer",
     "ray_terms",
 ]
-
-SOILS: dict[str, tuple[float, float, float, float]] = {
-    "very-dry": (3.0, 0.0, 0.00015, 2.52),
-    "medium-dry": (15.0, -0.1, 0.035, 1.63),
-    "wet": (30.0, -0.4, 0.15, 1.30),
-}
-"""ITU-R P.527 soils as the curve fits of ITU-R P.2040 Table 3: ``eps_r = a f^b``,
-``sigma = c f^d`` S/m with f in GHz (fitted over 1-10 GHz; held as they are above)."""
-
-
-def ground_permittivity(kind: str, freq_hz: float) -> complex:
-    """Complex relative permittivity ``eps_r - j 60 lambda sigma`` of a P.527 soil."""
-    a, b, c, d = SOILS[kind]
-    f_ghz = freq_hz / 1e9
-    lam = C0_M_S / freq_hz
-    return complex(a * f_ghz**b, -60.0 * lam * c * f_ghz**d)
-
-
-def gamma_table(scn: Scenario, max_rate_mm_h: float) -> tuple[np.ndarray, np.ndarray]:
-    """The rain's specific attenuation (dB/km) of ``scn``'s weather tabulated against the rain
-    rate over 0..``max_rate_mm_h`` at 513 points: smooth in the rate, so interpolating it
-    errs far below 1e-4 relative."""
-    rm = scn.medium.rain_medium(scn.freq_hz, scn.polarization)
-    table_r = np.linspace(0.0, max(max_rate_mm_h, 1e-3), 513)
-    return table_r, np.asarray(rm.specific_attenuation(table_r), dtype=float)
-
-
-def _node_spacing(scn: Scenario) -> float:
-    """The spacing of the rain's nodes for the rays: the pixel, at most 10 m."""
-    return min(scn.area.resolution_m, 10.0)
-
-
-def gamma_field(
-    scn: Scenario,
-    spacing_m: float | None = None,
-    table: tuple[np.ndarray, np.ndarray] | None = None,
-) -> tuple[float, np.ndarray | None, tuple[float, float, float, float]]:
-    """The rain's specific attenuation for the rays: (uniform dB/m, raster of nodes in dB/m
-    or None, (x0, dx, y0, dy) of the raster). Rain cells and rate maps are sampled at nodes
-    ``spacing_m`` apart (default: the pixel, at most 10 m) over the area; ``table``
-    ([`gamma_table()`][rainuav.radio.engines.ray_engine.gamma_table], covering the field's rates)
-    saves tabulating gamma again."""
-    m = scn.medium
-    if m.kind == "clear":
-        return 0.0, None, (0.0, 1.0, 0.0, 1.0)
-    if m.kind == "homogeneous":
-        rm = m.rain_medium(scn.freq_hz, scn.polarization)
-        return float(rm.specific_attenuation(m.rain_rate_mm_h)) / 1000.0, None, (0, 1, 0, 1)
-    a = scn.area
-    step = spacing_m or _node_spacing(scn)
-    nx = math.ceil((a.x_max_m - a.x_min_m) / step) + 1
-    ny = math.ceil((a.y_max_m - a.y_min_m) / step) + 1
-    xs = a.x_min_m + np.arange(nx) * step
-    ys = a.y_min_m + np.arange(ny) * step
-    rates = rain_rate_at(scn, xs[None, :], ys[:, None])
-    if table is None or table[0][-1] < rates.max():
-        table = gamma_table(scn, float(rates.max()))
-    gamma = np.interp(rates, *table) / 1000.0
-    return 0.0, np.ascontiguousarray(gamma), (a.x_min_m, step, a.y_min_m, step)
 
 
 def _directions(
@@ -141,10 +87,20 @@ def _flat_open(scn: Scenario) -> bool:
 def departures(
     scn: Scenario, sites: Sequence[Site], x_m: np.ndarray, y_m: np.ndarray
 ) -> np.ndarray:
-    """The departure elevations (degrees) toward which each site's antenna gains are taken,
-    (S, H, W, 2): the direct ray's (the diffracting edge where the profile costs a loss, else
-    the pixel) and the reflected ray's (the specular point). Over flat open ground these are
-    the closed forms of ``_directions``."""
+    """The departure elevations toward which each site's antenna gains are taken, degrees.
+
+    The direct ray's (the diffracting edge where the profile costs a loss, else the pixel) and the
+    reflected ray's (the specular point). Over flat open ground these are the closed forms.
+
+    Args:
+        scn: The scenario.
+        sites: The sites.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+
+    Returns:
+        (S, H, W, 2) degrees.
+    """
     return np.degrees(_path_table(scn, sites, x_m, y_m)[1][..., 3:5])
 
 
@@ -232,9 +188,21 @@ ray toward every pixel, degrees."""
 def ray_directions(
     scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
 ) -> Directions:
-    """Each (site, cell)'s azimuth and departure elevations toward every pixel (H, W): the closed
-    forms over flat open ground, else [`departures()`][rainuav.radio.engines.ray_engine.departures]
-    (toward the diffracting edge and the specular point), traced once per site."""
+    """Each (site, cell)'s azimuth and departure elevations toward every pixel.
+
+    The closed forms over flat open ground, else
+    [`departures()`][rainuav.radio.engines.ray_engine.departures] (toward the diffracting edge and
+    the specular point), traced once a site.
+
+    Args:
+        scn: The scenario.
+        jobs: The `(site, cell)` pairs.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+
+    Returns:
+        The directions, (H, W) each.
+    """
     return _paths(scn, jobs, x_m, y_m)[0]
 
 
@@ -265,10 +233,21 @@ def ray_gains(
     y_m: np.ndarray,
     directions: Directions | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The linear antenna gain of every (site, cell) toward every pixel along the direct and
-    the reflected ray, two (M, H, W) arrays: the part of a ray map that no weather changes
-    (``directions``: [`ray_directions()`][rainuav.radio.engines.ray_engine.ray_directions], computed
-    here if not given)."""
+    """The linear antenna gain of every (site, cell) toward every pixel, on both rays.
+
+    The part of a ray map that no weather changes.
+
+    Args:
+        scn: The scenario.
+        jobs: The `(site, cell)` pairs.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+        directions: [`ray_directions()`][rainuav.radio.engines.ray_engine.ray_directions]; None:
+            computed here.
+
+    Returns:
+        `(direct, reflected)`, (M, H, W) each.
+    """
     dirs = ray_directions(scn, jobs, x_m, y_m) if directions is None else directions
     shape = (len(jobs), y_m.size, x_m.size)
     gd, gr = np.empty(shape), np.empty(shape)
@@ -288,14 +267,26 @@ def ray_terms(
     y_m: np.ndarray,
     weights: Sequence[Weight | None] | None = None,
 ) -> np.ndarray:
-    """Everything of a ray map that no weather changes: each cell's clear-air power at every pixel
-    split into direct, reflected and interference parts, and its rays' lengths, (M, H, W, 7):
-    ``[direct, reflect, cross, d1, d2, wall, d3]`` (antenna gains, spreading, ground, pixel means,
-    diffraction, the walls' rays: [`wall_terms()`][rainuav.radio.engines.wall_rays.wall_terms]);
-    with ``weights`` (as [`ray_power()`][rainuav.radio.engines.ray_engine.ray_power] takes them),
-    the parts of the whole pattern less those of the weighted part (what the rays keep where the PE
-    carries the rest). [`ray_slicer()`][rainuav.radio.engines.ray_engine.ray_slicer] adds the
-    rain."""
+    """Everything of a ray map that no weather changes, split into its parts.
+
+    Each cell's clear-air power at every pixel split into direct, reflected and interference parts,
+    and its rays' lengths: `[direct, reflect, cross, d1, d2, wall, d3]` (antenna gains, spreading,
+    ground, pixel means, diffraction, the walls' rays:
+    [`wall_terms()`][rainuav.radio.engines.wall_rays.wall_terms]).
+    [`ray_slicer()`][rainuav.radio.engines.ray_engine.ray_slicer] adds the rain.
+
+    Args:
+        scn: The scenario.
+        jobs: The `(site, cell)` pairs.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+        weights: As [`ray_power()`][rainuav.radio.engines.ray_engine.ray_power] takes them: the
+            parts of the whole pattern less those of the weighted part (what the rays keep where the
+            PE carries the rest).
+
+    Returns:
+        (M, H, W, 7).
+    """
     dirs, paths = _paths(scn, jobs, x_m, y_m)
     gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)
@@ -343,11 +334,22 @@ def ray_slicer(
     y_m: np.ndarray,
     terms: np.ndarray | None = None,
 ) -> _core.RaySlicer:
-    """Every cell's rays over the map traced once in clear air (``terms``, default
-    [`ray_terms()`][rainuav.radio.engines.ray_engine.ray_terms]), with each site's fan of lines for
-    the rain (``rainuav_core::propagation::raytime``): ``slicer.power(**rain_args(scn_at_t))`` is
-    the received power (M, H, W) of the weather of any instant, the rain integrated once per site
-    for every pixel at once and shared by the site's cells and both rays."""
+    """Every cell's rays over the map traced once in clear air, ready for any rain.
+
+    `slicer.power(**rain_args(scn_at_t))` is the received power (M, H, W) in the weather of any
+    instant, the rain integrated once a site for every pixel at once and shared by the site's cells
+    and both rays (`rainuav_core::propagation::raytime`).
+
+    Args:
+        scn: The scenario.
+        jobs: The `(site, cell)` pairs.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+        terms: [`ray_terms()`][rainuav.radio.engines.ray_engine.ray_terms]; None: computed here.
+
+    Returns:
+        The core's `RaySlicer`.
+    """
     places: dict[tuple[float, float, float], int] = {}
     site_of = [places.setdefault((s.x_m, s.y_m, s.height_m), len(places)) for s, _ in jobs]
     return _core.RaySlicer(
@@ -360,13 +362,6 @@ def ray_slicer(
     )
 
 
-def rain_args(scn: Scenario, table: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, Any]:
-    """The rain of ``scn`` as `rainuav._core.RaySlicer.power` takes it (``table``: see
-    [`gamma_field()`][rainuav.radio.engines.ray_engine.gamma_field])."""
-    g_uniform, g_raster, g_os = gamma_field(scn, table=table)
-    return {"gamma_db_per_m": g_uniform, "gamma_raster": g_raster, "gamma_origin_step": g_os}
-
-
 def ray_power(
     scn: Scenario,
     jobs: Sequence[tuple[Site, Cell]],
@@ -374,10 +369,21 @@ def ray_power(
     y_m: np.ndarray,
     weights: Sequence[Weight | None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray | None]:
-    """Received power (mW, isotropic receiver) of every (site, cell) at every pixel centre,
-    (M, H, W), each the mean over its pixel; and, if ``weights`` are given, the power of the
-    part of each pattern they select (``weights[m]`` scales cell m's pattern; None: nothing).
-    Directions, gains, the rain field and the obstacles are prepared once for both."""
+    """The received power of every (site, cell) at every pixel, the mean over the pixel.
+
+    Directions, gains, the rain field and the obstacles are prepared once for both results; the
+    receiver is isotropic.
+
+    Args:
+        scn: The scenario.
+        jobs: The `(site, cell)` pairs.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+        weights: `weights[m]` scales cell m's pattern (None: nothing); None: no weighted part.
+
+    Returns:
+        `(power (M, H, W), the weighted parts' power or None)`, mW.
+    """
     dirs, paths = _paths(scn, jobs, x_m, y_m)
     gd, gr = ray_gains(scn, jobs, x_m, y_m, dirs)
     args = _medium_args(scn)

@@ -44,9 +44,14 @@ def _heights(scn: Scenario) -> tuple[np.ndarray | None, tuple[float, float, floa
 
 
 def obstacle_args(scn: Scenario) -> dict[str, Any]:
-    """The buildings (boxes and footprints,
-    [`rainuav.radio.scene.buildings`][rainuav.radio.scene.buildings]) and the height map of ``scn``
-    as the core's ray functions take them."""
+    """A scenario's buildings and height map as the core's ray functions take them.
+
+    Args:
+        scn: The scenario ([`rainuav.radio.scene.buildings`][rainuav.radio.scene.buildings]).
+
+    Returns:
+        The keyword arguments.
+    """
     b = scenario_buildings(scn)
     heights, h_os = _heights(scn)
     return {
@@ -67,10 +72,20 @@ the line)."""
 def trace_walls(
     scn: Scenario, jobs: Sequence[tuple[Site, Cell]], x_m: np.ndarray, y_m: np.ndarray
 ) -> tuple[WallRays, dict[int, int]] | None:
-    """Every ray the walls of ``scn`` reflect from each distinct site of ``jobs`` to each
-    pixel, and the rays the buildings' corners and the roofs' edges beside the line diffract into
-    the pixels they hide from it (`rainuav_core::propagation::corners`), and each site's index; None
-    without walls."""
+    """Every ray the walls reflect from each site to each pixel, and those edges diffract.
+
+    The buildings' corners and the roofs' edges beside the line diffract into the pixels they hide
+    from it (`rainuav_core::propagation::corners`).
+
+    Args:
+        scn: The scenario.
+        jobs: The `(site, cell)` pairs (each distinct site traced once).
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+
+    Returns:
+        `(rays, each site's index)`, or None without walls.
+    """
     walls, eps = wall_args(scn)
     if walls.shape[0] == 0:
         return None
@@ -100,11 +115,22 @@ def wall_terms(
     weights: Sequence[Weight | None] | None = None,
     rays: tuple[WallRays, dict[int, int]] | None = None,
 ) -> np.ndarray | None:
-    """Each cell's rays reflected by walls at every pixel ([physics reference, section
-    12][12-terrain-buildings-diffraction-and-reflections]), (M, H, W, 2): their clear-air power (mW,
-    each with the cell's gain toward its specular point; added incoherently) and their
-    power-weighted mean length (m); with ``weights``, the part of each pattern they select. None
-    where ``scn`` has no walls (``rays``: from `_wall_rays`, traced here if not given)."""
+    """Each cell's rays reflected by walls at every pixel: their clear-air power and mean length.
+
+    [Physics reference, section 12][12-terrain-buildings-diffraction-and-reflections]: each ray with
+    the cell's gain toward its specular point, added incoherently; the length power-weighted.
+
+    Args:
+        scn: The scenario.
+        jobs: The `(site, cell)` pairs.
+        x_m: The pixel centres' east (W,), m.
+        y_m: Their north (H,), m.
+        weights: The part of each pattern to select, as the rays' engine takes them.
+        rays: [`trace_walls()`][rainuav.radio.engines.wall_rays.trace_walls]; None: traced here.
+
+    Returns:
+        (M, H, W, 2): power (mW) and length (m); None where the scenario has no walls.
+    """
     traced = trace_walls(scn, jobs, x_m, y_m) if rays is None else rays
     if traced is None:
         return None

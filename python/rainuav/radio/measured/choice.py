@@ -55,9 +55,19 @@ BLOCKS = 5
 
 
 def block_folds(bp: np.ndarray, step_m: float, seed: int) -> list[np.ndarray]:
-    """The held-out blocks of the bins at ``bp`` (B, 3: east, north, height), each a mask (B,)
-    (module docstring): groups of neighbouring heights where the bins span two or more, then
-    ``BLOCKS`` places across the ground."""
+    """The held-out blocks of a log's bins, each a mask (the module's docstring).
+
+    Groups of neighbouring heights where the bins span two or more, then `BLOCKS` places across the
+    ground.
+
+    Args:
+        bp: The bins' points (B, 3): east, north, height, m.
+        step_m: The bins' height, m.
+        seed: The places' seed (k-means).
+
+    Returns:
+        The blocks, (B,) bool each.
+    """
     from sklearn.cluster import KMeans
 
     folds = []
@@ -77,12 +87,27 @@ def held_out_density(
     field: ResidualField, pts: np.ndarray, resid: np.ndarray, *, bin_m: float, step_m: float,
     seed: int = 0, scale: np.ndarray | None = None, folds: list[np.ndarray] | None = None,
 ) -> float:  # fmt: skip
-    """The mean held-out log predictive density of ``field``'s kernel (its hyperparameters
-    fixed) over the blocks of the rows at ``pts`` (N, 3) with residuals ``resid`` (N,), dB,
-    binned ``bin_m`` wide and ``step_m`` tall (module docstring); ``scale``: each row's scale
-    (N,), for a scaled field; ``folds``: the bins' blocks where already drawn (else
-    [`block_folds()`][rainuav.radio.measured.choice.block_folds] with ``seed``). NaN where the
-    log has fewer than two blocks."""
+    """The mean held-out log predictive density of a field's kernel, its hyperparameters fixed.
+
+    Over the blocks of the rows, binned (the module's docstring).
+
+    Args:
+        field: The fitted field.
+        pts: The rows' points (N, 3), m.
+        resid: Their residuals (N,), dB.
+        bin_m: The bins' width, m.
+        step_m: Their height, m.
+        seed: The blocks' seed, where `folds` is None.
+        scale: Each row's scale (N,), for a scaled field.
+        folds: The bins' blocks where already drawn; None:
+            [`block_folds()`][rainuav.radio.measured.choice.block_folds].
+
+    Returns:
+        Nats a bin; NaN where the log has fewer than two blocks.
+
+    Raises:
+        ValueError: A scaled field without the scale at its rows.
+    """
     from sklearn.gaussian_process import GaussianProcessRegressor
 
     bp, bv, count = bin_points(pts[:, 0], pts[:, 1], pts[:, 2], resid, bin_m, step_m)
@@ -112,9 +137,22 @@ def kernel_scores(
     fields: dict[str, ResidualField], pts: np.ndarray, resid: np.ndarray, *, step_m: float,
     seed: int = 0, scale: np.ndarray | None = None,
 ) -> dict[str, float]:  # fmt: skip
-    """Each candidate's held-out log predictive density per bin
-    ([`held_out_density()`][rainuav.radio.measured.choice.held_out_density]), all on the same
-    bins (the coarsest of the candidates' widths) and the same blocks."""
+    """Each candidate kernel's held-out log predictive density a bin, on the same bins and blocks.
+
+    The bins are the coarsest of the candidates' widths
+    ([`held_out_density()`][rainuav.radio.measured.choice.held_out_density]).
+
+    Args:
+        fields: The candidates by kernel name.
+        pts: The rows' points (N, 3), m.
+        resid: Their residuals (N,), dB.
+        step_m: The bins' height, m.
+        seed: The blocks' seed.
+        scale: Each row's scale (N,), for a scaled field.
+
+    Returns:
+        Nats a bin, by kernel name.
+    """
     bin_m = max(f.bin_m for f in fields.values())
     bp, _, _ = bin_points(pts[:, 0], pts[:, 1], pts[:, 2], resid, bin_m, step_m)
     folds = block_folds(bp, step_m, seed)
@@ -125,6 +163,14 @@ def kernel_scores(
 
 
 def chosen(scores: dict[str, float]) -> str:
-    """The candidate of the highest finite score (the first where none is finite)."""
+    """The candidate of the highest finite score (the first where none is finite).
+
+    Args:
+        scores: Scores by candidate
+            ([`kernel_scores()`][rainuav.radio.measured.choice.kernel_scores]).
+
+    Returns:
+        The candidate's name.
+    """
     finite = {k: v for k, v in scores.items() if np.isfinite(v)}
     return max(finite, key=lambda k: finite[k]) if finite else next(iter(scores))

@@ -124,8 +124,15 @@ class Correction:
     """The UAV's receive gain against its heading, where one was fitted (the same module)."""
 
     def receive_at(self, log: MeasurementLog) -> np.ndarray:
-        """The receive gain at the rows of ``log``, dB (0 without one; the heading's where the
-        log gives the heading)."""
+        """The receive gain at a log's rows, dB (0 without one; the heading's where the log gives
+        it).
+
+        Args:
+            log: The log.
+
+        Returns:
+            (N,) dB.
+        """
         scn = self.scenario
         out = np.zeros(len(log))
         if self.receive is not None:
@@ -139,10 +146,18 @@ class Correction:
         self, log: MeasurementLog, prior: np.ndarray, *, fields: bool = True,
         far: dict[int, ResidualField] | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
-        """At the rows of ``log`` (their cells and positions) whose prior powers are ``prior``,
-        (N,): the corrected power, the local mean's and one sample's deviation, dB, (N,)
-        each. ``fields`` False: the calibrated map alone, each measured cell's local deviation
-        its field's far from every measurement (of ``far``'s fields, default its own)."""
+        """The corrected power at a log's rows, with the local mean's and one sample's deviation.
+
+        Args:
+            log: The rows (their cells and positions).
+            prior: Their prior powers (N,), dBm.
+            fields: False: the calibrated map alone, each measured cell's local deviation its
+                field's far from every measurement.
+            far: The fields whose far deviation to use (default the correction's own).
+
+        Returns:
+            `(power dBm, local deviation dB, sample deviation dB)`, (N,) each.
+        """
         scn = self.scenario
         mean = calibrated_at(scn, log, prior, self.fits) + self.receive_at(log)
         local = np.full(len(log), self.other_local_db)
@@ -176,16 +191,34 @@ def fit_correction(
     like: Correction | None = None, max_points: int | None = None, receive: bool = False,
     heading: bool = False, kernel: str = "one-scale",
 ) -> Correction:  # fmt: skip
-    """Steps 2-3 of the module docstring on ``log``, whose rows' prior powers are ``prior``:
-    the offsets, the fields and the spreads of the cells without one. ``like``: a correction
-    of more of the log whose hyperparameters to reuse (a cross-validation fold);
-    ``receive``: fit the UAV's receive gain by elevation before the fields, ``heading``: its
-    gain against its heading (the log needs ``heading_deg``); ``kernel``: the residual fields'
-    (one of [`KERNELS`][rainuav.radio.measured.residual.KERNELS], or ``"auto"``: each cell's
-    chosen by its held-out density,
-    [`rainuav.radio.measured.choice`][rainuav.radio.measured.choice]; a ``like``'s own where
-    given, chosen again on this log where ``like`` chose)
-    ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern])."""
+    """Steps 2-3 of the module's docstring on a log: the offsets, the fields and the spreads.
+
+    The spreads of the cells without a field too.
+
+    Args:
+        rm: The prior map.
+        log: The log.
+        prior: Its rows' prior powers (N,), dBm.
+        params: The site parameters calibrated.
+        level_step_m: The height between the maps built at the log's heights, m.
+        seed: The fits' seed.
+        like: A correction of more of the log whose hyperparameters to reuse (a cross-validation
+            fold).
+        max_points: The most bins a field is conditioned on.
+        receive: Fit the UAV's receive gain by elevation before the fields
+            ([`rainuav.radio.measured.pattern`][rainuav.radio.measured.pattern]).
+        heading: Fit its gain against its heading (the log needs `heading_deg`).
+        kernel: The residual fields' kernel: one of
+            [`KERNELS`][rainuav.radio.measured.residual.KERNELS], or "auto" (each cell's chosen by
+            its held-out density, [`rainuav.radio.measured.choice`][rainuav.radio.measured.choice]);
+            a `like`'s own where given, chosen again on this log where `like` chose.
+
+    Returns:
+        The [`Correction`][rainuav.radio.measured.fitting.Correction].
+
+    Raises:
+        InvalidInputError: A heading gain asked of a log without headings.
+    """
     scn = rm.scenario
     fits = calibrate(scn, log, prior, params, near=None if like is None else like.fits)
     resid = log.rss_dbm - calibrated_at(scn, log, prior, fits)

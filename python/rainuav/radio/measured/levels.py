@@ -40,11 +40,23 @@ def prior_at(
     build: Any = None,
     progress: bool = False,
 ) -> np.ndarray:
-    """Each logged row's cell power in the prior, dBm, (N,) (module docstring). ``build``: the
-    function that builds a map of a scenario (default
-    [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map], cached); ``progress``: one
-    line on standard error per map built. A log whose heights need more than
-    [`MAX_LEVEL_MAPS`][rainuav.radio.measured.levels.MAX_LEVEL_MAPS] maps is refused."""
+    """Each logged row's cell power in the prior, dBm (the module's docstring).
+
+    Args:
+        rm: The prior map.
+        log: The log.
+        level_step_m: The height between the maps built at the log's heights, m.
+        build: The function that builds a map of a scenario (default
+            [`build_radio_map`][rainuav.radio.outputs.maps.build_radio_map], cached).
+        progress: A line on standard error per map built.
+
+    Returns:
+        (N,) dBm.
+
+    Raises:
+        InvalidInputError: A log whose heights need more than
+            [`MAX_LEVEL_MAPS`][rainuav.radio.measured.levels.MAX_LEVEL_MAPS] maps.
+    """
     scn = rm.scenario
     at = _level_coordinate(scn, log)
     if np.all(np.abs(at - rm.altitude_m) <= level_step_m / 2):

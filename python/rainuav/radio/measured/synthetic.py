@@ -38,10 +38,21 @@ def perturbed_sites(
     tilt_deg: float = 2.0,
     azimuth_deg: float = 5.0,
 ) -> tuple[list[Site], list[dict[str, float]]]:
-    """``sites`` as the real network might differ from its database: each cell's transmit power,
-    tilt and azimuth moved by draws of N(0, ``power_db``), N(0, ``tilt_deg``) and
-    N(0, ``azimuth_deg``) from ``seed`` (in that order, cell after cell). Returns the moved sites
-    and each cell's offsets (the names of the calibration's ``BOUNDS``)."""
+    """Sites as a real network might differ from its database.
+
+    Draws of N(0, `power_db`), N(0, `tilt_deg`) and N(0, `azimuth_deg`) from `seed`, in that order,
+    cell after cell.
+
+    Args:
+        sites: The database's sites.
+        seed: The draws' seed.
+        power_db: The transmit power's spread, dB.
+        tilt_deg: The tilt's, degrees.
+        azimuth_deg: The azimuth's, degrees.
+
+    Returns:
+        `(moved sites, each cell's offsets by the calibration's BOUNDS names)`.
+    """
     rng = np.random.default_rng(seed)
     moved, offsets = [], []
     for s in sites:
@@ -60,8 +71,19 @@ def perturbed_sites(
 
 
 def flight_line_pixels(shape: tuple[int, int], share: float, offset: float = 0.5) -> np.ndarray:
-    """(row, column) of the pixels on east-west lines covering ``share`` of a map of ``shape``,
-    the lines evenly spaced, the first ``offset`` of a spacing from the south edge, (K, 2)."""
+    """The pixels on east-west lines covering a share of a map, the lines evenly spaced.
+
+    Args:
+        shape: The map's (H, W).
+        share: The share of the pixels, in (0, 1].
+        offset: Where the first line lies from the south edge, in spacings.
+
+    Returns:
+        (K, 2) (row, column).
+
+    Raises:
+        InvalidInputError: A share outside (0, 1].
+    """
     if not 0.0 < share <= 1.0:
         raise InvalidInputError(f"share must lie within (0, 1] (got {share:g})")
     h, w = shape
@@ -82,12 +104,27 @@ def sample_log(
     repeat: int = 1,
     k_db: float | None = None,
 ) -> MeasurementLog:
-    """A log over ``truth`` (module docstring): ``share`` of its pixels on flight lines
-    (``offset``: where the first line lies, in spacings), the ``cells`` strongest cells at each,
-    each value with ``noise_db`` of Gaussian noise drawn from ``seed``, all rows of ``flight``.
-    ``repeat``: rows a pixel, each at a point drawn uniformly within it and with its own draw
-    (a receiver logging several samples a pixel); ``k_db``: each row's power also faded by a
-    Ricean draw of that K-factor (unit mean power; ``rainuav.radio.measured.prior``)."""
+    """A log flown over a truth map (the module's docstring).
+
+    Args:
+        truth: The map measured.
+        share: The share of its pixels on flight lines.
+        cells: The strongest cells logged at each pixel.
+        noise_db: Gaussian noise on each value, dB.
+        seed: The draws' seed.
+        offset: Where the first line lies, in spacings.
+        flight: The rows' flight number.
+        repeat: Rows a pixel, each at a point drawn uniformly within it with its own draw (a
+            receiver logging several samples a pixel).
+        k_db: Each row's power also faded by a Ricean draw of this K-factor (unit mean power); None:
+            no fading.
+
+    Returns:
+        The [`MeasurementLog`][rainuav.radio.measured.log.MeasurementLog].
+
+    Raises:
+        InvalidInputError: `repeat` outside 1..1000, or a share outside (0, 1].
+    """
     if not 1 <= repeat <= 1000:
         raise InvalidInputError(f"repeat must lie within 1..1000 (got {repeat})")
     rng = np.random.default_rng(seed)
@@ -123,8 +160,16 @@ def sample_log(
 
 
 def write_log(log: MeasurementLog, path: str | os.PathLike[str]) -> Path:
-    """Writes ``log`` as CSV in the scenario's metres (``x_m,y_m,alt_m,cell,rss_dbm,flight``),
-    atomically."""
+    """Writes a log as CSV in the scenario's metres (`x_m,y_m,alt_m,cell,rss_dbm,flight`),
+    atomically.
+
+    Args:
+        log: The log.
+        path: The file.
+
+    Returns:
+        The path written.
+    """
 
     def write(tmp: Path) -> None:
         with tmp.open("w", newline="") as f:

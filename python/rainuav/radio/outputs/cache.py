@@ -74,7 +74,14 @@ def engine_fingerprint() -> str:
 
 
 def map_path(scenario_digest: str) -> Path:
-    """The cache file of the map of a scenario with this digest, built by this engine."""
+    """The cache file of the map of a scenario with this digest, built by this engine.
+
+    Args:
+        scenario_digest: The scenario's digest.
+
+    Returns:
+        The path (under [`cache_dir()`][rainuav.radio.outputs.cache.cache_dir]).
+    """
     key = hashlib.sha256(f"{scenario_digest}|{engine_fingerprint()}".encode()).hexdigest()[:32]
     return cache_dir() / "radiomaps" / f"{key}.npz"
 

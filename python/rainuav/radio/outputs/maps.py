@@ -42,7 +42,16 @@ MAP_ARRAYS = 10
 
 
 def cached_map(scn: Scenario, path: Path | None = None) -> RadioMap | None:
-    """The cached map of ``scn`` (at ``path``, default its digest's), or None."""
+    """The cached map of a scenario, or None.
+
+    Args:
+        scn: The scenario.
+        path: The cache file; None: its digest's.
+
+    Returns:
+        The [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap], or None where none is cached (or
+        the file is refused: it is then rebuilt).
+    """
     digest = scn.digest()
     path = map_path(digest) if path is None else path
     if not path.exists():
@@ -140,9 +149,16 @@ def build_radio_map(
 
 
 def map_from_parts(scn: Scenario, parts: EngineParts, t0: float) -> RadioMap:
-    """The map of ``scn`` from its engine's parts
-    ([`rainuav.radio.engines.hybrid`][rainuav.radio.engines.hybrid]), its build counted from ``t0``
-    (``time.perf_counter``)."""
+    """The map of a scenario from its engine's parts.
+
+    Args:
+        scn: The scenario.
+        parts: The engine's parts.
+        t0: When the build started (`time.perf_counter`), for its recorded time.
+
+    Returns:
+        The [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap].
+    """
     a = scn.area
     x_m, y_m = a.centres()
     jobs = [(i, site, cell) for i, site in enumerate(scn.sites) for cell in site.cells]

@@ -78,9 +78,19 @@ def _bands(rm: Any, slice_index: int | None) -> np.ndarray:
 def write_map_geotiff(
     rm: Any, path: str | os.PathLike[str], slice_index: int | None = None
 ) -> Path:
-    """Writes the map ``rm`` (a [`rainuav.radio.RadioMap`][rainuav.radio.outputs.mapdata.RadioMap],
-    or one instant ``slice_index`` of a map series) of a georeferenced scenario as GeoTIFF at
-    ``path`` (module docstring), atomically."""
+    """Writes a map of a georeferenced scenario as GeoTIFF (the module's docstring), atomically.
+
+    Args:
+        rm: A [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap], or a map series.
+        path: The file.
+        slice_index: The instant of a series written; None for a map.
+
+    Returns:
+        The path written.
+
+    Raises:
+        InvalidInputError: rasterio is not installed, or the scenario has no `[origin]`.
+    """
     try:
         import rasterio
         from rasterio.transform import Affine

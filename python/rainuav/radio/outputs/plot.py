@@ -20,11 +20,22 @@ KINDS = ("sir", "sinr", "rss", "serving", "rss_std", "rss_sample_std", "correcti
 
 
 def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
-    """Draws the map ``rm`` (a RadioMap): ``kind`` 'sir', 'sinr', 'rss' (dB; ``cell``
-    selects one cell's RSS, default the strongest) or 'serving' (the serving cell); for a map
-    corrected by measurements 'rss_std' (the serving cell's standard deviation) or 'correction'
-    (the serving cell's corrected minus prior power), with the sites and beam azimuths marked.
-    Returns the matplotlib Axes (a new pyplot figure when ``ax`` is None)."""
+    """Draws a map with the sites and beam azimuths marked.
+
+    Args:
+        rm: The map (a [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap]).
+        kind: "sir", "sinr", "rss" (dB) or "serving" (the serving cell); for a map that carries its
+            spreads "rss_std" (the serving cell's standard deviation), for a corrected one
+            "correction" (the serving cell's corrected minus prior power).
+        cell: With "rss", the one cell to draw; None: the strongest.
+        ax: A matplotlib Axes to draw on; None: a new pyplot figure.
+
+    Returns:
+        The Axes.
+
+    Raises:
+        InvalidInputError: An unknown kind, a cell out of range, or a kind the map cannot show.
+    """
     if kind not in KINDS:
         raise InvalidInputError(f"kind must be one of {KINDS} (got {kind!r})")
     if ax is None:
@@ -139,7 +150,16 @@ def _rain_contours(rm: Any, ax: Any) -> None:
 
 
 def save_map_png(rm: Any, kind: str, path: str | Path) -> Path:
-    """Writes one map figure as PNG (atomically), without touching pyplot's state."""
+    """Writes one map figure as PNG, atomically, without touching pyplot's state.
+
+    Args:
+        rm: The map.
+        kind: As [`plot_map()`][rainuav.radio.outputs.plot.plot_map]'s.
+        path: The file.
+
+    Returns:
+        The path written.
+    """
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(6.5, 5.2))
@@ -155,11 +175,20 @@ def save_series_gif(
     fps: float = 8.0,
     progress: bool = False,
 ) -> Path:
-    """Writes the SINR of a map series
-    ([`rainuav.radio.outputs.timemap.RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries])
-    as an animated GIF, one frame a slice on one colour scale, with the rain outlined at each
-    instant (10/30/100 mm/h), the outage edge (SINR = ``min_db``, dashed) and the sites
-    (``progress``: a bar over the frames)."""
+    """Writes the SINR of a map series as an animated GIF, one frame a slice on one colour scale.
+
+    The rain outlined at each instant (10/30/100 mm/h), the outage edge dashed and the sites.
+
+    Args:
+        series: The [`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries].
+        path: The file.
+        min_db: The outage edge drawn, SINR dB; None: none drawn.
+        fps: Frames a second.
+        progress: A bar over the frames.
+
+    Returns:
+        The path written.
+    """
     import io
 
     from matplotlib.figure import Figure

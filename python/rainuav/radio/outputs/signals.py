@@ -25,17 +25,27 @@ SIGNALS = ("sinr", "sir")
 
 
 def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) -> Signal:
-    """A built map, maps in time or maps of every level as one signal.
+    """A built map, maps in time or maps of every level as one signal, bit for bit.
 
-    The ``signal`` (``"sinr"`` or ``"sir"``) of a built map
-    ([`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap]), maps in time
-    ([`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries]) or the maps of every level
-    ([`RadioLevels`][rainuav.radio.outputs.levelmaps.RadioLevels],
+    The maps of every level ([`RadioLevels`][rainuav.radio.outputs.levelmaps.RadioLevels],
     [`RadioLevelSeries`][rainuav.radio.outputs.levelmaps.RadioLevelSeries],
-    [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack], which hold SINR alone), with its
-    serving cells and not-flyable pixels, as one signal. The values are the source's, bit for
-    bit. ``scenario_toml``: the signal carries the source's scenario as TOML (for a file; a
-    radar weather's TOML takes seconds to write: False leaves it out)."""
+    [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack]) hold SINR alone. The signal carries
+    the source's serving cells and not-flyable pixels.
+
+    Args:
+        source: A [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap], a
+            [`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries] or the maps of every
+            level.
+        signal: "sinr" or "sir".
+        scenario_toml: Carry the source's scenario as TOML (for a file; a radar weather's TOML takes
+            seconds to write: False leaves it out).
+
+    Returns:
+        The [`Signal`][rainuav.signals.Signal].
+
+    Raises:
+        InvalidInputError: Another source, an unknown signal, or SIR from the maps of every level.
+    """
 
     def toml(scn: Any) -> str:
         return scn.to_toml_string() if scenario_toml and scn is not None else ""
@@ -82,11 +92,21 @@ def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) 
 def load_signal(path: str | os.PathLike[str], signal: str = "sinr") -> Signal:
     """The signal a file holds, whichever of rainuav's map files it is.
 
-    A signal file ([`Signal.save()`][rainuav.signals.Signal.save]), or a map, maps in time or
-    the maps of every level as the radio maps save them (read and checked by their own loaders, then
-    [`signal_of()`][rainuav.radio.outputs.signals.signal_of]; ``signal`` picks SINR or SIR where
-    the file holds both). The kind is told by the arrays' names, and the file read once, by its
-    own loader. Anything else is one line naming the file."""
+    A signal file ([`Signal.save()`][rainuav.signals.Signal.save]), or a map, maps in time or the
+    maps of every level as the radio maps save them (read and checked by their own loaders, then
+    [`signal_of()`][rainuav.radio.outputs.signals.signal_of]). The kind is told by the arrays'
+    names, and the file read once.
+
+    Args:
+        path: The file.
+        signal: "sinr" or "sir", where the file holds both.
+
+    Returns:
+        The [`Signal`][rainuav.signals.Signal].
+
+    Raises:
+        InvalidInputError: A file that is none of them, or that its loader refuses (named).
+    """
     what = "signal or radio map file"
     keys = array_names(path, what)
     if "meta_json" in keys:
