@@ -95,7 +95,17 @@ class _Weights:
 def pixel_index(
     shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any
 ) -> tuple[Any, Any]:
-    """The (row, column) of the pixel holding each point ``(x, y)`` (clamped to the map)."""
+    """The (row, column) of the pixel holding each point, clamped to the map.
+
+    Args:
+        shape: The map's shape (..., H, W).
+        extent: `(x_min, x_max, y_min, y_max)`, m.
+        x: East, m.
+        y: North, m.
+
+    Returns:
+        `(rows, columns)`, of the points' shape.
+    """
     x0, x1, y0, y1 = extent
     h, w = shape[-2:]
     j = np.clip(np.floor((np.asarray(x, dtype=np.float64) - x0) / (x1 - x0) * w), 0, w - 1)

@@ -55,8 +55,20 @@ _METRES = {"m", "metre", "metres", "meter", "meters", "metre(s)"}
 
 
 def open_raster(path: str | os.PathLike[str], what: str) -> Any:
-    """The raster at ``path`` opened with rasterio, checked to have a CRS and a north-up grid
-    (``what`` names the file in errors: "DEM file", "rain file"). The caller closes it."""
+    """A raster opened with rasterio, checked to have a CRS and a north-up grid (the caller closes
+    it).
+
+    Args:
+        path: The GeoTIFF.
+        what: What the errors call it ("DEM file", "rain file").
+
+    Returns:
+        The rasterio dataset.
+
+    Raises:
+        InvalidInputError: No such file, rasterio not installed, a file it cannot read, no CRS, or a
+            grid that is not north-up (named).
+    """
     try:
         import rasterio
     except ImportError as err:

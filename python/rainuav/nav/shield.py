@@ -19,8 +19,15 @@ __all__ = ["shield_moves", "unvisited_moves"]
 
 
 def unvisited_moves(offset: np.ndarray, visited: Sequence[set[tuple[int, int]]]) -> np.ndarray:
-    """(N, 4) bool: the moves from lattice ``offset`` (N, 2) to an offset not in ``visited``,
-    each flight's set of visited offsets."""
+    """The moves from each flight's lattice offset to an offset it has not visited.
+
+    Args:
+        offset: The flights' offsets (N, 2).
+        visited: Each flight's set of visited offsets.
+
+    Returns:
+        (N, 4) bool.
+    """
     steps = MOVES.tolist()
     return np.array(
         [

@@ -43,6 +43,16 @@ class Lanes:
 
     @classmethod
     def empty(cls, k: int, n_step: int, gamma: float) -> Lanes:
+        """The lanes of `k` UAVs, none in flight.
+
+        Args:
+            k: How many lanes.
+            n_step: The N-step windows' length.
+            gamma: Their discount.
+
+        Returns:
+            The [`Lanes`][rainuav.rl.collect.Lanes].
+        """
         return cls(
             start=np.zeros((k, 2)),
             offset=np.zeros((k, 2), dtype=np.int64),
@@ -57,7 +67,11 @@ class Lanes:
         )
 
     def state_dict(self) -> dict[str, Any]:
-        """Plain arrays and lists (a checkpoint must not pickle classes of ``__main__``)."""
+        """The lanes as plain arrays and lists (a checkpoint must not pickle classes of `__main__`).
+
+        Returns:
+            The arrays by field, and each window's buffer.
+        """
         d: dict[str, Any] = {
             f.name: getattr(self, f.name).copy()
             for f in dataclasses.fields(self)
@@ -67,9 +81,15 @@ class Lanes:
         return d
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        """Restores a [`state_dict()`][rainuav.rl.collect.Lanes.state_dict]; arrays of another shape
-        or type raise ValueError (a checkpoint from before levels has none: every lane on level
-        0)."""
+        """Restores a `state_dict()` (a checkpoint from before levels has none: every lane on level
+        0).
+
+        Args:
+            d: The saved state.
+
+        Raises:
+            ValueError: Arrays of another shape or type, or windows of another number.
+        """
         d = {"level": np.zeros_like(self.level), **d}
         for f in dataclasses.fields(self):
             mine, v = getattr(self, f.name), d[f.name]
@@ -90,6 +110,16 @@ class Lanes:
         self, k: int, start: np.ndarray, episode: int, goal: np.ndarray, world: int = 0,
         level: int = 0,
     ) -> None:  # fmt: skip
+        """Starts a new episode in a lane.
+
+        Args:
+            k: The lane.
+            start: The start (2,), m.
+            episode: The episode's index.
+            goal: The destination (2,), m.
+            world: The world of a bank.
+            level: The level it takes off at.
+        """
         self.start[k] = start
         self.level[k] = level
         self.goal[k] = goal
@@ -108,15 +138,25 @@ def greedy_rollouts(
     shield: bool | None = None,
     goals: np.ndarray | None = None,
 ) -> list[dict[str, Any]]:
-    """Greedy episodes from every start at once (the batched stepper gives exactly the scalar
-    environment's transitions), one dict per start: ``return``, ``steps``, ``path`` (T+1, 2),
-    ``levels`` and ``ticks`` (T+1,: each point's level and clock; zeros and the move count on one
-    level), ``signal`` (T,) along the path, ``reached`` and ``overridden`` (moves where the shield
-    replaced the network's choice). ``shield``: keep to the moves
-    [`shield_moves()`][rainuav.nav.shield.shield_moves] allows (the plane's; default:
-    ``agent.cfg.shield``). ``goals`` (N, 2): each flight's destination (default: the task's). Under
-    training's torch settings (one CPU thread: the networks are tiny, and two threads beside another
-    job spin for the core: 60 ms a one-UAV decision)."""
+    """Greedy episodes from every start at once.
+
+    The batched stepper gives exactly the scalar environment's transitions. Runs under training's
+    torch settings (one CPU thread: the networks are tiny, and two threads beside another job spin
+    for the core: 60 ms a one-UAV decision).
+
+    Args:
+        agent: The agent.
+        env: The environment.
+        starts: The starts (N, 2), m.
+        shield: Keep to the moves [`shield_moves()`][rainuav.nav.shield.shield_moves] allows (the
+            plane's); None: `agent.cfg.shield`.
+        goals: Each flight's destination (N, 2); None: the task's.
+
+    Returns:
+        One dict a start: `return`, `steps`, `path` (T+1, 2), `levels` and `ticks` (T+1,: each
+        point's level and clock; zeros and the move count on one level), `signal` (T,) along the
+        path, `reached` and `overridden` (moves where the shield replaced the network's choice).
+    """
     with torch_settings(agent.device):
         return _rollouts(agent, env, starts, agent.cfg.shield if shield is None else shield, goals)
 

@@ -21,8 +21,7 @@ of the env's observations after ``t`` moves -> (N, dim) float32) and ``make_net(
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 import torch
@@ -30,9 +29,9 @@ from torch import nn
 from torch.nn import functional as F
 
 from rainuav.errors import InvalidInputError
-from rainuav.nav.task import MOVES
 from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig
+from rainuav.rl.features import MoveGeometry, goal_features
 
 __all__ = [
     "DuelingQNet",
@@ -42,14 +41,6 @@ __all__ = [
     "WeatherQNet",
     "goal_features",
 ]
-
-
-def goal_features(rel: Any, scale: Any) -> Any:
-    """``tanh(rel / scale)`` per axis and scale: (N, 2) offsets to the destination and (2, K)
-    scales give (N, 2K). Works on numpy arrays and torch tensors."""
-    if isinstance(rel, torch.Tensor):
-        return torch.tanh(rel[:, :, None] / scale).flatten(1)
-    return np.tanh(rel[:, :, None] / scale).reshape(len(rel), -1)
 
 
 class DuelingQNet(nn.Module):
@@ -68,6 +59,15 @@ class DuelingQNet(nn.Module):
         obs_dim: int = 2,
         smooth_dim: int | None = None,
     ) -> None:
+        """The network's layers.
+
+        Args:
+            hidden: The hidden layers' width.
+            fourier: Sine/cosine frequencies of the smooth inputs.
+            n_actions: The actions (4 on one level, 6 among levels).
+            obs_dim: The input's size.
+            smooth_dim: The first inputs that also enter as frequencies; None: `obs_dim`.
+        """
         super().__init__()
         self.register_buffer("freqs", math.pi * torch.arange(1, fourier + 1, dtype=torch.float32))
         self.smooth_dim = obs_dim if smooth_dim is None else smooth_dim
@@ -79,6 +79,14 @@ class DuelingQNet(nn.Module):
         self.advantage = nn.Linear(hidden, n_actions)
 
     def features(self, obs: torch.Tensor) -> torch.Tensor:
+        """The input with the smooth part's sine/cosine frequencies beside it.
+
+        Args:
+            obs: The input (B, obs_dim).
+
+        Returns:
+            (B, features).
+        """
         parts = [obs]
         if self.freqs.numel():
             ang = obs[:, : self.smooth_dim, None] * self.freqs  # (B, smooth_dim, K)
@@ -86,10 +94,26 @@ class DuelingQNet(nn.Module):
         return torch.cat(parts, dim=-1)
 
     def head(self, h: torch.Tensor) -> torch.Tensor:
+        """The dueling head: `V(s) + A(s, a) - mean_a A(s, a)`.
+
+        Args:
+            h: The body's output (B, hidden).
+
+        Returns:
+            (B, A) action values.
+        """
         adv = self.advantage(h)
         return self.value(h) + adv - adv.mean(dim=-1, keepdim=True)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        """The action values of a batch of inputs.
+
+        Args:
+            obs: The input (B, obs_dim).
+
+        Returns:
+            (B, A).
+        """
         return self.head(self.body(self.features(obs)))
 
 
@@ -112,8 +136,18 @@ class PositionEncoder:
         gives_time: bool | None = None,
         n_actions: int = 4,
     ) -> None:
-        """``gives_time``: whether the env's observation ends with the time (default: it has
-        three dimensions, the plane's in time)."""
+        """The single-map learner's input for an env.
+
+        Args:
+            cfg: The learner's settings.
+            horizon: The task's `max_steps`.
+            goal: The fixed destination, m.
+            step: One move in the observation's units, per axis.
+            env_dims: The env observation's size.
+            gives_time: Whether the env's observation ends with the time; None: it has three
+                dimensions (the plane's in time).
+            n_actions: The actions (4 on one level, 6 among levels).
+        """
         self.cfg, self.horizon, self.n_actions = cfg, horizon, n_actions
         self.goal = np.asarray(goal, dtype=np.float32)
         self.goal_scale = (
@@ -136,6 +170,11 @@ class PositionEncoder:
         return np.concatenate(parts, axis=1).astype(np.float32)
 
     def make_net(self) -> nn.Module:
+        """The network this input feeds.
+
+        Returns:
+            A [`DuelingQNet`][rainuav.rl.networks.DuelingQNet].
+        """
         c = self.cfg
         return DuelingQNet(
             c.hidden, c.fourier, self.n_actions, obs_dim=self.dim, smooth_dim=self.n_smooth
@@ -150,7 +189,7 @@ class WeatherQNet(DuelingQNet):
     with ``fourier`` sine/cosine frequencies, and goal-relative features at
     ``len(goal_scale)`` scales; two hidden ReLU layers of ``hidden``.
 
-    With ``moves`` ([`MoveGeometry`][rainuav.rl.networks.MoveGeometry]), for each of the four moves
+    With ``moves`` ([`MoveGeometry`][rainuav.rl.features.MoveGeometry]), for each of the four moves
     the destination as it would be after it: whether the move arrives, and how much nearer it brings
     the UAV (in moves, in [-1, 1]). They are functions of the position and the destination the
     observation holds (nothing the env does not show), fed to the body and, through one weight per
@@ -169,6 +208,18 @@ class WeatherQNet(DuelingQNet):
         goal_maps: MoveGeometry | None = None,
         n_actions: int = 4,
     ) -> None:
+        """The weather network's layers.
+
+        Args:
+            view: The env's weather view (the observation's parts).
+            hidden: The hidden layers' width.
+            fourier: Sine/cosine frequencies of the position, destination and time.
+            goal_scale: The goal-relative features' scales.
+            conv: The first convolution's channels.
+            moves: The move features' geometry; None: none.
+            goal_maps: The goal maps' geometry; None: none.
+            n_actions: The actions (4 on one level, 6 among levels).
+        """
         nv = view.vector  # position, goal, time (and the level among levels)
         super().__init__(hidden, fourier, n_actions, obs_dim=nv, smooth_dim=nv)
         self.window, self.area, self.layers, self.n_vec = view.window, view.area, view.layers, nv
@@ -226,8 +277,16 @@ class WeatherQNet(DuelingQNet):
         )
 
     def move_features(self, vec: torch.Tensor) -> torch.Tensor:
-        """(B, A, 2): per move, arrival (0/1) and progress toward the destination, moves (a
-        climb or a descent: neither, it stays over the same point)."""
+        """Per move, whether it arrives and how much nearer it brings the UAV.
+
+        A climb or a descent: neither (it stays over the same point).
+
+        Args:
+            vec: The flat observations (B, D).
+
+        Returns:
+            (B, A, 2).
+        """
         assert self.moves is not None
         rel = (vec[:, 2:4] - vec[:, 0:2]) * self.span  # (B, 2) metres to the destination
         after = torch.linalg.vector_norm(rel[:, None, :] - self.shifts, dim=-1)  # (B, 4)
@@ -237,10 +296,18 @@ class WeatherQNet(DuelingQNet):
         return torch.stack([arrive, progress], dim=-1)
 
     def goal_channels(self, vec: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """The destination drawn on the grids: on the local window how much nearer each of
-        its points is to the destination than the UAV (in window half-widths, in [-1, 1]);
-        on the whole area each cell's distance to the destination and to the UAV (in area
-        diagonals). (B, 1, window, window) and (B, 2, area, area)."""
+        """The destination drawn on the grids.
+
+        On the local window, how much nearer each of its points is to the destination than the UAV
+        (in window half-widths, in [-1, 1]); on the whole area, each cell's distance to the
+        destination and to the UAV (in area diagonals).
+
+        Args:
+            vec: The flat observations (B, D).
+
+        Returns:
+            `((B, 1, window, window), (B, 2, area, area))`.
+        """
         ends = vec[:, 0:4].reshape(-1, 2, 2) * self.map_span  # (B, 2, 2): UAV, destination, m
         to_goal = ends[:, 1] - ends[:, 0]
         rx, ry = to_goal[:, 0:1], to_goal[:, 1:2]  # to the destination, m
@@ -255,6 +322,14 @@ class WeatherQNet(DuelingQNet):
         # The layers are called as functions (ReLU in place): the same
         # operations as the modules' calls, bit for bit, with less overhead per call; a
         # decision is a few dozen small operations (benches/decision.py).
+        """The action values of a batch of flat observations.
+
+        Args:
+            obs: The flat observations (B, D).
+
+        Returns:
+            (B, A).
+        """
         nl, nv = self.layers, self.n_vec
         w2, a2 = nl * self.window**2, nl * self.area**2
         vec = obs[:, :nv]
@@ -291,24 +366,6 @@ def _conv_stack(stack: nn.Module, x: torch.Tensor) -> torch.Tensor:
     return F.conv2d(x, c2.weight, c2.bias, c2.stride, c2.padding).relu_().flatten(1)
 
 
-@dataclass(frozen=True)
-class MoveGeometry:
-    """What a network needs to read the destination move by move: the area's sides
-    ``span_m`` (the observation's positions are fractions of them), the move ``step_m`` and
-    the arrival radius ``tol_m``, m."""
-
-    span_m: tuple[float, float]
-    step_m: float
-    tol_m: float
-    per_move: ClassVar[int] = 2
-    """Features per move: arrival, progress."""
-
-    @property
-    def shifts_m(self) -> np.ndarray:
-        """(4, 2): each move's displacement, m, in the env's action order."""
-        return (self.step_m * MOVES).astype(np.float32)
-
-
 class WeatherEncoder:
     """The weather-reading learner's input: the env's ``Dict`` observation flattened
     ([`WeatherView.flat()`][rainuav.nav.views.WeatherView.flat]); the network splits it
@@ -323,6 +380,18 @@ class WeatherEncoder:
         moves: MoveGeometry | None = None,
         n_actions: int = 4,
     ) -> None:
+        """The weather-reading learner's input for an env.
+
+        Args:
+            cfg: The learner's settings.
+            view: The env's weather view.
+            step: One move in the observation's units, per axis.
+            moves: The env's geometry, for the move features and the goal maps.
+            n_actions: The actions (4 on one level, 6 among levels).
+
+        Raises:
+            InvalidInputError: Goal maps or move features asked for without the env's geometry.
+        """
         self.cfg, self.view, self.n_actions = cfg, view, n_actions
         if cfg.move_features and moves is None:
             raise InvalidInputError("move_features needs the env's geometry (MoveGeometry)")
@@ -340,6 +409,11 @@ class WeatherEncoder:
         return self.view.flat(env_obs)
 
     def make_net(self) -> nn.Module:
+        """The network this input feeds.
+
+        Returns:
+            A [`WeatherQNet`][rainuav.rl.networks.WeatherQNet].
+        """
         c = self.cfg
         return WeatherQNet(
             self.view, c.hidden, c.fourier, self.goal_scale, c.conv, self.moves, self.goal_maps,

@@ -26,8 +26,17 @@ __all__ = [
 
 
 def map_image(ax: Any, env: UAVNavEnv) -> Any:
-    """The task's signal map on ``ax`` (where it changes in time, at take-off; among levels,
-    the lowest level's), its colour scale centred on the outage threshold."""
+    """The task's signal map drawn on an Axes, its colour scale centred on the outage threshold.
+
+    Where it changes in time, at take-off; among levels, the lowest level's.
+
+    Args:
+        ax: The matplotlib Axes.
+        env: The environment.
+
+    Returns:
+        The image (for a colour bar).
+    """
     x0, x1, y0, y1 = env.field.extent
     lo = float(env.cfg.min_db if env.cfg.min_db is not None else 0.0)
     field = env.field.level(0)
@@ -42,9 +51,19 @@ def map_image(ax: Any, env: UAVNavEnv) -> Any:
 
 
 def draw_flights(ax: Any, env: UAVNavEnv, rolls: list, optimal: Sequence[Any] = ()) -> Any:
-    """Flights over the map on ``ax``, the paper's way: the policy's paths (black), starts as
-    red crosses, the destination as a blue triangle; ``optimal``: the exact planner's paths
-    from the same starts (dashed blue). Returns the map's image (for a colour bar)."""
+    """Flights over the map, the paper's way.
+
+    The policy's paths black, starts as red crosses, the destination as a blue triangle.
+
+    Args:
+        ax: The matplotlib Axes.
+        env: The environment.
+        rolls: The flights ([`greedy_rollouts()`][rainuav.rl.collect.greedy_rollouts]).
+        optimal: The exact planner's paths from the same starts (dashed blue).
+
+    Returns:
+        The map's image (for a colour bar).
+    """
     x0, x1, y0, y1 = env.field.extent
     im = map_image(ax, env)
     for k, p in enumerate(optimal):
@@ -69,9 +88,18 @@ def plot_trajectories(
     optimal: Sequence[Any] = (),
     heights: Sequence[Any] = (),
 ) -> None:
-    """The flights over the map ([`draw_flights()`][rainuav.rl.plots.draw_flights]) with a colour
-    bar, a legend and axes; among levels, beside it each flight's altitude against time (the
-    network's in black, ``heights``: the optimum's (ticks, levels), dashed blue)."""
+    """Writes the flights over the map with a colour bar, a legend and axes.
+
+    Among levels, beside it each flight's altitude against time.
+
+    Args:
+        env: The environment.
+        rolls: The flights.
+        path: The PNG.
+        title: The figure's title.
+        optimal: The exact planner's paths from the same starts.
+        heights: Among levels, the optimum's `(ticks, levels)` a flight (dashed blue).
+    """
     from matplotlib.figure import Figure
 
     levels = env.altitudes_m is not None
@@ -103,12 +131,28 @@ def plot_trajectories(
 
 
 def optimal_paths(env: UAVNavEnv, rolls: list) -> list:
-    """The exact planner's paths from the starts of ``rolls`` (to draw beside them)."""
+    """The exact planner's paths from the starts of some flights (to draw beside them).
+
+    Args:
+        env: The environment.
+        rolls: The flights.
+
+    Returns:
+        The paths.
+    """
     return [p.path_m for p in optimal_plans(env, rolls)]
 
 
 def optimal_plans(env: UAVNavEnv, rolls: list) -> list:
-    """The exact planner's plans from the starts of ``rolls``."""
+    """The exact planner's plans from the starts of some flights.
+
+    Args:
+        env: The environment.
+        rolls: The flights.
+
+    Returns:
+        The [`Plan`][rainuav.nav.planner.Plan]s.
+    """
     from rainuav.nav import planner
 
     starts = np.array([r["path"][0] for r in rolls]).reshape(-1, 2)
@@ -118,8 +162,16 @@ def optimal_plans(env: UAVNavEnv, rolls: list) -> list:
 
 
 def plot_policy(env: UAVNavEnv, metrics: dict[str, Any], rolls: list, path: Path) -> None:
-    """The network's flights beside the exact optimum from the same starts, titled with its
-    success and mean excess cost (among levels, with the heights flown)."""
+    """Writes the network's flights beside the exact optimum's from the same starts.
+
+    Among levels, with the heights flown.
+
+    Args:
+        env: The environment.
+        metrics: The run's metrics.
+        rolls: The network's flights.
+        path: The PNG.
+    """
     plans = optimal_plans(env, rolls)
     heights = [(p.ticks, p.levels) for p in plans] if env.altitudes_m is not None else []  # type: ignore[union-attr]
     excess = metrics.get("mean_excess_cost")
@@ -134,8 +186,14 @@ def plot_returns(
     validation: Sequence[tuple[int, float, float]] = (),
     window: int = 50,
 ) -> None:
-    """The training returns and their moving average; beside them, when given, the greedy
-    network's success and mean excess cost on the validation starts."""
+    """Writes the training returns and their moving average, and the validation checks.
+
+    Args:
+        returns: Every episode's return.
+        path: The PNG.
+        validation: `(episodes, success, mean excess cost)` of each check.
+        window: The moving average's episodes.
+    """
     from matplotlib.figure import Figure
 
     r = np.asarray(returns)
@@ -164,6 +222,13 @@ def plot_returns(
 
 
 def plot_stages(env: UAVNavEnv, stages: list[tuple[int, list]], path: Path) -> None:
+    """Writes the greedy network's flights at stages of training, one panel a stage.
+
+    Args:
+        env: The environment.
+        stages: `(episode, flights)` of each stage.
+        path: The PNG.
+    """
     from matplotlib.figure import Figure
 
     n = max(1, len(stages))
@@ -184,10 +249,19 @@ def plot_stages(env: UAVNavEnv, stages: list[tuple[int, list]], path: Path) -> N
 
 
 def plot_storm_flights(env: UAVNavEnv, rolls: list, path: Path, panels: int = 3) -> None:
-    """Flights through a signal that changes in time: ``panels`` instants from take-off to
-    two thirds of the longest flight, each over the SINR of that instant, with the network's
-    flights (black), the frozen take-off plan's (orange) and the exact space-time optimum's
-    (dashed blue) from the same starts, drawn up to that instant (a dot: where the UAV is)."""
+    """Writes flights through a signal that changes in time, one panel an instant.
+
+    From take-off to two thirds of the longest flight, each panel over the SINR of that instant,
+    with the network's flights (black), the frozen take-off plan's (orange) and the exact space-time
+    optimum's (dashed blue) from the same starts, drawn up to that instant (a dot: where the UAV
+    is).
+
+    Args:
+        env: The environment.
+        rolls: The network's flights.
+        path: The PNG.
+        panels: The instants drawn.
+    """
     from matplotlib.figure import Figure
 
     from rainuav.nav import baselines, planner

@@ -13,10 +13,18 @@ __all__ = ["RunLog", "cut_log"]
 
 
 def cut_log(path: Path, done: int) -> None:
-    """Cuts ``log.csv`` back to the episodes a checkpoint holds (``finished <= done``): the
-    rows an interrupted run logged after its last checkpoint are logged again on resume.
-    Rewritten atomically; a row that does not parse ends the kept part; a log that is not a
-    readable text file is refused in one line."""
+    """Cuts `log.csv` back to the episodes a checkpoint holds (`finished <= done`).
+
+    The rows an interrupted run logged after its last checkpoint are logged again on resume. It is
+    rewritten atomically; a row that does not parse ends the kept part.
+
+    Args:
+        path: The run's `log.csv`.
+        done: The episodes the checkpoint holds.
+
+    Raises:
+        InvalidInputError: A log that is not a readable text file.
+    """
     if not path.is_file():
         raise InvalidInputError(f"--resume: {path} is not a file (the run's log.csv)")
     try:
@@ -48,6 +56,18 @@ class RunLog:
     """``log.csv`` (one row per finished episode), TensorBoard scalars and the progress bar."""
 
     def __init__(self, out: Path, resume: bool, total: int, done: int, progress: bool) -> None:
+        """Opens the run's log, its TensorBoard scalars and the progress bar.
+
+        Args:
+            out: The run's folder.
+            resume: Continue the log (cut back to `done`); False: a new one.
+            total: The run's episodes (the bar's total).
+            done: The episodes done so far.
+            progress: A progress bar.
+
+        Raises:
+            InvalidInputError: A `log.csv` that is a folder or a `tb` that is a file (named).
+        """
         from torch.utils.tensorboard import SummaryWriter
 
         tb, path = out / "tb", out / "log.csv"
@@ -72,7 +92,12 @@ class RunLog:
             self.bar = tqdm(total=total, initial=done, desc="train", unit="ep")
 
     def episode(self, n_done: int, row: tuple[int, float, int, bool, float, float]) -> None:
-        """One finished episode: (episode index, return, steps, reached, epsilon, seconds)."""
+        """Logs one finished episode.
+
+        Args:
+            n_done: The episodes finished, this one included.
+            row: `(episode index, return, steps, reached, epsilon, seconds)`.
+        """
         episode, ret, steps, reached, eps, seconds = row
         self.csv.writerow(
             [n_done, episode, f"{ret:.4f}", steps, int(reached), f"{eps:.5f}", f"{seconds:.2f}"]

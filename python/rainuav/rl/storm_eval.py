@@ -44,8 +44,17 @@ levels also the plans held at one altitude and the heights flown (absent on one 
 
 
 def parse_seeds(text: str) -> list[int]:
-    """``"A-B"`` (inclusive) or ``"K"``: the storm seeds, each in 0..2^63-1, at most
-    [`MAX_STORMS`][rainuav.rl.storm_eval.MAX_STORMS] of them."""
+    """Storm seeds from `"A-B"` (inclusive) or `"K"`.
+
+    Args:
+        text: The range.
+
+    Returns:
+        The seeds, each in 0..2^63-1, at most [`MAX_STORMS`][rainuav.rl.storm_eval.MAX_STORMS].
+
+    Raises:
+        InvalidInputError: Not a range `A-B` with 0 <= A <= B, or too many storms.
+    """
     parts = str(text).split("-")
     try:
         lo, hi = (int(parts[0]), int(parts[-1])) if len(parts) <= 2 else (None, None)
@@ -63,8 +72,16 @@ def _flights(agent: Any, env: UAVNavEnv, pts: np.ndarray, replan_every: int) -> 
 
 
 def evaluate_storms(run_dir: Path, seeds: list[int], **kw: Any) -> tuple[dict[str, Any], Any]:
-    """[`evaluate_worlds()`][rainuav.rl.storm_eval.evaluate_worlds] through the storms ``seeds``
-    (the run's scenario must be the storm's)."""
+    """[`evaluate_worlds()`][rainuav.rl.storm_eval.evaluate_worlds] through storms.
+
+    Args:
+        run_dir: The run's folder (its scenario must be the storm's).
+        seeds: The storms.
+        **kw: The other arguments of `evaluate_worlds()`.
+
+    Returns:
+        As `evaluate_worlds()`.
+    """
     return evaluate_worlds(run_dir, [{"storm_seed": k} for k in seeds], storms=True, **kw)
 
 
@@ -80,12 +97,27 @@ def evaluate_worlds(
     storms: bool = False,
     online: bool = False,
 ) -> tuple[dict[str, Any], Any]:
-    """Flies the network run ``run_dir`` reports in each world (the run's spec with the
-    changes of ``worlds[i]``, e.g. ``{"storm_seed": K}`` or ``{"scenario": "uma",
-    "rain_rate_mm_h": 0.0}``) from ``starts`` fixed starts (seeded by ``seed``, default the run's
-    ``eval_seed``; the same in every world); ``online``: its last online network in place
-    of the one it reports. Returns ``{"mean": ..., "worlds": [...]}`` (rows
-    with their changes) and, for figures, the first world's (env, flights)."""
+    """Flies the network a run reports in each of several worlds, from the same fixed starts.
+
+    Args:
+        run_dir: The run's folder.
+        worlds: The changes of the run's spec for each world, e.g. `{"storm_seed": K}` or
+            `{"scenario": "uma", "rain_rate_mm_h": 0.0}`.
+        starts: The fixed starts a world.
+        seed: Their seed; None: the run's `eval_seed`.
+        random_goals: Each start to its own destination.
+        device: "cpu", "cuda" or "auto".
+        progress: A line a world.
+        storms: The worlds are storms (the run must be the storm's; their maps are not cached).
+        online: Fly the last online network in place of the one the run reports.
+
+    Returns:
+        `({"mean": ..., "worlds": [...]}, (env, flights) of the first world)`: the rows with their
+        changes, and what the figures draw.
+
+    Raises:
+        InvalidInputError: A folder that is not a run's, or storms for a run not trained on them.
+    """
     check_integer("starts", starts, 1, 10_000)
     run = Path(run_dir)
     for name in ("config.toml", "checkpoint.pt"):

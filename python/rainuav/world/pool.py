@@ -156,8 +156,11 @@ class StormPool:
         return storm_seed, world
 
     def world(self) -> World:
-        """The pool as one world (its field the bank; ``observation`` and ``random_goal``
-        the spec's)."""
+        """The pool as one world: its field the bank.
+
+        Returns:
+            The [`World`][rainuav.world.World], with the spec's `observation` and `random_goal`.
+        """
         return World(
             None, self.bank, self.task, self.spec.observation, self.spec.random_goal, pool=self
         )
@@ -182,9 +185,12 @@ class StormPool:
         return self.seeds[slot]
 
     def state_dict(self) -> dict[str, Any]:
-        """Plain data that restores the pool
-        ([`load_state_dict()`][rainuav.world.pool.StormPool.load_state_dict]): the storms in the
-        slots, the one being mapped next, the seed stream's state and the storms flown."""
+        """Plain data that restores the pool (`load_state_dict()`).
+
+        Returns:
+            The storms in the slots, the one being mapped next, the seed stream's state and the
+            storms flown.
+        """
         return {
             "seeds": list(self.seeds),
             "next_seed": self._next_seed,

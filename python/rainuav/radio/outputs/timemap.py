@@ -72,9 +72,18 @@ _ARRAYS = ("t_s", "rss_dbm", "sinr_db", "sir_db", "serving_cell", "x_m", "y_m", 
 
 
 def series_times(duration_s: float, slice_s: float) -> npt.NDArray[np.float64]:
-    """The instants 0, ``slice_s``, ..., ``duration_s``: the step must divide the duration
-    (to 1e-9 of it) and give 2 to [`MAX_SLICES`][rainuav.radio.outputs.timemap.MAX_SLICES]
-    instants."""
+    """The instants 0, `slice_s`, ..., `duration_s` of a map series.
+
+    Args:
+        duration_s: The duration, s.
+        slice_s: The step, s: it must divide the duration (to 1e-9 of it).
+
+    Returns:
+        The instants, s: 2 to [`MAX_SLICES`][rainuav.radio.outputs.timemap.MAX_SLICES] of them.
+
+    Raises:
+        InvalidInputError: A step that does not divide the duration, or too many slices.
+    """
     d = check_number("duration_s", duration_s, 1e-3, 1e6, " s")
     step = check_number("slice_s", slice_s, 1e-3, d, f" s (at most duration_s = {d:g})")
     n = round(d / step)

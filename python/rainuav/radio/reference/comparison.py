@@ -8,9 +8,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from rainuav.radio.reference.agreement import Agreement, agreement
 from rainuav.radio.reference.tracer import (
-    Agreement,
-    agreement,
     engine_gain,
     inside_buildings,
     isotropic_scenario,
@@ -35,17 +34,34 @@ def compare(
     coefficient: str = "p526",
     runs: int = 2,
 ) -> Agreement:
-    """The building effect of the ray engine (or ``engine``:
-    [`engine_gain()`][rainuav.radio.reference.tracer.engine_gain]) against the tracer's on ``scn``
-    (each site once, isotropic:
-    [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]), over no ground or
-    a PEC one. ``reference``: ``"map"``, the tracer's radio map
-    ([`tracer_gain()`][rainuav.radio.reference.tracer.tracer_gain]), or ``"paths"``, its path
-    solver at every ``step``-th pixel's centre
-    ([`path_gain()`][rainuav.radio.reference.tracer_paths.path_gain]). ``coefficient``: the
-    tracer's wedge coefficient, the standard's (``"p526"``) or its own as released
-    (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge]); ``runs``: the path
-    solver's runs, combined as the union of their paths (its module docstring)."""
+    """The building effect of the ray engine (or another) against the tracer's on a scene.
+
+    Each site once, isotropic
+    ([`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]), over no ground or
+    a PEC one.
+
+    Args:
+        scn: The scene's scenario.
+        samples: The tracer's rays a site (its radio map).
+        seed: The tracer's seed.
+        max_depth: The interactions a path may have.
+        ground: "none" or "pec".
+        engine: The engine compared ([`engine_gain()`][rainuav.radio.reference.tracer.engine_gain]).
+        reference: "map", the tracer's radio map
+            ([`tracer_gain()`][rainuav.radio.reference.tracer.tracer_gain]), or "paths", its path
+            solver at every `step`-th pixel's centre
+            ([`path_gain()`][rainuav.radio.reference.tracer_paths.path_gain]).
+        step: With "paths", every how many pixels a centre is traced.
+        coefficient: The tracer's wedge coefficient: the standard's ("p526") or its own as released
+            ("sionna"; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge]).
+        runs: The path solver's runs, combined as the union of their paths.
+
+    Returns:
+        The [`Agreement`][rainuav.radio.reference.agreement.Agreement], site by site.
+
+    Raises:
+        ValueError: A reference other than "map" or "paths".
+    """
     if reference not in ("map", "paths"):
         raise ValueError(f"reference is 'map' or 'paths' (got {reference!r})")
     from rainuav.radio.reference.tracer_wedge import checked

@@ -53,10 +53,8 @@ __all__ = [
     "LLVM_PATHS",
     "MAX_NOISE_DB",
     "SHADOW_DB",
-    "Agreement",
     "TracerMap",
     "add_transmitters",
-    "agreement",
     "engine_gain",
     "inside_buildings",
     "interactions",
@@ -90,10 +88,18 @@ is then good to about this."""
 
 
 def load_sionna() -> tuple[Any, Any]:
-    """Imports Mitsuba and Sionna RT on a GPU where one is present, else on the CPU through LLVM,
-    with P.526's wedge coefficient ([`tracer_wedge`][rainuav.radio.reference.tracer_wedge]; the
-    first time: a [`coefficient()`][rainuav.radio.reference.tracer_wedge.coefficient] block
-    keeps its own): returns ``(mitsuba, sionna.rt)``. Raises ImportError naming what is missing."""
+    """Mitsuba and Sionna RT, on a GPU where one is present, else on the CPU through LLVM.
+
+    With P.526's wedge coefficient ([`tracer_wedge`][rainuav.radio.reference.tracer_wedge]; the
+    first time: a [`coefficient()`][rainuav.radio.reference.tracer_wedge.coefficient] block keeps
+    its own).
+
+    Returns:
+        `(mitsuba, sionna.rt)`.
+
+    Raises:
+        ImportError: What is missing (sionna-rt, or LLVM for the CPU), named.
+    """
     if "DRJIT_LIBLLVM_PATH" not in os.environ:
         for p in LLVM_PATHS:
             if os.path.exists(p):
@@ -132,9 +138,18 @@ ISOTROPIC = Pattern(
 
 
 def isotropic_scenario(scn: Scenario, *, buildings: bool = True, ground: str = "none") -> Scenario:
-    """``scn`` as both methods compare it: each distinct site once, with one isotropic cell of
-    0 dBm; clear air; no ground or a PEC one (``ground``); the ray engine; with or without its
-    buildings."""
+    """A scenario as both methods compare it: each site once, one isotropic 0 dBm cell.
+
+    Clear air; no ground or a PEC one; the ray engine; with or without its buildings.
+
+    Args:
+        scn: The scenario.
+        buildings: Keep its buildings.
+        ground: "none" or "pec".
+
+    Returns:
+        The [`Scenario`][rainuav.radio.scene.scenario.Scenario].
+    """
     sites, seen = [], set()
     for s in scn.sites:
         key = (s.x_m, s.y_m, s.height_m)
@@ -151,11 +166,19 @@ def isotropic_scenario(scn: Scenario, *, buildings: bool = True, ground: str = "
 
 
 def engine_gain(scn: Scenario, engine: str = "ray") -> np.ndarray:
-    """The path gain (linear, isotropic antennas) of each site of
-    [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]'s ``scn`` at every
-    pixel, (S, H, W), by the ray engine or (``engine`` ``"hybrid"`` or ``"pe"``) by
+    """The path gain of each site of an isotropic scenario at every pixel, by an engine.
+
+    With `engine` "hybrid" or "pe", by
     [`build_radio_map()`][rainuav.radio.outputs.maps.build_radio_map] with that engine (the cells
-    radiate 0 dBm: the map's dBm are the path gain's dB)."""
+    radiate 0 dBm: the map's dBm are the path gain's dB).
+
+    Args:
+        scn: An [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario].
+        engine: "ray", "hybrid" or "pe".
+
+    Returns:
+        (S, H, W), linear.
+    """
     from rainuav.radio.engines import engine_of
     from rainuav.radio.engines.ray_engine import ray_power
 
@@ -171,12 +194,22 @@ def engine_gain(scn: Scenario, engine: str = "ray") -> np.ndarray:
 
 
 def prism_arrays(polygon: Any, base: float, top: float) -> tuple[np.ndarray, np.ndarray]:
-    """The vertices (V, 3) and triangles (F, 3) of ``polygon`` (holes included) extruded from
-    ``base`` to ``top`` m: a closed mesh, faces outward (counter-clockwise seen from outside),
-    and faces that meet share their vertices. The tracer finds a wedge where two faces share an
-    edge and takes an edge of one face alone for a free edge (a half-plane): a mesh whose faces
-    did not share their vertices would make every corner two half-planes and every seam between
-    two triangles of a wall or a roof a diffracting edge."""
+    """The closed mesh of a polygon (holes included) extruded between two heights.
+
+    Faces point outward (counter-clockwise seen from outside), and faces that meet share their
+    vertices. The tracer finds a wedge where two faces share an edge and takes an edge of one face
+    alone for a free edge (a half-plane): a mesh whose faces did not share their vertices would make
+    every corner two half-planes and every seam between two triangles of a wall or a roof a
+    diffracting edge.
+
+    Args:
+        polygon: The footprint (a shapely polygon).
+        base: The bottom, m.
+        top: The roof, m.
+
+    Returns:
+        `(vertices (V, 3), triangles (F, 3))`.
+    """
     import shapely
 
     index: dict[tuple[float, float, float], int] = {}
@@ -233,11 +266,22 @@ class TracerMap:
 
 
 def tracer_scene(scn: Scenario, material: str | None = None) -> Any:
-    """Sionna RT's scene of ``scn``: its buildings as closed meshes of their footprints' P.2040
-    material (``material``, an ITU material name, for all of them where given; 0.3 m thick
-    walls), and one isotropic antenna of the scenario's polarisation on each side, without
-    transmitters. Over a PEC ground (``scn.ground == "pec"``) every building extends as deep
-    below the ground as it stands above it (the image method)."""
+    """Sionna RT's scene of a scenario: its buildings as closed meshes, and its antennas.
+
+    Each building of its footprints' P.2040 material (0.3 m thick walls), one isotropic antenna of
+    the scenario's polarisation on each side, no transmitters. Over a PEC ground every building
+    extends as deep below the ground as it stands above it (the image method).
+
+    Args:
+        scn: The scenario (ground "none" or "pec").
+        material: An ITU material name for every building; None: each footprint's own.
+
+    Returns:
+        The tracer's scene.
+
+    Raises:
+        ValueError: A ground other than "none" or "pec".
+    """
     if scn.ground not in ("none", "pec"):
         raise ValueError(f"the tracer's ground is none or pec (got {scn.ground!r})")
     from rainuav.radio.scene.buildings import scenario_buildings
@@ -261,10 +305,19 @@ def tracer_scene(scn: Scenario, material: str | None = None) -> Any:
 
 
 def add_transmitters(scene: Any, scn: Scenario) -> int:
-    """Adds one transmitter a site of ``scn`` to the tracer's ``scene``, and over a PEC ground
-    (``scn.ground == "pec"``) each site's image below the ground after them (the image method;
-    [`tracer_scene()`][rainuav.radio.reference.tracer.tracer_scene] extends the buildings below
-    it): returns how many sets of sites there are (1, or 2 with the images)."""
+    """Adds one transmitter a site to the tracer's scene (and each one's image over PEC).
+
+    The images come after the sites (the image method;
+    [`tracer_scene()`][rainuav.radio.reference.tracer.tracer_scene] extends the buildings below the
+    ground).
+
+    Args:
+        scene: The tracer's scene.
+        scn: The scenario.
+
+    Returns:
+        How many sets of sites there are (1, or 2 with the images).
+    """
     mi, rt = load_sionna()
     images = (1.0, -1.0) if scn.ground == "pec" else (1.0,)
     for sign in images:
@@ -275,9 +328,18 @@ def add_transmitters(scene: Any, scn: Scenario) -> int:
 
 
 def interactions(max_depth: int, diffraction: bool = True) -> dict[str, Any]:
-    """The interactions both of the tracer's solvers trace (module docstring): line of sight,
-    specular reflections up to ``max_depth``, edge diffraction where ``diffraction``; no diffuse
-    scattering, no transmission through walls."""
+    """The interactions both of the tracer's solvers trace (the module's docstring).
+
+    Line of sight, specular reflections up to `max_depth`, edge diffraction where asked; no diffuse
+    scattering, no transmission through walls.
+
+    Args:
+        max_depth: The most interactions of a path.
+        diffraction: Trace edge diffraction.
+
+    Returns:
+        The solvers' keyword arguments.
+    """
     return {
         "max_depth": max_depth,
         "los": True,
@@ -291,8 +353,13 @@ def interactions(max_depth: int, diffraction: bool = True) -> dict[str, Any]:
 
 @contextlib.contextmanager
 def repeatable() -> Iterator[None]:
-    """Runs the tracer on one thread within the block (module docstring: on several, the same
-    seed gives a different map each run), and restores the thread count after."""
+    """A context in which the tracer runs on one thread (the count restored after).
+
+    On several threads the same seed gives a different map each run (the module's docstring).
+
+    Yields:
+        Nothing.
+    """
     load_sionna()
     import drjit as dr
 
@@ -313,16 +380,25 @@ def tracer_gain(
     seed: int = 0,
     coefficient: str = "p526",
 ) -> TracerMap:
-    """Sionna RT's path gain of each site of
-    [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]'s ``scn`` at every
-    pixel (module docstring): ``samples`` rays per site in all, in two halves seeded ``2 seed`` and
-    ``2 seed + 1``. Over a PEC ground (``scn.ground == "pec"``) by the image method: every building
-    extends as deep below the ground as it stands above it, each site has its image below the
-    ground, and a pixel's gain is the sum of both (incoherent: the pixel mean of the ground's
-    fringes, as the ray engine takes it). On one thread
+    """Sionna RT's path gain of each site of an isotropic scenario at every pixel.
+
+    Over a PEC ground by the image method: every building extends as deep below the ground as it
+    stands above it, each site has its image below the ground, and a pixel's gain is the sum of both
+    (incoherent: the pixel mean of the ground's fringes, as the ray engine takes it). On one thread
     ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]): the same seed, the same map.
-    ``coefficient``: the wedge coefficient it diffracts with, the standard's (``"p526"``) or its
-    own as released (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge])."""
+
+    Args:
+        scn: An [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario].
+        samples: Rays a site in all, in two halves seeded `2 seed` and `2 seed + 1`.
+        max_depth: The most interactions of a path.
+        diffraction: Trace edge diffraction.
+        seed: The seed.
+        coefficient: The wedge coefficient it diffracts with: the standard's ("p526") or its own as
+            released ("sionna"; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge]).
+
+    Returns:
+        The [`TracerMap`][rainuav.radio.reference.tracer.TracerMap]: the two halves of the rays.
+    """
     from rainuav.radio.reference.tracer_wedge import coefficient as using
 
     mi, rt = load_sionna()
@@ -347,98 +423,15 @@ def tracer_gain(
     return TracerMap(halves[0], halves[1])
 
 
-@dataclass(frozen=True)
-class Agreement:
-    """The building effect of the ray engine against the tracer's over the pixels both cover
-    (one value a site, dB unless said)."""
-
-    pixels: np.ndarray
-    """Pixels compared."""
-    noisy: np.ndarray
-    """Pixels the tracer covers but left out: its noise above the tolerance."""
-    shadow_pixels: np.ndarray
-    """Of these, where the tracer sees a shadow (effect below
-    [`SHADOW_DB`][rainuav.radio.reference.tracer.SHADOW_DB])."""
-    shadow_median: np.ndarray
-    """Median of |engine - tracer| in the tracer's shadow."""
-    shadow_p90: np.ndarray
-    """90th percentile of |engine - tracer| there."""
-    shadow_bias: np.ndarray
-    """Median of engine - tracer there (negative: the engine's shadows are deeper)."""
-    light_median: np.ndarray
-    """Median of |engine - tracer| where the tracer sees light."""
-    classes_agree: np.ndarray
-    """Share of pixels on which shadow and light agree."""
-    noise_median: np.ndarray
-    """Median over the shadow of the tracer's own noise, |half a - half b| / 2 in dB."""
-
-    def rows(self) -> list[dict[str, float]]:
-        """One dict a site."""
-        names = [f.name for f in dataclasses.fields(self)]
-        return [{n: float(getattr(self, n)[k]) for n in names} for k in range(len(self.pixels))]
-
-
-def _q(v: np.ndarray, p: float) -> float:
-    return float(np.percentile(v, p)) if v.size else float("nan")
-
-
-def _db(x: np.ndarray) -> np.ndarray:
-    with np.errstate(divide="ignore"):
-        return 10.0 * np.log10(x)
-
-
-def agreement(
-    engine_with: np.ndarray,
-    engine_without: np.ndarray,
-    tracer_with: TracerMap,
-    tracer_without: TracerMap,
-    inside: np.ndarray,
-    max_noise_db: float = MAX_NOISE_DB,
-) -> Agreement:
-    """Compares the building effects (module docstring) site by site; ``inside`` (H, W) marks
-    pixels where the UAV would be inside a building (left out), and pixels where the tracer's
-    halves differ by more than ``2 max_noise_db`` are left out (its own estimate is uncertain
-    there by more than the tolerance; the count is in ``noisy``)."""
-    with np.errstate(invalid="ignore"):
-        return _agreement(engine_with, engine_without, tracer_with, tracer_without, inside,
-                          max_noise_db)  # fmt: skip
-
-
-def _agreement(
-    engine_with: np.ndarray,
-    engine_without: np.ndarray,
-    tracer_with: TracerMap,
-    tracer_without: TracerMap,
-    inside: np.ndarray,
-    max_noise_db: float,
-) -> Agreement:
-    ours = np.maximum(_db(engine_with) - _db(engine_without), FLOOR_DB)
-    ref = np.maximum(_db(tracer_with.gain) - _db(tracer_without.gain), FLOOR_DB)
-    noise = 0.5 * np.abs(_db(tracer_with.half_a) - _db(tracer_with.half_b))
-    covered = tracer_with.covered & tracer_without.covered & ~inside[None] & np.isfinite(ours)
-    ok = covered & (noise <= max_noise_db)
-    stats: dict[str, list[float]] = {f.name: [] for f in dataclasses.fields(Agreement)}
-    for k in range(ours.shape[0]):
-        o, r, n = ours[k][ok[k]], ref[k][ok[k]], noise[k][ok[k]]
-        dark = r < SHADOW_DB
-        err = o - r
-
-        stats["pixels"].append(float(o.size))
-        stats["noisy"].append(float((covered[k] & ~ok[k]).sum()))
-        stats["shadow_pixels"].append(float(dark.sum()))
-        stats["shadow_median"].append(_q(np.abs(err[dark]), 50))
-        stats["shadow_p90"].append(_q(np.abs(err[dark]), 90))
-        stats["shadow_bias"].append(_q(err[dark], 50))
-        stats["light_median"].append(_q(np.abs(err[~dark]), 50))
-        stats["classes_agree"].append(
-            float(np.mean((o < SHADOW_DB) == dark)) if o.size else float("nan")
-        )
-        stats["noise_median"].append(_q(n[dark], 50))
-    return Agreement(**{k: np.asarray(v) for k, v in stats.items()})
-
-
 def inside_buildings(scn: Scenario) -> np.ndarray:
-    """(H, W): pixels whose centre lies in a building at least as tall as the flight altitude."""
+    """The pixels whose centre lies in a building at least as tall as the flight altitude.
+
+    Args:
+        scn: The scenario.
+
+    Returns:
+        (H, W) bool.
+    """
     from rainuav.radio.scene.buildings import scenario_buildings
 
     found = scenario_buildings(scn)

@@ -61,16 +61,30 @@ def path_gain(
     coefficient: str = "p526",
     runs: int = 2,
 ) -> TracerMap:
-    """The path solver's gain (linear) of each site of ``scn`` (an
-    [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario]) at the centre of
-    every ``step``-th pixel (in both directions) outside the buildings, (S, H, W); other pixels are
-    0 (not covered). ``runs`` runs (even, at least 2) of ``samples // runs`` candidate rays a site,
-    seeded ``runs seed`` to ``runs seed + runs - 1``, combined as the union of their paths (module
-    docstring: the halves the unions of the even and of the odd runs, the estimate that of all);
-    on one thread
-    ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]), the same every run.
-    ``coefficient``: the wedge coefficient, the standard's (``"p526"``) or the tracer's own as
-    released (``"sionna"``; [`tracer_wedge`][rainuav.radio.reference.tracer_wedge])."""
+    """The tracer's path solver's gain of each site at pixel centres outside the buildings.
+
+    Other pixels are 0 (not covered). The runs are combined as the union of their paths (the
+    module's docstring: the halves the unions of the even and of the odd runs, the estimate that of
+    all); on one thread ([`repeatable()`][rainuav.radio.reference.tracer.repeatable]), the same
+    every run.
+
+    Args:
+        scn: An [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario].
+        samples: Candidate rays a site in all, `samples // runs` a run.
+        max_depth: The most interactions of a path.
+        seed: Runs are seeded `runs seed` to `runs seed + runs - 1`.
+        step: Every how many pixels a centre is traced, in both directions.
+        coefficient: The wedge coefficient: the standard's ("p526") or the tracer's own as released
+            ("sionna").
+        runs: The runs, even, at least 2.
+
+    Returns:
+        The [`TracerMap`][rainuav.radio.reference.tracer.TracerMap] (S, H, W), linear: the halves
+        and the whole.
+
+    Raises:
+        ValueError: `runs` odd or below 2, or `step` below 1.
+    """
     if step < 1:
         raise ValueError(f"step is a whole number of pixels >= 1 (got {step})")
     if runs < 2 or runs % 2:
@@ -82,9 +96,17 @@ def path_gain(
 
 
 def union_power(found: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-    """The power of the union of the distinct paths of several runs (module docstring): each run
-    its paths' delays and powers, (L, P) each for its L links (an invalid path's power 0); per
-    link the sum of one power per distinct delay (to ``DELAY_KEY_S``), (L,)."""
+    """The power of the union of the distinct paths of several runs (the module's docstring).
+
+    Per link, the sum of one power per distinct delay (to `DELAY_KEY_S`).
+
+    Args:
+        found: Each run's paths' delays and powers, (L, P) each for its L links (an invalid path's
+            power 0).
+
+    Returns:
+        (L,) powers.
+    """
     tau = np.concatenate([t for t, _ in found], axis=1)
     power = np.concatenate([p for _, p in found], axis=1)
     link, k = np.nonzero(power > 0)

@@ -280,5 +280,15 @@ too."""
 def scene(
     name: str, freq_hz: float = 4.9e9, altitude_m: float = 20.0, polarization: str = "v"
 ) -> Scenario:
-    """The comparison scene ``name`` ([`SCENES`][rainuav.radio.reference.tracer_scenes.SCENES])."""
+    """A comparison scene by name ([`SCENES`][rainuav.radio.reference.tracer_scenes.SCENES]).
+
+    Args:
+        name: The scene.
+        freq_hz: The carrier, Hz.
+        altitude_m: The UAV's height, m.
+        polarization: "h" or "v".
+
+    Returns:
+        Its [`Scenario`][rainuav.radio.scene.scenario.Scenario].
+    """
     return SCENES[name](freq_hz, altitude_m, polarization)

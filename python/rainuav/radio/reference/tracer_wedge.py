@@ -109,9 +109,17 @@ COEFFICIENTS = ("p526", "sionna")
 
 
 def checked(name: str) -> str:
-    """``name`` where it is one of
-    [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]; else ValueError naming
-    them."""
+    """A wedge coefficient's name, checked.
+
+    Args:
+        name: The name.
+
+    Returns:
+        It, where it is one of [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS].
+
+    Raises:
+        ValueError: Another name (the allowed ones named).
+    """
     if name not in COEFFICIENTS:
         raise ValueError(f"coefficient is one of {', '.join(COEFFICIENTS)} (got {name!r})")
     return name
@@ -122,10 +130,16 @@ _RELEASED: dict[str, Any] = {}
 
 
 def install(coefficient: str = "p526") -> None:
-    """Makes Sionna RT diffract at wedges with ``coefficient`` (one of
-    [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]): the standard's
-    (module docstring) or the tracer's own as released. Raises ValueError for another name and
-    ImportError where the tracer's version has no such method to replace."""
+    """Makes Sionna RT diffract at wedges with a coefficient: the standard's or the tracer's own.
+
+    Args:
+        coefficient: One of [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]: the
+            standard's (the module's docstring) or the tracer's own as released.
+
+    Raises:
+        ValueError: Another name.
+        ImportError: A tracer version with no such method to replace.
+    """
     checked(coefficient)
     from sionna.rt.radio_materials.radio_material import RadioMaterial
 
@@ -151,8 +165,11 @@ def install_default() -> None:
 
 
 def installed() -> str:
-    """The coefficient the tracer diffracts with now (``"sionna"`` before any
-    [`install()`][rainuav.radio.reference.tracer_wedge.install])."""
+    """The coefficient the tracer diffracts with now.
+
+    Returns:
+        Its name ("sionna" before any [`install()`][rainuav.radio.reference.tracer_wedge.install]).
+    """
     from sionna.rt.radio_materials.radio_material import RadioMaterial
 
     own = getattr(RadioMaterial, "_diffraction_matrix", None)
@@ -161,11 +178,20 @@ def installed() -> str:
 
 @contextlib.contextmanager
 def coefficient(name: str) -> Iterator[None]:
-    """Runs the tracer with the wedge coefficient ``name`` (one of
-    [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]) within the block,
-    and puts back the one it had after. The tracer is loaded first
-    ([`load_sionna()`][rainuav.radio.reference.tracer.load_sionna], which installs the default):
-    else RuntimeError, since the coefficient it had would not yet be the default."""
+    """A context in which the tracer diffracts with a coefficient; the one it had is put back after.
+
+    The tracer is loaded first ([`load_sionna()`][rainuav.radio.reference.tracer.load_sionna], which
+    installs the default).
+
+    Args:
+        name: One of [`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS].
+
+    Yields:
+        Nothing.
+
+    Raises:
+        RuntimeError: The tracer not loaded yet (the coefficient it had would not be the default).
+    """
     checked(name)
     if "own" not in _RELEASED:
         raise RuntimeError("load the tracer first: rainuav.radio.reference.tracer.load_sionna()")

@@ -90,8 +90,12 @@ class WedgeCase:
         return material_permittivity(self.material, self.freq_hz)
 
     def grid(self) -> tuple[np.ndarray, float, tuple[float, float]]:
-        """The grid's cell centres along either axis (m; the edge on a cell boundary at 0),
-        its cell size, and the source's position snapped to a cell centre."""
+        """The FDFD grid: its cell centres, its cell size, and the source snapped to a cell centre.
+
+        Returns:
+            `(centres along either axis (m; the edge on a cell boundary at 0), cell size m, source
+            (x, y) m)`.
+        """
         dl = C / self.freq_hz / self.points_per_wavelength
         cells = round(2.3 * self.rho_m / dl) + 2 * PML_CELLS
         x = (np.arange(cells) - cells / 2 + 0.5) * dl
@@ -101,12 +105,23 @@ class WedgeCase:
         return x, dl, (float(sx), float(sy))
 
     def source(self) -> tuple[float, float]:
-        """The snapped source's distance from the edge (m) and angle from the lit face (rad)."""
+        """The snapped source's place relative to the edge.
+
+        Returns:
+            `(distance from the edge m, angle from the lit face rad)`.
+        """
         _, _, (sx, sy) = self.grid()
         return math.hypot(sx, sy), math.pi - math.atan2(sy, sx)
 
     def points(self, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The field points (x, y, m) at ``phi`` (rad from the lit face) on the circle."""
+        """The field points on the case's circle.
+
+        Args:
+            phi: Angles from the lit face, rad.
+
+        Returns:
+            `(x, y)`, m.
+        """
         angle = math.pi - np.asarray(phi, dtype=float)
         return self.rho_m * np.cos(angle), self.rho_m * np.sin(angle)
 
@@ -120,8 +135,16 @@ def _fresnel(eps: complex, graze: np.ndarray, soft: bool) -> np.ndarray:
 
 
 def fdfd_total(case: WedgeCase, phi: np.ndarray, soft: bool) -> np.ndarray:
-    """The full-wave field at ``phi`` (rad from the lit face) over the source's in free space
-    (complex; ``exp(+j w t)``, as the UTD's), by ceviche's FDFD (module docstring)."""
+    """The full-wave field over the source's in free space, by ceviche's FDFD.
+
+    Args:
+        case: The wedge case.
+        phi: Angles from the lit face, rad.
+        soft: The soft (TE) polarisation; False: hard.
+
+    Returns:
+        Complex ratios (`exp(+j w t)`, as the UTD's).
+    """
     free = dataclasses.replace(case, material="air")
     points = tuple(np.asarray(phi, dtype=float))
     return _fdfd(case, points, soft) / _fdfd(free, points, soft)
@@ -147,8 +170,18 @@ def _fdfd(case: WedgeCase, phi: tuple[float, ...], soft: bool) -> np.ndarray:
 
 
 def exact_pec(case: WedgeCase, phi: np.ndarray, soft: bool) -> np.ndarray:
-    """The exact field of the line source on a perfectly conducting corner at ``phi`` over the
-    source's in free space (the eigenfunction series, module docstring)."""
+    """The exact field of the line source on a perfectly conducting corner.
+
+    The eigenfunction series (the module's docstring).
+
+    Args:
+        case: The wedge case.
+        phi: Angles from the lit face, rad.
+        soft: The soft polarisation; False: hard.
+
+    Returns:
+        Complex ratios.
+    """
     from scipy.special import hankel2, jv
 
     rho_s, phi1 = case.source()
@@ -178,9 +211,23 @@ beside the line)."""
 def p526_coefficient(
     case: WedgeCase, phi: np.ndarray, soft: bool, faces: str = "p526"
 ) -> np.ndarray:
-    """The standard's coefficient ``D`` at ``phi`` (the ray engine's ``utd_wedge``) with each
-    face's P.2040 half-space coefficient taken as ``faces`` says
-    ([`FACES`][rainuav.radio.reference.wedge_fullwave.FACES])."""
+    """The standard's coefficient `D` (the ray engine's `utd_wedge`).
+
+    Each face's P.2040 coefficient as `faces` says
+    ([`FACES`][rainuav.radio.reference.wedge_fullwave.FACES]).
+
+    Args:
+        case: The wedge case.
+        phi: Angles from the lit face, rad.
+        soft: The soft polarisation; False: hard.
+        faces: How the faces' coefficients are taken.
+
+    Returns:
+        Complex `D`.
+
+    Raises:
+        ValueError: `faces` not one of `FACES`.
+    """
     from rainuav import _core
 
     if faces not in FACES:
@@ -204,8 +251,17 @@ def p526_coefficient(
 
 
 def utd_total(case: WedgeCase, phi: np.ndarray, soft: bool, d: np.ndarray) -> np.ndarray:
-    """Geometrical optics plus the edge's diffracted field of coefficient ``d`` at ``phi``, over
-    the source's field in free space (module docstring)."""
+    """Geometrical optics plus the edge's diffracted field of a coefficient.
+
+    Args:
+        case: The wedge case.
+        phi: Angles from the lit face, rad.
+        soft: The soft polarisation; False: hard.
+        d: The edge's coefficient at each angle.
+
+    Returns:
+        Complex ratios.
+    """
     from scipy.special import hankel2
 
     phi = np.asarray(phi, dtype=float)
@@ -226,13 +282,23 @@ def utd_total(case: WedgeCase, phi: np.ndarray, soft: bool, d: np.ndarray) -> np
 def tracer_coefficient(
     case: WedgeCase, phi: np.ndarray, soft: bool, coefficient: str = "sionna"
 ) -> np.ndarray:
-    """The coefficient ``D`` the tracer's path solver gives at ``phi`` for the same corner in
-    three dimensions (a block of 20 m, 40 m tall, the source and the field points 20 m up: every
-    ray meets the vertical edge at right angles), with its wedge ``coefficient``
-    ([`tracer_wedge.COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]):
-    ``|a_d / a_free| sqrt(s s' (s + s')) / r`` of the edge's path, in the engine's sign convention
-    (the tracer's basis across the edge points the other way: its hard coefficient's sign is
-    turned). NaN where the path solver finds no path by that edge alone."""
+    """The coefficient `D` the tracer's path solver gives for the same corner in three dimensions.
+
+    A block of 20 m, 40 m tall, the source and the field points 20 m up: every ray meets the
+    vertical edge at right angles. `|a_d / a_free| sqrt(s s' (s + s')) / r` of the edge's path, in
+    the engine's sign convention (the tracer's basis across the edge points the other way: its hard
+    coefficient's sign is turned).
+
+    Args:
+        case: The wedge case.
+        phi: Angles from the lit face, rad.
+        soft: The soft polarisation; False: hard.
+        coefficient: The tracer's wedge coefficient
+            ([`COEFFICIENTS`][rainuav.radio.reference.tracer_wedge.COEFFICIENTS]).
+
+    Returns:
+        Complex `D`; NaN where the path solver finds no path by that edge alone.
+    """
     from rainuav.radio.reference.tracer import isotropic_scenario, load_sionna, tracer_scene
     from rainuav.radio.reference.tracer_wedge import coefficient as using
     from rainuav.radio.scene.area import Area
