@@ -842,12 +842,12 @@ def test_a_diverged_training_stops_in_one_line_and_saves_nothing_non_finite(tmp_
 def test_a_run_stopped_while_drawing_its_figures_does_not_look_finished(tmp_path, monkeypatch):
     """Ctrl-C after policy.pt but before the figures: metrics.json, the file a finished run is
     known by, is written last, so the folder holds none."""
-    import rainuav.rl.loop as loop
+    import rainuav.rl.report as report  # what a finished run writes
 
     def interrupted(*_a, **_k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(loop, "plot_policy", interrupted)
+    monkeypatch.setattr(report, "plot_policy", interrupted)
     with pytest.raises(KeyboardInterrupt):
         train(*in_world(plumbing_cfg(tmp_path, 10), synthetic_map()), progress=False)
     assert (tmp_path / "policy.pt").exists() and not (tmp_path / "metrics.json").exists()

@@ -42,6 +42,7 @@ from rainuav.radio.scene import presets
 from rainuav.radio.scene.buildings import buildings_near_route
 from rainuav.radio.scene.terrain import obstacle_pixel_max, scenario_terrain
 from rainuav.world import SLICE_S, level_field
+from rainuav.world.place import Place
 
 __all__ = ["fly_levels"]
 
@@ -50,7 +51,7 @@ __all__ = ["fly_levels"]
 # level, the waypoints over terrain with their holds, the files, the figure); each step writes
 # a part of the summary the next ones extend.
 def fly_levels(
-    place, out: Path, *, speed_m_s: float = 10.0, min_db: float | None = None,
+    place: Place, out: Path, *, speed_m_s: float = 10.0, min_db: float | None = None,
     progress: bool = False, start_altitude_m: float | None = None,
 ) -> dict:  # fmt: skip
     """Plans and writes the flight among a place's levels (the module's docstring).
