@@ -13,12 +13,17 @@ import math
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav import _core
 
 
 def bilinear(
-    values: np.ndarray, extent: tuple[float, float, float, float], x: Any, y: Any, k: Any = None
+    values: np.ndarray,
+    extent: tuple[float, float, float, float],
+    x: npt.ArrayLike,
+    y: npt.ArrayLike,
+    k: Any = None,
 ) -> Any:
     """``values`` (H, W) sampled at the points ``(x, y)`` (any broadcastable shapes); with
     ``k``, ``values`` is (K, H, W) and each point reads its own slice ``k``."""
@@ -28,8 +33,8 @@ def bilinear(
 def in_time(
     values: np.ndarray,
     extent: tuple[float, float, float, float],
-    x: Any,
-    y: Any,
+    x: npt.ArrayLike,
+    y: npt.ArrayLike,
     k0: Any,
     k1: Any,
     f: Any,
@@ -66,7 +71,9 @@ class _Weights:
     """The four pixel centres around each point (flat indices within a slice) and the
     bilinear weights, computed once for any number of slices."""
 
-    def __init__(self, shape: tuple[int, ...], extent: Any, x: Any, y: Any) -> None:
+    def __init__(
+        self, shape: tuple[int, ...], extent: Any, x: npt.ArrayLike, y: npt.ArrayLike
+    ) -> None:
         x0, x1, y0, y1 = extent
         h, w = shape
         fx = np.clip((np.asarray(x, dtype=np.float64) - x0) / (x1 - x0) * w - 0.5, 0.0, w - 1.0)
@@ -93,7 +100,7 @@ class _Weights:
 
 
 def pixel_index(
-    shape: tuple[int, ...], extent: tuple[float, ...], x: Any, y: Any
+    shape: tuple[int, ...], extent: tuple[float, ...], x: npt.ArrayLike, y: npt.ArrayLike
 ) -> tuple[Any, Any]:
     """The (row, column) of the pixel holding each point, clamped to the map.
 

@@ -36,6 +36,7 @@ from typing import Any
 from xml.sax.saxutils import escape
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 
@@ -189,9 +190,9 @@ def terrain_waypoints(
 
 def mission_items(
     home: tuple[float, float],
-    waypoints: Any,
-    altitude_m: Any,
-    altitudes_amsl_m: Any = None,
+    waypoints: npt.ArrayLike,
+    altitude_m: npt.ArrayLike,
+    altitudes_amsl_m: npt.ArrayLike | None = None,
 ) -> list[dict[str, Any]]:
     """The mission: take-off at home, the waypoints, landing at the last one.
 
@@ -248,9 +249,9 @@ def mission_items(
 
 def wpl_text(
     home: tuple[float, float],
-    waypoints: Any,
-    altitude_m: Any,
-    altitudes_amsl_m: Any = None,
+    waypoints: npt.ArrayLike,
+    altitude_m: npt.ArrayLike,
+    altitudes_amsl_m: npt.ArrayLike | None = None,
     home_amsl_m: float = 0.0,
 ) -> str:
     """The mission as `QGC WPL 110` text.
@@ -283,10 +284,10 @@ def _num(v: Any) -> str:
 
 def plan_dict(
     home: tuple[float, float],
-    waypoints: Any,
-    altitude_m: Any,
+    waypoints: npt.ArrayLike,
+    altitude_m: npt.ArrayLike,
     speed_m_s: float,
-    altitudes_amsl_m: Any = None,
+    altitudes_amsl_m: npt.ArrayLike | None = None,
     home_amsl_m: float = 0.0,
 ) -> dict[str, Any]:
     """The mission as a QGroundControl `.plan` (the module's docstring has the form).
@@ -341,8 +342,8 @@ def plan_dict(
 
 
 def geojson_dict(
-    latlon: Any,
-    altitude_m: Any,
+    latlon: npt.ArrayLike,
+    altitude_m: npt.ArrayLike,
     vertex_properties: dict[str, list[Any]],
     sites: list[dict[str, Any]] | None = None,
     properties: dict[str, Any] | None = None,
@@ -392,7 +393,10 @@ def geojson_dict(
 
 
 def kml_text(
-    latlon: Any, altitude_m: Any, name: str, sites: list[dict[str, Any]] | None = None
+    latlon: npt.ArrayLike,
+    altitude_m: npt.ArrayLike,
+    name: str,
+    sites: list[dict[str, Any]] | None = None,
 ) -> str:
     """The flight as KML 2.2 for Google Earth: the path as a `LineString`, each site a `Point`.
 

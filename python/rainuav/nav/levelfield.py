@@ -244,7 +244,7 @@ def field_of(signal: Signal, *, levels: bool = False) -> SignalField:
 
 
 def signal_field(
-    radio_map: Any, sinr_db: Any, sir_db: Any, extent_m: Any, signal: str | None
+    radio_map: Any, sinr_db: npt.ArrayLike, sir_db: npt.ArrayLike, extent_m: Any, signal: str | None
 ) -> SignalField:
     """The field a task flies on: a map's signal, or the one raw array given.
 

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from scipy.optimize import least_squares
 
 from rainuav.errors import InvalidInputError
@@ -72,7 +73,13 @@ SOFT_L1_SCALE_DB = 4.0
 
 
 def gain_change_db(
-    scn: Scenario, site: Site, cell: Cell, x: Any, y: Any, z: Any, offsets: dict[str, float]
+    scn: Scenario,
+    site: Site,
+    cell: Cell,
+    x: npt.ArrayLike,
+    y: npt.ArrayLike,
+    z: npt.ArrayLike,
+    offsets: dict[str, float],
 ) -> np.ndarray:
     """The change of a cell's power at points when its parameters move.
 
@@ -311,7 +318,9 @@ def calibrated_maps(rm: RadioMap, fits: list[CellFit]) -> np.ndarray:
     return out
 
 
-def calibration_std_db(scn: Scenario, fit: CellFit, x: Any, y: Any, z: Any) -> np.ndarray:
+def calibration_std_db(
+    scn: Scenario, fit: CellFit, x: npt.ArrayLike, y: npt.ArrayLike, z: npt.ArrayLike
+) -> np.ndarray:
     """How far the fitted offsets' uncertainty moves a cell's power at points, dB.
 
     Half the change between the offsets one standard deviation either way along each principal axis

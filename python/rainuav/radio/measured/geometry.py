@@ -4,11 +4,16 @@ antenna, and its distance from the site, at a map's pixels or at any points. The
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
+
+if TYPE_CHECKING:  # for the annotations alone
+    from rainuav.radio.outputs.mapdata import RadioMap
+    from rainuav.radio.scene.scenario import Scenario
 
 __all__ = [
     "excess_at",
@@ -20,7 +25,14 @@ __all__ = [
 ]
 
 
-def excess_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np.ndarray:
+def excess_at(
+    scn: Scenario,
+    cell: int,
+    x: npt.ArrayLike,
+    y: npt.ArrayLike,
+    z: npt.ArrayLike,
+    power_dbm: npt.ArrayLike,
+) -> np.ndarray:
     """The excess loss over free space of a cell's powers at points, dB.
 
     Args:
@@ -44,7 +56,7 @@ def excess_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np
     return excess_of(fs, power_dbm)
 
 
-def excess_of(free_space_dbm: Any, power_dbm: Any) -> np.ndarray:
+def excess_of(free_space_dbm: npt.ArrayLike, power_dbm: npt.ArrayLike) -> np.ndarray:
     """The excess loss of powers over their free-space powers, dB.
 
     Args:
@@ -58,7 +70,9 @@ def excess_of(free_space_dbm: Any, power_dbm: Any) -> np.ndarray:
     return np.where(p > RSS_FLOOR_DBM + 1.0, free_space_dbm - p, np.nan)
 
 
-def site_distance_at(scn: Any, cell: Any, x: Any, y: Any, z: Any) -> np.ndarray:
+def site_distance_at(
+    scn: Scenario, cell: int, x: npt.ArrayLike, y: npt.ArrayLike, z: npt.ArrayLike
+) -> np.ndarray:
     """The distance from a cell's antenna to points, m.
 
     Args:
@@ -78,7 +92,9 @@ def site_distance_at(scn: Any, cell: Any, x: Any, y: Any, z: Any) -> np.ndarray:
     return np.hypot(v.rho, v.dz)
 
 
-def _pixel_points(rm: Any, pixels: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray]:
+def _pixel_points(
+    rm: RadioMap, pixels: npt.ArrayLike
+) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray]:
     from rainuav.radio.scene.terrain import flight_heights
 
     shape = np.shape(rm.rss_dbm)[1:]
@@ -88,7 +104,7 @@ def _pixel_points(rm: Any, pixels: Any) -> tuple[Any, np.ndarray, np.ndarray, np
     return (r, c), x, y, z
 
 
-def free_space_db(rm: Any, pixels: Any = None) -> np.ndarray:
+def free_space_db(rm: RadioMap, pixels: npt.ArrayLike | None = None) -> np.ndarray:
     """Each cell's free-space power with its antenna's gain at a map's pixels, dBm.
 
     Args:
@@ -104,7 +120,7 @@ def free_space_db(rm: Any, pixels: Any = None) -> np.ndarray:
     return out.reshape(len(rm.rss_dbm), *np.shape(r))
 
 
-def excess_loss_db(rm: Any, pixels: Any = None) -> np.ndarray:
+def excess_loss_db(rm: RadioMap, pixels: npt.ArrayLike | None = None) -> np.ndarray:
     """Each cell's excess loss over free space from its antenna at a map's pixels, dB.
 
     At the map's flight height (the module of the prior says why the excess loss gives the
@@ -121,7 +137,7 @@ def excess_loss_db(rm: Any, pixels: Any = None) -> np.ndarray:
     return excess_of(free_space_db(rm, pixels), np.asarray(rm.rss_dbm, dtype=float)[:, r, c])
 
 
-def site_distance_m(rm: Any, pixels: Any = None) -> np.ndarray:
+def site_distance_m(rm: RadioMap, pixels: npt.ArrayLike | None = None) -> np.ndarray:
     """Each cell's distance from its antenna at a map's pixels, at its flight height, m.
 
     Args:

@@ -25,13 +25,18 @@ map, for the exact planner and the environment)."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 from rainuav.radio.measured.prior import SITE_DB
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
+
+if TYPE_CHECKING:  # for the annotations alone
+    from rainuav.radio.outputs.mapdata import RadioMap
+    from rainuav.radio.outputs.timemap import RadioMapSeries
 
 __all__ = [
     "DRAWS",
@@ -46,7 +51,7 @@ DRAWS = 256
 """Draws per pixel (a whole 200 x 200 map of 21 cells in about 10 s on 2 cores)."""
 
 
-def map_spreads(rm: Any, pixels: Any = None) -> tuple[np.ndarray, np.ndarray]:
+def map_spreads(rm: RadioMap, pixels: npt.ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The local mean's and one sample's spread of every cell's power at every pixel of a map, dB.
 
     Those the map carries (a corrected map's own, or a physics map's prior ones written with it; a
@@ -72,7 +77,7 @@ def map_spreads(rm: Any, pixels: Any = None) -> tuple[np.ndarray, np.ndarray]:
     return prior_spread(rm, pixels=pixels)
 
 
-def _drawn_spreads(rm: Any, pixels: Any) -> tuple[np.ndarray, np.ndarray, float]:
+def _drawn_spreads(rm: RadioMap, pixels: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, float]:
     """How a draw spreads each cell's power (module docstring): the local mean's spread drawn
     cell by cell, one sample's, and the part shared by every cell (a physics map's site error,
     taken out of the first in quadrature; 0 for a corrected map)."""
@@ -88,9 +93,14 @@ def _less(local: np.ndarray, common: float) -> np.ndarray:
 
 
 def _outage_of(
-    mean: np.ndarray, dev: np.ndarray, common: float, noise_dbm: float, min_db: float,
-    draws: int, seed: int,
-) -> np.ndarray:  # fmt: skip
+    mean: np.ndarray,
+    dev: np.ndarray,
+    common: float,
+    noise_dbm: float,
+    min_db: float,
+    draws: int,
+    seed: int,
+) -> np.ndarray:
     """P(SINR < ``min_db``) of points whose cells' powers are ``mean`` (M, N), dB, each drawn
     with its own deviation ``dev`` (M, N) and ``common`` shared by every cell (module
     docstring)."""
@@ -115,7 +125,13 @@ def _outage_of(
 
 
 def flight_outage_in_time(
-    series: Any, path_m: Any, t_s: Any, min_db: float, *, draws: int = 4096, seed: int = 0
+    series: RadioMapSeries,
+    path_m: npt.ArrayLike,
+    t_s: npt.ArrayLike,
+    min_db: float,
+    *,
+    draws: int = 4096,
+    seed: int = 0,
 ) -> np.ndarray:
     """The outage probability of each move of a flight through a weather that moves.
 
@@ -161,9 +177,13 @@ def flight_outage_in_time(
 
 
 def outage_probability(
-    rm: Any, min_db: float, seed: int = 0, draws: int = DRAWS, pixels: Any = None,
+    rm: RadioMap,
+    min_db: float,
+    seed: int = 0,
+    draws: int = DRAWS,
+    pixels: npt.ArrayLike | None = None,
     sample: bool = True,
-) -> np.ndarray:  # fmt: skip
+) -> np.ndarray:
     """The probability that the SINR is below a threshold, at every pixel of a map.
 
     Every cell's power is drawn from the map's two spreads (module docstring; a physics map's
@@ -222,7 +242,7 @@ def path_outage(prob: np.ndarray) -> dict[str, float]:
 
 
 def _field_of(
-    rm: Any, cell: int
+    rm: RadioMap, cell: int
 ) -> tuple[float, float, float, list[tuple[float, float, float]]] | None:
     """The cell's residual field as the map's ``fit`` records it (length, amplitude and nugget:
     m, dB, dB; and a two-scale field's components: amplitude, lengths east and north, empty for
@@ -252,7 +272,7 @@ def _field_of(
     return None
 
 
-def _along(rm: Any, cell: int, xy: np.ndarray) -> np.ndarray | None:
+def _along(rm: RadioMap, cell: int, xy: np.ndarray) -> np.ndarray | None:
     """The correlation of one cell's local-mean errors between the path's pixels ``xy`` (N, 2),
     besides any error shared by every pixel: a corrected map's residual field (its fitted
     Matern 3/2 over its length across the ground, or a two-scale field's two Materns each by its
@@ -275,9 +295,14 @@ def _along(rm: Any, cell: int, xy: np.ndarray) -> np.ndarray | None:
 
 
 def path_outage_draws(
-    rm: Any, pixels: Any, min_db: float, *, draws: int = 2000, seed: int = 0,
+    rm: RadioMap,
+    pixels: npt.ArrayLike,
+    min_db: float,
+    *,
+    draws: int = 2000,
+    seed: int = 0,
     sample: bool = True,
-) -> dict[str, float]:  # fmt: skip
+) -> dict[str, float]:
     """The outage share of a path, drawn whole: the plan's outage with its spread.
 
     Each draw gives every cell's local-mean errors correlated along the path (a corrected map's

@@ -34,9 +34,13 @@ the held-out scores predict each held-out row with its own heading."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:  # for the annotations alone
+    from rainuav.radio.scene.scenario import Scenario
 
 __all__ = [
     "HARMONICS",
@@ -67,7 +71,7 @@ class ElevationGain:
     gain_db: np.ndarray
     """The gain at each knot, dB."""
 
-    def at(self, elevation_deg: Any) -> np.ndarray:
+    def at(self, elevation_deg: npt.ArrayLike) -> np.ndarray:
         """The gain at elevations, dB.
 
         Args:
@@ -87,7 +91,9 @@ class ElevationGain:
         return {"knots_deg": self.knots_deg.tolist(), "gain_db": self.gain_db.tolist()}
 
 
-def elevation_deg(scn: Any, cell: Any, x: Any, y: Any, z: Any) -> np.ndarray:
+def elevation_deg(
+    scn: Scenario, cell: npt.ArrayLike, x: npt.ArrayLike, y: npt.ArrayLike, z: npt.ArrayLike
+) -> np.ndarray:
     """The elevation from points to the antenna of each point's cell, degrees.
 
     Args:
@@ -154,7 +160,7 @@ class HeadingGain:
     cos_db: np.ndarray
     sin_db: np.ndarray
 
-    def at(self, relative_deg: Any) -> np.ndarray:
+    def at(self, relative_deg: npt.ArrayLike) -> np.ndarray:
         """The gain at azimuths relative to the UAV's nose, dB (0 where the heading is unknown,
         NaN).
 
@@ -185,7 +191,13 @@ class HeadingGain:
                 "spread_db": self.spread_db}  # fmt: skip
 
 
-def relative_azimuth_deg(scn: Any, cell: Any, x: Any, y: Any, heading_deg: Any) -> np.ndarray:
+def relative_azimuth_deg(
+    scn: Scenario,
+    cell: npt.ArrayLike,
+    x: npt.ArrayLike,
+    y: npt.ArrayLike,
+    heading_deg: npt.ArrayLike,
+) -> np.ndarray:
     """The azimuth under which the UAV sees each point's cell's site, relative to its nose.
 
     Args:
@@ -211,7 +223,7 @@ def relative_azimuth_deg(scn: Any, cell: Any, x: Any, y: Any, heading_deg: Any) 
     return np.mod(bearing - np.asarray(heading_deg, dtype=float), 360.0)
 
 
-def fit_heading_gain(relative_deg: Any, resid: Any) -> HeadingGain:
+def fit_heading_gain(relative_deg: npt.ArrayLike, resid: Any) -> HeadingGain:
     """The heading gain that best explains the residuals of rows seen at relative azimuths.
 
     Rows of an unknown heading (NaN) are left out; the module's docstring has the fit.

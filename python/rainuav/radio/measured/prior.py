@@ -57,9 +57,10 @@ on held-out data ("How far to trust a map": the real flights, the tracer's scene
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 from rainuav.radio.measured.geometry import (
@@ -75,6 +76,10 @@ from rainuav.radio.measured.rainspread import (
     rain_spread_db,
     rain_spread_scores,
 )
+
+if TYPE_CHECKING:  # for the annotations alone
+    from rainuav.radio.outputs.mapdata import RadioMap
+    from rainuav.radio.scene.scenario import Scenario
 
 __all__ = [
     "LOS_EXCESS_DB",
@@ -125,7 +130,7 @@ class Spread:
     source: str
     """Where the values come from."""
 
-    def local_at(self, distance_m: Any) -> np.ndarray:
+    def local_at(self, distance_m: npt.ArrayLike) -> np.ndarray:
         """The local mean's spread at distances from the site, linear between the bands' middles.
 
         Args:
@@ -202,7 +207,10 @@ known exactly (a simulated truth)."""
 
 
 def spreads_of(
-    excess_db: Any, distance_m: Any, model_db: float = 0.0, spreads: dict[str, Spread] | None = None
+    excess_db: npt.ArrayLike,
+    distance_m: npt.ArrayLike,
+    model_db: float = 0.0,
+    spreads: dict[str, Spread] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The local mean's and one sample's spreads at points of known excess loss and distance.
 
@@ -229,7 +237,7 @@ def spreads_of(
     return np.hypot(local, model_db), sample
 
 
-def mechanism_of(excess_db: Any) -> np.ndarray:
+def mechanism_of(excess_db: npt.ArrayLike) -> np.ndarray:
     """The mechanism of each excess loss: its index in `MECHANISMS`.
 
     Args:
@@ -246,9 +254,14 @@ def mechanism_of(excess_db: Any) -> np.ndarray:
 
 
 def measured_spreads(
-    error_db: Any, excess_db: Any, distance_m: Any, *, min_pixels: int = 50,
-    floor_db: float = 0.3, source: str = "measured",
-) -> dict[str, Spread]:  # fmt: skip
+    error_db: npt.ArrayLike,
+    excess_db: npt.ArrayLike,
+    distance_m: npt.ArrayLike,
+    *,
+    min_pixels: int = 50,
+    floor_db: float = 0.3,
+    source: str = "measured",
+) -> dict[str, Spread]:
     """A table of local-mean spreads measured from a prediction's errors.
 
     Per mechanism and distance band, the error that 68.27% of the points stay within (bands of fewer
@@ -289,7 +302,7 @@ def measured_spreads(
     return out
 
 
-def with_prior_spreads(rm: Any) -> Any:
+def with_prior_spreads(rm: RadioMap) -> Any:
     """A physics map carrying its prior's two spreads (its file, GeoTIFF and figures then say so).
 
     Args:
@@ -311,7 +324,14 @@ def with_prior_spreads(rm: Any) -> Any:
     return dataclasses.replace(rm, rss_std_db=local, rss_sample_std_db=sample)
 
 
-def engine_spread_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any) -> np.ndarray:
+def engine_spread_at(
+    scn: Scenario,
+    cell: int,
+    x: npt.ArrayLike,
+    y: npt.ArrayLike,
+    z: npt.ArrayLike,
+    power_dbm: npt.ArrayLike,
+) -> np.ndarray:
     """The engine's own local-mean spread at points: how sure the physics is there.
 
     [`MEASURED`][rainuav.radio.measured.prior.MEASURED] by mechanism and distance, no site error:
@@ -333,7 +353,7 @@ def engine_spread_at(scn: Any, cell: Any, x: Any, y: Any, z: Any, power_dbm: Any
     return spreads_of(ex, site_distance_at(scn, cell, x, y, z), 0.0)[0]
 
 
-def engine_spread(rm: Any) -> np.ndarray:
+def engine_spread(rm: RadioMap) -> np.ndarray:
     """The engine's own local-mean spread at every pixel of every cell (no site error, no rain).
 
     Args:
@@ -347,9 +367,11 @@ def engine_spread(rm: Any) -> np.ndarray:
 
 
 def prior_spread(
-    rm: Any, model_db: float = SITE_DB, spreads: dict[str, Spread] | None = None,
-    pixels: Any = None,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    rm: RadioMap,
+    model_db: float = SITE_DB,
+    spreads: dict[str, Spread] | None = None,
+    pixels: npt.ArrayLike | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """A physics map's two spreads at every pixel of every cell: the local mean's and one sample's.
 
     By each pixel's mechanism and distance from its site (the module's docstring), the site
@@ -378,9 +400,12 @@ def prior_spread(
 
 
 def composed_prior_spread(
-    excess_db: Any, distance_m: Any, rain_db: Any, model_db: float = SITE_DB,
+    excess_db: npt.ArrayLike,
+    distance_m: npt.ArrayLike,
+    rain_db: npt.ArrayLike,
+    model_db: float = SITE_DB,
     spreads: dict[str, Spread] | None = None,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+) -> tuple[np.ndarray, np.ndarray]:
     """[`prior_spread()`][rainuav.radio.measured.prior.prior_spread] from its parts.
 
     Args:

@@ -6,11 +6,15 @@ itself: the same map in clear air less this one."""
 from __future__ import annotations
 
 import itertools
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
+
+if TYPE_CHECKING:  # for the annotations alone
+    from rainuav.radio.outputs.mapdata import RadioMap
 
 __all__ = [
     "RAIN_LOSS_DB",
@@ -35,7 +39,7 @@ from radar rain (pycomlink's 500 German links, those of even index;
 the loss up to 16 dB."""
 
 
-def rain_spread_db(loss_db: Any) -> np.ndarray:
+def rain_spread_db(loss_db: npt.ArrayLike) -> np.ndarray:
     """The spread of predicted rain losses: their band's.
 
     Args:
@@ -51,7 +55,7 @@ def rain_spread_db(loss_db: Any) -> np.ndarray:
 
 
 def rain_spread_scores(
-    measured_db: Any, predicted_db: Any, link: Any
+    measured_db: npt.ArrayLike, predicted_db: npt.ArrayLike, link: npt.ArrayLike
 ) -> dict[str, Any]:  # fmt: skip
     """The spread of predicted rain losses measured on real links, and scored on others.
 
@@ -98,7 +102,7 @@ def rain_spread_scores(
     }}  # fmt: skip
 
 
-def rain_loss_db(rm: Any, pixels: Any = None) -> np.ndarray | None:
+def rain_loss_db(rm: RadioMap, pixels: npt.ArrayLike | None = None) -> np.ndarray | None:
     """Each cell's loss to rain at a map's pixels: the same scenario's clear-air map less this one.
 
     Args:
@@ -116,7 +120,7 @@ def rain_loss_db(rm: Any, pixels: Any = None) -> np.ndarray | None:
     return rain_loss_of(clear[at], wet[at])
 
 
-def rain_loss_of(clear_dbm: Any, wet_dbm: Any) -> np.ndarray:
+def rain_loss_of(clear_dbm: npt.ArrayLike, wet_dbm: npt.ArrayLike) -> np.ndarray:
     """The loss to rain of powers against their clear-air powers, dB.
 
     Args:
@@ -130,7 +134,7 @@ def rain_loss_of(clear_dbm: Any, wet_dbm: Any) -> np.ndarray:
     return np.where(wet > RSS_FLOOR_DBM + 1.0, np.maximum(clear_dbm - wet, 0.0), 0.0)
 
 
-def clear_air_power_dbm(rm: Any) -> np.ndarray | None:
+def clear_air_power_dbm(rm: RadioMap) -> np.ndarray | None:
     """Each cell's power over a map's pixels in clear air, dBm (built, or taken from the cache).
 
     Args:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -13,13 +13,17 @@ from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM
 
+if TYPE_CHECKING:  # for the annotations alone
+    from rainuav.radio.outputs.mapdata import RadioMap
+    from rainuav.radio.outputs.timemap import RadioMapSeries
+
 __all__ = ["KINDS", "plot_map", "save_map_png", "save_series_gif"]
 
 KINDS = ("sir", "sinr", "rss", "serving", "rss_std", "rss_sample_std", "correction")
 """What a map figure shows; the last two only for a map corrected by measurements."""
 
 
-def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
+def plot_map(rm: RadioMap, kind: str = "sir", cell: int | None = None, ax: Any = None) -> Any:
     """Draws a map with the sites and beam azimuths marked.
 
     Args:
@@ -94,7 +98,7 @@ def plot_map(rm: Any, kind: str = "sir", cell: int | None = None, ax: Any = None
     return ax
 
 
-def _measured(rm: Any, kind: str) -> tuple[Any, str, str, float, float | None]:
+def _measured(rm: RadioMap, kind: str) -> tuple[Any, str, str, float, float | None]:
     """A corrected map's 'rss_std' or 'correction' figure: data, label, colours and range."""
     ii, jj = np.indices(rm.serving_cell.shape)
     s = np.maximum(rm.serving_cell, 0)
@@ -113,7 +117,7 @@ def _measured(rm: Any, kind: str) -> tuple[Any, str, str, float, float | None]:
     return d, "corrected - prior RSS, serving cell [dB]", "RdBu_r", -m, m
 
 
-def _sites(rm: Any, ax: Any) -> None:
+def _sites(rm: RadioMap, ax: Any) -> None:
     """Marks the sites and each cell's azimuth."""
     xs = [s.x_m for s in rm.scenario.sites]
     ys = [s.y_m for s in rm.scenario.sites]
@@ -133,7 +137,7 @@ RAIN_CONTOURS_MM_H = (10.0, 30.0, 100.0)
 """Rain rates outlined on maps whose rain varies over the area (cells, storms, rate maps)."""
 
 
-def _rain_contours(rm: Any, ax: Any) -> None:
+def _rain_contours(rm: RadioMap, ax: Any) -> None:
     """Outlines the rain at [`RAIN_CONTOURS_MM_H`][rainuav.radio.outputs.plot.RAIN_CONTOURS_MM_H]
     where the weather varies over the area (rain cells, a storm at its instant, a rate map),
     labelled in mm/h."""
@@ -149,7 +153,7 @@ def _rain_contours(rm: Any, ax: Any) -> None:
         ax.clabel(cs, fmt="%g mm/h", fontsize=7)
 
 
-def save_map_png(rm: Any, kind: str, path: str | Path) -> Path:
+def save_map_png(rm: RadioMap, kind: str, path: str | Path) -> Path:
     """Writes one map figure as PNG, atomically, without touching pyplot's state.
 
     Args:
@@ -169,7 +173,7 @@ def save_map_png(rm: Any, kind: str, path: str | Path) -> Path:
 
 
 def save_series_gif(
-    series: Any,
+    series: RadioMapSeries,
     path: str | Path,
     min_db: float | None = None,
     fps: float = 8.0,

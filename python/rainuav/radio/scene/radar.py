@@ -31,6 +31,7 @@ import os
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
@@ -51,7 +52,7 @@ LAT_NAMES = ("lat", "latitude")
 LON_NAMES = ("lon", "longitude")
 
 
-def dbz_to_rate(dbz: Any) -> Any:
+def dbz_to_rate(dbz: npt.ArrayLike) -> Any:
     """The rain rate of radar reflectivity by Marshall-Palmer (the module's docstring).
 
     Args:
