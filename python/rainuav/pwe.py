@@ -29,7 +29,7 @@ import numpy.typing as npt
 from rainuav import _core
 from rainuav._checks import as_real_scalar, check_choice
 from rainuav.errors import InvalidInputError
-from rainuav.pwe_sources import gaussian_beam, pattern_source
+from rainuav.pwe_sources import _positive, gaussian_beam, pattern_source
 
 __all__ = ["Marched", "gaussian_beam", "march", "pattern_source"]
 
@@ -59,13 +59,6 @@ def _field(name: str, value: Any) -> Complex64Array:
         raise InvalidInputError(f"{name} must be numeric (got dtype {arr.dtype})")
     # Finiteness is checked in Rust, in the same pass that copies the field in.
     return np.ascontiguousarray(arr, dtype=np.complex64)
-
-
-def _positive(name: str, value: Any) -> float:
-    v = as_real_scalar(name, value)
-    if not (np.isfinite(v) and v > 0):
-        raise InvalidInputError(f"{name} must be finite and > 0 (got {value!r})")
-    return v
 
 
 def _integer(name: str, value: Any, lo: int, hi: int | None = None) -> int:
