@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -408,7 +408,7 @@ class TabulatedPattern:
 def tabulated(
     azimuth_deg: npt.ArrayLike,
     elevation_deg: npt.ArrayLike,
-    gain_db: Any,
+    gain_db: npt.ArrayLike,
     *,
     normalise: bool = True,
 ) -> TabulatedPattern:

@@ -65,7 +65,7 @@ MAV_FRAME_GLOBAL_RELATIVE_ALT = 3
 LATLON = ("lat", "lon")
 
 
-def corners(path: Any) -> np.ndarray:
+def corners(path: npt.ArrayLike) -> np.ndarray:
     """The vertices of a lattice path where its direction changes: the waypoints that fly it.
 
     The first and the last vertex are among them; a change of height is a corner too.
@@ -90,7 +90,7 @@ def corners(path: Any) -> np.ndarray:
     return np.concatenate([[0], turn, [len(p) - 1]])
 
 
-def expand(points: Any, step_m: float) -> np.ndarray:
+def expand(points: npt.ArrayLike, step_m: float) -> np.ndarray:
     """The lattice path that flies straight between points in moves of one step.
 
     Each leg is a whole number of moves along one axis, as [`corners()`][rainuav.missions.corners]
@@ -121,7 +121,7 @@ SAMPLES_PER_MOVE = 4
 ([`densify()`][rainuav.missions.densify])."""
 
 
-def densify(path: Any, step_m: float, samples: int = SAMPLES_PER_MOVE) -> np.ndarray:
+def densify(path: npt.ArrayLike, step_m: float, samples: int = SAMPLES_PER_MOVE) -> np.ndarray:
     """A lattice path sampled finely enough to check against the ground: the same straight legs.
 
     Args:
@@ -139,9 +139,9 @@ def densify(path: Any, step_m: float, samples: int = SAMPLES_PER_MOVE) -> np.nda
 
 
 def terrain_waypoints(
-    path: Any,
-    height_amsl_m: Any,
-    top_amsl_m: Any,
+    path: npt.ArrayLike,
+    height_amsl_m: npt.ArrayLike,
+    top_amsl_m: npt.ArrayLike,
     clearance_m: float,
     hold_m: float | None = HOLD_M,
 ) -> np.ndarray:

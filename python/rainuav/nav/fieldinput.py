@@ -71,7 +71,7 @@ def checked_values(
     return np.ascontiguousarray(v), extent, serving
 
 
-def checked_probability(p: Any, shape: tuple[int, int]) -> np.ndarray:
+def checked_probability(p: npt.ArrayLike, shape: tuple[int, int]) -> np.ndarray:
     """Probabilities of outage, checked.
 
     Args:
@@ -94,7 +94,7 @@ def checked_probability(p: Any, shape: tuple[int, int]) -> np.ndarray:
     return a
 
 
-def checked_mask(mask: Any, shape: tuple[int, ...]) -> np.ndarray | None:
+def checked_mask(mask: npt.ArrayLike, shape: tuple[int, ...]) -> np.ndarray | None:
     """A not-flyable mask, checked.
 
     Args:

@@ -16,6 +16,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import numpy.typing as npt
 from gymnasium.vector import AutoresetMode
 
 from rainuav._checks import as_real_array, check_fits
@@ -170,7 +171,7 @@ class UAVNavVectorEnv(gym.vector.VectorEnv):
         return obs, self._infos(signal, np.zeros(self.num_envs, dtype=bool))
 
     def step(
-        self, actions: Any
+        self, actions: npt.ArrayLike
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """One move of every UAV; a finished episode restarts as the autoreset mode says.
 

@@ -35,6 +35,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.task import NavConfig
@@ -192,9 +193,17 @@ class WeatherView:
         return obs
 
     def observe_field(
-        self, field: Any, t_s: np.ndarray, pos: Any, level: Any, t: Any, goal: Any, world: Any,
-        min_db: float, max_steps: int,
-    ) -> dict[str, np.ndarray]:  # fmt: skip
+        self,
+        field: Any,
+        t_s: np.ndarray,
+        pos: npt.ArrayLike,
+        level: npt.ArrayLike,
+        t: npt.ArrayLike,
+        goal: npt.ArrayLike,
+        world: npt.ArrayLike,
+        min_db: float,
+        max_steps: int,
+    ) -> dict[str, np.ndarray]:
         """The observations of UAVs flying a field
         ([`observe()`][rainuav.nav.views.WeatherView.observe]).
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav import baselines, planner
@@ -85,8 +86,8 @@ def _arrived(env: UAVNavEnv, path: np.ndarray) -> bool:
 
 def flights(
     env: UAVNavEnv,
-    returns: Any,
-    arrived: Any,
+    returns: npt.ArrayLike,
+    arrived: npt.ArrayLike,
     paths: list,
     levels: list | None = None,
     ticks: list | None = None,

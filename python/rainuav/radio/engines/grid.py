@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
 from rainuav.radio.scene.cell import Cell, pattern_by_key
@@ -110,7 +111,7 @@ def _dynamic_range_cone(key: tuple[Any, ...], tilt_deg: float, dr_db: float) -> 
     return min(max(sh, _MIN_SINE), 0.95), min(max(sv, _MIN_SINE), 0.95)
 
 
-def cone_weight(sine_h: float, sine_v: float, sx: Any, sy: Any) -> Any:
+def cone_weight(sine_h: float, sine_v: float, sx: npt.ArrayLike, sy: npt.ArrayLike) -> Any:
     """The share of a pattern the PE carries at direction cosines.
 
     1 inside `CONE_FULL` of the cone, cos^2 down to 0 at its edge, 0 beyond; separable.
@@ -125,7 +126,7 @@ def cone_weight(sine_h: float, sine_v: float, sx: Any, sy: Any) -> Any:
         The share, of the broadcast shape.
     """
 
-    def one(t: Any) -> Any:
+    def one(t: npt.ArrayLike) -> Any:
         u = np.clip((np.abs(t) - CONE_FULL) / (1 - CONE_FULL), 0.0, 1.0)
         return np.cos(0.5 * np.pi * u) ** 2
 

@@ -32,6 +32,7 @@ import time
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav import _core, pwe
 from rainuav._sampling import bilinear
@@ -217,7 +218,7 @@ def march_cell(
     return _marched_power(scn, site, cell, grid, rows, [frac], offsets, timings)[0]
 
 
-def level_rows(grid: MarchGrid, heights_m: Any) -> tuple[list[int], list[float]]:
+def level_rows(grid: MarchGrid, heights_m: npt.ArrayLike) -> tuple[list[int], list[float]]:
     """The rows around each height above the grid's floor, and the fraction to the upper one.
 
     Flat ground: two rows a height.
@@ -248,7 +249,7 @@ def march_cell_levels(
     site: Site,
     cell: Cell,
     grid: MarchGrid,
-    heights_m: Any,
+    heights_m: npt.ArrayLike,
     timings: dict[str, float] | None = None,
 ) -> np.ndarray:
     """The received power at several heights over flat ground from one march.

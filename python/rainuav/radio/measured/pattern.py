@@ -130,7 +130,7 @@ def _basis(knots: np.ndarray, e: np.ndarray) -> np.ndarray:
     return b
 
 
-def fit_gain(elevation: Any, resid: Any) -> ElevationGain:
+def fit_gain(elevation: npt.ArrayLike, resid: npt.ArrayLike) -> ElevationGain:
     """The gain by elevation that best explains the residuals of rows seen at some elevations.
 
     Args:
@@ -223,7 +223,7 @@ def relative_azimuth_deg(
     return np.mod(bearing - np.asarray(heading_deg, dtype=float), 360.0)
 
 
-def fit_heading_gain(relative_deg: npt.ArrayLike, resid: Any) -> HeadingGain:
+def fit_heading_gain(relative_deg: npt.ArrayLike, resid: npt.ArrayLike) -> HeadingGain:
     """The heading gain that best explains the residuals of rows seen at relative azimuths.
 
     Rows of an unknown heading (NaN) are left out; the module's docstring has the fit.

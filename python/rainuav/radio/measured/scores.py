@@ -23,9 +23,8 @@ Gaussian (Gneiting and Raftery 2007, eq. 21):
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
+import numpy.typing as npt
 from scipy.special import ndtr
 
 from rainuav.radio.measured.residual import bin_index
@@ -36,7 +35,7 @@ COVERAGE_GAUSSIAN = (0.6827, 0.9545)
 """The share of a Gaussian's draws within one and two standard deviations of its mean."""
 
 
-def crps_gaussian(y: Any, mu: Any, sigma: Any) -> np.ndarray:
+def crps_gaussian(y: npt.ArrayLike, mu: npt.ArrayLike, sigma: npt.ArrayLike) -> np.ndarray:
     """The CRPS of Gaussian forecasts N(mu, sigma^2) for outcomes, in the outcomes' units.
 
     The module's docstring has the closed form; `sigma` 0 gives the absolute error.
@@ -58,7 +57,7 @@ def crps_gaussian(y: Any, mu: Any, sigma: Any) -> np.ndarray:
     return out
 
 
-def score(err: Any, sigma: Any) -> dict[str, float | int | None]:
+def score(err: npt.ArrayLike, sigma: npt.ArrayLike) -> dict[str, float | int | None]:
     """The scores of errors under their deviations: RMSE, bias, coverage and mean CRPS.
 
     Args:

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav import antenna
 from rainuav._checks import check_choice as _choice
@@ -198,7 +199,7 @@ def cell_pattern(cell: Cell) -> antenna.Pattern:
     return pattern_by_key(cell.key())
 
 
-def gain_linear(cell: Cell, azimuth_deg: Any, elevation_deg: Any) -> np.ndarray:
+def gain_linear(cell: Cell, azimuth_deg: npt.ArrayLike, elevation_deg: npt.ArrayLike) -> np.ndarray:
     """The cell's linear gain toward global directions (the module's docstring).
 
     Args:

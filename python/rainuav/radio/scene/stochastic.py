@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rainuav._checks import check_integer
 from rainuav._checks import check_number as _num
@@ -173,7 +174,7 @@ def nodes(side_m: float) -> int:
     return int(min(MAX_GRID, 2 ** math.ceil(math.log2(max(side_m / 10.0, 16.0)))))
 
 
-def field_rates(f: StochasticRain, x: Any, y: Any) -> np.ndarray:
+def field_rates(f: StochasticRain, x: npt.ArrayLike, y: npt.ArrayLike) -> np.ndarray:
     """The rain rate of a field at its instant at points, mm/h.
 
     Args:
