@@ -59,15 +59,9 @@ def test_the_entry_points_docstring_has_its_sections(name: str) -> None:
 
 def _public_modules() -> list[str]:
     """Every public module of the package, as the API reference lists them (docs/api_pages.py)."""
-    import importlib.util
-    from pathlib import Path
+    from test_docs import _load
 
-    spec = importlib.util.spec_from_file_location(
-        "api_pages", Path(__file__).resolve().parents[1] / "docs" / "api_pages.py"
-    )
-    pages = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(pages)
-    return pages.public_modules()
+    return _load("api_pages").public_modules()
 
 
 def _front_door() -> dict[str, object]:

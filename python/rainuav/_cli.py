@@ -22,7 +22,6 @@ __all__ = [
     "attach_negative_values",
     "earlier_name",
     "field_docs",
-    "fields_from_args",
     "metre_flags",
     "plain_help",
     "run",
@@ -199,16 +198,3 @@ def add_fields(ap: argparse.ArgumentParser, cls: type) -> None:
             if "default" in text or f.default is None
             else f"{text} (default {f.default})",
         )
-
-
-def fields_from_args(args: argparse.Namespace, cls: type) -> Any:
-    """The dataclass of options a parsed command line gives.
-
-    Args:
-        args: What the parser of [`add_fields()`][rainuav._cli.add_fields] parsed.
-        cls: The dataclass.
-
-    Returns:
-        An instance of `cls` with the flags' values.
-    """
-    return cls(**{f.name: getattr(args, f.name) for f in dataclasses.fields(cls)})
