@@ -98,12 +98,12 @@ def main() -> int:
             check=True, capture_output=True, env=env, timeout=600,
         )  # fmt: skip
         run = d / "run"
-        argv = ["rainuav.train", "--scenario", "uma", "--episodes", "600", "--out", str(run),
+        argv = ["rainuav.train", "--scenario", "uma", "--dqn.episodes", "600", "--out", str(run),
                 "--checkpoint-every", "50"]  # fmt: skip
         rc, err, waited = interrupt(argv, 20, env)
         results.append(clean_stop("training", rc, err, waited, half_written(run)))
         resumed = subprocess.run(
-            [sys.executable, "-m", *argv, "--resume", "--episodes", "600"],
+            [sys.executable, "-m", *argv, "--resume", "--dqn.episodes", "600"],
             capture_output=True, text=True, env=env, timeout=900,
         )  # fmt: skip
         ok = resumed.returncode == 0 and (run / "metrics.json").exists()

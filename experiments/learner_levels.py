@@ -4,8 +4,8 @@ the exact plan among levels, beside the plans of one altitude, tabulated.
 
     python experiments/learner_levels.py --seeds 0 1 2 --out runs/levels
 
-Each run is ``python -m rainuav.train --scenario uma --freq-ghz 28 --rain-rate 0 --altitudes
-25:115:15 --seed K`` (the defaults otherwise; ``--altitudes``, ``--scenario``... given here
+Each run is ``python -m rainuav.train --scenario uma --freq-ghz 28 --rain-rate-mm-h 0 --altitudes-m
+25:115:15 --seed K`` (the defaults otherwise; ``--altitudes-m``, ``--scenario``... given here
 replace them) in ``OUT/sK``; a run whose ``metrics.json`` exists is not repeated. Prints a
 Markdown table (the network's success, mean and worst excess cost and outage share; the fixed
 100 m plan's, the best single altitude's and the straight line's at 100 m excess cost and
@@ -51,8 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("extra", nargs="*", help="more rainuav.train flags, after --")
     args = ap.parse_args(argv)
-    base = ["--scenario", "uma", "--freq-ghz", "28", "--rain-rate", "0",
-            "--altitudes", "25:115:15"]  # fmt: skip
+    base = ["--scenario", "uma", "--freq-ghz", "28", "--rain-rate-mm-h", "0",
+            "--altitudes-m", "25:115:15"]  # fmt: skip
     lines = [HEADER]
     for seed in args.seeds:
         out = args.out / f"s{seed}"

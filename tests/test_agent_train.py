@@ -494,19 +494,17 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path, capsys) -> None:
         "rainuav.train",
         "--scenario-file",
         str(cfg),
-        "--rain-rate",
+        "--rain-rate-mm-h",
         "5",
-        "--episodes",
+        "--dqn.episodes",
         "6",
-        "--max-steps",
+        "--task.max-steps",
         "30",
         "--eval-starts",
         "5",
-        "--goal-x-m",
-        "300",
-        "--goal-y-m",
-        "300",
-        "--learning-starts",
+        "--task.goal-m",
+        "300,300",
+        "--dqn.learning-starts",
         "20",
         "--checkpoint-every",
         "3",
@@ -555,7 +553,7 @@ def test_cli_end_to_end_with_tiny_budgets(tmp_path: Path, capsys) -> None:
     assert online["network"] == "last online" and online["eval_starts"] == 5
     assert json.loads((out / "evaluation.json").read_text())["network"] == "reported"
     capsys.readouterr()
-    assert train_cli.main(["--lr", "-1", "--out", str(tmp_path / "x")]) == 2
+    assert train_cli.main(["--dqn.lr", "-1", "--out", str(tmp_path / "x")]) == 2
     assert "lr" in capsys.readouterr().err
 
 

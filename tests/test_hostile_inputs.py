@@ -230,7 +230,7 @@ def test_out_that_is_a_file_is_refused_before_any_work(run_copy, tmp_path, capsy
     target.write_text("keep me")
     argv = {
         "radiomap": (radiomap, ["--scenario", "paper", "--out", target]),
-        "train": (train, ["--out", target, "--episodes", "1"]),
+        "train": (train, ["--out", target, "--dqn.episodes", "1"]),
         "evaluate": (evaluate, [run_copy, "--out", target]),
         "validate": (validate, ["rain", "--out", target]),
     }[cli]
@@ -275,7 +275,10 @@ def test_seed_out_of_range_is_refused_before_writing(tmp_path, capsys, seed) -> 
 
 @pytest.mark.parametrize(
     ("flag", "value", "field"),
-    [("--hidden", "100000000", "dqn.hidden"), ("--replay-capacity", "10000000000", "replay")],
+    [
+        ("--dqn.hidden", "100000000", "dqn.hidden"),
+        ("--dqn.replay-capacity", "10000000000", "replay"),
+    ],
 )
 def test_sizes_that_cannot_fit_are_refused_naming_the_gb(tmp_path, capsys, flag, value, field):
     out = tmp_path / "run"
@@ -735,7 +738,7 @@ def test_out_that_cannot_be_made_is_refused_before_any_work(run_copy, tmp_path, 
     )
     argv = {
         "radiomap": (radiomap, ["--scenario", "paper", "--out", where]),
-        "train": (train, ["--out", where, "--episodes", "1"]),
+        "train": (train, ["--out", where, "--dqn.episodes", "1"]),
         "evaluate": (evaluate, [run_copy, "--out", where]),
         "validate": (validate, ["rain", "--out", where]),
         "study": (study, [spec, "--out", where, "--workers", "1"]),
@@ -932,9 +935,9 @@ def test_fly_start_height_outside_the_band_is_refused(tmp_path, capsys) -> None:
     from rainuav import fly
 
     argv = ["--sites", EXAMPLES / "sites.csv", "--start", "47.3700,8.5400,100", "--goal",
-            "47.3830,8.5570", "--altitudes", "30:120:15", "--out", tmp_path / "o"]  # fmt: skip
+            "47.3830,8.5570", "--altitudes-m", "30:120:15", "--out", tmp_path / "o"]  # fmt: skip
     rc, err = run_cli(fly, argv, capsys)
-    refused("fly --start at 100 m of 30:120:15", rc, err, "100 m", "--altitudes")
+    refused("fly --start at 100 m of 30:120:15", rc, err, "100 m", "--altitudes-m")
 
 
 CLI_MODULES = ("fly", "radiomap", "train", "evaluate", "study", "validate")

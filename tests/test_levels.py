@@ -121,7 +121,7 @@ def test_maps_at_several_heights_are_each_level_s_map() -> None:
 @pytest.mark.slow
 def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) -> None:
     # A 40 m wall across the whole place between the start and the destination: at 30 m it
-    # is not flyable (its 10 m clearance), at 60 m it is. `fly --altitudes 30:60:30` started
+    # is not flyable (its 10 m clearance), at 60 m it is. `fly --altitudes-m 30:60:30` started
     # at 30 m climbs to cross, and every file carries the heights: pymavlink reads the
     # waypoints at the path's levels (relative to home), the GeoJSON's vertices too, and the
     # plan costs no more than the flight held at its start level (which cannot cross).
@@ -139,7 +139,7 @@ def test_fly_a_band_of_heights_climbs_a_wall_and_writes_each_height(tmp_path) ->
     (tmp_path / "wall.geojson").write_text(json.dumps(fc))
     out = tmp_path / "flight"
     argv = ["--sites", str(examples / "sites.csv"), "--start", "47.3660,8.5380,30", "--goal",
-            "47.3800,8.5560", "--footprints", str(tmp_path / "wall.geojson"), "--altitudes",
+            "47.3800,8.5560", "--footprints", str(tmp_path / "wall.geojson"), "--altitudes-m",
             "30:60:30", "--engine", "ray", "--out", str(out)]  # fmt: skip
     assert main(argv) == 0
     s = json.loads((out / "summary.json").read_text())
@@ -215,7 +215,7 @@ def test_bad_altitude_bands_are_refused_in_one_line(tmp_path, capsys) -> None:
                        ("0.1:10:5", "altitudes_m[0]"), ("30:3000:10", "at most 64")):  # fmt: skip
         out = tmp_path / band.replace(":", "_")
         capsys.readouterr()
-        rc = main([*base, "--altitudes", band, "--out", str(out)])
+        rc = main([*base, "--altitudes-m", band, "--out", str(out)])
         err = capsys.readouterr().err.strip().splitlines()
         assert rc == 2 and len(err) == 1 and word in err[0], (band, err)
         assert not (out / "summary.json").exists()
@@ -223,7 +223,7 @@ def test_bad_altitude_bands_are_refused_in_one_line(tmp_path, capsys) -> None:
 
 @pytest.mark.slow
 def test_one_level_band_flies_todays_plan_and_a_start_altitude_is_a_level(tmp_path, capsys) -> None:
-    # `--altitudes 100:100:1` is today's flight at 100 m: the same cost and moves (the same
+    # `--altitudes-m 100:100:1` is today's flight at 100 m: the same cost and moves (the same
     # map, from the cache). A start altitude must be one of the levels (one line, exit 2).
     import json
     from pathlib import Path
@@ -233,21 +233,21 @@ def test_one_level_band_flies_todays_plan_and_a_start_altitude_is_a_level(tmp_pa
     examples = Path(__file__).resolve().parents[1] / "examples"
     base = ["--sites", str(examples / "sites.csv"), "--goal", "47.3800,8.5560", "--engine", "ray"]
     assert main([*base, "--start", "47.3660,8.5380", "--out", str(tmp_path / "a")]) == 0
-    assert main([*base, "--start", "47.3660,8.5380", "--altitudes", "100:100:1",
+    assert main([*base, "--start", "47.3660,8.5380", "--altitudes-m", "100:100:1",
                  "--out", str(tmp_path / "b")]) == 0  # fmt: skip
     a = json.loads((tmp_path / "a" / "summary.json").read_text())
     b = json.loads((tmp_path / "b" / "summary.json").read_text())
     assert b["cost"] == pytest.approx(a["cost"], abs=1e-9) and b["moves"] == a["moves"]
     capsys.readouterr()
-    rc = main([*base, "--start", "47.3660,8.5380,45", "--altitudes", "30:60:30",
+    rc = main([*base, "--start", "47.3660,8.5380,45", "--altitudes-m", "30:60:30",
                "--out", str(tmp_path / "c")])  # fmt: skip
     err = capsys.readouterr().err.strip().splitlines()
-    assert rc == 2 and len(err) == 1 and "one of --altitudes" in err[0], err
+    assert rc == 2 and len(err) == 1 and "one of --altitudes-m" in err[0], err
 
 
 @pytest.mark.slow
 def test_fly_a_band_of_heights_over_terrain_writes_heights_above_sea_level(tmp_path) -> None:
-    # Over the ridge DEM of the terrain tests, `--altitudes 60:120:60` above the ground: the
+    # Over the ridge DEM of the terrain tests, `--altitudes-m 60:120:60` above the ground: the
     # mission's waypoints (pymavlink) are MAV_FRAME_GLOBAL heights, each the terrain under it
     # plus one of the levels (1.5 m: the file's int16 heights, bilinear).
     import json
@@ -260,7 +260,7 @@ def test_fly_a_band_of_heights_over_terrain_writes_heights_above_sea_level(tmp_p
     dem = _zurich_hill_dem(tmp_path / "ridge.tif", ridge=True)
     out = tmp_path / "flight"
     argv = ["--sites", str(EXAMPLE_SITES), "--start", "47.3660,8.5380", "--goal",
-            "47.3800,8.5560", "--terrain", str(dem), "--altitudes", "60:120:60",
+            "47.3800,8.5560", "--terrain", str(dem), "--altitudes-m", "60:120:60",
             "--engine", "ray", "--out", str(out)]  # fmt: skip
     assert main(argv) == 0
     s = json.loads((out / "summary.json").read_text())
@@ -336,7 +336,7 @@ def test_more_levels_than_fit_in_memory_are_refused_before_building() -> None:
 
 
 def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
-    # `radiomap --altitudes 30:60:30` on a georeferenced scenario: per level a PNG, an .npz
+    # `radiomap --altitudes-m 30:60:30` on a georeferenced scenario: per level a PNG, an .npz
     # (the level's own map: its altitude, the same SINR as built alone) and a GeoTIFF tagged
     # with its altitude; radiomap_levels.json last with the outage shares. A bad band or a
     # band with maps in time: one line, exit 2, nothing written.
@@ -357,7 +357,7 @@ def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
     cfg_file = tmp_path / "uma.toml"
     cfg_file.write_text(scn.to_toml_string())
     out = tmp_path / "maps"
-    assert main(["--config", str(cfg_file), "--altitudes", "30:60:30", "--out", str(out)]) == 0
+    assert main(["--config", str(cfg_file), "--altitudes-m", "30:60:30", "--out", str(out)]) == 0
     summary = json.loads((out / "radiomap_levels.json").read_text())
     assert [lv["altitude_m"] for lv in summary["levels"]] == [30.0, 60.0]
     assert summary["min_db"] == -2.0
@@ -370,12 +370,13 @@ def test_radiomap_writes_a_map_at_each_level(tmp_path, capsys) -> None:
         with rasterio.open(out / f"radiomap_{a:g}m.tif") as src:
             assert src.count == 4 and float(src.tags()["altitude_m"]) == a
         assert (out / f"sinr_{a:g}m.png").stat().st_size > 0
-    for extra in (["--altitudes", "60:30:15"], ["--altitudes", "30:60:30", "--duration-s", "10"]):
+    wrong = (["--altitudes-m", "60:30:15"], ["--altitudes-m", "30:60:30", "--duration-s", "10"])
+    for extra in wrong:
         bad = tmp_path / "bad"
         capsys.readouterr()
         rc = main(["--config", str(cfg_file), *extra, "--out", str(bad)])
         err = capsys.readouterr().err.strip().splitlines()
-        assert rc == 2 and len(err) == 1 and "--altitudes" in err[0], err
+        assert rc == 2 and len(err) == 1 and "--altitudes-m" in err[0], err
         assert not (bad / "radiomap_levels.json").exists()
 
 

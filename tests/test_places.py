@@ -231,7 +231,7 @@ def test_fly_cli_writes_files_real_clients_load(tmp_path) -> None:
 
     out = tmp_path / "flight"
     argv = ["--sites", str(EXAMPLE), "--start", "47.3660,8.5380", "--goal", "47.3800,8.5560",
-            "--rain-rate", "25", "--out", str(out)]  # fmt: skip
+            "--rain-rate-mm-h", "25", "--out", str(out)]  # fmt: skip
     assert main(argv) == 0
     for name in ("flight.geojson", "flight.kml", "mission.plan", "mission.waypoints",
                  "flight.png", "summary.json"):  # fmt: skip
@@ -384,7 +384,7 @@ def test_bad_radar_grids_are_refused(tmp_path) -> None:
 def test_fly_through_the_shipped_radar_file(tmp_path) -> None:
     """``--weather examples/radar.nc`` (dBZ on lat/lon, 13 scans): a weather that moves, the
     plan in space-time, never worse than the straight line through the same storm. With
-    ``--altitudes 100:100:1`` the plan among levels in space and time is the same flight (the
+    ``--altitudes-m 100:100:1`` the plan among levels in space and time is the same flight (the
     same cost and moves, to 1e-9: the same rewards summed)."""
     from rainuav.fly import main
 
@@ -400,7 +400,7 @@ def test_fly_through_the_shipped_radar_file(tmp_path) -> None:
     chance = summary["outage_chance"]
     assert 0.0 <= chance["expected_outage_share"] <= 1.0
     assert 0.0 <= chance["spread_independent"] <= chance["spread_correlated"] <= 0.5
-    assert main([*argv, "--altitudes", "100:100:1", "--out", str(tmp_path / "band")]) == 0
+    assert main([*argv, "--altitudes-m", "100:100:1", "--out", str(tmp_path / "band")]) == 0
     band = json.loads((tmp_path / "band" / "summary.json").read_text())
     assert band["weather_moves"] is True and band["moves"] == summary["moves"]
     assert band["cost"] == pytest.approx(summary["cost"], abs=1e-9)

@@ -1,6 +1,6 @@
 """Presets are files: the TOML presets shipped with the package hold the configurations the
-training command set in code before (``--preset paper``, ``--storm-seed random`` with and
-without ``--altitudes``), one function lays a preset, a run file and flags over each other, and
+training command set in code before (``--preset paper``, ``--preset storms`` and
+``--preset storm-levels``), one function lays a preset, a run file and flags over each other, and
 the same configuration gives the same run bit for bit however it was reached."""
 
 from __future__ import annotations
@@ -69,18 +69,23 @@ def test_the_shipped_presets_are_the_configurations_the_code_set() -> None:
         check_config(cfg)
 
 
-def test_storm_seed_random_is_the_storms_preset_and_flags_win() -> None:
-    assert _cli("--scenario", "storm", "--storm-seed", "random") == _cli("--preset", "storms")
-    levels = ["--storm-seed", "random", "--altitudes", "25:115:15"]
-    assert _cli(*levels) == _cli("--preset", "storm-levels")
-    cfg = _cli(*levels, "--engine", "hybrid", "--storm-pool", "4", "--dqn.episodes", "100")
+def test_the_storm_presets_and_flags_win(capsys: pytest.CaptureFixture[str]) -> None:
+    cfg = _cli("--preset", "storm-levels", "--engine", "hybrid", "--storm-pool", "4",
+               "--dqn.episodes", "100")  # fmt: skip
     assert (cfg.engine, cfg.storm_pool, cfg.dqn.episodes, cfg.storm_episodes) == (
         "hybrid", 4, 100, 48,
     )  # fmt: skip
-    cfg = _cli("--preset", "storms", "--random-goal", "false", "--conv", "4", "--calm-share", "0")
+    cfg = _cli("--preset", "storms", "--random-goal", "false", "--dqn.conv", "4",
+               "--calm-share", "0")  # fmt: skip
     assert (cfg.random_goal, cfg.dqn.conv, cfg.dqn.move_features, cfg.calm_share) == (
         False, 4, True, 0.0,
     )  # fmt: skip
+    # The storm distribution is a preset: a storm seed is a number, and the error says which
+    # preset to use.
+    with pytest.raises(SystemExit) as stop:
+        _cli("--storm-seed", "random")
+    assert stop.value.code == 2
+    assert "every storm: --preset storms" in capsys.readouterr().err
 
 
 def test_a_preset_then_the_run_file_then_the_flags(
@@ -88,18 +93,15 @@ def test_a_preset_then_the_run_file_then_the_flags(
 ) -> None:
     run = tmp_path / "run.toml"
     run.write_text('preset = "paper"\nmax_steps = 70\n[dqn]\nlanes = 2\nlr = 5e-4\n')
-    cfg = _cli("--config", str(run), "--dqn.lanes", "3", "--max-steps", "80")
+    cfg = _cli("--config", str(run), "--dqn.lanes", "3", "--task.max-steps", "80")
     # The flags over the file, the file over the preset, the preset over the defaults.
     assert (cfg.dqn.lanes, cfg.task.max_steps, cfg.dqn.lr, cfg.dqn.loss) == (3, 80, 5e-4, "mse")
-    # A task field at the top of a file, and its plain flag, are the [task] table's and the
-    # dotted flag's.
+    # A task field at the top of a file (a run folder of an earlier release) is the [task]
+    # table's.
     assert load_config(run).task.max_steps == 70
-    assert _cli("--config", str(run), "--dqn.lanes", "3", "--task.max-steps", "80") == cfg
     assert load_config(run).dqn.lanes == 2 and load_config(run).dqn.loss == "mse"
-    # The dotted flag and the learner's plain one are the same field; an override of a field
-    # the preset sets is said in one line.
-    plain, dotted = ("--lanes", "4"), ("--dqn.lanes", "4")
-    assert _cli("--preset", "paper", *plain) == _cli("--preset", "paper", *dotted)
+    # An override of a field the preset sets is said in one line.
+    _cli("--preset", "paper", "--dqn.lanes", "4")
     assert "--dqn.lanes 4 in place of the preset 'paper''s 1" in capsys.readouterr().err
     # A preset of one's own: a file, which may start from a shipped one.
     mine = tmp_path / "mine.toml"
@@ -181,7 +183,9 @@ def test_same_configuration_same_run_bit_for_bit(tmp_path: Path) -> None:
     assert np.isclose(runs[0]["episodes"], 3)
 
 
-def test_earlier_names_are_read_and_a_field_twice_is_refused(tmp_path: Path) -> None:
+def test_earlier_names_are_read_and_a_field_twice_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     # Run files written before the task had its own table, and before rain_rate and altitudes
     # carried their units, load as today's (the old checkpoints' configurations too: the same
     # reader).
@@ -199,21 +203,19 @@ def test_earlier_names_are_read_and_a_field_twice_is_refused(tmp_path: Path) -> 
         "[task]\nmax_steps = 70\ngoal_m = [300.0, 350.0]\n[dqn]\nlanes = 2\n"
     )
     assert load_config(new) == cfg
-    # The flags' earlier names too, and one coordinate of the destination at a time.
-    flags = (
-        "--scenario",
-        "uma",
-        "--rain-rate",
-        "5",
-        "--altitudes",
-        "25:115:15",
-        "--max-steps",
-        "70",
-    )
-    assert _cli(*flags, "--goal-x-m", "300", "--goal-y-m", "350", "--lanes", "2") == _cli(
-        "--config", str(new)
-    )
-    assert _cli("--goal-y-m", "350").task.goal_m == (NavConfig().goal_m[0], 350.0)
+    # The flags' earlier names are gone: each is refused in one line naming its replacement.
+    replaced = [
+        (("--rain-rate", "5"), "--rain-rate-mm-h"),
+        (("--altitudes", "25:115:15"), "--altitudes-m"),
+        (("--max-steps", "70"), "--task.max-steps"),
+        (("--lanes", "2"), "--dqn.lanes"),
+        (("--goal-x-m", "300"), "--task.goal-m"),
+    ]
+    for old, new in replaced:
+        with pytest.raises(SystemExit) as stop:
+            _cli(*old)
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+        assert stop.value.code == 2 and f"did you mean {new}" in err, err
     # One field under two names is refused, naming it.
     twice = tmp_path / "twice.toml"
     twice.write_text("max_steps = 70\n[task]\nmax_steps = 80\n")

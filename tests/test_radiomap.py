@@ -289,7 +289,7 @@ def test_cli_writes_npz_and_pngs(tmp_path: Path) -> None:
             "rainuav.radiomap",
             "--config",
             str(cfg),
-            "--rain-rate",
+            "--rain-rate-mm-h",
             "10",
             "--out",
             str(out),
@@ -357,7 +357,7 @@ def test_rate_map_equals_homogeneous_rain() -> None:
 
 
 def test_with_rain_changes_only_the_rain() -> None:
-    # --rain-rate replaces the scenario's rain field, never its rain model, drop sizes,
+    # --rain-rate-mm-h replaces the scenario's rain field, never its rain model, drop sizes,
     # shape, temperature or wind.
     weather = Medium(
         kind="cells",

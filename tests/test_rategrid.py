@@ -101,8 +101,8 @@ def test_the_radiomap_cli_maps_a_rain_file_in_time(tmp_path, monkeypatch, capsys
     out = tmp_path / "out"
     assert radiomap.main([*argv, "--duration-s", "120", "--slice-s", "60", "--out", str(out)]) == 0
     assert (out / "storm.gif").exists() and "3 slices" in capsys.readouterr().out
-    assert radiomap.main([*argv, "--rain-rate", "5", "--out", str(out)]) == 2
-    assert "--rain-rate" in capsys.readouterr().err
+    assert radiomap.main([*argv, "--rain-rate-mm-h", "5", "--out", str(out)]) == 2
+    assert "--rain-rate-mm-h" in capsys.readouterr().err
 
 
 def test_a_file_too_large_for_memory_is_refused_before_it_is_read(tmp_path, monkeypatch) -> None:

@@ -181,8 +181,8 @@ def test_train_on_one_storm_and_evaluate_on_another_from_the_cli(tmp_path, capsy
     run = tmp_path / "run"
     argv = [
         "--scenario", "storm", "--storm-seed", "0", "--engine", "ray", "--slice-s", "30",
-        "--max-steps", "40", "--goal-x-m", "300", "--goal-y-m", "300", "--episodes", "4",
-        "--lanes", "2", "--eval-starts", "4", "--validate-every", "0", "--out", str(run),
+        "--task.max-steps", "40", "--task.goal-m", "300,300", "--dqn.episodes", "4",
+        "--dqn.lanes", "2", "--eval-starts", "4", "--validate-every", "0", "--out", str(run),
     ]  # fmt: skip
     assert train.main(argv) == 0
     for name in ("radiomap_series.npz", "trajectories.png", "storm_flights.png"):

@@ -44,7 +44,7 @@ def main() -> None:
     # 1. Train one network over the storm distribution (the default command: about 25-60 min
     #    on 2 cores; it resumes with --resume if stopped).
     small_train = [
-        "--episodes",
+        "--dqn.episodes",
         "8",
         "--storm-pool",
         "1",
@@ -55,7 +55,7 @@ def main() -> None:
         "--engine",
         "ray",
     ]
-    run(["rainuav.train", "--scenario", "storm", "--storm-seed", "random", "--out", storms,
+    run(["rainuav.train", "--preset", "storms", "--out", storms,
          *(small_train if args.small else [])])  # fmt: skip
 
     # 2. Fly it through held-out storms (seeds from 1 000 000 are never trained on), 20 starts

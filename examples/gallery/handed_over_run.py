@@ -47,7 +47,7 @@ def quietly(main, argv: list[str]) -> tuple[int, str]:
 
 
 out = out_dir(__doc__, sys.argv[1:])
-tiny = ["--scenario", "paper", "--engine", "ray", "--episodes", "30", "--eval-starts", "5",
+tiny = ["--scenario", "paper", "--engine", "ray", "--dqn.episodes", "30", "--eval-starts", "5",
         "--validate-starts", "5"]  # fmt: skip
 rows = []
 with tempfile.TemporaryDirectory() as tmp:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import difflib
 import itertools
 import math
 import re
@@ -17,15 +18,47 @@ from typing import Any
 from rainuav.errors import CacheWarning, InvalidInputError, WriteError
 
 __all__ = [
+    "Parser",
     "add_fields",
     "altitude_band",
     "attach_negative_values",
-    "earlier_name",
     "field_docs",
     "metre_flags",
     "plain_help",
     "run",
 ]
+
+
+class Parser(argparse.ArgumentParser):
+    """The commands' parser: a flag is its whole name (no abbreviations), and a flag it does not
+    know is named with the flags it could have meant (``--episodes``: ``--dqn.episodes``), or
+    with what replaced it (``removed``: a flag to the text that says so)."""
+
+    def __init__(self, *args: Any, removed: dict[str, str] | None = None, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+        self.removed = dict(removed or {})
+
+    def error(self, message: str) -> Any:
+        """Exits 2 with the usage and one line, the likely flags added to an unknown one's."""
+        if message.startswith("unrecognized arguments:"):
+            hints = [h for w in message.split(":", 1)[1].split() for h in self._meant(w)]
+            if hints:
+                message += f" (did you mean {' or '.join(dict.fromkeys(hints))}?)"
+        super().error(message)
+
+    def _meant(self, word: str) -> list[str]:
+        """The known flags an unknown ``word`` may stand for: the same name in a table
+        (``--dqn.NAME``), the name with its unit (``--rain-rate-mm-h``), else the closest."""
+        if not word.startswith("--"):
+            return []
+        bare = word.split("=", 1)[0]
+        if bare in self.removed:
+            return [self.removed[bare]]
+        known = [o for o in self._option_string_actions if o.startswith("--")]
+        near = [o for o in known if o.endswith("." + bare[2:]) or o.startswith(bare + "-")]
+        return near or difflib.get_close_matches(bare, known, n=2, cutoff=0.75)
+
 
 _NUMBERS = re.compile(r"^-(\d|\.\d)[\d.eE+\-]*(,\s*[+\-]?(\d|\.\d)[\d.eE+\-]*)*$")
 """A value that starts with a minus sign and is a number or a comma-separated list of them
@@ -107,12 +140,6 @@ def plain_help(text: str | None) -> str:
     out = _XREF.sub(lambda m: m.group(1), _ROLE.sub(role, text))
     out = out.replace("``", "")
     return out.replace("\\\\", "\\")
-
-
-def earlier_name(ap: argparse.ArgumentParser, flag: str, dest: str, kind: Any = str) -> None:
-    """Reads ``flag``, a flag's earlier name (``--rain-rate`` for ``--rain-rate-mm-h``), into
-    ``dest`` without listing it."""
-    ap.add_argument(flag, dest=dest, type=kind, default=argparse.SUPPRESS, help=argparse.SUPPRESS)
 
 
 def altitude_band(text: str, name: str = "--altitudes-m") -> list[float]:

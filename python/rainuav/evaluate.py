@@ -115,14 +115,13 @@ class EvaluateOptions:
 def build_parser() -> argparse.ArgumentParser:
     """The command line: the run's folder, then a flag for each field of
     [`EvaluateOptions`][rainuav.evaluate.EvaluateOptions]."""
-    ap = argparse.ArgumentParser(
+    ap = _cli.Parser(
         prog="python -m rainuav.evaluate",
         description=_cli.plain_help(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("run_dir", type=Path)
     _cli.add_fields(ap, EvaluateOptions)
-    _cli.earlier_name(ap, "--rain-rate", "rain_rate_mm_h", float)
     return ap
 
 

@@ -125,12 +125,11 @@ class RadiomapOptions:
 def build_parser() -> argparse.ArgumentParser:
     """The command line: a flag for each field of
     [`RadiomapOptions`][rainuav.radiomap.RadiomapOptions]."""
-    ap = argparse.ArgumentParser(
-        prog="python -m rainuav.radiomap", description="Build a radio map and write npz + PNGs."
+    ap = _cli.Parser(
+        prog="python -m rainuav.radiomap",
+        description="Build a radio map and write npz + PNGs.",
     )
     _cli.add_fields(ap, RadiomapOptions)
-    _cli.earlier_name(ap, "--rain-rate", "rain_rate_mm_h", float)
-    _cli.earlier_name(ap, "--altitudes", "altitudes_m")
     return ap
 
 

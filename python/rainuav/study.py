@@ -46,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     [`StudyOptions`][rainuav.study.StudyOptions]."""
     from rainuav.studies.spec import BUILT_IN
 
-    ap = argparse.ArgumentParser(
+    ap = _cli.Parser(
         prog="python -m rainuav.study",
         description=_cli.plain_help(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,

@@ -44,14 +44,12 @@ SHOWN = (
 """The run's own flags, the ones ``--help`` lists (``--help-all``: every field)."""
 
 
-def _storm_seed(text: str) -> int | str:
-    """A storm seed, or 'random': the storm distribution (the ``storms`` preset)."""
-    if text == "random":
-        return text
+def _storm_seed(text: str) -> int:
+    """A storm's seed (an integer; the storm distribution is ``--preset storms``)."""
     try:
         return int(text)
     except ValueError:
-        msg = f"expected an integer or 'random' (got {text!r})"
+        msg = f"expected an integer (got {text!r}; every storm: --preset storms)"
         raise argparse.ArgumentTypeError(msg) from None
 
 
@@ -72,15 +70,13 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
     """CLI flags generated from TrainConfig (``--name``), its task
     ([`rainuav.nav.task.NavConfig`][rainuav.nav.task.NavConfig], ``--task.name``) and
     DQNConfig (``--dqn.name``), one per field; ``--help`` lists the run's own
-    ([`SHOWN`][rainuav.train.SHOWN]), ``--help-all`` every one. Also read, unlisted: the task's
-    and the learner's fields without their prefix (``--max-steps``, ``--lr``), the fields'
-    earlier names ([`rainuav.rl.config.RENAMED`][rainuav.rl.config.RENAMED]) and
-    ``--goal-x-m`` / ``--goal-y-m``."""
+    ([`SHOWN`][rainuav.train.SHOWN]), ``--help-all`` every one."""
     from rainuav._checks import field_kind
-    from rainuav.rl.config import RENAMED, SECTIONS, TrainConfig, preset_names
+    from rainuav.rl.config import SECTIONS, TrainConfig, preset_names
 
     flag_types = {"int": int, "float": float, "str": str, "bool": _parse_bool}
-    ap = argparse.ArgumentParser(
+    ap = _cli.Parser(
+        removed={"--goal-x-m": "--task.goal-m X,Y", "--goal-y-m": "--task.goal-m X,Y"},
         prog="python -m rainuav.train",
         description=_cli.plain_help(__doc__),
         epilog=textwrap.fill(
@@ -95,7 +91,6 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
     ap.add_argument("--help-all", action="store_true", help="list every field's flag and exit")
     ap.add_argument("--config", type=Path, help="a TOML file of the run's fields (config.toml)")
     ap.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
-    hidden = {"help": argparse.SUPPRESS, "default": None}
     for cls, prefix in ((TrainConfig, ""), *((c, f"{n}.") for n, c in SECTIONS.items())):
         docs = _cli.field_docs(cls)
         for f in dataclasses.fields(cls):
@@ -109,30 +104,17 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
                 kind = _point
             else:
                 kind = flag_types.get(field_kind(f)[0], str)
-            more = {
-                "storm_seed": " Or 'random': --preset storms (with --altitudes-m: --preset "
-                "storm-levels)",
-                "goal_m": " As X,Y.",
-                "start_m": " As X,Y.",
-            }.get(f.name, "")
+            more = " As X,Y." if f.name in ("goal_m", "start_m") else ""
             text = _cli.plain_help(f"{docs.get(f.name, '')}{more} (default {default})")
             shown = show_all or name in SHOWN
             ap.add_argument(_flag(prefix + f.name), dest=name, type=kind, default=None,
                             help=text if shown else argparse.SUPPRESS)  # fmt: skip
-            if prefix:  # the task's and the learner's fields also as --name
-                ap.add_argument(_flag(f.name), dest=name, type=kind, **hidden)
-            for old in (o for o, n in RENAMED.items() if n == name):  # and under earlier names
-                ap.add_argument(_flag(old), dest=name, type=kind, **hidden)
-    for old in ("goal_x_m", "goal_y_m"):
-        ap.add_argument(_flag(old), dest=old, type=float, **hidden)
     return ap
 
 
 def config_from_args(args: argparse.Namespace) -> Any:
     """The run's TrainConfig: its preset, then the ``--config`` file's fields, then the flags
-    given ([`rainuav.rl.config.resolve_config()`][rainuav.rl.config.resolve_config]). ``--storm-seed
-    random`` is ``--preset storms`` (``storm-levels`` with ``--altitudes-m``)."""
-    from rainuav.nav.task import NavConfig
+    given ([`rainuav.rl.config.resolve_config()`][rainuav.rl.config.resolve_config])."""
     from rainuav.rl.config import SECTIONS, TrainConfig, preset_fields, read_config, resolve_config
 
     fields: dict[str, Any] = {}
@@ -145,16 +127,7 @@ def config_from_args(args: argparse.Namespace) -> Any:
             if f.name not in SECTIONS and value is not None:
                 flags[prefix + f.name] = value
     fields.update(flags)
-    if fields.get("storm_seed") == "random":  # the storm distribution: a preset
-        del fields["storm_seed"], flags["storm_seed"]
-        fields.setdefault("preset", "storm-levels" if fields.get("altitudes_m") else "storms")
     preset = preset_fields(fields["preset"]) if fields.get("preset") else {}
-    goal = [getattr(args, "goal_x_m", None), getattr(args, "goal_y_m", None)]
-    if goal != [None, None]:  # the destination's coordinates one at a time, as before
-        base = fields.get("task.goal_m", preset.get("task.goal_m", NavConfig().goal_m))
-        flags["task.goal_m"] = fields["task.goal_m"] = tuple(
-            b if g is None else g for g, b in zip(goal, base, strict=True)
-        )
     if preset and not args.resume:
         for k in sorted(set(flags) & set(preset)):
             if flags[k] != preset[k]:

@@ -8,7 +8,6 @@ default model to P.838-3 over 5-100 GHz and 12.5-150 mm/h.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import sys
 from collections.abc import Sequence
@@ -104,8 +103,9 @@ def run_rain(out_dir: Path) -> dict[str, Path]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m rainuav.validate", description=_cli.plain_help(__doc__)
+    parser = _cli.Parser(
+        prog="python -m rainuav.validate",
+        description=_cli.plain_help(__doc__),
     )
     sub = parser.add_subparsers(dest="what", required=True)
     rain = sub.add_parser("rain", help="rain attenuation against ITU-R P.838-3")

@@ -159,13 +159,12 @@ class FlyOptions:
 
 def build_parser() -> argparse.ArgumentParser:
     """The command line: a flag for each field of [`FlyOptions`][rainuav.fly.FlyOptions]."""
-    ap = argparse.ArgumentParser(
+    ap = _cli.Parser(
         prog="python -m rainuav.fly",
         description=_cli.plain_help(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     _cli.add_fields(ap, FlyOptions)
-    _cli.earlier_name(ap, "--rain-rate", "rain_rate_mm_h", float)
     return ap
 
 

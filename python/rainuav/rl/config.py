@@ -184,8 +184,8 @@ SECTIONS: dict[str, type] = {"task": NavConfig, "dqn": DQNConfig}
 """The tables of a run's fields (``[task]``, ``[dqn]`` in its file; ``task.NAME``, ``dqn.NAME``
 flat and on the command line)."""
 RENAMED = {"rain_rate": "rain_rate_mm_h", "altitudes": "altitudes_m"}
-"""Fields read under their earlier names (run files and checkpoints written before the rename,
-and the flags' short forms)."""
+"""Fields read under their earlier names in run files and checkpoints written before the rename
+(the command line takes today's names alone)."""
 
 
 def _names(cls: type) -> set[str]:
