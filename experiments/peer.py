@@ -1,5 +1,5 @@
 """Peers, side by side: rainuav's default learner, the paper's Algorithm 1 literally
-(``--preset paper``) and Stable-Baselines3's DQN on the same task with the same wall-clock
+(``--preset paper-learner``) and Stable-Baselines3's DQN on the same task with the same wall-clock
 budget, measured the same way (the network alone, greedy, from the run's 200 fixed evaluation
 starts, against the exact planner).
 
@@ -212,7 +212,10 @@ def main(argv: list[str] | None = None) -> int:
     if "paper_preset" in args.peers:
         literal = train(
             dataclasses.replace(
-                cfg, preset="paper", time_budget_s=budget, out=str(args.out / "paper_preset")
+                cfg,
+                preset="paper-learner",
+                time_budget_s=budget,
+                out=str(args.out / "paper_preset"),
             ),
             world,
             progress=False,

@@ -967,7 +967,7 @@ def test_study_help_names_every_built_in_study(capsys) -> None:
 def test_train_help_agrees_with_the_learning_page(capsys) -> None:
     text = _help(train, capsys)
     assert "Table I hyperparameters" not in text
-    assert "--preset paper runs Algorithm 1 and Table I literally" in text
+    assert "--preset paper-learner runs Algorithm 1 and Table I literally" in text
 
 
 def test_out_of_reach_pixels_are_named_in_the_rss_figure() -> None:

@@ -1,5 +1,5 @@
 """Presets are files: the TOML presets shipped with the package hold the configurations the
-training command set in code before (``--preset paper``, ``--preset storms`` and
+training command set in code before (``--preset paper-learner``, ``--preset storms`` and
 ``--preset storm-levels``), one function lays a preset, a run file and flags over each other, and
 the same configuration gives the same run bit for bit however it was reached."""
 
@@ -49,13 +49,13 @@ def _cli(*argv: str) -> TrainConfig:
 
 
 def test_the_shipped_presets_are_the_configurations_the_code_set() -> None:
-    assert preset_names() == ["paper", "storm-levels", "storms"]
-    paper = resolve_config({"preset": "paper"})
+    assert preset_names() == ["paper-learner", "storm-levels", "storms"]
+    paper = resolve_config({"preset": "paper-learner"})
     assert {k: getattr(paper.dqn, k) for k in PAPER_BEFORE} == PAPER_BEFORE
     # The rest is the default learner, with a constant learning rate (lr_final 0: lr throughout).
     rest = {f.name for f in dataclasses.fields(DQNConfig)} - set(PAPER_BEFORE) - {"lr_final"}
     assert all(getattr(paper.dqn, k) == getattr(DQNConfig(), k) for k in rest)
-    assert paper.dqn.lr_final == 0.0 and paper.preset == "paper"
+    assert paper.dqn.lr_final == 0.0 and paper.preset == "paper-learner"
     storms = resolve_config({"preset": "storms"})
     assert storms.scenario == "storm"
     assert {k: getattr(storms, k) for k in STORMS_BEFORE} == STORMS_BEFORE
@@ -96,14 +96,19 @@ def test_a_preset_then_the_run_file_then_the_flags(
     cfg = _cli("--config", str(run), "--dqn.lanes", "3", "--task.max-steps", "80")
     # The flags over the file, the file over the preset, the preset over the defaults.
     assert (cfg.dqn.lanes, cfg.task.max_steps, cfg.dqn.lr, cfg.dqn.loss) == (3, 80, 5e-4, "mse")
-    # A task field at the top of a file (a run folder of an earlier release) is the [task]
-    # table's.
+    # A task field at the top of a file and the preset's earlier name (a run folder of an
+    # earlier release) are the [task] table's and the preset's today.
     assert load_config(run).task.max_steps == 70
+    assert load_config(run).preset == "paper-learner"
+    # On the command line, the preset's name of today alone.
+    assert main(["--preset", "paper", "--out", str(tmp_path / "o")]) == 2
+    assert "preset 'paper' is now 'paper-learner'" in capsys.readouterr().err
     assert load_config(run).dqn.lanes == 2 and load_config(run).dqn.loss == "mse"
     # An override of a field the preset sets is said in one line.
-    _cli("--preset", "paper", "--dqn.lanes", "4")
-    assert "--dqn.lanes 4 in place of the preset 'paper''s 1" in capsys.readouterr().err
-    # A preset of one's own: a file, which may start from a shipped one.
+    _cli("--preset", "paper-learner", "--dqn.lanes", "4")
+    assert "--dqn.lanes 4 in place of the preset 'paper-learner''s 1" in capsys.readouterr().err
+    # A preset of one's own: a file, which may start from a shipped one (under its earlier name
+    # too).
     mine = tmp_path / "mine.toml"
     mine.write_text('extends = "paper"\nseed = 7\n[dqn]\nhidden = 64\n')
     cfg = _cli("--preset", str(mine))
@@ -115,7 +120,7 @@ def test_bad_presets_are_refused_in_one_line(
 ) -> None:
     assert main(["--preset", "papr", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "preset must be one of ['paper'" in err
+    assert err.count("\n") == 1 and "preset must be one of ['paper-learner'" in err
     loop = tmp_path / "loop.toml"
     loop.write_text(f'extends = "{loop}"\n')
     with pytest.raises(InvalidInputError, match="extends must name another preset"):
@@ -148,14 +153,14 @@ def test_help_lists_the_runs_own_flags_and_help_all_every_field(
 def test_a_study_case_starts_from_its_preset() -> None:
     from rainuav.studies.spec import train_config
 
-    cfg = train_config({"preset": "paper", "dqn.episodes": 10}, 3, "out")
+    cfg = train_config({"preset": "paper-learner", "dqn.episodes": 10}, 3, "out")
     assert (cfg.dqn.loss, cfg.dqn.lanes, cfg.dqn.episodes, cfg.seed) == ("mse", 1, 10, 3)
 
 
 @pytest.mark.slow
 def test_same_configuration_same_run_bit_for_bit(tmp_path: Path) -> None:
-    """A short run of ``--preset paper`` against the same run configured field by field as the
-    code set it before (``lr_final`` then equal to ``lr``): the same metrics and weights."""
+    """A short run of ``--preset paper-learner`` against the same run configured field by field as
+    the code set it before (``lr_final`` then equal to ``lr``): the same metrics and weights."""
     import torch
     from rainuav.rl.loop import train
     from rainuav.world import in_world
@@ -164,7 +169,7 @@ def test_same_configuration_same_run_bit_for_bit(tmp_path: Path) -> None:
     run = {"eval_starts": 4, "validate_every": 0, "checkpoint_every": 2}
     task = {"task.goal_m": (300.0, 350.0), "task.max_steps": 40}
     by_preset = resolve_config(
-        {"preset": "paper", "out": str(tmp_path / "a"), "dqn.episodes": 3, **run, **task}
+        {"preset": "paper-learner", "out": str(tmp_path / "a"), "dqn.episodes": 3, **run, **task}
     )
     by_hand = TrainConfig(
         out=str(tmp_path / "b"), **run, task=NavConfig(goal_m=(300.0, 350.0), max_steps=40),

@@ -157,7 +157,7 @@ def test_bad_study_files_are_refused_before_any_work(
 
 
 def test_built_in_studies_load_and_name_their_cases() -> None:
-    paper = load_study("paper")
+    paper = load_study("paper-sweeps")
     ids = [c.id for c in paper.cases()]
     assert ids[0] == "000_base_s0" and len(ids) == len(set(ids))
     axes = {c.axis for c in paper.cases()}

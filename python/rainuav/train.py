@@ -2,11 +2,11 @@
 
 With no arguments: the paper's scenario in its own weather (25 mm/h; radio map built or taken from
 the cache), the default learner (the paper's Algorithm 1 with measured departures from its Table I,
-each listed on the Learning page; ``--preset paper`` runs Algorithm 1 and Table I literally), seed
-0, results in ``runs/paper``. ``--preset NAME|FILE`` starts from a preset (a TOML file of fields:
-``paper``, ``storms``, ``storm-levels`` ship with the package); every field of
-[`rainuav.rl.config.TrainConfig`][rainuav.rl.config.TrainConfig] is a flag ``--name`` and every
-field of its task, [`rainuav.nav.task.NavConfig`][rainuav.nav.task.NavConfig], a flag
+each listed on the Learning page; ``--preset paper-learner`` runs Algorithm 1 and Table I
+literally), seed 0, results in ``runs/paper``. ``--preset NAME|FILE`` starts from a preset (a TOML
+file of fields: ``paper-learner``, ``storms``, ``storm-levels`` ship with the package); every field
+of [`rainuav.rl.config.TrainConfig`][rainuav.rl.config.TrainConfig] is a flag ``--name`` and
+every field of its task, [`rainuav.nav.task.NavConfig`][rainuav.nav.task.NavConfig], a flag
 ``--task.name`` and every field of
 [`rainuav.rl.config.DQNConfig`][rainuav.rl.dqnconfig.DQNConfig] a flag ``--dqn.name``
 (``--help`` lists the run's own, ``--help-all`` all); ``--config run.toml`` reads fields from a

@@ -21,14 +21,13 @@ from rainuav.world import WorldSpec, check_spec
 
 __all__ = [
     "MAX_EXTENDS",
+    "PRESETS_RENAMED",
     "PRESET_DIR",
     "RENAMED",
-    "RESUME_MAY_DIFFER",
     "SECTIONS",
     "DQNConfig",
     "TrainConfig",
     "check_config",
-    "config_diff",
     "field_name",
     "flat",
     "flat_fields",
@@ -175,7 +174,7 @@ def preset_names() -> list[str]:
     """The presets shipped with the package.
 
     Returns:
-        Their names (`paper`, `storms`, `storm-levels`), sorted.
+        Their names (`paper-learner`, `storms`, `storm-levels`), sorted.
     """
     return sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
 
@@ -186,6 +185,9 @@ flat and on the command line)."""
 RENAMED = {"rain_rate": "rain_rate_mm_h", "altitudes": "altitudes_m"}
 """Fields read under their earlier names in run files and checkpoints written before the rename
 (the command line takes today's names alone)."""
+PRESETS_RENAMED = {"paper": "paper-learner"}
+"""Presets read under their earlier names in run files and checkpoints (``paper``, the paper's
+learner, is ``paper-learner``: ``paper`` alone names the scenario)."""
 
 
 def _names(cls: type) -> set[str]:
@@ -262,6 +264,8 @@ def flat_fields(data: dict[str, Any], where: str) -> dict[str, Any]:
     if unknown:
         unknown.sort(key=lambda k: ("." in k, k))  # the run's own first, then the tables'
         raise InvalidInputError(f"{where}: unknown field(s) {unknown}")
+    if out.get("preset") in PRESETS_RENAMED:  # a run of an earlier release
+        out["preset"] = PRESETS_RENAMED[out["preset"]]
     return out
 
 
@@ -290,6 +294,11 @@ def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict
     """
     text = str(name_or_path)
     path = PRESET_DIR / f"{text}.toml" if text in preset_names() else Path(text)
+    if text in PRESETS_RENAMED and not path.is_file():
+        raise InvalidInputError(
+            f"preset {text!r} is now {PRESETS_RENAMED[text]!r} (must be one of {preset_names()} "
+            "or a TOML file)"
+        )
     if not path.is_file():
         raise InvalidInputError(
             f"preset must be one of {preset_names()} or a TOML file (got {text!r}: no such file)"
@@ -298,8 +307,10 @@ def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict
     if "preset" in data:  # a run's config.toml as a preset: the preset it records is its base
         if "extends" in data:
             raise InvalidInputError(f"preset {path}: give extends or preset, not both")
-        data["extends"] = data.pop("preset") or None
+        base_name = data.pop("preset") or None
+        data["extends"] = PRESETS_RENAMED.get(base_name, base_name)
     base = data.pop("extends", None)
+    base = PRESETS_RENAMED.get(base, base)  # a file written before a rename
     if base is not None and (not isinstance(base, str) or base in (*_seen, text)):
         raise InvalidInputError(f"preset {path}: extends must name another preset (got {base!r})")
     if base is not None and len(_seen) + 1 >= MAX_EXTENDS:
@@ -413,37 +424,3 @@ def load_config(path: str | Path) -> TrainConfig:
         InvalidInputError: A file that cannot be read, or fields out of range (named).
     """
     return resolve_config(read_config(path))
-
-
-RESUME_MAY_DIFFER = ("device", "out", "time_budget_s")
-"""Fields a resumed run may change (the rest must equal the checkpoint's): the device, the
-folder's path (a run folder moved or copied elsewhere resumes where it now is; its results do
-not depend on where it lives) and the wall-clock budget (a run its budget stopped, on a slower
-machine, continues with a larger one to the episodes it was given, as if it had never
-stopped)."""
-
-
-def config_diff(saved: dict[str, Any], cfg: TrainConfig, ignore: tuple[str, ...] = ()) -> list[str]:
-    """The fields where a configuration differs from a run's saved one.
-
-    Args:
-        saved: The run's saved configuration, in any form
-            [`flat_fields()`][rainuav.rl.config.flat_fields] reads.
-        cfg: The configuration given.
-        ignore: Fields allowed to differ.
-
-    Returns:
-        One `"name: saved -> given"` line a field (`task.x`, `dqn.x` for the task's and the
-        learner's).
-    """
-
-    def same_form(d: dict[str, Any]) -> dict[str, Any]:  # a point read back is a list
-        return {k: tuple(v) if isinstance(v, list) else v for k, v in d.items()}
-
-    old = same_form(flat_fields(saved, "saved configuration"))
-    new = same_form(flat(cfg))
-    return [
-        f"{key}: {old.get(key)!r} -> {new.get(key)!r}"
-        for key in sorted(set(old) | set(new))
-        if key not in ignore and old.get(key) != new.get(key)
-    ]

@@ -27,10 +27,8 @@ from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import (
     MAX_SEED,
     MAX_STARTS,
-    RESUME_MAY_DIFFER,
     TrainConfig,
     check_config,
-    config_diff,
     load_config,
 )
 from rainuav.rl.dqn import Agent
@@ -41,6 +39,7 @@ from rainuav.rl.references import (
     relative_gap,
     summarise,
 )
+from rainuav.rl.resume import RESUME_MAY_DIFFER, config_diff
 from rainuav.rl.setup import make_agent, pick_device
 from rainuav.world import World, load_world, task_of, world_from
 

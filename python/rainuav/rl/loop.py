@@ -47,10 +47,8 @@ from rainuav.rl.callbacks import (
 )
 from rainuav.rl.collect import Lanes
 from rainuav.rl.config import (
-    RESUME_MAY_DIFFER,
     TrainConfig,
     check_config,
-    config_diff,
     random_streams,
     to_dict,
 )
@@ -63,6 +61,7 @@ from rainuav.rl.evaluation import (
 from rainuav.rl.learner import learner_ends, learning_reward, training_level, training_task
 from rainuav.rl.references import optimal_flights
 from rainuav.rl.report import finish
+from rainuav.rl.resume import RESUME_MAY_DIFFER, config_diff
 from rainuav.rl.runlog import RunLog
 from rainuav.rl.setup import check_fits, make_agent, pick_device, torch_settings
 from rainuav.world import World, build_world, task_of

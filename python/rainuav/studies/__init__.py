@@ -1,6 +1,7 @@
 """Studies: a base case and the axes to sweep ([`spec`][rainuav.studies.spec], read from TOML;
-``paper.toml`` and ``mmwave.toml`` ship with the package), run case by case in parallel worker
-processes and resumably ([`run`][rainuav.studies.run]). ``python -m rainuav.study`` is the CLI.
+``paper-sweeps.toml``, ``mmwave.toml``, ``storms.toml`` and ``altitude.toml`` ship with the
+package), run case by case in parallel worker processes and resumably
+([`run`][rainuav.studies.run]). ``python -m rainuav.study`` is the CLI.
 """
 
 from __future__ import annotations

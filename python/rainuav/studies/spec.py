@@ -2,7 +2,7 @@
 
 .. code-block:: toml
 
-    name = "paper"
+    name = "paper-sweeps"
     sweep = "one_at_a_time"     # or "grid": every combination of the axes
     seeds = [0]
     compute = ["map", "optimal", "learned"]
@@ -50,7 +50,7 @@ SCENARIO_FIELDS = ("freq_ghz", "wind_m_s", "wind_model", "engine", "altitudes_m"
 """Fields of a case that change the scenario rather than the run (``altitudes_m``: the levels
 its ``altitudes`` figures map and plan among, the case's own map staying at the scenario's
 altitude)."""
-BUILT_IN = ("paper", "mmwave", "storms", "altitude")
+BUILT_IN = ("paper-sweeps", "mmwave", "storms", "altitude")
 MAX_CASES = 10_000
 """The most cases a study may have (axes x seeds): every case is at least a map and a plan."""
 _TOP = {"name", "sweep", "seeds", "compute", "eval_starts", "base", "axes", "quick"}
@@ -322,7 +322,7 @@ def load_study(name_or_path: str | Path) -> Study:
     """A built-in study by name, or a study read from a TOML file.
 
     Args:
-        name_or_path: `paper`, `mmwave`, or the path of a study TOML file.
+        name_or_path: `paper-sweeps`, `mmwave`, or the path of a study TOML file.
 
     Returns:
         The [`Study`][rainuav.studies.spec.Study], checked.
@@ -331,6 +331,8 @@ def load_study(name_or_path: str | Path) -> Study:
         InvalidInputError: An unknown name, an unreadable or malformed file, or a field out of range
             (named).
     """
+    if str(name_or_path) == "paper" and not Path("paper").is_file():
+        raise InvalidInputError("study 'paper' is now 'paper-sweeps' (the paper's section VI)")
     if str(name_or_path) in BUILT_IN:
         ref = resources.files("rainuav.studies") / f"{name_or_path}.toml"
         with resources.as_file(ref) as path:
