@@ -37,7 +37,14 @@ from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
 from rainuav.geo import Georef, pyproj_module
 from rainuav.radio.scene.geotiff import is_geotiff, open_geotiff
-from rainuav.radio.scene.rategrid import UNITS, _open, _seconds, rate_medium, sample_grid
+from rainuav.radio.scene.rategrid import (
+    UNITS,
+    _open,
+    _rain_variable,
+    _seconds,
+    rate_medium,
+    sample_grid,
+)
 from rainuav.radio.scene.scenario import Area
 from rainuav.radio.scene.weather import MAX_RATE_MM_H, Medium
 
@@ -125,12 +132,7 @@ def read_radar_grid(
             named).
     """
     with open_geotiff(path) if is_geotiff(path) else _open(path) as ds:
-        names = [variable] if variable else [k for k, v in ds.data_vars.items() if v.ndim == 3]
-        if len(names) != 1 or names[0] not in ds.data_vars:
-            raise InvalidInputError(
-                f"rain file {path}: needs one (time, y, x) variable, or variable= naming it "
-                f"(has {sorted(ds.data_vars)})"
-            )
+        names = [_rain_variable(ds, variable, f"rain file {path}")]
         da = ds[names[0]]
         units = str(da.attrs.get("units", "")).strip()
         if units not in UNITS + DBZ_UNITS:

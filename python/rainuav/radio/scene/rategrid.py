@@ -93,15 +93,22 @@ def read_rate_grid(
         return _read(path, ds, area, base, variable, max_cells)
 
 
-def _read(
-    path: Any, ds: Any, area: Area, base: Medium | None, variable: str | None, max_cells: int
-) -> Medium:
+def _rain_variable(ds: Any, variable: str | None, what: str) -> str:
+    """The rain variable of a dataset: ``variable``, else its one three-dimensional variable;
+    else one line naming ``what`` (the file) and the variables it has."""
     names = [variable] if variable else [k for k, v in ds.data_vars.items() if v.ndim == 3]
     if len(names) != 1 or names[0] not in ds.data_vars:
         raise InvalidInputError(
-            f"rain-rate file {path}: needs one (time, y, x) variable, or variable= naming it "
+            f"{what}: needs one (time, y, x) variable, or variable= naming it "
             f"(has {sorted(ds.data_vars)})"
         )
+    return names[0]
+
+
+def _read(
+    path: Any, ds: Any, area: Area, base: Medium | None, variable: str | None, max_cells: int
+) -> Medium:
+    names = [_rain_variable(ds, variable, f"rain-rate file {path}")]
     da = ds[names[0]]
     if set(da.dims) != {"time", "y", "x"}:
         raise InvalidInputError(
