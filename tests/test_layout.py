@@ -431,7 +431,7 @@ def test_generated_commands_take_every_option_from_their_dataclasses() -> None:
     import argparse
     import dataclasses
 
-    from rainuav import evaluate, fly, radiomap, study, train
+    from rainuav import _cli, evaluate, fly, radiomap, study, train
     from rainuav.rl.config import SECTIONS, TrainConfig
 
     commands = {p.stem for p in ROOT.glob("*.py") if "def main(" in p.read_text()}
@@ -450,10 +450,36 @@ def test_generated_commands_take_every_option_from_their_dataclasses() -> None:
                              (radiomap, radiomap.RadiomapOptions),
                              (fly, fly.FlyOptions),
                              (study, study.StudyOptions)):  # fmt: skip
-        assert shown(command.build_parser()) == {f.name for f in dataclasses.fields(options)}
+        every = {f.name for f in dataclasses.fields(options)}
+        more = {f.name for f in dataclasses.fields(options) if f.metadata.get("more")}
+        # --help lists the common options, --help-all every one; each is a flag either way.
+        assert shown(_cli.show_all(command.build_parser())) - {"help_all"} == every
+        assert shown(command.build_parser()) - {"help_all"} == every - more
+        assert len(every - more) <= 15, command.__name__
     run = {f.name for f in dataclasses.fields(TrainConfig) if f.name not in SECTIONS}
     run |= {f"{n}.{f.name}" for n, c in SECTIONS.items() for f in dataclasses.fields(c)}
     assert shown(train.build_parser(show_all=True)) - {"help_all", "config", "resume"} == run
+    assert shown(train.build_parser()) - {"help_all", "config", "resume"} == set(train.SHOWN)
+
+
+def test_help_lists_the_common_options_and_help_all_every_one(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from rainuav import fly
+
+    texts = []
+    for flag in ("--help", "--help-all"):
+        with pytest.raises(SystemExit) as stop:
+            fly.main([flag])
+        assert stop.value.code == 0
+        texts.append(capsys.readouterr().out)
+    short, full = texts
+    assert "--help-all" in short and "--sites" in short and "--sites" in full
+    assert "--speed-m-s" not in short and "--speed-m-s" in full
+    # An option --help leaves out is read all the same.
+    needed = ["--sites", "s.csv", "--start", "47.37,8.54", "--goal", "47.38,8.55", "--out", "o"]
+    args = fly.build_parser().parse_args([*needed, "--speed-m-s", "5"])
+    assert args.speed_m_s == 5.0
 
 
 MAX_FUNCTION_LINES = 80

@@ -26,7 +26,37 @@ __all__ = [
     "metre_flags",
     "plain_help",
     "run",
+    "show_all",
 ]
+
+
+class _HelpAll(argparse.Action):
+    """``--help-all``: the help with every option, the ones ``--help`` leaves out too."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, **_: Any) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS,
+                         help="list every option, with its default, and exit")  # fmt: skip
+
+    def __call__(self, parser: argparse.ArgumentParser, *_: Any) -> None:
+        show_all(parser)
+        parser.print_help()
+        parser.exit()
+
+
+def show_all(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """Lists in ``parser``'s help the options its ``--help`` leaves out
+    ([`Parser.hide()`][rainuav._cli.Parser.hide]).
+
+    Args:
+        parser: The command's parser.
+
+    Returns:
+        The parser.
+    """
+    for a in parser._actions:
+        if getattr(a, "full_help", None) is not None:
+            a.help = a.full_help
+    return parser
 
 
 class Parser(argparse.ArgumentParser):
@@ -38,6 +68,18 @@ class Parser(argparse.ArgumentParser):
         kwargs.setdefault("allow_abbrev", False)
         super().__init__(*args, **kwargs)
         self.removed = dict(removed or {})
+
+    def hide(self, action: argparse.Action) -> None:
+        """Leaves ``action`` out of ``--help`` (an option few runs need); ``--help-all`` lists
+        it, and is added with the first option hidden.
+
+        Args:
+            action: What ``add_argument`` returned.
+        """
+        if "--help-all" not in self._option_string_actions:
+            self.add_argument("--help-all", action=_HelpAll)
+        action.full_help = action.help  # type: ignore[attr-defined]
+        action.help = argparse.SUPPRESS
 
     def error(self, message: str) -> Any:
         """Exits 2 with the usage and one line, the likely flags added to an unknown one's."""
@@ -194,7 +236,8 @@ def add_fields(ap: argparse.ArgumentParser, cls: type) -> None:
     is the field's (``int``, ``float``, ``str``, a path); a ``bool`` field that defaults to False is
     a switch; a field's ``metadata["choices"]`` are its allowed values (or a function giving
     them, called when the parser is built), ``metadata["metavar"]`` its value's name,
-    ``metadata["type"]`` a parser of its own and ``metadata["required"]`` a flag that must be given.
+    ``metadata["type"]`` a parser of its own, ``metadata["required"]`` a flag that must be given
+    and ``metadata["more"]`` one that ``--help`` leaves out (``--help-all`` lists it).
 
     Args:
         ap: The command's parser.
@@ -211,17 +254,21 @@ def add_fields(ap: argparse.ArgumentParser, cls: type) -> None:
         flag = f"--{f.name.replace('_', '-')}"
         text = plain_help(docs.get(f.name, ""))
         if kind == "bool":
-            ap.add_argument(flag, dest=f.name, action="store_true", help=text)
-            continue
-        ap.add_argument(
-            flag,
-            dest=f.name,
-            type=f.metadata.get("type", kinds.get(kind, str)),
-            default=f.default,
-            required=f.metadata.get("required", False),
-            choices=choices() if callable(choices := f.metadata.get("choices")) else choices,
-            metavar=f.metadata.get("metavar"),
-            help=text
-            if "default" in text or f.default is None
-            else f"{text} (default {f.default})",
-        )
+            action = ap.add_argument(flag, dest=f.name, action="store_true", help=text)
+        else:
+            action = ap.add_argument(
+                flag,
+                dest=f.name,
+                type=f.metadata.get("type", kinds.get(kind, str)),
+                default=f.default,
+                required=f.metadata.get("required", False),
+                choices=choices() if callable(choices := f.metadata.get("choices")) else choices,
+                metavar=f.metadata.get("metavar"),
+                help=text
+                if "default" in text or f.default is None
+                else f"{text} (default {f.default})",
+            )
+        if f.metadata.get("more"):
+            if not isinstance(ap, Parser):
+                raise TypeError("options left out of --help need a rainuav._cli.Parser")
+            ap.hide(action)

@@ -92,7 +92,7 @@ class EvaluateOptions:
     """Propagation engine of the world flown."""
     storm_seed: int | None = None
     """Fly through this storm of the 'storm' scenario."""
-    freq_ghz: float | None = None
+    freq_ghz: float | None = dataclasses.field(default=None, metadata={"more": True})
     """Carrier frequency, GHz."""
     storm_seeds: str | None = None
     """Fly through every storm A-B (inclusive), 20 starts each unless --starts."""
@@ -102,11 +102,13 @@ class EvaluateOptions:
     """Number of fixed starts (default: the run's eval_starts)."""
     seed: int | None = None
     """Seed of the starts (default: the run's eval_seed)."""
-    shield: bool = False
+    shield: bool = dataclasses.field(default=False, metadata={"more": True})
     """Also report shielded flights."""
-    online: bool = False
+    online: bool = dataclasses.field(default=False, metadata={"more": True})
     """Fly the last online network, not the one the run reports (the weight average)."""
-    device: str = dataclasses.field(default="cpu", metadata={"choices": ("cpu", "cuda", "auto")})
+    device: str = dataclasses.field(
+        default="cpu", metadata={"more": True, "choices": ("cpu", "cuda", "auto")}
+    )
     """Where the network runs."""
     out: Path | None = None
     """Output folder (default: the run's folder for its own map, a folder in it for another)."""

@@ -64,26 +64,28 @@ class RadiomapOptions:
     """Propagation engine (default: the scenario's, 'hybrid' for the presets)."""
     storm_seed: int | None = None
     """With --scenario storm: the storm drawn (default 0; from 1000000: evaluation storms)."""
-    at_s: float | None = None
+    at_s: float | None = field(default=None, metadata={"more": True})
     """The weather this many seconds into its motion (moving rain cells; default 0)."""
     duration_s: float | None = None
     """Maps in time: the weather's first DURATION seconds, every --slice-s (ray engine), written
     as radiomap_series.npz and storm.gif."""
-    slice_s: float | None = None
+    slice_s: float | None = field(default=None, metadata={"more": True})
     """With --duration-s: the step, s (default 5)."""
     terrain: Path | None = None
     """A DEM GeoTIFF (any CRS; heights in metres above sea level) under the area: the scenario
     needs an [origin] (a --config TOML)."""
-    ground: str | None = field(default=None, metadata={"choices": _grounds})
+    ground: str | None = field(default=None, metadata={"more": True, "choices": _grounds})
     """The ground's material: pec, none, or an ITU-R P.527 soil (default: the scenario's;
     medium-dry over a --terrain DEM)."""
     footprints: Path | None = None
     """Building footprints in GeoJSON (longitude/latitude; OpenStreetMap height tags): the
     scenario needs an [origin] (a --config TOML)."""
-    default_height: float | None = field(default=None, metadata={"metavar": "M"})
+    default_height: float | None = field(default=None, metadata={"more": True, "metavar": "M"})
     """The roof of a building whose footprint gives neither a height nor storeys, m (default:
     the scenario's footprints.default_height_m, 10 m)."""
-    altitude_reference: str | None = field(default=None, metadata={"choices": ("ground", "msl")})
+    altitude_reference: str | None = field(
+        default=None, metadata={"more": True, "choices": ("ground", "msl")}
+    )
     """The flight altitude above the terrain under the UAV (ground, the default) or above mean
     sea level (msl)."""
     altitudes_m: str | None = field(default=None, metadata={"metavar": "LOW:HIGH:STEP"})
@@ -93,32 +95,32 @@ class RadiomapOptions:
     """A drive-test or flight log (lat,lon or x_m,y_m, alt_m, cell, rsrp_dbm or rss_dbm): the
     map calibrated and corrected by it, with each pixel's standard deviation
     (rainuav.radio.measured); writes fit.json."""
-    calibrate: str | None = field(default=None, metadata={"metavar": "NAMES"})
+    calibrate: str | None = field(default=None, metadata={"more": True, "metavar": "NAMES"})
     """With --measurements: the site parameters fitted per cell, comma-separated, or 'none'
     (default: all four)."""
     receive_pattern: str = field(
-        default="off", metadata={"choices": ("off", "elevation", "heading", "both")}
+        default="off", metadata={"more": True, "choices": ("off", "elevation", "heading", "both")}
     )
     """With --measurements: 'elevation' fits the UAV's receive gain by elevation before the
     residual field, 'heading' its gain against its heading (a log with heading_deg), 'both' the
     two (fit.json's held-out scores say whether it helped; default off)."""
     residual_kernel: str | None = field(
-        default=None, metadata={"choices": ("one-scale", "two-scale", "auto")}
+        default=None, metadata={"more": True, "choices": ("one-scale", "two-scale", "auto")}
     )
     """With --measurements: the residual field's kernel; 'two-scale' adds a field over tens of
     metres to the smooth one, 'auto' keeps the one that predicts the log's held-out blocks
     better (default one-scale)."""
-    level_step_m: float | None = field(default=None, metadata={"metavar": "M"})
+    level_step_m: float | None = field(default=None, metadata={"more": True, "metavar": "M"})
     """With --measurements: the height between the maps built at the log's heights, 1..500 m
     (default 10; at most 40 maps, so a log spanning more needs a coarser step)."""
     out: Path = Path("maps")
     """The output folder."""
-    no_cache: bool = False
+    no_cache: bool = field(default=False, metadata={"more": True})
     """Build afresh, do not store."""
-    min_db: float | None = None
+    min_db: float | None = field(default=None, metadata={"more": True})
     """The SINR counted as outage in the summaries, dB (default: the preset's; for a scenario
     file the uma preset's, as fly uses)."""
-    clear_cache: bool = False
+    clear_cache: bool = field(default=False, metadata={"more": True})
     """Delete every cached map and exit."""
 
 

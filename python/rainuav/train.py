@@ -88,7 +88,6 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    ap.add_argument("--help-all", action="store_true", help="list every field's flag and exit")
     ap.add_argument("--config", type=Path, help="a TOML file of the run's fields (config.toml)")
     ap.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
     for cls, prefix in ((TrainConfig, ""), *((c, f"{n}.") for n, c in SECTIONS.items())):
@@ -106,10 +105,11 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
                 kind = flag_types.get(field_kind(f)[0], str)
             more = " As X,Y." if f.name in ("goal_m", "start_m") else ""
             text = _cli.plain_help(f"{docs.get(f.name, '')}{more} (default {default})")
-            shown = show_all or name in SHOWN
-            ap.add_argument(_flag(prefix + f.name), dest=name, type=kind, default=None,
-                            help=text if shown else argparse.SUPPRESS)  # fmt: skip
-    return ap
+            action = ap.add_argument(_flag(prefix + f.name), dest=name, type=kind, default=None,
+                                     help=text)  # fmt: skip
+            if name not in SHOWN:
+                ap.hide(action)
+    return _cli.show_all(ap) if show_all else ap
 
 
 def config_from_args(args: argparse.Namespace) -> Any:

@@ -121,9 +121,9 @@ class FlyOptions:
     weather: Path | None = None
     """A georeferenced rain file (NetCDF on lat/lon or x/y with a CRS, a GeoTIFF with a band per
     instant, or a folder of GeoTIFF scans; mm/h or dBZ)."""
-    speed_m_s: float = 10.0
+    speed_m_s: float = field(default=10.0, metadata={"more": True})
     """Ground speed, m/s."""
-    min_db: float | None = None
+    min_db: float | None = field(default=None, metadata={"more": True})
     """SINR outage threshold, dB."""
     policy: Path | None = None
     """Fly a trained network that reads the weather (a run of --observation weather)."""
@@ -133,20 +133,24 @@ class FlyOptions:
     footprints: Path | None = None
     """Building footprints in GeoJSON (longitude/latitude, OpenStreetMap height tags): buildings
     that block, diffract and reflect, and that the flight keeps clear of."""
-    default_height: float | None = field(default=None, metadata={"metavar": "M"})
+    default_height: float | None = field(default=None, metadata={"more": True, "metavar": "M"})
     """With --footprints: the roof of a building whose footprint gives neither a height nor
     storeys, m (default 10; central-city buildings are often 18-28 m)."""
-    ground: str | None = field(default=None, metadata={"choices": _grounds})
+    ground: str | None = field(default=None, metadata={"more": True, "choices": _grounds})
     """The ground's material: pec, none, or an ITU-R P.527 soil (default: pec on flat ground,
     medium-dry over a --terrain DEM)."""
-    engine: str | None = field(default=None, metadata={"choices": ("hybrid", "ray", "pe")})
+    engine: str | None = field(
+        default=None, metadata={"more": True, "choices": ("hybrid", "ray", "pe")}
+    )
     """The radio map's engine (default: hybrid, the PE inside each cell's cone and rays outside;
     ray: rays alone, seconds instead of minutes)."""
     altitudes_m: str | None = field(default=None, metadata={"metavar": "LOW:HIGH:STEP"})
     """Fly a band of heights, m above the ground (e.g. 30:120:15): the flight chooses its
     height, climbing at 5 m/s and descending at 3 m/s; --altitude-m is then the single height
     it is compared with."""
-    altitude_reference: str | None = field(default=None, metadata={"choices": ("ground", "msl")})
+    altitude_reference: str | None = field(
+        default=None, metadata={"more": True, "choices": ("ground", "msl")}
+    )
     """--altitude-m above the terrain under the UAV (ground, the default) or above mean sea
     level (msl)."""
     measurements: Path | None = field(default=None, metadata={"metavar": "LOG.csv"})
