@@ -432,6 +432,7 @@ def test_generated_commands_take_every_option_from_their_dataclasses() -> None:
     import dataclasses
 
     from rainuav import _cli, evaluate, fly, radiomap, study, train
+    from rainuav.radio.engines import ENGINES
     from rainuav.rl.config import SECTIONS, TrainConfig
 
     commands = {p.stem for p in ROOT.glob("*.py") if "def main(" in p.read_text()}
@@ -456,6 +457,8 @@ def test_generated_commands_take_every_option_from_their_dataclasses() -> None:
         assert shown(_cli.show_all(command.build_parser())) - {"help_all"} == every
         assert shown(command.build_parser()) - {"help_all"} == every - more
         assert len(every - more) <= 15, command.__name__
+        engine = [a for a in command.build_parser()._actions if a.dest == "engine"]
+        assert not engine or tuple(engine[0].choices) == tuple(ENGINES)  # from the registry
     run = {f.name for f in dataclasses.fields(TrainConfig) if f.name not in SECTIONS}
     run |= {f"{n}.{f.name}" for n, c in SECTIONS.items() for f in dataclasses.fields(c)}
     assert shown(train.build_parser(show_all=True)) - {"help_all", "config", "resume"} == run

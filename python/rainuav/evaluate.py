@@ -40,6 +40,7 @@ from pathlib import Path
 from rainuav import _cli
 from rainuav._checks import check_integer
 from rainuav._io import begin_folder, check_out_dir, write_atomic
+from rainuav.radio.engines import ENGINES
 
 OTHER_WORLD = ("scenario", "rain_rate_mm_h", "engine", "storm_seed", "freq_ghz")
 """The flags that fly the run in another world."""
@@ -86,9 +87,7 @@ class EvaluateOptions:
     """Fly on this preset's map (in its own weather, unless --rain-rate-mm-h)."""
     rain_rate_mm_h: float | None = None
     """Homogeneous rain, mm/h."""
-    engine: str | None = dataclasses.field(
-        default=None, metadata={"choices": ("hybrid", "ray", "pe")}
-    )
+    engine: str | None = dataclasses.field(default=None, metadata={"choices": tuple(ENGINES)})
     """Propagation engine of the world flown."""
     storm_seed: int | None = None
     """Fly through this storm of the 'storm' scenario."""

@@ -29,6 +29,7 @@ from typing import Any
 
 from rainuav import _cli
 from rainuav.errors import InvalidInputError
+from rainuav.radio.engines import ENGINES
 
 
 def _presets() -> tuple[str, ...]:
@@ -60,7 +61,7 @@ class RadiomapOptions:
     (rainuav.radio.scene.rategrid; needs the 'weather' extra)."""
     freq_ghz: float | None = None
     """Carrier frequency, GHz (1-100)."""
-    engine: str | None = field(default=None, metadata={"choices": ("hybrid", "ray", "pe")})
+    engine: str | None = field(default=None, metadata={"choices": tuple(ENGINES)})
     """Propagation engine (default: the scenario's, 'hybrid' for the presets)."""
     storm_seed: int | None = None
     """With --scenario storm: the storm drawn (default 0; from 1000000: evaluation storms)."""

@@ -60,6 +60,7 @@ from pathlib import Path
 
 from rainuav import _cli
 from rainuav.errors import InvalidInputError
+from rainuav.radio.engines import ENGINES
 
 LATLON_FLAGS = ("--start", "--goal", "--area")
 """The flags whose values may begin with a minus sign (southern and western degrees)."""
@@ -139,9 +140,7 @@ class FlyOptions:
     ground: str | None = field(default=None, metadata={"more": True, "choices": _grounds})
     """The ground's material: pec, none, or an ITU-R P.527 soil (default: pec on flat ground,
     medium-dry over a --terrain DEM)."""
-    engine: str | None = field(
-        default=None, metadata={"more": True, "choices": ("hybrid", "ray", "pe")}
-    )
+    engine: str | None = field(default=None, metadata={"more": True, "choices": tuple(ENGINES)})
     """The radio map's engine (default: hybrid, the PE inside each cell's cone and rays outside;
     ray: rays alone, seconds instead of minutes)."""
     altitudes_m: str | None = field(default=None, metadata={"metavar": "LOW:HIGH:STEP"})
