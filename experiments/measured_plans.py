@@ -21,7 +21,7 @@ local mean's spread alone (``sample=False``).
 
 Where a plan set's realised outage comes from is printed beside it: of its moves that end in
 outage on the truth, how many the map gave a probability under 5%, and there the serving cell's
-error and spread on the map.
+error and spread on the map (of the cell the map has serving).
 """
 
 from __future__ import annotations
@@ -66,13 +66,14 @@ def outage_on(truth, prob: np.ndarray, path: np.ndarray, thr: float) -> tuple[fl
 
 def misses_on(rm, truth, prob: np.ndarray, paths: list[np.ndarray], thr: float) -> dict:
     """Where a set of plans' realised outage comes from: of the moves that end below ``thr`` on
-    the truth, the share the map gave a probability under 5%, and at those moves the serving
-    cell's error (map minus truth, dB) and its spread on the map (local mean), medians."""
+    the truth, the share the map gave a probability under 5%, and at those moves the error of
+    the cell the map has serving (map minus truth, dB) and its spread on the map (local mean),
+    medians."""
     where = [pixel_index(truth.sinr_db.shape, truth.extent_m, p[1:, 0], p[1:, 1]) for p in paths]
     r, c = (np.concatenate(a) for a in zip(*where, strict=True))
     out = truth.sinr_db[r, c] < thr
     sure = out & (prob[r, c] < 0.05)
-    cell = truth.serving_cell[r[sure], c[sure]]
+    cell = rm.serving_cell[r[sure], c[sure]]
     err = rm.rss_dbm[cell, r[sure], c[sure]] - truth.rss_dbm[cell, r[sure], c[sure]]
     std = getattr(rm, "rss_std_db", None)
     spread = None
@@ -152,8 +153,9 @@ def run(seeds: list[int], n_starts: int) -> list[dict]:
                       f"interval for {100 * r['within_90_interval']:.0f}% of the plans, within "
                       f"one spread for {100 * r['within_one_spread']:.0f}%; of its "
                       f"{miss['outage_moves']} moves in outage {miss['outage_moves_under_5pct']} "
-                      f"had P < 5% (serving cell off by {miss['under_5pct_error_db']} dB there, "
-                      f"spread {miss['under_5pct_spread_db']} dB)",
+                      f"had P < 5% (the map's serving cell off by "
+                      f"{miss['under_5pct_error_db']} dB there, spread "
+                      f"{miss['under_5pct_spread_db']} dB)",
                       flush=True)  # fmt: skip
     return rows
 

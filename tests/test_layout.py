@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import re
 import subprocess
 import sys
 import warnings
@@ -483,6 +484,21 @@ def test_help_lists_the_common_options_and_help_all_every_one(
     needed = ["--sites", "s.csv", "--start", "47.37,8.54", "--goal", "47.38,8.55", "--out", "o"]
     args = fly.build_parser().parse_args([*needed, "--speed-m-s", "5"])
     assert args.speed_m_s == 5.0
+
+
+INSIDE_READS = 67
+"""Reads of the environment's insides (``env.cfg``, ``env.field``, ``env.altitudes_m``) the
+learner's package still makes, at most: fewer with each move toward the spaces alone (the
+training starts and the shaping are the navigation layer's wrappers now,
+``rainuav.nav.training``)."""
+
+
+def test_the_learner_reads_the_environments_insides_no_more_than_it_did() -> None:
+    pattern = re.compile(r"\benv\.(cfg|field|altitudes_m)\b")
+    reads = {p.name: len(pattern.findall(p.read_text()))
+             for p in sorted((ROOT / "rl").glob("*.py"))}  # fmt: skip
+    assert reads["learner.py"] == 0, "the learner's starts and rewards go through rainuav.nav"
+    assert sum(reads.values()) <= INSIDE_READS, reads
 
 
 MAX_FUNCTION_LINES = 80
