@@ -19,11 +19,13 @@ from __future__ import annotations
 import argparse
 import time
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 import torch
 from rainuav.nav import UAVNavEnv
 from rainuav.nav.field import SignalSeries
+from rainuav.nav.training import network_inputs
 from rainuav.rl.config import DQNConfig, preset_learner
 from rainuav.rl.dqn import Agent
 from rainuav.rl.setup import make_encoder
@@ -62,7 +64,12 @@ def storm_network() -> DQNConfig:
 def make_agent(d: DQNConfig, observation: str, field: SignalSeries) -> tuple[UAVNavEnv, Agent]:
     """The env on ``field`` with the task's destination and the learner's agent (seed 0)."""
     env = UAVNavEnv(field=field, goal_m=(1400.0, 1600.0), min_db=-2.0, observation=observation)
-    return env, Agent(d, 0, torch.device("cpu"), make_encoder(d, env, (0.005, 0.005)))
+    return env, Agent(
+        d,
+        0,
+        torch.device("cpu"),
+        make_encoder(d, replace(network_inputs(env), step=(0.005, 0.005))),
+    )
 
 
 def main() -> None:

@@ -304,13 +304,16 @@ def test_move_features_tell_what_each_move_does() -> None:
     move, and the progress
     feature is the drop of the straight distance to the destination in moves (1e-3: float32
     positions of a 1000 m area, 1e-4 m, over 10 m moves)."""
+    from dataclasses import replace
+
     import torch
+    from rainuav.nav.training import network_inputs
     from rainuav.rl.config import DQNConfig
     from rainuav.rl.setup import make_encoder
 
     env = weather_env(random_goal=True)
     d = DQNConfig(move_features=True, conv=4, hidden=16)
-    enc = make_encoder(d, env, (0.01, 0.0125))
+    enc = make_encoder(d, replace(network_inputs(env), step=(0.01, 0.0125)))
     net = enc.make_net()
     rng = np.random.default_rng(3)
     arrivals = 0
@@ -343,15 +346,23 @@ def test_goal_maps_draw_the_destination_on_the_grids() -> None:
     diagonal, and each window point's approach to the destination over the window's
     half-width (1e-5: float32 positions of a 1000 m area); the network takes them as extra
     input channels; without the flag the network is unchanged."""
+    from dataclasses import replace
+
     import torch
+    from rainuav.nav.training import network_inputs
     from rainuav.rl.config import DQNConfig
     from rainuav.rl.setup import make_encoder
 
     env = weather_env(random_goal=True)
-    enc = make_encoder(DQNConfig(goal_maps=True, conv=4, hidden=16), env, (0.01, 0.0125))
+    enc = make_encoder(
+        DQNConfig(goal_maps=True, conv=4, hidden=16),
+        replace(network_inputs(env), step=(0.01, 0.0125)),
+    )
     net = enc.make_net()
     assert net.local[0].in_channels == 2 and net.whole[0].in_channels == 3
-    plain = make_encoder(DQNConfig(conv=4, hidden=16), env, (0.01, 0.0125)).make_net()
+    plain = make_encoder(
+        DQNConfig(conv=4, hidden=16), replace(network_inputs(env), step=(0.01, 0.0125))
+    ).make_net()
     assert plain.goal_maps is None and plain.whole[0].in_channels == 1
     rng = np.random.default_rng(4)
     cells, off = env.view.area_points(EXTENT), env.view.local_offsets()
@@ -373,13 +384,18 @@ def test_runs_without_move_features_keep_their_network() -> None:
     """A run saved before the move features (its config has neither ``conv`` nor
     ``move_features``) builds the network it was trained with: 16/32 channels, no move
     features; with them the per-move gain is the only new weight shared by the moves."""
+    from dataclasses import replace
+
+    from rainuav.nav.training import network_inputs
     from rainuav.rl.config import DQNConfig
     from rainuav.rl.setup import make_encoder
 
     env = weather_env()
-    old = make_encoder(DQNConfig(), env, (0.01, 0.0125)).make_net()
+    old = make_encoder(DQNConfig(), replace(network_inputs(env), step=(0.01, 0.0125))).make_net()
     assert old.moves is None and old.local[0].out_channels == 16
-    new = make_encoder(DQNConfig(move_features=True, conv=8), env, (0.01, 0.0125)).make_net()
+    new = make_encoder(
+        DQNConfig(move_features=True, conv=8), replace(network_inputs(env), step=(0.01, 0.0125))
+    ).make_net()
     assert new.local[2].out_channels == 16 and new.move_gain.weight.shape == (1, 2)
 
 

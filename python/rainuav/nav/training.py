@@ -1,4 +1,5 @@
-"""What a learner trains on, beside the task itself: where its training flights start
+"""What a learner trains on, beside the task itself: what its network's input is
+([`network_inputs()`][rainuav.nav.training.network_inputs]), where its training flights start
 ([`TrainingStarts`][rainuav.nav.training.TrainingStarts]) and the shaped reward it stores for a
 move ([`Shaping`][rainuav.nav.training.Shaping]).
 
@@ -9,17 +10,86 @@ insides. Why each exists, and what it measured: ``docs/record/learning.md``."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import base_reward
 
-__all__ = ["GOAL_START_MOVES", "Shaping", "TrainingStarts"]
+__all__ = ["GOAL_START_MOVES", "NetworkInputs", "Shaping", "TrainingStarts", "network_inputs"]
 
 GOAL_START_MOVES = 10
 """Half side, in moves, of the square around the destination where ``goal_starts`` of the
 training flights begin."""
+
+
+@dataclass(frozen=True)
+class NetworkInputs:
+    """What a network needs to know of an environment's observations and actions, beside its
+    spaces."""
+
+    observation_dims: int
+    """The length of an observation of the position (its space's shape)."""
+    actions: int
+    """The number of actions (its action space's)."""
+    step: tuple[float, float]
+    """One move east and north in the observation's units."""
+    goal: tuple[float, float] | None
+    """The task's destination in the observation's units (None where the environment observes
+    the weather, with its destination in it)."""
+    max_steps: int
+    """The task's time limit, moves."""
+    among_levels: bool
+    """Whether the flight chooses its level (the level is in the observation)."""
+    gives_time: bool
+    """Whether the signal varies in time (the clock is in the observation)."""
+    area_m: tuple[float, float]
+    """The area's size east and north, m."""
+    step_m: float
+    """One move, m."""
+    tol_m: float
+    """The arrival tolerance, m."""
+    view: Any = None
+    """The weather view where the environment observes the weather
+    ([`rainuav.nav.views`][rainuav.nav.views]); None: it observes the position."""
+
+
+def network_inputs(env: UAVNavEnv) -> NetworkInputs:
+    """What a network reads of an environment: its observation's and action's sizes, one move
+    and the destination in the observation's units, the task's time limit and what the
+    observation holds.
+
+    Args:
+        env: The environment.
+
+    Returns:
+        The [`NetworkInputs`][rainuav.nav.training.NetworkInputs].
+    """
+    x0, x1, y0, y1 = env.field.extent
+    s = env.cfg.step_m
+    among = env.altitudes_m is not None
+    goal: tuple[float, float] | None = None
+    if among:  # the destination scaled to the area, as the observation scales the position
+        gx, gy = env.cfg.goal_m
+        goal = ((gx - x0) / (x1 - x0), (gy - y0) / (y1 - y0))
+    elif env.view is None:
+        gx, gy = env.observe(np.asarray(env.cfg.goal_m))[:2].tolist()
+        goal = (gx, gy)
+    shape = env.observation_space.shape
+    return NetworkInputs(
+        observation_dims=int(shape[0]) if shape else 0,
+        actions=int(env.action_space.n),  # type: ignore[attr-defined]
+        step=(s / (x1 - x0), s / (y1 - y0)),
+        goal=goal,
+        max_steps=env.cfg.max_steps,
+        among_levels=among,
+        gives_time=bool(env.field.varies),
+        area_m=(x1 - x0, y1 - y0),
+        step_m=s,
+        tol_m=env.cfg.tol_m,
+        view=env.view,
+    )
 
 
 @dataclass(frozen=True)

@@ -8,12 +8,12 @@ import contextlib
 import sys
 from collections.abc import Iterator
 
-import numpy as np
 import torch
 
 from rainuav._checks import check_fits as check_fits_memory
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.training import NetworkInputs, network_inputs
 from rainuav.nav.views import WeatherView
 from rainuav.rl.config import DQNConfig, TrainConfig
 from rainuav.rl.dqn import Agent, Encoder, memory_needed
@@ -59,13 +59,10 @@ def make_agent(cfg: TrainConfig, env: UAVNavEnv, device: torch.device) -> Agent:
             ([`check_fits()`][rainuav.rl.setup.check_fits]).
     """
     check_fits(cfg)
-    x0, x1, y0, y1 = env.field.extent
-    s = env.cfg.step_m
-    step = (s / (x1 - x0), s / (y1 - y0))
-    return Agent(cfg.dqn, cfg.seed, device, make_encoder(cfg.dqn, env, step))
+    return Agent(cfg.dqn, cfg.seed, device, make_encoder(cfg.dqn, network_inputs(env)))
 
 
-def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Encoder:
+def make_encoder(d: DQNConfig, inputs: NetworkInputs) -> Encoder:
     """The encoder (and network) for an environment's observation.
 
     The weather-reading one where the env shows the weather, else the position one (with the env's
@@ -74,28 +71,21 @@ def make_encoder(d: DQNConfig, env: UAVNavEnv, step: tuple[float, float]) -> Enc
 
     Args:
         d: The learner's settings.
-        env: The environment.
-        step: One move in the observation's units.
+        inputs: What the network reads of the environment
+            ([`network_inputs()`][rainuav.nav.training.network_inputs]).
 
     Returns:
         The encoder.
     """
-    if env.view is not None:
-        x0, x1, y0, y1 = env.field.extent
-        geometry = MoveGeometry((x1 - x0, y1 - y0), env.cfg.step_m, env.cfg.tol_m)
-        n = int(env.action_space.n)  # type: ignore[union-attr]
-        return WeatherEncoder(d, env.view, step, geometry, n)
-    if env.altitudes_m is not None:  # among levels: the level in the input, six actions
-        x0, x1, y0, y1 = env.field.extent
-        gx, gy = env.cfg.goal_m
-        goal = ((gx - x0) / (x1 - x0), (gy - y0) / (y1 - y0))
-        dims = int(env.observation_space.shape[0])  # type: ignore[index]
-        n = int(env.action_space.n)  # type: ignore[union-attr]  # six: a climb and a descent
-        return PositionEncoder(d, env.cfg.max_steps, goal, step, dims,
-                               gives_time=env.field.varies, n_actions=n)  # fmt: skip
-    goal = tuple(env.observe(np.asarray(env.cfg.goal_m))[:2].tolist())
-    dims = int(env.observation_space.shape[0])  # type: ignore[index]
-    return PositionEncoder(d, env.cfg.max_steps, goal, step, dims)
+    i = inputs
+    if i.view is not None:
+        geometry = MoveGeometry(i.area_m, i.step_m, i.tol_m)
+        return WeatherEncoder(d, i.view, i.step, geometry, i.actions)
+    assert i.goal is not None  # an env that observes the position has its destination
+    if i.among_levels:  # the level in the input, six actions (a climb and a descent)
+        return PositionEncoder(d, i.max_steps, i.goal, i.step, i.observation_dims,
+                               gives_time=i.gives_time, n_actions=i.actions)  # fmt: skip
+    return PositionEncoder(d, i.max_steps, i.goal, i.step, i.observation_dims)
 
 
 def pick_device(name: str) -> torch.device:
