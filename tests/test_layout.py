@@ -486,11 +486,11 @@ def test_help_lists_the_common_options_and_help_all_every_one(
     assert args.speed_m_s == 5.0
 
 
-INSIDE_READS = 55
+INSIDE_READS = 37
 """Reads of the environment's insides (``env.cfg``, ``env.field``, ``env.altitudes_m``) the
 learner's package still makes, at most: fewer with each move toward the spaces alone (77
-before the training starts, the shaping and the network's inputs became the navigation layer's,
-``rainuav.nav.training``)."""
+before the training starts, the shaping, the network's inputs and the yardsticks became the
+navigation layer's: ``rainuav.nav.training``, ``rainuav.nav.references``)."""
 
 
 def test_the_learner_reads_the_environments_insides_no_more_than_it_did() -> None:

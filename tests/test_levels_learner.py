@@ -13,6 +13,7 @@ import torch
 from rainuav.errors import InvalidInputError
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.references import reference_flights
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio.outputs.levelmaps import LevelStack
 from rainuav.radio.scene.scenario import Area, Scenario, Site
@@ -22,7 +23,6 @@ from rainuav.rl.config import DQNConfig, TrainConfig, check_config
 from rainuav.rl.evaluation import eval_starts, evaluate, evaluate_saved_run
 from rainuav.rl.learner import learning_reward
 from rainuav.rl.loop import train
-from rainuav.rl.references import reference_flights
 from rainuav.rl.setup import make_agent
 from rainuav.world import World, in_world, load_world, saved_world
 

@@ -1,5 +1,5 @@
 """Measuring a policy: the network's greedy flights from fixed starts against the exact planner and
-the baselines ([`rainuav.rl.references`][rainuav.rl.references]: the straight line; where the
+the baselines ([`rainuav.nav.references`][rainuav.nav.references]: the straight line; where the
 weather moves, the plan of the weather at take-off and re-planning; among levels, the plans of one
 altitude), by success and excess cost ([`evaluate()`][rainuav.rl.evaluation.evaluate]), the run's
 evaluation ([`evaluate_run_policy()`][rainuav.rl.evaluation.evaluate_run_policy]) and the greedy
@@ -21,6 +21,13 @@ from rainuav._checks import check_integer
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import field_digest
+from rainuav.nav.references import (
+    eval_starts,
+    flights,
+    reference_flights,
+    relative_gap,
+    summarise,
+)
 from rainuav.radio.outputs.maps import RadioMap
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
@@ -32,13 +39,6 @@ from rainuav.rl.config import (
     load_config,
 )
 from rainuav.rl.dqn import Agent
-from rainuav.rl.references import (
-    eval_starts,
-    flights,
-    reference_flights,
-    relative_gap,
-    summarise,
-)
 from rainuav.rl.resume import RESUME_MAY_DIFFER, config_diff
 from rainuav.rl.setup import make_agent, pick_device
 from rainuav.world import World, load_world, task_of, world_from

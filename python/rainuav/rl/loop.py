@@ -34,6 +34,7 @@ import tomli_w
 from rainuav._io import FolderLock, check_out_dir, write_atomic
 from rainuav.errors import InvalidInputError, TrainingDivergedError
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.references import optimal_flights
 from rainuav.radio.scene.storms import check_storm_seed
 from rainuav.rl import checkpoint
 from rainuav.rl.callbacks import (
@@ -59,7 +60,6 @@ from rainuav.rl.evaluation import (
     eval_starts,
 )
 from rainuav.rl.learner import learner_ends, learning_reward, training_level, training_task
-from rainuav.rl.references import optimal_flights
 from rainuav.rl.report import finish
 from rainuav.rl.resume import RESUME_MAY_DIFFER, config_diff
 from rainuav.rl.runlog import RunLog

@@ -1,14 +1,14 @@
 """The yardsticks a policy is measured against: fixed starts
-([`eval_starts()`][rainuav.rl.references.eval_starts]), the exact planner's flights and the
-baselines' ([`reference_flights()`][rainuav.rl.references.reference_flights]), what a set of flights
-comes to ([`flights()`][rainuav.rl.references.flights]) and how it compares with the optimum
-([`summarise()`][rainuav.rl.references.summarise]).
+([`eval_starts()`][rainuav.nav.references.eval_starts]), the exact planner's flights and the
+baselines' ([`reference_flights()`][rainuav.nav.references.reference_flights]), what a set of
+flights comes to ([`flights()`][rainuav.nav.references.flights]) and how it compares with the
+optimum ([`summarise()`][rainuav.nav.references.summarise]).
 
 On one level: the exact optimum, the straight line, and where the weather moves the plan of the
 weather at take-off and re-planning ([`rainuav.nav.baselines`][rainuav.nav.baselines]). Among levels
 ([`rainuav.nav.levels`][rainuav.nav.levels]): the exact optimum among
 levels from the level a flight starts at, and the baselines of one altitude (``fixed_altitude``: the
-exact plan held at the level nearest [`PAPER_ALTITUDE_M`][rainuav.rl.references.PAPER_ALTITUDE_M],
+exact plan held at the level nearest [`PAPER_ALTITUDE_M`][rainuav.nav.references.PAPER_ALTITUDE_M],
 the paper's; ``best_single_altitude``: the exact plan at each level, the best chosen with hindsight
 per flight; ``straight_line``: the straight line at the fixed level), each flown from the start at
 its own level (the take-off climb is the autopilot's, as in ``fly``)."""
@@ -137,7 +137,7 @@ def summarise(f: dict[str, np.ndarray], optimum: dict[str, np.ndarray]) -> dict[
     """The figures of a set of flights against the optimum's from the same starts.
 
     Args:
-        f: The flights ([`flights()`][rainuav.rl.references.flights]).
+        f: The flights ([`flights()`][rainuav.nav.references.flights]).
         optimum: The optimum's flights.
 
     Returns:
@@ -174,7 +174,7 @@ def reference_flights(
     The baselines: the straight line and, where the signal changes in time, the plan of the weather
     at take-off (`frozen_plan`) and re-planning every `replan_every` moves (`replan`), each flown
     through the moving weather. Among levels:
-    [`level_reference_flights()`][rainuav.rl.references.level_reference_flights].
+    [`level_reference_flights()`][rainuav.nav.references.level_reference_flights].
 
     Args:
         env: The environment.
@@ -204,7 +204,7 @@ def optimal_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, Any]:
         starts: The starts (N, 2), m.
 
     Returns:
-        The flights, as [`reference_flights()`][rainuav.rl.references.reference_flights] gives
+        The flights, as [`reference_flights()`][rainuav.nav.references.reference_flights] gives
         `optimal`.
     """
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
@@ -222,8 +222,8 @@ def optimal_flights(env: UAVNavEnv, starts: np.ndarray) -> dict[str, Any]:
 
 
 def _plans(plans: list, env: UAVNavEnv) -> dict[str, Any]:
-    """[`flights()`][rainuav.rl.references.flights] of planned flights (plans, or among levels level
-    plans, whose levels are kept for the heights flown)."""
+    """[`flights()`][rainuav.nav.references.flights] of planned flights (plans, or among levels
+    level plans, whose levels are kept for the heights flown)."""
     among = env.altitudes_m is not None
     levels = [p.levels for p in plans] if among else None
     f = flights(
