@@ -19,11 +19,11 @@ from pathlib import Path
 
 import numpy as np
 from rainuav.nav import planner
+from rainuav.nav.figures import plot_storm_flights
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import greedy_rollouts
 from rainuav.rl.config import load_config
 from rainuav.rl.evaluation import eval_starts, load_agent
-from rainuav.rl.plots import plot_storm_flights
 from rainuav.world import build_world, spec_of
 
 

@@ -162,7 +162,7 @@ def test_a_storm_world_from_a_spec_for_gym_make_train_and_evaluate() -> None:
 
 
 def test_flights_in_time_are_drawn_over_the_signal_at_take_off(tmp_path) -> None:
-    from rainuav.rl.plots import plot_trajectories
+    from rainuav.nav.figures import plot_trajectories
 
     env = storm_env(max_steps=20)
     starts = np.array([[5.0, 5.0], [55.0, 5.0]])

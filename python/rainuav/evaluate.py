@@ -132,9 +132,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
+    from rainuav.nav.figures import plot_policy, plot_storm_flights
     from rainuav.rl.config import MAX_SEED, MAX_STARTS
     from rainuav.rl.evaluation import evaluate_saved_run
-    from rainuav.rl.plots import plot_policy, plot_storm_flights
 
     if args.starts is not None:
         check_integer("--starts", args.starts, 1, MAX_STARTS)
@@ -168,7 +168,7 @@ def _evaluate_storms(args: argparse.Namespace) -> int:
     flags give):
     [`rainuav.rl.storm_eval.evaluate_worlds()`][rainuav.rl.storm_eval.evaluate_worlds]."""
     from rainuav.errors import InvalidInputError
-    from rainuav.rl.plots import plot_policy, plot_storm_flights
+    from rainuav.nav.figures import plot_policy, plot_storm_flights
     from rainuav.rl.storm_eval import evaluate_worlds, parse_seeds
 
     if args.shield:

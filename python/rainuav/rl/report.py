@@ -9,11 +9,12 @@ from typing import Any
 
 from rainuav._io import write_atomic
 from rainuav.nav.env import UAVNavEnv
+from rainuav.nav.figures import plot_policy, plot_stages, plot_storm_flights
 from rainuav.rl import checkpoint
 from rainuav.rl.config import TrainConfig, to_dict
 from rainuav.rl.dqn import Agent
 from rainuav.rl.evaluation import Validation, evaluate_run_policy
-from rainuav.rl.plots import plot_policy, plot_returns, plot_stages, plot_storm_flights
+from rainuav.rl.plots import plot_returns
 from rainuav.world.pool import VALIDATION_SEEDS, StormPool
 
 __all__ = ["finish"]

@@ -90,8 +90,8 @@ def transfer(study: Study, cases: list[Case], out: Path) -> dict[str, dict[str, 
     """
     from matplotlib.figure import Figure
 
+    from rainuav.nav.figures import draw_flights, optimal_paths
     from rainuav.radio.outputs.maps import RadioMap
-    from rainuav.rl.plots import draw_flights, optimal_paths
 
     if study.sweep != "one_at_a_time" or "learned" not in study.compute:
         return {}
@@ -164,7 +164,7 @@ def plot_learned(cases: list[Case], rows: dict[str, dict[str, Any]], out: Path) 
 
     from matplotlib.figure import Figure
 
-    from rainuav.rl.plots import draw_flights, optimal_paths
+    from rainuav.nav.figures import draw_flights, optimal_paths
 
     first = {}
     for c in cases:

@@ -66,10 +66,10 @@ def run_case(
     Returns:
         The case's row.
     """
+    from rainuav.nav.figures import plot_trajectories
     from rainuav.rl.evaluation import eval_starts as starts_of
     from rainuav.rl.evaluation import reference_flights, summarise
     from rainuav.rl.loop import train
-    from rainuav.rl.plots import plot_trajectories
     from rainuav.world import build_source, task_of, world_from
 
     out = Path(folder)
