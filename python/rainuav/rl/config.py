@@ -51,7 +51,7 @@ class TrainConfig(WorldSpec):
 
     preset: str = ""
     """The preset the run starts from: '' (the tuned defaults: docs/record/learning.md),
-    a preset shipped with the package ('paper': Algorithm 1 and Table I literally; 'storms';
+    a preset shipped with the package ('paper-learner': Algorithm 1 and Table I literally; 'storms';
     'storm-levels') or a TOML file of fields; the fields given beside it win
     ([`resolve_config()`][rainuav.rl.config.resolve_config])."""
     seed: int = 0
