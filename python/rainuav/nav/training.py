@@ -17,7 +17,15 @@ import numpy as np
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.task import base_reward
 
-__all__ = ["GOAL_START_MOVES", "NetworkInputs", "Shaping", "TrainingStarts", "network_inputs"]
+__all__ = [
+    "GOAL_START_MOVES",
+    "NetworkInputs",
+    "Shaping",
+    "TrainingStarts",
+    "network_inputs",
+    "positions",
+    "random_flight",
+]
 
 GOAL_START_MOVES = 10
 """Half side, in moves, of the square around the destination where ``goal_starts`` of the
@@ -90,6 +98,39 @@ def network_inputs(env: UAVNavEnv) -> NetworkInputs:
         tol_m=env.cfg.tol_m,
         view=env.view,
     )
+
+
+def positions(env: UAVNavEnv, starts: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Where UAVs are, from their starts and their offsets in moves (the batched interface's
+    coordinates, [`rainuav.nav.batched`][rainuav.nav.batched]).
+
+    Args:
+        env: The environment.
+        starts: The starts (N, 2), m.
+        offsets: The offsets from them (N, 2), moves.
+
+    Returns:
+        The positions (N, 2), m.
+    """
+    return starts + env.cfg.step_m * offsets
+
+
+def random_flight(env: UAVNavEnv, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """A destination drawn in the area and a start drawn within reach of it
+    ([`sample_goal()`][rainuav.nav.views.sample_goal],
+    [`sample_start_for()`][rainuav.nav.views.sample_start_for]).
+
+    Args:
+        env: The environment.
+        rng: The generator.
+
+    Returns:
+        `(start, destination)`, (2,) each, m.
+    """
+    from rainuav.nav.views import sample_goal, sample_start_for
+
+    goal = sample_goal(rng, env.field.extent)
+    return sample_start_for(rng, env.field.extent, goal, env.cfg), goal
 
 
 @dataclass(frozen=True)

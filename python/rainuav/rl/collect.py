@@ -16,6 +16,7 @@ import numpy as np
 
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.shield import shield_moves
+from rainuav.nav.training import positions
 from rainuav.rl.dqn import Agent, NStepWindow, best_action
 from rainuav.rl.setup import torch_settings
 
@@ -181,7 +182,7 @@ def _rollouts(
     signal: list[list[float]] = [[] for _ in range(n)]
     while live.any():
         idx = np.flatnonzero(live)
-        pos = starts[idx] + env.cfg.step_m * off[idx]
+        pos = positions(env, starts[idx], off[idx])
         g = None if goal is None else goal[idx]
         q = agent.q_values(agent.observe(env.observe_batch(pos, lv[idx], t[idx], g), t[idx]))
         a = best_action(q)

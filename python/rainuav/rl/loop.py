@@ -35,6 +35,7 @@ from rainuav._io import FolderLock, check_out_dir, write_atomic
 from rainuav.errors import InvalidInputError, TrainingDivergedError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.references import optimal_flights
+from rainuav.nav.training import positions
 from rainuav.radio.scene.storms import check_storm_seed
 from rainuav.rl import checkpoint
 from rainuav.rl.callbacks import (
@@ -368,7 +369,7 @@ def collect(run: RunState, cfg: TrainConfig) -> tuple[np.ndarray, dict[str, np.n
     """
     env, agent, lanes, d = run.env, run.agent, run.lanes, cfg.dqn
     idx = np.flatnonzero(lanes.active)
-    pos = lanes.start[idx] + env.cfg.step_m * lanes.offset[idx]
+    pos = positions(env, lanes.start[idx], lanes.offset[idx])
     goal = lanes.goal[idx] if env.view is not None else None  # each UAV's destination and world
     world = lanes.world[idx] if run.pool is not None else None
     level, t = lanes.level[idx], lanes.t[idx]

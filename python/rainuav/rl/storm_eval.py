@@ -4,9 +4,10 @@ the network alone, the exact optimum (in space-time where the weather moves), th
 take-off plan, re-planning and the straight line from the same fixed starts, then the mean
 over the worlds.
 
-Destinations: the task's fixed one, or with ``random_goals`` one per start, drawn as training draws
-them ([`rainuav.nav.views.sample_goal()`][rainuav.nav.views.sample_goal], the start within reach of
-it), each flight then planned and judged against its own destination's optimum."""
+Destinations: the task's fixed one, or with ``random_goals`` one per start, drawn as training
+draws them ([`rainuav.nav.training.random_flight()`][rainuav.nav.training.random_flight]: the
+start within reach of it), each flight then planned and judged against its own destination's
+optimum."""
 
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ import numpy as np
 from rainuav._checks import check_integer
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.views import sample_goal, sample_start_for
+from rainuav.nav.training import random_flight
 from rainuav.radio.scene.storms import EVAL_SEEDS_FROM, MAX_STORM_SEED
 from rainuav.rl import checkpoint
 from rainuav.rl.config import check_config, load_config
@@ -153,8 +154,7 @@ def evaluate_worlds(
         else:
             per = []
             for _ in range(starts):
-                goal = sample_goal(rng, env.field.extent)
-                start = sample_start_for(rng, env.field.extent, goal, env.cfg)
+                start, goal = random_flight(env, rng)
                 task = dataclasses.replace(world.task, goal_m=(float(goal[0]), float(goal[1])))
                 e = dataclasses.replace(world, task=task).env()
                 per.append(_flights(agent, e, start[None], cfg.replan_every))
