@@ -307,8 +307,7 @@ def preset_fields(name_or_path: str | Path, _seen: tuple[str, ...] = ()) -> dict
     if "preset" in data:  # a run's config.toml as a preset: the preset it records is its base
         if "extends" in data:
             raise InvalidInputError(f"preset {path}: give extends or preset, not both")
-        base_name = data.pop("preset") or None
-        data["extends"] = PRESETS_RENAMED.get(base_name, base_name)
+        data["extends"] = data.pop("preset") or None
     base = data.pop("extends", None)
     base = PRESETS_RENAMED.get(base, base)  # a file written before a rename
     if base is not None and (not isinstance(base, str) or base in (*_seen, text)):
