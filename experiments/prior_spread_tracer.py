@@ -2,7 +2,7 @@
 page "How far to trust a map").
 
     python experiments/prior_spread_tracer.py [--freq-ghz 3.5] [--altitude 20] [--samples 8e6]
-        [--json FILE] [--markdown]
+        [--json FILE] [--markdown] [--save-truth tests/tracer_truth.npz]
 
 Every tracer scene (no ground, isotropic antennas, the ray engine): the tracer's radio map as
 released is the truth of the local mean (a Monte Carlo average over each pixel), the engine's
@@ -19,6 +19,11 @@ error (median, RMS), the shares within one and two sigma and the CRPS. Each pixe
 the tracer's own standard error added in quadrature (half the difference of its two halves, in
 dB), as a local mean's has its own. The tuned table printed first is
 ``rainuav.radio.measured.prior.MEASURED``.
+
+``--save-truth`` writes the tracer's maps of the tuning sites (its two halves, linear gain) to a
+file: the test suite reads it to check that the shipped table is what today's engine makes of
+them, without tracing every scene again (it re-traces two scenes to check the file is the
+tracer's).
 """
 
 from __future__ import annotations
@@ -47,16 +52,23 @@ TUNING_SITES = 1
 """The held-back scenes' sites the spreads are tuned on (their first); the others report."""
 
 
-def pixels(name: str, freq_hz: float, altitude_m: float, samples: int) -> dict[str, np.ndarray]:
+def pixels(
+    name: str,
+    freq_hz: float,
+    altitude_m: float,
+    samples: int,
+    traced: tracer.TracerMap | None = None,
+) -> dict[str, np.ndarray]:
     """Every pixel the tracer covers (both halves of its rays, outside the buildings), per site:
     the tracer's minus the engine's power (``error_db``), the engine's excess loss over free
     space (``excess_db``), the distance from the site (``distance_m``), the site's index
     (``site``), the tracer's own standard error of its mean in dB, from the difference of its
     two halves (``truth_se_db``: half that difference, the standard error of a mean of two), and
-    the pixel's centre (``x_m``, ``y_m``)."""
+    the pixel's centre (``x_m``, ``y_m``). ``traced``: the tracer's map of the first sites (a
+    saved truth, ``truth_maps``); None: traced here."""
     scn = tracer.isotropic_scenario(scene(name, freq_hz, altitude_m))
-    ours = 10 * np.log10(np.maximum(tracer.engine_gain(scn), 1e-30))
-    tm = tracer.tracer_gain(scn, samples=samples)
+    tm = tracer.tracer_gain(scn, samples=samples) if traced is None else traced
+    ours = 10 * np.log10(np.maximum(tracer.engine_gain(scn), 1e-30))[: tm.half_a.shape[0]]
     ok = tm.covered & ~tracer.inside_buildings(scn)[None]
     with np.errstate(divide="ignore", invalid="ignore"):  # uncovered pixels: -inf, NaN
         truth = 10 * np.log10(tm.gain)
@@ -81,6 +93,25 @@ def pixels(name: str, freq_hz: float, altitude_m: float, samples: int) -> dict[s
         out["x_m"].append(gx.ravel()[sel])
         out["y_m"].append(gy.ravel()[sel])
     return {k: np.concatenate(v) for k, v in out.items()}
+
+
+def truth_maps(path: Path) -> dict[str, tracer.TracerMap]:
+    """The tracer's maps of the tuning sites a ``--save-truth`` file holds, per scene."""
+    with np.load(path) as f:
+        return {k[: -len("_a")]: tracer.TracerMap(f[k].astype(float), f[k[:-1] + "b"].astype(float))
+                for k in f.files if k.endswith("_a")}  # fmt: skip
+
+
+def save_truth(path: Path, maps: dict[str, tracer.TracerMap]) -> None:
+    """Writes the tuning sites' tracer maps (float32: 1e-7 relative, far below 0.01 dB)."""
+    arrays = {}
+    for name, tm in maps.items():
+        keep = TUNING_SITES if name in HELD_BACK else tm.half_a.shape[0]
+        arrays[f"{name}_a"] = tm.half_a[:keep].astype(np.float32)
+        arrays[f"{name}_b"] = tm.half_b[:keep].astype(np.float32)
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez_compressed(tmp, **arrays)
+    tmp.replace(path)
 
 
 def scores(e: np.ndarray, sd: np.ndarray) -> dict:
@@ -115,9 +146,20 @@ def main() -> None:
     ap.add_argument("--samples", type=float, default=8e6)
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--markdown", action="store_true", help="print the page's table too")
+    ap.add_argument(
+        "--save-truth",
+        type=Path,
+        default=None,
+        help="write the tuning sites' tracer maps here (the test suite's file)",
+    )
     args = ap.parse_args()
     f, h, n = args.freq_ghz * 1e9, args.altitude, int(args.samples)
-    data = {name: pixels(name, f, h, n) for name in SPREAD_SCENES}
+    traced = {}
+    for name in SPREAD_SCENES:
+        traced[name] = tracer.tracer_gain(tracer.isotropic_scenario(scene(name, f, h)), samples=n)
+    if args.save_truth:
+        save_truth(args.save_truth, traced)
+    data = {name: pixels(name, f, h, n, traced[name]) for name in SPREAD_SCENES}
     tune = split(data, True)
     tuned = measured_spreads(tune["error_db"], tune["excess_db"], tune["distance_m"],
                              source="tuning pixels")  # fmt: skip
