@@ -33,14 +33,46 @@ import numpy.typing as npt
 from rainuav._io import write_atomic
 from rainuav.errors import InvalidInputError
 
-__all__ = ["AXES", "FORMAT", "FORMAT_VERSION", "Signal"]
+__all__ = ["AXES", "FORMAT", "FORMAT_VERSION", "SIGNALS", "Signal", "signal_name", "toml_of"]
 
 AXES = ("world", "time", "level", "north", "east")
 """The axes of every signal, in the order its array holds them."""
+SIGNALS = ("sinr", "sir")
+"""The signals a map holds and a task flies."""
 FORMAT = "rainuav.signal"
 """What a signal file says it is (its ``format`` entry)."""
 FORMAT_VERSION = 1
 """Version of the layout [`Signal.save()`][rainuav.signals.Signal.save] writes."""
+
+
+def signal_name(signal: str) -> str:
+    """The array name of a signal (``"sinr"`` -> ``"sinr_db"``), checked.
+
+    Args:
+        signal: One of [`SIGNALS`][rainuav.signals.SIGNALS].
+
+    Returns:
+        Its name with ``_db``.
+
+    Raises:
+        InvalidInputError: Another signal.
+    """
+    if signal not in SIGNALS:
+        raise InvalidInputError(f"signal must be one of {SIGNALS} (got {signal!r})")
+    return f"{signal}_db"
+
+
+def toml_of(scenario: Any, keep: bool = True) -> str:
+    """A scenario's TOML for a signal's ``scenario_toml`` ('' where none, or not kept).
+
+    Args:
+        scenario: A scenario (anything with ``to_toml_string()``), or None.
+        keep: Carry it (a radar weather's TOML takes seconds to write: False leaves it out).
+
+    Returns:
+        The TOML, or ''.
+    """
+    return scenario.to_toml_string() if keep and scenario is not None else ""
 
 
 def _extent(extent_m: Any) -> tuple[float, float, float, float]:
@@ -176,6 +208,23 @@ class Signal:
         s = None if serving_cell is None else canonical(serving_cell, "serving_cell")
         return cls(v, extent_m, np.asarray(t_s, np.float64), np.asarray(altitudes_m, np.float64),
                    serving_cell=s, **meta)  # fmt: skip
+
+    def as_signal(self, signal: str = "sinr", *, scenario_toml: bool = True) -> Signal:
+        """This signal, where it is the one asked for: every map kind answers ``as_signal``.
+
+        Args:
+            signal: "sinr" or "sir".
+            scenario_toml: Unused (the signal keeps its own).
+
+        Returns:
+            Itself.
+
+        Raises:
+            InvalidInputError: A signal of another name.
+        """
+        if self.name != signal_name(signal):
+            raise InvalidInputError(f"the signal is {self.name}, not {signal_name(signal)}")
+        return self
 
     @property
     def sizes(self) -> dict[str, int]:

@@ -110,7 +110,9 @@ class UAVNavEnv(BatchedFlights, gym.Env):
         """Builds the environment over a map and a task.
 
         Args:
-            radio_map: A built map ([`RadioMap`][rainuav.radio.RadioMap], in time or levels).
+            radio_map: A built map of any kind ([`RadioMap`][rainuav.radio.RadioMap], in time or of
+                every level) or a [`Signal`][rainuav.signals.Signal], read through its
+                `as_signal()`.
             sinr_db: A raw SINR array, dB, in place of a map (with ``extent_m``).
             sir_db: A raw SIR array, dB (with ``extent_m``).
             extent_m: ``(x_min, x_max, y_min, y_max)`` of a raw array, m.

@@ -249,7 +249,9 @@ def signal_field(
     """The field a task flies on: a map's signal, or the one raw array given.
 
     Args:
-        radio_map: A built map, or None.
+        radio_map: A built map of any kind, a [`Signal`][rainuav.signals.Signal] (each read
+            through its `as_signal()`), any object with the signal's array and `extent_m`, or
+            None.
         sinr_db: A raw SINR array (with `extent_m`), or None.
         sir_db: A raw SIR array (with `extent_m`), or None.
         extent_m: The raw array's `(x_min, x_max, y_min, y_max)`, m.
@@ -269,7 +271,10 @@ def signal_field(
         if raw:
             raise InvalidInputError(f"give radio_map or {next(iter(raw))}_db, not both")
         signal = signal or "sinr"
-        values = getattr(radio_map, f"{signal}_db", None)
+        as_signal = getattr(radio_map, "as_signal", None)
+        if callable(as_signal):  # every map kind and a Signal: one path, by its axes
+            return field_of(as_signal(signal, scenario_toml=False))
+        values = getattr(radio_map, f"{signal}_db", None)  # any object with the arrays
         if values is None:
             raise InvalidInputError(
                 f"signal={signal!r}: radio_map has no {signal}_db (rebuild it with this version)"

@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
+from rainuav.signals import SIGNALS
 
 __all__ = [
     "MAX_STEPS",
@@ -50,7 +51,6 @@ __all__ = [
 ]
 
 REWARDS = ("shortfall", "outage", "linear", "chance")
-SIGNALS = ("sinr", "sir")
 #: Unit steps of the four actions: +x, +y, -x, -y.
 MOVES = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]], dtype=np.int64)
 

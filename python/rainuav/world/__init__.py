@@ -157,9 +157,9 @@ def world_from(source: Any, task: NavConfig) -> World:
 
     Args:
         source: A [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap], a
-            [`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries], a
-            [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack] or a
-            [`Signal`][rainuav.signals.Signal].
+            [`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries], the maps of every
+            level (a [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack], or built levels,
+            which the world keeps as their signal) or a [`Signal`][rainuav.signals.Signal].
         task: The navigation task; its `min_db` unset takes the scenario's documented threshold for
             the signal flown.
 
@@ -172,25 +172,23 @@ def world_from(source: Any, task: NavConfig) -> World:
             "chance" on anything but one radio map's SINR.
     """
     signal = task.signal
-    if isinstance(source, Signal):
-        if source.name != f"{signal}_db":
-            raise InvalidInputError(
-                f"task.signal is {signal!r} but the signal given is {source.name}"
-            )
-        sig = source
-    elif isinstance(source, RadioMap | RadioMapSeries | LevelStack):
-        sig = signal_of(source, signal, scenario_toml=False)
-    else:
+    if not callable(getattr(source, "as_signal", None)):
         raise InvalidInputError(
-            "a world needs a RadioMap, RadioMapSeries, LevelStack or Signal (got "
+            "a world needs a RadioMap, RadioMapSeries, maps of every level or a Signal (got "
             f"{type(source).__name__})"
         )
+    try:  # every kind says how it is one signal: its own as_signal()
+        sig = signal_of(source, signal, scenario_toml=False)
+    except InvalidInputError as err:  # the source does not hold the task's signal
+        raise InvalidInputError(f"task.signal is {signal!r}: {err}") from None
     field = field_of(sig)
     min_db = task.min_db
     if min_db is None:  # the same rule for every kind (by the scenario's name)
         min_db = default_min_db(_scenario_name(source), signal)
     if task.reward == "chance":  # outage as a probability, from the map's spreads
-        if not isinstance(field, SignalField) or not isinstance(source, RadioMap):
+        # one radio map carries spreads (its prior's, or its measurements'): maps in time, of
+        # levels and bare signals do not
+        if not hasattr(source, "rss_std_db"):
             raise InvalidInputError(
                 "task.reward 'chance' flies one radio map (a physics map with its prior's "
                 "spreads, or one corrected by measurements: rainuav.radio.measured.correct_map)"
@@ -200,7 +198,8 @@ def world_from(source: Any, task: NavConfig) -> World:
         from rainuav.radio.measured.outage import outage_probability
 
         field.outage_p = outage_probability(source, min_db)
-    return World(source, field, dataclasses.replace(task, min_db=min_db))
+    kept = source if hasattr(source, "save") else sig  # built levels are saved as their signal
+    return World(kept, field, dataclasses.replace(task, min_db=min_db))
 
 
 def series_instants(spec: WorldSpec) -> Any:
@@ -347,15 +346,16 @@ def _extent(scn: Scenario) -> tuple[float, float, float, float]:
 
 def _scenario_name(source: Any) -> str:
     """The name of the scenario a source was built from ('' where a signal carries none)."""
-    if isinstance(source, Signal):
-        if not source.scenario_toml:
+    scn = getattr(source, "scenario", None)
+    if scn is None:
+        if not getattr(source, "scenario_toml", ""):
             return ""
         try:
             name = tomllib.loads(source.scenario_toml).get("name", "")
         except tomllib.TOMLDecodeError:
             return ""
         return name if isinstance(name, str) else ""
-    return str(source.scenario.name)
+    return str(scn.name)
 
 
 def in_world(spec: WorldSpec, source: Any) -> tuple[Any, World]:

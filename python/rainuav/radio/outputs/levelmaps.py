@@ -28,6 +28,7 @@ from rainuav._checks import check_fits
 from rainuav._sampling import bilinear
 from rainuav.errors import InvalidInputError
 from rainuav.radio.engines import engine_of
+from rainuav.radio.outputs.levelsignal import LevelsAsSignal
 from rainuav.radio.outputs.mapdata import RadioMap, read_npz, write_npz
 from rainuav.radio.scene.scenario import Scenario
 
@@ -44,13 +45,21 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class RadioLevels:
+class RadioLevels(LevelsAsSignal):
     """A scenario's maps at each flight altitude, lowest first."""
 
     altitudes_m: np.ndarray
     """The levels (L,), m, in the area's altitude reference."""
     maps: tuple[RadioMap, ...]
     """One map a level."""
+
+    @property
+    def scenario(self) -> Scenario:
+        """The scenario the maps were built from (the lowest level's)."""
+        return self.maps[0].scenario
+
+    def _serving_and_scenario(self) -> tuple[Any, Any]:  # the maps' own arrays
+        return np.stack([m.serving_cell for m in self.maps]), self.scenario
 
     @property
     def sinr_db(self) -> np.ndarray:
@@ -180,7 +189,7 @@ def _levels_from_one_march(scn: Scenario, *, cache: bool, progress: bool) -> Rad
 
 
 @dataclass(frozen=True)
-class RadioLevelSeries:
+class RadioLevelSeries(LevelsAsSignal):
     """A scenario's maps in time at each flight altitude: what a flight among levels through
     weather that moves reads."""
 
@@ -330,7 +339,7 @@ STACK_VERSION = 1
 
 
 @dataclass(frozen=True)
-class LevelStack:
+class LevelStack(LevelsAsSignal):
     """What a flight among levels reads, and what a training run among levels saves
     (``radiolevels.npz``): every level's SINR and serving cell (static (L, H, W), or in time
     (T, L, H, W) at ``t_s``), the not-flyable pixels (L, H, W), the levels and the area,

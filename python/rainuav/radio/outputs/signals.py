@@ -10,32 +10,28 @@ from __future__ import annotations
 import os
 from typing import Any
 
-import numpy as np
-
 from rainuav.errors import InvalidInputError
-from rainuav.radio.outputs.levelmaps import LevelStack, RadioLevels, RadioLevelSeries
+from rainuav.radio.outputs.levelmaps import LevelStack
 from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.timemap import RadioMapSeries
-from rainuav.radio.scene.terrain import map_mask
-from rainuav.signals import Signal, array_names, read_arrays
+from rainuav.signals import Signal, array_names, read_arrays, signal_name
 
 __all__ = ["load_signal", "signal_of"]
 
-SIGNALS = ("sinr", "sir")
-
 
 def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) -> Signal:
-    """A built map, maps in time or maps of every level as one signal, bit for bit.
+    """A built map, maps in time, maps of every level or a signal as one signal, bit for bit.
 
-    The maps of every level ([`RadioLevels`][rainuav.radio.outputs.levelmaps.RadioLevels],
+    Each kind says how it is one signal (its `as_signal()`); the maps of every level
+    ([`RadioLevels`][rainuav.radio.outputs.levelmaps.RadioLevels],
     [`RadioLevelSeries`][rainuav.radio.outputs.levelmaps.RadioLevelSeries],
     [`LevelStack`][rainuav.radio.outputs.levelmaps.LevelStack]) hold SINR alone. The signal carries
     the source's serving cells and not-flyable pixels.
 
     Args:
         source: A [`RadioMap`][rainuav.radio.outputs.mapdata.RadioMap], a
-            [`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries] or the maps of every
-            level.
+            [`RadioMapSeries`][rainuav.radio.outputs.timemap.RadioMapSeries], the maps of every
+            level or a [`Signal`][rainuav.signals.Signal].
         signal: "sinr" or "sir".
         scenario_toml: Carry the source's scenario as TOML (for a file; a radar weather's TOML takes
             seconds to write: False leaves it out).
@@ -46,47 +42,14 @@ def signal_of(source: Any, signal: str = "sinr", *, scenario_toml: bool = True) 
     Raises:
         InvalidInputError: Another source, an unknown signal, or SIR from the maps of every level.
     """
-
-    def toml(scn: Any) -> str:
-        return scn.to_toml_string() if scenario_toml and scn is not None else ""
-
-    if signal not in SIGNALS:
-        raise InvalidInputError(f"signal must be one of {SIGNALS} (got {signal!r})")
-    name = f"{signal}_db"
-    if isinstance(source, RadioMap):
-        nf = None if source.not_flyable is None else source.not_flyable[None]
-        return Signal.from_axes(getattr(source, name), ("north", "east"), source.extent_m,
-                                altitudes_m=[source.altitude_m], serving_cell=source.serving_cell,
-                                name=name, not_flyable=nf,
-                                scenario_toml=toml(source.scenario))  # fmt: skip
-    if isinstance(source, RadioMapSeries):
-        a = source.scenario.area
-        extent = (a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m)
-        mask = map_mask(source.scenario)  # the ground's, the same at every instant
-        nf = None if mask is None else mask[None]
-        return Signal.from_axes(getattr(source, name), ("time", "north", "east"), extent,
-                                t_s=source.t_s, altitudes_m=[source.scenario.area.altitude_m],
-                                serving_cell=source.serving_cell, name=name, not_flyable=nf,
-                                scenario_toml=toml(source.scenario))  # fmt: skip
-    if isinstance(source, RadioLevels | RadioLevelSeries | LevelStack):
-        if signal != "sinr":
-            raise InvalidInputError("the maps of every level hold SINR alone (signal='sinr')")
-        if isinstance(source, RadioLevels):  # the maps' own arrays (a LevelStack's are narrowed)
-            serving = np.stack([m.serving_cell for m in source.maps])
-            scn = source.maps[0].scenario
-        else:
-            serving, scn = source.serving_cell, getattr(source, "scenario", None)
-        t = getattr(source, "t_s", None)
-        dims = ("level", "north", "east") if t is None else ("time", "level", "north", "east")
-        return Signal.from_axes(source.sinr_db, dims, source.extent,
-                                t_s=(0.0,) if t is None else t, altitudes_m=source.altitudes_m,
-                                serving_cell=serving, name=name,
-                                not_flyable=np.asarray(source.not_flyable, bool),
-                                scenario_toml=toml(scn))  # fmt: skip
-    raise InvalidInputError(
-        "source must be a RadioMap, RadioMapSeries, RadioLevels, RadioLevelSeries or LevelStack "
-        f"(got {type(source).__name__})"
-    )
+    signal_name(signal)
+    as_signal = getattr(source, "as_signal", None)
+    if not callable(as_signal):
+        raise InvalidInputError(
+            "source must be a RadioMap, RadioMapSeries, RadioLevels, RadioLevelSeries, LevelStack "
+            f"or Signal (got {type(source).__name__})"
+        )
+    return as_signal(signal, scenario_toml=scenario_toml)
 
 
 def load_signal(path: str | os.PathLike[str], signal: str = "sinr") -> Signal:

@@ -49,17 +49,13 @@ from rainuav.radio.engines import engine_of
 from rainuav.radio.engines.hybrid import EngineParts, engine_parts
 from rainuav.radio.engines.ray_engine import gamma_table, rain_args, ray_slicer, ray_terms
 from rainuav.radio.outputs.cache import map_path
-from rainuav.radio.outputs.mapdata import (
-    RadioMap,
-    check_arrays,
-    map_ranges,
-    read_npz,
-    store,
-    write_npz,
-)
+from rainuav.radio.outputs.mapchecks import check_arrays, map_ranges
+from rainuav.radio.outputs.mapdata import RadioMap, read_npz, store, write_npz
 from rainuav.radio.outputs.sinr import RSS_FLOOR_DBM, sir_from_power
 from rainuav.radio.scene.presets import with_rain
 from rainuav.radio.scene.scenario import Scenario
+from rainuav.radio.scene.terrain import map_mask
+from rainuav.signals import Signal, signal_name, toml_of
 
 __all__ = ["MAX_SLICES", "RadioMapSeries", "build_radio_map_series", "series_times"]
 
@@ -117,6 +113,26 @@ class RadioMapSeries:
     cell_site: npt.NDArray[np.int64]
     build_seconds: float = 0.0
     timings: dict[str, float] = field(default_factory=dict)
+
+    def as_signal(self, signal: str = "sinr", *, scenario_toml: bool = True) -> Signal:
+        """The maps in time as one [`Signal`][rainuav.signals.Signal] (a time axis at ``t_s``), bit
+        for bit, with the serving cells and the ground's not-flyable pixels.
+
+        Args:
+            signal: "sinr" or "sir".
+            scenario_toml: Carry the scenario as TOML.
+
+        Returns:
+            The signal.
+        """
+        name = signal_name(signal)
+        a = self.scenario.area
+        mask = map_mask(self.scenario)  # the ground's, the same at every instant
+        return Signal.from_axes(getattr(self, name), ("time", "north", "east"),
+                                (a.x_min_m, a.x_max_m, a.y_min_m, a.y_max_m), t_s=self.t_s,
+                                altitudes_m=[a.altitude_m], serving_cell=self.serving_cell,
+                                name=name, not_flyable=None if mask is None else mask[None],
+                                scenario_toml=toml_of(self.scenario, scenario_toml))  # fmt: skip
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Writes the series as an .npz file, atomically (the scenario as TOML inside; no pickles).
