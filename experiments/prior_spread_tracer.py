@@ -35,6 +35,7 @@ tracer's).
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 from pathlib import Path
 
@@ -124,30 +125,51 @@ def save_truth(path: Path, maps: dict[str, tracer.TracerMap]) -> None:
     tmp.replace(path)
 
 
-def against_paths(name: str, freq_hz: float, altitude_m: float, traced: tracer.TracerMap,
-                  step: int) -> dict:  # fmt: skip
-    """The held-back sites' pixels both the radio map and the path solver cover (every ``step``-th):
-    the engine's error against each, and the measured table's coverage of both."""
+def paths_pixels(name: str, freq_hz: float, altitude_m: float, step: int, sites: slice,
+                 ) -> tuple[Scenario, dict[str, np.ndarray]]:  # fmt: skip
+    """The pixels of the tracer's exact path solver (every ``step``-th) at some sites of a scene,
+    as ``pixels`` gives them; with the scenario of those sites."""
     from rainuav.radio.reference.tracer_paths import path_gain
 
     scn = tracer.isotropic_scenario(scene(name, freq_hz, altitude_m))
-    scn = scn.replace(sites=scn.sites[TUNING_SITES:])
+    scn = scn.replace(sites=scn.sites[sites])
     paths = path_gain(scn, samples=1_000_000, step=step)
+    return scn, pixels(name, freq_hz, altitude_m, 0, paths, scn)
+
+
+def paths_table(freq_hz: float, altitude_m: float, step: int) -> dict:
+    """The engine's spreads measured as ``MEASURED`` is, on the tuning pixels, against the exact
+    path solver in place of the radio map."""
+    parts = []
+    for name in SPREAD_SCENES:
+        sites = slice(0, TUNING_SITES) if name in HELD_BACK else slice(None)
+        parts.append(paths_pixels(name, freq_hz, altitude_m, step, sites)[1])
+    e, ex, d = (np.concatenate([q[k] for q in parts]) for k in ("error_db", "excess_db",
+                                                                  "distance_m"))  # fmt: skip
+    return measured_spreads(e, ex, d, source="tuning pixels, exact paths")
+
+
+def against_paths(name: str, freq_hz: float, altitude_m: float, traced: tracer.TracerMap,
+                  step: int, tables: dict) -> dict:  # fmt: skip
+    """The held-back sites' pixels both the radio map and the path solver cover (every ``step``-th):
+    the engine's error against each, and each table's coverage of both."""
+    scn, p_paths = paths_pixels(name, freq_hz, altitude_m, step, slice(TUNING_SITES, None))
     rmap = tracer.TracerMap(traced.half_a[TUNING_SITES:], traced.half_b[TUNING_SITES:])
     p_map = pixels(name, freq_hz, altitude_m, 0, rmap, scn)
-    p_paths = pixels(name, freq_hz, altitude_m, 0, paths, scn)
 
     def key(q: dict) -> np.ndarray:  # a pixel's site and centre (to half a metre), as one number
         return q["site"] * 10**8 + np.round(2 * q["y_m"]) * 10**4 + np.round(2 * q["x_m"])
 
     both, i, j = np.intersect1d(key(p_map), key(p_paths), return_indices=True)
     out: dict = {"pixels": len(both), "step": step}
-    local, _ = spreads_of(p_map["excess_db"][i], p_map["distance_m"][i], 0.0, MEASURED)
     d = p_map["distance_m"][i]
-    for label, q, k in (("map", p_map, i), ("paths", p_paths, j)):
+    for (label, q, k), (tname, table) in itertools.product(
+        (("map", p_map, i), ("paths", p_paths, j)), tables.items()
+    ):
+        local, _ = spreads_of(p_map["excess_db"][i], d, 0.0, table)
         e = q["error_db"][k]
         sd = np.hypot(local, np.nan_to_num(q["truth_se_db"][k]))
-        out[label] = scores(e, sd) | {
+        out[f"{label}, {tname} table"] = scores(e, sd) | {
             "abs_error_quantiles_db": {
                 f"p{v}": float(np.percentile(np.abs(e), v)) for v in (50, 68, 90, 98)
             },
@@ -262,17 +284,27 @@ def main() -> None:
                     f"{100 * b['within_one_sigma']:.0f}% / {100 * b['within_two_sigma']:.0f}%, "
                     f"{b['crps_db']:.2f} |"
                 )
+    if args.paths_step:
+        tables["measured against the paths"] = paths_table(f, h, args.paths_step)
+        print("measured on the tuning pixels against the exact paths: " + ", ".join(
+            f"{m}: {'/'.join(f'{v:g}' for v in tables['measured against the paths'][m].local_db)}"
+            for m in MECHANISMS), flush=True)  # type: ignore[union-attr]  # fmt: skip
     for name in HELD_BACK if args.paths_step else ():
         r = report.setdefault("against_paths", {})[name] = against_paths(
-            name, f, h, traced[name], args.paths_step
+            name,
+            f,
+            h,
+            traced[name],
+            args.paths_step,
+            {k: v for k, v in tables.items() if k != "published"},
         )
-        for label in ("map", "paths"):
+        for label in (k for k in r if "table" in k):
             q = r[label]
             far = q["by_distance"]
             print(f"{name} sites {TUNING_SITES}+ against the {label}, {r['pixels']} pixels both "
                   f"cover (every {args.paths_step}th): |engine error| p50/p68/p90/p98 "
                   + "/".join(f"{v:.2f}" for v in q["abs_error_quantiles_db"].values())
-                  + f" dB; measured table within one / two sigma {100 * q['within_one_sigma']:.0f}"
+                  + f" dB; within one / two sigma {100 * q['within_one_sigma']:.0f}"
                   f" / {100 * q['within_two_sigma']:.0f}%; by distance "
                   + ", ".join(f"{k}: {100 * v.get('within_one_sigma', 0):.0f}%"
                               for k, v in far.items()), flush=True)  # fmt: skip

@@ -409,6 +409,24 @@ def test_the_learner_never_tests_environment_classes() -> None:
     assert not hits, f"environment classes tested at {hits}"
 
 
+def test_no_map_class_is_tested_outside_its_module() -> None:
+    """Every map kind says how it is one signal (its ``as_signal()``): outside the module that
+    defines a map class, code reads maps through that and through what they carry, never by
+    testing their class (an ``isinstance`` chain grows a branch for every new kind)."""
+    import re
+
+    classes = {"RadioMap": "mapdata", "RadioMapSeries": "timemap", "RadioLevels": "levelmaps",
+               "RadioLevelSeries": "levelmaps", "LevelStack": "levelmaps"}  # fmt: skip
+    tested = re.compile(r"isinstance\(.*?\b(" + "|".join(classes) + r")\b")
+    hits = [
+        f"{name}:{i + 1}"
+        for name, path in modules().items()
+        for i, line in enumerate(path.read_text().splitlines())
+        if (m := tested.search(line)) and not name.endswith("." + classes[m.group(1)])
+    ]
+    assert not hits, f"map classes tested at {hits}"
+
+
 def test_one_environment_class() -> None:
     """One environment flies one level and several: ``UAVLevelsEnv`` is ``UAVNavEnv``'s
     constructor with the arguments it has always taken, with no behaviour of its own."""

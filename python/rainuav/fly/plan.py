@@ -36,10 +36,9 @@ from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import pixel_index
 from rainuav.nav.task import NavConfig, base_reward
 from rainuav.radio.engines import for_time
-from rainuav.radio.outputs.mapdata import RadioMap
 from rainuav.radio.outputs.maps import build_radio_map
 from rainuav.radio.outputs.maptiff import write_map_geotiff
-from rainuav.radio.outputs.timemap import RadioMapSeries, build_radio_map_series, series_times
+from rainuav.radio.outputs.timemap import build_radio_map_series, series_times
 from rainuav.radio.scene import presets
 from rainuav.radio.scene.buildings import buildings_near_route
 from rainuav.radio.scene.scenario import Scenario
@@ -197,7 +196,7 @@ def fly_place(
         path_outage_draws,
     )
 
-    if isinstance(rm, RadioMap):  # outage as a probability, from the map's spreads
+    if hasattr(rm, "rss_std_db"):  # one map: outage as a probability, from its spreads
         r, c = pixel_index(rm.sinr_db.shape, rm.extent_m, path[1:, 0], path[1:, 1])
         prob = outage_probability(rm, min_db, pixels=(r, c), draws=4096)  # the path's pixels
         summary["outage_chance"] = {
@@ -209,7 +208,7 @@ def fly_place(
             summary["measurements"] = {"log": rm.fit["log"],
                                        "cross_validation": rm.fit["cross_validation"],
                                        **path_outage(prob)}  # fmt: skip
-    elif isinstance(rm, RadioMapSeries):  # a weather that moves: each move on its own slice
+    elif world.varies:  # maps in time, a weather that moves: each move on its own slice
         summary["outage_chance"] = {
             "spreads": "the prior's by mechanism, each move on the map of the slice it lands in",
             **path_outage(flight_outage_in_time(rm, path[1:], t_s[1:], min_db)),
