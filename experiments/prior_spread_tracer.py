@@ -285,9 +285,9 @@ def main() -> None:
                     f"{b['crps_db']:.2f} |"
                 )
     if args.paths_step:
-        tables["measured against the paths"] = paths_table(f, h, args.paths_step)
+        paths = tables["measured against the paths"] = paths_table(f, h, args.paths_step)
         print("measured on the tuning pixels against the exact paths: " + ", ".join(
-            f"{m}: {'/'.join(f'{v:g}' for v in tables['measured against the paths'][m].local_db)}"
+            f"{m}: {'/'.join(f'{v:g}' for v in np.atleast_1d(paths[m].local_db))}"
             for m in MECHANISMS), flush=True)  # type: ignore[union-attr]  # fmt: skip
     for name in HELD_BACK if args.paths_step else ():
         r = report.setdefault("against_paths", {})[name] = against_paths(
