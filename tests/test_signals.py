@@ -222,6 +222,36 @@ def test_a_world_of_a_signal_flies_as_the_world_of_its_source(series, tmp_path: 
         world_from(signal_of(series), dataclasses.replace(task, signal="sir"))
 
 
+def test_the_environment_takes_every_kind_as_its_signal(series) -> None:
+    """UAVNavEnv(radio_map=...) reads any map kind or a signal through its as_signal(): one map
+    and its signal fly the same (the planner's return bit for bit, as the map's own arrays gave
+    before), maps in time fly as their world does (to 1e-9), the maps of every level give an
+    environment among levels, and an object that is no map is one line."""
+    from rainuav.nav import planner
+    from rainuav.nav.env import UAVNavEnv
+    from rainuav.nav.task import NavConfig
+    from rainuav.world import world_from
+
+    task = NavConfig(goal_m=(1800.0, 1800.0), max_steps=60, min_db=-2.0)
+    starts = [(150.0, 250.0), (900.0, 150.0)]
+    one = series.at(0.0)
+    pairs = [(UAVNavEnv(one, config=task), UAVNavEnv(signal_of(one), config=task)),
+             (UAVNavEnv(series, config=task), world_from(series, task).env())]  # fmt: skip
+    for env_a, env_b in pairs:
+        ra = [planner.optimal(env_a, s).return_ for s in starts]
+        rb = [planner.optimal(env_b, s).return_ for s in starts]
+        assert np.allclose(ra, rb, rtol=0, atol=1e-9), (ra, rb)
+    assert env_a.field.varies  # the series flew as maps in time
+    levels = UAVNavEnv(stack(), config=NavConfig(goal_m=(350.0, 350.0), max_steps=40))
+    assert levels.field.altitudes_m is not None and levels.action_space.n == 6
+    raw = UAVNavEnv(sinr_db=one.sinr_db, extent_m=one.extent_m, config=task)
+    assert [planner.optimal(raw, s).return_ for s in starts] == [
+        planner.optimal(UAVNavEnv(one, config=task), s).return_ for s in starts
+    ]
+    with pytest.raises(InvalidInputError, match="signal is sinr_db, not sir_db"):
+        UAVNavEnv(signal_of(one), config=task, signal="sir")
+
+
 def spec_for(task):
     from rainuav.world import WorldSpec
 
