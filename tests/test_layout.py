@@ -504,12 +504,13 @@ def test_help_lists_the_common_options_and_help_all_every_one(
     assert args.speed_m_s == 5.0
 
 
-INSIDE_READS = 11
+INSIDE_READS = 8
 """Reads of the environment's insides (``env.cfg``, ``env.field``, ``env.altitudes_m``) the
 learner's package still makes, at most: fewer with each move toward the spaces alone (77
 before the training starts, the shaping, the network's inputs, the positions of the batched
 interface, the random flights, the yardsticks and the figures of flights became the navigation
-layer's: ``rainuav.nav.training``, ``rainuav.nav.references``, ``rainuav.nav.figures``)."""
+layer's: ``rainuav.nav.training``, ``rainuav.nav.references``, ``rainuav.nav.figures``; the
+map's digest and the evaluation's cache key are read of the world, not of its environment)."""
 
 
 def test_the_learner_reads_the_environments_insides_no_more_than_it_did() -> None:

@@ -393,14 +393,14 @@ def evaluate_saved_run(
     if world is None:
         raise InvalidInputError(f"{run}: missing radiomap.npz; is this a rainuav.train output?")
     if own:
-        check_map_digest(state, env.field, run)
+        check_map_digest(state, world.field, run)
     agent, episodes, seconds = load_agent(path, state, cfg, env, device, online)
     agent.cfg.shield = shield
     n = cfg.eval_starts if starts is None else starts
     pts = eval_starts(env, n, cfg.eval_seed if seed is None else seed)
     refs = None
     if references is not None:
-        key = (id(world.source), repr(env.cfg), pts.tobytes())
+        key = (id(world.source), repr(world.task), pts.tobytes())
         if key not in references:
             references[key] = reference_flights(env, pts, cfg.replan_every)
         refs = references[key]

@@ -200,7 +200,7 @@ def train(
         write_atomic(out / "config.toml", lambda t: t.write_text(tomli_w.dumps(to_dict(cfg))))
         env = world.env()
         if saved is not None and world.pool is None:
-            check_map_digest(saved, env.field, out)
+            check_map_digest(saved, world.field, out)
         # A storm pool's run is checked, validated and evaluated on a validation storm, with
         # the task's fixed destination.
         ref_env = None

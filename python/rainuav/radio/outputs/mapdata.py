@@ -140,8 +140,15 @@ class RadioMap:
 
         Returns:
             The signal.
+
+        Raises:
+            InvalidInputError: An unknown signal, or one the map does not hold.
         """
         name = signal_name(signal)
+        if getattr(self, name) is None:  # e.g. a map object of a release without a noise model
+            raise InvalidInputError(
+                f"signal={signal!r}: the map has no {name} (rebuild it with this version)"
+            )
         nf = None if self.not_flyable is None else self.not_flyable[None]
         return Signal.from_axes(getattr(self, name), ("north", "east"), self.extent_m,
                                 altitudes_m=[self.altitude_m], serving_cell=self.serving_cell,
