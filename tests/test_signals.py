@@ -244,6 +244,14 @@ def test_the_environment_takes_every_kind_as_its_signal(series) -> None:
     assert env_a.field.varies  # the series flew as maps in time
     levels = UAVNavEnv(stack(), config=NavConfig(goal_m=(350.0, 350.0), max_steps=40))
     assert levels.field.altitudes_m is not None and levels.action_space.n == 6
+    # What the learner reads of them (rainuav.nav.batched.FlightTerms), and the digest a run
+    # records: the same for a map and its signal, another for another map.
+    plane, moving, among = pairs[0][0].terms(), env_a.terms(), levels.terms()
+    assert (plane.signal, plane.min_db, plane.altitudes_m, plane.varies) == ("sinr", -2.0, None,
+                                                                           False)  # fmt: skip
+    assert moving.varies and moving.altitudes_m is None
+    assert among.altitudes_m == (30.0, 45.0, 100.0) and not among.varies
+    assert pairs[0][0].digest() == pairs[0][1].digest() != env_a.digest()
     raw = UAVNavEnv(sinr_db=one.sinr_db, extent_m=one.extent_m, config=task)
     assert [planner.optimal(raw, s).return_ for s in starts] == [
         planner.optimal(UAVNavEnv(one, config=task), s).return_ for s in starts

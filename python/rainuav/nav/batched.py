@@ -5,20 +5,48 @@
 clocks and worlds (N,)) rather than Gymnasium's one UAV a call: the observation, one move, the
 moves an exploring UAV draws from, and the drawing of a new episode's start, destination and
 world. The learner ([`rainuav.rl`][rainuav.rl]) reads an environment through these and its spaces
-alone."""
+alone, and one summary of what it flies ([`FlightTerms`][rainuav.nav.batched.FlightTerms]: the
+signal, the threshold, the levels, whether the signal moves)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
+from rainuav.nav.field import field_digest
 from rainuav.nav.levelfield import LEVEL_ACTIONS, LevelStepper
 from rainuav.nav.views import sample_goal, sample_start_for
 
-__all__ = ["BatchedFlights"]
+__all__ = ["PROTOCOL", "BatchedFlights", "FlightTerms"]
+
+PROTOCOL = (
+    "observation_space", "action_space", "np_random", "reset", "step",  # Gymnasium's
+    "observe_batch", "step_batch", "exploration_moves", "start_level_at", "lowest_flyable",
+    "sample_start", "draw_task", "signal", "terms", "digest",  # the batches'
+)  # fmt: skip
+"""What of an environment the learner ([`rainuav.rl`][rainuav.rl]) reads: Gymnasium's spaces,
+random stream and one-UAV calls, and the batched calls of
+[`BatchedFlights`][rainuav.nav.batched.BatchedFlights] (``tests/test_layout.py`` holds ``rl/`` to
+these)."""
+
+
+@dataclass(frozen=True)
+class FlightTerms:
+    """What an environment flies, as a learner reports and checks it
+    ([`BatchedFlights.terms()`][rainuav.nav.batched.BatchedFlights.terms])."""
+
+    signal: str
+    """The signal flown: "sinr" or "sir"."""
+    min_db: float
+    """The outage threshold, dB."""
+    altitudes_m: tuple[float, ...] | None
+    """The flight levels, m, where altitude is a decision (six actions); None on one plane."""
+    varies: bool
+    """Whether the signal moves in time."""
 
 
 class BatchedFlights:
@@ -241,6 +269,29 @@ class BatchedFlights:
             if self.field.flyable(*p).any():
                 return p, g, world
         raise InvalidInputError(f"no flyable start within reach of the destination {tuple(g)}")
+
+    def terms(self) -> FlightTerms:
+        """What this environment flies (the learner's one read of it beside the spaces).
+
+        Returns:
+            The [`FlightTerms`][rainuav.nav.batched.FlightTerms].
+        """
+        alts = self.field.altitudes_m
+        return FlightTerms(
+            signal=str(self.cfg.signal), min_db=float(self.cfg.min_db),
+            altitudes_m=None if alts is None else tuple(float(a) for a in alts),
+            varies=bool(self.field.varies),
+        )  # fmt: skip
+
+    def digest(self) -> str:
+        """A digest of the signal this environment flies: a run records it, so that a map swapped
+        into its folder is refused ([`field_digest()`][rainuav.nav.field.field_digest]; it hashes
+        the whole field: once a checkpoint, not once a move).
+
+        Returns:
+            The SHA-256 digest, as hexadecimal text.
+        """
+        return field_digest(self.field)
 
     def signal(
         self,

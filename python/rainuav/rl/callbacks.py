@@ -22,7 +22,6 @@ import torch
 
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import field_digest
 from rainuav.rl import checkpoint
 from rainuav.rl.collect import Lanes, greedy_rollouts
 from rainuav.rl.config import TrainConfig, to_dict
@@ -107,7 +106,7 @@ class RunState:
             "torch_rng": torch.get_rng_state(),
             "config": to_dict(cfg),
             # what the run flies (not for a storm pool, whose field changes storm by storm)
-            "map_digest": None if pool is not None else field_digest(self.env.field),
+            "map_digest": None if pool is not None else self.env.digest(),
             "pool": None
             if pool is None
             else {"pool": pool.state_dict(), "per_storm": self.per_storm.copy()},

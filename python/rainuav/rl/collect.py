@@ -180,13 +180,14 @@ def _rollouts(
     overridden = np.zeros(n, dtype=np.int64)
     paths: list[list[np.ndarray]] = [[s.copy()] for s in starts]
     signal: list[list[float]] = [[] for _ in range(n)]
+    shield = shield and env.terms().altitudes_m is None  # the shield is the plane's
     while live.any():
         idx = np.flatnonzero(live)
         pos = positions(env, starts[idx], off[idx])
         g = None if goal is None else goal[idx]
         q = agent.q_values(agent.observe(env.observe_batch(pos, lv[idx], t[idx], g), t[idx]))
         a = best_action(q)
-        if shield and env.altitudes_m is None:  # the shield is the plane's
+        if shield:
             allowed = shield_moves(env, pos, t[idx], off[idx], [visited[k] for k in idx], g)
             free, a = a, best_action(q, allowed)
             overridden[idx] += a != free

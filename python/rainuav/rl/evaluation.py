@@ -93,11 +93,8 @@ def evaluate(
     refs = references or reference_flights(env, starts)
     opt = refs["optimal"]
     f, rolls = _policy_flights(agent, env, starts, shield=False)
-    metrics: dict[str, Any] = {
-        "signal": env.cfg.signal,
-        "min_db": env.cfg.min_db,
-        **summarise(f, opt),
-    }
+    terms = env.terms()
+    metrics: dict[str, Any] = {"signal": terms.signal, "min_db": terms.min_db, **summarise(f, opt)}
     for name, ref in refs.items():
         for key, value in summarise(ref, opt).items():
             if name != "optimal" or key not in ("mean_excess_cost", "worst_excess_cost"):
@@ -108,8 +105,8 @@ def evaluate(
         keys = ("success_rate", "mean_excess_cost", "worst_excess_cost")
         metrics.update({f"shielded_{k}": s[k] for k in keys})
         metrics["shielded_flights"] = float(np.mean([r["overridden"] > 0 for r in rolls_s]))
-    if env.altitudes_m is not None:  # the heights the network flies at
-        alts = env.field.altitudes_m
+    if terms.altitudes_m is not None:  # the heights the network flies at
+        alts = np.asarray(terms.altitudes_m)
         metrics["altitudes_m"] = alts.tolist()
         for name, levels in (("", [r["levels"] for r in rolls]),
                              ("optimal_", refs["optimal"].get("levels", []))):  # fmt: skip

@@ -370,7 +370,8 @@ def collect(run: RunState, cfg: TrainConfig) -> tuple[np.ndarray, dict[str, np.n
     env, agent, lanes, d = run.env, run.agent, run.lanes, cfg.dqn
     idx = np.flatnonzero(lanes.active)
     pos = positions(env, lanes.start[idx], lanes.offset[idx])
-    goal = lanes.goal[idx] if env.view is not None else None  # each UAV's destination and world
+    # each UAV's destination (where its observation holds one: the weather's) and world
+    goal = lanes.goal[idx] if "goal" in getattr(env.observation_space, "spaces", {}) else None
     world = lanes.world[idx] if run.pool is not None else None
     level, t = lanes.level[idx], lanes.t[idx]
     obs = agent.observe(env.observe_batch(pos, level, t, goal, world), t)

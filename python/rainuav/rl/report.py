@@ -63,7 +63,8 @@ def finish(
         metrics["evaluated_on_storm_seed"] = VALIDATION_SEEDS[0]
     plot_returns(returns, out / "returns.png", checks.history)
     plot_policy(env, metrics, rolls[:40], out / "trajectories.png")
-    if env.field.varies and env.altitudes_m is None:  # (among levels: trajectories.png)
+    terms = env.terms()
+    if terms.varies and terms.altitudes_m is None:  # (among levels: trajectories.png)
         plot_storm_flights(env, rolls[:6], out / "storm_flights.png")
     if stages:
         plot_stages(env, stages, out / "stages.png")
