@@ -223,8 +223,9 @@ def test_bad_altitude_bands_are_refused_in_one_line(tmp_path, capsys) -> None:
 
 @pytest.mark.slow
 def test_one_level_band_flies_todays_plan_and_a_start_altitude_is_a_level(tmp_path, capsys) -> None:
-    # `--altitudes-m 100:100:1` is today's flight at 100 m: the same cost and moves (the same
-    # map, from the cache). A start altitude must be one of the levels (one line, exit 2).
+    # `--altitudes-m 100:100:1` is today's flight at 100 m: the same cost, moves and outage
+    # chance (the same map, from the cache). A start altitude must be one of the levels (one
+    # line, exit 2).
     import json
     from pathlib import Path
 
@@ -238,6 +239,10 @@ def test_one_level_band_flies_todays_plan_and_a_start_altitude_is_a_level(tmp_pa
     a = json.loads((tmp_path / "a" / "summary.json").read_text())
     b = json.loads((tmp_path / "b" / "summary.json").read_text())
     assert b["cost"] == pytest.approx(a["cost"], abs=1e-9) and b["moves"] == a["moves"]
+    # Its outage with its spread, each move on its level's map, is today's on the one map.
+    ca, cb = a["outage_chance"], b["outage_chance"]
+    for k in ("expected_outage_share", "spread_independent", "spread_correlated"):
+        assert cb[k] == pytest.approx(ca[k], abs=1e-12), k
     capsys.readouterr()
     rc = main([*base, "--start", "47.3660,8.5380,45", "--altitudes-m", "30:60:30",
                "--out", str(tmp_path / "c")])  # fmt: skip

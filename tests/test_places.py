@@ -405,6 +405,9 @@ def test_fly_through_the_shipped_radar_file(tmp_path) -> None:
     assert band["weather_moves"] is True and band["moves"] == summary["moves"]
     assert band["cost"] == pytest.approx(summary["cost"], abs=1e-9)
     assert band["flight_time_s"] == pytest.approx(summary["flight_time_s"])
+    # Among levels in a moving weather the maps hold SINR alone: the summary says it has no
+    # outage chance, and why, rather than a number.
+    assert band["outage_chance"]["spreads"] is None and "SINR alone" in band["outage_chance"]["why"]
 
 
 def test_a_scenario_carries_its_origin(tmp_path) -> None:

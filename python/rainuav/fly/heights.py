@@ -157,6 +157,15 @@ def fly_levels(
         heights, home_amsl = (ground + dz)[picks], float(ground[0])
         wp_ll = np.stack(place.georef.to_latlon(dense[picks, 0], dense[picks, 1]), axis=1)
         wp_z = dz[picks]
+    if times is None:  # one sample's outage as a probability, each move on its level's map
+        from rainuav.radio.measured.outage import flight_outage_among_levels, path_outage
+
+        prob = flight_outage_among_levels(source.maps, path[1:], lv[1:], threshold)
+        chance: dict = {"spreads": "the prior's by mechanism, each move on its level's map",
+                        **path_outage(prob)}  # fmt: skip
+    else:
+        chance = {"spreads": None, "why": "the maps of every level in a moving weather hold "
+                  "SINR alone: no cell's power to draw"}  # fmt: skip
     summary = {
         "flown_by": "exact optimum among levels", "cost": cost, "optimal_cost": cost,
         "excess_over_optimum": 0.0, "outage_share": float(np.mean(sig[1:] < threshold)),
@@ -168,7 +177,7 @@ def fly_levels(
         "best_single_altitude_m": None if best_single is None else float(alts[best_single]),
         "best_single_altitude_cost": None if best_single is None else per_level[best_single][0],
         "flight_time_s": float(t_s[-1]), "moves": len(plan.actions), "waypoints": len(picks),
-        "min_db": float(threshold),
+        "min_db": float(threshold), "outage_chance": chance,
         "origin": {"lat": place.georef.lat_deg, "lon": place.georef.lon_deg,
                    "projection": place.georef.proj4},
         "area_m": list(scn.area.bounds),

@@ -25,6 +25,7 @@ map, for the exact planner and the environment)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -40,6 +41,7 @@ if TYPE_CHECKING:  # for the annotations alone
 
 __all__ = [
     "DRAWS",
+    "flight_outage_among_levels",
     "flight_outage_in_time",
     "map_spreads",
     "outage_probability",
@@ -174,6 +176,52 @@ def flight_outage_in_time(
     local, one = composed_prior_spread(excess, site_distance_m(first, (r, c)), rain)
     dev = np.hypot(_less(local, SITE_DB), one)
     return _outage_of(power, dev, SITE_DB, first.scenario.noise_power_dbm, min_db, draws, seed)
+
+
+def flight_outage_among_levels(
+    maps: Sequence[RadioMap],
+    path_m: npt.ArrayLike,
+    levels: npt.ArrayLike,
+    min_db: float,
+    *,
+    draws: int = 4096,
+    seed: int = 0,
+) -> np.ndarray:
+    """The outage probability of each move of a flight among flight levels.
+
+    The move ending at ``path_m[k]`` on level ``levels[k]`` is read on that level's map with its
+    spreads ([`outage_probability()`][rainuav.radio.measured.outage.outage_probability], one
+    sample's outage). Each level is drawn on its own, so a physics map's site error is drawn
+    once a level, not once a flight: the expected share is the same either way, and the spread
+    between [`path_outage()`][rainuav.radio.measured.outage.path_outage]'s bounds still holds.
+
+    Args:
+        maps: Each level's map, lowest first.
+        path_m: Where each move ends, (N, 2), m.
+        levels: The level each move ends on, (N,).
+        min_db: The SINR threshold, dB.
+        draws: Draws per move (1-1 000 000).
+        seed: The draws' seed.
+
+    Returns:
+        The outage probability at each move, (N,).
+
+    Raises:
+        InvalidInputError: ``draws`` out of its range, or a level with no map.
+    """
+    from rainuav._sampling import pixel_index
+
+    path = np.asarray(path_m, dtype=float).reshape(-1, 2)
+    lv = np.asarray(levels, dtype=np.int64).reshape(-1)
+    if lv.size and (lv.min() < 0 or lv.max() >= len(maps)):
+        raise InvalidInputError(f"levels must lie within 0..{len(maps) - 1} (the maps given)")
+    out = np.zeros(len(path))
+    for k in np.unique(lv):
+        on = lv == k
+        rm = maps[int(k)]
+        r, c = pixel_index(rm.sinr_db.shape, rm.extent_m, path[on, 0], path[on, 1])
+        out[on] = outage_probability(rm, min_db, seed=seed, draws=draws, pixels=(r, c))
+    return out
 
 
 def outage_probability(
