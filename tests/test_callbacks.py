@@ -50,6 +50,9 @@ def test_a_users_callback_sees_every_episode_and_may_end_training(tmp_path: Path
     # The checkpoint holds the state where the callback ended training (all of what RunState
     # saves, in the keys a resumed run reads), so a resumed run goes on from there to the end.
     saved = load(tmp_path / "checkpoint.pt", CHECKPOINT_KEYS)
+    from rainuav.rl.callbacks import RunState
+
+    assert CHECKPOINT_KEYS == RunState.KEYS and set(saved) == {*RunState.KEYS, "map_digest", "pool"}
     assert len(saved["returns"]) == m["episodes"] and saved["started"] <= 9
     assert (tmp_path / "policy.pt").exists() and (tmp_path / "metrics.json").exists()
     resumed = train(*in_world(_cfg(tmp_path), _map()), progress=False, resume=True)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
@@ -68,6 +68,14 @@ class RunState:
     losses: list[float] = field(default_factory=list)
     """The gradient steps' losses since the last log (not saved)."""
     t0: float = field(default_factory=time.perf_counter)
+
+    KEYS: ClassVar[tuple[str, ...]] = (
+        "agent", "env_rng", "lanes", "started", "returns", "successes", "stages", "pending",
+        "validation", "train_seconds", "torch_rng", "config",
+    )  # fmt: skip
+    """The keys [`state_dict()`][rainuav.rl.callbacks.RunState.state_dict] writes that every
+    checkpoint holds, what a resume requires (it also writes ``map_digest`` and ``pool``, which
+    a checkpoint of an earlier release lacks)."""
 
     @property
     def done(self) -> int:

@@ -91,11 +91,9 @@ def save_checkpoint(path: Path, state: dict[str, Any]) -> None:
     checkpoint.save(path, state)
 
 
-CHECKPOINT_KEYS = (
-    "agent", "env_rng", "lanes", "started", "returns", "successes", "stages", "pending",
-    "validation", "train_seconds", "torch_rng", "config",
-)  # fmt: skip
-"""What a training checkpoint holds."""
+CHECKPOINT_KEYS = RunState.KEYS
+"""What a training checkpoint holds: the state object's own keys
+([`RunState.KEYS`][rainuav.rl.callbacks.RunState.KEYS])."""
 
 
 def load_checkpoint(path: Path, cfg: TrainConfig) -> dict[str, Any]:
