@@ -258,6 +258,8 @@ def test_the_environment_takes_every_kind_as_its_signal(series) -> None:
     ]
     with pytest.raises(InvalidInputError, match="signal is sinr_db, not sir_db"):
         UAVNavEnv(signal_of(one), config=task, signal="sir")
+    with pytest.raises(InvalidInputError, match="radio_map must be a built map"):
+        UAVNavEnv(radio_map=np.zeros((4, 4)), config=task)
 
 
 def spec_for(task):

@@ -249,9 +249,8 @@ def signal_field(
     """The field a task flies on: a map's signal, or the one raw array given.
 
     Args:
-        radio_map: A built map of any kind, a [`Signal`][rainuav.signals.Signal] (each read
-            through its `as_signal()`), any object with the signal's array and `extent_m`, or
-            None.
+        radio_map: A built map of any kind or a [`Signal`][rainuav.signals.Signal] (each read
+            through its `as_signal()`), or None.
         sinr_db: A raw SINR array (with `extent_m`), or None.
         sir_db: A raw SIR array (with `extent_m`), or None.
         extent_m: The raw array's `(x_min, x_max, y_min, y_max)`, m.
@@ -272,16 +271,12 @@ def signal_field(
             raise InvalidInputError(f"give radio_map or {next(iter(raw))}_db, not both")
         signal = signal or "sinr"
         as_signal = getattr(radio_map, "as_signal", None)
-        if callable(as_signal):  # every map kind and a Signal: one path, by its axes
-            return field_of(as_signal(signal, scenario_toml=False))
-        values = getattr(radio_map, f"{signal}_db", None)  # any object with the arrays
-        if values is None:
+        if not callable(as_signal):
             raise InvalidInputError(
-                f"signal={signal!r}: radio_map has no {signal}_db (rebuild it with this version)"
+                "radio_map must be a built map (RadioMap, in time or of every level) or a Signal "
+                f"(got {type(radio_map).__name__})"
             )
-        serving = getattr(radio_map, "serving_cell", None)
-        mask = getattr(radio_map, "not_flyable", None)
-        return SignalField(values, radio_map.extent_m, f"{signal}_db", serving, mask)
+        return field_of(as_signal(signal, scenario_toml=False))  # every kind, by its axes
     if len(raw) != 1:
         raise InvalidInputError("give radio_map, or exactly one of sinr_db and sir_db")
     kind, values = next(iter(raw.items()))
