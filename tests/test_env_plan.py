@@ -228,6 +228,41 @@ def test_planner_refuses_plans_beyond_memory() -> None:
         plan.optimal(env, [100.0, 100.0])
 
 
+def test_the_binding_takes_one_signal_array_and_one_task() -> None:
+    """The Rust planner reads one array (time, level, north, east) and one task built from the
+    configuration (``rust_task``); a plan through it is the environment's plan, and a mask,
+    a start level or a task item that does not fit is refused by its name."""
+    from rainuav import _core
+    from rainuav.nav.task import NavConfig
+
+    e = env(max_steps=40)
+    want = plan.optimal(e, [50.0, 50.0])
+    cfg = NavConfig(goal_m=(300.0, 200.0), max_steps=40, min_db=e.cfg.min_db)
+    task = plan.rust_task(cfg, EXT)
+    sig = np.ascontiguousarray(small_map()[None, None])
+    starts = np.array([[50.0, 50.0, 0.0]])
+    ((ret, actions, path, ticks),) = _core.plan_optimal_levels(sig, np.zeros(1), starts, task)
+    assert ret == pytest.approx(want.return_, abs=1e-9)  # the same programme: to rounding
+    np.testing.assert_array_equal(actions, want.actions)
+    np.testing.assert_array_equal(path[:, :2], want.path_m)
+    np.testing.assert_array_equal(ticks, np.arange(len(actions) + 1))
+    bad = [
+        ({"blocked": np.zeros((2, 30, 40), np.uint8)}, {}, "blocked"),
+        ({}, {"climb": [1]}, "climb"),
+        ({}, {"dt_s": 0.0}, "dt_s"),
+        ({}, {"reward": "best"}, "reward"),
+    ]
+    for extra, items, needle in bad:
+        with pytest.raises(rainuav.InvalidInputError, match=needle):
+            _core.plan_optimal_levels(sig, np.zeros(1), starts, {**task, **items}, **extra)
+    with pytest.raises(rainuav.InvalidInputError, match="starts"):
+        _core.plan_optimal_levels(sig, np.zeros(1), np.array([[50.0, 50.0, 1.0]]), task)
+    with pytest.raises(KeyError, match="mu"):
+        _core.plan_optimal_levels(
+            sig, np.zeros(1), starts, {k: v for k, v in task.items() if k != "mu"}
+        )
+
+
 def test_chance_weighted_planner_against_brute_force(best_return_of_every_sequence) -> None:
     """The ``"chance"`` reward (a move costs ``1 + mu P``, ``P`` the field's ``outage_p`` where
     it ends): the Rust planner's plan against every 6-move sequence flown by the Python

@@ -4,7 +4,7 @@ Array arguments are 1-D float64 C-contiguous arrays (read as zero-copy views); r
 fresh arrays handed over without copying. ``rainuav.medium`` wraps these with broadcasting.
 """
 
-from typing import final
+from typing import Any, final
 
 import numpy as np
 import numpy.typing as npt
@@ -198,27 +198,15 @@ def sample_slices(
 def plan_optimal_levels(
     sinr_db: _F,
     t_s: _F,
-    extent_m: tuple[float, float, float, float],
-    goal_m: tuple[float, float],
     starts: _F,
-    *,
-    t0_s: float,
-    dt_s: float,
-    step_m: float,
-    tol_m: float,
-    max_steps: int,
-    mu: float,
-    reward: str,
-    sir_min_db: float,
-    goal_reward: float,
-    out_of_bounds_penalty: float,
-    climb: list[int],
-    descend: list[int],
+    task: dict[str, Any],
     blocked: npt.NDArray[np.uint8] | None = None,
 ) -> list[tuple[float, npt.NDArray[np.uint8], _F, npt.NDArray[np.uint64]]]:
     """Exact plans among levels, the signal (K, L, H, W) at the instants t_s (one slice: a
-    signal that does not change): six moves, starts (N, 3) x, y, level; climbs and descents
-    in ticks; each a (return, actions, path (T+1, 3): x, y, level, ticks (T+1,))."""
+    signal that does not change): six moves, starts (N, 3) x, y, level (-1: the best); the
+    task's items as ``rainuav.nav.planner.rust_task`` builds them (geometry, rewards,
+    horizon, clock, climbs and descents in ticks); each plan a (return, actions, path (T+1,
+    3): x, y, level, ticks (T+1,))."""
 
 def ray_power(
     tx_m: _F,

@@ -5,8 +5,8 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use ndarray::{Array4, Axis};
-use rainuav_core::planning::planlevels::{LevelTask, LevelTimeline};
+use ndarray::Array4;
+use rainuav_core::planning::planlevels::{LevelSignal, LevelTask};
 use rainuav_core::planning::planner::{NavTask, RewardKind};
 
 const LEVELS: usize = 7;
@@ -21,50 +21,47 @@ fn signal() -> Array4<f64> {
     })
 }
 
-fn task(s: ndarray::ArrayView2<'_, f64>) -> NavTask<'_> {
-    NavTask {
-        sir_db: s,
-        extent: [0.0, 2000.0, 0.0, 2000.0],
-        goal: [1400.0, 1600.0],
-        step_m: 10.0,
-        tol_m: 10.0,
-        max_steps: 300,
-        mu: 10.0 / 43.0,
-        reward: RewardKind::Shortfall,
-        sir_min_db: -2.0,
-        goal_reward: 2000.0,
-        out_of_bounds_penalty: 10000.0,
-        blocked: None,
-    }
-}
+const TASK: NavTask = NavTask {
+    extent: [0.0, 2000.0, 0.0, 2000.0],
+    goal: [1400.0, 1600.0],
+    step_m: 10.0,
+    tol_m: 10.0,
+    max_steps: 300,
+    mu: 10.0 / 43.0,
+    reward: RewardKind::Shortfall,
+    sir_min_db: -2.0,
+    goal_reward: 2000.0,
+    out_of_bounds_penalty: 10000.0,
+};
 
 fn bench(c: &mut Criterion) {
     let sig = signal();
     let times: Vec<f64> = (0..SLICES).map(|k| 5.0 * k as f64).collect();
-    let first = sig.index_axis(Axis(0), 0);
-    let levels: Vec<NavTask<'_>> = (0..LEVELS)
-        .map(|l| task(first.index_axis(Axis(0), l)))
-        .collect();
-    let plan = LevelTask {
-        levels,
+    let first = sig.slice(ndarray::s![0..1, .., .., ..]);
+    let task = |signal| LevelTask {
+        task: TASK,
+        signal,
+        blocked: None,
         climb: vec![3; LEVELS - 1],
         descend: vec![5; LEVELS - 1],
     };
-    let tl = LevelTimeline {
+    let at_rest = task(LevelSignal::still(first));
+    let moving = task(LevelSignal {
         slices: sig.view(),
         t_s: &times,
         t0_s: 0.0,
         dt_s: 1.0,
-    };
+    });
     let one: Array4<f64> = sig.slice(ndarray::s![.., 3..4, .., ..]).to_owned();
-    let flat = LevelTimeline {
-        slices: one.view(),
-        t_s: &times,
-        t0_s: 0.0,
-        dt_s: 1.0,
-    };
     let plane = LevelTask {
-        levels: vec![task(first.index_axis(Axis(0), 3))],
+        task: TASK,
+        signal: LevelSignal {
+            slices: one.view(),
+            t_s: &times,
+            t0_s: 0.0,
+            dt_s: 1.0,
+        },
+        blocked: None,
         climb: vec![],
         descend: vec![],
     };
@@ -72,13 +69,13 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("one_plan_200x200_300_ticks");
     g.sample_size(10);
     g.bench_function("7_levels_static", |b| {
-        b.iter(|| plan.optimal(start, 0).expect("plans"))
+        b.iter(|| at_rest.optimal(start, 0).expect("plans"))
     });
     g.bench_function("7_levels_61_slices", |b| {
-        b.iter(|| plan.optimal_in_time(&tl, start, 0).expect("plans"))
+        b.iter(|| moving.optimal(start, 0).expect("plans"))
     });
     g.bench_function("plane_61_slices_reference", |b| {
-        b.iter(|| plane.optimal_in_time(&flat, start, 0).expect("plans"))
+        b.iter(|| plane.optimal(start, 0).expect("plans"))
     });
     g.finish();
 }

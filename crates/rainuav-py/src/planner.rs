@@ -10,7 +10,7 @@ use numpy::{
 };
 use pyo3::prelude::*;
 use rainuav_core::CoreError;
-use rainuav_core::planning::planlevels::{LevelTask, LevelTimeline};
+use rainuav_core::planning::planlevels::{ANY_LEVEL, LevelSignal, LevelTask};
 use rainuav_core::planning::planner::NavTask;
 
 /// The instants of a signal in time, a contiguous 1-D array.
@@ -70,91 +70,33 @@ type LevelPlanOut<'py> = (
     Bound<'py, PyArray1<u64>>,
 );
 
-/// Exact plans with altitude as a decision (`rainuav_core::planning::planlevels`): the signal of each
-/// level `sinr_db` (K, L, H, W) at the instants `t_s` (K,; one slice: a signal that does not
-/// change), lowest level first, and optionally each level's not-flyable pixels `blocked`
-/// (L, H', W'); `starts` (N, 3): x, y and the start level (-1: the best). Six moves (the
-/// plane's four, a climb, a descent); `climb[k]` and `descend[k]` (L - 1 each) are how many
-/// ticks (horizontal moves of `dt_s` seconds) the climb from level k to k + 1 and the
-/// descent back last; take-off at `t0_s`.
-#[pyfunction]
-#[pyo3(signature = (sinr_db, t_s, extent_m, goal_m, starts, *, t0_s, dt_s, step_m, tol_m,
-    max_steps, mu, reward, sir_min_db, goal_reward, out_of_bounds_penalty, climb, descend,
-    blocked=None))]
-#[allow(clippy::too_many_arguments)]
-// Long: the binding converts and checks its numpy arrays and the task's numbers (each named in its
-// errors) before the core is called; that conversion is most of its length.
-fn plan_optimal_levels<'py>(
-    py: Python<'py>,
-    sinr_db: PyReadonlyArray4<'py, f64>,
-    t_s: PyReadonlyArray1<'py, f64>,
+/// The task a plan solves, read from a dict's items (`rainuav.nav.planner.rust_task` builds
+/// it from a `NavConfig`): the geometry, rewards and horizon, the clock, and the climbs and
+/// descents between neighbouring levels in ticks.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct PlanSpec {
     extent_m: [f64; 4],
     goal_m: [f64; 2],
-    starts: PyReadonlyArray2<'py, f64>,
-    t0_s: f64,
-    dt_s: f64,
     step_m: f64,
     tol_m: f64,
     max_steps: usize,
     mu: f64,
-    reward: &str,
+    reward: String,
     sir_min_db: f64,
     goal_reward: f64,
     out_of_bounds_penalty: f64,
+    t0_s: f64,
+    dt_s: f64,
     climb: Vec<usize>,
     descend: Vec<usize>,
-    blocked: Option<PyReadonlyArray3<'py, u8>>,
-) -> PyResult<Vec<LevelPlanOut<'py>>> {
-    let slices = sinr_db.as_array();
-    let masks = blocked.as_ref().map(|b| b.as_array());
-    let (nk, nl) = (slices.shape()[0], slices.shape()[1]);
-    if nk == 0 || nl == 0 {
-        return Err(to_py(CoreError::invalid(
-            "sinr_db",
-            "must hold at least one slice and one level",
-            format!("{:?}", slices.shape()),
-        )));
-    }
-    if let Some(b) = &masks
-        && b.shape()[0] != nl
-    {
-        return Err(to_py(CoreError::invalid(
-            "blocked",
-            format!("must hold one mask a level ({nl})"),
-            b.shape()[0],
-        )));
-    }
-    let times = instants(&t_s)?;
-    let kind = reward.parse().map_err(to_py)?;
-    let first = slices.index_axis(ndarray::Axis(0), 0);
-    let levels = (0..nl)
-        .map(|l| NavTask {
-            sir_db: first.index_axis(ndarray::Axis(0), l),
-            extent: extent_m,
-            goal: goal_m,
-            step_m,
-            tol_m,
-            max_steps,
-            mu,
-            reward: kind,
-            sir_min_db,
-            goal_reward,
-            out_of_bounds_penalty,
-            blocked: masks.as_ref().map(|b| b.index_axis(ndarray::Axis(0), l)),
-        })
-        .collect();
-    let task = LevelTask {
-        levels,
-        climb,
-        descend,
-    };
-    let tl = LevelTimeline {
-        slices: slices.view(),
-        t_s: times,
-        t0_s,
-        dt_s,
-    };
-    let st = starts.as_array();
+}
+
+/// The starts (N, 3): x, y and a level in `0..levels`, or -1 (the best).
+fn start_points(
+    st: ndarray::ArrayView2<'_, f64>,
+    levels: usize,
+) -> PyResult<Vec<([f64; 2], usize)>> {
     if st.ncols() != 3 {
         return Err(to_py(CoreError::invalid(
             "starts",
@@ -162,24 +104,65 @@ fn plan_optimal_levels<'py>(
             format!("{:?}", st.dim()),
         )));
     }
-    let mut pts = Vec::with_capacity(st.nrows());
-    for r in st.rows() {
-        let l = r[2];
-        if l == -1.0 {
-            pts.push(([r[0], r[1]], rainuav_core::planning::planlevels::ANY_LEVEL));
-            continue;
-        }
-        if !(l.is_finite() && l >= 0.0 && l.fract() == 0.0 && (l as usize) < nl) {
-            return Err(to_py(CoreError::invalid(
-                "starts",
-                format!("levels must be whole numbers in 0..{nl}, or -1 (the best)"),
-                l,
-            )));
-        }
-        pts.push(([r[0], r[1]], l as usize));
-    }
-    let moving = (nk > 1).then_some(&tl);
-    let plans = detached(py, || task.optimal_many(moving, &pts))?;
+    st.rows()
+        .into_iter()
+        .map(|r| {
+            let l = r[2];
+            if l == -1.0 {
+                return Ok(([r[0], r[1]], ANY_LEVEL));
+            }
+            if !(l.is_finite() && l >= 0.0 && l.fract() == 0.0 && (l as usize) < levels) {
+                return Err(to_py(CoreError::invalid(
+                    "starts",
+                    format!("levels must be whole numbers in 0..{levels}, or -1 (the best)"),
+                    l,
+                )));
+            }
+            Ok(([r[0], r[1]], l as usize))
+        })
+        .collect()
+}
+
+/// Exact plans with altitude as a decision (`rainuav_core::planning::planlevels`): the signal
+/// `sinr_db` (K, L, H, W) of every level at the instants `t_s` (K,; one slice: a signal that
+/// does not change), lowest level first; `starts` (N, 3): x, y and the start level (-1: the
+/// best); `task` the [`PlanSpec`]'s items; optionally each level's not-flyable pixels
+/// `blocked` (L, H', W'). Six moves (the plane's four, a climb, a descent).
+#[pyfunction]
+#[pyo3(signature = (sinr_db, t_s, starts, task, blocked=None))]
+fn plan_optimal_levels<'py>(
+    py: Python<'py>,
+    sinr_db: PyReadonlyArray4<'py, f64>,
+    t_s: PyReadonlyArray1<'py, f64>,
+    starts: PyReadonlyArray2<'py, f64>,
+    task: PlanSpec,
+    blocked: Option<PyReadonlyArray3<'py, u8>>,
+) -> PyResult<Vec<LevelPlanOut<'py>>> {
+    let plan = LevelTask {
+        task: NavTask {
+            extent: task.extent_m,
+            goal: task.goal_m,
+            step_m: task.step_m,
+            tol_m: task.tol_m,
+            max_steps: task.max_steps,
+            mu: task.mu,
+            reward: task.reward.parse().map_err(to_py)?,
+            sir_min_db: task.sir_min_db,
+            goal_reward: task.goal_reward,
+            out_of_bounds_penalty: task.out_of_bounds_penalty,
+        },
+        signal: LevelSignal {
+            slices: sinr_db.as_array(),
+            t_s: instants(&t_s)?,
+            t0_s: task.t0_s,
+            dt_s: task.dt_s,
+        },
+        blocked: blocked.as_ref().map(|b| b.as_array()),
+        climb: task.climb,
+        descend: task.descend,
+    };
+    let pts = start_points(starts.as_array(), plan.levels())?;
+    let plans = detached(py, || plan.optimal_many(&pts))?;
     Ok(plans
         .into_iter()
         .map(|p| {

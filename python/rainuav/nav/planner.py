@@ -32,6 +32,7 @@ __all__ = [
     "optimal_among_levels",
     "optimal_levels",
     "optimal_many",
+    "rust_task",
     "straight_line",
 ]
 
@@ -46,6 +47,43 @@ class Plan:
     """(T + 1, 2) positions, from the start."""
     actions: npt.NDArray[np.int64]
     """(T,) actions."""
+
+
+def rust_task(
+    cfg: NavConfig,
+    extent_m: Any,
+    climb: list[int] | None = None,
+    descend: list[int] | None = None,
+) -> dict[str, Any]:
+    """The task the Rust planner solves, built from a task's configuration once.
+
+    Args:
+        cfg: The task, ``min_db`` resolved.
+        extent_m: ``(x_min, x_max, y_min, y_max)`` of the signal, m.
+        climb: Ticks of the climb between each two neighbouring levels (none: one level).
+        descend: Ticks of the descent between each two neighbouring levels.
+
+    Returns:
+        The items ``rainuav._core.plan_optimal_levels`` reads as its ``task``: the geometry,
+        rewards and horizon, the clock (every flight taking off at 0, one tick a move of
+        ``cfg.move_s``) and the climbs and descents.
+    """
+    return {
+        "extent_m": tuple(float(v) for v in extent_m),
+        "goal_m": (float(cfg.goal_m[0]), float(cfg.goal_m[1])),
+        "step_m": float(cfg.step_m),
+        "tol_m": float(cfg.tol_m),
+        "max_steps": int(cfg.max_steps),
+        "mu": float(cfg.mu),
+        "reward": cfg.reward,
+        "sir_min_db": float(cfg.min_db),  # the Rust planner's name for the threshold
+        "goal_reward": float(cfg.goal_reward),
+        "out_of_bounds_penalty": float(cfg.out_of_bounds_penalty),
+        "t0_s": 0.0,
+        "dt_s": float(cfg.move_s),
+        "climb": list(climb or []),
+        "descend": list(descend or []),
+    }
 
 
 def _as_env(env: UAVNavEnv) -> UAVNavEnv:
@@ -92,22 +130,10 @@ def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
             several levels, ``"chance"`` without ``outage_p``).
     """
     starts = np.ascontiguousarray(np.asarray(starts_m, dtype=np.float64).reshape(-1, 2))
-    task = {
-        "step_m": float(cfg.step_m),
-        "tol_m": float(cfg.tol_m),
-        "max_steps": int(cfg.max_steps),
-        "mu": float(cfg.mu),
-        "reward": cfg.reward,
-        "sir_min_db": float(cfg.min_db),  # the Rust planner's name for the threshold
-        "goal_reward": float(cfg.goal_reward),
-        "out_of_bounds_penalty": float(cfg.out_of_bounds_penalty),
-    }
     # The plane is the programme among levels with one level: (K, 1, H, W) slices (one slice
     # for a signal that does not change), every start on level 0, no climbs.
     mask = getattr(field, "not_flyable", None)
-    if mask is not None:
-        task["blocked"] = np.ascontiguousarray(np.asarray(mask, dtype=np.uint8)[None])
-    goal = (float(cfg.goal_m[0]), float(cfg.goal_m[1]))
+    blocked = None if mask is None else np.ascontiguousarray(np.asarray(mask, dtype=np.uint8)[None])
     if cfg.reward == "chance":
         if getattr(field, "outage_p", None) is None:
             raise InvalidInputError("reward 'chance' plans on one map with outage_p")
@@ -118,9 +144,8 @@ def plan_on(field: Any, cfg: NavConfig, starts_m: npt.ArrayLike) -> list[Plan]:
         slices, times = field.values[0], field.t_s
     raw = _core.plan_optimal_levels(
         np.ascontiguousarray(slices, dtype=np.float64), np.ascontiguousarray(times),
-        tuple(float(v) for v in field.extent), goal,  # type: ignore[arg-type]
         np.ascontiguousarray(np.column_stack([starts, np.zeros(len(starts))])),
-        t0_s=0.0, dt_s=float(cfg.move_s), climb=[], descend=[], **task,
+        rust_task(cfg, field.extent), blocked,
     )  # fmt: skip
     return [
         Plan(float(r), np.ascontiguousarray(np.asarray(path)[:, :2]), np.asarray(a, dtype=np.int64))
@@ -281,12 +306,8 @@ def optimal_levels(
         blocked = np.ascontiguousarray(np.asarray(not_flyable, dtype=np.uint8))
     raw = _core.plan_optimal_levels(
         np.ascontiguousarray(sig), np.ascontiguousarray(times),
-        tuple(float(v) for v in extent_m), (float(cfg.goal_m[0]), float(cfg.goal_m[1])),  # type: ignore[arg-type]
-        np.ascontiguousarray(np.column_stack([starts, lv])), t0_s=0.0, dt_s=float(cfg.move_s),
-        step_m=float(cfg.step_m), tol_m=float(cfg.tol_m), max_steps=int(cfg.max_steps),
-        mu=float(cfg.mu), reward=cfg.reward, sir_min_db=float(cfg.min_db),
-        goal_reward=float(cfg.goal_reward), out_of_bounds_penalty=float(cfg.out_of_bounds_penalty),
-        climb=climb, descend=descend, blocked=blocked,
+        np.ascontiguousarray(np.column_stack([starts, lv])),
+        rust_task(cfg, extent_m, climb, descend), blocked,
     )  # fmt: skip
     out = []
     for r, a, p, ticks in raw:

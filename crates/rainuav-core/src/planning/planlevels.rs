@@ -1,7 +1,8 @@
 //! The exact planner with altitude as a decision: the UAV flies on a stack of levels (one
 //! signal map and one not-flyable mask per flight altitude) and has six moves, the four of
 //! the plane (one step east, north, west, south on its level) and a climb or a descent of
-//! one level; the signal may change in time (a storm that moves, [`LevelTimeline`]).
+//! one level; the signal is one array over (time, level, north, east), [`LevelSignal`]: one
+//! slice for a signal that does not change, several for a storm that moves).
 //!
 //! **Clock.** The flight's clock ticks once per horizontal move (`dt_s` seconds). A climb
 //! from level `k` to `k + 1` lasts `climb[k]` ticks and the descent back `descend[k]`, whole
@@ -13,7 +14,7 @@
 //!
 //! **Costs.** A move's reward is its duration in ticks times the base reward of the level,
 //! point and instant it lands on (`-1 - mu shortfall` and the other kinds of
-//! [`NavTask::base_reward`]). A move past the band lasts as long as the last gap on that side
+//! [`crate::planning::planner::NavTask::base_reward`]). A move past the band lasts as long as the last gap on that side
 //! (one tick without one). Leaving the area or the band of levels, or entering a not-flyable
 //! cell of a level, ends the flight with the out-of-bounds penalty, as leaving the area does
 //! in the plane. The flight arrives when its horizontal position comes within the tolerance
@@ -29,13 +30,13 @@
 use crate::error::{CoreError, Result};
 use crate::memory::check_memory_for;
 use crate::planning::planner::{NavTask, Tap, blend};
+use ndarray::{ArrayView2, ArrayView3, Axis};
 
 mod signal;
 mod solve;
 mod stencil;
 
-pub use signal::LevelTimeline;
-use signal::Source;
+pub use signal::LevelSignal;
 use stencil::{Row, Sampler, Vertical, stencil_row};
 
 const MEMORY_HINT: &str = "use fewer levels, fewer max_steps, a larger step_m or a smaller area";
@@ -53,13 +54,20 @@ pub struct LevelPlan {
     pub ticks: Vec<usize>,
 }
 
-/// The task among levels: one [`NavTask`] per level (the same geometry, rewards and
-/// horizon; each its own signal and not-flyable mask), lowest first, and the durations of
-/// the climbs and descents between neighbouring levels in ticks (horizontal moves).
+/// The task among levels: one [`NavTask`] (the geometry, rewards and horizon every level
+/// shares), the signal of every level ([`LevelSignal`], lowest level first), each level's
+/// not-flyable mask, and the durations of the climbs and descents between neighbouring levels
+/// in ticks (horizontal moves).
 #[derive(Debug, Clone)]
 pub struct LevelTask<'a> {
-    /// One task per level, lowest first.
-    pub levels: Vec<NavTask<'a>>,
+    /// The geometry, rewards and horizon.
+    pub task: NavTask,
+    /// The signal (K, L, H, W) and the flight's clock.
+    pub signal: LevelSignal<'a>,
+    /// Pixels a UAV may not enter (non-zero), (L, H', W') over the area (terrain or obstacles
+    /// within the clearance of each level's height): a move into one is a move out of the
+    /// area.
+    pub blocked: Option<ArrayView3<'a, u8>>,
     /// Ticks of the climb from level `k` to `k + 1` (L - 1 values, each >= 1).
     pub climb: Vec<usize>,
     /// Ticks of the descent from level `k + 1` to `k` (L - 1 values, each >= 1).
@@ -73,35 +81,42 @@ pub const LEVEL_MOVES: usize = 6;
 pub const ANY_LEVEL: usize = usize::MAX;
 
 impl LevelTask<'_> {
+    /// The number of levels.
+    pub fn levels(&self) -> usize {
+        self.signal.slices.dim().1
+    }
+
+    /// Level `l`'s not-flyable mask.
+    fn mask(&self, l: usize) -> Option<ArrayView2<'_, u8>> {
+        self.blocked.as_ref().map(|b| b.index_axis(Axis(0), l))
+    }
+
+    /// Whether `(x, y)` may not be entered on level `l`.
+    fn blocked_at(&self, l: usize, x: f64, y: f64) -> bool {
+        self.task.blocked_at(self.mask(l).as_ref(), x, y)
+    }
+
     fn validate(&self) -> Result<()> {
-        let Some(first) = self.levels.first() else {
-            return Err(CoreError::invalid(
-                "levels",
-                "must hold at least one level",
-                0,
-            ));
-        };
-        for t in &self.levels {
-            t.validate()?;
-            if t.extent != first.extent
-                || t.goal != first.goal
-                || t.step_m != first.step_m
-                || t.max_steps != first.max_steps
-            {
+        self.task.validate()?;
+        self.signal.validate()?;
+        let nl = self.levels();
+        if let Some(b) = &self.blocked {
+            let (l, h, w) = b.dim();
+            if l != nl || h == 0 || w == 0 {
                 return Err(CoreError::invalid(
-                    "levels",
-                    "must share the area, destination, step and horizon",
-                    "a level differs",
+                    "blocked",
+                    format!("must hold one non-empty mask a level ({nl})"),
+                    format!("{:?}", b.dim()),
                 ));
             }
         }
         for (name, v) in [("climb", &self.climb), ("descend", &self.descend)] {
-            if v.len() + 1 != self.levels.len() {
+            if v.len() + 1 != nl {
                 return Err(CoreError::invalid(
                     name,
                     format!(
                         "must hold one duration between each two levels ({})",
-                        self.levels.len() - 1
+                        nl - 1
                     ),
                     v.len(),
                 ));
@@ -128,18 +143,19 @@ impl LevelTask<'_> {
     /// The transition from level `l`, lattice offset `(i, j)` of `start`, by action `a`, the
     /// move starting at tick `tick`: `(reward, terminal, (level, i, j) after, position after
     /// [x, y, level], duration in ticks)`; the signal read at the landing tick.
-    fn step(
+    pub fn transition(
         &self,
-        src: Source<'_, '_, '_>,
         start: [f64; 2],
         (l, i, j): (usize, i64, i64),
         a: usize,
         tick: usize,
     ) -> (f64, bool, (usize, i64, i64), [f64; 3], usize) {
-        let t = &self.levels[l];
+        let (t, sig) = (&self.task, &self.signal);
         if a < 4 {
             let (r, term, (ti, tj), p) =
-                t.transition_with(start, i, j, a, |x, y| src.signal(l, x, y, tick + 1));
+                t.transition_with(self.mask(l).as_ref(), (start, i, j), a, |x, y| {
+                    sig.signal(t.extent, l, x, y, tick + 1)
+                });
             return (r, term, (l, ti, tj), [p[0], p[1], l as f64], 1);
         }
         let (x, y) = (
@@ -149,68 +165,19 @@ impl LevelTask<'_> {
         let up = a == 4;
         let d = self.duration(l, up);
         let to = if up {
-            Some(l + 1).filter(|&k| k < self.levels.len())
+            Some(l + 1).filter(|&k| k < self.levels())
         } else {
             l.checked_sub(1)
         };
         let land = tick + d;
-        match to {
-            Some(k) => {
-                let r = d as f64 * self.levels[k].base_reward(src.signal(k, x, y, land));
-                if self.levels[k].blocked_at(x, y) {
-                    // Into a not-flyable cell of the next level: out of bounds there.
-                    (
-                        r - t.out_of_bounds_penalty,
-                        true,
-                        (k, i, j),
-                        [x, y, k as f64],
-                        d,
-                    )
-                } else {
-                    (r, false, (k, i, j), [x, y, k as f64], d)
-                }
-            }
-            // Past the lowest or highest level: out of the band, where it is.
-            None => {
-                let r = d as f64 * t.base_reward(src.signal(l, x, y, land));
-                (
-                    r - t.out_of_bounds_penalty,
-                    true,
-                    (l, i, j),
-                    [x, y, l as f64],
-                    d,
-                )
-            }
-        }
-    }
-
-    /// The static task's transition (the signal of each level's map): see [`Self::step`].
-    pub fn transition(
-        &self,
-        start: [f64; 2],
-        state: (usize, i64, i64),
-        a: usize,
-        tick: usize,
-    ) -> (f64, bool, (usize, i64, i64), [f64; 3], usize) {
-        self.step(Source::Static(&self.levels), start, state, a, tick)
-    }
-
-    /// The transition with the signal of `tl`: see [`Self::step`].
-    pub fn transition_in_time(
-        &self,
-        tl: &LevelTimeline<'_>,
-        start: [f64; 2],
-        state: (usize, i64, i64),
-        a: usize,
-        tick: usize,
-    ) -> (f64, bool, (usize, i64, i64), [f64; 3], usize) {
-        self.step(
-            Source::Time(tl, self.levels[0].extent),
-            start,
-            state,
-            a,
-            tick,
-        )
+        // Past the lowest or highest level: out of the band, where it is.
+        let (k, out) = match to {
+            Some(k) => (k, self.blocked_at(k, x, y)),
+            None => (l, true),
+        };
+        let r = d as f64 * t.base_reward(sig.signal(t.extent, k, x, y, land));
+        let r = if out { r - t.out_of_bounds_penalty } else { r };
+        (r, out, (k, i, j), [x, y, k as f64], d)
     }
 
     fn longest(&self) -> usize {
@@ -227,62 +194,36 @@ impl LevelTask<'_> {
     /// values of the last `max(d) + 1` ticks, two slices' samples, the step's stencil input
     /// and the flags.
     pub fn plan_bytes(&self, start: [f64; 2]) -> Result<usize> {
-        let total = self.levels[0]
+        let total = self
+            .task
             .lattice_points(start)?
-            .saturating_mul(self.levels.len());
+            .saturating_mul(self.levels());
         let keep = self.longest() + 1;
         let per = (2 * keep + 5) * size_of::<f64>() + 1;
-        Ok(total.saturating_mul(per.saturating_add(self.levels[0].max_steps)))
+        Ok(total.saturating_mul(per.saturating_add(self.task.max_steps)))
     }
 
-    /// The exact optimum from `start` on level `level` on each level's map; [`ANY_LEVEL`]:
-    /// on the level (of those where the start may be flown) whose optimum is best, the
-    /// take-off's climb left to the autopilot.
+    /// The exact optimum from `start` on level `level`; [`ANY_LEVEL`]: on the level (of those
+    /// where the start may be flown) whose optimum is best, the take-off's climb left to the
+    /// autopilot.
     pub fn optimal(&self, start: [f64; 2], level: usize) -> Result<LevelPlan> {
         self.validate()?;
-        self.solve(Source::Static(&self.levels), start, level)
+        self.solve(start, level)
     }
 
-    /// The exact optimum when the signal of every level changes in time (`tl`).
-    pub fn optimal_in_time(
-        &self,
-        tl: &LevelTimeline<'_>,
-        start: [f64; 2],
-        level: usize,
-    ) -> Result<LevelPlan> {
-        self.validate()?;
-        tl.validate(self.levels.len())?;
-        self.solve(Source::Time(tl, self.levels[0].extent), start, level)
-    }
-
-    /// Exact plans from many `(start, level)`s in parallel (rayon), on each level's map or
-    /// in time (`tl`), refusing before allocating a batch whose plans in flight at once
-    /// would not fit in memory.
-    pub fn optimal_many(
-        &self,
-        tl: Option<&LevelTimeline<'_>>,
-        starts: &[([f64; 2], usize)],
-    ) -> Result<Vec<LevelPlan>> {
+    /// Exact plans from many `(start, level)`s in parallel (rayon), refusing before
+    /// allocating a batch whose plans in flight at once would not fit in memory.
+    pub fn optimal_many(&self, starts: &[([f64; 2], usize)]) -> Result<Vec<LevelPlan>> {
         use rayon::prelude::*;
         self.validate()?;
-        if let Some(tl) = tl {
-            tl.validate(self.levels.len())?;
-        }
         let mut largest = 0usize;
         for &(p, _) in starts {
-            self.levels[0].check_start(p)?;
+            self.task.check_start(p)?;
             largest = largest.max(self.plan_bytes(p)?);
         }
         let at_once = rayon::current_num_threads().min(starts.len()).max(1);
         check_memory_for("max_steps", MEMORY_HINT, largest.saturating_mul(at_once))?;
-        let src = match tl {
-            Some(tl) => Source::Time(tl, self.levels[0].extent),
-            None => Source::Static(&self.levels),
-        };
-        starts
-            .par_iter()
-            .map(|&(p, l)| self.solve(src, p, l))
-            .collect()
+        starts.par_iter().map(|&(p, l)| self.solve(p, l)).collect()
     }
 }
 

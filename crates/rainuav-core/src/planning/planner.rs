@@ -1,7 +1,8 @@
-//! The exact planner's task (docs/physics.md section 6, `rainuav.nav`): the map, the geometry,
-//! the rewards and the one move rule, and the clock of a signal that changes in time. The
-//! programme itself, over (tick, level, lattice point), is [`crate::planning::planlevels`]: the plane (one
-//! level, its signal static or in time) is its case.
+//! The exact planner's task (docs/physics.md section 6, `rainuav.nav`): the geometry, the
+//! rewards, the horizon and the one move rule, and the clock of a signal that changes in time.
+//! The signal itself (one array over time, level, north and east) and the programme over
+//! (tick, level, lattice point) are [`crate::planning::planlevels`]: the plane (one level, its
+//! signal static or in time) is its case.
 //!
 //! Moves are deterministic on the lattice `start + step (i, j)`. Rewards, the SIR interpolation,
 //! leaving the area and arriving follow `rainuav.env` operation for operation, so a plan
@@ -41,11 +42,10 @@ impl FromStr for RewardKind {
     }
 }
 
-/// The task: map, geometry and rewards.
-#[derive(Debug, Clone)]
-pub struct NavTask<'a> {
-    /// SIR map (H, W), dB.
-    pub sir_db: ArrayView2<'a, f64>,
+/// The task: geometry, rewards and horizon, the same at every level and instant (the signal
+/// and the not-flyable masks are [`crate::planning::planlevels::LevelTask`]'s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavTask {
     /// (x_min, x_max, y_min, y_max).
     pub extent: [f64; 4],
     /// Destination.
@@ -66,9 +66,6 @@ pub struct NavTask<'a> {
     pub goal_reward: f64,
     /// Charged on leaving.
     pub out_of_bounds_penalty: f64,
-    /// Pixels a UAV may not enter (non-zero), (H', W') over `extent` (terrain or obstacles
-    /// within the clearance of the flight height): a move into one is a move out of the area.
-    pub blocked: Option<ArrayView2<'a, u8>>,
 }
 
 pub(crate) const MOVES: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
@@ -112,24 +109,9 @@ pub(crate) fn bilinear_taps(s: &ArrayView2<'_, f64>, tx: Tap, ty: Tap) -> f64 {
         + s[(ty.hi, tx.hi)] * tx.t * ty.t
 }
 
-impl NavTask<'_> {
-    /// Checks the task.
+impl NavTask {
+    /// Checks the task's numbers.
     pub fn validate(&self) -> Result<()> {
-        let (h, w) = self.sir_db.dim();
-        if h == 0 || w == 0 {
-            return Err(CoreError::invalid(
-                "sir_db",
-                "must not be empty",
-                format!("{h}x{w}"),
-            ));
-        }
-        if self.sir_db.iter().any(|v| !v.is_finite()) {
-            return Err(CoreError::invalid(
-                "sir_db",
-                "must be finite everywhere",
-                "NaN or inf",
-            ));
-        }
         let [x0, x1, y0, y1] = self.extent;
         if !(x1 > x0 && y1 > y0) || self.extent.iter().any(|v| !v.is_finite()) {
             return Err(CoreError::invalid(
@@ -159,15 +141,6 @@ impl NavTask<'_> {
             1e9,
             "must be finite and > 0",
         )?;
-        if let Some(b) = &self.blocked
-            && (b.nrows() == 0 || b.ncols() == 0)
-        {
-            return Err(CoreError::invalid(
-                "blocked",
-                "must not be empty",
-                format!("{:?}", b.dim()),
-            ));
-        }
         if self.max_steps == 0 || self.max_steps > 100_000 {
             return Err(CoreError::invalid(
                 "max_steps",
@@ -178,15 +151,11 @@ impl NavTask<'_> {
         Ok(())
     }
 
-    /// SIR at (x, y): bilinear, edge-clamped, exactly as `rainuav.env.SirField`.
-    pub fn sir_at(&self, x: f64, y: f64) -> f64 {
-        bilinear(&self.sir_db, self.extent, x, y)
-    }
-
-    /// Whether the pixel holding `(x, y)` (a point inside the area) may not be entered
-    /// (`rainuav.nav.field`'s pixel lookup: the cell `floor((x - x0) / (x1 - x0) W)`, clamped).
-    pub fn blocked_at(&self, x: f64, y: f64) -> bool {
-        let Some(b) = &self.blocked else {
+    /// Whether the pixel of `mask` (H', W', over the area) holding `(x, y)` (a point inside
+    /// the area) may not be entered (`rainuav.nav.field`'s pixel lookup: the cell
+    /// `floor((x - x0) / (x1 - x0) W)`, clamped); no mask: every pixel may.
+    pub fn blocked_at(&self, mask: Option<&ArrayView2<'_, u8>>, x: f64, y: f64) -> bool {
+        let Some(b) = mask else {
             return false;
         };
         let [x0, x1, y0, y1] = self.extent;
@@ -225,14 +194,14 @@ impl NavTask<'_> {
         }
     }
 
-    /// The transition from lattice offset `(i, j)` of `start` by action `a`, the signal read by
-    /// `signal(x, y)` at the (clamped) new position: `(reward, terminal, new offset, position
-    /// after the move (clamped if it left))`. The one move rule of the plane.
+    /// The transition from lattice offset `(i, j)` of `start` by action `a` on a level whose
+    /// not-flyable pixels are `mask`, the signal read by `signal(x, y)` at the (clamped) new
+    /// position: `(reward, terminal, new offset, position after the move (clamped if it
+    /// left))`. The one move rule of the plane.
     pub(crate) fn transition_with(
         &self,
-        start: [f64; 2],
-        i: i64,
-        j: i64,
+        mask: Option<&ArrayView2<'_, u8>>,
+        (start, i, j): ([f64; 2], i64, i64),
         a: usize,
         signal: impl Fn(f64, f64) -> f64,
     ) -> (f64, bool, (i64, i64), [f64; 2]) {
@@ -240,7 +209,7 @@ impl NavTask<'_> {
         let (ni, nj) = (i + MOVES[a].0, j + MOVES[a].1);
         let qx = start[0] + self.step_m * ni as f64;
         let qy = start[1] + self.step_m * nj as f64;
-        let out = qx < x0 || qx > x1 || qy < y0 || qy > y1 || self.blocked_at(qx, qy);
+        let out = qx < x0 || qx > x1 || qy < y0 || qy > y1 || self.blocked_at(mask, qx, qy);
         let (cx, cy) = (qx.clamp(x0, x1), qy.clamp(y0, y1));
         let b = self.base_reward(signal(cx, cy));
         if out {
@@ -297,9 +266,8 @@ impl NavTask<'_> {
 /// The small task the planners' unit tests share: a 40 x 30 m area, 10 m moves, the
 /// destination at (30, 20), a 10 dB threshold.
 #[cfg(test)]
-pub(crate) fn test_task(s: &ndarray::Array2<f64>, max_steps: usize) -> NavTask<'_> {
+pub(crate) fn test_task(max_steps: usize) -> NavTask {
     NavTask {
-        sir_db: s.view(),
         extent: [0.0, 40.0, 0.0, 30.0],
         goal: [30.0, 20.0],
         step_m: 10.0,
@@ -310,7 +278,6 @@ pub(crate) fn test_task(s: &ndarray::Array2<f64>, max_steps: usize) -> NavTask<'
         sir_min_db: 10.0,
         goal_reward: 100.0,
         out_of_bounds_penalty: 1000.0,
-        blocked: None,
     }
 }
 

@@ -7,15 +7,10 @@ impl LevelTask<'_> {
     /// The backward programme (module docs) and the replay of its policy.
     // Long: the backward programme over (tick, level, position) and the replay of its policy share
     // the value tables and the lattice; split, the tables would pass between the halves.
-    pub(super) fn solve(
-        &self,
-        src: Source<'_, '_, '_>,
-        start: [f64; 2],
-        level: usize,
-    ) -> Result<LevelPlan> {
-        let t0 = &self.levels[0];
+    pub(super) fn solve(&self, start: [f64; 2], level: usize) -> Result<LevelPlan> {
+        let (t0, src) = (&self.task, &self.signal);
         t0.check_start(start)?;
-        let nl = self.levels.len();
+        let nl = self.levels();
         if level != ANY_LEVEL && level >= nl {
             return Err(CoreError::invalid(
                 "start level",
@@ -46,12 +41,12 @@ impl LevelTask<'_> {
                 let out = qx < x0 || qx > x1 || qy < y0 || qy > y1;
                 let ring = ii == 0 || jj == 0 || ii + 1 == ni || jj + 1 == nj;
                 let goal = (qx - t0.goal[0]).hypot(qy - t0.goal[1]) <= t0.tol_m;
-                for (l, task) in self.levels.iter().enumerate() {
+                for l in 0..nl {
                     let s = l * n + ii * nj + jj;
-                    extra[s] = if out || task.blocked_at(qx, qy) {
-                        -task.out_of_bounds_penalty
+                    extra[s] = if out || self.blocked_at(l, qx, qy) {
+                        -t0.out_of_bounds_penalty
                     } else if goal {
-                        task.goal_reward
+                        t0.goal_reward
                     } else if ring {
                         // Beyond the table the horizon cuts (as in the plane): unreachable.
                         f64::NEG_INFINITY
@@ -64,7 +59,7 @@ impl LevelTask<'_> {
         }
         let keep = self.longest() + 1;
         let t_max = t0.max_steps;
-        let still = matches!(src, Source::Static(_));
+        let still = !src.moves();
         // B and W of tick `tau` sit in slot `tau % keep` (B in slot 0 for a static signal).
         let mut b_ring = vec![vec![0.0f64; total]; if still { 1 } else { keep }];
         let mut w_ring = vec![extra.clone(); keep];
@@ -81,15 +76,11 @@ impl LevelTask<'_> {
         let mut fill_b = |tau: usize, b: &mut [f64]| {
             let (k0, k1, f) = src.bracket(tau);
             let (v0, v1) = sampler.values(k0, k1, src, &taps, n);
-            for (l, task) in self.levels.iter().enumerate() {
-                let (b, v0) = (&mut b[l * n..(l + 1) * n], &v0[l * n..(l + 1) * n]);
-                match v1 {
-                    None => task.base_rewards(v0.iter().copied(), b),
-                    Some(v1) => {
-                        let v1 = &v1[l * n..(l + 1) * n];
-                        let sig = v0.iter().zip(v1).map(|(a, c)| blend(*a, *c, f));
-                        task.base_rewards(sig, b);
-                    }
+            match v1 {
+                None => t0.base_rewards(v0.iter().copied(), b),
+                Some(v1) => {
+                    let sig = v0.iter().zip(v1).map(|(a, c)| blend(*a, *c, f));
+                    t0.base_rewards(sig, b);
                 }
             }
         };
@@ -170,7 +161,7 @@ impl LevelTask<'_> {
         // The start level: the given one, or the best of those the start may be flown at.
         let level = if level == ANY_LEVEL {
             (0..nl)
-                .filter(|&l| !self.levels[l].blocked_at(start[0], start[1]))
+                .filter(|&l| !self.blocked_at(l, start[0], start[1]))
                 .max_by(|&a, &b| at_start[a].total_cmp(&at_start[b]).then(b.cmp(&a)))
                 .ok_or_else(|| {
                     CoreError::invalid(
@@ -195,7 +186,7 @@ impl LevelTask<'_> {
         };
         while tick < t_max {
             let a = policy[tick * total + idx(state.0, state.1, state.2)] as usize;
-            let (r, term, next, pos, d) = self.step(src, start, state, a, tick);
+            let (r, term, next, pos, d) = self.transition(start, state, a, tick);
             tick += d;
             plan.actions.push(a as u8);
             plan.path.push(pos);

@@ -1,7 +1,7 @@
 //! The inner loops of the planner among levels: one row of the backward programme read as a
 //! stencil, and each level's signal sampled once a slice at the plan's lattice.
 
-use super::signal::Source;
+use super::signal::LevelSignal;
 use crate::planning::planner::{Tap, bilinear_taps};
 
 /// The stencil input of one row: `B` and `W` of the next tick over the whole stack, the
@@ -80,7 +80,7 @@ impl Sampler {
         &mut self,
         k0: usize,
         k1: usize,
-        src: Source<'_, '_, '_>,
+        src: &LevelSignal<'_>,
         taps: &[(Vec<Tap>, Vec<Tap>)],
         n: usize,
     ) -> (&[f64], Option<&[f64]>) {
