@@ -52,6 +52,7 @@ from rainuav.radio.measured.prior import (
 )
 from rainuav.radio.measured.scores import crps_gaussian
 from rainuav.radio.reference import tracer
+from rainuav.radio.reference.saved import load_tracer_maps, save_tracer_maps
 from rainuav.radio.reference.tracer_scenes import HELD_BACK, SPREAD_SCENES, scene
 from rainuav.radio.scene.scenario import Scenario
 from rainuav.radio.scene.terrain import flight_heights
@@ -108,21 +109,14 @@ def pixels(
 
 def truth_maps(path: Path) -> dict[str, tracer.TracerMap]:
     """The tracer's maps of the tuning sites a ``--save-truth`` file holds, per scene."""
-    with np.load(path) as f:
-        return {k[: -len("_a")]: tracer.TracerMap(f[k].astype(float), f[k[:-1] + "b"].astype(float))
-                for k in f.files if k.endswith("_a")}  # fmt: skip
+    return load_tracer_maps(path)
 
 
 def save_truth(path: Path, maps: dict[str, tracer.TracerMap]) -> None:
     """Writes the tuning sites' tracer maps (float32: 1e-7 relative, far below 0.01 dB)."""
-    arrays = {}
-    for name, tm in maps.items():
-        keep = TUNING_SITES if name in HELD_BACK else tm.half_a.shape[0]
-        arrays[f"{name}_a"] = tm.half_a[:keep].astype(np.float32)
-        arrays[f"{name}_b"] = tm.half_b[:keep].astype(np.float32)
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    tmp.replace(path)
+    keep = {n: TUNING_SITES if n in HELD_BACK else tm.half_a.shape[0] for n, tm in maps.items()}
+    save_tracer_maps(path, {n: tracer.TracerMap(tm.half_a[: keep[n]], tm.half_b[: keep[n]])
+                            for n, tm in maps.items()})  # fmt: skip
 
 
 def paths_pixels(name: str, freq_hz: float, altitude_m: float, step: int, sites: slice,

@@ -21,7 +21,20 @@ from pathlib import Path
 from rainuav.radio.scene.area import Area, FootprintsFile
 from rainuav.radio.scene.scenario import Building, Origin, Scenario, Site
 
-__all__ = ["HELD_BACK", "HELSINKI", "REAL", "SCENES", "SPREAD_SCENES", "TEST_SCENES", "scene"]
+__all__ = [
+    "HELD_BACK",
+    "HELSINKI",
+    "MAP_CASES",
+    "MAP_SAMPLES",
+    "PATH_CASES",
+    "REAL",
+    "SCENES",
+    "SPREAD_SCENES",
+    "TEST_ALTITUDE_M",
+    "TEST_SCENES",
+    "case_key",
+    "scene",
+]
 
 
 def _area(x0: float, x1: float, y0: float, y1: float, altitude_m: float, res: float) -> Area:
@@ -248,6 +261,44 @@ TEST_SCENES = ("box", "thick", "canyon", "corner", "block")
 """The scenes the tests compare on whole (and the methods' choices were made on); ``roof_wall``
 and ``eave`` are compared on for one path each: a wall's reflection over a roof, a roof's edge
 beside the line."""
+
+TEST_ALTITUDE_M = {"box": 20.0, "thick": 10.0, "canyon": 20.0, "corner": 20.0, "block": 8.0}
+"""The UAV's height over each of ``TEST_SCENES`` in the tests, m (4.9 GHz)."""
+
+MAP_CASES = (
+    *((s, pol, "none") for s in TEST_SCENES for pol in ("v", "h")),
+    ("box", "v", "pec"),
+    ("canyon", "h", "pec"),
+)
+"""The tests' cases against the tracer's radio map at 4 million rays a site: (scene,
+polarisation, ground), the scene at 4.9 GHz and ``TEST_ALTITUDE_M``."""
+
+PATH_CASES = (
+    ("canyon", "v", "none", 400_000),
+    ("thick", "h", "none", 400_000),
+    ("block", "h", "none", 1_000_000),
+    ("box", "v", "pec", 400_000),
+)
+"""The tests' cases against the tracer's path solver at every third pixel's centre: (scene,
+polarisation, ground, candidate rays a site), the scene at 4.9 GHz and ``TEST_ALTITUDE_M``."""
+
+MAP_SAMPLES = 4_000_000
+"""The tracer's rays a site in ``MAP_CASES``."""
+
+
+def case_key(name: str, pol: str, ground: str) -> str:
+    """The name a case's saved tracer maps go by (``rainuav.radio.reference.saved``).
+
+    Args:
+        name: The scene.
+        pol: The polarisation, "v" or "h".
+        ground: "none" or "pec".
+
+    Returns:
+        ``"name-pol-ground"``; its map without the buildings goes by that and ``"-open"``.
+    """
+    return f"{name}-{pol}-{ground}"
+
 
 HELD_BACK = ("urban", "district")
 """The scenes the results page reports, on which no choice was made."""
