@@ -1,4 +1,4 @@
-"""The tracer's references of the building tests, traced once and saved as data.
+"""The references of the building tests, computed once and saved as data.
 
     python experiments/tracer_references.py [--out tests]
 
@@ -8,7 +8,11 @@ the buildings) and ``tracer_paths_truth.npz`` (its path solver at every third pi
 ``PATH_CASES``), as released but for the wedge coefficient of ITU-R P.526-15 section 6 (the
 project's default, ``rainuav.radio.reference.tracer_wedge``). ``tests/test_tracer.py`` and
 ``tests/test_tracer_paths.py`` read them and hold today's engine to them; each file has a test
-that traces one case again and holds the file to the tracer. About 80 s on 2 cores."""
+that traces one case again and holds the file to the tracer. And ``wedge_fdfd.npz``: ceviche's
+FDFD field (over free space's) around the reference corner
+(``rainuav.radio.reference.wedge_fullwave.reference_corner``) of metal and of concrete, both
+polarisations, which ``tests/test_wedge_fullwave.py`` reads (one case solved again there). About
+two minutes on 2 cores."""
 
 from __future__ import annotations
 
@@ -16,6 +20,7 @@ import argparse
 import time
 from pathlib import Path
 
+import numpy as np
 from rainuav.radio.reference.comparison import reference_maps
 from rainuav.radio.reference.saved import save_tracer_maps
 from rainuav.radio.reference.tracer_scenes import (
@@ -49,7 +54,25 @@ def main() -> None:
         key = case_key(name, pol, ground)
         paths[key], paths[f"{key}-open"] = with_b, without
     save_tracer_maps(args.out / "tracer_paths_truth.npz", paths)
-    print(f"wrote {len(maps)} maps and {len(paths)} path maps in {time.perf_counter() - t0:.0f} s")
+    save_fdfd(args.out / "wedge_fdfd.npz")
+    print(f"wrote {len(maps)} maps, {len(paths)} path maps and 4 full-wave fields in "
+          f"{time.perf_counter() - t0:.0f} s")  # fmt: skip
+
+
+def save_fdfd(path: Path) -> None:
+    """The FDFD's field of the reference corner, metal and concrete, soft and hard."""
+    from rainuav.radio.reference.wedge_fullwave import (
+        REFERENCE_PHI_DEG,
+        fdfd_total,
+        reference_corner,
+    )
+
+    phi = np.radians(REFERENCE_PHI_DEG)
+    fields = {f"{m}_{'soft' if soft else 'hard'}": fdfd_total(reference_corner(m), phi, soft)
+              for m in ("metal", "concrete") for soft in (True, False)}  # fmt: skip
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez_compressed(tmp, phi_deg=REFERENCE_PHI_DEG, **fields)
+    tmp.replace(path)
 
 
 if __name__ == "__main__":

@@ -15,32 +15,49 @@ right-angled corner of a solid block, a line source 0.3 m from the edge at 3.5 G
   coefficient does.
 - A [`coefficient()`][rainuav.radio.reference.tracer_wedge.coefficient] block puts back the
   coefficient it found.
+
+The FDFD's fields of the four cases are read from a file solved once
+(``tests/wedge_fdfd.npz``, ``python experiments/tracer_references.py``; about 30 s to solve);
+one case is solved again and held to the file (to 1e-6 relative: the same sparse solve).
 """
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from rainuav.radio.reference.wedge_fullwave import (
+    REFERENCE_PHI_DEG,
     WedgeCase,
     exact_pec,
     fdfd_total,
     p526_coefficient,
+    reference_corner,
     tracer_coefficient,
     utd_total,
 )
 
 pytestmark = pytest.mark.timeout(300)
 
-PHI_DEG = np.arange(2.0, 269.0, 2.0)
+PHI_DEG = REFERENCE_PHI_DEG
 SHADOW = PHI_DEG > 180.0 + 45.0 + 5.0
 LIT = (PHI_DEG > 180.0 - 45.0 + 5.0) & (PHI_DEG < 180.0 + 45.0 - 5.0)
+FDFD = Path(__file__).resolve().parent / "wedge_fdfd.npz"
+_case = reference_corner
 
 
-def _case(material: str) -> WedgeCase:
-    return WedgeCase(3.5e9, material, 45.0, 0.3, points_per_wavelength=40.0)
+def _saved_fdfd(material: str, soft: bool) -> np.ndarray:
+    with np.load(FDFD, allow_pickle=False) as f:
+        np.testing.assert_array_equal(f["phi_deg"], PHI_DEG)
+        return f[f"{material}_{'soft' if soft else 'hard'}"]
+
+
+def test_the_saved_fdfd_is_what_ceviche_solves() -> None:
+    pytest.importorskip("ceviche")
+    now = fdfd_total(_case("metal"), np.radians(PHI_DEG), True)
+    np.testing.assert_allclose(_saved_fdfd("metal", True), now, rtol=1e-6)
 
 
 def _db_error(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -49,10 +66,9 @@ def _db_error(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("soft", [True, False], ids=["soft", "hard"])
 def test_the_fdfd_is_the_exact_series_on_a_conducting_corner(soft: bool) -> None:
-    pytest.importorskip("ceviche")
     case = _case("metal")
     phi = np.radians(PHI_DEG)
-    err = _db_error(fdfd_total(case, phi, soft), exact_pec(case, phi, soft))[SHADOW]
+    err = _db_error(_saved_fdfd("metal", soft), exact_pec(case, phi, soft))[SHADOW]
     assert np.median(err) < 0.6, err
     assert np.quantile(err, 0.9) < 1.5, err
 
@@ -60,11 +76,10 @@ def test_the_fdfd_is_the_exact_series_on_a_conducting_corner(soft: bool) -> None
 @pytest.mark.slow
 @pytest.mark.parametrize("soft", [True, False], ids=["soft", "hard"])
 def test_on_a_concrete_corner_the_full_wave_field_is_p526s(soft: bool) -> None:
-    pytest.importorskip("ceviche")
     pytest.importorskip("sionna.rt")
     case = _case("concrete")
     phi = np.radians(PHI_DEG)
-    full = fdfd_total(case, phi, soft)
+    full = _saved_fdfd("concrete", soft)
     p526 = utd_total(case, phi, soft, p526_coefficient(case, phi, soft))
     released = utd_total(case, phi, soft, tracer_coefficient(case, phi, soft, "sionna"))
     assert np.median(_db_error(p526, full)[SHADOW]) < 0.6

@@ -45,10 +45,12 @@ from rainuav.ground.footprints import material_permittivity
 
 __all__ = [
     "FACES",
+    "REFERENCE_PHI_DEG",
     "WedgeCase",
     "exact_pec",
     "fdfd_total",
     "p526_coefficient",
+    "reference_corner",
     "tracer_coefficient",
     "utd_total",
 ]
@@ -340,3 +342,22 @@ def tracer_coefficient(
     a = np.where(by_edge, re + 1j * im, 0.0).sum(axis=1)
     d = a / free * np.sqrt(s * rho_s * (s + rho_s)) / r * (1.0 if soft else -1.0)
     return np.where(by_edge.sum(axis=1) == 1, d, np.nan)
+
+
+REFERENCE_PHI_DEG = np.arange(2.0, 269.0, 2.0)
+"""The field points of the reference corner, degrees from the lit face."""
+
+
+def reference_corner(material: str) -> WedgeCase:
+    """The corner the tests check the coefficient on.
+
+    3.5 GHz, the source 45 degrees from the lit face and 0.3 m from the edge (``k rho = 22``),
+    40 cells a wavelength.
+
+    Args:
+        material: ``"metal"`` or a P.2040 material.
+
+    Returns:
+        The case.
+    """
+    return WedgeCase(3.5e9, material, 45.0, 0.3, points_per_wavelength=40.0)
