@@ -29,7 +29,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=2)
     args = ap.parse_args()
     from rainuav.nav import planner
-    from rainuav.nav.field import SignalSeries
+    from rainuav.nav.field import SignalField
     from rainuav.radio.outputs.levelmaps import build_radio_level_series
     from rainuav.rl.evaluation import eval_starts
     from rainuav.world import WorldSpec, build_world, make_scenario, series_instants
@@ -62,7 +62,7 @@ def main() -> None:
     plans, t_lv = best_of(lambda: planner.optimal_levels(
         sig, alts, env.field.extent, cfg, starts, np.zeros(len(starts)), t_s=times))  # fmt: skip
     k100 = int(np.argmin(np.abs(alts - 100.0)))
-    one = SignalSeries(sig[:, k100], times, env.field.extent)
+    one = SignalField.series(sig[:, k100], times, env.field.extent)
     flat, t_one = best_of(lambda: planner.plan_on(one, cfg, starts))
     arrived = np.mean([p.return_ > 0 for p in plans])
     moves = np.mean([np.sum(p.actions >= 4) for p in plans])

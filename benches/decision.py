@@ -24,7 +24,7 @@ from dataclasses import replace
 import numpy as np
 import torch
 from rainuav.nav import UAVNavEnv
-from rainuav.nav.field import SignalSeries
+from rainuav.nav.field import SignalField
 from rainuav.nav.training import network_inputs
 from rainuav.rl.config import DQNConfig, preset_learner
 from rainuav.rl.dqn import Agent
@@ -45,11 +45,11 @@ def median_ms(fn: Callable[[], object], reps: int = 200) -> float:
     return 1e3 * float(np.median(times))
 
 
-def storm_and_fleet(n: int = N) -> tuple[SignalSeries, np.ndarray, np.ndarray, np.ndarray]:
+def storm_and_fleet(n: int = N) -> tuple[SignalField, np.ndarray, np.ndarray, np.ndarray]:
     """The bench's storm (61 random slices of 200 x 200 pixels over 2 km, 5 s apart) and ``n``
     UAVs in it: positions, instants (moves) and destinations, all drawn from seed 0."""
     rng = np.random.default_rng(0)
-    field = SignalSeries(rng.normal(5.0, 8.0, (61, 200, 200)), np.arange(61) * 5.0, EXT)
+    field = SignalField.series(rng.normal(5.0, 8.0, (61, 200, 200)), np.arange(61) * 5.0, EXT)
     pos = rng.uniform(0.0, 2000.0, (n, 2))
     t = rng.integers(0, 300, n)
     return field, pos, t, rng.uniform(100.0, 1900.0, (n, 2))
@@ -61,7 +61,7 @@ def storm_network() -> DQNConfig:
     return DQNConfig(**{k: v for k, v in preset_learner("storms").items() if k in keys})
 
 
-def make_agent(d: DQNConfig, observation: str, field: SignalSeries) -> tuple[UAVNavEnv, Agent]:
+def make_agent(d: DQNConfig, observation: str, field: SignalField) -> tuple[UAVNavEnv, Agent]:
     """The env on ``field`` with the task's destination and the learner's agent (seed 0)."""
     env = UAVNavEnv(field=field, goal_m=(1400.0, 1600.0), min_db=-2.0, observation=observation)
     return env, Agent(

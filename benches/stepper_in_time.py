@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 from rainuav.nav import UAVNavEnv
-from rainuav.nav.field import SignalField, SignalSeries
+from rainuav.nav.field import SignalField
 from rainuav.nav.vector import UAVNavVectorEnv
 
 EXT = (0.0, 2000.0, 0.0, 2000.0)
@@ -48,7 +48,7 @@ def main() -> None:
     slices = rng.normal(5.0, 8.0, (61, 200, 200))
     task = {"goal_m": (1400.0, 1600.0), "min_db": -2.0}
     one = UAVNavEnv(field=SignalField(slices[0], EXT), **task)
-    moving = UAVNavEnv(field=SignalSeries(slices, np.arange(61) * 5.0, EXT), **task)
+    moving = UAVNavEnv(field=SignalField.series(slices, np.arange(61) * 5.0, EXT), **task)
     for name, fn, n, steps in (
         ("batched stepper, 1024 UAVs", per_second, 1024, 200),
         ("vector env, 64 UAVs", vector_per_second, 64, 2000),

@@ -427,6 +427,27 @@ def test_no_map_class_is_tested_outside_its_module() -> None:
     assert not hits, f"map classes tested at {hits}"
 
 
+def test_no_class_goes_by_a_second_name() -> None:
+    """One name per thing: no module binds a class of the package, or one of its makers, to a
+    second name (``SirField = SignalField``, ``SignalSeries = SignalField.series``: such aliases
+    of old names were removed, and the changelog lists each with its replacement)."""
+    trees = {name: ast.parse(path.read_text()) for name, path in modules().items()}
+    classes = {n.name for t in trees.values() for n in ast.walk(t) if isinstance(n, ast.ClassDef)}
+    hits = []
+    for name, tree in trees.items():
+        for node in tree.body:
+            if not (isinstance(node, ast.Assign) and len(node.targets) == 1):
+                continue
+            target, value = node.targets[0], node.value
+            root = value
+            while isinstance(root, ast.Attribute):
+                root = root.value
+            if (isinstance(target, ast.Name) and target.id[:1].isupper() and not target.id.isupper()
+                    and isinstance(root, ast.Name) and root.id in classes):  # fmt: skip
+                hits.append(f"{name}:{node.lineno} {target.id}")
+    assert not hits, f"second names of classes: {hits}"
+
+
 def test_one_environment_class() -> None:
     """One environment flies one level and several: ``UAVLevelsEnv`` is ``UAVNavEnv``'s
     constructor with the arguments it has always taken, with no behaviour of its own."""

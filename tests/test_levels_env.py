@@ -10,8 +10,8 @@ import pytest
 from rainuav.errors import InvalidInputError
 from rainuav.nav import planner
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import SignalSeries
-from rainuav.nav.levels import LevelField, UAVLevelsEnv
+from rainuav.nav.field import SignalField
+from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import NavConfig
 
 EXTENT = (0.0, 120.0, 0.0, 80.0)
@@ -54,7 +54,7 @@ def test_exact_plans_replayed_in_the_environment_earn_their_returns(moving) -> N
     t_s = np.array([0.0, 13.0, 26.0, 39.0]) if moving else None
     mask = np.zeros((3, 8, 12), bool)
     mask[0, 2:5, 3:9] = True
-    field = LevelField.from_stack(sig, ALTS, EXTENT, t_s=t_s, not_flyable=mask)
+    field = SignalField.from_stack(sig, ALTS, EXTENT, t_s=t_s, not_flyable=mask)
     env = UAVLevelsEnv(field, c)
     rng = np.random.default_rng(7)
     starts = rng.uniform([0, 0], [120, 80], size=(12, 2))
@@ -75,7 +75,7 @@ def test_one_level_is_the_plane_s_environment() -> None:
     # the same moves (here random sequences of the four), and a vertical move leaves the band.
     sig = stack(2)[:1]
     c = cfg(max_steps=25)
-    lv = UAVLevelsEnv(LevelField.from_stack(sig, [100.0], EXTENT), c)
+    lv = UAVLevelsEnv(SignalField.from_stack(sig, [100.0], EXTENT), c)
     flat = UAVNavEnv(sinr_db=sig[0], extent_m=EXTENT, config=c)
     rng = np.random.default_rng(3)
     for _ in range(20):
@@ -101,7 +101,7 @@ def test_climbs_last_their_duration_and_land_in_their_slice() -> None:
     c = cfg(mu=1.0)
     sig = np.full((2, 3, 8, 12), -10.0)
     sig[1, 1] = 4.0  # level 1 clear from t = 3 s on
-    field = LevelField.from_stack(sig, ALTS, EXTENT, t_s=np.array([0.0, 3.0]))
+    field = SignalField.from_stack(sig, ALTS, EXTENT, t_s=np.array([0.0, 3.0]))
     env = UAVLevelsEnv(field, c)
     obs, info = env.reset(options={"start_m": (55.0, 35.0)})
     assert info["level"] == 0 and info["altitude_m"] == 30.0 and obs.shape == (4,)
@@ -115,7 +115,7 @@ def test_climbs_last_their_duration_and_land_in_their_slice() -> None:
 
 def test_bad_input_is_refused_in_one_line() -> None:
     sig = stack(3)
-    field = LevelField.from_stack(sig, ALTS, EXTENT)
+    field = SignalField.from_stack(sig, ALTS, EXTENT)
     env = UAVLevelsEnv(field, cfg())
     env.reset(options={"start_m": (5.0, 5.0)})
     for bad in (6, -1, 1.5, "up", True):
@@ -124,19 +124,19 @@ def test_bad_input_is_refused_in_one_line() -> None:
     with pytest.raises(InvalidInputError, match="start_level"):
         env.reset(options={"start_m": (5.0, 5.0), "start_level": 3})
     with pytest.raises(InvalidInputError, match="increase"):
-        LevelField.from_stack(sig, [60.0, 45.0, 30.0], EXTENT)
+        SignalField.from_stack(sig, [60.0, 45.0, 30.0], EXTENT)
     with pytest.raises(InvalidInputError, match="one altitude a level"):
-        LevelField.from_stack(sig, [30.0, 45.0], EXTENT)
+        SignalField.from_stack(sig, [30.0, 45.0], EXTENT)
     mask = np.zeros((3, 8, 12), bool)
     mask[:2, 0, 0] = True
-    env = UAVLevelsEnv(LevelField.from_stack(sig, ALTS, EXTENT, not_flyable=mask), cfg())
+    env = UAVLevelsEnv(SignalField.from_stack(sig, ALTS, EXTENT, not_flyable=mask), cfg())
     _, info = env.reset(options={"start_m": (5.0, 5.0)})
     assert info["level"] == 2  # the lowest level flyable there
     with pytest.raises(InvalidInputError, match="not flyable at level 0"):
         env.reset(options={"start_m": (5.0, 5.0), "start_level": 0})
-    series = SignalSeries(stack(4, 2)[:, 0], [0.0, 5.0], EXTENT)
+    series = SignalField.series(stack(4, 2)[:, 0], [0.0, 5.0], EXTENT)
     with pytest.raises(InvalidInputError, match="all maps, all maps in time"):
-        LevelField.of_levels([series, field.level(1), field.level(2)], ALTS)
+        SignalField.of_levels([series, field.level(1), field.level(2)], ALTS)
 
 
 def test_a_plan_too_big_for_memory_is_refused_before_allocating() -> None:
@@ -186,10 +186,10 @@ def test_a_field_of_levels_is_its_levels_read_one_by_one() -> None:
     mask = rng.random((3, 8, 12)) < 0.2
     for sig, t_s in ((stack(6), None), (stack(7, 4), [0.0, 3.0, 5.0, 10.0])):
         serving = rng.integers(0, 5, sig.shape)
-        field = LevelField.from_stack(sig, ALTS, EXTENT, t_s=t_s, not_flyable=mask,
+        field = SignalField.from_stack(sig, ALTS, EXTENT, t_s=t_s, not_flyable=mask,
                                       serving_cell=serving)  # fmt: skip
         assert field.levels == 3 and field.values.shape[2] == 3
-        again = LevelField.of_levels([field.level(k) for k in range(3)], ALTS)
+        again = SignalField.of_levels([field.level(k) for k in range(3)], ALTS)
         for k in range(3):
             one = field.level(k)
             assert one.altitudes_m is None and one.levels == 1

@@ -16,7 +16,7 @@ import pytest
 import torch
 from gymnasium.utils.env_checker import check_env
 from rainuav.errors import InvalidInputError
-from rainuav.nav.levelfield import LevelField
+from rainuav.nav.field import SignalField
 from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.task import NavConfig
 from rainuav.nav.views import WeatherView
@@ -41,7 +41,7 @@ def stacks(worlds: int = 2) -> np.ndarray:
 
 
 def bank_env(**kw: object) -> UAVLevelsEnv:
-    field = LevelField.bank(stacks(), T_S, EXTENT, ALTS)
+    field = SignalField.bank(stacks(), T_S, EXTENT, ALTS)
     task = NavConfig(goal_m=(700.0, 500.0), max_steps=60, speed_m_s=5.0, min_db=-2.0)
     return UAVLevelsEnv(field, task, observation="weather", **kw)
 
@@ -82,13 +82,13 @@ def test_level_bank_reads_each_world_as_its_own_levels() -> None:
     """A field of banks gives, point by point, what each world's own levels give (bit for
     bit); put() renews one world on every level."""
     s = stacks(3)
-    bank = LevelField.bank(s, T_S, EXTENT, ALTS)
+    bank = SignalField.bank(s, T_S, EXTENT, ALTS)
     rng = np.random.default_rng(3)
     x, y = rng.uniform(-50, 1050, 400), rng.uniform(-50, 850, 400)
     t, lv, w = rng.uniform(-5, 25, 400), rng.integers(0, 3, 400), rng.integers(0, 3, 400)
     got = bank(x, y, t, w, level=lv)
     for p in range(3):
-        own = LevelField.from_stack(s[p], ALTS, EXTENT, t_s=T_S)
+        own = SignalField.from_stack(s[p], ALTS, EXTENT, t_s=T_S)
         on = w == p
         np.testing.assert_array_equal(got[on], own(x[on], y[on], t[on], level=lv[on]))
     bank.put(0, s[2])
@@ -97,7 +97,7 @@ def test_level_bank_reads_each_world_as_its_own_levels() -> None:
     with pytest.raises(InvalidInputError, match=r"must be finite, of shape \(3, 3, 40, 50\)"):
         bank.put(0, s[2][:, :2])
     with pytest.raises(InvalidInputError, match="put renews a world of a bank"):
-        LevelField.from_stack(s[0], ALTS, EXTENT, t_s=T_S).put(0, s[1])
+        SignalField.from_stack(s[0], ALTS, EXTENT, t_s=T_S).put(0, s[1])
 
 
 def test_batched_steps_with_destinations_and_storms_match_the_env() -> None:
@@ -172,11 +172,11 @@ def test_the_network_among_levels_reads_every_layer_and_six_moves() -> None:
 
 
 def test_bad_weather_options_among_levels_are_refused() -> None:
-    field = LevelField.bank(stacks(), T_S, EXTENT, ALTS)
+    field = SignalField.bank(stacks(), T_S, EXTENT, ALTS)
     task = NavConfig(goal_m=(700.0, 500.0), max_steps=60, min_db=-2.0)
     with pytest.raises(InvalidInputError, match="need observation='weather'"):
         UAVLevelsEnv(field, task)
-    one = LevelField.from_stack(stacks()[0], ALTS, EXTENT, t_s=T_S)
+    one = SignalField.from_stack(stacks()[0], ALTS, EXTENT, t_s=T_S)
     with pytest.raises(InvalidInputError, match="need observation='weather'"):
         UAVLevelsEnv(one, task, random_goal=True)
     with pytest.raises(InvalidInputError, match="observation must be one of"):
@@ -190,8 +190,8 @@ def test_bad_weather_options_among_levels_are_refused() -> None:
     with pytest.raises(InvalidInputError, match=r"layers must be an integer in 1\.\.64"):
         WeatherView(layers=0)
     with pytest.raises(InvalidInputError, match="as many worlds and instants"):
-        two, three = (LevelField.bank(stacks(p), T_S, EXTENT, ALTS) for p in (2, 3))
-        LevelField.of_levels([two.level(0), three.level(1)], ALTS[:2])
+        two, three = (SignalField.bank(stacks(p), T_S, EXTENT, ALTS) for p in (2, 3))
+        SignalField.of_levels([two.level(0), three.level(1)], ALTS[:2])
 
 
 def pool_cfg(out: Path, **kw: object) -> object:
@@ -228,7 +228,7 @@ def test_storm_pool_among_levels_is_seeded_resumes_exactly_and_is_evaluated(
 
     cfg = pool_cfg(tmp_path / "a", checkpoint_every=6)
     pool = StormPool(cfg, cfg.seed)
-    assert isinstance(pool.bank, LevelField) and pool.bank.levels == 2
+    assert isinstance(pool.bank, SignalField) and pool.bank.levels == 2
     m_a = train(cfg, pool.world(), progress=False)
     cfg = pool_cfg(tmp_path / "b", checkpoint_every=6)
     assert train(cfg, StormPool(cfg, cfg.seed).world(), progress=False, stop_after=6) == {}

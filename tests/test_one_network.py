@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import SignalBank, SignalSeries
+from rainuav.nav.field import SignalField
 from rainuav.nav.task import MOVES, NavConfig
 from rainuav.nav.views import GOAL_MARGIN_M, REACH, WeatherView, sample_goal, sample_start_for
 
@@ -41,7 +41,7 @@ COEF = (0.02, -0.015, 0.3, -4.0)
 
 
 def weather_env(**kw: object) -> UAVNavEnv:
-    field = SignalSeries(plane(*COEF), T_S, EXTENT)
+    field = SignalField.series(plane(*COEF), T_S, EXTENT)
     task = NavConfig(goal_m=(700.0, 500.0), max_steps=50, speed_m_s=5.0, min_db=-2.0)
     return UAVNavEnv(field=field, config=task, observation="weather", **kw)
 
@@ -128,14 +128,14 @@ def test_bank_reads_each_world_as_its_series() -> None:
     """A bank of three worlds gives, point by point, what each world's own series gives
     (bit for bit: the same operations); put() replaces one world."""
     worlds = [plane(0.01 * k, -0.02, 0.1 * k, k) for k in range(3)]
-    bank = SignalBank(worlds, T_S, EXTENT)
+    bank = SignalField.bank(worlds, T_S, EXTENT)
     rng = np.random.default_rng(1)
     x, y = rng.uniform(-50, 1050, 300), rng.uniform(-50, 850, 300)
     t = rng.uniform(-5, 25, 300)
     w = rng.integers(0, 3, 300)
     got = bank(x, y, t, w)
     for k in range(3):
-        own = SignalSeries(worlds[k], T_S, EXTENT)
+        own = SignalField.series(worlds[k], T_S, EXTENT)
         np.testing.assert_array_equal(got[w == k], own(x[w == k], y[w == k], t[w == k]))
     pts = np.stack([x[:40], y[:40]], axis=1)  # fixed points (an area grid) at many instants
     np.testing.assert_allclose(
@@ -144,7 +144,9 @@ def test_bank_reads_each_world_as_its_series() -> None:
     )  # fmt: skip
     bank.put(1, worlds[2])
     np.testing.assert_allclose(bank.at_points(pts, t, 1)[:, :3], bank(x[:3], y[:3], t[:, None], 1))
-    np.testing.assert_array_equal(bank(x, y, t, 1), SignalSeries(worlds[2], T_S, EXTENT)(x, y, t))
+    np.testing.assert_array_equal(
+        bank(x, y, t, 1), SignalField.series(worlds[2], T_S, EXTENT)(x, y, t)
+    )
     with pytest.raises(InvalidInputError, match="sinr_db must be finite"):
         bank.put(0, np.full_like(worlds[0], np.nan))
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from rainuav._sampling import bilinear, in_time
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import SignalBank, SignalSeries
+from rainuav.nav.field import SignalField
 
 
 def numpy_in_time(values, extent, x, y, k0, k1, f):
@@ -48,12 +48,12 @@ def test_fields_read_through_it_as_before() -> None:
     t = np.array([0.0, 5.0, 10.0, 20.0])
     ext = (0.0, 1000.0, 0.0, 800.0)
     db = rng.normal(0.0, 5.0, (3, 4, 16, 20))
-    bank = SignalBank(db, t, ext)
+    bank = SignalField.bank(db, t, ext)
     x, y = rng.uniform(0, 1000, (64, 50)), rng.uniform(0, 800, (64, 50))
     tau = np.r_[rng.uniform(-5.0, 25.0, 60), 0.0, 5.0, 20.0, 30.0][:, None]
     world = rng.integers(0, 3, (64, 1))
     for w in range(3):
-        series = SignalSeries(db[w], t, ext)
+        series = SignalField.series(db[w], t, ext)
         k0, k1, f = (np.broadcast_to(a, x.shape) for a in series.brackets(tau))
         want = numpy_in_time(db[w], ext, x, y, k0, k1, f)
         np.testing.assert_array_equal(series(x, y, tau), want)
@@ -75,12 +75,12 @@ def test_brackets_kept_for_the_same_instants_are_the_computed_ones() -> None:
     for the window, (N,) for the grid): asked again in either shape, or after other instants,
     they equal a fresh series' brackets, and nobody can write into the kept arrays."""
     t = np.array([0.0, 5.0, 10.0, 20.0])
-    series = SignalSeries(np.zeros((4, 2, 2)), t, (0.0, 1.0, 0.0, 1.0))
+    series = SignalField.series(np.zeros((4, 2, 2)), t, (0.0, 1.0, 0.0, 1.0))
     rng = np.random.default_rng(3)
     a, b = rng.uniform(-5.0, 25.0, (2, 40))
     for tau in (a[:, None], a, b, a, a[:7], 5.0):
         got = series.brackets(tau)
-        want = SignalSeries(np.zeros((4, 2, 2)), t, (0.0, 1.0, 0.0, 1.0)).brackets(tau)
+        want = SignalField.series(np.zeros((4, 2, 2)), t, (0.0, 1.0, 0.0, 1.0)).brackets(tau)
         for g, w in zip(got, want, strict=True):
             assert g.shape == np.shape(tau)
             np.testing.assert_array_equal(g, w)

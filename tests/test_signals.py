@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import SignalBank, SignalField, SignalSeries
-from rainuav.nav.levelfield import LevelField, field_of
+from rainuav.nav.field import SignalField
+from rainuav.nav.levelfield import field_of
 from rainuav.radio.outputs.levelmaps import LevelStack
 from rainuav.radio.outputs.signals import load_signal, signal_of
 from rainuav.radio.outputs.timemap import build_radio_map_series
@@ -98,13 +98,13 @@ def test_the_field_of_a_signal_reads_as_the_field_of_its_source(series) -> None:
     assert np.array_equal(a(x, y), b(x, y))
     assert np.array_equal(a.serving_cell(x, y), b.serving_cell(x, y))
     a = field_of(signal_of(series))
-    b = SignalSeries(series.sinr_db, series.t_s, one.extent_m, "sinr_db", series.serving_cell)
+    b = SignalField.series(series.sinr_db, series.t_s, one.extent_m, "sinr_db", series.serving_cell)
     assert type(a) is SignalField and a.varies and not a.banked
     assert np.array_equal(a(x, y, t), b(x, y, t))
     for moving in (False, True):
         s = stack(moving)
         a = field_of(signal_of(s))
-        b = LevelField.from_stack(
+        b = SignalField.from_stack(
             s.sinr_db, s.altitudes_m, s.extent, t_s=s.t_s, not_flyable=s.not_flyable,
             serving_cell=s.serving_cell,
         )  # fmt: skip
@@ -119,12 +119,12 @@ def test_the_field_of_a_signal_reads_as_the_field_of_its_source(series) -> None:
     v = rng.normal(0.0, 10.0, (4, 2, 20, 20))
     w = np.arange(len(x)) % 4
     sig = Signal.from_axes(v, ("world", "time", "north", "east"), one.extent_m, t_s=series.t_s)
-    a, b = field_of(sig), SignalBank(v, series.t_s, one.extent_m)
+    a, b = field_of(sig), SignalField.bank(v, series.t_s, one.extent_m)
     assert type(a) is SignalField and a.banked and a.worlds == 4
     assert np.array_equal(a(x, y, t, w), b(x, y, t, w))
     lv5 = rng.normal(0.0, 10.0, (4, 2, 3, 20, 20))
     sig = Signal(lv5, one.extent_m, series.t_s, np.array([30.0, 45.0, 100.0]))
-    a, b = field_of(sig), LevelField.bank(lv5, series.t_s, one.extent_m, [30.0, 45.0, 100.0])
+    a, b = field_of(sig), SignalField.bank(lv5, series.t_s, one.extent_m, [30.0, 45.0, 100.0])
     lv = np.arange(len(x)) % 3
     assert a.banked and np.array_equal(a(x, y, t, w, level=lv), b(x, y, t, w, level=lv))
 
@@ -269,7 +269,7 @@ def spec_for(task):
 
 
 def test_a_band_of_one_level_stays_a_level_field() -> None:
-    """levels=True gives a LevelField of one level (a band of one flight level, six moves),
+    """levels=True gives a field of one level (a band of one flight level, six moves),
     reading as the plain map does."""
     s = stack()
     one = Signal.from_axes(s.sinr_db[:1], ("level", "north", "east"), s.extent, altitudes_m=[30.0])

@@ -10,7 +10,7 @@ import pytest
 from rainuav.errors import InvalidInputError
 from rainuav.nav import UAVNavEnv, planner
 from rainuav.nav.baselines import fly_actions, frozen_plans, replans
-from rainuav.nav.field import SignalField, SignalSeries
+from rainuav.nav.field import SignalField
 from rainuav.nav.task import NavConfig
 from rainuav.nav.vector import UAVNavVectorEnv
 from rainuav.world import WorldSpec, build_world
@@ -18,10 +18,10 @@ from rainuav.world import WorldSpec, build_world
 EXT = (0.0, 60.0, 0.0, 50.0)
 
 
-def series(k: int = 4, seed: int = 0) -> SignalSeries:
+def series(k: int = 4, seed: int = 0) -> SignalField:
     """A small signal in time whose slices differ strongly (so timing matters)."""
     rng = np.random.default_rng(seed)
-    return SignalSeries(rng.normal(0.0, 12.0, (k, 5, 6)), np.arange(k) * 3.0, EXT)
+    return SignalField.series(rng.normal(0.0, 12.0, (k, 5, 6)), np.arange(k) * 3.0, EXT)
 
 
 def storm_env(**kw) -> UAVNavEnv:
@@ -72,7 +72,7 @@ def test_on_a_single_map_the_baselines_are_the_optimum_and_nothing_changed() -> 
     np.testing.assert_allclose([p.return_ for p in replans(env, starts, 3)], opt, atol=1e-9)
     # A series of one repeated slice is that map: same plans, same returns, bit for bit.
     same = UAVNavEnv(
-        field=SignalSeries(np.stack([values, values]), [0.0, 1.0], EXT),
+        field=SignalField.series(np.stack([values, values]), [0.0, 1.0], EXT),
         goal_m=(45.0, 35.0), max_steps=30, tol_m=1.0, min_db=env.cfg.min_db,
     )  # fmt: skip
     assert [p.return_ for p in planner.optimal_many(same, starts)] == opt
@@ -129,7 +129,7 @@ def test_frozen_field_and_bad_series_are_refused_cleanly() -> None:
     assert isinstance(f.frozen(0.0), SignalField)
     np.testing.assert_array_equal(f.frozen(3.0).db, f.db[1])
     with pytest.raises(InvalidInputError, match="t_s"):
-        SignalSeries(np.zeros((2, 3, 3)), [1.0, 1.0], EXT)
+        SignalField.series(np.zeros((2, 3, 3)), [1.0, 1.0], EXT)
     with pytest.raises(InvalidInputError, match="speed_m_s"):
         UAVNavEnv(field=f, goal_m=(45.0, 35.0), speed_m_s=0.0)
     with pytest.raises(InvalidInputError, match="replan_every"):

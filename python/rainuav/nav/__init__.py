@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from rainuav.nav.batch import BatchStepper
 from rainuav.nav.env import UAVNavEnv
-from rainuav.nav.field import SignalField, SirField
-from rainuav.nav.levels import LevelField, UAVLevelsEnv
+from rainuav.nav.field import SignalField
+from rainuav.nav.levels import UAVLevelsEnv
 from rainuav.nav.planner import Plan, optimal, optimal_many, straight_line
 from rainuav.nav.shield import shield_moves
 from rainuav.nav.task import (
@@ -31,12 +31,10 @@ __all__ = [
     "REWARDS",
     "SIGNALS",
     "BatchStepper",
-    "LevelField",
     "LoiteringWarning",
     "NavConfig",
     "Plan",
     "SignalField",
-    "SirField",
     "UAVLevelsEnv",
     "UAVNavEnv",
     "base_reward",

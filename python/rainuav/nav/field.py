@@ -29,10 +29,7 @@ from rainuav.nav.fieldinput import (
 from rainuav.nav.fieldmakers import FieldMakers
 
 __all__ = [
-    "SignalBank",
     "SignalField",
-    "SignalSeries",
-    "SirField",
     "field_digest",
     "pixel_index",
 ]
@@ -49,9 +46,8 @@ class SignalField(FieldMakers):
     (``rainuav_core::planning::planlevels``' signal in time, operation for operation); a point of a
     bank reads its own world, a point among levels its own level. Made by the constructor (one
     map, time ignored) and by its makers: [`series()`][rainuav.nav.fieldmakers.FieldMakers.series]
-    (also `SignalSeries`: maps in time, a storm that moves),
-    [`bank()`][rainuav.nav.fieldmakers.FieldMakers.bank] (also `SignalBank`: several worlds in
-    one array, the storms of one training batch, each renewed in place by
+    (maps in time, a storm that moves), [`bank()`][rainuav.nav.fieldmakers.FieldMakers.bank]
+    (several worlds in one array, the storms of one training batch, each renewed in place by
     [`put()`][rainuav.nav.field.SignalField.put]), and among flight levels
     [`from_stack()`][rainuav.nav.fieldmakers.FieldMakers.from_stack] and
     [`of_levels()`][rainuav.nav.fieldmakers.FieldMakers.of_levels] (a level axis before north and
@@ -389,16 +385,6 @@ class SignalField(FieldMakers):
             ],
             axis=1,
         )
-
-
-SignalSeries = SignalField.series
-"""Maps in time: [`SignalField.series`][rainuav.nav.fieldmakers.FieldMakers.series]."""
-
-SignalBank = SignalField.bank
-"""A bank of worlds: [`SignalField.bank`][rainuav.nav.fieldmakers.FieldMakers.bank]."""
-
-SirField = SignalField
-"""The old name (the field is whichever signal the task flies on)."""
 
 
 def field_digest(field: SignalField) -> str:

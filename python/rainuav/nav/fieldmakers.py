@@ -126,7 +126,8 @@ class FieldMakers:
             raise InvalidInputError("fields must be SignalFields of one level each")
         if len({(f.banked, f.varies) for f in fields}) != 1:
             raise InvalidInputError(
-                "fields must be all maps, all maps in time (SignalSeries) or all banks (SignalBank)"
+                "fields must be all maps, all maps in time (SignalField.series) or all banks "
+                "(SignalField.bank)"
             )
         if len({f.db.shape for f in fields}) != 1 or len({f.t_s.tobytes() for f in fields}) != 1:
             raise InvalidInputError(

@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import SignalBank, SignalField, SignalSeries
+from rainuav.nav.field import SignalField
 from rainuav.nav.task import MOVES, SIGNALS, NavConfig, base_reward
 from rainuav.signals import Signal
 
@@ -24,7 +24,6 @@ __all__ = [
     "CLIMB_M_S",
     "DESCEND_M_S",
     "LEVEL_ACTIONS",
-    "LevelField",
     "LevelStepper",
     "field_of",
     "level_durations",
@@ -74,13 +73,6 @@ def level_durations(
         return [max(1, math.ceil(g / speed / move - 1e-9)) for g in gaps]
 
     return ticks(climb_m_s), ticks(descend_m_s)
-
-
-LevelField = SignalField
-"""The old name of a field among levels: a [`SignalField`][rainuav.nav.field.SignalField] with
-``altitudes_m`` ([`SignalField.from_stack`][rainuav.nav.fieldmakers.FieldMakers.from_stack],
-[`SignalField.bank`][rainuav.nav.fieldmakers.FieldMakers.bank] with altitudes,
-[`SignalField.of_levels`][rainuav.nav.fieldmakers.FieldMakers.of_levels])."""
 
 
 class LevelStepper:
@@ -228,7 +220,7 @@ def field_of(signal: Signal, *, levels: bool = False) -> SignalField:
             )
         if lv > 1 or levels:
             return SignalField.bank(v, t_s, signal.extent_m, signal.altitudes_m)
-        return SignalBank(v[:, :, 0], t_s, signal.extent_m, name=name)
+        return SignalField.bank(v[:, :, 0], t_s, signal.extent_m, name=name)
     if lv > 1 or levels:
         return SignalField.from_stack(
             v[0, 0] if t == 1 else v[0], signal.altitudes_m, signal.extent_m,
@@ -240,7 +232,7 @@ def field_of(signal: Signal, *, levels: bool = False) -> SignalField:
         s = None if srv is None else srv[0, 0, 0]
         return SignalField(v[0, 0, 0], signal.extent_m, name, s, m)
     s = None if srv is None else srv[0, :, 0]
-    return SignalSeries(v[0, :, 0], t_s, signal.extent_m, name, s, m)
+    return SignalField.series(v[0, :, 0], t_s, signal.extent_m, name, s, m)
 
 
 def signal_field(

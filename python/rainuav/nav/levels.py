@@ -41,11 +41,11 @@ from typing import Any
 from rainuav.errors import InvalidInputError
 from rainuav.nav.env import UAVNavEnv
 from rainuav.nav.field import SignalField
-from rainuav.nav.levelfield import CLIMB_M_S, DESCEND_M_S, LevelField
+from rainuav.nav.levelfield import CLIMB_M_S, DESCEND_M_S
 from rainuav.nav.task import NavConfig
 from rainuav.nav.views import WeatherView
 
-__all__ = ["CLIMB_M_S", "DESCEND_M_S", "LevelField", "UAVLevelsEnv"]
+__all__ = ["CLIMB_M_S", "DESCEND_M_S", "UAVLevelsEnv"]
 
 
 class UAVLevelsEnv(UAVNavEnv):

@@ -3,7 +3,7 @@
 The moves are deterministic on the start's lattice, so the exact finite-horizon optimum of the
 undiscounted return is a dynamic programme (in Rust; many starts run in parallel). It is the
 yardstick for learned policies. Where the signal changes in time (a
-[`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries]) the programme's rewards depend
+[`SignalField.series`][rainuav.nav.fieldmakers.FieldMakers.series]) the programme's rewards depend
 on the step: it is then the exact optimum on the space-time lattice, the storm's motion known.
 One programme in Rust (``rainuav_core::planning::planlevels``) solves every case: the plane in
 space, in space and time, and among flight levels (the plane is its case of one level). The

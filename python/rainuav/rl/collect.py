@@ -22,8 +22,6 @@ from rainuav.rl.setup import torch_settings
 
 __all__ = ["Lanes", "greedy_rollouts"]
 
-Env = UAVNavEnv
-
 
 @dataclass
 class Lanes:
@@ -134,7 +132,7 @@ class Lanes:
 
 def greedy_rollouts(
     agent: Agent,
-    env: Env,
+    env: UAVNavEnv,
     starts: np.ndarray,
     shield: bool | None = None,
     goals: np.ndarray | None = None,
@@ -163,7 +161,7 @@ def greedy_rollouts(
 
 
 def _rollouts(
-    agent: Agent, env: Env, starts: np.ndarray, shield: bool, goals: np.ndarray | None
+    agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool, goals: np.ndarray | None
 ) -> list[dict[str, Any]]:
     starts = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
     n = len(starts)

@@ -56,11 +56,9 @@ __all__ = [
     "summarise",
 ]
 
-Env = UAVNavEnv
-
 
 def _policy_flights(
-    agent: Agent, env: Env, starts: np.ndarray, shield: bool
+    agent: Agent, env: UAVNavEnv, starts: np.ndarray, shield: bool
 ) -> tuple[dict[str, np.ndarray], list]:
     rolls = greedy_rollouts(agent, env, starts, shield=shield)
     f = flights(env, *([r[k] for r in rolls] for k in ("return", "reached", "path", "levels",
@@ -70,7 +68,7 @@ def _policy_flights(
 
 def evaluate(
     agent: Agent,
-    env: Env,
+    env: UAVNavEnv,
     starts: np.ndarray,
     references: dict[str, dict[str, np.ndarray]] | None = None,
 ) -> tuple[dict[str, Any], list]:
@@ -150,7 +148,7 @@ class Validation:
         """
         return (1.0 - success) + (1.0 if excess is None else excess)
 
-    def check(self, agent: Agent, env: Env, finished: int) -> tuple[float, float]:
+    def check(self, agent: Agent, env: UAVNavEnv, finished: int) -> tuple[float, float]:
         """Flies the network alone from the validation starts.
 
         Args:
@@ -198,7 +196,7 @@ class Validation:
 
 
 def evaluate_run_policy(
-    cfg: TrainConfig, agent: Agent, env: Env, checks: Validation
+    cfg: TrainConfig, agent: Agent, env: UAVNavEnv, checks: Validation
 ) -> tuple[dict[str, Any], list]:
     """Evaluates the run's policy from the evaluation starts, and leaves it in the agent.
 
@@ -237,7 +235,7 @@ def evaluate_run_policy(
 
 
 def load_agent(
-    path: Path, state: dict[str, Any], cfg: TrainConfig, env: Env, device: str, online: bool
+    path: Path, state: dict[str, Any], cfg: TrainConfig, env: UAVNavEnv, device: str, online: bool
 ) -> tuple[Agent, int, float]:
     """The agent of a run's checkpoint, holding the network the run reports.
 

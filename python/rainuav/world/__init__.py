@@ -15,7 +15,7 @@ preset), the propagation engine, the flight levels and the task
 ([`NavConfig`][rainuav.nav.task.NavConfig], its ``task``). A weather that moves is mapped at
 instants ``slice_s`` apart over the task's horizon (``max_steps`` moves of ``step_m /
 speed_m_s`` seconds; [`rainuav.radio.outputs.timemap`][rainuav.radio.outputs.timemap]), and the UAV
-flies the series ([`rainuav.nav.field.SignalSeries`][rainuav.nav.field.SignalSeries])"""
+flies the series ([`SignalField.series`][rainuav.nav.fieldmakers.FieldMakers.series])"""
 
 from __future__ import annotations
 

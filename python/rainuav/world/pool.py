@@ -19,7 +19,7 @@ import numpy as np
 
 from rainuav._checks import check_fits
 from rainuav.errors import InvalidInputError
-from rainuav.nav.field import SignalBank, SignalField
+from rainuav.nav.field import SignalField
 from rainuav.radio.outputs.levelmaps import LevelStack
 from rainuav.radio.outputs.timemap import build_radio_map_series
 from rainuav.radio.scene.scenario import Scenario
@@ -83,8 +83,8 @@ def calm(scn: Scenario) -> Scenario:
 
 class StormPool:
     """Storms of the distribution as a training run needs them: ``spec.storm_pool`` storms in one
-    [`SignalBank`][rainuav.nav.field.SignalBank] (world ``k``'s slot is renewed with
-    [`renew()`][rainuav.world.pool.StormPool.renew]), their seeds drawn from
+    bank ([`SignalField.bank`][rainuav.nav.fieldmakers.FieldMakers.bank]; world ``k``'s slot is
+    renewed with [`renew()`][rainuav.world.pool.StormPool.renew]), their seeds drawn from
     ``numpy.random.default_rng(seed)`` in [`TRAINING_SEEDS`][rainuav.world.pool.TRAINING_SEEDS] (a
     share ``spec.calm_share`` of them flown calm: [`is_calm()`][rainuav.world.pool.is_calm],
     [`calm()`][rainuav.world.pool.calm]). The next storm is mapped in a background thread while
@@ -131,7 +131,7 @@ class StormPool:
             self.bank = SignalField.bank(stacks, field.t_s, field.extent, field.altitudes_m)
         else:
             assert isinstance(field, SignalField) and field.varies  # a storm moves
-            self.bank = SignalBank([w.field.db for _, w in first], field.t_s, field.extent)
+            self.bank = SignalField.bank([w.field.db for _, w in first], field.t_s, field.extent)
         self.seeds = [k for k, _ in first]
         self.flown.extend(self.seeds)
         self._executor = ThreadPoolExecutor(1)
