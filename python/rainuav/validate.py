@@ -8,15 +8,27 @@ default model to P.838-3 over 5-100 GHz and 12.5-150 mm/h.
 
 from __future__ import annotations
 
+import argparse
 import csv
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from rainuav import _cli, medium
 from rainuav._io import check_out_dir, write_atomic
+
+
+@dataclass
+class RainValidationOptions:
+    """What ``python -m rainuav.validate rain`` takes (one docstring line per field = one flag,
+    generated as ``train``'s are)."""
+
+    out: Path = Path("validation")
+    """The output directory."""
+
 
 RAIN_RATE_MM_H = 12.5
 TABLE_FREQS_GHZ = (1.0, 2.0, 4.9, 10.0, 20.0, 28.0, 40.0, 60.0, 100.0)
@@ -102,15 +114,25 @@ def run_rain(out_dir: Path) -> dict[str, Path]:
     return {"csv": csv_path, "png": png_path}
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: one sub-command a validation, a flag for each field of its options
+    ([`RainValidationOptions`][rainuav.validate.RainValidationOptions]).
+
+    Returns:
+        The parser.
+    """
     parser = _cli.Parser(
         prog="python -m rainuav.validate",
         description=_cli.plain_help(__doc__),
     )
     sub = parser.add_subparsers(dest="what", required=True)
     rain = sub.add_parser("rain", help="rain attenuation against ITU-R P.838-3")
-    rain.add_argument("--out", type=Path, default=Path("validation"), help="output directory")
-    args = parser.parse_args(argv)
+    _cli.add_fields(rain, RainValidationOptions)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
 
     def body() -> int:
         check_out_dir(args.out)  # before any work
