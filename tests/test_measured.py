@@ -450,6 +450,39 @@ def test_a_world_of_a_corrected_map_flies_the_chance_of_outage(corrected, worlds
     assert unsure(physics.field.outage_p) > unsure(world.field.outage_p)
 
 
+@pytest.mark.slow
+def test_a_signal_that_carries_its_cells_powers_flies_the_chance_as_its_map(
+    corrected, tmp_path
+) -> None:
+    """The corrected map's signal with every cell's power and its spreads
+    (``with_cell_powers``), saved as ``signal.npz`` and read back: its outage probabilities are
+    the map's to the last bit (the same draws), and a world of it flies the ``"chance"`` reward
+    as the map's world does (the exact plan's return to 1e-12). A signal without them is
+    refused for that reward in one line."""
+    from rainuav.nav import planner
+    from rainuav.nav.task import NavConfig
+    from rainuav.radio.measured import outage_probability
+    from rainuav.radio.measured.signalrisk import signal_outage_probability, with_cell_powers
+    from rainuav.signals import Signal
+    from rainuav.world import world_from
+
+    task = NavConfig(goal_m=(1400.0, 1600.0), reward="chance", mu=2.0, max_steps=400)
+    on_map = world_from(corrected, task)
+    thr = on_map.task.min_db
+    sig = Signal.load(with_cell_powers(corrected).save(tmp_path / "signal.npz"))
+    assert np.array_equal(signal_outage_probability(sig, thr)[0, 0, 0],
+                          outage_probability(corrected, thr))  # fmt: skip
+    on_signal = world_from(sig, dataclasses.replace(task, min_db=thr))
+    assert np.array_equal(on_signal.field.outage_p, on_map.field.outage_p)
+    start = np.array([312.5, 412.5])
+    a, b = planner.optimal(on_map.env(), start), planner.optimal(on_signal.env(), start)
+    assert a.return_ == pytest.approx(b.return_, abs=1e-12)
+    np.testing.assert_array_equal(a.actions, b.actions)
+    bare = corrected.as_signal("sinr")
+    with pytest.raises(InvalidInputError, match="carries its cells' powers"):
+        world_from(bare, dataclasses.replace(task, min_db=thr))
+
+
 def test_a_two_scale_correction_maps_both_spreads_and_records_its_components(worlds) -> None:
     """``correct_map(..., kernel="two-scale")`` on the ``uma`` worlds (a log of 2% of the pixels,
     two cells a pixel): every field is two-scale with two components (long first), the map's

@@ -31,6 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from rainuav._io import write_atomic
+from rainuav.cellpowers import CellPowers
 from rainuav.errors import InvalidInputError
 
 __all__ = ["AXES", "FORMAT", "FORMAT_VERSION", "SIGNALS", "Signal", "signal_name", "toml_of"]
@@ -120,6 +121,9 @@ class Signal:
     scenario_toml: str = ""
     """The scenario the signal was built from, as TOML ('' for none): metadata, never read
     back as code."""
+    powers: CellPowers | None = None
+    """Every cell's power and its two spreads over the same axes (what drawing the SINR needs:
+    the ``"chance"`` reward); None: not carried."""
 
     def __post_init__(self) -> None:
         v = np.asarray(self.values)
@@ -154,6 +158,8 @@ class Signal:
                     f"(got {m.dtype} of shape {m.shape})"
                 )
             put(self, "not_flyable", np.ascontiguousarray(m))
+        if self.powers is not None:
+            self.powers.fits(v.shape)
 
     @classmethod
     def from_axes(
@@ -264,6 +270,7 @@ class Signal:
             altitudes_m=self.altitudes_m[lv],
             serving_cell=None if self.serving_cell is None else self.serving_cell[at],
             not_flyable=None if self.not_flyable is None else self.not_flyable[lv],
+            powers=None if self.powers is None else self.powers.take(at),
         )
 
     def to_xarray(self) -> Any:
@@ -317,6 +324,8 @@ class Signal:
             arrays["serving_cell"] = self.serving_cell
         if self.not_flyable is not None:
             arrays["not_flyable"] = self.not_flyable
+        if self.powers is not None:
+            arrays |= self.powers.arrays()
 
         def write(tmp: Path) -> None:
             with tmp.open("wb") as fh:
@@ -355,7 +364,8 @@ class Signal:
         try:
             return cls(data["values"], data["extent_m"], data["t_s"], data["altitudes_m"],
                        str(meta.get("name", "")), data.get("serving_cell"),
-                       data.get("not_flyable"), str(meta.get("scenario_toml", "")))  # fmt: skip
+                       data.get("not_flyable"), str(meta.get("scenario_toml", "")),
+                       CellPowers.from_arrays(data))  # fmt: skip
         except InvalidInputError as err:
             raise InvalidInputError(f"{path}: {err}") from None
 

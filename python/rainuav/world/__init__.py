@@ -185,19 +185,28 @@ def world_from(source: Any, task: NavConfig) -> World:
     min_db = task.min_db
     if min_db is None:  # the same rule for every kind (by the scenario's name)
         min_db = default_min_db(_scenario_name(source), signal)
-    if task.reward == "chance":  # outage as a probability, from the map's spreads
-        # one radio map carries spreads (its prior's, or its measurements'): maps in time, of
-        # levels and bare signals do not
-        if not hasattr(source, "rss_std_db"):
+    if task.reward == "chance":  # outage as a probability, from the cells' powers and spreads
+        # one radio map carries spreads (its prior's, or its measurements'), and a signal may
+        # carry its cells' powers with them; maps in time and of levels do not
+        from rainuav.radio.measured import signalrisk
+
+        if sig.powers is None and not hasattr(source, "rss_std_db"):
             raise InvalidInputError(
                 "task.reward 'chance' flies one radio map (a physics map with its prior's "
-                "spreads, or one corrected by measurements: rainuav.radio.measured.correct_map)"
+                "spreads, or one corrected by measurements: rainuav.radio.measured.correct_map) "
+                "or the signal of one map that carries its cells' powers "
+                "(rainuav.radio.measured.signalrisk.with_cell_powers)"
             )
         if signal != "sinr":
             raise InvalidInputError("task.reward 'chance' is the SINR's outage: task.signal sinr")
-        from rainuav.radio.measured.outage import outage_probability
-
-        field.outage_p = outage_probability(source, min_db)
+        if sig.powers is None:
+            sig = dataclasses.replace(sig, powers=signalrisk.cell_powers(source))
+        if sig.values.shape[:3] != (1, 1, 1):
+            raise InvalidInputError(
+                "task.reward 'chance' flies one map (one world, instant and level; got "
+                f"{sig.values.shape[:3]})"
+            )
+        field.outage_p = signalrisk.signal_outage_probability(sig, min_db)[0, 0, 0]
     kept = source if hasattr(source, "save") else sig  # built levels are saved as their signal
     return World(kept, field, dataclasses.replace(task, min_db=min_db))
 
