@@ -25,7 +25,8 @@ BASE = {"errors", "_io", "_checks", "_sampling", "_core", "_cli", "_threads"}
 LAYERS = {
     "base": 0,
     "medium": 1,
-    "signals": 1,
+    "cellpowers": 1,
+    "signals": 2,
     "antenna": 1,
     "geo": 1,
     "missions": 2,
@@ -59,6 +60,8 @@ FORBIDDEN = {
     "cml": {"torch", "gymnasium"},
     "pwe": {"torch", "gymnasium"},
     "pwe_sources": {"torch", "gymnasium"},
+    "signals": {"torch", "gymnasium"},
+    "cellpowers": {"torch", "gymnasium"},
     "ground": {"torch", "gymnasium"},
     "radio": {"torch", "gymnasium"},
     "nav": {"torch"},
