@@ -39,19 +39,19 @@ settings.load_profile("rainuav")
 
 
 # The test files that take longest, longest first (seconds of a whole run, `python -m pytest
-# -n 2 --dist loadfile --junitxml=...`, summed per file, 2026-11-28; the tracer's three files
+# -n 2 --dist loadfile --junitxml=...`, summed per file, 2026-12-04; the tracer's three files
 # count as the one unit they run as): the rest follow in pytest's order. Each worker takes whole
 # files in the order collected (the Makefile's `--no-loadscope-reorder`: by default
 # pytest-xdist sends the files with the most tests first, which left a few long end-to-end
 # files to the end, one worker running them while the other idled). A list out of date costs
 # only that balance.
 LONGEST_FIRST = (
-    "test_tracer_paths.py", "test_tracer.py", "test_tracer_wedge.py", "test_study.py",
-    "test_agent_train.py", "test_measured.py", "test_wedge_fullwave.py", "test_tutorials.py",
-    "test_levels_learner.py", "test_hostile_inputs.py", "test_terrain.py", "test_engines.py",
-    "test_one_network.py", "test_radiomap.py", "test_levels.py", "test_buildings.py",
-    "test_levels_storms.py", "test_readme.py", "test_geotiff.py", "test_timemap.py",
-    "test_places.py",
+    "test_study.py", "test_tutorials.py", "test_agent_train.py", "test_measured.py",
+    "test_hostile_inputs.py", "test_tracer_paths.py", "test_tracer.py", "test_tracer_wedge.py",
+    "test_terrain.py", "test_levels_learner.py", "test_engines.py", "test_wedge_fullwave.py",
+    "test_levels.py", "test_spread.py", "test_buildings.py", "test_one_network.py",
+    "test_radiomap.py", "test_levels_storms.py", "test_readme.py", "test_places.py",
+    "test_timemap.py", "test_two_scale.py", "test_geotiff.py",
 )  # fmt: skip
 
 

@@ -45,7 +45,11 @@ from rainuav.radio.reference.tracer import (
 )
 from rainuav.radio.scene.scenario import Scenario
 
-__all__ = ["DELAY_KEY_S", "path_gain", "union_power"]
+__all__ = ["DELAY_KEY_S", "PATH_KINDS", "path_gain", "path_gain_by_kind", "union_power"]
+
+PATH_KINDS = ("line of sight", "reflections", "diffraction", "reflections and a diffraction")
+"""The kinds of path [`path_gain_by_kind()`][rainuav.radio.reference.tracer_paths.path_gain_by_kind]
+splits the power into, by the interactions along each path."""
 
 DELAY_KEY_S = 3e-13
 """How close two paths' delays are for them to be one path (module docstring): 0.09 mm."""
@@ -92,7 +96,53 @@ def path_gain(
     from rainuav.radio.reference.tracer_wedge import coefficient as using
 
     with repeatable(), using(coefficient):
-        return _path_gain(scn, samples, max_depth, seed, step, runs)
+        found, gain = _path_runs(scn, samples, max_depth, seed, step, runs)
+        return TracerMap(gain(found, list(range(0, runs, 2))), gain(found, list(range(1, runs, 2))),
+                         whole=gain(found, list(range(runs))))  # fmt: skip
+
+
+def path_gain_by_kind(
+    scn: Scenario,
+    *,
+    samples: int = 2_000_000,
+    max_depth: int = 2,
+    seed: int = 0,
+    step: int = 1,
+    coefficient: str = "p526",
+    runs: int = 2,
+) -> dict[str, np.ndarray]:
+    """The path solver's gain at pixel centres split by the kind of path that carries it.
+
+    The union of all the runs' paths (as the estimate of
+    [`path_gain()`][rainuav.radio.reference.tracer_paths.path_gain]), each path counted in one
+    of [`PATH_KINDS`][rainuav.radio.reference.tracer_paths.PATH_KINDS] by its interactions:
+    none, specular reflections alone, one diffraction alone, or reflections and a diffraction.
+    The kinds sum to ``path_gain``'s ``whole``.
+
+    Args:
+        scn: An [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario].
+        samples: Candidate rays a site in all, `samples // runs` a run.
+        max_depth: The most interactions of a path.
+        seed: Runs are seeded `runs seed` to `runs seed + runs - 1`.
+        step: Every how many pixels a centre is traced, in both directions.
+        coefficient: The wedge coefficient, "p526" or "sionna".
+        runs: The runs, even, at least 2.
+
+    Returns:
+        Each kind's gain (S, H, W), linear (0 where not traced).
+
+    Raises:
+        ValueError: `runs` odd or below 2, or `step` below 1.
+    """
+    if step < 1:
+        raise ValueError(f"step is a whole number of pixels >= 1 (got {step})")
+    if runs < 2 or runs % 2:
+        raise ValueError(f"runs is an even number >= 2 (got {runs})")
+    from rainuav.radio.reference.tracer_wedge import coefficient as using
+
+    with repeatable(), using(coefficient):
+        found, gain = _path_runs(scn, samples, max_depth, seed, step, runs)
+        return {kind: gain(found, list(range(runs)), k) for k, kind in enumerate(PATH_KINDS)}
 
 
 def union_power(found: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
@@ -115,9 +165,17 @@ def union_power(found: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
     return np.bincount(link[first], weights=power[link, k][first], minlength=len(tau))
 
 
-def _path_gain(
+def _kinds(codes: np.ndarray) -> np.ndarray:
+    """Each path's index in ``PATH_KINDS`` from its interaction codes (depth first, Sionna RT's
+    ``InteractionType``: 0 none, 1 specular, 8 diffraction)."""
+    specular = np.any(codes == 1, axis=0)
+    diffracted = np.any(codes == 8, axis=0)
+    return np.where(diffracted, np.where(specular, 3, 2), np.where(specular, 1, 0))
+
+
+def _path_runs(
     scn: Scenario, samples: int, max_depth: int, seed: int, step: int, runs: int
-) -> TracerMap:
+) -> tuple[list, object]:
     mi, rt = load_sionna()
     scene = tracer_scene(scn)
     images = add_transmitters(scene, scn)
@@ -145,15 +203,18 @@ def _path_gain(
         # (receivers, rx antennas, transmitters, tx antennas, paths): one antenna each side
         power = ((re**2 + im**2) * valid)[:, 0, :, 0, :]
         tau = np.asarray(paths.tau, dtype=float).reshape(re.shape)[:, 0, :, 0, :]
-        found.append((tau.reshape(-1, tau.shape[-1]), power.reshape(-1, power.shape[-1])))
+        codes = np.asarray(paths.interactions.numpy()).reshape(-1, *re.shape)[:, :, 0, :, 0, :]
+        found.append((tau.reshape(-1, tau.shape[-1]), power.reshape(-1, power.shape[-1]),
+                      _kinds(codes).reshape(-1, power.shape[-1])))  # fmt: skip
 
-    def gain(which: list[int]) -> np.ndarray:
-        per = union_power([found[k] for k in which])
+    def gain(found: list, which: list[int], kind: int | None = None) -> np.ndarray:
+        runs = [(found[k][0], found[k][1] if kind is None else found[k][1] * (found[k][2] == kind))
+                for k in which]  # fmt: skip
+        per = union_power(runs)
         # (receivers, transmitters: each site's images) -> (sites, receivers)
         per = per.reshape(len(ii), images, len(scn.sites)).sum(axis=1)
         g = np.zeros((len(scn.sites), h, w))
         g[:, ii, jj] = per.T
         return g
 
-    return TracerMap(gain(list(range(0, runs, 2))), gain(list(range(1, runs, 2))),
-                     whole=gain(list(range(runs))))  # fmt: skip
+    return found, gain
