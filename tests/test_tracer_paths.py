@@ -76,6 +76,12 @@ def test_a_reference_other_than_the_map_or_the_paths_is_refused() -> None:
         path_gain(isotropic_scenario(scene("box")), step=0)
     with pytest.raises(ValueError, match="runs is an even number"):
         path_gain(isotropic_scenario(scene("box")), runs=3)
+    from rainuav.radio.reference.tracer_paths import path_gain_by_kind
+
+    with pytest.raises(TypeError, match="unknown arguments"):
+        path_gain_by_kind(isotropic_scenario(scene("box")), sample=10)
+    with pytest.raises(ValueError, match="step is a whole number"):
+        path_gain_by_kind(isotropic_scenario(scene("box")), step=0)
 
 
 def test_a_wall_then_a_corner_beside_the_line_lights_a_street() -> None:

@@ -32,6 +32,9 @@ radio map ([`tracer_gain()`][rainuav.radio.reference.tracer.tracer_gain]).
 
 from __future__ import annotations
 
+import inspect
+from typing import Any
+
 import numpy as np
 
 from rainuav.radio.reference.tracer import (
@@ -89,28 +92,13 @@ def path_gain(
     Raises:
         ValueError: `runs` odd or below 2, or `step` below 1.
     """
-    if step < 1:
-        raise ValueError(f"step is a whole number of pixels >= 1 (got {step})")
-    if runs < 2 or runs % 2:
-        raise ValueError(f"runs is an even number >= 2 (got {runs})")
-    from rainuav.radio.reference.tracer_wedge import coefficient as using
-
-    with repeatable(), using(coefficient):
-        found, gain = _path_runs(scn, samples, max_depth, seed, step, runs)
-        return TracerMap(gain(found, list(range(0, runs, 2))), gain(found, list(range(1, runs, 2))),
-                         whole=gain(found, list(range(runs))))  # fmt: skip
+    found, gain = _solved(scn, samples=samples, max_depth=max_depth, seed=seed, step=step,
+                          coefficient=coefficient, runs=runs)  # fmt: skip
+    return TracerMap(gain(found, list(range(0, runs, 2))), gain(found, list(range(1, runs, 2))),
+                     whole=gain(found, list(range(runs))))  # fmt: skip
 
 
-def path_gain_by_kind(
-    scn: Scenario,
-    *,
-    samples: int = 2_000_000,
-    max_depth: int = 2,
-    seed: int = 0,
-    step: int = 1,
-    coefficient: str = "p526",
-    runs: int = 2,
-) -> dict[str, np.ndarray]:
+def path_gain_by_kind(scn: Scenario, **solver: Any) -> dict[str, np.ndarray]:
     """The path solver's gain at pixel centres split by the kind of path that carries it.
 
     The union of all the runs' paths (as the estimate of
@@ -121,12 +109,8 @@ def path_gain_by_kind(
 
     Args:
         scn: An [`isotropic_scenario()`][rainuav.radio.reference.tracer.isotropic_scenario].
-        samples: Candidate rays a site in all, `samples // runs` a run.
-        max_depth: The most interactions of a path.
-        seed: Runs are seeded `runs seed` to `runs seed + runs - 1`.
-        step: Every how many pixels a centre is traced, in both directions.
-        coefficient: The wedge coefficient, "p526" or "sionna".
-        runs: The runs, even, at least 2.
+        **solver: ``path_gain``'s keyword arguments (``samples``, ``max_depth``, ``seed``,
+            ``step``, ``coefficient``, ``runs``), with its defaults.
 
     Returns:
         Each kind's gain (S, H, W), linear (0 where not traced).
@@ -134,6 +118,21 @@ def path_gain_by_kind(
     Raises:
         ValueError: `runs` odd or below 2, or `step` below 1.
     """
+    opts = {k: v.default for k, v in inspect.signature(path_gain).parameters.items() if k != "scn"}
+    unknown = sorted(set(solver) - set(opts))
+    if unknown:
+        raise TypeError(f"path_gain_by_kind got unknown arguments {unknown}")
+    opts |= solver
+    found, gain = _solved(scn, **opts)
+    runs = list(range(opts["runs"]))
+    return {kind: gain(found, runs, k) for k, kind in enumerate(PATH_KINDS)}
+
+
+def _solved(
+    scn: Scenario, *, samples: int, max_depth: int, seed: int, step: int, coefficient: str,
+    runs: int,
+) -> tuple[list, Any]:  # fmt: skip
+    """The runs' paths and their gain by union, on one thread, with the coefficient asked for."""
     if step < 1:
         raise ValueError(f"step is a whole number of pixels >= 1 (got {step})")
     if runs < 2 or runs % 2:
@@ -141,8 +140,7 @@ def path_gain_by_kind(
     from rainuav.radio.reference.tracer_wedge import coefficient as using
 
     with repeatable(), using(coefficient):
-        found, gain = _path_runs(scn, samples, max_depth, seed, step, runs)
-        return {kind: gain(found, list(range(runs)), k) for k, kind in enumerate(PATH_KINDS)}
+        return _path_runs(scn, samples, max_depth, seed, step, runs)
 
 
 def union_power(found: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
@@ -175,7 +173,7 @@ def _kinds(codes: np.ndarray) -> np.ndarray:
 
 def _path_runs(
     scn: Scenario, samples: int, max_depth: int, seed: int, step: int, runs: int
-) -> tuple[list, object]:
+) -> tuple[list, Any]:
     mi, rt = load_sionna()
     scene = tracer_scene(scn)
     images = add_transmitters(scene, scn)
