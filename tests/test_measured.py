@@ -418,12 +418,15 @@ def test_outage_probability_by_drawing(corrected) -> None:
 
 
 @pytest.mark.slow
-def test_a_world_of_a_corrected_map_flies_the_chance_of_outage(corrected, worlds) -> None:
+def test_a_world_of_a_corrected_map_flies_the_chance_of_outage(corrected, worlds, tmp_path) -> None:
     """``world_from(map, task)`` with the ``"chance"`` reward puts the corrected map's outage
     probabilities in the field; the environment's move then earns ``-1 - mu P`` at its end (P
     read bilinearly, as the map), and the exact plan's return is what the environment pays
-    flying it (to 1e-9). A physics map flies it with its prior's spreads (wider than the
-    corrected map's, so more pixels are uncertain); maps in time are refused in one line."""
+    flying it (to 1e-9). The map's signal with every cell's power and its spreads
+    (``with_cell_powers``), saved as ``signal.npz`` and read back, flies it as the map does
+    (the same probabilities to the last bit, the same plan); a signal without them is refused
+    in one line. A physics map flies it with its prior's spreads (wider than the corrected
+    map's, so more pixels are uncertain)."""
     from rainuav.nav import planner
     from rainuav.nav.task import NavConfig
     from rainuav.radio.measured import outage_probability
@@ -444,43 +447,23 @@ def test_a_world_of_a_corrected_map_flies_the_chance_of_outage(corrected, worlds
     env.reset(options={"start_m": [312.5, 412.5]})
     r = env.step(0)[1]
     assert r == pytest.approx(-1 - 2.0 * float(world.field.chance(322.5, 412.5)), abs=1e-12)
+    from rainuav.radio.measured.signalrisk import signal_outage_probability, with_cell_powers
+    from rainuav.signals import Signal
+
+    sig = Signal.load(with_cell_powers(corrected).save(tmp_path / "signal.npz"))
+    on_signal = world_from(sig, dataclasses.replace(task, min_db=thr))
+    assert np.array_equal(on_signal.field.outage_p, world.field.outage_p)
+    q = planner.optimal(on_signal.env(), np.array([312.5, 412.5]))
+    assert q.return_ == pytest.approx(p.return_, abs=1e-12)
+    np.testing.assert_array_equal(q.actions, p.actions)
+    assert np.array_equal(signal_outage_probability(sig, thr, draws=16)[0, 0, 0],
+                          outage_probability(corrected, thr, draws=16))  # fmt: skip
+    with pytest.raises(InvalidInputError, match="carries its cells' powers"):
+        world_from(corrected.as_signal("sinr"), dataclasses.replace(task, min_db=thr))
     physics = world_from(worlds[0], task)
     assert np.array_equal(physics.field.outage_p, outage_probability(worlds[0], thr))
     unsure = lambda q: float(np.mean((q > 0.05) & (q < 0.95)))  # noqa: E731
     assert unsure(physics.field.outage_p) > unsure(world.field.outage_p)
-
-
-@pytest.mark.slow
-def test_a_signal_that_carries_its_cells_powers_flies_the_chance_as_its_map(
-    corrected, tmp_path
-) -> None:
-    """The corrected map's signal with every cell's power and its spreads
-    (``with_cell_powers``), saved as ``signal.npz`` and read back: its outage probabilities are
-    the map's to the last bit (the same draws), and a world of it flies the ``"chance"`` reward
-    as the map's world does (the exact plan's return to 1e-12). A signal without them is
-    refused for that reward in one line."""
-    from rainuav.nav import planner
-    from rainuav.nav.task import NavConfig
-    from rainuav.radio.measured import outage_probability
-    from rainuav.radio.measured.signalrisk import signal_outage_probability, with_cell_powers
-    from rainuav.signals import Signal
-    from rainuav.world import world_from
-
-    task = NavConfig(goal_m=(1400.0, 1600.0), reward="chance", mu=2.0, max_steps=400)
-    on_map = world_from(corrected, task)
-    thr = on_map.task.min_db
-    sig = Signal.load(with_cell_powers(corrected).save(tmp_path / "signal.npz"))
-    assert np.array_equal(signal_outage_probability(sig, thr)[0, 0, 0],
-                          outage_probability(corrected, thr))  # fmt: skip
-    on_signal = world_from(sig, dataclasses.replace(task, min_db=thr))
-    assert np.array_equal(on_signal.field.outage_p, on_map.field.outage_p)
-    start = np.array([312.5, 412.5])
-    a, b = planner.optimal(on_map.env(), start), planner.optimal(on_signal.env(), start)
-    assert a.return_ == pytest.approx(b.return_, abs=1e-12)
-    np.testing.assert_array_equal(a.actions, b.actions)
-    bare = corrected.as_signal("sinr")
-    with pytest.raises(InvalidInputError, match="carries its cells' powers"):
-        world_from(bare, dataclasses.replace(task, min_db=thr))
 
 
 def test_a_two_scale_correction_maps_both_spreads_and_records_its_components(worlds) -> None:
