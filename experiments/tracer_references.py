@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from rainuav._io import write_atomic
 from rainuav.radio.reference.comparison import reference_maps
 from rainuav.radio.reference.saved import save_tracer_maps
 from rainuav.radio.reference.tracer_scenes import (
@@ -70,9 +71,12 @@ def save_fdfd(path: Path) -> None:
     phi = np.radians(REFERENCE_PHI_DEG)
     fields = {f"{m}_{'soft' if soft else 'hard'}": fdfd_total(reference_corner(m), phi, soft)
               for m in ("metal", "concrete") for soft in (True, False)}  # fmt: skip
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez_compressed(tmp, phi_deg=REFERENCE_PHI_DEG, **fields)
-    tmp.replace(path)
+
+    def write(tmp: Path) -> None:
+        with tmp.open("wb") as fh:
+            np.savez_compressed(fh, phi_deg=REFERENCE_PHI_DEG, **fields)
+
+    write_atomic(path, write)
 
 
 if __name__ == "__main__":

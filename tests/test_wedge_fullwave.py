@@ -45,7 +45,6 @@ PHI_DEG = REFERENCE_PHI_DEG
 SHADOW = PHI_DEG > 180.0 + 45.0 + 5.0
 LIT = (PHI_DEG > 180.0 - 45.0 + 5.0) & (PHI_DEG < 180.0 + 45.0 - 5.0)
 FDFD = Path(__file__).resolve().parent / "wedge_fdfd.npz"
-_case = reference_corner
 
 
 def _saved_fdfd(material: str, soft: bool) -> np.ndarray:
@@ -56,7 +55,7 @@ def _saved_fdfd(material: str, soft: bool) -> np.ndarray:
 
 def test_the_saved_fdfd_is_what_ceviche_solves() -> None:
     pytest.importorskip("ceviche")
-    now = fdfd_total(_case("metal"), np.radians(PHI_DEG), True)
+    now = fdfd_total(reference_corner("metal"), np.radians(PHI_DEG), True)
     np.testing.assert_allclose(_saved_fdfd("metal", True), now, rtol=1e-6)
 
 
@@ -66,7 +65,7 @@ def _db_error(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("soft", [True, False], ids=["soft", "hard"])
 def test_the_fdfd_is_the_exact_series_on_a_conducting_corner(soft: bool) -> None:
-    case = _case("metal")
+    case = reference_corner("metal")
     phi = np.radians(PHI_DEG)
     err = _db_error(_saved_fdfd("metal", soft), exact_pec(case, phi, soft))[SHADOW]
     assert np.median(err) < 0.6, err
@@ -77,7 +76,7 @@ def test_the_fdfd_is_the_exact_series_on_a_conducting_corner(soft: bool) -> None
 @pytest.mark.parametrize("soft", [True, False], ids=["soft", "hard"])
 def test_on_a_concrete_corner_the_full_wave_field_is_p526s(soft: bool) -> None:
     pytest.importorskip("sionna.rt")
-    case = _case("concrete")
+    case = reference_corner("concrete")
     phi = np.radians(PHI_DEG)
     full = _saved_fdfd("concrete", soft)
     p526 = utd_total(case, phi, soft, p526_coefficient(case, phi, soft))
@@ -93,7 +92,7 @@ def test_on_a_concrete_corner_the_full_wave_field_is_p526s(soft: bool) -> None:
 @pytest.mark.parametrize("soft", [True, False], ids=["soft", "hard"])
 def test_the_tracer_with_p526_diffracts_as_the_engine(soft: bool) -> None:
     pytest.importorskip("sionna.rt")
-    case = _case("concrete")
+    case = reference_corner("concrete")
     phi = np.radians(PHI_DEG[SHADOW])
     engine = p526_coefficient(case, phi, soft)
     tracer = tracer_coefficient(case, phi, soft, "p526")
@@ -122,7 +121,7 @@ def test_a_coefficient_block_puts_back_the_one_it_found() -> None:
 def test_a_case_outside_its_range_is_refused() -> None:
     with pytest.raises(ValueError, match=r"phi1_deg is in \(0, 90\)"):
         WedgeCase(phi1_deg=120.0)
-    assert math.isclose(_case("concrete").eps.real, 5.24)
+    assert math.isclose(reference_corner("concrete").eps.real, 5.24)
 
 
 def test_the_real_city_squares_are_read_as_exports_are_read() -> None:

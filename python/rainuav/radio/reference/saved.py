@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rainuav._io import write_atomic
 from rainuav.radio.reference.tracer import TracerMap
 
 __all__ = ["load_tracer_maps", "save_tracer_maps"]
@@ -17,7 +18,8 @@ __all__ = ["load_tracer_maps", "save_tracer_maps"]
 def save_tracer_maps(path: Path, maps: dict[str, TracerMap]) -> None:
     """Writes tracer maps by name, as float32 (1e-7 relative: far below 0.01 dB).
 
-    Written to a temporary file and renamed, so a file is whole or absent.
+    Written to a temporary file and renamed (``rainuav._io.write_atomic``), so a file is whole
+    or absent.
 
     Args:
         path: The ``.npz`` file.
@@ -35,9 +37,12 @@ def save_tracer_maps(path: Path, maps: dict[str, TracerMap]) -> None:
         arrays[f"{name}_b"] = np.asarray(tm.half_b, dtype=np.float32)
         if tm.whole is not None:
             arrays[f"{name}_w"] = np.asarray(tm.whole, dtype=np.float32)
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    tmp.replace(path)
+
+    def write(tmp: Path) -> None:
+        with tmp.open("wb") as fh:
+            np.savez_compressed(fh, **arrays)
+
+    write_atomic(path, write)
 
 
 def load_tracer_maps(path: Path) -> dict[str, TracerMap]:
